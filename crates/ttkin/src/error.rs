@@ -1,0 +1,101 @@
+//! The one error type of `ttkin`: every fallible call returns [`Result`].
+
+/// Result alias used across `ttkin`.
+pub type Result<T> = std::result::Result<T, Error>;
+
+/// Everything that can go wrong in `ttkin`, each variant with a message that says what to fix.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// An argument has the wrong length or shape.
+    #[error("{what}: expected {expected}, got {got}")]
+    Shape {
+        /// Name of the argument.
+        what: String,
+        /// The length or shape that was expected.
+        expected: String,
+        /// The length or shape that was given.
+        got: String,
+    },
+    /// An argument holds NaN or an infinity.
+    #[error("{what}: element {index} is {value} (every value must be finite)")]
+    NonFinite {
+        /// Name of the argument.
+        what: String,
+        /// Flat index of the first offending element.
+        index: usize,
+        /// The offending value.
+        value: f64,
+    },
+    /// An argument is finite but outside what is allowed (negative duration, bad option, ...).
+    #[error("{what}: {reason}")]
+    InvalidArgument {
+        /// Name of the argument.
+        what: String,
+        /// What is wrong and what is accepted.
+        reason: String,
+    },
+    /// A robot model is inconsistent (bad limits, non-physical inertia, empty chain, ...).
+    #[error("invalid model: {0}")]
+    Model(String),
+    /// A robot file could not be read or parsed.
+    #[error("robot file {path}: {reason}")]
+    File {
+        /// Path of the file (or `<string>` for text).
+        path: String,
+        /// What failed.
+        reason: String,
+    },
+    /// A URDF document could not be turned into a serial chain.
+    #[error("URDF: {0}")]
+    Urdf(String),
+    /// A target is outside the robot's reach; the message names the constraint.
+    #[error("unreachable: {0}")]
+    Unreachable(String),
+    /// A computation needs a non-singular configuration and did not get one.
+    #[error("singular configuration: {0}")]
+    Singular(String),
+}
+
+impl Error {
+    /// Shorthand for [`Error::Shape`].
+    pub fn shape(what: impl Into<String>, expected: impl ToString, got: impl ToString) -> Self {
+        Error::Shape {
+            what: what.into(),
+            expected: expected.to_string(),
+            got: got.to_string(),
+        }
+    }
+
+    /// Shorthand for [`Error::InvalidArgument`].
+    pub fn invalid(what: impl Into<String>, reason: impl Into<String>) -> Self {
+        Error::InvalidArgument {
+            what: what.into(),
+            reason: reason.into(),
+        }
+    }
+}
+
+/// Checks that `values` has `expected` elements, all finite.
+pub fn check_vector(what: &str, values: &[f64], expected: usize) -> Result<()> {
+    if values.len() != expected {
+        return Err(Error::shape(
+            what,
+            format!("{expected} values"),
+            format!("{} values", values.len()),
+        ));
+    }
+    check_finite(what, values)
+}
+
+/// Checks that every element of `values` is finite.
+pub fn check_finite(what: &str, values: &[f64]) -> Result<()> {
+    match values.iter().position(|v| !v.is_finite()) {
+        None => Ok(()),
+        Some(index) => Err(Error::NonFinite {
+            what: what.to_string(),
+            index,
+            value: values[index],
+        }),
+    }
+}

@@ -1,0 +1,22 @@
+//! `ttkin`: the maths of the ttmanip motion stack for table-tennis robots.
+//!
+//! Robot descriptions (DH in either convention, robot files, URDF) become a [`Chain`]; on it live
+//! forward kinematics ([`Chain::fk`], [`Chain::fk_all`]) and the geometric Jacobian
+//! ([`Chain::jacobian`]). Everything is `f64`, in SI units (m, rad, s), frames named in each doc
+//! comment. No devices, no Python, no global state.
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+pub mod chain;
+pub mod description;
+pub mod error;
+pub mod inertial;
+pub mod joint;
+pub mod robots;
+pub mod transform;
+pub mod urdf;
+
+pub use chain::{Chain, JacobianFrame};
+pub use error::{Error, Result};
+pub use inertial::Inertial;
+pub use joint::{Dh, DhConvention, Geometry, Joint, JointType, Limits};

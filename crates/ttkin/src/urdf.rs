@@ -1,0 +1,260 @@
+//! URDF import of a serial chain between two links, and URDF export of any chain, through the
+//! `urdf-rs` crate.
+//!
+//! Export writes one URDF link per DH frame (`link1` … `linkN`), so frame i of a tool that loads
+//! the file is exactly our link frame i: `base_link` —(fixed: base)→ `link0` —(joint 1)→ `link1` …
+//! `linkN` —(fixed: tool)→ `tool`. A standard-DH joint moves before its fixed part, so it gets an
+//! extra `<joint name>_axis` link between the moving joint and a fixed joint to its DH frame.
+
+use std::collections::HashMap;
+
+use nalgebra::{IsometryMatrix3, Unit, Vector3};
+
+use crate::chain::Chain;
+use crate::error::{Error, Result};
+use crate::inertial::Inertial;
+use crate::joint::{DhConvention, Geometry, Joint, JointType, Limits};
+use crate::transform::{from_xyz_rpy, to_xyz_rpy};
+
+/// Name of the base link in exported URDF.
+pub const BASE_LINK: &str = "base_link";
+/// Name of the tool link in exported URDF.
+pub const TOOL_LINK: &str = "tool";
+
+/// Reads the serial chain from `base_link` to `tip_link` of a URDF file.
+pub fn load(path: impl AsRef<std::path::Path>, base_link: &str, tip_link: &str) -> Result<Chain> {
+    let path = path.as_ref();
+    let text = std::fs::read_to_string(path).map_err(|e| Error::File {
+        path: path.display().to_string(),
+        reason: e.to_string(),
+    })?;
+    from_urdf_str(&text, base_link, tip_link)
+}
+
+fn pose(p: &urdf_rs::Pose) -> IsometryMatrix3<f64> {
+    from_xyz_rpy(p.xyz.0, p.rpy.0)
+}
+
+fn link_inertial(link: &urdf_rs::Link) -> Option<Inertial> {
+    let i = &link.inertial;
+    if i.mass.value <= 0.0 {
+        return None;
+    }
+    let t = &i.inertia;
+    let local = Inertial::new(i.mass.value, [0.0; 3], [t.ixx, t.iyy, t.izz, t.ixy, t.ixz, t.iyz]);
+    Some(local.transformed(&pose(&i.origin)))
+}
+
+fn add_body(acc: &mut Option<Inertial>, body: Option<Inertial>) {
+    if let Some(b) = body {
+        *acc = Some(match acc {
+            Some(a) => a.combine(&b),
+            None => b,
+        });
+    }
+}
+
+/// Parses URDF text and extracts the serial chain from `base_link` to `tip_link`.
+///
+/// Fixed joints on the path are folded into the next moving joint's origin (or into the tool
+/// transform after the last one); the inertias of links fixed to a moving link are lumped into it.
+/// Links that hang off the path are ignored. Continuous joints become unbounded revolute joints.
+pub fn from_urdf_str(text: &str, base_link: &str, tip_link: &str) -> Result<Chain> {
+    let robot = urdf_rs::read_from_string(text).map_err(|e| Error::Urdf(format!("cannot parse: {e}")))?;
+    let links: HashMap<&str, &urdf_rs::Link> = robot.links.iter().map(|l| (l.name.as_str(), l)).collect();
+    for name in [base_link, tip_link] {
+        if !links.contains_key(name) {
+            let mut known: Vec<&str> = links.keys().copied().collect();
+            known.sort_unstable();
+            return Err(Error::Urdf(format!("no link named '{name}'; links are: {}", known.join(", "))));
+        }
+    }
+    let by_child: HashMap<&str, &urdf_rs::Joint> = robot.joints.iter().map(|j| (j.child.link.as_str(), j)).collect();
+    // Walk up from the tip to the base.
+    let mut path = Vec::new();
+    let mut link = tip_link;
+    while link != base_link {
+        match by_child.get(link) {
+            Some(j) => {
+                path.push(*j);
+                link = j.parent.link.as_str();
+            }
+            None => {
+                return Err(Error::Urdf(format!(
+                    "links '{base_link}' and '{tip_link}' are not connected: '{tip_link}' does not descend from '{base_link}'"
+                )))
+            }
+        }
+    }
+    path.reverse();
+    let mut joints: Vec<Joint> = Vec::new();
+    let mut pending = IsometryMatrix3::identity();
+    let mut body: Option<Inertial> = None;
+    for uj in path {
+        let origin = pose(&uj.origin);
+        let kind = match uj.joint_type {
+            urdf_rs::JointType::Fixed => {
+                pending *= origin;
+                if !joints.is_empty() {
+                    add_body(&mut body, links.get(uj.child.link.as_str()).and_then(|l| link_inertial(l)).map(|i| i.transformed(&pending)));
+                }
+                continue;
+            }
+            urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous => JointType::Revolute,
+            urdf_rs::JointType::Prismatic => JointType::Prismatic,
+            ref other => {
+                return Err(Error::Urdf(format!(
+                    "joint '{}' is {other:?}: a serial chain holds only revolute, continuous, prismatic and fixed joints",
+                    uj.name
+                )))
+            }
+        };
+        if uj.mimic.is_some() {
+            return Err(Error::Urdf(format!("joint '{}' mimics another joint: not a serial chain of independent joints", uj.name)));
+        }
+        if let Some(prev) = joints.last_mut() {
+            if let Some(b) = body.take() {
+                *prev = prev.clone().with_inertial(b)?;
+            }
+        }
+        let axis = Vector3::from(uj.axis.xyz.0);
+        if !(axis.norm() > 1e-12) {
+            return Err(Error::Urdf(format!("joint '{}' has a zero axis", uj.name)));
+        }
+        let mut j = Joint::new(
+            uj.name.clone(),
+            kind,
+            Geometry::Origin {
+                origin: pending * origin,
+                axis: Unit::new_normalize(axis),
+            },
+        )
+        .map_err(|e| Error::Urdf(e.to_string()))?;
+        let l = &uj.limit;
+        let bounded = uj.joint_type != urdf_rs::JointType::Continuous && l.lower.is_finite() && l.upper.is_finite() && l.lower < l.upper;
+        let positive = |v: f64| (v.is_finite() && v > 0.0).then_some(v);
+        j = j
+            .with_limits(Limits {
+                lower: if bounded { l.lower } else { f64::NEG_INFINITY },
+                upper: if bounded { l.upper } else { f64::INFINITY },
+                velocity: positive(l.velocity),
+                acceleration: positive(l.acceleration),
+                effort: positive(l.effort),
+            })
+            .map_err(|e| Error::Urdf(e.to_string()))?;
+        joints.push(j);
+        pending = IsometryMatrix3::identity();
+        body = links.get(uj.child.link.as_str()).and_then(|l| link_inertial(l));
+    }
+    if joints.is_empty() {
+        return Err(Error::Urdf(format!("no revolute or prismatic joint between '{base_link}' and '{tip_link}'")));
+    }
+    if let (Some(b), Some(last)) = (body, joints.last_mut()) {
+        *last = last.clone().with_inertial(b)?;
+    }
+    Chain::new(robot.name.clone(), joints, IsometryMatrix3::identity(), pending)
+}
+
+fn urdf_pose(t: &IsometryMatrix3<f64>) -> urdf_rs::Pose {
+    let (xyz, rpy) = to_xyz_rpy(t);
+    urdf_rs::Pose {
+        xyz: urdf_rs::Vec3(xyz),
+        rpy: urdf_rs::Vec3(rpy),
+    }
+}
+
+fn urdf_link(name: &str, inertial: Option<&Inertial>) -> urdf_rs::Link {
+    let inertial = inertial.map_or_else(urdf_rs::Inertial::default, |i| {
+        let [ixx, iyy, izz, ixy, ixz, iyz] = i.components();
+        urdf_rs::Inertial {
+            origin: urdf_rs::Pose {
+                xyz: urdf_rs::Vec3(i.com.into()),
+                rpy: urdf_rs::Vec3([0.0; 3]),
+            },
+            mass: urdf_rs::Mass { value: i.mass },
+            inertia: urdf_rs::Inertia { ixx, ixy, ixz, iyy, iyz, izz },
+        }
+    });
+    urdf_rs::Link {
+        name: name.to_string(),
+        inertial,
+        visual: vec![],
+        collision: vec![],
+    }
+}
+
+fn fixed_joint(name: &str, parent: &str, child: &str, t: &IsometryMatrix3<f64>) -> urdf_rs::Joint {
+    urdf_rs::Joint {
+        name: name.to_string(),
+        joint_type: urdf_rs::JointType::Fixed,
+        origin: urdf_pose(t),
+        parent: urdf_rs::LinkName { link: parent.to_string() },
+        child: urdf_rs::LinkName { link: child.to_string() },
+        axis: urdf_rs::Axis::default(),
+        limit: urdf_rs::JointLimit::default(),
+        calibration: None,
+        dynamics: None,
+        mimic: None,
+        safety_controller: None,
+    }
+}
+
+/// Writes any chain as URDF text (see the module doc for the link names).
+pub fn to_urdf_string(chain: &Chain) -> String {
+    let mut links = vec![urdf_link(BASE_LINK, None), urdf_link("link0", None)];
+    let mut joints = vec![fixed_joint("base_joint", BASE_LINK, "link0", chain.base())];
+    for (i, j) in chain.joints().iter().enumerate() {
+        let parent = format!("link{i}");
+        let child = format!("link{}", i + 1);
+        let (origin, axis, post) = match j.geometry() {
+            Geometry::Origin { origin, axis } => (*origin, axis.into_inner(), None),
+            Geometry::Dh(DhConvention::Modified, _) => (*j.pre(), Vector3::z(), None),
+            Geometry::Dh(DhConvention::Standard, _) => (*j.pre(), Vector3::z(), Some(*j.post())),
+        };
+        let moving_child = if post.is_some() { format!("{}_axis", j.name()) } else { child.clone() };
+        let l = j.limits();
+        let unbounded = !(l.lower.is_finite() && l.upper.is_finite());
+        let joint_type = match (j.kind(), unbounded) {
+            (JointType::Revolute, true) => urdf_rs::JointType::Continuous,
+            (JointType::Revolute, false) => urdf_rs::JointType::Revolute,
+            (JointType::Prismatic, _) => urdf_rs::JointType::Prismatic,
+        };
+        joints.push(urdf_rs::Joint {
+            name: j.name().to_string(),
+            joint_type,
+            origin: urdf_pose(&origin),
+            parent: urdf_rs::LinkName { link: parent },
+            child: urdf_rs::LinkName { link: moving_child.clone() },
+            axis: urdf_rs::Axis { xyz: urdf_rs::Vec3(axis.into()) },
+            limit: urdf_rs::JointLimit {
+                lower: l.lower,
+                upper: l.upper,
+                effort: l.effort.unwrap_or(f64::INFINITY),
+                velocity: l.velocity.unwrap_or(f64::INFINITY),
+                acceleration: l.acceleration.unwrap_or(f64::INFINITY),
+                deceleration: l.acceleration.unwrap_or(f64::INFINITY),
+                jerk: f64::INFINITY,
+            },
+            calibration: None,
+            dynamics: None,
+            mimic: None,
+            safety_controller: None,
+        });
+        if let Some(post) = post {
+            links.push(urdf_link(&moving_child, None));
+            joints.push(fixed_joint(&format!("{}_dh", j.name()), &moving_child, &child, &post));
+        }
+        links.push(urdf_link(&child, j.inertial()));
+    }
+    let n = chain.dof();
+    links.push(urdf_link(TOOL_LINK, None));
+    joints.push(fixed_joint("tool_joint", &format!("link{n}"), TOOL_LINK, chain.tool()));
+    let robot = urdf_rs::Robot {
+        name: chain.name().to_string(),
+        version: None,
+        links,
+        joints,
+        materials: vec![],
+    };
+    urdf_rs::write_to_string(&robot).expect("a chain of finite values always serialises as URDF")
+}
