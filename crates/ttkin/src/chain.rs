@@ -53,12 +53,18 @@ impl Chain {
         for (what, t) in [("base", &base), ("tool", &tool)] {
             let v = t.translation.vector;
             crate::error::check_finite(&format!("{what} transform of chain '{name}'"), &[v.x, v.y, v.z])?;
-            crate::error::check_finite(&format!("{what} transform of chain '{name}'"), t.rotation.matrix().as_slice())?;
+            crate::error::check_finite(
+                &format!("{what} transform of chain '{name}'"),
+                t.rotation.matrix().as_slice(),
+            )?;
         }
         let mut seen = std::collections::HashSet::new();
         for j in &joints {
             if !seen.insert(j.name()) {
-                return Err(Error::Model(format!("chain '{name}': joint name '{}' is used twice", j.name())));
+                return Err(Error::Model(format!(
+                    "chain '{name}': joint name '{}' is used twice",
+                    j.name()
+                )));
             }
         }
         let n = joints.len();
@@ -263,7 +269,11 @@ impl Chain {
     fn batch_count(&self, qs: &[f64], out_len: usize, per_item: usize) -> Result<usize> {
         let n = self.dof();
         if qs.len() % n != 0 {
-            return Err(Error::shape("q", format!("N × {n} values"), format!("{} values", qs.len())));
+            return Err(Error::shape(
+                "q",
+                format!("N × {n} values"),
+                format!("{} values", qs.len()),
+            ));
         }
         crate::error::check_finite("q", qs)?;
         let count = qs.len() / n;

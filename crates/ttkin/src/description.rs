@@ -161,7 +161,10 @@ pub fn from_toml_str(text: &str, origin: &str) -> Result<Chain> {
         let geometry = match (&e.dh, &e.origin) {
             (Some(dh), None) => {
                 if e.axis.is_some() {
-                    return Err(file_err(format!("joint '{}': 'axis' goes with 'origin', not with 'dh'", e.name)));
+                    return Err(file_err(format!(
+                        "joint '{}': 'axis' goes with 'origin', not with 'dh'",
+                        e.name
+                    )));
                 }
                 let conv = e.convention.or(f.convention).ok_or_else(|| {
                     file_err(format!(

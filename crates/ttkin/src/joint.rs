@@ -111,10 +111,16 @@ impl Limits {
                 self.lower, self.upper
             )));
         }
-        for (name, v) in [("velocity", self.velocity), ("acceleration", self.acceleration), ("effort", self.effort)] {
+        for (name, v) in [
+            ("velocity", self.velocity),
+            ("acceleration", self.acceleration),
+            ("effort", self.effort),
+        ] {
             if let Some(v) = v {
                 if !(v > 0.0) {
-                    return Err(Error::Model(format!("joint '{joint}': {name} limit must be > 0, got {v}")));
+                    return Err(Error::Model(format!(
+                        "joint '{joint}': {name} limit must be > 0, got {v}"
+                    )));
                 }
             }
         }
@@ -224,7 +230,10 @@ fn split(g: &Geometry, name: &str) -> Result<(IsometryMatrix3<f64>, IsometryMatr
     let id = IsometryMatrix3::identity();
     match g {
         Geometry::Dh(conv, dh) => {
-            crate::error::check_finite(&format!("DH row of joint '{name}' (a, alpha, d, theta)"), &[dh.a, dh.alpha, dh.d, dh.theta])?;
+            crate::error::check_finite(
+                &format!("DH row of joint '{name}' (a, alpha, d, theta)"),
+                &[dh.a, dh.alpha, dh.d, dh.theta],
+            )?;
             // Rz(θ0 + q)·Tz(d) = Rz(θ0)·Tz(d)·Rz(q) and Rz(θ)·Tz(d0 + q) = Rz(θ)·Tz(d0)·Tz(q):
             // the fixed part of the row commutes with the z motion, so it goes before or after it.
             let z_part = rot_z(dh.theta) * trans(0.0, 0.0, dh.d);
@@ -238,7 +247,9 @@ fn split(g: &Geometry, name: &str) -> Result<(IsometryMatrix3<f64>, IsometryMatr
             crate::error::check_finite(&format!("origin of joint '{name}'"), &[o.x, o.y, o.z])?;
             let a = axis.into_inner();
             if !(a.iter().all(|v| v.is_finite()) && (a.norm() - 1.0).abs() < 1e-9) {
-                return Err(Error::Model(format!("joint '{name}': axis must be a finite unit vector, got {a:?}")));
+                return Err(Error::Model(format!(
+                    "joint '{name}': axis must be a finite unit vector, got {a:?}"
+                )));
             }
             // Align local z with the axis; the link frame is origin·Rot(axis, q) = origin·A·Rz(q)·Aᵀ.
             let align = Rotation3::rotation_between(&Vector3::z(), &a)

@@ -6,6 +6,8 @@
 //! comment. No devices, no Python, no global state.
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
+// `!(x > 0.0)` is how this crate rejects NaN together with the out-of-range values: keep it.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod chain;
 pub mod description;
@@ -13,6 +15,7 @@ pub mod error;
 pub mod inertial;
 pub mod joint;
 pub mod robots;
+pub mod task;
 pub mod transform;
 pub mod urdf;
 

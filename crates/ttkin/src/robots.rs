@@ -98,12 +98,27 @@ pub fn mobile8() -> Chain {
         };
         joints.push(j.expect("built-in mobile8 joint is valid"));
     }
-    Chain::new("mobile8", joints, IsometryMatrix3::identity(), IsometryMatrix3::identity()).expect("built-in mobile8 is valid")
+    Chain::new(
+        "mobile8",
+        joints,
+        IsometryMatrix3::identity(),
+        IsometryMatrix3::identity(),
+    )
+    .expect("built-in mobile8 is valid")
 }
 
 /// The start configuration of seed 000's experiment: [0.26 m, 200°, 90°, 80°, 250°, 105°, 180°, 135°].
 pub fn mobile8_start() -> [f64; 8] {
-    [0.26, 200.0 * DEG, 90.0 * DEG, 80.0 * DEG, 250.0 * DEG, 105.0 * DEG, 180.0 * DEG, 135.0 * DEG]
+    [
+        0.26,
+        200.0 * DEG,
+        90.0 * DEG,
+        80.0 * DEG,
+        250.0 * DEG,
+        105.0 * DEG,
+        180.0 * DEG,
+        135.0 * DEG,
+    ]
 }
 
 /// Seed 002: the 6-joint gantry table-tennis robot with the default lengths.
@@ -123,11 +138,22 @@ pub fn gantry6_with(l: GantryLengths) -> Result<Chain> {
         Joint::prismatic("d1", m, dh(0.0, a90, 0.0, a90))?.with_limits(limits(-1.0, 1.0, 3.0, 20.0, 300.0))?,
         Joint::prismatic("d2", m, dh(0.0, a90, 0.0, a90))?.with_limits(limits(-0.6, 0.6, 3.0, 20.0, 200.0))?,
         Joint::revolute("theta3", m, dh(0.0, a90, l.l1, 0.0))?.with_limits(limits(-PI, PI, 10.0, 100.0, 30.0))?,
-        Joint::revolute("theta4", m, dh(0.0, a90, 0.0, 0.0))?.with_limits(limits(-PI / 2.0, PI / 2.0, 10.0, 100.0, 30.0))?,
+        Joint::revolute("theta4", m, dh(0.0, a90, 0.0, 0.0))?.with_limits(limits(
+            -PI / 2.0,
+            PI / 2.0,
+            10.0,
+            100.0,
+            30.0,
+        ))?,
         Joint::revolute("theta5", m, dh(l.l3, 0.0, l.l2, 0.0))?.with_limits(limits(-PI, PI, 15.0, 150.0, 15.0))?,
         Joint::revolute("theta6", m, dh(0.0, a90, l.l4, 0.0))?.with_limits(limits(-PI, PI, 20.0, 200.0, 5.0))?,
     ];
-    Chain::new("gantry6", joints, IsometryMatrix3::identity(), IsometryMatrix3::identity())
+    Chain::new(
+        "gantry6",
+        joints,
+        IsometryMatrix3::identity(),
+        IsometryMatrix3::identity(),
+    )
 }
 
 /// Lengths of the 4-DOF arm of seed 001 (m). The seed prints no values; these are documented
@@ -189,7 +215,14 @@ pub fn ur5() -> Chain {
         dh(0.0, -PI / 2.0, 0.09465, 0.0),
         dh(0.0, 0.0, 0.0823, 0.0),
     ];
-    let names = ["shoulder_pan", "shoulder_lift", "elbow", "wrist_1", "wrist_2", "wrist_3"];
+    let names = [
+        "shoulder_pan",
+        "shoulder_lift",
+        "elbow",
+        "wrist_1",
+        "wrist_2",
+        "wrist_3",
+    ];
     let efforts = [150.0, 150.0, 150.0, 28.0, 28.0, 28.0];
     let joints = rows
         .iter()

@@ -10,12 +10,18 @@ pub const RIGID_TOLERANCE: f64 = 1e-9;
 
 /// Pure rotation about x by `angle` rad.
 pub fn rot_x(angle: f64) -> IsometryMatrix3<f64> {
-    IsometryMatrix3::from_parts(Translation3::identity(), Rotation3::from_axis_angle(&Vector3::x_axis(), angle))
+    IsometryMatrix3::from_parts(
+        Translation3::identity(),
+        Rotation3::from_axis_angle(&Vector3::x_axis(), angle),
+    )
 }
 
 /// Pure rotation about z by `angle` rad.
 pub fn rot_z(angle: f64) -> IsometryMatrix3<f64> {
-    IsometryMatrix3::from_parts(Translation3::identity(), Rotation3::from_axis_angle(&Vector3::z_axis(), angle))
+    IsometryMatrix3::from_parts(
+        Translation3::identity(),
+        Rotation3::from_axis_angle(&Vector3::z_axis(), angle),
+    )
 }
 
 /// Pure translation by (x, y, z) m.
@@ -64,7 +70,10 @@ pub fn isometry_from_matrix(what: &str, m: &Matrix4<f64>) -> Result<IsometryMatr
         ));
     }
     if r.determinant() < 0.0 {
-        return Err(Error::invalid(what, "rotation block has determinant −1 (a reflection, not a rotation)"));
+        return Err(Error::invalid(
+            what,
+            "rotation block has determinant −1 (a reflection, not a rotation)",
+        ));
     }
     Ok(IsometryMatrix3::from_parts(
         Translation3::new(m[(0, 3)], m[(1, 3)], m[(2, 3)]),

@@ -66,7 +66,10 @@ pub fn from_urdf_str(text: &str, base_link: &str, tip_link: &str) -> Result<Chai
         if !links.contains_key(name) {
             let mut known: Vec<&str> = links.keys().copied().collect();
             known.sort_unstable();
-            return Err(Error::Urdf(format!("no link named '{name}'; links are: {}", known.join(", "))));
+            return Err(Error::Urdf(format!(
+                "no link named '{name}'; links are: {}",
+                known.join(", ")
+            )));
         }
     }
     let by_child: HashMap<&str, &urdf_rs::Joint> = robot.joints.iter().map(|j| (j.child.link.as_str(), j)).collect();
@@ -96,21 +99,28 @@ pub fn from_urdf_str(text: &str, base_link: &str, tip_link: &str) -> Result<Chai
             urdf_rs::JointType::Fixed => {
                 pending *= origin;
                 if !joints.is_empty() {
-                    add_body(&mut body, links.get(uj.child.link.as_str()).and_then(|l| link_inertial(l)).map(|i| i.transformed(&pending)));
+                    add_body(
+                        &mut body,
+                        links
+                            .get(uj.child.link.as_str())
+                            .and_then(|l| link_inertial(l))
+                            .map(|i| i.transformed(&pending)),
+                    );
                 }
                 continue;
             }
             urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous => JointType::Revolute,
             urdf_rs::JointType::Prismatic => JointType::Prismatic,
-            ref other => {
-                return Err(Error::Urdf(format!(
-                    "joint '{}' is {other:?}: a serial chain holds only revolute, continuous, prismatic and fixed joints",
-                    uj.name
-                )))
-            }
+            ref other => return Err(Error::Urdf(format!(
+                "joint '{}' is {other:?}: a serial chain holds only revolute, continuous, prismatic and fixed joints",
+                uj.name
+            ))),
         };
         if uj.mimic.is_some() {
-            return Err(Error::Urdf(format!("joint '{}' mimics another joint: not a serial chain of independent joints", uj.name)));
+            return Err(Error::Urdf(format!(
+                "joint '{}' mimics another joint: not a serial chain of independent joints",
+                uj.name
+            )));
         }
         if let Some(prev) = joints.last_mut() {
             if let Some(b) = body.take() {
@@ -131,7 +141,10 @@ pub fn from_urdf_str(text: &str, base_link: &str, tip_link: &str) -> Result<Chai
         )
         .map_err(|e| Error::Urdf(e.to_string()))?;
         let l = &uj.limit;
-        let bounded = uj.joint_type != urdf_rs::JointType::Continuous && l.lower.is_finite() && l.upper.is_finite() && l.lower < l.upper;
+        let bounded = uj.joint_type != urdf_rs::JointType::Continuous
+            && l.lower.is_finite()
+            && l.upper.is_finite()
+            && l.lower < l.upper;
         let positive = |v: f64| (v.is_finite() && v > 0.0).then_some(v);
         j = j
             .with_limits(Limits {
@@ -147,7 +160,9 @@ pub fn from_urdf_str(text: &str, base_link: &str, tip_link: &str) -> Result<Chai
         body = links.get(uj.child.link.as_str()).and_then(|l| link_inertial(l));
     }
     if joints.is_empty() {
-        return Err(Error::Urdf(format!("no revolute or prismatic joint between '{base_link}' and '{tip_link}'")));
+        return Err(Error::Urdf(format!(
+            "no revolute or prismatic joint between '{base_link}' and '{tip_link}'"
+        )));
     }
     if let (Some(b), Some(last)) = (body, joints.last_mut()) {
         *last = last.clone().with_inertial(b)?;
@@ -172,7 +187,14 @@ fn urdf_link(name: &str, inertial: Option<&Inertial>) -> urdf_rs::Link {
                 rpy: urdf_rs::Vec3([0.0; 3]),
             },
             mass: urdf_rs::Mass { value: i.mass },
-            inertia: urdf_rs::Inertia { ixx, ixy, ixz, iyy, iyz, izz },
+            inertia: urdf_rs::Inertia {
+                ixx,
+                ixy,
+                ixz,
+                iyy,
+                iyz,
+                izz,
+            },
         }
     });
     urdf_rs::Link {
@@ -188,8 +210,12 @@ fn fixed_joint(name: &str, parent: &str, child: &str, t: &IsometryMatrix3<f64>) 
         name: name.to_string(),
         joint_type: urdf_rs::JointType::Fixed,
         origin: urdf_pose(t),
-        parent: urdf_rs::LinkName { link: parent.to_string() },
-        child: urdf_rs::LinkName { link: child.to_string() },
+        parent: urdf_rs::LinkName {
+            link: parent.to_string(),
+        },
+        child: urdf_rs::LinkName {
+            link: child.to_string(),
+        },
         axis: urdf_rs::Axis::default(),
         limit: urdf_rs::JointLimit::default(),
         calibration: None,
@@ -211,7 +237,11 @@ pub fn to_urdf_string(chain: &Chain) -> String {
             Geometry::Dh(DhConvention::Modified, _) => (*j.pre(), Vector3::z(), None),
             Geometry::Dh(DhConvention::Standard, _) => (*j.pre(), Vector3::z(), Some(*j.post())),
         };
-        let moving_child = if post.is_some() { format!("{}_axis", j.name()) } else { child.clone() };
+        let moving_child = if post.is_some() {
+            format!("{}_axis", j.name())
+        } else {
+            child.clone()
+        };
         let l = j.limits();
         let unbounded = !(l.lower.is_finite() && l.upper.is_finite());
         let joint_type = match (j.kind(), unbounded) {
@@ -224,8 +254,12 @@ pub fn to_urdf_string(chain: &Chain) -> String {
             joint_type,
             origin: urdf_pose(&origin),
             parent: urdf_rs::LinkName { link: parent },
-            child: urdf_rs::LinkName { link: moving_child.clone() },
-            axis: urdf_rs::Axis { xyz: urdf_rs::Vec3(axis.into()) },
+            child: urdf_rs::LinkName {
+                link: moving_child.clone(),
+            },
+            axis: urdf_rs::Axis {
+                xyz: urdf_rs::Vec3(axis.into()),
+            },
             limit: urdf_rs::JointLimit {
                 lower: l.lower,
                 upper: l.upper,

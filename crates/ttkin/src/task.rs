@@ -1,0 +1,177 @@
+//! Task spaces: what part of the tool pose a solver controls, with a residual and its Jacobian.
+//!
+//! Every task compares the current tool pose `T` (base frame) with a target pose `T*` and returns
+//! a residual `e` (target minus current, base-frame axes) of `dim()` rows, and a task Jacobian
+//! `J_e` (dim × n) with `ė = −J_e q̇` for a fixed target: a solver drives `e` to zero with
+//! `q̇ = J_e⁺ (K e)`. The 5-D racket task of seed 000 uses a 2-D tangent-plane error for the face
+//! normal, so it has no singularity when the normal points along ±z (where the seed's polar and
+//! azimuth angles are singular); [`racket_coordinates`] gives the seed's angle form for display.
+
+use nalgebra::{DMatrix, DVector, IsometryMatrix3, Matrix3, Matrix6xX, Rotation3, Translation3, Unit, Vector3};
+
+use crate::error::{Error, Result};
+
+/// Distance of the racket centre along the z axis of the last frame in seed 000 (m).
+pub const SEED_RACKET_OFFSET: f64 = 0.15;
+
+/// The part of the tool pose a solver controls.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Task {
+    /// Full 6-D pose: position (m) and orientation (rad, rotation vector).
+    Pose,
+    /// 3-D position of the tool point (m); orientation free.
+    Position,
+    /// Seed 000's 5-D racket task: centre at `offset` m along the tool z axis, and the direction of
+    /// the face normal (the tool x axis); rotation about the normal is free.
+    Racket {
+        /// Distance of the racket centre from the tool origin along tool z (m).
+        offset: f64,
+    },
+}
+
+impl Task {
+    /// Parses `"pose"`, `"position"` or `"racket5"` (seed offset 0.15 m).
+    pub fn from_name(name: &str) -> Result<Task> {
+        match name {
+            "pose" => Ok(Task::Pose),
+            "position" => Ok(Task::Position),
+            "racket5" => Ok(Task::Racket {
+                offset: SEED_RACKET_OFFSET,
+            }),
+            other => Err(Error::invalid(
+                "task",
+                format!("unknown task '{other}'; choose 'pose', 'position' or 'racket5'"),
+            )),
+        }
+    }
+
+    /// Number of residual rows: 6, 3 or 5.
+    pub fn dim(&self) -> usize {
+        match self {
+            Task::Pose => 6,
+            Task::Position => 3,
+            Task::Racket { .. } => 5,
+        }
+    }
+
+    /// Residual target − current (base-frame axes): see the module doc for each task.
+    pub fn error(&self, current: &IsometryMatrix3<f64>, target: &IsometryMatrix3<f64>) -> DVector<f64> {
+        let mut e = DVector::zeros(self.dim());
+        self.error_into(current, target, e.as_mut_slice());
+        e
+    }
+
+    /// [`Task::error`] into a slice of `dim()` values.
+    pub fn error_into(&self, current: &IsometryMatrix3<f64>, target: &IsometryMatrix3<f64>, e: &mut [f64]) {
+        match self {
+            Task::Pose => {
+                let dp = target.translation.vector - current.translation.vector;
+                let dr = (target.rotation * current.rotation.inverse()).scaled_axis();
+                e[..3].copy_from_slice(dp.as_slice());
+                e[3..6].copy_from_slice(dr.as_slice());
+            }
+            Task::Position => {
+                let dp = target.translation.vector - current.translation.vector;
+                e[..3].copy_from_slice(dp.as_slice());
+            }
+            Task::Racket { offset } => {
+                let dc = racket_centre(target, *offset) - racket_centre(current, *offset);
+                let (n, nt) = (racket_normal(current), racket_normal(target));
+                let (u1, u2) = tangent_basis(&nt);
+                let r = n.cross(&nt);
+                e[..3].copy_from_slice(dc.as_slice());
+                e[3] = u1.dot(&r);
+                e[4] = u2.dot(&r);
+            }
+        }
+    }
+
+    /// Task Jacobian (dim × n) from the base-frame geometric Jacobian `j` at pose `current`, such
+    /// that the residual against `target` changes as ė = −J_e q̇.
+    pub fn jacobian(
+        &self,
+        j: &Matrix6xX<f64>,
+        current: &IsometryMatrix3<f64>,
+        target: &IsometryMatrix3<f64>,
+    ) -> DMatrix<f64> {
+        let n = j.ncols();
+        let mut out = DMatrix::zeros(self.dim(), n);
+        match self {
+            Task::Pose => out.copy_from(j),
+            Task::Position => out.copy_from(&j.fixed_rows::<3>(0)),
+            Task::Racket { offset } => {
+                let z = current.rotation.matrix().column(2).into_owned();
+                let jv = j.fixed_rows::<3>(0);
+                let jw = j.fixed_rows::<3>(3);
+                // ċ = v + ω × (offset·z) = J_v q̇ − offset·[z]× J_ω q̇
+                let jc = jv - skew(&(z * *offset)) * jw;
+                out.rows_mut(0, 3).copy_from(&jc);
+                // e_n = Bᵀ(n × n*), ė_n = Bᵀ [n*]× [n]× ω  ⇒  J_n = −Bᵀ [n*]× [n]× J_ω
+                let (n_cur, nt) = (racket_normal(current), racket_normal(target));
+                let (u1, u2) = tangent_basis(&nt);
+                let m = skew(&nt) * skew(&n_cur);
+                let jn = m * jw;
+                for c in 0..n {
+                    let col = jn.column(c);
+                    out[(3, c)] = -u1.dot(&col);
+                    out[(4, c)] = -u2.dot(&col);
+                }
+            }
+        }
+        out
+    }
+}
+
+/// Skew-symmetric matrix [v]× with [v]× w = v × w.
+pub fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
+    Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0)
+}
+
+/// Racket centre (m, base frame): tool origin plus `offset` along tool z.
+pub fn racket_centre(t: &IsometryMatrix3<f64>, offset: f64) -> Vector3<f64> {
+    t.translation.vector + t.rotation.matrix().column(2) * offset
+}
+
+/// Racket face normal (unit, base frame): the tool x axis.
+pub fn racket_normal(t: &IsometryMatrix3<f64>) -> Vector3<f64> {
+    t.rotation.matrix().column(0).into_owned()
+}
+
+/// Two unit vectors that complete `n` to a right-handed orthonormal basis (u1, u2, n).
+pub fn tangent_basis(n: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+    let helper = if n.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
+    let u1 = helper.cross(n).normalize();
+    let u2 = n.cross(&u1);
+    (u1, u2)
+}
+
+/// Seed 000's 5-D task vector of a tool pose: [centre x, y, z (m), polar angle acos(n_z),
+/// azimuth atan2(n_y, n_x) (rad)] of the racket normal n.
+pub fn racket_coordinates(t: &IsometryMatrix3<f64>, offset: f64) -> [f64; 5] {
+    let c = racket_centre(t, offset);
+    let n = racket_normal(t);
+    [c.x, c.y, c.z, n.z.clamp(-1.0, 1.0).acos(), n.y.atan2(n.x)]
+}
+
+/// A tool pose whose racket centre and normal have the seed-000 coordinates `x` (m, rad); the
+/// rotation about the normal, which the task leaves free, is chosen so that tool z is as close
+/// as possible to `z_hint` (pass the current tool z to stay near the current pose).
+pub fn racket_pose(x: &[f64; 5], offset: f64, z_hint: &Vector3<f64>) -> IsometryMatrix3<f64> {
+    let (sp, cp) = x[3].sin_cos();
+    let (sa, ca) = x[4].sin_cos();
+    let n = Vector3::new(sp * ca, sp * sa, cp);
+    let mut z = z_hint - n * n.dot(z_hint);
+    if z.norm() < 1e-9 {
+        z = tangent_basis(&n).0;
+    }
+    let z = z.normalize();
+    let y = z.cross(&n);
+    let r = Rotation3::from_matrix_unchecked(Matrix3::from_columns(&[n, y, z]));
+    let c = Vector3::new(x[0], x[1], x[2]);
+    IsometryMatrix3::from_parts(Translation3::from(c - z * offset), r)
+}
+
+/// Unit vector helper used by callers that build targets from a normal direction.
+pub fn unit(v: Vector3<f64>) -> Result<Unit<Vector3<f64>>> {
+    Unit::try_new(v, 1e-12).ok_or_else(|| Error::invalid("normal", "must be a non-zero vector"))
+}
