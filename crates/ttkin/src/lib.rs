@@ -10,14 +10,18 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod chain;
+pub mod clik;
 pub mod description;
+pub mod diffdrive;
 pub mod error;
 pub mod inertial;
 pub mod joint;
+pub mod redundancy;
 pub mod robots;
 pub mod task;
 pub mod transform;
 pub mod urdf;
+pub mod wholebody;
 
 pub use chain::{Chain, JacobianFrame};
 pub use error::{Error, Result};

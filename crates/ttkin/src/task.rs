@@ -94,32 +94,126 @@ impl Task {
         current: &IsometryMatrix3<f64>,
         target: &IsometryMatrix3<f64>,
     ) -> DMatrix<f64> {
-        let n = j.ncols();
-        let mut out = DMatrix::zeros(self.dim(), n);
+        let mut out = DMatrix::zeros(self.dim(), j.ncols());
+        self.jacobian_into(j, current, target, out.as_mut_slice());
+        out
+    }
+
+    /// [`Task::jacobian`] into a column-major slice of dim × n values; allocates nothing.
+    pub fn jacobian_into(
+        &self,
+        j: &Matrix6xX<f64>,
+        current: &IsometryMatrix3<f64>,
+        target: &IsometryMatrix3<f64>,
+        out: &mut [f64],
+    ) {
+        let m = self.dim();
         match self {
-            Task::Pose => out.copy_from(j),
-            Task::Position => out.copy_from(&j.fixed_rows::<3>(0)),
+            Task::Pose | Task::Position => {
+                for (c, col) in j.column_iter().enumerate() {
+                    out[c * m..(c + 1) * m].copy_from_slice(&col.as_slice()[..m]);
+                }
+            }
             Task::Racket { offset } => {
-                let z = current.rotation.matrix().column(2).into_owned();
-                let jv = j.fixed_rows::<3>(0);
-                let jw = j.fixed_rows::<3>(3);
-                // ċ = v + ω × (offset·z) = J_v q̇ − offset·[z]× J_ω q̇
-                let jc = jv - skew(&(z * *offset)) * jw;
-                out.rows_mut(0, 3).copy_from(&jc);
+                let oz = current.rotation.matrix().column(2) * *offset;
                 // e_n = Bᵀ(n × n*), ė_n = Bᵀ [n*]× [n]× ω  ⇒  J_n = −Bᵀ [n*]× [n]× J_ω
                 let (n_cur, nt) = (racket_normal(current), racket_normal(target));
                 let (u1, u2) = tangent_basis(&nt);
-                let m = skew(&nt) * skew(&n_cur);
-                let jn = m * jw;
-                for c in 0..n {
-                    let col = jn.column(c);
-                    out[(3, c)] = -u1.dot(&col);
-                    out[(4, c)] = -u2.dot(&col);
+                for (c, col) in j.column_iter().enumerate() {
+                    let v = Vector3::new(col[0], col[1], col[2]);
+                    let w = Vector3::new(col[3], col[4], col[5]);
+                    // ċ = v + ω × (offset·z) = v − (offset·z) × ω
+                    let jc = v - oz.cross(&w);
+                    let jn = nt.cross(&n_cur.cross(&w));
+                    let o = &mut out[c * 5..(c + 1) * 5];
+                    o[..3].copy_from_slice(jc.as_slice());
+                    o[3] = -u1.dot(&jn);
+                    o[4] = -u2.dot(&jn);
                 }
             }
         }
-        out
     }
+
+    /// Task coordinates of a tool pose (base frame), `dim()` values: position (m); position (m)
+    /// and rotation vector (rad); or seed 000's 5-vector [centre (m), polar, azimuth (rad)].
+    pub fn coordinates(&self, pose: &IsometryMatrix3<f64>, out: &mut [f64]) {
+        match self {
+            Task::Position => out[..3].copy_from_slice(pose.translation.vector.as_slice()),
+            Task::Pose => {
+                out[..3].copy_from_slice(pose.translation.vector.as_slice());
+                out[3..6].copy_from_slice(pose.rotation.scaled_axis().as_slice());
+            }
+            Task::Racket { offset } => out[..5].copy_from_slice(&racket_coordinates(pose, *offset)),
+        }
+    }
+
+    /// A target pose with task coordinates `x` (as in [`Task::coordinates`]); what the task leaves
+    /// free is taken from `hint` (orientation for the position task, rotation about the normal
+    /// for the racket task).
+    pub fn target_pose(&self, x: &[f64], hint: &IsometryMatrix3<f64>) -> IsometryMatrix3<f64> {
+        match self {
+            Task::Position => IsometryMatrix3::from_parts(Translation3::new(x[0], x[1], x[2]), hint.rotation),
+            Task::Pose => IsometryMatrix3::from_parts(
+                Translation3::new(x[0], x[1], x[2]),
+                Rotation3::new(Vector3::new(x[3], x[4], x[5])),
+            ),
+            Task::Racket { offset } => {
+                let z = hint.rotation.matrix().column(2).into_owned();
+                racket_pose(&[x[0], x[1], x[2], x[3], x[4]], *offset, &z)
+            }
+        }
+    }
+
+    /// Feed-forward velocity in residual coordinates (what ė = f − J_e q̇ needs) of a target moving
+    /// with coordinates `x` and rates `xdot`. Position: ẋ. Pose: rows 3–5 of `xdot` are taken as
+    /// the angular velocity (rad/s, base axes), not rotation-vector rates. Racket: ċ and
+    /// Bᵀ(n* × ṅ*), with ṅ* from the polar and azimuth rates (B the tangent basis of n*).
+    pub fn feedforward(&self, x: &[f64], xdot: &[f64], out: &mut [f64]) {
+        match self {
+            Task::Position | Task::Pose => out[..self.dim()].copy_from_slice(&xdot[..self.dim()]),
+            Task::Racket { .. } => {
+                let (sp, cp) = x[3].sin_cos();
+                let (sa, ca) = x[4].sin_cos();
+                let n = Vector3::new(sp * ca, sp * sa, cp);
+                let dn_dp = Vector3::new(cp * ca, cp * sa, -sp);
+                let dn_da = Vector3::new(-sp * sa, sp * ca, 0.0);
+                let ndot = dn_dp * xdot[3] + dn_da * xdot[4];
+                let (u1, u2) = tangent_basis(&n);
+                let r = n.cross(&ndot);
+                out[..3].copy_from_slice(&xdot[..3]);
+                out[3] = u1.dot(&r);
+                out[4] = u2.dot(&r);
+            }
+        }
+    }
+}
+
+/// Seed 000's analytic Jacobian of the 5-vector [centre, polar, azimuth] (5 × n) from the
+/// base-frame geometric Jacobian `j` at tool pose `t`. Singular where the normal is along ±z
+/// (sin(polar) = 0): returns [`Error::Singular`] below `sin(polar) < 1e-6`.
+pub fn racket_angle_jacobian(j: &Matrix6xX<f64>, t: &IsometryMatrix3<f64>, offset: f64) -> Result<DMatrix<f64>> {
+    let n = racket_normal(t);
+    let rho2 = n.x * n.x + n.y * n.y;
+    if rho2.sqrt() < 1e-6 {
+        return Err(Error::Singular(
+            "racket normal along ±z: the azimuth angle is undefined (use the 'racket5' residual task)".into(),
+        ));
+    }
+    let oz = t.rotation.matrix().column(2) * offset;
+    let mut out = DMatrix::zeros(5, j.ncols());
+    for (c, col) in j.column_iter().enumerate() {
+        let v = Vector3::new(col[0], col[1], col[2]);
+        let w = Vector3::new(col[3], col[4], col[5]);
+        let jc = v - oz.cross(&w);
+        let nd = w.cross(&n);
+        out[(0, c)] = jc.x;
+        out[(1, c)] = jc.y;
+        out[(2, c)] = jc.z;
+        // polar = acos(n_z): −ṅ_z / sin(polar); azimuth = atan2(n_y, n_x): (n_x ṅ_y − n_y ṅ_x)/ρ²
+        out[(3, c)] = -nd.z / rho2.sqrt();
+        out[(4, c)] = (n.x * nd.y - n.y * nd.x) / rho2;
+    }
+    Ok(out)
 }
 
 /// Skew-symmetric matrix [v]× with [v]× w = v × w.
