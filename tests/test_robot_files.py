@@ -188,3 +188,37 @@ def test_malformed_xml_and_missing_files(tmp_path):
 def test_bad_robot_files_raise_clear_errors(text, words):
     with pytest.raises(ttmanip.TtmanipError, match=words):
         ttmanip.Robot.from_toml(text)
+
+
+@pytest.mark.parametrize("name", BUILTINS)
+def test_repository_robot_files_match_the_builtins(name):
+    """robots/NAME.{toml,urdf} are what `ttmanip export` writes today (regenerate them if not)."""
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent / "robots"
+    robot = ttmanip.Robot.builtin(name)
+    toml_text = "".join(
+        line
+        for line in (root / f"{name}.toml").read_text().splitlines(keepends=True)
+        if not line.startswith("#")
+    )
+    assert toml_text == robot.to_toml(), (
+        f"robots/{name}.toml is stale: ttmanip export {name} --out robots/{name}.toml"
+    )
+    assert (root / f"{name}.urdf").read_text() == robot.to_urdf()
+    from_file = ttmanip.Robot.from_file(root / f"{name}.toml")
+    q = random_q(robot, 50)
+    np.testing.assert_array_equal(from_file.fk(q), robot.fk(q))
+
+
+def test_cli_export_and_info(tmp_path, capsys):
+    from ttmanip.cli import main
+
+    assert main(["export", "arm4", "--out", str(tmp_path / "arm4.urdf")]) == 0
+    back = ttmanip.Robot.from_urdf(tmp_path / "arm4.urdf", "base_link", "tool")
+    np.testing.assert_allclose(
+        back.fk([0.1, 0.2, 0.3, 0.4]), ttmanip.robots.arm4().fk([0.1, 0.2, 0.3, 0.4]), atol=1e-12
+    )
+    assert main(["export", "arm4", "--out", str(tmp_path / "arm4.json")]) == 2
+    assert main(["info", "gantry6"]) == 0
+    assert "theta6" in capsys.readouterr().out

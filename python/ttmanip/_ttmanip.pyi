@@ -81,7 +81,7 @@ class Robot:
         """Joint names, base to tool."""
     @property
     def joint_types(self) -> list[str]:
-        """"revolute" or "prismatic" per joint."""
+        """ "revolute" or "prismatic" per joint."""
     @property
     def limits(self) -> NDArray[np.float64]:
         """(n, 2) lower and upper position limits (m or rad)."""
