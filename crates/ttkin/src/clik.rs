@@ -10,6 +10,9 @@
 //! solver ([`WlsSolver`]) saturates inputs in the null space and scales the task only as a last
 //! resort. The result carries a [`ClikStatus`] instead of garbage when the task cannot be followed.
 
+// Numeric loops index several parallel arrays by the same input index: keep them as loops.
+#![allow(clippy::needless_range_loop)]
+
 use nalgebra::{IsometryMatrix3, Matrix6xX};
 
 use crate::error::{check_finite, Error, Result};
@@ -111,7 +114,7 @@ impl TaskTrajectory {
             ));
         }
         let steps = (duration * rate_hz).round() as usize;
-        if steps < 1 || steps > 100_000_000 {
+        if !(1..=100_000_000).contains(&steps) {
             return Err(Error::invalid("duration", "duration × rate must give 1..1e8 steps"));
         }
         let mut x = Vec::with_capacity((steps + 1) * d);
@@ -425,15 +428,9 @@ impl<'a> Clik<'a> {
                 self.lo[k] -= prev[k];
                 self.hi[k] -= prev[k];
             }
-            let rep2 = self.solver.solve(
-                &self.jtask,
-                &self.w,
-                &self.cmd[..m],
-                None,
-                &self.lo,
-                &self.hi,
-                &mut self.du,
-            );
+            let rep2 = self
+                .solver
+                .resolve(&self.jtask, &self.cmd[..m], None, &self.lo, &self.hi, &mut self.du);
             for k in 0..nu {
                 prev[k] += self.du[k];
             }

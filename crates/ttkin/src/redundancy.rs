@@ -16,10 +16,16 @@
 //! the joint moves away from mid-range, so "grows" is tested as ∂H/∂q_i · q̇_i ≥ 0 with the
 //! joint's latest motion q̇_i (a joint at rest counts as approaching, the safe side).
 
+// Numeric loops index several parallel arrays by the same input index: keep them as loops.
+#![allow(clippy::needless_range_loop)]
+
 use crate::error::{Error, Result};
 
 /// Largest task dimension the solver handles.
 pub const MAX_TASK_DIM: usize = 6;
+
+/// Inverse-iteration sweeps per solve for σ_min (warm-started from the previous solve's vector).
+const INVERSE_ITERATIONS: usize = 2;
 
 /// Cap on |∂H/∂q| (and so on a weight) at or beyond a limit, where the criterion is infinite.
 pub const MAX_LIMIT_GRADIENT: f64 = 1e12;
@@ -167,6 +173,10 @@ pub struct WlsSolver {
     chol: [f64; MAX_TASK_DIM * MAX_TASK_DIM],
     gram: [f64; MAX_TASK_DIM * MAX_TASK_DIM],
     eig: [f64; MAX_TASK_DIM],
+    factor_fn: FactorFn,
+    solve_fn: SolveFn,
+    cached: Option<(f64, f64)>,
+    cached_chol: [f64; MAX_TASK_DIM * MAX_TASK_DIM],
 }
 
 impl WlsSolver {
@@ -194,6 +204,10 @@ impl WlsSolver {
             chol: [0.0; MAX_TASK_DIM * MAX_TASK_DIM],
             gram: [0.0; MAX_TASK_DIM * MAX_TASK_DIM],
             eig,
+            factor_fn: kernels(m).0,
+            solve_fn: kernels(m).1,
+            cached: None,
+            cached_chol: [0.0; MAX_TASK_DIM * MAX_TASK_DIM],
         })
     }
 
@@ -229,12 +243,40 @@ impl WlsSolver {
         upper: &[f64],
         qdot: &mut [f64],
     ) -> StepReport {
-        let (m, n) = (self.m, self.n);
-        debug_assert!(jac.len() == m * n && w.len() == n && xdot.len() == m && qdot.len() == n);
-        debug_assert!(lower.len() == n && upper.len() == n);
+        debug_assert!(w.len() == self.n);
         for (wi, &x) in self.winv.iter_mut().zip(w) {
             *wi = 1.0 / x;
         }
+        self.cached = None;
+        self.solve_inner(jac, xdot, z, lower, upper, qdot)
+    }
+
+    /// [`WlsSolver::solve`] with the Jacobian and weights of the previous `solve` (only the task
+    /// velocity, secondary motion and box change): reuses the factorisation when possible.
+    pub fn resolve(
+        &mut self,
+        jac: &[f64],
+        xdot: &[f64],
+        z: Option<&[f64]>,
+        lower: &[f64],
+        upper: &[f64],
+        qdot: &mut [f64],
+    ) -> StepReport {
+        self.solve_inner(jac, xdot, z, lower, upper, qdot)
+    }
+
+    fn solve_inner(
+        &mut self,
+        jac: &[f64],
+        xdot: &[f64],
+        z: Option<&[f64]>,
+        lower: &[f64],
+        upper: &[f64],
+        qdot: &mut [f64],
+    ) -> StepReport {
+        let (m, n) = (self.m, self.n);
+        debug_assert!(jac.len() == m * n && xdot.len() == m && qdot.len() == n);
+        debug_assert!(lower.len() == n && upper.len() == n);
         let mut z = z;
         'with_z: loop {
             self.free.fill(true);
@@ -247,7 +289,19 @@ impl WlsSolver {
                 saturated: 0,
             };
             for saturated in 0..=n {
-                let (sigma, lambda2) = self.factor(jac);
+                let (sigma, lambda2) = match (saturated, self.cached) {
+                    (0, Some(c)) => {
+                        self.chol = self.cached_chol;
+                        c
+                    }
+                    (0, None) => {
+                        let c = self.factor(jac);
+                        self.cached = Some(c);
+                        self.cached_chol = self.chol;
+                        c
+                    }
+                    _ => self.factor(jac),
+                };
                 self.parts(jac, xdot, z);
                 // Largest s ∈ [0, 1] with lower ≤ a + s·b ≤ upper on the free inputs.
                 let mut s_max = 1.0f64;
@@ -358,10 +412,10 @@ impl WlsSolver {
         // σ_min² = λ_min(G): inverse iteration warm-started from the previous eigenvector.
         let mut sigma = 0.0;
         self.chol[..m * m].copy_from_slice(&g[..m * m]);
-        if cholesky(&mut self.chol, m) {
+        if (self.factor_fn)(&mut self.chol) {
             let mut lam = f64::INFINITY;
-            for _ in 0..4 {
-                cholesky_solve(&self.chol, m, &mut self.eig);
+            for _ in 0..INVERSE_ITERATIONS {
+                (self.solve_fn)(&self.chol, &mut self.eig);
                 let norm = self.eig[..m].iter().map(|v| v * v).sum::<f64>().sqrt();
                 if !(norm.is_finite() && norm > 0.0) {
                     self.eig[..m].fill(1.0 / (m as f64).sqrt());
@@ -378,14 +432,14 @@ impl WlsSolver {
         for r in 0..m {
             self.chol[r * m + r] += lambda2;
         }
-        if !cholesky(&mut self.chol, m) {
+        if !(self.factor_fn)(&mut self.chol) {
             // Exactly singular and undamped: regularise minimally so the result stays finite.
             let tiny = 1e-12 * (1.0 + (0..m).map(|r| g[r * m + r]).fold(0.0, f64::max));
             self.chol[..m * m].copy_from_slice(&g[..m * m]);
             for r in 0..m {
                 self.chol[r * m + r] += lambda2 + tiny;
             }
-            cholesky(&mut self.chol, m);
+            (self.factor_fn)(&mut self.chol);
             return (sigma, lambda2 + tiny);
         }
         (sigma, lambda2)
@@ -411,8 +465,8 @@ impl WlsSolver {
                 }
             }
         }
-        cholesky_solve(&self.chol, m, &mut ra);
-        cholesky_solve(&self.chol, m, &mut rb);
+        (self.solve_fn)(&self.chol, &mut ra);
+        (self.solve_fn)(&self.chol, &mut rb);
         for k in 0..n {
             if !self.free[k] {
                 self.a_part[k] = self.fixed[k];
@@ -431,45 +485,62 @@ impl WlsSolver {
     }
 }
 
-/// In-place Cholesky G = L Lᵀ of the lower triangle of an m × m row-major matrix; false when G is
-/// not positive definite (to working precision).
-fn cholesky(a: &mut [f64], m: usize) -> bool {
-    for j in 0..m {
-        let mut d = a[j * m + j];
+/// Cholesky factorisation of an M × M row-major matrix in place (lower triangle).
+type FactorFn = fn(&mut [f64; MAX_TASK_DIM * MAX_TASK_DIM]) -> bool;
+/// Solve with a Cholesky factor in place.
+type SolveFn = fn(&[f64; MAX_TASK_DIM * MAX_TASK_DIM], &mut [f64; MAX_TASK_DIM]);
+
+/// The factor/solve pair for task dimension `m` (1..=6), monomorphised so the loops unroll.
+fn kernels(m: usize) -> (FactorFn, SolveFn) {
+    match m {
+        1 => (cholesky::<1>, cholesky_solve::<1>),
+        2 => (cholesky::<2>, cholesky_solve::<2>),
+        3 => (cholesky::<3>, cholesky_solve::<3>),
+        4 => (cholesky::<4>, cholesky_solve::<4>),
+        5 => (cholesky::<5>, cholesky_solve::<5>),
+        _ => (cholesky::<6>, cholesky_solve::<6>),
+    }
+}
+
+/// In-place Cholesky G = L Lᵀ of the lower triangle of an M × M row-major matrix (stride M);
+/// false when G is not positive definite (to working precision).
+fn cholesky<const M: usize>(a: &mut [f64; MAX_TASK_DIM * MAX_TASK_DIM]) -> bool {
+    for j in 0..M {
+        let mut d = a[j * M + j];
         for k in 0..j {
-            d -= a[j * m + k] * a[j * m + k];
+            d -= a[j * M + k] * a[j * M + k];
         }
         if !(d > 1e-300) {
             return false;
         }
         let d = d.sqrt();
-        a[j * m + j] = d;
-        for i in j + 1..m {
-            let mut s = a[i * m + j];
+        a[j * M + j] = d;
+        for i in j + 1..M {
+            let mut s = a[i * M + j];
             for k in 0..j {
-                s -= a[i * m + k] * a[j * m + k];
+                s -= a[i * M + k] * a[j * M + k];
             }
-            a[i * m + j] = s / d;
+            a[i * M + j] = s / d;
         }
     }
     true
 }
 
 /// Solves L Lᵀ x = b in place with the factor from [`cholesky`].
-fn cholesky_solve(l: &[f64], m: usize, b: &mut [f64]) {
-    for i in 0..m {
+fn cholesky_solve<const M: usize>(l: &[f64; MAX_TASK_DIM * MAX_TASK_DIM], b: &mut [f64; MAX_TASK_DIM]) {
+    for i in 0..M {
         let mut s = b[i];
         for k in 0..i {
-            s -= l[i * m + k] * b[k];
+            s -= l[i * M + k] * b[k];
         }
-        b[i] = s / l[i * m + i];
+        b[i] = s / l[i * M + i];
     }
-    for i in (0..m).rev() {
+    for i in (0..M).rev() {
         let mut s = b[i];
-        for k in i + 1..m {
-            s -= l[k * m + i] * b[k];
+        for k in i + 1..M {
+            s -= l[k * M + i] * b[k];
         }
-        b[i] = s / l[i * m + i];
+        b[i] = s / l[i * M + i];
     }
 }
 

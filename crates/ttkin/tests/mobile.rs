@@ -1,4 +1,5 @@
 //! Mobile manipulation: differential drive, whole-body Jacobian, weighted least norm, CLIK.
+#![allow(clippy::needless_range_loop)]
 
 mod common;
 
