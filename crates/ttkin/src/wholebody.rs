@@ -10,6 +10,8 @@
 //! (6 × nu) maps u to the tool twist [v; ω] at the tool point in world axes:
 //! column v = [cos θ, sin θ, 0; 0], column ω = [ẑ × (p − p_b); ẑ], arm columns = R_wb R_mount J_arm.
 
+use std::sync::Arc;
+
 use nalgebra::{IsometryMatrix3, Matrix6xX, Rotation3, Translation3, Vector3};
 
 use crate::chain::{Chain, JacobianFrame};
@@ -35,7 +37,7 @@ pub enum Base {
 #[derive(Debug, Clone, PartialEq)]
 pub struct WholeBody {
     base: Base,
-    arm: Chain,
+    arm: Arc<Chain>,
 }
 
 /// Scratch of a [`WholeBody`] (one per thread): the arm Jacobian.
@@ -46,15 +48,18 @@ pub struct WholeBodyData {
 
 impl WholeBody {
     /// The arm alone on a fixed base.
-    pub fn fixed(arm: Chain) -> Self {
-        WholeBody { base: Base::Fixed, arm }
+    pub fn fixed(arm: impl Into<Arc<Chain>>) -> Self {
+        WholeBody {
+            base: Base::Fixed,
+            arm: arm.into(),
+        }
     }
 
     /// The arm mounted (`mount`: base frame → arm base frame) on a differential-drive base.
-    pub fn on_diff_drive(drive: DiffDrive, mount: IsometryMatrix3<f64>, arm: Chain) -> Self {
+    pub fn on_diff_drive(drive: DiffDrive, mount: IsometryMatrix3<f64>, arm: impl Into<Arc<Chain>>) -> Self {
         WholeBody {
             base: Base::DiffDrive { drive, mount },
-            arm,
+            arm: arm.into(),
         }
     }
 

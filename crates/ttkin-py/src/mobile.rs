@@ -1,0 +1,452 @@
+//! Mobile manipulation bindings: `DiffDrive`, `Robot.task_jacobian` / `Robot.task_coordinates`,
+//! `wls_step`, `task_line` and `track` (one call per motion, the loop in Rust without the GIL).
+
+use numpy::PyArrayDyn;
+use pyo3::prelude::*;
+use ttkin::clik::{ClikOptions, ClikResult, ClikStatus, TaskTrajectory};
+use ttkin::diffdrive::DiffDrive;
+use ttkin::redundancy::{Damping, Weighting, WlsStep};
+use ttkin::task::Task;
+use ttkin::wholebody::WholeBody;
+
+use crate::convert::{f64_array, to_numpy, transform, vector};
+use crate::errors::{PyResultExt, ShapeError, TtmanipError};
+use crate::robot::PyRobot;
+
+/// A differential-drive base: wheel speeds (left, right) in rad/s, body velocity (v m/s, ω rad/s),
+/// poses (x m, y m, θ rad) of the axle midpoint in the world frame.
+#[pyclass(name = "DiffDrive", module = "ttmanip", frozen)]
+#[derive(Clone)]
+pub struct PyDiffDrive {
+    drive: DiffDrive,
+}
+
+fn wheel_pair(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<[f64; 2]> {
+    let v = vector(obj, what, 2)?;
+    Ok([v[0], v[1]])
+}
+
+fn finite(what: &str, v: f64) -> PyResult<f64> {
+    ttkin::error::check_finite(what, &[v]).py()?;
+    Ok(v)
+}
+
+#[pymethods]
+impl PyDiffDrive {
+    /// Wheel radius and track (m); optional wheel speed (rad/s) and acceleration (rad/s²) limits.
+    #[new]
+    #[pyo3(signature = (wheel_radius, track, max_wheel_speed=None, max_wheel_acceleration=None))]
+    fn new(
+        wheel_radius: f64,
+        track: f64,
+        max_wheel_speed: Option<f64>,
+        max_wheel_acceleration: Option<f64>,
+    ) -> PyResult<Self> {
+        let drive = DiffDrive::new(wheel_radius, track)
+            .and_then(|d| {
+                d.with_limits(
+                    max_wheel_speed.unwrap_or(f64::INFINITY),
+                    max_wheel_acceleration.unwrap_or(f64::INFINITY),
+                )
+            })
+            .py()?;
+        Ok(PyDiffDrive { drive })
+    }
+
+    /// Wheel radius (m).
+    #[getter]
+    fn wheel_radius(&self) -> f64 {
+        self.drive.wheel_radius()
+    }
+
+    /// Distance between the wheel contact points (m).
+    #[getter]
+    fn track(&self) -> f64 {
+        self.drive.track()
+    }
+
+    /// Wheel speed limit (rad/s; inf when none).
+    #[getter]
+    fn max_wheel_speed(&self) -> f64 {
+        self.drive.max_wheel_speed()
+    }
+
+    /// Wheel acceleration limit (rad/s²; inf when none).
+    #[getter]
+    fn max_wheel_acceleration(&self) -> f64 {
+        self.drive.max_wheel_acceleration()
+    }
+
+    /// Body velocity (v m/s, ω rad/s) from wheel speeds (left, right) rad/s.
+    fn body_velocity(&self, wheel_speeds: &Bound<'_, PyAny>) -> PyResult<(f64, f64)> {
+        Ok(self.drive.body_velocity(wheel_pair(wheel_speeds, "wheel_speeds")?))
+    }
+
+    /// Wheel speeds (left, right) in rad/s for a body velocity (v m/s, ω rad/s), shape (2,).
+    fn wheel_speeds<'py>(&self, py: Python<'py>, v: f64, omega: f64) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let w = self.drive.wheel_speeds(finite("v", v)?, finite("omega", omega)?);
+        Ok(to_numpy(py, &[2], &w))
+    }
+
+    /// Pose (x, y, θ) after `duration` s at constant wheel speeds (left, right) rad/s from `pose`:
+    /// the exact arc (no singularity when driving straight or spinning in place), shape (3,).
+    fn integrate<'py>(
+        &self,
+        py: Python<'py>,
+        pose: &Bound<'py, PyAny>,
+        wheel_speeds: &Bound<'py, PyAny>,
+        duration: f64,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let p = vector(pose, "pose", 3)?;
+        let w = wheel_pair(wheel_speeds, "wheel_speeds")?;
+        let out = self.drive.try_integrate([p[0], p[1], p[2]], w, duration).py()?;
+        Ok(to_numpy(py, &[3], &out))
+    }
+
+    /// Wheel speeds scaled together to the speed limit (curvature kept), shape (2,).
+    fn saturate<'py>(
+        &self,
+        py: Python<'py>,
+        wheel_speeds: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let (w, _) = self.drive.saturate_speeds(wheel_pair(wheel_speeds, "wheel_speeds")?);
+        Ok(to_numpy(py, &[2], &w))
+    }
+
+    /// Wheel speeds reachable from `previous` toward `command` in `dt` s under both limits, (2,).
+    fn limit_step<'py>(
+        &self,
+        py: Python<'py>,
+        previous: &Bound<'py, PyAny>,
+        command: &Bound<'py, PyAny>,
+        dt: f64,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        if !(dt >= 0.0 && dt.is_finite()) {
+            return Err(TtmanipError::new_err(format!("dt: must be finite and ≥ 0 s, got {dt}")));
+        }
+        let w = self
+            .drive
+            .limit_step(wheel_pair(previous, "previous")?, wheel_pair(command, "command")?, dt);
+        Ok(to_numpy(py, &[2], &w))
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "DiffDrive(wheel_radius={}, track={}, max_wheel_speed={}, max_wheel_acceleration={})",
+            self.drive.wheel_radius(),
+            self.drive.track(),
+            self.drive.max_wheel_speed(),
+            self.drive.max_wheel_acceleration()
+        )
+    }
+}
+
+/// The whole-body model of a robot, optionally on a diff-drive base with a mount transform.
+fn model(robot: &PyRobot, base: Option<&PyDiffDrive>, mount: Option<&Bound<'_, PyAny>>) -> PyResult<WholeBody> {
+    match base {
+        None => {
+            if mount.is_some() {
+                return Err(TtmanipError::new_err(
+                    "mount: only meaningful together with base=DiffDrive(...)",
+                ));
+            }
+            Ok(WholeBody::fixed(robot.chain.clone()))
+        }
+        Some(b) => {
+            let m = match mount {
+                Some(m) => transform(m, "mount")?,
+                None => nalgebra::IsometryMatrix3::identity(),
+            };
+            Ok(WholeBody::on_diff_drive(b.drive, m, robot.chain.clone()))
+        }
+    }
+}
+
+fn make_damping(lambda_max: f64, epsilon: f64) -> PyResult<Damping> {
+    let d = Damping { epsilon, lambda_max };
+    d.validate().py()?;
+    Ok(d)
+}
+
+#[pymethods]
+impl PyRobot {
+    /// Task Jacobian J_e (m, n) of `task` ("pose", "position", "racket5") at `q`, rows in the task's
+    /// residual coordinates (base axes): the residual against `target` (4×4, default: the current
+    /// pose) changes as ė = −J_e q̇; for the current pose as target, J_e q̇ is the task velocity.
+    #[pyo3(signature = (q, task="racket5", target=None))]
+    fn task_jacobian<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+        task: &str,
+        target: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let task = Task::from_name(task).py()?;
+        let n = self.chain.dof();
+        let q = vector(q, "q", n)?;
+        let j = self.chain.jacobian(&q, ttkin::JacobianFrame::Base).py()?;
+        let t = self.chain.fk_unchecked(&q);
+        let target = match target {
+            Some(m) => transform(m, "target")?,
+            None => t,
+        };
+        let je = task.jacobian(&j, &t, &target);
+        Ok(to_numpy(py, &[task.dim(), n], je.transpose().as_slice()))
+    }
+
+    /// Task coordinates of the tool pose at `q`: position (3,); position and rotation vector (6,);
+    /// or seed 000's racket 5-vector [centre x, y, z (m), polar, azimuth (rad)].
+    #[pyo3(signature = (q, task="racket5"))]
+    fn task_coordinates<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+        task: &str,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let task = Task::from_name(task).py()?;
+        let q = vector(q, "q", self.chain.dof())?;
+        let mut x = [0.0; 6];
+        task.coordinates(&self.chain.fk_unchecked(&q), &mut x);
+        Ok(to_numpy(py, &[task.dim()], &x[..task.dim()]))
+    }
+}
+
+/// One weighted least-norm step: inputs q̇ (nu,) that realise task velocity `xdot` (residual
+/// coordinates, see `Robot.task_jacobian`) at `q`, with Chan–Dubey joint-limit weights (or none) and
+/// singularity-robust damping (λ_max = `damping`, starting below σ_min = `epsilon`).
+#[pyfunction]
+#[pyo3(signature = (robot, q, xdot, task="racket5", weights="chan-dubey", damping=0.05, epsilon=1e-3, qdot_prev=None, base=None, mount=None))]
+#[allow(clippy::too_many_arguments)]
+fn wls_step<'py>(
+    py: Python<'py>,
+    robot: &PyRobot,
+    q: &Bound<'py, PyAny>,
+    xdot: &Bound<'py, PyAny>,
+    task: &str,
+    weights: &str,
+    damping: f64,
+    epsilon: f64,
+    qdot_prev: Option<&Bound<'py, PyAny>>,
+    base: Option<PyRef<'py, PyDiffDrive>>,
+    mount: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    let task = Task::from_name(task).py()?;
+    let weighting = Weighting::from_name(weights).py()?;
+    let model = model(robot, base.as_deref(), mount)?;
+    let q = vector(q, "q", model.nq())?;
+    let xdot = vector(xdot, "xdot", task.dim())?;
+    let prev = match qdot_prev {
+        Some(p) => vector(p, "qdot_prev", model.nu())?,
+        None => vec![0.0; model.nu()],
+    };
+    let mut step = WlsStep::new(&model, task, weighting, make_damping(damping, epsilon)?).py()?;
+    let (qd, _) = step.try_solve(&q, &xdot, &prev).py()?;
+    Ok(to_numpy(py, &[qd.len()], &qd))
+}
+
+/// Samples (N, dim) and rates (N, dim) of a straight task-space line from `x0` to `x1` over
+/// `duration` s with the quintic rest-to-rest time law, at `rate_hz` (both ends included).
+#[pyfunction]
+#[pyo3(signature = (x0, x1, duration, rate_hz=1000.0, task="racket5"))]
+fn task_line<'py>(
+    py: Python<'py>,
+    x0: &Bound<'py, PyAny>,
+    x1: &Bound<'py, PyAny>,
+    duration: f64,
+    rate_hz: f64,
+    task: &str,
+) -> PyResult<(Bound<'py, PyArrayDyn<f64>>, Bound<'py, PyArrayDyn<f64>>)> {
+    let task = Task::from_name(task).py()?;
+    let d = task.dim();
+    let (a, b) = (vector(x0, "x0", d)?, vector(x1, "x1", d)?);
+    let traj = TaskTrajectory::line(task, &a, &b, duration, rate_hz).py()?;
+    let n = traj.len();
+    let mut x = Vec::with_capacity(n * d);
+    let mut xd = Vec::with_capacity(n * d);
+    for k in 0..n {
+        x.extend_from_slice(traj.x(k));
+        xd.extend_from_slice(traj.xdot(k));
+    }
+    Ok((to_numpy(py, &[n, d], &x), to_numpy(py, &[n, d], &xd)))
+}
+
+/// The arrays of a tracked motion (one row per control sample) and how it ended.
+#[pyclass(name = "TrackResult", module = "ttmanip", frozen)]
+pub struct PyTrackResult {
+    r: ClikResult,
+    joint_names: Vec<String>,
+}
+
+#[pymethods]
+impl PyTrackResult {
+    /// Sample times (N,), s.
+    #[getter]
+    fn time<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        to_numpy(py, &[self.r.len()], &self.r.time)
+    }
+    /// Configurations (N, nq): m for prismatic, rad for revolute joints (base x, y, θ first).
+    #[getter]
+    fn q<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        to_numpy(py, &[self.r.len(), self.r.nq], &self.r.q)
+    }
+    /// Commanded inputs (N, nu): joint rates (m/s, rad/s), base (v, ω) first.
+    #[getter]
+    fn qdot<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        to_numpy(py, &[self.r.len(), self.r.nu], &self.r.qdot)
+    }
+    /// Task coordinates reached (N, dim).
+    #[getter]
+    fn x<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        to_numpy(py, &[self.r.len(), self.r.dim], &self.r.x)
+    }
+    /// Norm of the task residual (N,), task units.
+    #[getter]
+    fn error<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        to_numpy(py, &[self.r.len()], &self.r.error)
+    }
+    /// Position residual (N,), m.
+    #[getter]
+    fn position_error<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        to_numpy(py, &[self.r.len()], &self.r.position_error)
+    }
+    /// Orientation residual (N,), rad.
+    #[getter]
+    fn orientation_error<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        to_numpy(py, &[self.r.len()], &self.r.orientation_error)
+    }
+    /// Distance of each arm joint to its nearer limit (N, n), m or rad; negative beyond a limit.
+    #[getter]
+    fn margin<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        to_numpy(py, &[self.r.len(), self.r.n_margin], &self.r.margin)
+    }
+    /// Fraction of the task velocity achieved at each sample (N,), 1 = full.
+    #[getter]
+    fn scale<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        to_numpy(py, &[self.r.len()], &self.r.scale)
+    }
+    /// Smallest singular value estimate of the weighted task Jacobian (N,).
+    #[getter]
+    fn sigma_min<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        to_numpy(py, &[self.r.len()], &self.r.sigma_min)
+    }
+    /// "completed", "saturated" (finished, task velocity scaled at some samples) or "failed".
+    #[getter]
+    fn status(&self) -> &'static str {
+        match self.r.status {
+            ClikStatus::Completed => "completed",
+            ClikStatus::Saturated { .. } => "saturated",
+            ClikStatus::Failed { .. } => "failed",
+        }
+    }
+    /// True when the motion completed with the full task velocity at every sample.
+    #[getter]
+    fn ok(&self) -> bool {
+        self.r.status == ClikStatus::Completed
+    }
+    /// A sentence on how the motion ended.
+    #[getter]
+    fn message(&self) -> String {
+        match &self.r.status {
+            ClikStatus::Completed => "completed: full task velocity at every sample".into(),
+            ClikStatus::Saturated {
+                first_time,
+                samples,
+                min_scale,
+            } => format!(
+                "saturated: limits scaled the task velocity at {samples} samples from t = {first_time:.3} s \
+                 (smallest scale {min_scale:.3})"
+            ),
+            ClikStatus::Failed { time, reason } => format!("failed at t = {time:.3} s: {reason}"),
+        }
+    }
+    /// Names of the arm joints (columns of `margin`).
+    #[getter]
+    fn joint_names(&self) -> Vec<String> {
+        self.joint_names.clone()
+    }
+    fn __len__(&self) -> usize {
+        self.r.len()
+    }
+    fn __repr__(&self) -> String {
+        format!("TrackResult({} samples, {})", self.r.len(), self.message())
+    }
+}
+
+/// Closed-loop tracking of a task trajectory sampled at `rate_hz` (N, dim) from `q0`; the loop
+/// runs in Rust without the GIL. `velocities` (N, dim) are the task rates (default: finite
+/// differences). See `ttmanip.mobile.track` for the options.
+#[pyfunction]
+#[pyo3(signature = (robot, q0, task_trajectory, rate_hz=1000.0, task="racket5", velocities=None, weights="chan-dubey",
+                    gain=None, damping=0.05, epsilon=1e-3, input_weights=None, limit_gain=0.0,
+                    respect_limits=true, max_error=0.05, corrector=true, base=None, mount=None))]
+#[allow(clippy::too_many_arguments)]
+fn track<'py>(
+    py: Python<'py>,
+    robot: &PyRobot,
+    q0: &Bound<'py, PyAny>,
+    task_trajectory: &Bound<'py, PyAny>,
+    rate_hz: f64,
+    task: &str,
+    velocities: Option<&Bound<'py, PyAny>>,
+    weights: &str,
+    gain: Option<f64>,
+    damping: f64,
+    epsilon: f64,
+    input_weights: Option<&Bound<'py, PyAny>>,
+    limit_gain: f64,
+    respect_limits: bool,
+    max_error: f64,
+    corrector: bool,
+    base: Option<PyRef<'py, PyDiffDrive>>,
+    mount: Option<&Bound<'py, PyAny>>,
+) -> PyResult<PyTrackResult> {
+    let task = Task::from_name(task).py()?;
+    let model = model(robot, base.as_deref(), mount)?;
+    let q0 = vector(q0, "q0", model.nq())?;
+    let d = task.dim();
+    let samples = |obj: &Bound<'py, PyAny>, what: &str| -> PyResult<Vec<f64>> {
+        let a = f64_array(obj, what)?;
+        match a.shape() {
+            [_, c] if *c == d => Ok(a.data().to_vec()),
+            _ => Err(ShapeError::new_err(format!(
+                "{what}: expected shape (N, {d}) for task of dimension {d}, got {}",
+                a.shape_str()
+            ))),
+        }
+    };
+    let x = samples(task_trajectory, "task_trajectory")?;
+    let trajectory = match velocities {
+        Some(v) => TaskTrajectory::new(task, rate_hz, x, samples(v, "velocities")?),
+        None => TaskTrajectory::from_samples(task, rate_hz, x),
+    }
+    .py()?;
+    let input_weights = match input_weights {
+        Some(w) => Some(vector(w, "input_weights", model.nu())?),
+        None => None,
+    };
+    let options = ClikOptions {
+        gain,
+        weighting: Weighting::from_name(weights).py()?,
+        damping: make_damping(damping, epsilon)?,
+        input_weights,
+        limit_gain,
+        respect_limits,
+        max_error,
+        corrector,
+    };
+    let r = py
+        .detach(|| ttkin::clik::track(&model, &q0, &trajectory, options))
+        .py()?;
+    let joint_names = robot.chain.joints().iter().map(|j| j.name().to_string()).collect();
+    Ok(PyTrackResult { r, joint_names })
+}
+
+/// Adds the mobile-manipulation classes and functions to the module.
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyDiffDrive>()?;
+    m.add_class::<PyTrackResult>()?;
+    m.add_function(wrap_pyfunction!(wls_step, m)?)?;
+    m.add_function(wrap_pyfunction!(task_line, m)?)?;
+    m.add_function(wrap_pyfunction!(track, m)?)?;
+    Ok(())
+}
