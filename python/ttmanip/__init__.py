@@ -10,6 +10,7 @@ seconds; poses are 4×4 homogeneous matrices in the robot's base frame.
 """
 
 from . import robots
+from .mobile import DiffDrive, TrackResult, task_line, track, wls_step
 from ._ttmanip import (
     ModelError,
     NonFiniteError,
@@ -22,15 +23,20 @@ from ._ttmanip import (
 )
 
 __all__ = [
+    "DiffDrive",
     "ModelError",
     "NonFiniteError",
     "Robot",
     "RobotFileError",
     "ShapeError",
     "SingularError",
+    "TrackResult",
     "TtmanipError",
     "UnreachableError",
     "robots",
+    "task_line",
+    "track",
+    "wls_step",
 ]
 
 __version__ = "0.1.0"

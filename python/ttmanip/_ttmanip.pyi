@@ -106,3 +106,110 @@ class Robot:
         """Every link frame in the base frame: (n, 4, 4) or (N, n, 4, 4)."""
     def jacobian(self, q: ArrayLike, frame: str = "base") -> NDArray[np.float64]:
         """Geometric Jacobian [v; ω] of the tool point: (6, n) or (N, 6, n)."""
+    def task_jacobian(self, q: ArrayLike, task: str = "racket5", target: ArrayLike | None = None) -> NDArray[np.float64]:
+        """Task Jacobian (m, n) of "pose", "position" or "racket5" in residual coordinates (ė = −J_e q̇)."""
+    def task_coordinates(self, q: ArrayLike, task: str = "racket5") -> NDArray[np.float64]:
+        """Task coordinates of the tool pose: (3,), (6,) or the racket 5-vector (m, rad)."""
+
+class DiffDrive:
+    """Differential-drive base: wheel speeds (left, right) rad/s, body velocity (v m/s, ω rad/s)."""
+
+    def __init__(
+        self,
+        wheel_radius: float,
+        track: float,
+        max_wheel_speed: float | None = None,
+        max_wheel_acceleration: float | None = None,
+    ) -> None: ...
+    @property
+    def wheel_radius(self) -> float: ...
+    @property
+    def track(self) -> float: ...
+    @property
+    def max_wheel_speed(self) -> float: ...
+    @property
+    def max_wheel_acceleration(self) -> float: ...
+    def body_velocity(self, wheel_speeds: ArrayLike) -> tuple[float, float]:
+        """(v m/s, ω rad/s) from wheel speeds (left, right) rad/s."""
+    def wheel_speeds(self, v: float, omega: float) -> NDArray[np.float64]:
+        """Wheel speeds (left, right) rad/s, shape (2,)."""
+    def integrate(self, pose: ArrayLike, wheel_speeds: ArrayLike, duration: float) -> NDArray[np.float64]:
+        """Pose (x, y, θ) after `duration` s at constant wheel speeds (exact arc), shape (3,)."""
+    def saturate(self, wheel_speeds: ArrayLike) -> NDArray[np.float64]:
+        """Wheel speeds scaled together to the speed limit, shape (2,)."""
+    def limit_step(self, previous: ArrayLike, command: ArrayLike, dt: float) -> NDArray[np.float64]:
+        """Wheel speeds reachable from `previous` toward `command` in `dt` s, shape (2,)."""
+
+class TrackResult:
+    """Arrays of a tracked motion, one row per control sample, and how it ended."""
+
+    @property
+    def time(self) -> NDArray[np.float64]: ...
+    @property
+    def q(self) -> NDArray[np.float64]: ...
+    @property
+    def qdot(self) -> NDArray[np.float64]: ...
+    @property
+    def x(self) -> NDArray[np.float64]: ...
+    @property
+    def error(self) -> NDArray[np.float64]: ...
+    @property
+    def position_error(self) -> NDArray[np.float64]: ...
+    @property
+    def orientation_error(self) -> NDArray[np.float64]: ...
+    @property
+    def margin(self) -> NDArray[np.float64]: ...
+    @property
+    def scale(self) -> NDArray[np.float64]: ...
+    @property
+    def sigma_min(self) -> NDArray[np.float64]: ...
+    @property
+    def status(self) -> str:
+        """ "completed", "saturated" or "failed"."""
+    @property
+    def ok(self) -> bool: ...
+    @property
+    def message(self) -> str: ...
+    @property
+    def joint_names(self) -> list[str]: ...
+    def __len__(self) -> int: ...
+
+def wls_step(
+    robot: Robot,
+    q: ArrayLike,
+    xdot: ArrayLike,
+    task: str = "racket5",
+    weights: str = "chan-dubey",
+    damping: float = 0.05,
+    epsilon: float = 1e-3,
+    qdot_prev: ArrayLike | None = None,
+    base: DiffDrive | None = None,
+    mount: ArrayLike | None = None,
+) -> NDArray[np.float64]:
+    """One weighted least-norm step: inputs q̇ for task velocity `xdot` (residual coordinates)."""
+
+def task_line(
+    x0: ArrayLike, x1: ArrayLike, duration: float, rate_hz: float = 1000.0, task: str = "racket5"
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Samples and rates (N, dim) of a straight task line with the quintic time law."""
+
+def track(
+    robot: Robot,
+    q0: ArrayLike,
+    task_trajectory: ArrayLike,
+    rate_hz: float = 1000.0,
+    task: str = "racket5",
+    velocities: ArrayLike | None = None,
+    weights: str = "chan-dubey",
+    gain: float | None = None,
+    damping: float = 0.05,
+    epsilon: float = 1e-3,
+    input_weights: ArrayLike | None = None,
+    limit_gain: float = 0.0,
+    respect_limits: bool = True,
+    max_error: float = 0.05,
+    corrector: bool = True,
+    base: DiffDrive | None = None,
+    mount: ArrayLike | None = None,
+) -> TrackResult:
+    """Closed-loop tracking of a task trajectory sampled at `rate_hz` (loop in Rust)."""
