@@ -10,7 +10,6 @@ seconds; poses are 4×4 homogeneous matrices in the robot's base frame.
 """
 
 from . import robots
-from .mobile import DiffDrive, TrackResult, task_line, track, wls_step
 from ._ttmanip import (
     ModelError,
     NonFiniteError,
@@ -21,6 +20,7 @@ from ._ttmanip import (
     TtmanipError,
     UnreachableError,
 )
+from .mobile import DiffDrive, TrackResult, task_line, track, wls_step
 
 __all__ = [
     "DiffDrive",

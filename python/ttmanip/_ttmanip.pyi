@@ -106,7 +106,9 @@ class Robot:
         """Every link frame in the base frame: (n, 4, 4) or (N, n, 4, 4)."""
     def jacobian(self, q: ArrayLike, frame: str = "base") -> NDArray[np.float64]:
         """Geometric Jacobian [v; ω] of the tool point: (6, n) or (N, 6, n)."""
-    def task_jacobian(self, q: ArrayLike, task: str = "racket5", target: ArrayLike | None = None) -> NDArray[np.float64]:
+    def task_jacobian(
+        self, q: ArrayLike, task: str = "racket5", target: ArrayLike | None = None
+    ) -> NDArray[np.float64]:
         """Task Jacobian (m, n) of "pose", "position" or "racket5" in residual coordinates (ė = −J_e q̇)."""
     def task_coordinates(self, q: ArrayLike, task: str = "racket5") -> NDArray[np.float64]:
         """Task coordinates of the tool pose: (3,), (6,) or the racket 5-vector (m, rad)."""
