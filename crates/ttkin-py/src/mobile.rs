@@ -13,6 +13,9 @@ use crate::convert::{f64_array, to_numpy, transform, vector};
 use crate::errors::{PyResultExt, ShapeError, TtmanipError};
 use crate::robot::PyRobot;
 
+/// A float64 numpy array handed to Python.
+type Array<'py> = Bound<'py, PyArrayDyn<f64>>;
+
 /// A differential-drive base: wheel speeds (left, right) in rad/s, body velocity (v m/s, ω rad/s),
 /// poses (x m, y m, θ rad) of the axle midpoint in the world frame.
 #[pyclass(name = "DiffDrive", module = "ttmanip", frozen)]
@@ -255,7 +258,7 @@ fn task_line<'py>(
     duration: f64,
     rate_hz: f64,
     task: &str,
-) -> PyResult<(Bound<'py, PyArrayDyn<f64>>, Bound<'py, PyArrayDyn<f64>>)> {
+) -> PyResult<(Array<'py>, Array<'py>)> {
     let task = Task::from_name(task).py()?;
     let d = task.dim();
     let (a, b) = (vector(x0, "x0", d)?, vector(x1, "x1", d)?);
