@@ -175,6 +175,7 @@ pub struct WlsSolver {
     eig: [f64; MAX_TASK_DIM],
     factor_fn: FactorFn,
     solve_fn: SolveFn,
+    gram_fn: GramFn,
     cached: Option<(f64, f64)>,
     cached_chol: [f64; MAX_TASK_DIM * MAX_TASK_DIM],
 }
@@ -206,6 +207,7 @@ impl WlsSolver {
             eig,
             factor_fn: kernels(m).0,
             solve_fn: kernels(m).1,
+            gram_fn: kernels(m).2,
             cached: None,
             cached_chol: [0.0; MAX_TASK_DIM * MAX_TASK_DIM],
         })
@@ -393,22 +395,9 @@ impl WlsSolver {
 
     /// Builds G = J_F W⁻¹ J_Fᵀ, estimates σ_min, factors G + λ²I into `chol`. Returns (σ_min, λ²).
     fn factor(&mut self, jac: &[f64]) -> (f64, f64) {
-        let (m, n) = (self.m, self.n);
-        let g = &mut self.gram;
-        g[..m * m].fill(0.0);
-        for k in 0..n {
-            if !self.free[k] {
-                continue;
-            }
-            let col = &jac[k * m..(k + 1) * m];
-            let wk = self.winv[k];
-            for r in 0..m {
-                let jr = col[r] * wk;
-                for c in 0..=r {
-                    g[r * m + c] += jr * col[c];
-                }
-            }
-        }
+        let m = self.m;
+        (self.gram_fn)(jac, &self.winv, &self.free, &mut self.gram);
+        let g = &self.gram;
         // σ_min² = λ_min(G): inverse iteration warm-started from the previous eigenvector.
         let mut sigma = 0.0;
         self.chol[..m * m].copy_from_slice(&g[..m * m]);
@@ -489,21 +478,24 @@ impl WlsSolver {
 type FactorFn = fn(&mut [f64; MAX_TASK_DIM * MAX_TASK_DIM]) -> bool;
 /// Solve with a Cholesky factor in place.
 type SolveFn = fn(&[f64; MAX_TASK_DIM * MAX_TASK_DIM], &mut [f64; MAX_TASK_DIM]);
+/// Gram matrix of the free columns.
+type GramFn = fn(&[f64], &[f64], &[bool], &mut [f64; MAX_TASK_DIM * MAX_TASK_DIM]);
 
 /// The factor/solve pair for task dimension `m` (1..=6), monomorphised so the loops unroll.
-fn kernels(m: usize) -> (FactorFn, SolveFn) {
+fn kernels(m: usize) -> (FactorFn, SolveFn, GramFn) {
     match m {
-        1 => (cholesky::<1>, cholesky_solve::<1>),
-        2 => (cholesky::<2>, cholesky_solve::<2>),
-        3 => (cholesky::<3>, cholesky_solve::<3>),
-        4 => (cholesky::<4>, cholesky_solve::<4>),
-        5 => (cholesky::<5>, cholesky_solve::<5>),
-        _ => (cholesky::<6>, cholesky_solve::<6>),
+        1 => (cholesky::<1>, cholesky_solve::<1>, gram::<1>),
+        2 => (cholesky::<2>, cholesky_solve::<2>, gram::<2>),
+        3 => (cholesky::<3>, cholesky_solve::<3>, gram::<3>),
+        4 => (cholesky::<4>, cholesky_solve::<4>, gram::<4>),
+        5 => (cholesky::<5>, cholesky_solve::<5>, gram::<5>),
+        _ => (cholesky::<6>, cholesky_solve::<6>, gram::<6>),
     }
 }
 
-/// In-place Cholesky G = L Lᵀ of the lower triangle of an M × M row-major matrix (stride M);
-/// false when G is not positive definite (to working precision).
+/// In-place Cholesky G = L Lᵀ of the lower triangle of an M × M row-major matrix (stride M),
+/// storing 1/L_jj on the diagonal (the solves then multiply instead of divide); false when G is not
+/// positive definite (to working precision).
 fn cholesky<const M: usize>(a: &mut [f64; MAX_TASK_DIM * MAX_TASK_DIM]) -> bool {
     for j in 0..M {
         let mut d = a[j * M + j];
@@ -513,14 +505,14 @@ fn cholesky<const M: usize>(a: &mut [f64; MAX_TASK_DIM * MAX_TASK_DIM]) -> bool 
         if !(d > 1e-300) {
             return false;
         }
-        let d = d.sqrt();
-        a[j * M + j] = d;
+        let inv = 1.0 / d.sqrt();
+        a[j * M + j] = inv;
         for i in j + 1..M {
             let mut s = a[i * M + j];
             for k in 0..j {
                 s -= a[i * M + k] * a[j * M + k];
             }
-            a[i * M + j] = s / d;
+            a[i * M + j] = s * inv;
         }
     }
     true
@@ -533,14 +525,32 @@ fn cholesky_solve<const M: usize>(l: &[f64; MAX_TASK_DIM * MAX_TASK_DIM], b: &mu
         for k in 0..i {
             s -= l[i * M + k] * b[k];
         }
-        b[i] = s / l[i * M + i];
+        b[i] = s * l[i * M + i];
     }
     for i in (0..M).rev() {
         let mut s = b[i];
         for k in i + 1..M {
             s -= l[k * M + i] * b[k];
         }
-        b[i] = s / l[i * M + i];
+        b[i] = s * l[i * M + i];
+    }
+}
+
+/// Gram matrix G = J_F W⁻¹ J_Fᵀ (lower triangle, stride M) over the free inputs.
+fn gram<const M: usize>(jac: &[f64], winv: &[f64], free: &[bool], g: &mut [f64; MAX_TASK_DIM * MAX_TASK_DIM]) {
+    g[..M * M].fill(0.0);
+    for ((col, &wk), &f) in jac.chunks_exact(M).zip(winv).zip(free) {
+        if !f {
+            continue;
+        }
+        let mut c = [0.0; M];
+        c.copy_from_slice(col);
+        for r in 0..M {
+            let jr = c[r] * wk;
+            for k in 0..=r {
+                g[r * M + k] += jr * c[k];
+            }
+        }
     }
 }
 

@@ -153,13 +153,10 @@ impl WholeBody {
     /// [`WholeBody::jacobian`] into a preallocated 6 × nu matrix, unchecked; returns the tool pose.
     pub fn jacobian_into(&self, q: &[f64], data: &mut WholeBodyData, jac: &mut Matrix6xX<f64>) -> IsometryMatrix3<f64> {
         let nb = self.base_coordinates();
-        let t = self.arm.jacobian_into(&q[nb..], JacobianFrame::Base, &mut data.arm_jac);
         match self.base_to_arm(q) {
-            None => {
-                jac.copy_from(&data.arm_jac);
-                t
-            }
+            None => self.arm.jacobian_into(q, JacobianFrame::Base, jac),
             Some(b) => {
+                let t = self.arm.jacobian_into(&q[nb..], JacobianFrame::Base, &mut data.arm_jac);
                 let r = b.rotation;
                 let world = b * t;
                 let p = world.translation.vector;
