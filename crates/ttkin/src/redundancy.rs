@@ -401,7 +401,8 @@ impl WlsSolver {
         // σ_min² = λ_min(G): inverse iteration warm-started from the previous eigenvector.
         let mut sigma = 0.0;
         self.chol[..m * m].copy_from_slice(&g[..m * m]);
-        if (self.factor_fn)(&mut self.chol) {
+        let factored = (self.factor_fn)(&mut self.chol);
+        if factored {
             let mut lam = f64::INFINITY;
             for _ in 0..INVERSE_ITERATIONS {
                 (self.solve_fn)(&self.chol, &mut self.eig);
@@ -417,6 +418,10 @@ impl WlsSolver {
             sigma = lam.max(0.0).sqrt();
         }
         let lambda2 = self.damping.lambda_squared(sigma);
+        if factored && lambda2 == 0.0 {
+            // Away from singularities the factor of G is the one to solve with.
+            return (sigma, 0.0);
+        }
         self.chol[..m * m].copy_from_slice(&g[..m * m]);
         for r in 0..m {
             self.chol[r * m + r] += lambda2;
