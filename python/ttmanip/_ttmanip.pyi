@@ -208,6 +208,7 @@ def track(
     epsilon: float = 1e-3,
     input_weights: ArrayLike | None = None,
     limit_gain: float = 0.0,
+    manipulability_gain: float = 0.0,
     respect_limits: bool = True,
     max_error: float = 0.05,
     corrector: bool = True,

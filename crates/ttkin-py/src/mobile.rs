@@ -381,7 +381,7 @@ impl PyTrackResult {
 #[pyfunction]
 #[pyo3(signature = (robot, q0, task_trajectory, rate_hz=1000.0, task="racket5", velocities=None, weights="chan-dubey",
                     gain=None, damping=0.05, epsilon=1e-3, input_weights=None, limit_gain=0.0,
-                    respect_limits=true, max_error=0.05, corrector=true, base=None, mount=None))]
+                    manipulability_gain=0.0, respect_limits=true, max_error=0.05, corrector=true, base=None, mount=None))]
 #[allow(clippy::too_many_arguments)]
 fn track<'py>(
     py: Python<'py>,
@@ -397,6 +397,7 @@ fn track<'py>(
     epsilon: f64,
     input_weights: Option<&Bound<'py, PyAny>>,
     limit_gain: f64,
+    manipulability_gain: f64,
     respect_limits: bool,
     max_error: f64,
     corrector: bool,
@@ -433,6 +434,7 @@ fn track<'py>(
         damping: make_damping(damping, epsilon)?,
         input_weights,
         limit_gain,
+        manipulability_gain,
         respect_limits,
         max_error,
         corrector,

@@ -16,7 +16,7 @@
 use nalgebra::{IsometryMatrix3, Matrix6xX};
 
 use crate::error::{check_finite, Error, Result};
-use crate::redundancy::{chan_dubey_weight, limit_gradient, Damping, StepReport, Weighting, WlsSolver};
+use crate::redundancy::{chan_dubey_weight, limit_gradient, manipulability, Damping, StepReport, Weighting, WlsSolver};
 use crate::task::Task;
 use crate::wholebody::{WholeBody, WholeBodyData};
 
@@ -188,6 +188,9 @@ pub struct ClikOptions {
     pub input_weights: Option<Vec<f64>>,
     /// Gain (1/s) of the null-space motion −k·∂H/∂q away from the joint limits (0 = off).
     pub limit_gain: f64,
+    /// Gain of the null-space motion +k·∂w/∂q up the manipulability w = √det(J_e J_eᵀ) of the task
+    /// (0 = off; the gradient takes 2 extra Jacobians per arm joint by central differences).
+    pub manipulability_gain: f64,
     /// Keep every input inside its speed limit and every joint inside its position limits.
     pub respect_limits: bool,
     /// Tracking error (norm of the residual, task units) at which the motion is declared failed.
@@ -208,6 +211,7 @@ impl Default for ClikOptions {
             damping: Damping::default(),
             input_weights: None,
             limit_gain: 0.0,
+            manipulability_gain: 0.0,
             respect_limits: true,
             max_error: 0.05,
             corrector: true,
@@ -307,6 +311,8 @@ pub struct Clik<'a> {
     q_pred: Vec<f64>,
     du: Vec<f64>,
     ff: [f64; 6],
+    jac6_fd: Matrix6xX<f64>,
+    jtask_fd: Vec<f64>,
 }
 
 impl<'a> Clik<'a> {
@@ -333,6 +339,9 @@ impl<'a> Clik<'a> {
         }
         if !(options.limit_gain >= 0.0 && options.limit_gain.is_finite()) {
             return Err(Error::invalid("limit_gain", "must be finite and ≥ 0"));
+        }
+        if !(options.manipulability_gain >= 0.0 && options.manipulability_gain.is_finite()) {
+            return Err(Error::invalid("manipulability_gain", "must be finite and ≥ 0"));
         }
         if !(options.max_error > 0.0) {
             return Err(Error::invalid("max_error", "must be > 0"));
@@ -364,6 +373,8 @@ impl<'a> Clik<'a> {
             q_pred: vec![0.0; model.nq()],
             du: vec![0.0; nu],
             ff: [0.0; 6],
+            jac6_fd: Matrix6xX::zeros(nu),
+            jtask_fd: vec![0.0; m * nu],
         })
     }
 
@@ -406,7 +417,10 @@ impl<'a> Clik<'a> {
                 self.hi[k] = f64::INFINITY;
             }
         }
-        let z = if self.options.limit_gain > 0.0 {
+        if self.options.manipulability_gain > 0.0 {
+            self.add_manipulability_gradient(q);
+        }
+        let z = if self.options.limit_gain > 0.0 || self.options.manipulability_gain > 0.0 {
             Some(&self.z[..])
         } else {
             None
@@ -438,6 +452,31 @@ impl<'a> Clik<'a> {
             report.saturated = report.saturated.max(rep2.saturated);
         }
         (t, report)
+    }
+
+    /// Adds k·∂w/∂q (central differences, h = 1e-6) to the null-space motion `z` for every input
+    /// that drives a configuration coordinate; base inputs get none (w does not change with the
+    /// base pose).
+    fn add_manipulability_gradient(&mut self, q: &[f64]) {
+        let h = 1e-6;
+        let m = self.task.dim();
+        self.q_pred.copy_from_slice(q);
+        for k in 0..self.model.nu() {
+            let Some(c) = self.model.input_coordinate(k) else {
+                continue;
+            };
+            let mut w = [0.0; 2];
+            for (side, sign) in [(0, 1.0), (1, -1.0)] {
+                self.q_pred[c] = q[c] + sign * h;
+                let t = self
+                    .model
+                    .jacobian_into(&self.q_pred, &mut self.data, &mut self.jac6_fd);
+                self.task.jacobian_into(&self.jac6_fd, &t, &t, &mut self.jtask_fd);
+                w[side] = manipulability(&self.jtask_fd, m);
+            }
+            self.q_pred[c] = q[c];
+            self.z[k] += self.options.manipulability_gain * (w[0] - w[1]) / (2.0 * h);
+        }
     }
 
     /// Tracks `trajectory` from `q0`; see the module doc. Errors only for bad input (shapes,

@@ -645,3 +645,23 @@ impl<'a> WlsStep<'a> {
         Ok((qd.to_vec(), rep))
     }
 }
+
+/// Manipulability √det(J Jᵀ) of an m × n task Jacobian (column-major slice), 0 when rank-deficient.
+pub fn manipulability(jac: &[f64], m: usize) -> f64 {
+    if m == 0 || m > MAX_TASK_DIM || jac.len() % m != 0 {
+        return 0.0;
+    }
+    let n = jac.len() / m;
+    let (factor, _, gram) = kernels(m);
+    let ones = [1.0; 64];
+    let free = [true; 64];
+    if n > ones.len() {
+        return 0.0;
+    }
+    let mut g = [0.0; MAX_TASK_DIM * MAX_TASK_DIM];
+    gram(jac, &ones[..n], &free[..n], &mut g);
+    if !factor(&mut g) {
+        return 0.0;
+    }
+    (0..m).map(|j| 1.0 / g[j * m + j]).product()
+}

@@ -442,3 +442,65 @@ fn mobile_base_clik_tracks_a_position_line() {
         assert!(ws[0].abs() <= d.max_wheel_speed() + 1e-9 && ws[1].abs() <= d.max_wheel_speed() + 1e-9);
     }
 }
+
+#[test]
+fn manipulability_is_the_root_of_the_gram_determinant() {
+    let model = WholeBody::fixed(ttkin::robots::mobile8());
+    let q = ttkin::robots::mobile8_start();
+    let t = model.tool_pose(&q).unwrap();
+    let je = Task::Racket { offset: 0.15 }.jacobian(&model.jacobian(&q).unwrap(), &t, &t);
+    let expected = (&je * je.transpose()).determinant().sqrt();
+    let w = ttkin::redundancy::manipulability(je.as_slice(), 5);
+    assert!((w - expected).abs() < 1e-12 * expected.max(1.0), "{w} vs {expected}");
+    assert_eq!(ttkin::redundancy::manipulability(&[1.0, 2.0, 2.0, 4.0], 2), 0.0);
+}
+
+#[test]
+fn null_space_objectives_keep_the_task_and_do_their_job() {
+    let (model, q0, traj) = seed000_trajectory(0.15);
+    let task = Task::Racket { offset: 0.15 };
+    let mean_manip = |r: &ttkin::clik::ClikResult| {
+        let mut sum = 0.0;
+        for k in 0..r.len() {
+            let q = &r.q[k * 8..(k + 1) * 8];
+            let t = model.tool_pose(q).unwrap();
+            let je = task.jacobian(&model.jacobian(q).unwrap(), &t, &t);
+            sum += ttkin::redundancy::manipulability(je.as_slice(), 5);
+        }
+        sum / r.len() as f64
+    };
+    let plain = track(&model, &q0, &traj, ClikOptions::default()).unwrap();
+    let manip = track(
+        &model,
+        &q0,
+        &traj,
+        ClikOptions {
+            manipulability_gain: 5.0,
+            ..ClikOptions::default()
+        },
+    )
+    .unwrap();
+    let limits = track(
+        &model,
+        &q0,
+        &traj,
+        ClikOptions {
+            limit_gain: 0.05,
+            ..ClikOptions::default()
+        },
+    )
+    .unwrap();
+    for r in [&manip, &limits] {
+        assert_eq!(r.status, ClikStatus::Completed);
+        assert!(r.error.iter().cloned().fold(0.0, f64::max) <= 1e-6);
+    }
+    assert!(mean_manip(&manip) > mean_manip(&plain), "manipulability gradient must raise w");
+    let criterion = |r: &ttkin::clik::ClikResult| {
+        let lims = model.arm().limits();
+        let k = r.len() - 1;
+        (0..8)
+            .map(|i| limit_criterion(r.q[k * 8 + i], lims[i].lower, lims[i].upper))
+            .sum::<f64>()
+    };
+    assert!(criterion(&limits) < criterion(&plain), "limit gradient must lower H");
+}
