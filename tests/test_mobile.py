@@ -234,3 +234,13 @@ def test_seed000_experiment(tmp_path):
     # the unweighted pseudo-inverse crosses a limit on the same motion
     assert summary["unweighted"]["min_limit_margin"] < 0.0
     assert summary["unweighted"]["joints_crossing_limits"]
+
+
+def test_wls_step_at_a_singular_configuration():
+    ur5 = ttmanip.robots.ur5()
+    q = np.array([0.3, -1.2, 1.4, -0.8, 0.0, 0.4])  # wrist singularity (q5 = 0)
+    xdot = np.array([0.0, 0.0, 0.0, 0.3, 0.2, 0.1])
+    with pytest.raises(ttmanip.SingularError, match="damping"):
+        ttmanip.wls_step(ur5, q, xdot, task="pose", weights="none", damping=0.0)
+    qd = ttmanip.wls_step(ur5, q, xdot, task="pose", weights="none", damping=0.05, epsilon=0.05)
+    assert np.isfinite(qd).all() and np.abs(qd).max() < 20.0

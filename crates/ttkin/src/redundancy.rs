@@ -27,6 +27,9 @@ pub const MAX_TASK_DIM: usize = 6;
 /// Inverse-iteration sweeps per solve for σ_min (warm-started from the previous solve's vector).
 const INVERSE_ITERATIONS: usize = 2;
 
+/// Smallest singular value below which an undamped step is refused as singular.
+pub const SINGULAR_SIGMA: f64 = 1e-9;
+
 /// Cap on |∂H/∂q| (and so on a weight) at or beyond a limit, where the criterion is infinite.
 pub const MAX_LIMIT_GRADIENT: f64 = 1e12;
 
@@ -638,9 +641,14 @@ impl<'a> WlsStep<'a> {
         self.model.check_q("q", q)?;
         crate::error::check_vector("xdot", xdot, self.task.dim())?;
         crate::error::check_vector("qdot_prev", previous, self.model.nu())?;
+        let undamped = self.solver.damping().lambda_max == 0.0;
         let (qd, rep) = self.solve(q, xdot, previous);
-        if qd.iter().any(|v| !v.is_finite()) {
-            return Err(Error::Singular("weighted least-norm step is not finite".into()));
+        if qd.iter().any(|v| !v.is_finite()) || (undamped && rep.sigma_min < SINGULAR_SIGMA) {
+            return Err(Error::Singular(format!(
+                "the weighted task Jacobian is singular here (σ_min ≈ {:.1e}); pass a damping > 0 for a \
+                 bounded least-squares step",
+                rep.sigma_min
+            )));
         }
         Ok((qd.to_vec(), rep))
     }
