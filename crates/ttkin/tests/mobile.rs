@@ -494,7 +494,10 @@ fn null_space_objectives_keep_the_task_and_do_their_job() {
         assert_eq!(r.status, ClikStatus::Completed);
         assert!(r.error.iter().cloned().fold(0.0, f64::max) <= 1e-6);
     }
-    assert!(mean_manip(&manip) > mean_manip(&plain), "manipulability gradient must raise w");
+    assert!(
+        mean_manip(&manip) > mean_manip(&plain),
+        "manipulability gradient must raise w"
+    );
     let criterion = |r: &ttkin::clik::ClikResult| {
         let lims = model.arm().limits();
         let k = r.len() - 1;
