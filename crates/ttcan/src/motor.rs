@@ -365,13 +365,13 @@ impl Plant {
             }
             let dir = drive.signum();
             self.advance(u, tc * dir - t_ext);
-            if self.state[1] * dir < 0.0 {
+            if tc > 0.0 && self.state[1] * dir < 0.0 {
                 self.state[1] = 0.0;
             }
         } else {
             let dir = omega.signum();
             self.advance(u, tc * dir - t_ext);
-            if self.state[1] * dir < 0.0 {
+            if tc > 0.0 && self.state[1] * dir < 0.0 {
                 // The speed crossed zero inside the step: stick at zero (the next step decides).
                 self.state[1] = 0.0;
             }
