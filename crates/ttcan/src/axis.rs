@@ -173,10 +173,18 @@ impl Axis {
         positive("following error limit (rad)", c.following_error_limit)?;
         positive("quick-stop deceleration (rad/s²)", c.quick_stop_deceleration)?;
         if c.peak_current < c.continuous_current {
-            return Err(invalid("peak current (A)", c.peak_current, "must be >= the continuous current"));
+            return Err(invalid(
+                "peak current (A)",
+                c.peak_current,
+                "must be >= the continuous current",
+            ));
         }
         if c.overcurrent_trip <= c.peak_current {
-            return Err(invalid("over-current trip (A)", c.overcurrent_trip, "must be > the peak current"));
+            return Err(invalid(
+                "over-current trip (A)",
+                c.overcurrent_trip,
+                "must be > the peak current",
+            ));
         }
         let m = &c.model;
         let n = m.gearbox.ratio;
@@ -192,11 +200,19 @@ impl Axis {
             ));
         }
         if c.emf_filter_hz.is_nan() || c.emf_filter_hz <= 0.0 {
-            return Err(invalid("EMF filter (Hz)", c.emf_filter_hz, "must be > 0 (infinite: no filter)"));
+            return Err(invalid(
+                "EMF filter (Hz)",
+                c.emf_filter_hz,
+                "must be > 0 (infinite: no filter)",
+            ));
         }
         if let Some(f) = c.speed_reference_filter_hz {
             if f.is_nan() || f <= 0.0 {
-                return Err(invalid("speed reference filter (Hz)", f, "must be > 0 (infinite: no filter)"));
+                return Err(invalid(
+                    "speed reference filter (Hz)",
+                    f,
+                    "must be > 0 (infinite: no filter)",
+                ));
             }
         }
         let [tc, ts, tp] = c.rates.periods();
@@ -209,7 +225,11 @@ impl Axis {
             tc,
             m.bus_voltage,
             m.max_voltage(),
-            if c.emf_feedforward { m.motor.back_emf_constant * n } else { 0.0 },
+            if c.emf_feedforward {
+                m.motor.back_emf_constant * n
+            } else {
+                0.0
+            },
             c.peak_current,
             c.continuous_current,
             (c.peak_current * c.peak_current - c.continuous_current * c.continuous_current) * c.peak_duration,
@@ -290,7 +310,9 @@ impl Axis {
             self.duty = 0.0;
             return 0.0;
         }
-        self.duty = self.current_loop.step(self.current_reference, current, self.emf_speed.output());
+        self.duty = self
+            .current_loop
+            .step(self.current_reference, current, self.emf_speed.output());
         self.duty
     }
 
@@ -328,7 +350,9 @@ impl Axis {
             }
             Mode::Position => {
                 if due.position {
-                    let o = self.position_loop.step(self.q_ref, self.qd_ref, self.qdd_ref, self.position);
+                    let o = self
+                        .position_loop
+                        .step(self.q_ref, self.qd_ref, self.qdd_ref, self.position);
                     self.position_output = o;
                     if o.following_error.abs() > self.config.following_error_limit {
                         self.trip(Fault::FollowingError);
@@ -338,7 +362,8 @@ impl Axis {
                 }
                 if due.speed {
                     let o = self.position_output;
-                    self.current_reference = self.speed_step(o.speed_command, o.speed_feedforward, o.current_feedforward);
+                    self.current_reference =
+                        self.speed_step(o.speed_command, o.speed_feedforward, o.current_feedforward);
                 }
             }
         }

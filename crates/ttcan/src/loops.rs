@@ -181,7 +181,10 @@ impl CurrentLoop {
             self.foldback = true;
         }
         let ff = self.emf_per_output_speed * output_speed;
-        let v = ff + self.pi.step(r - measured, -self.max_voltage - ff, self.max_voltage - ff);
+        let v = ff
+            + self
+                .pi
+                .step(r - measured, -self.max_voltage - ff, self.max_voltage - ff);
         self.voltage = v;
         v / self.bus_voltage
     }
@@ -296,7 +299,12 @@ pub struct PositionLoop {
 
 impl PositionLoop {
     /// `kp` in 1/s; `amps_per_acceleration` = 1 / (output rad/s² per A).
-    pub fn new(kp: f64, amps_per_acceleration: f64, velocity_feedforward: bool, acceleration_feedforward: bool) -> Self {
+    pub fn new(
+        kp: f64,
+        amps_per_acceleration: f64,
+        velocity_feedforward: bool,
+        acceleration_feedforward: bool,
+    ) -> Self {
         PositionLoop {
             kp,
             amps_per_acceleration,

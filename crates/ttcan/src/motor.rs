@@ -345,7 +345,11 @@ impl Plant {
 
     /// Advances one step with the bridge duty `duty` (clamped to ±max_duty; NaN counts as 0).
     pub fn step(&mut self, duty: f64) {
-        let d = if duty.is_finite() { duty.clamp(-self.model.max_duty, self.model.max_duty) } else { 0.0 };
+        let d = if duty.is_finite() {
+            duty.clamp(-self.model.max_duty, self.model.max_duty)
+        } else {
+            0.0
+        };
         let u = d * self.model.bus_voltage;
         let m = &self.model.motor;
         let n = self.model.gearbox.ratio;

@@ -147,7 +147,12 @@ impl Simulation {
             return Err(Error::InvalidParameter {
                 what: "trajectory length".into(),
                 value: q.len() as f64,
-                reason: format!("q, qd, qdd must have equal lengths (got {}, {}, {})", q.len(), qd.len(), qdd.len()),
+                reason: format!(
+                    "q, qd, qdd must have equal lengths (got {}, {}, {})",
+                    q.len(),
+                    qd.len(),
+                    qdd.len()
+                ),
             });
         }
         for (name, v) in [("q", q), ("qd", qd), ("qdd", qdd)] {

@@ -143,7 +143,11 @@ pub fn tune_cascade(model: &MotorModel, periods: [f64; 3], targets: &TuningTarge
 
     // Speed loop, continuous with lumped delays.
     let w_ci = 2.0 * PI * targets.current_bandwidth_hz;
-    let t_f = if f_out.is_infinite() { 0.0 } else { 1.0 / (2.0 * PI * f_out) };
+    let t_f = if f_out.is_infinite() {
+        0.0
+    } else {
+        1.0 / (2.0 * PI * f_out)
+    };
     let t_d = ts + 0.5 * tc;
     let t_sigma = 1.0 / w_ci + t_f + t_d;
     let k_acc = model.acceleration_per_amp();

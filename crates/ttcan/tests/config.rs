@@ -15,9 +15,11 @@ fn assert_names(e: &Error, what: &str) {
     assert!(msg.contains(what), "error `{msg}` should name `{what}`");
 }
 
+type Change = Box<dyn Fn(&mut MotorModel)>;
+
 #[test]
 fn non_physical_motor_parameters_are_rejected() {
-    let cases: Vec<(&str, Box<dyn Fn(&mut MotorModel)>)> = vec![
+    let cases: Vec<(&str, Change)> = vec![
         ("resistance", Box::new(|m| m.motor.resistance = -2.32)),
         ("inductance", Box::new(|m| m.motor.inductance = 0.0)),
         ("rotor inertia", Box::new(|m| m.motor.rotor_inertia = 0.0)),
@@ -52,17 +54,32 @@ fn non_physical_limits_are_rejected() {
     assert_names(&axis_error(|c| c.max_speed = 40.0), "back-EMF");
     assert_names(&axis_error(|c| c.following_error_limit = -0.1), "following error");
     assert_names(&axis_error(|c| c.quick_stop_deceleration = 0.0), "quick-stop");
-    assert_names(&axis_error(|c| c.speed_reference_filter_hz = Some(f64::NAN)), "speed reference filter");
+    assert_names(
+        &axis_error(|c| c.speed_reference_filter_hz = Some(f64::NAN)),
+        "speed reference filter",
+    );
     assert_names(&axis_error(|c| c.emf_filter_hz = 0.0), "EMF filter");
 }
 
 #[test]
 fn unreachable_tuning_targets_are_rejected() {
-    assert_names(&axis_error(|c| c.tuning.current_bandwidth_hz = 5000.0), "sixth of the current loop rate");
-    assert_names(&axis_error(|c| c.tuning.current_bandwidth_hz = -1.0), "current loop bandwidth");
-    assert_names(&axis_error(|c| c.tuning.speed_symmetric_optimum = 1.5), "symmetric optimum");
+    assert_names(
+        &axis_error(|c| c.tuning.current_bandwidth_hz = 5000.0),
+        "sixth of the current loop rate",
+    );
+    assert_names(
+        &axis_error(|c| c.tuning.current_bandwidth_hz = -1.0),
+        "current loop bandwidth",
+    );
+    assert_names(
+        &axis_error(|c| c.tuning.speed_symmetric_optimum = 1.5),
+        "symmetric optimum",
+    );
     assert_names(&axis_error(|c| c.tuning.position_ratio = f64::NAN), "position ratio");
-    assert_names(&axis_error(|c| c.tuning.speed_output_filter_hz = 0.0), "speed output filter");
+    assert_names(
+        &axis_error(|c| c.tuning.speed_output_filter_hz = 0.0),
+        "speed output filter",
+    );
 }
 
 #[test]
@@ -77,7 +94,13 @@ fn rates_that_are_not_integer_multiples_are_rejected() {
         (f64::NAN, 5_000.0, 1_000.0),
     ] {
         let e = Rates::new(c, s, p).expect_err("bad rates");
-        assert!(matches!(e, Error::Rates(_) | Error::InvalidParameter { .. } | Error::NonFinite { .. }), "{e}");
+        assert!(
+            matches!(
+                e,
+                Error::Rates(_) | Error::InvalidParameter { .. } | Error::NonFinite { .. }
+            ),
+            "{e}"
+        );
     }
     let r = Rates::new(10_000.0, 2_500.0, 500.0).unwrap();
     assert_eq!(r.position_ticks(), 20);

@@ -44,8 +44,15 @@ fn assert_at_rest(s: &mut Simulation, fault: Fault) {
     let tr = s.run(0.1, |_| Setpoint::Velocity(15.0)).unwrap();
     assert_eq!(s.axis.state(), AxisState::Faulted(fault));
     assert!(tr.duty.iter().all(|d| *d == 0.0));
-    assert!(s.plant.output_speed().abs() < 0.5, "speed {} rad/s after the stop", s.plant.output_speed());
-    assert!(!s.axis.enable(Mode::Velocity), "a faulted axis must not re-enable before clear_fault");
+    assert!(
+        s.plant.output_speed().abs() < 0.5,
+        "speed {} rad/s after the stop",
+        s.plant.output_speed()
+    );
+    assert!(
+        !s.axis.enable(Mode::Velocity),
+        "a faulted axis must not re-enable before clear_fault"
+    );
 }
 
 #[test]
@@ -71,7 +78,10 @@ fn following_error_trips_and_stops_the_axis() {
     let tr = s.run(0.1, |t| Setpoint::Position(40.0 * (t - t0), 40.0, 0.0)).unwrap();
     assert!(tr.state.contains(&2), "the axis must be stopping");
     let state = s.axis.state();
-    assert!(matches!(state, AxisState::Stopping(Fault::FollowingError) | AxisState::Faulted(Fault::FollowingError)));
+    assert!(matches!(
+        state,
+        AxisState::Stopping(Fault::FollowingError) | AxisState::Faulted(Fault::FollowingError)
+    ));
     if let AxisState::Stopping(_) = state {
         run_until_stopped(&mut s, Fault::FollowingError);
     }

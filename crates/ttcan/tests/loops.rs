@@ -19,8 +19,14 @@ fn current_step_rises_within_designed_bandwidth_without_overshoot_and_settles() 
     let over = overshoot(&tr.current, 1.0);
     let steady = mean_between(&tr.time, &tr.current, t0 + 0.015, t0 + 0.02);
     println!("designed bandwidth {bw:.0} Hz, rise {rise:.2e} s (designed {designed_rise:.2e}), overshoot {over:.4}, steady {steady:.5}");
-    assert!((bw - 1000.0).abs() < 50.0, "closed-loop bandwidth {bw} Hz, designed 1000 Hz");
-    assert!(rise <= 1.2 * designed_rise && rise >= 0.8 * designed_rise, "rise time {rise} s vs {designed_rise} s");
+    assert!(
+        (bw - 1000.0).abs() < 50.0,
+        "closed-loop bandwidth {bw} Hz, designed 1000 Hz"
+    );
+    assert!(
+        rise <= 1.2 * designed_rise && rise >= 0.8 * designed_rise,
+        "rise time {rise} s vs {designed_rise} s"
+    );
     assert!(over < 0.05, "overshoot {over}");
     assert!((steady - 1.0).abs() < 0.003, "steady-state current {steady} A for 1 A");
 }
@@ -85,7 +91,10 @@ fn quintic_is_tracked_with_feedforward_and_worse_without() {
     assert!(without_ff > 5.0e-2, "without feedforward: {without_ff} rad");
     assert!(without_ff > 20.0 * with_ff);
     let count = 2.0 * PI / (4096.0 * 14.0);
-    assert!(end_with < 3.0 * count && end_without < 3.0 * count, "final errors {end_with}, {end_without}");
+    assert!(
+        end_with < 3.0 * count && end_without < 3.0 * count,
+        "final errors {end_with}, {end_without}"
+    );
 }
 
 fn velocity_step_overshoot(anti_windup: bool) -> (f64, f64) {
@@ -101,9 +110,15 @@ fn anti_windup_keeps_a_saturating_speed_step_from_overshooting() {
     let (with_aw, sat) = velocity_step_overshoot(true);
     let (without_aw, _) = velocity_step_overshoot(false);
     println!("25 rad/s step, current saturated for {sat:.4} s: overshoot {with_aw:.4} with anti-windup, {without_aw:.4} without");
-    assert!(sat > 0.01, "the step must saturate the current limit for a while ({sat} s)");
+    assert!(
+        sat > 0.01,
+        "the step must saturate the current limit for a while ({sat} s)"
+    );
     assert!(with_aw < 0.05, "overshoot with anti-windup {with_aw}");
-    assert!(without_aw > 3.0 * with_aw.max(0.01), "overshoot without anti-windup {without_aw}");
+    assert!(
+        without_aw > 3.0 * with_aw.max(0.01),
+        "overshoot without anti-windup {without_aw}"
+    );
 }
 
 #[test]

@@ -115,5 +115,9 @@ fn tuning_reports_the_designed_bandwidths_and_margins() {
     // Position loop: well damped, crossover near Kp.
     assert!(t.position.phase_margin_deg > 45.0, "{:?}", t.position);
     let kp_hz = t.position.kp / (2.0 * std::f64::consts::PI);
-    assert!((t.position.crossover_hz - kp_hz).abs() < 0.3 * kp_hz, "{:?}", t.position);
+    assert!(
+        (t.position.crossover_hz - kp_hz).abs() < 0.3 * kp_hz,
+        "{:?}",
+        t.position
+    );
 }

@@ -8,7 +8,11 @@ fn main() -> Result<(), ttcan::Error> {
     let config = AxisConfig::new(model);
     let sim = Simulation::new(&model, &config)?;
     let t = sim.axis.tuning();
-    println!("T_sigma = {:.3} ms, speed reference filter {:.1} Hz", t.t_sigma * 1e3, t.speed_reference_filter_hz);
+    println!(
+        "T_sigma = {:.3} ms, speed reference filter {:.1} Hz",
+        t.t_sigma * 1e3,
+        t.speed_reference_filter_hz
+    );
     for (name, r) in [("current", t.current), ("speed", t.speed), ("position", t.position)] {
         println!(
             "{name:>8} loop: kp {:.4e} ki {:.4e}  crossover {:.1} Hz  phase margin {:.1} deg  bandwidth {:.1} Hz",
@@ -29,8 +33,16 @@ fn main() -> Result<(), ttcan::Error> {
     let mut s = Simulation::new(&model, &config)?;
     s.enable(Mode::Position);
     let tr = quintic(&mut s, 3.0, 0.3)?;
-    let max_e = tr.position.iter().zip(&tr.position_reference).map(|(q, r)| (r - q).abs()).fold(0.0, f64::max);
-    println!("quintic 3 rad in 0.3 s: max |q_ref - q| = {max_e:.2e} rad, final state {:?}", s.axis.state());
+    let max_e = tr
+        .position
+        .iter()
+        .zip(&tr.position_reference)
+        .map(|(q, r)| (r - q).abs())
+        .fold(0.0, f64::max);
+    println!(
+        "quintic 3 rad in 0.3 s: max |q_ref - q| = {max_e:.2e} rad, final state {:?}",
+        s.axis.state()
+    );
     Ok(())
 }
 
@@ -48,8 +60,18 @@ fn quintic(s: &mut Simulation, h: f64, tf: f64) -> Result<Trace, ttcan::Error> {
 }
 
 fn summary(name: &str, t: &[f64], y: &[f64], target: f64) {
-    let t10 = t.iter().zip(y).find(|(_, v)| **v >= 0.1 * target).map(|(t, _)| *t).unwrap_or(f64::NAN);
-    let t90 = t.iter().zip(y).find(|(_, v)| **v >= 0.9 * target).map(|(t, _)| *t).unwrap_or(f64::NAN);
+    let t10 = t
+        .iter()
+        .zip(y)
+        .find(|(_, v)| **v >= 0.1 * target)
+        .map(|(t, _)| *t)
+        .unwrap_or(f64::NAN);
+    let t90 = t
+        .iter()
+        .zip(y)
+        .find(|(_, v)| **v >= 0.9 * target)
+        .map(|(t, _)| *t)
+        .unwrap_or(f64::NAN);
     let peak = y.iter().cloned().fold(f64::MIN, f64::max);
     let tail = &y[y.len() * 4 / 5..];
     let mean = tail.iter().sum::<f64>() / tail.len() as f64;

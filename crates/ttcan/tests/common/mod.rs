@@ -47,6 +47,11 @@ pub fn overshoot(y: &[f64], target: f64) -> f64 {
 
 /// Mean of the samples of `y` whose time is in [t0, t1).
 pub fn mean_between(t: &[f64], y: &[f64], t0: f64, t1: f64) -> f64 {
-    let v: Vec<f64> = t.iter().zip(y).filter(|(t, _)| **t >= t0 && **t < t1).map(|(_, y)| *y).collect();
+    let v: Vec<f64> = t
+        .iter()
+        .zip(y)
+        .filter(|(t, _)| **t >= t0 && **t < t1)
+        .map(|(_, y)| *y)
+        .collect();
     v.iter().sum::<f64>() / v.len() as f64
 }
