@@ -16,7 +16,9 @@ fn configs() -> Vec<(&'static str, Chain, Vec<f64>)> {
 fn fk(c: &mut Criterion) {
     let mut g = c.benchmark_group("fk");
     for (name, chain, q) in configs() {
-        g.bench_with_input(BenchmarkId::from_parameter(name), &q, |b, q| b.iter(|| chain.fk(black_box(q)).unwrap()));
+        g.bench_with_input(BenchmarkId::from_parameter(name), &q, |b, q| {
+            b.iter(|| chain.fk(black_box(q)).unwrap())
+        });
     }
     g.finish();
 }
@@ -37,9 +39,13 @@ fn fk_batch(c: &mut Criterion) {
     let count = 100_000;
     g.throughput(Throughput::Elements(count as u64));
     for (name, chain, q) in configs() {
-        let qs: Vec<f64> = (0..count).flat_map(|k| q.iter().map(move |v| v + 1e-6 * k as f64)).collect();
+        let qs: Vec<f64> = (0..count)
+            .flat_map(|k| q.iter().map(move |v| v + 1e-6 * k as f64))
+            .collect();
         let mut out = vec![0.0; count * 16];
-        g.bench_function(BenchmarkId::from_parameter(name), |b| b.iter(|| chain.fk_batch(black_box(&qs), &mut out)));
+        g.bench_function(BenchmarkId::from_parameter(name), |b| {
+            b.iter(|| chain.fk_batch(black_box(&qs), &mut out))
+        });
     }
     g.finish();
 }
