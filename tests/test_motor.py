@@ -28,10 +28,13 @@ def test_tuning_reports_designed_bandwidths(servo):
     assert t["current"]["phase_margin_deg"] > 75
     assert t["speed"]["phase_margin_deg"] == pytest.approx(53.1, abs=5)
     assert t["position"]["phase_margin_deg"] > 45
-    # Continuous limits of the discrete current-loop gains: Kp → L ω_c, Ki → R ω_c.
-    wc = 2 * np.pi * 1000
+    # Discrete pole-zero cancellation: a = e^{-RT/L}, b = 1 - e^{-ω_c T}, Kp = R b/(1 - a), Ki = R b/T
+    # (→ L ω_c and R ω_c for T → 0; at ω_c T = 0.31 the discrete values are 8 % and -14 % off).
+    period, wc = 1 / 20000, 2 * np.pi * 1000
+    a, b = np.exp(-2.32 * period / 0.238e-3), 1 - np.exp(-wc * period)
+    assert t["current"]["kp"] == pytest.approx(2.32 * b / (1 - a), rel=1e-12)
+    assert t["current"]["ki"] == pytest.approx(2.32 * b / period, rel=1e-12)
     assert t["current"]["kp"] == pytest.approx(0.238e-3 * wc, rel=0.1)
-    assert t["current"]["ki"] == pytest.approx(2.32 * wc, rel=0.1)
 
 
 def test_current_step_response(servo):
@@ -101,6 +104,7 @@ def test_plot_writes_a_png(servo, tmp_path):
         ({"motor": motor.DcMotor(inductance=float("nan"))}, ttmanip.NonFiniteError),
         ({"loops": motor.Loops(speed_hz=6000.0)}, ttmanip.TtmanipError),
         ({"loops": motor.Loops(peak_current=0.5)}, ttmanip.ModelError),
+        ({"loops": motor.Loops(speed_window=0)}, ttmanip.ModelError),
         ({"plant": {"resistance": 0.0}}, ttmanip.ModelError),
         ({"plant": {"no_such_parameter": 1.0}}, ttmanip.TtmanipError),
     ],

@@ -14,7 +14,7 @@ use crate::error::{finite, positive, Error, Result};
 use crate::loops::{CurrentLoop, LowPass, Pi, PositionLoop, PositionOutput, SpeedLoop};
 use crate::motor::{Measurement, MotorModel};
 use crate::stepper::{Due, Rates};
-use crate::tuning::{tune_cascade, CascadeTuning, TuningTargets};
+use crate::tuning::{tune_cascade, CascadeTuning, TuningTargets, SPEED_WINDOW_MAX};
 
 /// Operating mode (the CiA 402 cyclic synchronous modes: torque, velocity, position).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -143,7 +143,10 @@ pub struct Axis {
     count_offset: i64,
     last_counts: i64,
     position: f64,
-    position_at_speed_tick: f64,
+    /// Positions at the last `SPEED_WINDOW_MAX` speed ticks (ring buffer), rad.
+    speed_ring: [f64; SPEED_WINDOW_MAX],
+    speed_ring_index: usize,
+    speed_window: usize,
     speed: f64,
     // References and outputs.
     state: AxisState,
@@ -253,7 +256,7 @@ impl Axis {
             config: *c,
             tuning,
             rad_per_count,
-            speed_rate: 1.0 / ts,
+            speed_rate: 1.0 / (ts * c.tuning.speed_window as f64),
             speed_period: ts,
             jump_limit,
             standstill: 0.05 * c.max_speed,
@@ -266,7 +269,9 @@ impl Axis {
             count_offset: 0,
             last_counts: 0,
             position: 0.0,
-            position_at_speed_tick: 0.0,
+            speed_ring: [0.0; SPEED_WINDOW_MAX],
+            speed_ring_index: 0,
+            speed_window: c.tuning.speed_window as usize,
             speed: 0.0,
             state: AxisState::Disabled,
             mode: Mode::Current,
@@ -328,14 +333,20 @@ impl Axis {
             }
         } else {
             self.primed = true;
-            self.position_at_speed_tick = counts as f64 * self.rad_per_count;
-            self.q_ref = self.position_at_speed_tick;
+            let p = counts as f64 * self.rad_per_count;
+            self.speed_ring = [p; SPEED_WINDOW_MAX];
+            self.q_ref = p;
         }
         self.last_counts = counts;
         self.position = counts as f64 * self.rad_per_count;
         if speed_due {
-            self.speed = (self.position - self.position_at_speed_tick) * self.speed_rate;
-            self.position_at_speed_tick = self.position;
+            // Difference over the last `speed_window` speed periods: the ring holds the positions
+            // of the last SPEED_WINDOW_MAX speed ticks, the oldest needed one `speed_window` back.
+            let i = self.speed_ring_index;
+            let old = (i + SPEED_WINDOW_MAX - self.speed_window) % SPEED_WINDOW_MAX;
+            self.speed = (self.position - self.speed_ring[old]) * self.speed_rate;
+            self.speed_ring[i] = self.position;
+            self.speed_ring_index = (i + 1) % SPEED_WINDOW_MAX;
             self.emf_speed.step(self.speed);
         }
     }
@@ -532,7 +543,7 @@ impl Axis {
         self.position
     }
 
-    /// Estimated output speed, rad/s (encoder difference over one speed period).
+    /// Estimated output speed, rad/s (encoder difference over `speed_window` speed periods).
     pub fn speed(&self) -> f64 {
         self.speed
     }

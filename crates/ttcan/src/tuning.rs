@@ -10,7 +10,7 @@
 //! - Speed loop, **symmetric optimum** (Kessler). The plant seen by the speed PI is
 //!   K_acc/s · 1/(1 + T_σ s), where T_σ lumps the small lags: the closed current loop 1/ω_c,i, the
 //!   output filter T_f, the hold of the current reference T_s/2, the speed estimate by differencing
-//!   T_s/2 and the current loop's hold T_c/2. With a ≥ 2: Kp = 1/(a K_acc T_σ), T_i = a² T_σ,
+//!   over w speed periods w·T_s/2 and the current loop's hold T_c/2. With a ≥ 2: Kp = 1/(a K_acc T_σ), T_i = a² T_σ,
 //!   crossover 1/(a T_σ), phase margin atan((a² − 1)/(2a)) (36.9° for a = 2, 53.1° for a = 3).
 //!   The reference low-pass 1/(1 + a T_σ s) takes the edge off the PI zero's overshoot.
 //! - Position loop: P gain Kp = ω_c,speed / r (r = 4 by default), velocity and acceleration
@@ -65,7 +65,14 @@ pub struct TuningTargets {
     pub speed_output_filter_hz: f64,
     /// Ratio of the speed-loop crossover to the position gain (≥ 2).
     pub position_ratio: f64,
+    /// Speed periods over which the speed is estimated by differencing encoder positions
+    /// (1..=`SPEED_WINDOW_MAX`): a longer window divides the quantisation noise of the estimate by
+    /// the window and adds half a window of delay to T_σ.
+    pub speed_window: u32,
 }
+
+/// Longest speed-estimate window, speed periods.
+pub const SPEED_WINDOW_MAX: usize = 16;
 
 impl Default for TuningTargets {
     fn default() -> Self {
@@ -74,6 +81,7 @@ impl Default for TuningTargets {
             speed_symmetric_optimum: 3.0,
             speed_output_filter_hz: 1000.0,
             position_ratio: 4.0,
+            speed_window: 4,
         }
     }
 }
@@ -120,6 +128,14 @@ pub fn tune_cascade(model: &MotorModel, periods: [f64; 3], targets: &TuningTarge
             reason: "must be > 0 (infinite: no filter)".into(),
         });
     }
+    let window = targets.speed_window;
+    if window == 0 || window as usize > SPEED_WINDOW_MAX {
+        return Err(Error::InvalidParameter {
+            what: "speed window (speed periods)".into(),
+            value: window as f64,
+            reason: format!("must be between 1 and {SPEED_WINDOW_MAX}"),
+        });
+    }
     let r_pos = targets.position_ratio;
     crate::error::finite("position ratio", r_pos)?;
     if r_pos < 2.0 {
@@ -148,7 +164,7 @@ pub fn tune_cascade(model: &MotorModel, periods: [f64; 3], targets: &TuningTarge
     } else {
         1.0 / (2.0 * PI * f_out)
     };
-    let t_d = ts + 0.5 * tc;
+    let t_d = 0.5 * ts * (1.0 + window as f64) + 0.5 * tc;
     let t_sigma = 1.0 / w_ci + t_f + t_d;
     let k_acc = model.acceleration_per_amp();
     let kps = 1.0 / (a_so * k_acc * t_sigma);
