@@ -240,31 +240,31 @@ impl Plant {
     pub fn new(model: &MotorModel, dt: f64) -> Result<Self> {
         model.validate()?;
         positive("plant time step (s)", dt)?;
-        let m = &model.motor;
-        let j = model.motor_side_inertia();
-        let b = model.motor_side_viscous();
-        // Augmented matrix [[A, B], [0, 0]] · dt; its exponential holds Φ and Γ.
-        let mut aug = SMatrix::<f64, 5, 5>::zeros();
-        aug[(0, 0)] = -m.resistance / m.inductance;
-        aug[(0, 1)] = -m.back_emf_constant / m.inductance;
-        aug[(1, 0)] = m.torque_constant / j;
-        aug[(1, 1)] = -b / j;
-        aug[(2, 1)] = 1.0;
-        aug[(0, 3)] = 1.0 / m.inductance;
-        aug[(1, 4)] = -1.0 / j;
-        let e = (aug * dt).exp();
+        let (phi, gamma) = discretise(model, dt);
         Ok(Plant {
             model: *model,
             dt,
-            phi: e.fixed_view::<3, 3>(0, 0).into_owned(),
-            gamma: e.fixed_view::<3, 2>(0, 3).into_owned(),
-            stuck_decay: (-m.resistance * dt / m.inductance).exp(),
+            phi,
+            gamma,
+            stuck_decay: (-model.motor.resistance * dt / model.motor.inductance).exp(),
             state: SVector::zeros(),
             external_torque: 0.0,
             encoder_offset: 0,
             current_offset: 0.0,
             rng: SplitMix64(0x5eed_0007),
         })
+    }
+
+    /// Changes the load inertia about the output axis (kg·m², e.g. the joint's diagonal entry of a
+    /// robot's mass matrix at the present configuration) and re-discretises; no allocation.
+    /// Returns false and changes nothing for a negative or non-finite value.
+    pub fn set_load_inertia(&mut self, inertia: f64) -> bool {
+        if !(inertia.is_finite() && inertia >= 0.0) {
+            return false;
+        }
+        self.model.load.inertia = inertia;
+        (self.phi, self.gamma) = discretise(&self.model, self.dt);
+        true
     }
 
     /// The model this plant simulates.
@@ -385,6 +385,26 @@ impl Plant {
     fn advance(&mut self, u: f64, tau_d: f64) {
         self.state = self.phi * self.state + self.gamma * SVector::<f64, 2>::new(u, tau_d);
     }
+}
+
+/// Φ = e^{A dt} and Γ = ∫₀^dt e^{As} ds B, read off the exponential of [[A, B], [0, 0]]·dt.
+fn discretise(model: &MotorModel, dt: f64) -> (SMatrix<f64, 3, 3>, SMatrix<f64, 3, 2>) {
+    let m = &model.motor;
+    let j = model.motor_side_inertia();
+    let b = model.motor_side_viscous();
+    let mut aug = SMatrix::<f64, 5, 5>::zeros();
+    aug[(0, 0)] = -m.resistance / m.inductance;
+    aug[(0, 1)] = -m.back_emf_constant / m.inductance;
+    aug[(1, 0)] = m.torque_constant / j;
+    aug[(1, 1)] = -b / j;
+    aug[(2, 1)] = 1.0;
+    aug[(0, 3)] = 1.0 / m.inductance;
+    aug[(1, 4)] = -1.0 / j;
+    let e = (aug * dt).exp();
+    (
+        e.fixed_view::<3, 3>(0, 0).into_owned(),
+        e.fixed_view::<3, 2>(0, 3).into_owned(),
+    )
 }
 
 /// SplitMix64 with a Box–Muller transform: a tiny seeded normal generator for sensor noise.
