@@ -20,6 +20,7 @@ pub mod redundancy;
 pub mod robots;
 pub mod task;
 pub mod transform;
+pub mod trig;
 pub mod urdf;
 pub mod wholebody;
 
