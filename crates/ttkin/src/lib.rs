@@ -11,6 +11,7 @@
 
 pub mod chain;
 pub mod description;
+pub mod dynamics;
 pub mod error;
 pub mod inertial;
 pub mod joint;
@@ -20,6 +21,7 @@ pub mod transform;
 pub mod urdf;
 
 pub use chain::{Chain, JacobianFrame};
+pub use dynamics::{Dynamics, DynamicsData, Wrench};
 pub use error::{Error, Result};
 pub use inertial::Inertial;
-pub use joint::{Dh, DhConvention, Geometry, Joint, JointType, Limits};
+pub use joint::{Dh, DhConvention, Drive, Geometry, Joint, JointType, Limits};
