@@ -220,14 +220,16 @@ impl Dynamics {
                     inertial.validate(j.name())?;
                     links.push(*inertial);
                 }
-                None => return Err(Error::Model(format!(
+                None => {
+                    return Err(Error::Model(format!(
                     "chain '{}': the link moved by joint '{}' (joint {} of {n}, URDF link 'link{}') has no inertial; \
                          dynamics needs the mass, centre of mass and inertia of every link",
                     chain.name(),
                     j.name(),
                     i + 1,
                     i + 1
-                ))),
+                )))
+                }
             }
         }
         let mut fixed = Vec::with_capacity(n + 1);
