@@ -5,6 +5,7 @@
 use pyo3::prelude::*;
 
 mod convert;
+mod dynamics;
 mod errors;
 mod robot;
 
@@ -13,5 +14,6 @@ mod robot;
 fn _ttmanip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     errors::register(m)?;
     robot::register(m)?;
+    dynamics::register(m)?;
     Ok(())
 }

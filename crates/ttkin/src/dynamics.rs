@@ -19,6 +19,9 @@
 //! τ = M(q)·q̈ + C(q, q̇)·q̇ + g(q) − Jᵀ(q)·w_ext (+ friction, see [`Dynamics::inverse_dynamics`]).
 //! Gravity is a vector in the base frame (m/s², e.g. (0, 0, −9.81)).
 
+// The recursions index several per-joint arrays at once: index loops read like the textbook.
+#![allow(clippy::needless_range_loop)]
+
 use nalgebra::{DMatrix, DVector, IsometryMatrix3, Matrix3, Vector3};
 use rayon::prelude::*;
 
@@ -85,7 +88,7 @@ impl BodyInertia {
     /// The same body seen from the parent frame, in which this frame has rotation `r`, origin `p`.
     /// I_o' = R·I_o·Rᵀ + 2(y·p)·1 − (y·pᵀ + p·yᵀ) + m(|p|²·1 − p·pᵀ), y = R·h.
     #[inline(always)]
-    fn to_parent(&self, r: &Matrix3<f64>, p: &Vector3<f64>) -> Self {
+    fn in_parent(&self, r: &Matrix3<f64>, p: &Vector3<f64>) -> Self {
         let y = r * self.h;
         let yp = y * p.transpose();
         BodyInertia {
@@ -507,7 +510,7 @@ impl Dynamics {
                 data.mass[(j, i)] = mij;
             }
             if i > 0 {
-                let parent = body.to_parent(&data.rot[i], &data.pos[i]);
+                let parent = body.in_parent(&data.rot[i], &data.pos[i]);
                 data.composite[i - 1].add(&parent);
             }
         }
