@@ -4,6 +4,8 @@ the identities between them; the torque profile; bad input."""
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -169,6 +171,10 @@ def test_torque_profile_of_a_planned_motion():
     traj = Trajectory()
     traj.q, traj.qd, traj.qdd = q, qd, qdd
     np.testing.assert_array_equal(robot.torques(traj).joint, profile.joint)
+    named = SimpleNamespace(position=q, velocity=qd, acceleration=qdd)
+    np.testing.assert_array_equal(robot.torques(named).joint, profile.joint)
+    with pytest.raises(ttmanip.TtmanipError, match="attributes"):
+        robot.torques(SimpleNamespace(q=q))
 
 
 def test_missing_inertia_names_the_link():

@@ -177,7 +177,7 @@ impl PyTorqueProfile {
 }
 
 /// (q, qd, qdd) from `torques`' arguments: three arrays, a (q, qd, qdd) tuple, or an object with
-/// attributes q, qd, qdd.
+/// attributes q, qd, qdd (or position, velocity, acceleration).
 fn trajectory_arrays<'py>(
     trajectory: &Bound<'py, PyAny>,
     qd: Option<&Bound<'py, PyAny>>,
@@ -190,13 +190,17 @@ fn trajectory_arrays<'py>(
             {
                 return Ok([q, qd, qdd]);
             }
-            let get = |name: &str| trajectory.getattr(name);
-            match (get("q"), get("qd"), get("qdd")) {
-                (Ok(q), Ok(qd), Ok(qdd)) => Ok([q, qd, qdd]),
-                _ => Err(TtmanipError::new_err(
-                    "torques: expected (q, qd, qdd) arrays, a (q, qd, qdd) tuple or an object with attributes q, qd, qdd",
-                )),
+            for names in [["q", "qd", "qdd"], ["position", "velocity", "acceleration"]] {
+                let got: PyResult<Vec<Bound<'py, PyAny>>> = names.iter().map(|n| trajectory.getattr(*n)).collect();
+                if let Ok(v) = got {
+                    let [q, qd, qdd]: [Bound<'py, PyAny>; 3] = v.try_into().expect("three names");
+                    return Ok([q, qd, qdd]);
+                }
             }
+            Err(TtmanipError::new_err(
+                "torques: expected (q, qd, qdd) arrays, a (q, qd, qdd) tuple, or an object with attributes \
+                 q, qd, qdd (or position, velocity, acceleration)",
+            ))
         }
         _ => Err(TtmanipError::new_err("torques: give both qd and qdd, or neither")),
     }
@@ -434,7 +438,8 @@ impl PyRobot {
     }
 
     /// Torque profile of a planned motion (patent step S105): `torques(q, qd, qdd)` with (N, n)
-    /// arrays, `torques((q, qd, qdd))` or `torques(traj)` for an object with attributes q, qd, qdd.
+    /// arrays, `torques((q, qd, qdd))` or `torques(traj)` for an object with attributes q, qd, qdd
+    /// (or position, velocity, acceleration), each (N, n).
     /// Joint torques include friction; motor side through the gear ratio and torque constant.
     #[pyo3(signature = (trajectory, qd=None, qdd=None, gravity=None, wrench=None))]
     fn torques<'py>(

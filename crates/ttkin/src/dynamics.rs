@@ -296,7 +296,7 @@ impl Dynamics {
             let rf = f.rotation.matrix();
             match self.kinds[i] {
                 JointType::Revolute => {
-                    let (s, c) = q[i].sin_cos();
+                    let (s, c) = crate::trig::sin_cos(q[i]);
                     let (c0, c1) = (rf.column(0), rf.column(1));
                     let r = &mut data.rot[i];
                     r.set_column(0, &(c0 * c + c1 * s));
