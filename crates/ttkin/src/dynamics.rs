@@ -225,7 +225,7 @@ impl Dynamics {
                 }
                 None => {
                     return Err(Error::Model(format!(
-                    "chain '{}': the link moved by joint '{}' (joint {} of {n}, URDF link 'link{}') has no inertial; \
+                    "chain '{}': the link moved by joint '{}' (joint {} of {n}, 'link{}' in exported URDF) has no inertial; \
                          dynamics needs the mass, centre of mass and inertia of every link",
                     chain.name(),
                     j.name(),
