@@ -231,3 +231,13 @@ def test_robot_file_and_urdf_carry_inertias_and_drives():
     model = pin.buildModelFromXML(robot.to_urdf())
     np.testing.assert_allclose(model.damping, [d["viscous"] for d in robot.drives])
     np.testing.assert_allclose(model.friction, [d["coulomb"] for d in robot.drives])
+
+
+def test_torque_figure_is_written(tmp_path):
+    robot = ttmanip.robots.arm4()
+    q, qd, qdd = states(robot, 30, seed=2)
+    path = tmp_path / "torques.png"
+    ttmanip.dynamics.torque_figure(robot, np.linspace(0, 1, 30), robot.torques(q, qd, qdd), path)
+    assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    gantry, t, profile = ttmanip.dynamics.gantry6_example()
+    assert profile.within_limits and profile.joint.shape == (len(t), gantry.n)
