@@ -9,7 +9,7 @@ seconds; poses are 4×4 homogeneous matrices in the robot's base frame.
 (4, 4)
 """
 
-from . import dynamics, robots
+from . import dynamics, motor, robots
 from ._ttmanip import (
     ModelError,
     NonFiniteError,
@@ -31,6 +31,7 @@ __all__ = [
     "TtmanipError",
     "UnreachableError",
     "dynamics",
+    "motor",
     "robots",
 ]
 

@@ -7,6 +7,7 @@ use pyo3::prelude::*;
 mod convert;
 mod dynamics;
 mod errors;
+mod motor;
 mod robot;
 
 /// The native extension module `ttmanip._ttmanip`.
@@ -15,5 +16,6 @@ fn _ttmanip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     errors::register(m)?;
     robot::register(m)?;
     dynamics::register(m)?;
+    motor::register(m)?;
     Ok(())
 }
