@@ -9,7 +9,7 @@ seconds; poses are 4×4 homogeneous matrices in the robot's base frame.
 (4, 4)
 """
 
-from . import motor, robots
+from . import dynamics, motor, robots
 from ._ttmanip import (
     ModelError,
     NonFiniteError,
@@ -33,6 +33,7 @@ __all__ = [
     "TrackResult",
     "TtmanipError",
     "UnreachableError",
+    "dynamics",
     "motor",
     "robots",
     "task_line",

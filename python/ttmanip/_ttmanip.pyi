@@ -114,6 +114,90 @@ class Robot:
         """Task coordinates of the tool pose: (3,), (6,) or the racket 5-vector (m, rad)."""
 
 
+    # --- dynamics (crates/ttkin-py/src/dynamics.rs); SI units, gravity in the base frame ---
+    def rnea(
+        self,
+        q: ArrayLike,
+        qd: ArrayLike,
+        qdd: ArrayLike,
+        gravity: ArrayLike | None = None,
+        wrench: ArrayLike | None = None,
+    ) -> NDArray[np.float64]:
+        """Inverse dynamics (RNEA, armature, no friction): (n,) or (N, n) torques."""
+    def inverse_dynamics(
+        self,
+        q: ArrayLike,
+        qd: ArrayLike,
+        qdd: ArrayLike,
+        gravity: ArrayLike | None = None,
+        wrench: ArrayLike | None = None,
+    ) -> NDArray[np.float64]:
+        """rnea plus joint friction: the torques the drives deliver."""
+    def mass_matrix(self, q: ArrayLike) -> NDArray[np.float64]:
+        """Joint-space mass matrix (CRBA, armature included): (n, n) or (N, n, n)."""
+    def gravity(self, q: ArrayLike, gravity: ArrayLike | None = None) -> NDArray[np.float64]:
+        """Gravity torques g(q): (n,) or (N, n)."""
+    def coriolis(self, q: ArrayLike, qd: ArrayLike) -> NDArray[np.float64]:
+        """Coriolis and centrifugal torques C(q, qd)·qd: (n,) or (N, n)."""
+    def nonlinear_effects(
+        self, q: ArrayLike, qd: ArrayLike, gravity: ArrayLike | None = None
+    ) -> NDArray[np.float64]:
+        """h(q, qd) = C(q, qd)·qd + g(q): (n,) or (N, n)."""
+    def forward_dynamics(
+        self,
+        q: ArrayLike,
+        qd: ArrayLike,
+        tau: ArrayLike,
+        gravity: ArrayLike | None = None,
+        wrench: ArrayLike | None = None,
+    ) -> NDArray[np.float64]:
+        """Joint accelerations M⁻¹(τ − h + Jᵀw), no friction: (n,) or (N, n)."""
+    def friction(self, qd: ArrayLike) -> NDArray[np.float64]:
+        """Joint friction b·qd + f_c·sign(qd): (n,) or (N, n)."""
+    def kinetic_energy(self, q: ArrayLike, qd: ArrayLike) -> float:
+        """½ qdᵀ M qd (J)."""
+    def potential_energy(self, q: ArrayLike, gravity: ArrayLike | None = None) -> float:
+        """−Σ m_i g·c_i (J)."""
+    def simulate(
+        self,
+        q0: ArrayLike,
+        qd0: ArrayLike,
+        tau: ArrayLike,
+        dt: float,
+        gravity: ArrayLike | None = None,
+        friction: bool = True,
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Semi-implicit Euler under tau (N, n): (q, qd), each (N + 1, n)."""
+    def torques(
+        self,
+        trajectory: object,
+        qd: ArrayLike | None = None,
+        qdd: ArrayLike | None = None,
+        gravity: ArrayLike | None = None,
+        wrench: ArrayLike | None = None,
+    ) -> TorqueProfile:
+        """Torque profile of (q, qd, qdd) (N, n) arrays, a tuple of them or an object with q, qd, qdd."""
+    @property
+    def armature(self) -> NDArray[np.float64]:
+        """(n,) rotor inertia reflected to each joint, G²·J (kg·m² or kg)."""
+    @property
+    def masses(self) -> NDArray[np.float64]:
+        """(n,) link masses (kg; NaN where unknown)."""
+    @property
+    def drives(self) -> list[dict[str, float | None] | None]:
+        """Per joint: gear_ratio, rotor_inertia, viscous, coulomb, torque_constant (or None)."""
+    def with_inertials(self, mass: ArrayLike, com: ArrayLike, inertia: ArrayLike) -> Robot:
+        """The same robot with link inertias (n,) kg, (n, 3) m, (n, 3, 3) kg·m² about the com, link frames."""
+    def with_drives(
+        self,
+        gear_ratio: ArrayLike,
+        rotor_inertia: ArrayLike | None = None,
+        viscous: ArrayLike | None = None,
+        coulomb: ArrayLike | None = None,
+        torque_constant: ArrayLike | None = None,
+    ) -> Robot:
+        """The same robot with drives, one value per joint."""
+
 class ServoSim:
     """A simulated servo axis: ttcan's current/speed/position cascade on a DC motor plant (SI units)."""
 
@@ -254,3 +338,24 @@ def track(
     mount: ArrayLike | None = None,
 ) -> TrackResult:
     """Closed-loop tracking of a task trajectory sampled at `rate_hz` (loop in Rust)."""
+class TorqueProfile:
+    """Torques along a planned motion (patent step S105)."""
+
+    @property
+    def joint(self) -> NDArray[np.float64]:
+        """(N, n) joint torques, friction included (N·m or N)."""
+    @property
+    def motor(self) -> NDArray[np.float64]:
+        """(N, n) motor torques τ/G (N·m)."""
+    @property
+    def current(self) -> NDArray[np.float64]:
+        """(N, n) motor currents (A; NaN without torque constant)."""
+    @property
+    def peak(self) -> NDArray[np.float64]:
+        """(n,) largest |joint torque|."""
+    @property
+    def within_limits(self) -> bool:
+        """No sample exceeds an effort limit."""
+    @property
+    def violations(self) -> list[tuple[int, int, float, float]]:
+        """(sample, joint, torque, limit) of every exceedance."""

@@ -5,6 +5,7 @@
 use pyo3::prelude::*;
 
 mod convert;
+mod dynamics;
 mod errors;
 mod mobile;
 mod motor;
@@ -16,6 +17,7 @@ fn _ttmanip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     errors::register(m)?;
     robot::register(m)?;
     mobile::register(m)?;
+    dynamics::register(m)?;
     motor::register(m)?;
     Ok(())
 }

@@ -18,12 +18,17 @@ use crate::errors::{PyResultExt, ShapeError, TtmanipError};
 pub struct PyRobot {
     /// The kinematic (and later dynamic) model.
     pub chain: Arc<Chain>,
+    /// The dynamic model, built on first use, and its scratch space (see `dynamics.rs`).
+    pub dynamics: crate::dynamics::DynamicsCache,
 }
 
 impl PyRobot {
     /// Wraps a chain.
     pub fn new(chain: Chain) -> Self {
-        PyRobot { chain: Arc::new(chain) }
+        PyRobot {
+            chain: Arc::new(chain),
+            dynamics: Default::default(),
+        }
     }
 
     /// Reads `q` as one configuration (n,) or a batch (N, n); returns the batch size (None for one).

@@ -14,6 +14,8 @@
 //! limits = { lower = -170, upper = 170, velocity = 180 }
 //! inertial = { mass = 1.2, com = [-0.15, 0, 0], inertia = [1e-3, 9e-3, 9e-3, 0, 0, 0] }  # always SI
 //! ```
+//! A joint may also carry its drive (SI units; see [`crate::joint::Drive`]):
+//! `drive = { gear_ratio = 100, rotor_inertia = 1.2e-6, viscous = 0.05, coulomb = 0.2, torque_constant = 0.025 }`.
 //! A joint may give `origin = { xyz = [...], rpy = [...] }` and `axis = [x, y, z]` instead of `dh`.
 //! Inertias are always SI: kg, m, kg·m² (ixx, iyy, izz, ixy, ixz, iyz) about the centre of mass
 //! in link-frame axes. Unknown keys are errors, so a typo never passes silently.
@@ -26,7 +28,7 @@ use serde::{Deserialize, Serialize};
 use crate::chain::Chain;
 use crate::error::{Error, Result};
 use crate::inertial::Inertial;
-use crate::joint::{Dh, DhConvention, Geometry, Joint, JointType, Limits};
+use crate::joint::{Dh, DhConvention, Drive, Geometry, Joint, JointType, Limits};
 use crate::transform::{from_xyz_rpy, to_xyz_rpy};
 
 #[derive(Debug, Serialize, Deserialize)]
@@ -117,6 +119,8 @@ struct JointEntry {
     limits: Option<Limits>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     inertial: Option<InertialEntry>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    drive: Option<Drive>,
 }
 
 impl Units {
@@ -216,6 +220,9 @@ pub fn from_toml_str(text: &str, origin: &str) -> Result<Chain> {
         if let Some(i) = &e.inertial {
             j = j.with_inertial(Inertial::new(i.mass, i.com, i.inertia))?;
         }
+        if let Some(d) = e.drive {
+            j = j.with_drive(d)?;
+        }
         joints.push(j);
     }
     let id = IsometryMatrix3::identity();
@@ -269,6 +276,7 @@ pub fn to_toml(chain: &Chain) -> String {
                     com: i.com.into(),
                     inertia: i.components(),
                 }),
+                drive: j.drive().copied(),
             }
         })
         .collect();

@@ -128,6 +128,99 @@ impl Limits {
     }
 }
 
+/// The drive of one joint: motor rotor inertia, gear ratio, joint-side friction and the motor's
+/// torque constant. Values are per joint: the rotor inertia and torque constant are motor side,
+/// the friction coefficients joint side (after the gearbox).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Drive {
+    /// Gear ratio G = motor angle / joint motion (> 0): rad/rad for a revolute joint, rad/m for a
+    /// prismatic one (a ball screw of lead ℓ m/turn has G = 2π/ℓ).
+    pub gear_ratio: f64,
+    /// Rotor inertia of the motor (and gearbox input) about its axis, motor side, kg·m² (≥ 0).
+    /// Reflected to the joint it adds the armature G²·J (kg·m² or kg).
+    #[serde(default)]
+    pub rotor_inertia: f64,
+    /// Viscous friction coefficient b, joint side: τ_f = b·q̇ (N·m·s/rad or N·s/m, ≥ 0).
+    #[serde(default)]
+    pub viscous: f64,
+    /// Coulomb friction level f_c, joint side: τ_f = f_c·sign(q̇) (N·m or N, ≥ 0).
+    #[serde(default)]
+    pub coulomb: f64,
+    /// Motor torque constant k_t, N·m/A (> 0), if known: current = motor torque / k_t.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub torque_constant: Option<f64>,
+}
+
+impl Drive {
+    /// A drive with only a gear ratio: no rotor inertia, no friction, no torque constant.
+    pub fn geared(gear_ratio: f64) -> Self {
+        Drive {
+            gear_ratio,
+            rotor_inertia: 0.0,
+            viscous: 0.0,
+            coulomb: 0.0,
+            torque_constant: None,
+        }
+    }
+
+    /// Rotor inertia reflected to the joint, G²·J (kg·m² for revolute, kg for prismatic joints).
+    pub fn armature(&self) -> f64 {
+        self.gear_ratio * self.gear_ratio * self.rotor_inertia
+    }
+
+    /// Friction torque (N·m or N) at joint speed `qd` (rad/s or m/s): b·q̇ + f_c·sign(q̇), with
+    /// sign(0) = 0.
+    pub fn friction(&self, qd: f64) -> f64 {
+        let sign = if qd > 0.0 {
+            1.0
+        } else if qd < 0.0 {
+            -1.0
+        } else {
+            0.0
+        };
+        self.viscous * qd + self.coulomb * sign
+    }
+
+    /// Checks that every value is finite and in range; `joint` names the joint in the message.
+    pub fn validate(&self, joint: &str) -> Result<()> {
+        let what = format!("drive of joint '{joint}'");
+        crate::error::check_finite(
+            &what,
+            &[
+                self.gear_ratio,
+                self.rotor_inertia,
+                self.viscous,
+                self.coulomb,
+                self.torque_constant.unwrap_or(1.0),
+            ],
+        )?;
+        if !(self.gear_ratio > 0.0) {
+            return Err(Error::Model(format!(
+                "{what}: gear ratio must be > 0, got {}",
+                self.gear_ratio
+            )));
+        }
+        for (name, v) in [
+            ("rotor inertia", self.rotor_inertia),
+            ("viscous friction", self.viscous),
+            ("Coulomb friction", self.coulomb),
+        ] {
+            if v < 0.0 {
+                return Err(Error::Model(format!("{what}: {name} must be ≥ 0, got {v}")));
+            }
+        }
+        if let Some(k) = self.torque_constant {
+            if !(k > 0.0) {
+                return Err(Error::Model(format!(
+                    "{what}: torque constant must be > 0 N·m/A, got {k}"
+                )));
+            }
+        }
+        Ok(())
+    }
+}
+
 /// One joint and the link it moves.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Joint {
@@ -136,6 +229,7 @@ pub struct Joint {
     geometry: Geometry,
     limits: Limits,
     inertial: Option<Inertial>,
+    drive: Option<Drive>,
     pre: IsometryMatrix3<f64>,
     post: IsometryMatrix3<f64>,
 }
@@ -151,6 +245,7 @@ impl Joint {
             geometry,
             limits: Limits::unbounded(),
             inertial: None,
+            drive: None,
             pre,
             post,
         })
@@ -180,6 +275,13 @@ impl Joint {
         Ok(self)
     }
 
+    /// The same joint driven by the given motor and gearbox.
+    pub fn with_drive(mut self, drive: Drive) -> Result<Self> {
+        drive.validate(&self.name)?;
+        self.drive = Some(drive);
+        Ok(self)
+    }
+
     /// Joint name.
     pub fn name(&self) -> &str {
         &self.name
@@ -203,6 +305,11 @@ impl Joint {
     /// Inertia of the link this joint moves, in the link frame, if known.
     pub fn inertial(&self) -> Option<&Inertial> {
         self.inertial.as_ref()
+    }
+
+    /// Motor, gearbox and friction of this joint, if known.
+    pub fn drive(&self) -> Option<&Drive> {
+        self.drive.as_ref()
     }
 
     /// Previous link frame → joint-axis frame (z is the axis).

@@ -13,6 +13,7 @@ pub mod chain;
 pub mod clik;
 pub mod description;
 pub mod diffdrive;
+pub mod dynamics;
 pub mod error;
 pub mod inertial;
 pub mod joint;
@@ -25,6 +26,7 @@ pub mod urdf;
 pub mod wholebody;
 
 pub use chain::{Chain, JacobianFrame};
+pub use dynamics::{Dynamics, DynamicsData, Wrench};
 pub use error::{Error, Result};
 pub use inertial::Inertial;
-pub use joint::{Dh, DhConvention, Geometry, Joint, JointType, Limits};
+pub use joint::{Dh, DhConvention, Drive, Geometry, Joint, JointType, Limits};

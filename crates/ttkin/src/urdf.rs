@@ -5,6 +5,10 @@
 //! the file is exactly our link frame i: `base_link` —(fixed: base)→ `link0` —(joint 1)→ `link1` …
 //! `linkN` —(fixed: tool)→ `tool`. URDF 1.0 carries no acceleration limits, so they are not exported. A standard-DH joint moves before its fixed part, so it gets an
 //! extra `<joint name>_axis` link between the moving joint and a fixed joint to its DH frame.
+//!
+//! A joint's drive travels as `<dynamics damping="viscous" friction="Coulomb"/>` (joint side);
+//! URDF has no field for the gear ratio, rotor inertia or torque constant, so those live only in
+//! the robot file (an imported joint with damping or friction gets a unit gear ratio).
 
 use std::collections::HashMap;
 
@@ -13,7 +17,7 @@ use nalgebra::{IsometryMatrix3, Unit, Vector3};
 use crate::chain::Chain;
 use crate::error::{Error, Result};
 use crate::inertial::Inertial;
-use crate::joint::{DhConvention, Geometry, Joint, JointType, Limits};
+use crate::joint::{DhConvention, Drive, Geometry, Joint, JointType, Limits};
 use crate::transform::{from_xyz_rpy, to_xyz_rpy};
 
 /// Name of the base link in exported URDF.
@@ -157,6 +161,17 @@ pub fn from_urdf_str(text: &str, base_link: &str, tip_link: &str) -> Result<Chai
                 effort: positive(l.effort),
             })
             .map_err(|e| Error::Urdf(e.to_string()))?;
+        if let Some(d) = &uj.dynamics {
+            if d.damping != 0.0 || d.friction != 0.0 {
+                // URDF has no gear ratio or rotor inertia: a unit ratio carries the friction alone.
+                let drive = Drive {
+                    viscous: d.damping,
+                    coulomb: d.friction,
+                    ..Drive::geared(1.0)
+                };
+                j = j.with_drive(drive).map_err(|e| Error::Urdf(e.to_string()))?;
+            }
+        }
         joints.push(j);
         pending = IsometryMatrix3::identity();
         body = links.get(uj.child.link.as_str()).and_then(|l| link_inertial(l));
@@ -272,7 +287,10 @@ pub fn to_urdf_string(chain: &Chain) -> String {
                 jerk: f64::INFINITY,
             },
             calibration: None,
-            dynamics: None,
+            dynamics: j.drive().map(|d| urdf_rs::Dynamics {
+                damping: d.viscous,
+                friction: d.coulomb,
+            }),
             mimic: None,
             safety_controller: None,
         });

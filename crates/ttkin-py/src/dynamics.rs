@@ -1,0 +1,662 @@
+//! Dynamics methods of `ttmanip.Robot` (RNEA, mass matrix, gravity, forward dynamics, simulation,
+//! torque profile) and the `ttmanip.TorqueProfile` result. Conversion only: the maths is
+//! `ttkin::dynamics`.
+//!
+//! Each robot builds its `ttkin::Dynamics` model once, on the first dynamics call, and keeps one
+//! scratch `DynamicsData` behind a mutex for single calls (a second thread that finds it busy
+//! uses a fresh one). Batches run in parallel without the GIL.
+
+use std::sync::{Arc, Mutex, OnceLock};
+
+use nalgebra::{Matrix3, Vector3};
+use numpy::{PyArrayDyn, PyArrayMethods};
+use pyo3::prelude::*;
+use ttkin::dynamics::{TorqueProfile, EARTH_GRAVITY};
+use ttkin::{Chain, Drive, Dynamics, DynamicsData, Inertial, Wrench};
+
+use crate::convert::{f64_array, to_numpy, vector, zeros, F64Array};
+use crate::errors::{PyResultExt, ShapeError, TtmanipError};
+use crate::robot::PyRobot;
+
+/// A numpy float64 array returned to Python.
+type Array<'py> = Bound<'py, PyArrayDyn<f64>>;
+
+/// The lazily built dynamic model of a robot and its scratch space.
+#[derive(Default)]
+pub struct DynamicsCache {
+    model: OnceLock<Result<Arc<Dynamics>, ttkin::Error>>,
+    scratch: Mutex<Option<DynamicsData>>,
+}
+
+impl PyRobot {
+    /// The dynamic model (an error names the first link without inertia).
+    fn dynamics(&self) -> PyResult<&Arc<Dynamics>> {
+        self.dynamics
+            .model
+            .get_or_init(|| Dynamics::new(&self.chain).map(Arc::new))
+            .as_ref()
+            .map_err(|e| e.clone())
+            .py()
+    }
+
+    /// Runs `f` with the model and a scratch space.
+    fn with_data<T>(&self, f: impl FnOnce(&Dynamics, &mut DynamicsData) -> T) -> PyResult<T> {
+        let dy = self.dynamics()?;
+        let mut guard = self.dynamics.scratch.try_lock().ok();
+        match guard.as_deref_mut() {
+            Some(slot) => {
+                let data = slot.get_or_insert_with(|| DynamicsData::new(dy));
+                Ok(f(dy, data))
+            }
+            None => Ok(f(dy, &mut DynamicsData::new(dy))),
+        }
+    }
+
+    /// Reads several per-configuration arrays that must all be (n,) or all (N, n) with the same N.
+    fn states<'py, const K: usize>(
+        &self,
+        arrays: [(&Bound<'py, PyAny>, &str); K],
+    ) -> PyResult<(Vec<F64Array<'py>>, Option<usize>)> {
+        let mut out = Vec::with_capacity(K);
+        let mut batch = None;
+        for (k, (obj, what)) in arrays.into_iter().enumerate() {
+            let (a, b) = self.configs(obj, what)?;
+            if k == 0 {
+                batch = b;
+            } else if b != batch {
+                return Err(ShapeError::new_err(format!(
+                    "{what}: expected shape {} like the first argument, got {}",
+                    shape_of(batch, self.chain.dof()),
+                    a.shape_str()
+                )));
+            }
+            out.push(a);
+        }
+        Ok((out, batch))
+    }
+}
+
+fn shape_of(batch: Option<usize>, n: usize) -> String {
+    match batch {
+        None => format!("({n},)"),
+        Some(c) => format!("({c}, {n})"),
+    }
+}
+
+/// Gravity argument: None → (0, 0, −9.81) m/s², else a 3-vector in the base frame.
+fn gravity_arg(g: Option<&Bound<'_, PyAny>>) -> PyResult<[f64; 3]> {
+    match g {
+        None => Ok(EARTH_GRAVITY),
+        Some(g) => {
+            let v = vector(g, "gravity", 3)?;
+            Ok([v[0], v[1], v[2]])
+        }
+    }
+}
+
+/// Wrench argument: None, or [fx, fy, fz, mx, my, mz] (N, N·m) on the tool, tool-frame axes.
+fn wrench_arg(w: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Wrench>> {
+    w.map(|w| {
+        let v = vector(w, "wrench", 6)?;
+        Ok(Wrench {
+            force: Vector3::new(v[0], v[1], v[2]),
+            torque: Vector3::new(v[3], v[4], v[5]),
+        })
+    })
+    .transpose()
+}
+
+fn out_shape(batch: Option<usize>, item: &[usize]) -> (usize, Vec<usize>) {
+    match batch {
+        None => (1, item.to_vec()),
+        Some(c) => (c, std::iter::once(c).chain(item.iter().copied()).collect()),
+    }
+}
+
+/// The result of `Robot.torques`: joint, motor-side and current profiles and the effort check.
+#[pyclass(name = "TorqueProfile", module = "ttmanip", frozen)]
+pub struct PyTorqueProfile {
+    profile: TorqueProfile,
+}
+
+#[pymethods]
+impl PyTorqueProfile {
+    /// (N, n) joint torques (N·m) / forces (N): rigid body + armature + friction.
+    #[getter]
+    fn joint<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        let p = &self.profile;
+        to_numpy(py, &[p.joint.len() / p.dof, p.dof], &p.joint)
+    }
+
+    /// (N, n) motor torques τ/G (N·m).
+    #[getter]
+    fn motor<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        let p = &self.profile;
+        to_numpy(py, &[p.motor.len() / p.dof, p.dof], &p.motor)
+    }
+
+    /// (N, n) motor currents τ_motor/k_t (A); NaN for joints without a torque constant.
+    #[getter]
+    fn current<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        let p = &self.profile;
+        to_numpy(py, &[p.current.len() / p.dof, p.dof], &p.current)
+    }
+
+    /// (n,) largest |joint torque| over the profile (N·m or N).
+    #[getter]
+    fn peak<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        to_numpy(py, &[self.profile.dof], &self.profile.peak)
+    }
+
+    /// True when no sample exceeds any joint's effort limit.
+    #[getter]
+    fn within_limits(&self) -> bool {
+        self.profile.within_limits()
+    }
+
+    /// Every (sample, joint, torque, limit) whose |torque| exceeds the effort limit.
+    #[getter]
+    fn violations(&self) -> Vec<(usize, usize, f64, f64)> {
+        self.profile
+            .violations
+            .iter()
+            .map(|v| (v.sample, v.joint, v.torque, v.limit))
+            .collect()
+    }
+
+    fn __repr__(&self) -> String {
+        let p = &self.profile;
+        format!(
+            "TorqueProfile({} samples × {} joints, within_limits={}, {} violations)",
+            p.joint.len() / p.dof,
+            p.dof,
+            if p.within_limits() { "True" } else { "False" },
+            p.violations.len()
+        )
+    }
+}
+
+/// (q, qd, qdd) from `torques`' arguments: three arrays, a (q, qd, qdd) tuple, or an object with
+/// attributes q, qd, qdd (or position, velocity, acceleration).
+fn trajectory_arrays<'py>(
+    trajectory: &Bound<'py, PyAny>,
+    qd: Option<&Bound<'py, PyAny>>,
+    qdd: Option<&Bound<'py, PyAny>>,
+) -> PyResult<[Bound<'py, PyAny>; 3]> {
+    match (qd, qdd) {
+        (Some(qd), Some(qdd)) => Ok([trajectory.clone(), qd.clone(), qdd.clone()]),
+        (None, None) => {
+            if let Ok((q, qd, qdd)) = trajectory.extract::<(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>)>()
+            {
+                return Ok([q, qd, qdd]);
+            }
+            for names in [["q", "qd", "qdd"], ["position", "velocity", "acceleration"]] {
+                let got: PyResult<Vec<Bound<'py, PyAny>>> = names.iter().map(|n| trajectory.getattr(*n)).collect();
+                if let Ok(v) = got {
+                    let [q, qd, qdd]: [Bound<'py, PyAny>; 3] = v.try_into().expect("three names");
+                    return Ok([q, qd, qdd]);
+                }
+            }
+            Err(TtmanipError::new_err(
+                "torques: expected (q, qd, qdd) arrays, a (q, qd, qdd) tuple, or an object with attributes \
+                 q, qd, qdd (or position, velocity, acceleration)",
+            ))
+        }
+        _ => Err(TtmanipError::new_err("torques: give both qd and qdd, or neither")),
+    }
+}
+
+/// Reads an (n, k) per-joint table (or (n,) when k = 1).
+fn per_joint(obj: &Bound<'_, PyAny>, what: &str, n: usize, k: usize) -> PyResult<Vec<f64>> {
+    let a = f64_array(obj, what)?;
+    let ok = if k == 1 { a.shape() == [n] } else { a.shape() == [n, k] };
+    if !ok {
+        let expected = if k == 1 {
+            format!("({n},)")
+        } else {
+            format!("({n}, {k})")
+        };
+        return Err(ShapeError::new_err(format!(
+            "{what}: expected shape {expected}, got {}",
+            a.shape_str()
+        )));
+    }
+    ttkin::error::check_finite(what, a.data()).py()?;
+    Ok(a.data().to_vec())
+}
+
+fn rebuild(chain: &Chain, joints: Vec<ttkin::Joint>) -> PyResult<PyRobot> {
+    Ok(PyRobot::new(
+        Chain::new(chain.name(), joints, *chain.base(), *chain.tool()).py()?,
+    ))
+}
+
+#[pymethods]
+impl PyRobot {
+    /// Inverse dynamics (recursive Newton–Euler): joint torques (N·m) / forces (N) for q, qd, qdd
+    /// of shape (n,) or (N, n); rigid bodies plus rotor armature, no friction (Pinocchio's rnea).
+    /// `gravity` is a base-frame vector (default (0, 0, −9.81) m/s²); `wrench` [fx, fy, fz, mx, my,
+    /// mz] (N, N·m) is applied to the tool by the environment, tool-frame axes, moment about the
+    /// tool point.
+    #[pyo3(signature = (q, qd, qdd, gravity=None, wrench=None))]
+    fn rnea<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+        qd: &Bound<'py, PyAny>,
+        qdd: &Bound<'py, PyAny>,
+        gravity: Option<&Bound<'py, PyAny>>,
+        wrench: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        self.inverse(py, q, qd, qdd, gravity, wrench, false)
+    }
+
+    /// `rnea` plus joint friction b·q̇ + f_c·sign(q̇): the torques the drives must deliver.
+    #[pyo3(signature = (q, qd, qdd, gravity=None, wrench=None))]
+    fn inverse_dynamics<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+        qd: &Bound<'py, PyAny>,
+        qdd: &Bound<'py, PyAny>,
+        gravity: Option<&Bound<'py, PyAny>>,
+        wrench: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        self.inverse(py, q, qd, qdd, gravity, wrench, true)
+    }
+
+    /// Joint-space mass matrix M(q), armature included: (n, n) or (N, n, n).
+    fn mass_matrix<'py>(&self, py: Python<'py>, q: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let (a, batch) = self.configs(q, "q")?;
+        let n = self.chain.dof();
+        match batch {
+            None => self
+                .with_data(|dy, d| dy.mass_matrix(d, a.data()).map(|m| to_numpy(py, &[n, n], m.as_slice())))?
+                .py(),
+            Some(count) => {
+                let dy = self.dynamics()?;
+                let out = zeros(py, &[count, n, n]);
+                {
+                    let mut w = out.readwrite();
+                    let (qs, o) = (a.data(), w.as_slice_mut().expect("fresh array"));
+                    py.detach(|| dy.mass_matrix_batch(qs, o)).py()?;
+                }
+                Ok(out)
+            }
+        }
+    }
+
+    /// Gravity torques g(q) (N·m or N) that hold the robot still: (n,) or (N, n).
+    #[pyo3(signature = (q, gravity=None))]
+    fn gravity<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+        gravity: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let g = gravity_arg(gravity)?;
+        let (a, batch) = self.configs(q, "q")?;
+        let n = self.chain.dof();
+        match batch {
+            None => self
+                .with_data(|dy, d| dy.gravity(d, a.data(), &g).map(|t| to_numpy(py, &[n], t.as_slice())))?
+                .py(),
+            Some(count) => {
+                let dy = self.dynamics()?;
+                let out = zeros(py, &[count, n]);
+                {
+                    let mut w = out.readwrite();
+                    let (qs, o) = (a.data(), w.as_slice_mut().expect("fresh array"));
+                    py.detach(|| dy.gravity_batch(qs, &g, o)).py()?;
+                }
+                Ok(out)
+            }
+        }
+    }
+
+    /// Coriolis and centrifugal torques C(q, q̇)·q̇ (N·m or N), gravity excluded: (n,) or (N, n).
+    fn coriolis<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+        qd: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let zero = to_numpy(py, &[3], &[0.0; 3]);
+        let qdd = zeros(py, f64_array(qd, "qd")?.shape());
+        self.inverse(py, q, qd, qdd.as_any(), Some(zero.as_any()), None, false)
+    }
+
+    /// Nonlinear effects h(q, q̇) = C(q, q̇)·q̇ + g(q) (N·m or N): (n,) or (N, n).
+    #[pyo3(signature = (q, qd, gravity=None))]
+    fn nonlinear_effects<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+        qd: &Bound<'py, PyAny>,
+        gravity: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let qdd = zeros(py, f64_array(qd, "qd")?.shape());
+        self.inverse(py, q, qd, qdd.as_any(), gravity, None, false)
+    }
+
+    /// Forward dynamics q̈ = M⁻¹(τ − h + Jᵀw) (rad/s², m/s²) for q, qd, tau of shape (n,) or
+    /// (N, n); no friction (the inverse of `rnea`). `gravity` and `wrench` as in `rnea`.
+    #[pyo3(signature = (q, qd, tau, gravity=None, wrench=None))]
+    fn forward_dynamics<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+        qd: &Bound<'py, PyAny>,
+        tau: &Bound<'py, PyAny>,
+        gravity: Option<&Bound<'py, PyAny>>,
+        wrench: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let g = gravity_arg(gravity)?;
+        let w = wrench_arg(wrench)?;
+        let (arrays, batch) = self.states([(q, "q"), (qd, "qd"), (tau, "tau")])?;
+        let n = self.chain.dof();
+        let (q, qd, tau) = (arrays[0].data(), arrays[1].data(), arrays[2].data());
+        match batch {
+            None => self
+                .with_data(|dy, d| {
+                    dy.forward_dynamics(d, q, qd, tau, &g, w.as_ref())
+                        .map(|a| to_numpy(py, &[n], a.as_slice()))
+                })?
+                .py(),
+            Some(count) => {
+                let dy = self.dynamics()?;
+                let out = zeros(py, &[count, n]);
+                {
+                    let mut o = out.readwrite();
+                    let o = o.as_slice_mut().expect("fresh array");
+                    py.detach(|| dy.forward_dynamics_batch(q, qd, tau, &g, w.as_ref(), o))
+                        .py()?;
+                }
+                Ok(out)
+            }
+        }
+    }
+
+    /// Joint friction b·q̇ + f_c·sign(q̇) (N·m or N) at speeds qd: (n,) or (N, n).
+    fn friction<'py>(&self, py: Python<'py>, qd: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let (a, batch) = self.configs(qd, "qd")?;
+        let dy = self.dynamics()?;
+        let n = self.chain.dof();
+        let mut out = Vec::with_capacity(a.data().len());
+        for v in a.data().chunks_exact(n) {
+            out.extend(dy.friction(v).py()?.iter());
+        }
+        let (_, shape) = out_shape(batch, &[n]);
+        Ok(to_numpy(py, &shape, &out))
+    }
+
+    /// Kinetic energy ½ q̇ᵀ M q̇ (J) at one state (n,).
+    fn kinetic_energy(&self, q: &Bound<'_, PyAny>, qd: &Bound<'_, PyAny>) -> PyResult<f64> {
+        let n = self.chain.dof();
+        let (q, qd) = (vector(q, "q", n)?, vector(qd, "qd", n)?);
+        self.with_data(|dy, d| dy.kinetic_energy(d, &q, &qd))?.py()
+    }
+
+    /// Potential energy −Σ m_i g·c_i (J) at one configuration (n,).
+    #[pyo3(signature = (q, gravity=None))]
+    fn potential_energy(&self, q: &Bound<'_, PyAny>, gravity: Option<&Bound<'_, PyAny>>) -> PyResult<f64> {
+        let g = gravity_arg(gravity)?;
+        let q = vector(q, "q", self.chain.dof())?;
+        self.dynamics()?.potential_energy(&q, &g).py()
+    }
+
+    /// Simulates with the semi-implicit Euler integrator: from q0, qd0 (n,) under torques tau
+    /// (N, n) held over steps of dt s; returns (q, qd), each (N + 1, n). `friction` subtracts the
+    /// joint friction from tau.
+    #[pyo3(signature = (q0, qd0, tau, dt, gravity=None, friction=true))]
+    #[allow(clippy::too_many_arguments)]
+    fn simulate<'py>(
+        &self,
+        py: Python<'py>,
+        q0: &Bound<'py, PyAny>,
+        qd0: &Bound<'py, PyAny>,
+        tau: &Bound<'py, PyAny>,
+        dt: f64,
+        gravity: Option<&Bound<'py, PyAny>>,
+        friction: bool,
+    ) -> PyResult<(Array<'py>, Array<'py>)> {
+        let n = self.chain.dof();
+        let g = gravity_arg(gravity)?;
+        let (q0, qd0) = (vector(q0, "q0", n)?, vector(qd0, "qd0", n)?);
+        let (t, batch) = self.configs(tau, "tau")?;
+        if batch.is_none() {
+            return Err(ShapeError::new_err(format!(
+                "tau: expected shape (N, {n}), one row per step, got {}",
+                t.shape_str()
+            )));
+        }
+        let dy = self.dynamics()?;
+        let taus = t.data();
+        let (qs, qds) = py.detach(|| dy.simulate(&q0, &qd0, taus, dt, &g, friction)).py()?;
+        let rows = qs.len() / n;
+        Ok((to_numpy(py, &[rows, n], &qs), to_numpy(py, &[rows, n], &qds)))
+    }
+
+    /// Torque profile of a planned motion (patent step S105): `torques(q, qd, qdd)` with (N, n)
+    /// arrays, `torques((q, qd, qdd))` or `torques(traj)` for an object with attributes q, qd, qdd
+    /// (or position, velocity, acceleration), each (N, n).
+    /// Joint torques include friction; motor side through the gear ratio and torque constant.
+    #[pyo3(signature = (trajectory, qd=None, qdd=None, gravity=None, wrench=None))]
+    fn torques<'py>(
+        &self,
+        py: Python<'py>,
+        trajectory: &Bound<'py, PyAny>,
+        qd: Option<&Bound<'py, PyAny>>,
+        qdd: Option<&Bound<'py, PyAny>>,
+        gravity: Option<&Bound<'py, PyAny>>,
+        wrench: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<PyTorqueProfile> {
+        let g = gravity_arg(gravity)?;
+        let w = wrench_arg(wrench)?;
+        let [q, qd, qdd] = trajectory_arrays(trajectory, qd, qdd)?;
+        let (arrays, _) = self.states([(&q, "q"), (&qd, "qd"), (&qdd, "qdd")])?;
+        let dy = self.dynamics()?;
+        let (q, qd, qdd) = (arrays[0].data(), arrays[1].data(), arrays[2].data());
+        let profile = py.detach(|| dy.torque_profile(q, qd, qdd, &g, w.as_ref())).py()?;
+        Ok(PyTorqueProfile { profile })
+    }
+
+    /// (n,) rotor inertia reflected to each joint, G²·J (kg·m² or kg); Pinocchio's model.armature.
+    #[getter]
+    fn armature<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        let a: Vec<f64> = self
+            .chain
+            .joints()
+            .iter()
+            .map(|j| j.drive().map_or(0.0, Drive::armature))
+            .collect();
+        to_numpy(py, &[a.len()], &a)
+    }
+
+    /// (n,) link masses (kg; NaN where a link has no inertial).
+    #[getter]
+    fn masses<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        let m: Vec<f64> = self
+            .chain
+            .joints()
+            .iter()
+            .map(|j| j.inertial().map_or(f64::NAN, |i| i.mass))
+            .collect();
+        to_numpy(py, &[m.len()], &m)
+    }
+
+    /// Drive of each joint as a dict (gear_ratio, rotor_inertia, viscous, coulomb,
+    /// torque_constant), or None.
+    #[getter]
+    fn drives(&self) -> Vec<Option<std::collections::HashMap<&'static str, Option<f64>>>> {
+        self.chain
+            .joints()
+            .iter()
+            .map(|j| {
+                j.drive().map(|d| {
+                    std::collections::HashMap::from([
+                        ("gear_ratio", Some(d.gear_ratio)),
+                        ("rotor_inertia", Some(d.rotor_inertia)),
+                        ("viscous", Some(d.viscous)),
+                        ("coulomb", Some(d.coulomb)),
+                        ("torque_constant", d.torque_constant),
+                    ])
+                })
+            })
+            .collect()
+    }
+
+    /// The same robot with new link inertias: `mass` (n,) kg, `com` (n, 3) m and `inertia`
+    /// (n, 3, 3) kg·m² about the centre of mass, all in each link's frame (DH frame i / URDF link i).
+    fn with_inertials(
+        &self,
+        mass: &Bound<'_, PyAny>,
+        com: &Bound<'_, PyAny>,
+        inertia: &Bound<'_, PyAny>,
+    ) -> PyResult<PyRobot> {
+        let n = self.chain.dof();
+        let m = per_joint(mass, "mass", n, 1)?;
+        let c = per_joint(com, "com", n, 3)?;
+        let i = per_joint(inertia, "inertia", n, 9).or_else(|_| {
+            let a = f64_array(inertia, "inertia")?;
+            if a.shape() != [n, 3, 3] {
+                return Err(ShapeError::new_err(format!(
+                    "inertia: expected shape ({n}, 3, 3), got {}",
+                    a.shape_str()
+                )));
+            }
+            ttkin::error::check_finite("inertia", a.data()).py()?;
+            Ok(a.data().to_vec())
+        })?;
+        let joints = self
+            .chain
+            .joints()
+            .iter()
+            .enumerate()
+            .map(|(k, j)| {
+                let inertial = Inertial {
+                    mass: m[k],
+                    com: Vector3::new(c[3 * k], c[3 * k + 1], c[3 * k + 2]),
+                    inertia: Matrix3::from_row_slice(&i[9 * k..9 * k + 9]),
+                };
+                j.clone().with_inertial(inertial)
+            })
+            .collect::<ttkin::Result<Vec<_>>>()
+            .py()?;
+        rebuild(&self.chain, joints)
+    }
+
+    /// The same robot with new drives, one value per joint (n,): gear ratio G (> 0), rotor inertia
+    /// (kg·m², motor side), viscous (N·m·s/rad or N·s/m) and Coulomb (N·m or N) friction (joint
+    /// side), torque constant (N·m/A; NaN for unknown).
+    #[pyo3(signature = (gear_ratio, rotor_inertia=None, viscous=None, coulomb=None, torque_constant=None))]
+    fn with_drives(
+        &self,
+        gear_ratio: &Bound<'_, PyAny>,
+        rotor_inertia: Option<&Bound<'_, PyAny>>,
+        viscous: Option<&Bound<'_, PyAny>>,
+        coulomb: Option<&Bound<'_, PyAny>>,
+        torque_constant: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<PyRobot> {
+        let n = self.chain.dof();
+        let column = |obj: Option<&Bound<'_, PyAny>>, what: &str| -> PyResult<Vec<f64>> {
+            obj.map_or(Ok(vec![0.0; n]), |o| vector(o, what, n))
+        };
+        let g = vector(gear_ratio, "gear_ratio", n)?;
+        let (j, b, c) = (
+            column(rotor_inertia, "rotor_inertia")?,
+            column(viscous, "viscous")?,
+            column(coulomb, "coulomb")?,
+        );
+        let kt: Vec<Option<f64>> = match torque_constant {
+            None => vec![None; n],
+            Some(o) => {
+                let a = f64_array(o, "torque_constant")?;
+                if a.shape() != [n] {
+                    return Err(ShapeError::new_err(format!(
+                        "torque_constant: expected shape ({n},), got {}",
+                        a.shape_str()
+                    )));
+                }
+                a.data().iter().map(|&v| (!v.is_nan()).then_some(v)).collect()
+            }
+        };
+        let joints = self
+            .chain
+            .joints()
+            .iter()
+            .enumerate()
+            .map(|(k, joint)| {
+                joint.clone().with_drive(Drive {
+                    gear_ratio: g[k],
+                    rotor_inertia: j[k],
+                    viscous: b[k],
+                    coulomb: c[k],
+                    torque_constant: kt[k],
+                })
+            })
+            .collect::<ttkin::Result<Vec<_>>>()
+            .py()?;
+        rebuild(&self.chain, joints)
+    }
+}
+
+impl PyRobot {
+    /// Shared body of rnea / inverse_dynamics / coriolis / nonlinear_effects.
+    #[allow(clippy::too_many_arguments)]
+    fn inverse<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+        qd: &Bound<'py, PyAny>,
+        qdd: &Bound<'py, PyAny>,
+        gravity: Option<&Bound<'py, PyAny>>,
+        wrench: Option<&Bound<'py, PyAny>>,
+        friction: bool,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let g = gravity_arg(gravity)?;
+        let w = wrench_arg(wrench)?;
+        let (arrays, batch) = self.states([(q, "q"), (qd, "qd"), (qdd, "qdd")])?;
+        let n = self.chain.dof();
+        let (q, qd, qdd) = (arrays[0].data(), arrays[1].data(), arrays[2].data());
+        match batch {
+            None => self
+                .with_data(|dy, d| {
+                    let t = if friction {
+                        dy.inverse_dynamics(d, q, qd, qdd, &g, w.as_ref())
+                    } else {
+                        dy.rnea(d, q, qd, qdd, &g, w.as_ref())
+                    };
+                    t.map(|t| to_numpy(py, &[n], t.as_slice()))
+                })?
+                .py(),
+            Some(count) => {
+                let dy = self.dynamics()?;
+                let out = zeros(py, &[count, n]);
+                {
+                    let mut o = out.readwrite();
+                    let o = o.as_slice_mut().expect("fresh array");
+                    py.detach(|| -> ttkin::Result<()> {
+                        dy.rnea_batch(q, qd, qdd, &g, w.as_ref(), o)?;
+                        if friction {
+                            for (row, v) in o.chunks_exact_mut(n).zip(qd.chunks_exact(n)) {
+                                for (t, f) in row.iter_mut().zip(dy.friction(v)?.iter()) {
+                                    *t += f;
+                                }
+                            }
+                        }
+                        Ok(())
+                    })
+                    .py()?;
+                }
+                Ok(out)
+            }
+        }
+    }
+}
+
+/// Adds `TorqueProfile` to the module (the dynamics methods live on `Robot`).
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyTorqueProfile>()?;
+    Ok(())
+}
