@@ -12,6 +12,7 @@
 pub mod chain;
 pub mod description;
 pub mod error;
+pub mod ik;
 pub mod inertial;
 pub mod joint;
 pub mod robots;

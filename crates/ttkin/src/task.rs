@@ -94,31 +94,43 @@ impl Task {
         current: &IsometryMatrix3<f64>,
         target: &IsometryMatrix3<f64>,
     ) -> DMatrix<f64> {
-        let n = j.ncols();
-        let mut out = DMatrix::zeros(self.dim(), n);
+        let mut out = DMatrix::zeros(self.dim(), j.ncols());
+        self.jacobian_into(j, current, target, &mut out);
+        out
+    }
+
+    /// [`Task::jacobian`] into a preallocated dim × n matrix, without allocating.
+    pub fn jacobian_into(
+        &self,
+        j: &Matrix6xX<f64>,
+        current: &IsometryMatrix3<f64>,
+        target: &IsometryMatrix3<f64>,
+        out: &mut DMatrix<f64>,
+    ) {
         match self {
             Task::Pose => out.copy_from(j),
             Task::Position => out.copy_from(&j.fixed_rows::<3>(0)),
             Task::Racket { offset } => {
-                let z = current.rotation.matrix().column(2).into_owned();
-                let jv = j.fixed_rows::<3>(0);
-                let jw = j.fixed_rows::<3>(3);
+                let zo = current.rotation.matrix().column(2) * *offset;
                 // ċ = v + ω × (offset·z) = J_v q̇ − offset·[z]× J_ω q̇
-                let jc = jv - skew(&(z * *offset)) * jw;
-                out.rows_mut(0, 3).copy_from(&jc);
                 // e_n = Bᵀ(n × n*), ė_n = Bᵀ [n*]× [n]× ω  ⇒  J_n = −Bᵀ [n*]× [n]× J_ω
                 let (n_cur, nt) = (racket_normal(current), racket_normal(target));
                 let (u1, u2) = tangent_basis(&nt);
+                // Row k of J_n is −(Mᵀ u_k)ᵀ J_ω with M = [n*]× [n]×.
                 let m = skew(&nt) * skew(&n_cur);
-                let jn = m * jw;
-                for c in 0..n {
-                    let col = jn.column(c);
-                    out[(3, c)] = -u1.dot(&col);
-                    out[(4, c)] = -u2.dot(&col);
+                let (r1, r2) = (m.transpose() * u1, m.transpose() * u2);
+                for c in 0..j.ncols() {
+                    let v = Vector3::new(j[(0, c)], j[(1, c)], j[(2, c)]);
+                    let w = Vector3::new(j[(3, c)], j[(4, c)], j[(5, c)]);
+                    let jc = v - zo.cross(&w);
+                    out[(0, c)] = jc.x;
+                    out[(1, c)] = jc.y;
+                    out[(2, c)] = jc.z;
+                    out[(3, c)] = -r1.dot(&w);
+                    out[(4, c)] = -r2.dot(&w);
                 }
             }
         }
-        out
     }
 }
 
