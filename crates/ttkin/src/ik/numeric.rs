@@ -18,6 +18,11 @@
 //! runs out of restarts or out of its time budget. With a fixed seed and a budget that does not
 //! bind (set `time_budget: None`), the result is a deterministic function of the inputs.
 //!
+//! The racket task is solved with a 6-row residual [c* − c; n* − n] (centre, and the chord between
+//! the face normals) rather than [`Task::error`]'s 2-D tangent form: ½‖n* − n‖² = 1 − cos∠(n, n*)
+//! grows monotonically with the angle, while the tangent form Bᵀ(n × n*) also vanishes at the
+//! flipped normal n = −n*, a false minimum a descent method can fall into.
+//!
 //! Hot loops allocate nothing: all buffers live in an [`IkScratch`] (Pinocchio's model/data split).
 
 use std::time::{Duration, Instant};
@@ -31,7 +36,7 @@ use crate::joint::JointType;
 use crate::task::{racket_normal, Task};
 
 /// Steps after which an attempt must have halved its cost E, or it is abandoned as stalled.
-pub const STALL_WINDOW: usize = 12;
+pub const STALL_WINDOW: usize = 8;
 
 /// Settings of the numeric IK solver.
 #[derive(Debug, Clone, PartialEq)]
@@ -175,7 +180,7 @@ impl IkSolver {
     /// Solves for a tool pose `target` (base frame, m) from `q0` (m, rad; projected into the limits
     /// first), allocating its own buffers. See [`IkSolver::solve_with`].
     pub fn solve(&self, chain: &Chain, target: &IsometryMatrix3<f64>, q0: &[f64]) -> Result<IkResult> {
-        let mut scratch = IkScratch::new(chain, self.task.dim());
+        let mut scratch = IkScratch::new(chain, residual_dim(&self.task));
         self.solve_with(chain, target, q0, &mut scratch)
     }
 
@@ -193,8 +198,8 @@ impl IkSolver {
         check_vector("q0", q0, chain.dof())?;
         check_finite("target pose", target.rotation.matrix().as_slice())?;
         check_finite("target pose", target.translation.vector.as_slice())?;
-        if !s.fits(chain, self.task.dim()) {
-            *s = IkScratch::new(chain, self.task.dim());
+        if !s.fits(chain, residual_dim(&self.task)) {
+            *s = IkScratch::new(chain, residual_dim(&self.task));
         }
         Ok(self.solve_unchecked(chain, target, q0, s, self.seed))
     }
@@ -217,7 +222,7 @@ impl IkSolver {
             .par_iter()
             .enumerate()
             .map_init(
-                || IkScratch::new(chain, self.task.dim()),
+                || IkScratch::new(chain, residual_dim(&self.task)),
                 |s, (i, t)| {
                     let q0 = if q0s.len() == 1 { &q0s[0] } else { &q0s[i] };
                     self.solve_unchecked(chain, t, q0, s, self.seed.wrapping_add(i as u64))
@@ -282,7 +287,7 @@ impl IkSolver {
         let task = &self.task;
         let n = s.n;
         let mut t = chain.jacobian_into(&s.q, JacobianFrame::Base, &mut s.jac);
-        task.error_into(&t, target, s.e.as_mut_slice());
+        residual_into(task, &t, target, s.e.as_mut_slice());
         let mut cost = 0.5 * s.e.norm_squared();
         let mut lambda = -1.0;
         let mut nu = 2.0;
@@ -310,7 +315,7 @@ impl IkSolver {
             since_window += 1;
             *iterations += 1;
             // Normal equations A = JᵀJ, g = Jᵀe.
-            task.jacobian_into(&s.jac, &t, target, &mut s.je);
+            residual_jacobian_into(task, &s.jac, &t, target, &mut s.je);
             s.a.gemm_tr(1.0, &s.je, &s.je, 0.0);
             s.je.tr_mul_to(&s.e, &mut s.g);
             if lambda < 0.0 {
@@ -344,7 +349,7 @@ impl IkSolver {
                 s.dq[i] = s.q_trial[i] - s.q[i];
             }
             let t_trial = chain.jacobian_into(&s.q_trial, JacobianFrame::Base, &mut s.jac_trial);
-            task.error_into(&t_trial, target, s.e_trial.as_mut_slice());
+            residual_into(task, &t_trial, target, s.e_trial.as_mut_slice());
             let cost_trial = 0.5 * s.e_trial.norm_squared();
             // Predicted decrease of the linear model for the projected step: gᵀδ − ½ δᵀAδ.
             let mut predicted = 0.0;
@@ -384,6 +389,55 @@ impl IkSolver {
         } else {
             Attempt::Stalled
         }
+    }
+}
+
+/// Rows of the solver's residual for `task`: 6 for the pose and the racket, 3 for the position.
+pub fn residual_dim(task: &Task) -> usize {
+    match task {
+        Task::Racket { .. } => 6,
+        other => other.dim(),
+    }
+}
+
+/// The solver's residual (target − current): [`Task::error_into`], except for the racket task's
+/// chord form [c* − c; n* − n] (see the module doc).
+fn residual_into(task: &Task, t: &IsometryMatrix3<f64>, target: &IsometryMatrix3<f64>, e: &mut [f64]) {
+    match task {
+        Task::Racket { offset } => {
+            let dc = crate::task::racket_centre(target, *offset) - crate::task::racket_centre(t, *offset);
+            let dn = racket_normal(target) - racket_normal(t);
+            e[..3].copy_from_slice(dc.as_slice());
+            e[3..6].copy_from_slice(dn.as_slice());
+        }
+        other => other.error_into(t, target, e),
+    }
+}
+
+/// Jacobian of [`residual_into`] with ė = −J_e q̇: for the chord rows ṅ = ω × n, so J_n = −[n]× J_ω.
+fn residual_jacobian_into(
+    task: &Task,
+    j: &Matrix6xX<f64>,
+    t: &IsometryMatrix3<f64>,
+    target: &IsometryMatrix3<f64>,
+    out: &mut DMatrix<f64>,
+) {
+    match task {
+        Task::Racket { offset } => {
+            let zo = t.rotation.matrix().column(2) * *offset;
+            let n = racket_normal(t);
+            for c in 0..j.ncols() {
+                let v = nalgebra::Vector3::new(j[(0, c)], j[(1, c)], j[(2, c)]);
+                let w = nalgebra::Vector3::new(j[(3, c)], j[(4, c)], j[(5, c)]);
+                let jc = v - zo.cross(&w);
+                let jn = w.cross(&n);
+                for r in 0..3 {
+                    out[(r, c)] = jc[r];
+                    out[(3 + r, c)] = jn[r];
+                }
+            }
+        }
+        other => other.jacobian_into(j, t, target, out),
     }
 }
 
