@@ -62,7 +62,11 @@ pub fn f64_array<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<F64Array<
         }
     }
     let converted = as_contiguous_f64(obj).map_err(|e| {
-        let ty = obj.get_type().name().map(|n| n.to_string()).unwrap_or_else(|_| "?".into());
+        let ty = obj
+            .get_type()
+            .name()
+            .map(|n| n.to_string())
+            .unwrap_or_else(|_| "?".into());
         ShapeError::new_err(format!("{what}: expected an array of real numbers, got {ty} ({e})"))
     })?;
     let a = converted
@@ -75,7 +79,10 @@ pub fn f64_array<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<F64Array<
 pub fn vector(obj: &Bound<'_, PyAny>, what: &str, n: usize) -> PyResult<Vec<f64>> {
     let a = f64_array(obj, what)?;
     if a.shape() != [n] {
-        return Err(ShapeError::new_err(format!("{what}: expected shape ({n},), got {}", a.shape_str())));
+        return Err(ShapeError::new_err(format!(
+            "{what}: expected shape ({n},), got {}",
+            a.shape_str()
+        )));
     }
     ttkin::error::check_finite(what, a.data()).py()?;
     Ok(a.data().to_vec())
@@ -85,7 +92,10 @@ pub fn vector(obj: &Bound<'_, PyAny>, what: &str, n: usize) -> PyResult<Vec<f64>
 pub fn transform(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<IsometryMatrix3<f64>> {
     let a = f64_array(obj, what)?;
     if a.shape() != [4, 4] {
-        return Err(ShapeError::new_err(format!("{what}: expected shape (4, 4), got {}", a.shape_str())));
+        return Err(ShapeError::new_err(format!(
+            "{what}: expected shape (4, 4), got {}",
+            a.shape_str()
+        )));
     }
     let m = Matrix4::from_row_slice(a.data());
     ttkin::transform::isometry_from_matrix(what, &m).py()

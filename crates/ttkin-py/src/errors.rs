@@ -5,13 +5,48 @@ use pyo3::create_exception;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
-create_exception!(ttmanip, TtmanipError, PyValueError, "Base of every ttmanip error (a ValueError).");
-create_exception!(ttmanip, ShapeError, TtmanipError, "An array has the wrong length, shape or dtype.");
-create_exception!(ttmanip, NonFiniteError, TtmanipError, "An input holds NaN or an infinity.");
-create_exception!(ttmanip, ModelError, TtmanipError, "A robot model is inconsistent or non-physical.");
-create_exception!(ttmanip, RobotFileError, TtmanipError, "A robot file or URDF cannot be read.");
-create_exception!(ttmanip, UnreachableError, TtmanipError, "A target is outside the robot's reach.");
-create_exception!(ttmanip, SingularError, TtmanipError, "A configuration is singular for the request.");
+create_exception!(
+    ttmanip,
+    TtmanipError,
+    PyValueError,
+    "Base of every ttmanip error (a ValueError)."
+);
+create_exception!(
+    ttmanip,
+    ShapeError,
+    TtmanipError,
+    "An array has the wrong length, shape or dtype."
+);
+create_exception!(
+    ttmanip,
+    NonFiniteError,
+    TtmanipError,
+    "An input holds NaN or an infinity."
+);
+create_exception!(
+    ttmanip,
+    ModelError,
+    TtmanipError,
+    "A robot model is inconsistent or non-physical."
+);
+create_exception!(
+    ttmanip,
+    RobotFileError,
+    TtmanipError,
+    "A robot file or URDF cannot be read."
+);
+create_exception!(
+    ttmanip,
+    UnreachableError,
+    TtmanipError,
+    "A target is outside the robot's reach."
+);
+create_exception!(
+    ttmanip,
+    SingularError,
+    TtmanipError,
+    "A configuration is singular for the request."
+);
 
 /// Converts a `ttkin` error to the matching Python exception.
 pub fn to_py(e: ttkin::Error) -> PyErr {

@@ -27,7 +27,11 @@ impl PyRobot {
     }
 
     /// Reads `q` as one configuration (n,) or a batch (N, n); returns the batch size (None for one).
-    pub fn configs<'py>(&self, q: &Bound<'py, PyAny>, what: &str) -> PyResult<(crate::convert::F64Array<'py>, Option<usize>)> {
+    pub fn configs<'py>(
+        &self,
+        q: &Bound<'py, PyAny>,
+        what: &str,
+    ) -> PyResult<(crate::convert::F64Array<'py>, Option<usize>)> {
         let a = f64_array(q, what)?;
         let n = self.chain.dof();
         let batch = match a.shape() {
@@ -48,7 +52,9 @@ fn frame_from_str(frame: &str) -> PyResult<JacobianFrame> {
     match frame {
         "base" | "world" => Ok(JacobianFrame::Base),
         "tool" | "local" => Ok(JacobianFrame::Tool),
-        other => Err(TtmanipError::new_err(format!("frame: expected 'base' or 'tool', got '{other}'"))),
+        other => Err(TtmanipError::new_err(format!(
+            "frame: expected 'base' or 'tool', got '{other}'"
+        ))),
     }
 }
 
@@ -64,7 +70,10 @@ fn joint_types(types: Option<&Bound<'_, PyAny>>, n: usize) -> PyResult<Vec<Joint
         })?
     };
     if items.len() != n {
-        return Err(ShapeError::new_err(format!("types: expected {n} joint types, got {}", items.len())));
+        return Err(ShapeError::new_err(format!(
+            "types: expected {n} joint types, got {}",
+            items.len()
+        )));
     }
     items
         .iter()
@@ -108,7 +117,12 @@ impl PyRobot {
         let av = f64_array(a, "a")?;
         let n = match av.shape() {
             [n] if *n > 0 => *n,
-            _ => return Err(ShapeError::new_err(format!("a: expected shape (n,) with n ≥ 1, got {}", av.shape_str()))),
+            _ => {
+                return Err(ShapeError::new_err(format!(
+                    "a: expected shape (n,) with n ≥ 1, got {}",
+                    av.shape_str()
+                )))
+            }
         };
         let a = vector(a, "a", n)?;
         let alpha = vector(alpha, "alpha", n)?;
@@ -129,29 +143,46 @@ impl PyRobot {
             Some(l) => {
                 let la = f64_array(l, "limits")?;
                 if la.shape() != [n, 2] {
-                    return Err(ShapeError::new_err(format!("limits: expected shape ({n}, 2), got {}", la.shape_str())));
+                    return Err(ShapeError::new_err(format!(
+                        "limits: expected shape ({n}, 2), got {}",
+                        la.shape_str()
+                    )));
                 }
                 Some(la.data().to_vec())
             }
         };
         let names = match names {
             Some(v) if v.len() != n => {
-                return Err(ShapeError::new_err(format!("names: expected {n} names, got {}", v.len())))
+                return Err(ShapeError::new_err(format!(
+                    "names: expected {n} names, got {}",
+                    v.len()
+                )))
             }
             Some(v) => v,
             None => (1..=n).map(|i| format!("joint{i}")).collect(),
         };
         let mut joints = Vec::with_capacity(n);
         for i in 0..n {
-            let row = Dh { a: a[i], alpha: alpha[i], d: d[i], theta: theta[i] };
+            let row = Dh {
+                a: a[i],
+                alpha: alpha[i],
+                d: d[i],
+                theta: theta[i],
+            };
             let mut j = Joint::new(names[i].clone(), kinds[i], ttkin::Geometry::Dh(conv, row)).py()?;
             if let Some(l) = &lims {
                 j = j.with_limits(Limits::position(l[2 * i], l[2 * i + 1])).py()?;
             }
             joints.push(j);
         }
-        let base = base.map(|b| transform(b, "base")).transpose()?.unwrap_or_else(nalgebra::IsometryMatrix3::identity);
-        let tool = tool.map(|t| transform(t, "tool")).transpose()?.unwrap_or_else(nalgebra::IsometryMatrix3::identity);
+        let base = base
+            .map(|b| transform(b, "base"))
+            .transpose()?
+            .unwrap_or_else(nalgebra::IsometryMatrix3::identity);
+        let tool = tool
+            .map(|t| transform(t, "tool"))
+            .transpose()?
+            .unwrap_or_else(nalgebra::IsometryMatrix3::identity);
         Ok(PyRobot::new(Chain::new(name, joints, base, tool).py()?))
     }
 
@@ -182,7 +213,9 @@ impl PyRobot {
     /// Robot from URDF text (see `from_urdf`).
     #[staticmethod]
     fn from_urdf_string(text: &str, base_link: &str, tip_link: &str) -> PyResult<Self> {
-        Ok(PyRobot::new(ttkin::urdf::from_urdf_str(text, base_link, tip_link).py()?))
+        Ok(PyRobot::new(
+            ttkin::urdf::from_urdf_str(text, base_link, tip_link).py()?,
+        ))
     }
 
     /// A built-in robot: "mobile8", "gantry6", "arm4" or "ur5".
@@ -321,7 +354,12 @@ impl PyRobot {
     /// Geometric Jacobian [v; ω] (v of the tool point), rows in the axes of `frame` ("base" or
     /// "tool"): (6, n) for q of shape (n,), (N, 6, n) for (N, n). Units m/s and rad/s per joint unit.
     #[pyo3(signature = (q, frame="base"))]
-    fn jacobian<'py>(&self, py: Python<'py>, q: &Bound<'py, PyAny>, frame: &str) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    fn jacobian<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+        frame: &str,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let frame = frame_from_str(frame)?;
         let (a, batch) = self.configs(q, "q")?;
         let n = self.chain.dof();
@@ -352,7 +390,12 @@ impl PyRobot {
                 JointType::Prismatic => 'P',
             })
             .collect();
-        format!("Robot('{}', n={}, joints='{}')", self.chain.name(), self.chain.dof(), types)
+        format!(
+            "Robot('{}', n={}, joints='{}')",
+            self.chain.name(),
+            self.chain.dof(),
+            types
+        )
     }
 }
 

@@ -40,7 +40,7 @@ pub struct Arm4Ik {
     /// d1, a1, a2, d4 of the chain (m).
     pub lengths: Arm4Lengths,
     /// How far (m, and in the unit approach axis) a target may be from the reachable set and still
-    /// be accepted; default 1e-9.
+    /// be accepted; default 1e-12 (raise it for targets rounded or measured elsewhere).
     pub tolerance: f64,
     offsets: [f64; 4],
     pub(crate) info: ChainInfo,
@@ -74,7 +74,7 @@ impl Arm4Ik {
                 a2: r[1].a,
                 d4: r[3].d,
             },
-            tolerance: 1e-9,
+            tolerance: 1e-12,
             offsets: [r[0].theta, r[1].theta, r[2].theta, r[3].theta],
             info: ChainInfo::of(chain),
         })

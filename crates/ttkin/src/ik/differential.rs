@@ -82,7 +82,10 @@ impl DifferentialIk {
             Some(w) => {
                 check_vector("weights", w, n)?;
                 if let Some(bad) = w.iter().find(|v| !(**v > 0.0)) {
-                    return Err(Error::invalid("weights", format!("every weight must be > 0, got {bad}")));
+                    return Err(Error::invalid(
+                        "weights",
+                        format!("every weight must be > 0, got {bad}"),
+                    ));
                 }
                 w.iter().map(|v| 1.0 / v.sqrt()).collect()
             }
@@ -137,7 +140,11 @@ impl DifferentialIk {
 /// w_i = 1 while it shrinks. Joints with an infinite limit get w_i = 1. Returns (weights, ∂H/∂q);
 /// pass the gradient back as `previous_gradient` on the next call. `q` must be strictly inside
 /// the limits.
-pub fn joint_limit_weights(chain: &Chain, q: &[f64], previous_gradient: Option<&[f64]>) -> Result<(Vec<f64>, Vec<f64>)> {
+pub fn joint_limit_weights(
+    chain: &Chain,
+    q: &[f64],
+    previous_gradient: Option<&[f64]>,
+) -> Result<(Vec<f64>, Vec<f64>)> {
     chain.check_q("q", q)?;
     if let Some(p) = previous_gradient {
         check_vector("previous_gradient", p, chain.dof())?;
@@ -160,8 +167,8 @@ pub fn joint_limit_weights(chain: &Chain, q: &[f64], previous_gradient: Option<&
             ));
         }
         let range = l.upper - l.lower;
-        let g = range * range * (2.0 * qi - l.upper - l.lower)
-            / (4.0 * (l.upper - qi).powi(2) * (qi - l.lower).powi(2));
+        let g =
+            range * range * (2.0 * qi - l.upper - l.lower) / (4.0 * (l.upper - qi).powi(2) * (qi - l.lower).powi(2));
         let growing = previous_gradient.is_none_or(|p| g.abs() >= p[i].abs());
         w.push(if growing { 1.0 + g.abs() } else { 1.0 });
         grad.push(g);

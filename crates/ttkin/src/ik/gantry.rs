@@ -108,7 +108,12 @@ impl GantryIk {
 
     /// The mathematical branches (no limit filter) into `sols`; `q3_hint` is θ3's joint value on
     /// the s45 = 0 family.
-    pub(crate) fn solve_into(&self, target: &IsometryMatrix3<f64>, q3_hint: Option<f64>, sols: &mut Solutions) -> Result<()> {
+    pub(crate) fn solve_into(
+        &self,
+        target: &IsometryMatrix3<f64>,
+        q3_hint: Option<f64>,
+        sols: &mut Solutions,
+    ) -> Result<()> {
         let t = self.info.to_chain(target);
         let r = t.rotation.matrix();
         let p = t.translation.vector;

@@ -206,10 +206,19 @@ impl IkSolver {
 
     /// Solves N targets in parallel: `targets[i]` from `q0s[i]` (or every target from `q0s[0]`
     /// when one start is given), target i with seed `seed + i`. Same errors as [`IkSolver::solve`].
-    pub fn solve_batch(&self, chain: &Chain, targets: &[IsometryMatrix3<f64>], q0s: &[Vec<f64>]) -> Result<Vec<IkResult>> {
+    pub fn solve_batch(
+        &self,
+        chain: &Chain,
+        targets: &[IsometryMatrix3<f64>],
+        q0s: &[Vec<f64>],
+    ) -> Result<Vec<IkResult>> {
         self.validate()?;
         if q0s.len() != 1 && q0s.len() != targets.len() {
-            return Err(Error::shape("q0", format!("1 or {} start configurations", targets.len()), q0s.len()));
+            return Err(Error::shape(
+                "q0",
+                format!("1 or {} start configurations", targets.len()),
+                q0s.len(),
+            ));
         }
         for q0 in q0s {
             check_vector("q0", q0, chain.dof())?;
@@ -361,7 +370,11 @@ impl IkSolver {
                 predicted += s.dq[i] * (s.g[i] - 0.5 * ad);
             }
             if cost_trial < cost {
-                let rho = if predicted > 0.0 { (cost - cost_trial) / predicted } else { 0.5 };
+                let rho = if predicted > 0.0 {
+                    (cost - cost_trial) / predicted
+                } else {
+                    0.5
+                };
                 lambda *= (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0);
                 nu = 2.0;
                 std::mem::swap(&mut s.q, &mut s.q_trial);
@@ -465,7 +478,11 @@ fn random_in(rng: &mut fastrand::Rng, lower: f64, upper: f64, kind: JointType) -
     match (lower.is_finite(), upper.is_finite()) {
         (true, true) => lower + (upper - lower) * u,
         _ => {
-            let half = if kind == JointType::Revolute { std::f64::consts::PI } else { 1.0 };
+            let half = if kind == JointType::Revolute {
+                std::f64::consts::PI
+            } else {
+                1.0
+            };
             let centre = if lower.is_finite() {
                 lower + half
             } else if upper.is_finite() {
