@@ -22,11 +22,13 @@ pub mod numeric;
 
 use std::f64::consts::PI;
 
-use nalgebra::IsometryMatrix3;
+use nalgebra::{IsometryMatrix3, Matrix4};
+use rayon::prelude::*;
 
 use crate::chain::Chain;
 use crate::error::{Error, Result};
 use crate::joint::{Dh, DhConvention, Geometry, JointType, Limits};
+use crate::transform::isometry_from_matrix;
 
 pub use arm4::Arm4Ik;
 pub use differential::{joint_velocity, DifferentialIk, JointVelocity};
@@ -233,6 +235,59 @@ impl Analytic {
         crate::error::check_vector("current configuration", current, info.kinds.len())?;
         let sols = self.solve(target, Some(current), filter)?;
         Ok(sols.nearest(current, info, filter))
+    }
+
+    /// Batch of [`Analytic::solve`] in parallel: `targets` holds N row-major 4×4 tool poses (N × 16),
+    /// `out` receives N × [`MAX_BRANCHES`] × n joint values (NaN past each pose's branch count) and
+    /// `counts` the N branch counts, 0 for an unreachable pose. A non-rigid or non-finite matrix is
+    /// an error for the whole batch (its index is in the message).
+    pub fn solve_batch(
+        &self,
+        targets: &[f64],
+        filter: LimitFilter,
+        out: &mut [f64],
+        counts: &mut [usize],
+    ) -> Result<()> {
+        let n = self.dof();
+        if targets.len() % 16 != 0 {
+            return Err(Error::shape("targets", "N × 16 values", targets.len()));
+        }
+        let count = targets.len() / 16;
+        if out.len() != count * MAX_BRANCHES * n || counts.len() != count {
+            return Err(Error::shape(
+                "output buffers",
+                format!("{} and {count} values", count * MAX_BRANCHES * n),
+                format!("{} and {}", out.len(), counts.len()),
+            ));
+        }
+        const CHUNK: usize = 256;
+        out.par_chunks_mut(CHUNK * MAX_BRANCHES * n)
+            .zip(counts.par_chunks_mut(CHUNK))
+            .zip(targets.par_chunks(CHUNK * 16))
+            .enumerate()
+            .try_for_each(|(chunk, ((o, c), t))| {
+                for (i, ((oi, ci), ti)) in o
+                    .chunks_exact_mut(MAX_BRANCHES * n)
+                    .zip(c.iter_mut())
+                    .zip(t.chunks_exact(16))
+                    .enumerate()
+                {
+                    let m = Matrix4::from_row_slice(ti);
+                    let pose = isometry_from_matrix(&format!("target {}", chunk * CHUNK + i), &m)?;
+                    oi.fill(f64::NAN);
+                    *ci = match self.solve(&pose, None, filter) {
+                        Ok(sols) => {
+                            for (dst, q) in oi.chunks_exact_mut(n).zip(sols.iter()) {
+                                dst.copy_from_slice(q);
+                            }
+                            sols.len()
+                        }
+                        Err(Error::Unreachable(_)) => 0,
+                        Err(e) => return Err(e),
+                    };
+                }
+                Ok(())
+            })
     }
 
     /// Number of joints of the chain.

@@ -25,6 +25,9 @@
 //!
 //! Hot loops allocate nothing: all buffers live in an [`IkScratch`] (Pinocchio's model/data split).
 
+// Index loops over joints read like the maths here (several arrays per index): keep them.
+#![allow(clippy::needless_range_loop)]
+
 use std::time::{Duration, Instant};
 
 use nalgebra::{DMatrix, DVector, IsometryMatrix3, Matrix6xX};
