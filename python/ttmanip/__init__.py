@@ -9,6 +9,7 @@ seconds; poses are 4×4 homogeneous matrices in the robot's base frame.
 (4, 4)
 """
 
+from . import robots
 from ._ttmanip import (
     ModelError,
     NonFiniteError,
@@ -19,7 +20,6 @@ from ._ttmanip import (
     TtmanipError,
     UnreachableError,
 )
-from . import robots
 
 __all__ = [
     "ModelError",

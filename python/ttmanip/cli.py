@@ -41,6 +41,26 @@ def _info(args: argparse.Namespace) -> int:
     return 0
 
 
+def _export(args: argparse.Namespace) -> int:
+    from . import Robot
+
+    robot = Robot.builtin(args.robot)
+    out = Path(args.out)
+    if out.suffix == ".urdf":
+        out.write_text(robot.to_urdf())
+    elif out.suffix == ".toml":
+        header = (
+            f"# Built-in robot {args.robot} of ttmanip, written by `ttmanip export {args.robot}`; SI units.\n"
+            "# tests/test_robot_files.py checks that this file and the built-in model agree.\n"
+        )
+        out.write_text(header + robot.to_toml())
+    else:
+        print("ttmanip: --out must end in .urdf or .toml", file=sys.stderr)
+        return 2
+    print(f"wrote {out}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``ttmanip`` command."""
     parser = argparse.ArgumentParser(prog="ttmanip", description=__doc__)
@@ -58,6 +78,11 @@ def build_parser() -> argparse.ArgumentParser:
     info = sub.add_parser("info", help="print a built-in robot's joints and limits")
     info.add_argument("robot", choices=("mobile8", "gantry6", "arm4", "ur5"))
     info.set_defaults(func=_info)
+
+    export = sub.add_parser("export", help="write a built-in robot as URDF or as a ttmanip robot file")
+    export.add_argument("robot", choices=("mobile8", "gantry6", "arm4", "ur5"))
+    export.add_argument("--out", required=True, help="file ending in .urdf or .toml")
+    export.set_defaults(func=_export)
     return parser
 
 

@@ -78,7 +78,9 @@ def run(out: Path) -> dict:
     gantry = robots.gantry6()
     mobile = robots.mobile8()
     results = {
-        "gantry6": workspace_figure(gantry, np.array([0.1, -0.2, 0.3, 0.4, 0.6, 0.0]), out / "workspace_gantry6.png"),
+        "gantry6": workspace_figure(
+            gantry, np.array([0.1, -0.2, 0.3, 0.4, 0.6, 0.0]), out / "workspace_gantry6.png"
+        ),
         "mobile8": workspace_figure(mobile, robots.mobile8_start(), out / "workspace_mobile8.png"),
     }
     (out / "summary.json").write_text(json.dumps(results, indent=2))

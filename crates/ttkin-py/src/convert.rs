@@ -43,15 +43,44 @@ pub fn shape_str(shape: &[usize]) -> String {
     }
 }
 
-fn as_contiguous_f64<'py>(obj: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
-    static ASCONTIG: PyOnceLock<Py<PyAny>> = PyOnceLock::new();
+struct NumpyFns {
+    asarray: Py<PyAny>,
+    ascontiguousarray: Py<PyAny>,
+}
+
+/// Converts any array-like of real numbers (float or integer dtype) to a C-contiguous float64
+/// array; complex, boolean, string and object data are refused rather than silently cast.
+fn as_contiguous_f64<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<Bound<'py, PyAny>> {
+    static NUMPY: PyOnceLock<NumpyFns> = PyOnceLock::new();
     let py = obj.py();
-    let f = ASCONTIG.get_or_try_init(py, || -> PyResult<Py<PyAny>> {
-        Ok(py.import("numpy")?.getattr("ascontiguousarray")?.unbind())
+    let np = NUMPY.get_or_try_init(py, || -> PyResult<NumpyFns> {
+        let m = py.import("numpy")?;
+        Ok(NumpyFns {
+            asarray: m.getattr("asarray")?.unbind(),
+            ascontiguousarray: m.getattr("ascontiguousarray")?.unbind(),
+        })
     })?;
+    let ty = || {
+        obj.get_type()
+            .name()
+            .map(|n| n.to_string())
+            .unwrap_or_else(|_| "?".into())
+    };
+    let arr =
+        np.asarray.bind(py).call1((obj,)).map_err(|e| {
+            ShapeError::new_err(format!("{what}: expected an array of real numbers, got {} ({e})", ty()))
+        })?;
+    let kind: String = arr.getattr("dtype")?.getattr("kind")?.extract()?;
+    if !matches!(kind.as_str(), "f" | "i" | "u") {
+        let dtype = arr.getattr("dtype")?.str()?.to_string();
+        return Err(ShapeError::new_err(format!(
+            "{what}: expected an array of real numbers (float or integer), got {} of dtype {dtype}",
+            ty()
+        )));
+    }
     let kwargs = PyDict::new(py);
     kwargs.set_item("dtype", "float64")?;
-    f.bind(py).call((obj,), Some(&kwargs))
+    np.ascontiguousarray.bind(py).call((arr,), Some(&kwargs))
 }
 
 /// Reads `obj` as a float64 array named `what` in error messages.
@@ -61,14 +90,7 @@ pub fn f64_array<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<F64Array<
             return Ok(F64Array { array: a.readonly() });
         }
     }
-    let converted = as_contiguous_f64(obj).map_err(|e| {
-        let ty = obj
-            .get_type()
-            .name()
-            .map(|n| n.to_string())
-            .unwrap_or_else(|_| "?".into());
-        ShapeError::new_err(format!("{what}: expected an array of real numbers, got {ty} ({e})"))
-    })?;
+    let converted = as_contiguous_f64(obj, what)?;
     let a = converted
         .cast::<PyArrayDyn<f64>>()
         .map_err(|_| ShapeError::new_err(format!("{what}: could not convert to a float64 array")))?;

@@ -18,6 +18,7 @@ pub mod joint;
 pub mod robots;
 pub mod task;
 pub mod transform;
+pub mod trig;
 pub mod urdf;
 
 pub use chain::{Chain, JacobianFrame};
