@@ -6,6 +6,7 @@ use pyo3::prelude::*;
 
 mod convert;
 mod errors;
+mod ik;
 mod robot;
 
 /// The native extension module `ttmanip._ttmanip`.
@@ -13,5 +14,6 @@ mod robot;
 fn _ttmanip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     errors::register(m)?;
     robot::register(m)?;
+    ik::register(m)?;
     Ok(())
 }
