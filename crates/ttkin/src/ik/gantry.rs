@@ -19,6 +19,8 @@
 //! same axis, a one-parameter family; the representative keeps θ3 at the hint's value, 0 without,
 //! and [`Solutions::family`] is set) and c4 = 0 (the two σ2 branches coincide).
 
+use std::f64::consts::PI;
+
 use nalgebra::{IsometryMatrix3, Matrix3, Vector3};
 
 use super::{dh_rows, same, wrap, ChainInfo, LimitFilter, Solutions};
@@ -133,51 +135,52 @@ impl GantryIk {
         }
         let s4 = s4.clamp(-1.0, 1.0);
         let c4_abs = (1.0 - s4 * s4).max(0.0).sqrt();
+        let th4 = s4.atan2(c4_abs);
         let sxy = a.x.hypot(a.y);
         sols.family = sxy <= FAMILY_EPS;
-        // Cᵀ·n: the first column of Rz(θ3)·Rx(90°)·Rz(θ45)·Rx(90°)·Rz(θ6).
-        let n0 = self.c_t * r.column(0);
-        let off = &self.offsets;
-        for sigma1 in [1.0, -1.0] {
-            if sols.family && sigma1 < 0.0 {
-                continue;
-            }
-            let s45 = sigma1 * sxy;
-            let th45 = s45.atan2(-a.z);
-            let th3 = if sols.family {
-                q3_hint.unwrap_or(0.0) + off[2]
-            } else {
-                (sigma1 * a.x).atan2(-sigma1 * a.y)
-            };
+        // Branch σ1 = +1: s45 = √(ax² + ay²) ≥ 0, (s3, c3) = (ax, −ay)/s45.
+        let (th3, s3, c3) = if sols.family {
+            let th3 = q3_hint.unwrap_or(0.0) + self.offsets[2];
             let (s3, c3) = th3.sin_cos();
-            // Undo Rz(θ3), Rx(90°), Rz(θ45), Rx(90°) on n: what is left is Rz(θ6)·x̂.
-            let v = rx_m90(&rz_inv(th45, &rx_m90(&rz_inv(th3, &n0))));
-            let th6 = v.y.atan2(v.x);
-            for sigma2 in [1.0, -1.0] {
-                let c4 = sigma2 * c4_abs;
-                let th4 = s4.atan2(c4);
-                let th5 = th45 - th4;
+            (th3, s3, c3)
+        } else {
+            (a.x.atan2(-a.y), a.x / sxy, -a.y / sxy)
+        };
+        let (s45, c45) = (sxy, -a.z);
+        let th45 = s45.atan2(c45);
+        // Undo Rz(θ3), Rx(90°), Rz(θ45), Rx(90°) on Cᵀ·n: what is left is Rz(θ6)·x̂.
+        let n0 = self.c_t * r.column(0);
+        let v = rx_m90(&rz_inv(s45, c45, &rx_m90(&rz_inv(s3, c3, &n0))));
+        let th6 = v.y.atan2(v.x);
+        let branch = |sols: &mut Solutions, sigma: f64, th3: f64, th45: f64, th6: f64| {
+            // σ1 = −1 is (θ3 + π, −θ45, θ6 + π): s3, c3, s45 change sign.
+            let (s3, c3, s45) = (sigma * s3, sigma * c3, sigma * s45);
+            for (c4, th4) in [(c4_abs, th4), (-c4_abs, PI - th4)] {
                 let k = l3 * c4 + l4 * s45;
                 let d1 = -p.y - l2 * s3 - c3 * k;
                 let d2 = p.x + l2 * c3 - s3 * k;
+                let off = &self.offsets;
                 sols.push(&[
                     d1 - off[0],
                     d2 - off[1],
                     wrap(th3 - off[2]),
                     wrap(th4 - off[3]),
-                    wrap(th5 - off[4]),
+                    wrap(th45 - th4 - off[4]),
                     wrap(th6 - off[5]),
                 ]);
             }
+        };
+        branch(sols, 1.0, th3, th45, th6);
+        if !sols.family {
+            branch(sols, -1.0, th3 + PI, -th45, th6 + PI);
         }
         Ok(())
     }
 }
 
-/// Rz(−θ)·v.
+/// Rz(−θ)·v from s = sin θ, c = cos θ.
 #[inline(always)]
-fn rz_inv(theta: f64, v: &Vector3<f64>) -> Vector3<f64> {
-    let (s, c) = theta.sin_cos();
+fn rz_inv(s: f64, c: f64, v: &Vector3<f64>) -> Vector3<f64> {
     Vector3::new(c * v.x + s * v.y, -s * v.x + c * v.y, v.z)
 }
 

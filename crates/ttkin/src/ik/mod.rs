@@ -180,6 +180,8 @@ pub(crate) struct ChainInfo {
     pub names: Vec<String>,
     pub base_inv: IsometryMatrix3<f64>,
     pub tool_inv: IsometryMatrix3<f64>,
+    /// True when base and tool are both the identity (targets are already in chain frames).
+    pub plain: bool,
 }
 
 impl ChainInfo {
@@ -190,12 +192,17 @@ impl ChainInfo {
             names: chain.joints().iter().map(|j| j.name().to_string()).collect(),
             base_inv: chain.base().inverse(),
             tool_inv: chain.tool().inverse(),
+            plain: *chain.base() == IsometryMatrix3::identity() && *chain.tool() == IsometryMatrix3::identity(),
         }
     }
 
     /// Target tool pose (base frame) → pose of the last DH frame in the chain's frame 0.
     pub(crate) fn to_chain(&self, target: &IsometryMatrix3<f64>) -> IsometryMatrix3<f64> {
-        self.base_inv * target * self.tool_inv
+        if self.plain {
+            *target
+        } else {
+            self.base_inv * target * self.tool_inv
+        }
     }
 }
 
@@ -273,7 +280,8 @@ impl Analytic {
                     .enumerate()
                 {
                     let m = Matrix4::from_row_slice(ti);
-                    let pose = isometry_from_matrix(&format!("target {}", chunk * CHUNK + i), &m)?;
+                    let pose = isometry_from_matrix("target", &m)
+                        .map_err(|e| Error::invalid(format!("targets[{}]", chunk * CHUNK + i), e.to_string()))?;
                     oi.fill(f64::NAN);
                     *ci = match self.solve(&pose, None, filter) {
                         Ok(sols) => {
@@ -305,6 +313,9 @@ impl Analytic {
 
 /// Wraps an angle to (−π, π] (rad).
 pub fn wrap(angle: f64) -> f64 {
+    if angle > -PI && angle <= PI {
+        return angle;
+    }
     let a = angle.rem_euclid(2.0 * PI);
     if a > PI {
         a - 2.0 * PI
