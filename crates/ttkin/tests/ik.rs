@@ -516,3 +516,26 @@ fn joint_limit_gradient_matches_finite_differences() {
         assert!(w2.iter().all(|v| *v == 1.0));
     }
 }
+
+#[test]
+fn rotation_log_inverts_the_exponential_from_zero_to_pi() {
+    use nalgebra::{Rotation3, Vector3};
+    let mut rng = fastrand::Rng::with_seed(5);
+    for k in 0..20_000 {
+        let axis = Vector3::new(rng.f64() - 0.5, rng.f64() - 0.5, rng.f64() - 0.5).normalize();
+        let angle = match k % 4 {
+            0 => PI * rng.f64(),
+            1 => 1e-9 * rng.f64(),
+            2 => PI - 1e-7 * rng.f64(),
+            _ => PI - 1e-2 * rng.f64(),
+        };
+        let r = Rotation3::from_scaled_axis(axis * angle);
+        let v = ttkin::task::rotation_log(r.matrix());
+        assert!(v.iter().all(|x| x.is_finite()));
+        // Compare as rotations (at π the sign of the axis is a matter of convention).
+        let back = Rotation3::from_scaled_axis(v);
+        let err = (back.matrix() - r.matrix()).amax();
+        assert!(err < 1e-12, "angle {angle}: {err:e}");
+        assert!((v.norm() - angle).abs() < 1e-12, "angle {angle}: |log| = {}", v.norm());
+    }
+}

@@ -463,7 +463,8 @@ pub fn measure(task: &Task, t: &IsometryMatrix3<f64>, target: &IsometryMatrix3<f
     match task {
         Task::Pose => {
             let dp = (target.translation.vector - t.translation.vector).norm();
-            (dp, (target.rotation * t.rotation.inverse()).angle())
+            let r = (target.rotation * t.rotation.inverse()).into_inner();
+            (dp, crate::task::rotation_log(&r).norm())
         }
         Task::Position => ((target.translation.vector - t.translation.vector).norm(), 0.0),
         Task::Racket { offset } => {
