@@ -11,6 +11,7 @@ seconds; poses are 4×4 homogeneous matrices in the robot's base frame.
 
 from . import robots
 from ._ttmanip import (
+    IkResult,
     ModelError,
     NonFiniteError,
     Robot,
@@ -22,6 +23,7 @@ from ._ttmanip import (
 )
 
 __all__ = [
+    "IkResult",
     "ModelError",
     "NonFiniteError",
     "Robot",
