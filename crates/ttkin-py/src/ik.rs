@@ -8,14 +8,19 @@ use nalgebra::{IsometryMatrix3, Matrix4};
 use numpy::{PyArray1, PyArrayDyn, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use ttkin::ik::numeric::measure;
-use ttkin::ik::{Analytic, DifferentialIk, IkResult, IkSolver, LimitFilter, MAX_BRANCHES};
+use ttkin::ik::numeric::{measure, residual_dim};
+use ttkin::ik::{Analytic, DifferentialIk, IkResult, IkScratch, IkSolver, LimitFilter, MAX_BRANCHES};
 use ttkin::task::Task;
 use ttkin::JacobianFrame;
 
 use crate::convert::{f64_array, to_numpy, transform, vector, zeros};
 use crate::errors::{PyResultExt, ShapeError, TtmanipError};
 use crate::robot::PyRobot;
+
+thread_local! {
+    /// Buffers of the numeric solver, one per thread (the caller's and each rayon worker's).
+    static SCRATCH: std::cell::RefCell<Option<IkScratch>> = const { std::cell::RefCell::new(None) };
+}
 
 /// Result of `Robot.ik`: arrays for a batch, scalars for one target.
 #[pyclass(name = "IkResult", module = "ttmanip", frozen, get_all)]
@@ -65,7 +70,10 @@ fn task_from(task: &str, racket_offset: Option<f64>) -> PyResult<Task> {
 fn poses(t: &Bound<'_, PyAny>) -> PyResult<(Vec<IsometryMatrix3<f64>>, bool)> {
     let a = f64_array(t, "T")?;
     match a.shape() {
-        [4, 4] => Ok((vec![transform(t, "T")?], false)),
+        [4, 4] => Ok((
+            vec![ttkin::transform::isometry_from_matrix("T", &Matrix4::from_row_slice(a.data())).py()?],
+            false,
+        )),
         [_, 4, 4] => {
             let v = a
                 .data()
@@ -217,11 +225,16 @@ impl PyRobot {
                     Err(_) => {}
                 }
             }
-            IkSolver {
+            let seeded = IkSolver {
                 seed: solver.seed.wrapping_add(i as u64),
                 ..solver.clone()
-            }
-            .solve(chain, t, q0)
+            };
+            // One scratch per thread, reused across calls (resized when the robot or task changes).
+            SCRATCH.with(|cell| {
+                let mut slot = cell.borrow_mut();
+                let scratch = slot.get_or_insert_with(|| IkScratch::new(chain, residual_dim(&seeded.task)));
+                seeded.solve_with(chain, t, q0, scratch)
+            })
         };
         let results: Vec<IkResult> = if batch {
             use rayon::prelude::*;

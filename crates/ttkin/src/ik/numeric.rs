@@ -145,10 +145,10 @@ impl IkScratch {
         self.n == chain.dof()
             && self.m == m
             && chain
-                .limits()
+                .joints()
                 .iter()
                 .zip(self.lower.iter().zip(&self.upper))
-                .all(|(l, (lo, hi))| l.lower == *lo && l.upper == *hi)
+                .all(|(j, (lo, hi))| j.limits().lower == *lo && j.limits().upper == *hi)
     }
 }
 
