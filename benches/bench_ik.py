@@ -2,8 +2,8 @@
 
 Targets are the FK of random configurations within the joint limits (reachable by construction);
 every solver starts from the same fixed configuration and must reach the pose to 1e-6 m and
-1e-6 rad within the joint limits, checked with ttmanip's FK whatever the solver claims. A solve counts as a success only
-if it also finished within 1 ms. Prints success rate and median / p99 time per solver and case,
+1e-6 rad within the joint limits, checked with ttmanip's FK whatever the solver claims. A solve
+counts as a success only if it also finished within 1 ms. Prints success rate and median / p99 time per solver and case,
 plus ttmanip's batch throughput and the analytic gantry6 IK (every branch) per pose.
 
 Run: ``.venv/bin/python benches/bench_ik.py [--count 10000] [--peer-count 1000]``, peers from
@@ -185,7 +185,8 @@ def main() -> None:
                 f.write(robot.to_urdf())
             for plabel, solve in peers(robot, q0, urdf):
                 if solve is None:
-                    rows.append((label, f"{plabel} (unsupported)", "0", float("nan"), float("nan"), float("nan")))
+                    nan = float("nan")
+                    rows.append((label, f"{plabel} (unsupported)", "0", nan, nan, nan))
                     continue
                 rows.append((label, *run(plabel, solve, robot, targets[: args.peer_count], task)))
     gantry = ttmanip.robots.gantry6()
