@@ -3,8 +3,9 @@
 Targets are the FK of random configurations within the joint limits (reachable by construction);
 every solver starts from the same fixed configuration and must reach the pose to 1e-6 m and
 1e-6 rad within the joint limits, checked with ttmanip's FK whatever the solver claims. A solve
-counts as a success only if it also finished within 1 ms. Prints success rate and median / p99 time per solver and case,
-plus ttmanip's batch throughput and the analytic gantry6 IK (every branch) per pose.
+counts as a success only if it also finished within 1 ms. Prints success rate and median / p99
+time per solver and case, plus ttmanip's batch throughput and the analytic gantry6 IK (every
+branch) per pose.
 
 Run: ``.venv/bin/python benches/bench_ik.py [--count 10000] [--peer-count 1000]``, peers from
 ``pip install roboticstoolbox-python pin ikpy optik-py``. Not part of CI. The peers get fewer
