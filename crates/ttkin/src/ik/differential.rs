@@ -102,8 +102,8 @@ impl DifferentialIk {
         };
         let sigma = &svd.singular_values;
         let rank_dim = sigma.len();
-        // A chain with fewer than 6 joints always has 6 − n zero singular values that no motion
-        // can fix: only the n joint directions count.
+        // min(6, n) singular values: for n < 6 the twist directions no joint can produce do not
+        // count as a singularity (they show up in `residual` instead).
         let sigma_min = sigma.iter().copied().fold(f64::INFINITY, f64::min);
         let singular = sigma_min < self.threshold;
         let damping = if singular {
