@@ -162,8 +162,7 @@ impl Arm4Ik {
         cands.sort_by(|x, y| x.0.total_cmp(&y.0));
         let mut kept: [[f64; 4]; 4] = [[0.0; 4]; 4];
         let mut k = 0;
-        for (err, q) in cands.iter().filter(|c| c.0.is_finite()) {
-            let _ = err;
+        for (_, q) in cands.iter().filter(|c| c.0.is_finite()) {
             if kept[..k]
                 .iter()
                 .any(|o| o.iter().zip(q).all(|(x, y)| wrap(x - y).abs() < 1e-6))
