@@ -39,7 +39,7 @@ use crate::joint::JointType;
 use crate::task::{racket_normal, Task};
 
 /// Steps after which an attempt must have halved its cost E, or it is abandoned as stalled.
-pub const STALL_WINDOW: usize = 8;
+pub const STALL_WINDOW: usize = 6;
 
 /// Settings of the numeric IK solver.
 #[derive(Debug, Clone, PartialEq)]
