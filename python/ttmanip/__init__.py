@@ -11,6 +11,7 @@ seconds; poses are 4×4 homogeneous matrices in the robot's base frame.
 
 from . import dynamics, motor, robots
 from ._ttmanip import (
+    IkResult,
     ModelError,
     NonFiniteError,
     Robot,
@@ -24,6 +25,7 @@ from .mobile import DiffDrive, TrackResult, task_line, track, wls_step
 
 __all__ = [
     "DiffDrive",
+    "IkResult",
     "ModelError",
     "NonFiniteError",
     "Robot",

@@ -359,3 +359,68 @@ class TorqueProfile:
     @property
     def violations(self) -> list[tuple[int, int, float, float]]:
         """(sample, joint, torque, limit) of every exceedance."""
+    def ik(
+        self,
+        T: ArrayLike,
+        q0: ArrayLike | None = None,
+        task: str = "pose",
+        *,
+        method: str = "auto",
+        position_tolerance: float = 1e-6,
+        orientation_tolerance: float = 1e-6,
+        max_iterations: int = 60,
+        max_restarts: int = 500,
+        time_budget: float | None = 1e-3,
+        seed: int = 0,
+        racket_offset: float | None = None,
+        raise_on_failure: bool = False,
+    ) -> IkResult:
+        """IK of T (4, 4) or a batch (N, 4, 4); task "pose", "racket5" or "position".
+
+        method "auto" uses the analytic nearest branch for task="pose" where the robot has one,
+        else bounded Levenberg–Marquardt with restarts. An unreachable target gives
+        success=False (UnreachableError only with raise_on_failure=True).
+        """
+    def ik_all(
+        self, T: ArrayLike, limits: bool = False, hint: ArrayLike | None = None
+    ) -> NDArray[np.float64] | tuple[NDArray[np.float64], NDArray[np.int64]]:
+        """Every analytic branch: (k, n) for T (4, 4); (q (N, 4, n) NaN-padded, count (N,)) for (N, 4, 4)."""
+    def ik_nearest(self, T: ArrayLike, q: ArrayLike, limits: bool = True) -> NDArray[np.float64]:
+        """The analytic branch nearest to q (revolute angles modulo 2π), within limits by default."""
+    @property
+    def analytic_ik(self) -> str | None:
+        """ "gantry6" or "arm4" when the DH structure has a closed-form IK, else None."""
+    def joint_velocity(
+        self,
+        q: ArrayLike,
+        twist: ArrayLike,
+        frame: str = "base",
+        weights: ArrayLike | None = None,
+        threshold: float = 1e-3,
+        max_damping: float = 1e-2,
+        info: bool = False,
+    ) -> NDArray[np.float64] | tuple[NDArray[np.float64], dict[str, float | bool]]:
+        """q̇ (n,) for the tool twist [v; ω] (6,): J⁻¹V, weighted least-norm, or damped near singularities."""
+
+class IkResult:
+    """Result of Robot.ik: scalars for one target, arrays for a batch."""
+
+    @property
+    def q(self) -> NDArray[np.float64]:
+        """Joint values (m, rad): (n,) or (N, n)."""
+    @property
+    def success(self) -> bool | NDArray[np.bool_]:
+        """True where both errors are within the tolerances."""
+    @property
+    def position_error(self) -> float | NDArray[np.float64]:
+        """Position error (m)."""
+    @property
+    def orientation_error(self) -> float | NDArray[np.float64]:
+        """Orientation error (rad)."""
+    @property
+    def iterations(self) -> int | NDArray[np.int64]:
+        """LM steps (0 for an analytic solve)."""
+    @property
+    def restarts(self) -> int | NDArray[np.int64]:
+        """Random restarts used."""
+    def __bool__(self) -> bool: ...

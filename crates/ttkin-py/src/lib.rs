@@ -7,6 +7,7 @@ use pyo3::prelude::*;
 mod convert;
 mod dynamics;
 mod errors;
+mod ik;
 mod mobile;
 mod motor;
 mod robot;
@@ -19,5 +20,6 @@ fn _ttmanip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     mobile::register(m)?;
     dynamics::register(m)?;
     motor::register(m)?;
+    ik::register(m)?;
     Ok(())
 }

@@ -66,7 +66,7 @@ impl Task {
         match self {
             Task::Pose => {
                 let dp = target.translation.vector - current.translation.vector;
-                let dr = (target.rotation * current.rotation.inverse()).scaled_axis();
+                let dr = rotation_log(&(target.rotation * current.rotation.inverse()).into_inner());
                 e[..3].copy_from_slice(dp.as_slice());
                 e[3..6].copy_from_slice(dr.as_slice());
             }
@@ -141,7 +141,7 @@ impl Task {
             Task::Position => out[..3].copy_from_slice(pose.translation.vector.as_slice()),
             Task::Pose => {
                 out[..3].copy_from_slice(pose.translation.vector.as_slice());
-                out[3..6].copy_from_slice(pose.rotation.scaled_axis().as_slice());
+                out[3..6].copy_from_slice(rotation_log(pose.rotation.matrix()).as_slice());
             }
             Task::Racket { offset } => out[..5].copy_from_slice(&racket_coordinates(pose, *offset)),
         }
@@ -214,6 +214,28 @@ pub fn racket_angle_jacobian(j: &Matrix6xX<f64>, t: &IsometryMatrix3<f64>, offse
         out[(4, c)] = (n.x * nd.y - n.y * nd.x) / rho2;
     }
     Ok(out)
+}
+
+/// Rotation vector θ·axis (rad) of a rotation matrix: the SO(3) logarithm, accurate at θ → 0 and
+/// θ → π. (nalgebra's `Rotation3::angle` is an unclamped acos: NaN when rounding pushes
+/// (tr R − 1)/2 past 1, and only √ε-accurate near 0.)
+pub fn rotation_log(r: &Matrix3<f64>) -> Vector3<f64> {
+    // sin θ·axis from the skew part, cos θ from the trace.
+    let v = Vector3::new(r[(2, 1)] - r[(1, 2)], r[(0, 2)] - r[(2, 0)], r[(1, 0)] - r[(0, 1)]) * 0.5;
+    let c = 0.5 * (r.trace() - 1.0);
+    let s = v.norm();
+    let theta = s.atan2(c);
+    if c >= 0.0 || s > 1e-3 {
+        return if s < 1e-300 { v } else { v * (theta / s) };
+    }
+    // Near π: (R + Rᵀ)/2 = c·I + (1 − c)·a·aᵀ; take the largest column of a·aᵀ, sign from v.
+    let b = (r + r.transpose()) * 0.5 - Matrix3::identity() * c;
+    let k = (0..3).max_by(|&i, &j| b[(i, i)].total_cmp(&b[(j, j)])).unwrap_or(0);
+    let mut a = b.column(k).normalize();
+    if a.dot(&v) < 0.0 {
+        a = -a;
+    }
+    a * theta
 }
 
 /// Skew-symmetric matrix [v]× with [v]× w = v × w.

@@ -1,0 +1,425 @@
+//! Inverse kinematics on `ttmanip.Robot`: `ik` (numeric, or analytic where the robot has a closed
+//! form), `ik_all` / `ik_nearest` (analytic branches), `joint_velocity` (differential IK).
+//! Conversion only: the maths is `ttkin::ik`. Batches over (N, 4, 4) run without the GIL.
+
+use std::time::Duration;
+
+use nalgebra::{IsometryMatrix3, Matrix4};
+use numpy::{PyArray1, PyArrayDyn, PyArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use ttkin::ik::numeric::{measure, residual_dim};
+use ttkin::ik::{Analytic, DifferentialIk, IkResult, IkScratch, IkSolver, LimitFilter, MAX_BRANCHES};
+use ttkin::task::Task;
+use ttkin::JacobianFrame;
+
+use crate::convert::{f64_array, to_numpy, transform, vector, zeros};
+use crate::errors::{PyResultExt, ShapeError, TtmanipError};
+use crate::robot::PyRobot;
+
+thread_local! {
+    /// Buffers of the numeric solver, one per thread (the caller's and each rayon worker's).
+    static SCRATCH: std::cell::RefCell<Option<IkScratch>> = const { std::cell::RefCell::new(None) };
+}
+
+/// Result of `Robot.ik`: arrays for a batch, scalars for one target.
+#[pyclass(name = "IkResult", module = "ttmanip", frozen, get_all)]
+pub struct PyIkResult {
+    /// Joint values (m, rad): (n,) or (N, n).
+    q: Py<PyAny>,
+    /// True where both errors are within the tolerances: bool or (N,) bool array.
+    success: Py<PyAny>,
+    /// Position error of `q` (m).
+    position_error: Py<PyAny>,
+    /// Orientation error of `q` (rad; 0 for task="position").
+    orientation_error: Py<PyAny>,
+    /// LM steps taken (0 for an analytic solve).
+    iterations: Py<PyAny>,
+    /// Random restarts used.
+    restarts: Py<PyAny>,
+}
+
+#[pymethods]
+impl PyIkResult {
+    fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
+        Ok(format!(
+            "IkResult(success={}, position_error={}, orientation_error={}, iterations={}, q={})",
+            self.success.bind(py).repr()?,
+            self.position_error.bind(py).repr()?,
+            self.orientation_error.bind(py).repr()?,
+            self.iterations.bind(py).repr()?,
+            self.q.bind(py).repr()?
+        ))
+    }
+
+    fn __bool__(&self, py: Python<'_>) -> PyResult<bool> {
+        self.success.bind(py).is_truthy()
+    }
+}
+
+fn task_from(task: &str, racket_offset: Option<f64>) -> PyResult<Task> {
+    let t = Task::from_name(task).py()?;
+    Ok(match (t, racket_offset) {
+        (Task::Racket { .. }, Some(offset)) => Task::Racket { offset },
+        (_, Some(_)) => return Err(TtmanipError::new_err("racket_offset: only for task='racket5'")),
+        (t, None) => t,
+    })
+}
+
+/// Reads T as one pose (4, 4) or a batch (N, 4, 4) of rigid transforms.
+fn poses(t: &Bound<'_, PyAny>) -> PyResult<(Vec<IsometryMatrix3<f64>>, bool)> {
+    let a = f64_array(t, "T")?;
+    match a.shape() {
+        [4, 4] => Ok((
+            vec![ttkin::transform::isometry_from_matrix("T", &Matrix4::from_row_slice(a.data())).py()?],
+            false,
+        )),
+        [_, 4, 4] => {
+            let v = a
+                .data()
+                .chunks_exact(16)
+                .enumerate()
+                .map(|(i, m)| ttkin::transform::isometry_from_matrix(&format!("T[{i}]"), &Matrix4::from_row_slice(m)))
+                .collect::<ttkin::Result<Vec<_>>>()
+                .py()?;
+            Ok((v, true))
+        }
+        _ => Err(ShapeError::new_err(format!(
+            "T: expected shape (4, 4) or (N, 4, 4), got {}",
+            a.shape_str()
+        ))),
+    }
+}
+
+impl PyRobot {
+    fn analytic(&self) -> PyResult<Analytic> {
+        Analytic::for_chain(&self.chain).ok_or_else(|| {
+            TtmanipError::new_err(format!(
+                "robot '{}' has no analytic IK (gantry6 and arm4 structures have one); use robot.ik(T)",
+                self.chain.name()
+            ))
+        })
+    }
+
+    /// Default start: the middle of each finite joint range, 0 otherwise.
+    fn default_start(&self) -> Vec<f64> {
+        self.chain
+            .limits()
+            .iter()
+            .map(|l| {
+                if l.lower.is_finite() && l.upper.is_finite() {
+                    0.5 * (l.lower + l.upper)
+                } else {
+                    0.0
+                }
+            })
+            .collect()
+    }
+}
+
+/// An `IkResult` for an analytic configuration `q` of the pose task.
+fn analytic_result(chain: &ttkin::Chain, t: &IsometryMatrix3<f64>, q: Vec<f64>, solver: &IkSolver) -> IkResult {
+    let (p, o) = measure(&Task::Pose, &chain.fk_unchecked(&q), t);
+    IkResult {
+        q,
+        success: p <= solver.position_tolerance && o <= solver.orientation_tolerance,
+        position_error: p,
+        orientation_error: o,
+        iterations: 0,
+        restarts: 0,
+    }
+}
+
+#[pymethods]
+impl PyRobot {
+    /// Inverse kinematics of a tool pose T (4, 4), or of a batch (N, 4, 4) in parallel.
+    ///
+    /// task: "pose" (6-D), "racket5" (racket centre `racket_offset` m along tool z, default 0.15,
+    /// and face normal = tool x; 5-D) or "position" (3-D). q0: start (n,) or (N, n); default the
+    /// middle of the joint ranges. method: "auto" (analytic nearest branch within limits for
+    /// task="pose" on robots with a closed form, else numeric), "numeric" or "analytic".
+    /// time_budget in s (None: unlimited, then fully deterministic for a seed).
+    /// Returns an IkResult; an unreachable target gives success=False with the best q found,
+    /// never an exception (unless raise_on_failure=True: UnreachableError).
+    #[pyo3(signature = (T, q0=None, task="pose", *, method="auto", position_tolerance=1e-6, orientation_tolerance=1e-6,
+        max_iterations=60, max_restarts=500, time_budget=Some(1e-3), seed=0, racket_offset=None, raise_on_failure=false))]
+    #[allow(non_snake_case, clippy::too_many_arguments)]
+    fn ik(
+        &self,
+        py: Python<'_>,
+        T: &Bound<'_, PyAny>,
+        q0: Option<&Bound<'_, PyAny>>,
+        task: &str,
+        method: &str,
+        position_tolerance: f64,
+        orientation_tolerance: f64,
+        max_iterations: usize,
+        max_restarts: usize,
+        time_budget: Option<f64>,
+        seed: u64,
+        racket_offset: Option<f64>,
+        raise_on_failure: bool,
+    ) -> PyResult<PyIkResult> {
+        let task = task_from(task, racket_offset)?;
+        let time_budget = match time_budget {
+            None => None,
+            Some(s) if s > 0.0 && s.is_finite() => Some(Duration::from_secs_f64(s)),
+            Some(s) => {
+                return Err(TtmanipError::new_err(format!(
+                    "time_budget: expected seconds > 0 or None, got {s}"
+                )))
+            }
+        };
+        let solver = IkSolver {
+            task,
+            position_tolerance,
+            orientation_tolerance,
+            max_iterations,
+            max_restarts,
+            time_budget,
+            seed,
+        };
+        solver.validate().py()?;
+        let analytic = match method {
+            "numeric" => None,
+            "auto" if task != Task::Pose => None,
+            "auto" => Analytic::for_chain(&self.chain),
+            "analytic" if task != Task::Pose => {
+                return Err(TtmanipError::new_err("method='analytic' solves task='pose' only"));
+            }
+            "analytic" => Some(self.analytic()?),
+            other => {
+                return Err(TtmanipError::new_err(format!(
+                    "method: expected 'auto', 'numeric' or 'analytic', got '{other}'"
+                )))
+            }
+        };
+        let strict = method == "analytic";
+        let (targets, batch) = poses(T)?;
+        let n = self.chain.dof();
+        let q0s: Vec<Vec<f64>> = match q0 {
+            None => vec![self.default_start()],
+            Some(q) => {
+                let (a, qb) = self.configs(q, "q0")?;
+                ttkin::error::check_finite("q0", a.data()).py()?;
+                match qb {
+                    Some(c) if !batch || c != targets.len() => {
+                        return Err(ShapeError::new_err(format!(
+                            "q0: expected shape ({n},) or ({}, {n}), got ({c}, {n})",
+                            targets.len()
+                        )))
+                    }
+                    _ => a.data().chunks_exact(n).map(<[f64]>::to_vec).collect(),
+                }
+            }
+        };
+        let chain = &*self.chain;
+        let solve_one = |i: usize, t: &IsometryMatrix3<f64>| -> ttkin::Result<IkResult> {
+            let q0 = if q0s.len() == 1 { &q0s[0] } else { &q0s[i] };
+            if let Some(ik) = &analytic {
+                // The nearest branch within limits; none: an error for method="analytic", the
+                // numeric solver's best effort otherwise.
+                match ik.nearest(t, q0, LimitFilter::Enforce) {
+                    Ok(q) => return Ok(analytic_result(chain, t, q, &solver)),
+                    Err(e) if strict => return Err(e),
+                    Err(_) => {}
+                }
+            }
+            let seeded = IkSolver {
+                seed: solver.seed.wrapping_add(i as u64),
+                ..solver.clone()
+            };
+            // One scratch per thread, reused across calls (resized when the robot or task changes).
+            SCRATCH.with(|cell| {
+                let mut slot = cell.borrow_mut();
+                let scratch = slot.get_or_insert_with(|| IkScratch::new(chain, residual_dim(&seeded.task)));
+                seeded.solve_with(chain, t, q0, scratch)
+            })
+        };
+        let results: Vec<IkResult> = if batch {
+            use rayon::prelude::*;
+            py.detach(|| {
+                targets
+                    .par_iter()
+                    .enumerate()
+                    .map(|(i, t)| solve_one(i, t))
+                    .collect::<ttkin::Result<_>>()
+            })
+            .py()?
+        } else {
+            vec![solve_one(0, &targets[0]).py()?]
+        };
+        if raise_on_failure {
+            if let Some((i, r)) = results.iter().enumerate().find(|(_, r)| !r.success) {
+                return Err(crate::errors::UnreachableError::new_err(format!(
+                    "IK failed for target {i}: position error {:.3e} m, orientation error {:.3e} rad",
+                    r.position_error, r.orientation_error
+                )));
+            }
+        }
+        if !batch {
+            let r = &results[0];
+            return Ok(PyIkResult {
+                q: to_numpy(py, &[n], &r.q).into_any().unbind(),
+                success: r.success.into_pyobject(py)?.to_owned().into_any().unbind(),
+                position_error: r.position_error.into_pyobject(py)?.into_any().unbind(),
+                orientation_error: r.orientation_error.into_pyobject(py)?.into_any().unbind(),
+                iterations: r.iterations.into_pyobject(py)?.into_any().unbind(),
+                restarts: r.restarts.into_pyobject(py)?.into_any().unbind(),
+            });
+        }
+        let count = results.len();
+        let q: Vec<f64> = results.iter().flat_map(|r| r.q.iter().copied()).collect();
+        let column = |f: &dyn Fn(&IkResult) -> f64| -> Vec<f64> { results.iter().map(f).collect() };
+        Ok(PyIkResult {
+            q: to_numpy(py, &[count, n], &q).into_any().unbind(),
+            success: PyArray1::from_vec(py, results.iter().map(|r| r.success).collect())
+                .into_any()
+                .unbind(),
+            position_error: to_numpy(py, &[count], &column(&|r| r.position_error))
+                .into_any()
+                .unbind(),
+            orientation_error: to_numpy(py, &[count], &column(&|r| r.orientation_error))
+                .into_any()
+                .unbind(),
+            iterations: PyArray1::from_vec(py, results.iter().map(|r| r.iterations as i64).collect())
+                .into_any()
+                .unbind(),
+            restarts: PyArray1::from_vec(py, results.iter().map(|r| r.restarts as i64).collect())
+                .into_any()
+                .unbind(),
+        })
+    }
+
+    /// Every analytic IK branch of a tool pose T (4, 4) as a (k, n) array (gantry6: up to 4,
+    /// σ1 = +1 first, then σ2 = +1 first; arm4: 1 or 2). limits=True keeps only branches within the
+    /// joint limits (revolute angles shifted by 2π into them). hint (n,): on the gantry's s45 = 0
+    /// family, θ3 is taken from it (0 otherwise). For a batch T (N, 4, 4), returns (q, count):
+    /// q (N, 4, n) padded with NaN and count (N,) branches per pose, 0 where unreachable.
+    /// Raises UnreachableError (single pose) naming the failed constraint; TtmanipError when the
+    /// robot has no analytic solver.
+    #[pyo3(signature = (T, limits=false, hint=None))]
+    #[allow(non_snake_case)]
+    fn ik_all<'py>(
+        &self,
+        py: Python<'py>,
+        T: &Bound<'py, PyAny>,
+        limits: bool,
+        hint: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let ik = self.analytic()?;
+        let n = self.chain.dof();
+        let filter = if limits { LimitFilter::Enforce } else { LimitFilter::Off };
+        let a = f64_array(T, "T")?;
+        match a.shape() {
+            [4, 4] => {
+                let hint = hint.map(|h| vector(h, "hint", n)).transpose()?;
+                let t = transform(T, "T")?;
+                let sols = ik.solve(&t, hint.as_deref(), filter).py()?;
+                let flat: Vec<f64> = sols.iter().flat_map(|q| q.iter().copied()).collect();
+                Ok(to_numpy(py, &[sols.len(), n], &flat).into_any())
+            }
+            [count, 4, 4] => {
+                let count = *count;
+                let out = zeros(py, &[count, MAX_BRANCHES, n]);
+                let mut counts = vec![0usize; count];
+                {
+                    let mut w = out.readwrite();
+                    let o = w.as_slice_mut().expect("fresh array");
+                    let data = a.data();
+                    py.detach(|| ik.solve_batch(data, filter, o, &mut counts)).py()?;
+                }
+                let counts = PyArray1::from_vec(py, counts.into_iter().map(|c| c as i64).collect());
+                Ok((out, counts).into_pyobject(py)?.into_any())
+            }
+            _ => Err(ShapeError::new_err(format!(
+                "T: expected shape (4, 4) or (N, 4, 4), got {}",
+                a.shape_str()
+            ))),
+        }
+    }
+
+    /// The analytic branch nearest to the configuration q (n,) for the tool pose T (4, 4): joint
+    /// distance with revolute angles taken modulo 2π towards q; limits=True (default) keeps to the
+    /// joint limits. Raises UnreachableError when no branch exists.
+    #[pyo3(signature = (T, q, limits=true))]
+    #[allow(non_snake_case)]
+    fn ik_nearest<'py>(
+        &self,
+        py: Python<'py>,
+        T: &Bound<'py, PyAny>,
+        q: &Bound<'py, PyAny>,
+        limits: bool,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let ik = self.analytic()?;
+        let q = vector(q, "q", self.chain.dof())?;
+        let filter = if limits { LimitFilter::Enforce } else { LimitFilter::Off };
+        let sol = ik.nearest(&transform(T, "T")?, &q, filter).py()?;
+        Ok(to_numpy(py, &[sol.len()], &sol))
+    }
+
+    /// Name of the analytic IK solver of this robot ("gantry6", "arm4"), found from the structure
+    /// of its DH table, or None.
+    #[getter]
+    fn analytic_ik(&self) -> Option<&'static str> {
+        match Analytic::for_chain(&self.chain)? {
+            Analytic::Gantry6(_) => Some("gantry6"),
+            Analytic::Arm4(_) => Some("arm4"),
+        }
+    }
+
+    /// Joint velocities (n,) (m/s, rad/s) that produce the tool twist [v (m/s); ω (rad/s)] (6,)
+    /// at q (n,): J⁻¹V for a square robot, the weighted least-norm solution for a redundant one
+    /// (weights (n,) > 0, default 1), least squares for fewer than 6 joints. Near a singularity
+    /// (σ_min < threshold) the inverse is damped up to max_damping. frame: axes of the twist,
+    /// "base" or "tool". With info=True returns (qdot, {"singular", "sigma_min", "damping",
+    /// "residual"}).
+    #[pyo3(signature = (q, twist, frame="base", weights=None, threshold=1e-3, max_damping=1e-2, info=false))]
+    #[allow(clippy::too_many_arguments)]
+    fn joint_velocity<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+        twist: &Bound<'py, PyAny>,
+        frame: &str,
+        weights: Option<&Bound<'py, PyAny>>,
+        threshold: f64,
+        max_damping: f64,
+        info: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let n = self.chain.dof();
+        let q = vector(q, "q", n)?;
+        let twist = vector(twist, "twist", 6)?;
+        let weights = weights.map(|w| vector(w, "weights", n)).transpose()?;
+        let frame = match frame {
+            "base" | "world" => JacobianFrame::Base,
+            "tool" | "local" => JacobianFrame::Tool,
+            other => {
+                return Err(TtmanipError::new_err(format!(
+                    "frame: expected 'base' or 'tool', got '{other}'"
+                )))
+            }
+        };
+        let d = DifferentialIk {
+            threshold,
+            max_damping,
+            frame,
+        };
+        let r = d.solve(&self.chain, &q, &twist, weights.as_deref()).py()?;
+        let qdot = to_numpy(py, &[n], &r.qdot);
+        if !info {
+            return Ok(qdot.into_any());
+        }
+        let dict = PyDict::new(py);
+        dict.set_item("singular", r.singular)?;
+        dict.set_item("sigma_min", r.sigma_min)?;
+        dict.set_item("damping", r.damping)?;
+        dict.set_item("residual", r.residual)?;
+        Ok((qdot, dict).into_pyobject(py)?.into_any())
+    }
+}
+
+/// Adds `IkResult` to the module (the methods live on `Robot`).
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyIkResult>()
+}
