@@ -113,7 +113,6 @@ class Robot:
     def task_coordinates(self, q: ArrayLike, task: str = "racket5") -> NDArray[np.float64]:
         """Task coordinates of the tool pose: (3,), (6,) or the racket 5-vector (m, rad)."""
 
-
     # --- dynamics (crates/ttkin-py/src/dynamics.rs); SI units, gravity in the base frame ---
     def rnea(
         self,
@@ -197,6 +196,48 @@ class Robot:
         torque_constant: ArrayLike | None = None,
     ) -> Robot:
         """The same robot with drives, one value per joint."""
+    def ik(
+        self,
+        T: ArrayLike,
+        q0: ArrayLike | None = None,
+        task: str = "pose",
+        *,
+        method: str = "auto",
+        position_tolerance: float = 1e-6,
+        orientation_tolerance: float = 1e-6,
+        max_iterations: int = 60,
+        max_restarts: int = 500,
+        time_budget: float | None = 1e-3,
+        seed: int = 0,
+        racket_offset: float | None = None,
+        raise_on_failure: bool = False,
+    ) -> IkResult:
+        """IK of T (4, 4) or a batch (N, 4, 4); task "pose", "racket5" or "position".
+
+        method "auto" uses the analytic nearest branch for task="pose" where the robot has one,
+        else bounded Levenberg–Marquardt with restarts. An unreachable target gives
+        success=False (UnreachableError only with raise_on_failure=True).
+        """
+    def ik_all(
+        self, T: ArrayLike, limits: bool = False, hint: ArrayLike | None = None
+    ) -> NDArray[np.float64] | tuple[NDArray[np.float64], NDArray[np.int64]]:
+        """Every analytic branch: (k, n) for T (4, 4); (q (N, 4, n) NaN-padded, count (N,)) for (N, 4, 4)."""
+    def ik_nearest(self, T: ArrayLike, q: ArrayLike, limits: bool = True) -> NDArray[np.float64]:
+        """The analytic branch nearest to q (revolute angles modulo 2π), within limits by default."""
+    @property
+    def analytic_ik(self) -> str | None:
+        """ "gantry6" or "arm4" when the DH structure has a closed-form IK, else None."""
+    def joint_velocity(
+        self,
+        q: ArrayLike,
+        twist: ArrayLike,
+        frame: str = "base",
+        weights: ArrayLike | None = None,
+        threshold: float = 1e-3,
+        max_damping: float = 1e-2,
+        info: bool = False,
+    ) -> NDArray[np.float64] | tuple[NDArray[np.float64], dict[str, float | bool]]:
+        """q̇ (n,) for the tool twist [v; ω] (6,): J⁻¹V, weighted least-norm, or damped near singularities."""
 
 class ServoSim:
     """A simulated servo axis: ttcan's current/speed/position cascade on a DC motor plant (SI units)."""
@@ -338,6 +379,7 @@ def track(
     mount: ArrayLike | None = None,
 ) -> TrackResult:
     """Closed-loop tracking of a task trajectory sampled at `rate_hz` (loop in Rust)."""
+
 class TorqueProfile:
     """Torques along a planned motion (patent step S105)."""
 
@@ -359,48 +401,6 @@ class TorqueProfile:
     @property
     def violations(self) -> list[tuple[int, int, float, float]]:
         """(sample, joint, torque, limit) of every exceedance."""
-    def ik(
-        self,
-        T: ArrayLike,
-        q0: ArrayLike | None = None,
-        task: str = "pose",
-        *,
-        method: str = "auto",
-        position_tolerance: float = 1e-6,
-        orientation_tolerance: float = 1e-6,
-        max_iterations: int = 60,
-        max_restarts: int = 500,
-        time_budget: float | None = 1e-3,
-        seed: int = 0,
-        racket_offset: float | None = None,
-        raise_on_failure: bool = False,
-    ) -> IkResult:
-        """IK of T (4, 4) or a batch (N, 4, 4); task "pose", "racket5" or "position".
-
-        method "auto" uses the analytic nearest branch for task="pose" where the robot has one,
-        else bounded Levenberg–Marquardt with restarts. An unreachable target gives
-        success=False (UnreachableError only with raise_on_failure=True).
-        """
-    def ik_all(
-        self, T: ArrayLike, limits: bool = False, hint: ArrayLike | None = None
-    ) -> NDArray[np.float64] | tuple[NDArray[np.float64], NDArray[np.int64]]:
-        """Every analytic branch: (k, n) for T (4, 4); (q (N, 4, n) NaN-padded, count (N,)) for (N, 4, 4)."""
-    def ik_nearest(self, T: ArrayLike, q: ArrayLike, limits: bool = True) -> NDArray[np.float64]:
-        """The analytic branch nearest to q (revolute angles modulo 2π), within limits by default."""
-    @property
-    def analytic_ik(self) -> str | None:
-        """ "gantry6" or "arm4" when the DH structure has a closed-form IK, else None."""
-    def joint_velocity(
-        self,
-        q: ArrayLike,
-        twist: ArrayLike,
-        frame: str = "base",
-        weights: ArrayLike | None = None,
-        threshold: float = 1e-3,
-        max_damping: float = 1e-2,
-        info: bool = False,
-    ) -> NDArray[np.float64] | tuple[NDArray[np.float64], dict[str, float | bool]]:
-        """q̇ (n,) for the tool twist [v; ω] (6,): J⁻¹V, weighted least-norm, or damped near singularities."""
 
 class IkResult:
     """Result of Robot.ik: scalars for one target, arrays for a batch."""
