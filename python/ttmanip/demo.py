@@ -1,10 +1,14 @@
-"""The pipeline demo: kinematics of the seed robots, with figures.
+"""The demo of the whole pipeline, with figures.
 
 Writes into the output folder:
-- ``workspace_gantry6.png`` and ``workspace_mobile8.png``: reachable tool positions from 200,000
-  random configurations within the joint limits (batch FK in Rust), top and side views, and the
-  robot drawn as a stick figure at a reference configuration;
-- ``summary.json``: the reference poses, Jacobians' singular values and the batch FK rate.
+- ``kinematics/``: ``workspace_gantry6.png`` and ``workspace_mobile8.png``, reachable tool
+  positions from 200,000 random configurations within the joint limits (batch FK in Rust), top and
+  side views, with the robot drawn as a stick figure at a reference configuration;
+- ``pipeline/``: seed 002's hit pipeline on gantry6 (hit parameters → analytic IK → J⁻¹V →
+  quintic stroke → inverse dynamics → one joint driven by the cascaded motor loops), see
+  :mod:`ttmanip.pipeline`;
+- ``seed000/``, ``seed001/``: the seed documents' experiments (``ttmanip experiment NAME``);
+- ``summary.json``: what each part measured.
 """
 
 from __future__ import annotations
