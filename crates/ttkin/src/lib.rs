@@ -16,6 +16,7 @@ pub mod inertial;
 pub mod joint;
 pub mod robots;
 pub mod task;
+pub mod traj;
 pub mod transform;
 pub mod urdf;
 

@@ -111,10 +111,12 @@ pub fn from_urdf_str(text: &str, base_link: &str, tip_link: &str) -> Result<Chai
             }
             urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous => JointType::Revolute,
             urdf_rs::JointType::Prismatic => JointType::Prismatic,
-            ref other => return Err(Error::Urdf(format!(
+            ref other => {
+                return Err(Error::Urdf(format!(
                 "joint '{}' is {other:?}: a serial chain holds only revolute, continuous, prismatic and fixed joints",
                 uj.name
-            ))),
+            )))
+            }
         };
         if uj.mimic.is_some() {
             return Err(Error::Urdf(format!(

@@ -1,0 +1,435 @@
+//! Kinematic limits of joint trajectories: exact peak values, limit checks, and the minimal
+//! duration of a polynomial segment.
+//!
+//! Peaks are exact up to rounding: on each polynomial piece the extrema of a derivative lie at the
+//! piece's ends or at roots of the next derivative, which [`poly::roots_in`] isolates and bisects.
+//! Nothing is sampled, so a violation between two control ticks is still found.
+
+use super::{poly, JointState, JointTrajectory};
+use crate::chain::Chain;
+use crate::error::{check_vector, Error, Result};
+
+/// Relative tolerance of a limit check: a peak up to `limit·(1 + 1e-9)` passes, so a trajectory
+/// planned exactly at a limit is not reported for rounding.
+pub const LIMIT_TOLERANCE: f64 = 1e-9;
+
+/// Per-joint kinematic limits; +∞ (or −∞ for `lower`) where a joint has none.
+#[derive(Debug, Clone, PartialEq)]
+pub struct KinematicLimits {
+    /// Lower position limits (rad or m).
+    pub lower: Vec<f64>,
+    /// Upper position limits (rad or m).
+    pub upper: Vec<f64>,
+    /// Speed limits (rad/s or m/s), > 0.
+    pub velocity: Vec<f64>,
+    /// Acceleration limits (rad/s² or m/s²), > 0.
+    pub acceleration: Vec<f64>,
+    /// Jerk limits (rad/s³ or m/s³), > 0.
+    pub jerk: Vec<f64>,
+}
+
+impl KinematicLimits {
+    /// Velocity, acceleration and jerk limits (dof long each; +∞ allowed), no position limits.
+    pub fn new(velocity: &[f64], acceleration: &[f64], jerk: &[f64]) -> Result<Self> {
+        let n = velocity.len();
+        let l = KinematicLimits {
+            lower: vec![f64::NEG_INFINITY; n],
+            upper: vec![f64::INFINITY; n],
+            velocity: velocity.to_vec(),
+            acceleration: acceleration.to_vec(),
+            jerk: jerk.to_vec(),
+        };
+        l.validate()?;
+        Ok(l)
+    }
+
+    /// The limits of a chain's joints (absent velocity or acceleration limits are +∞) with the
+    /// given jerk limits (+∞ when `None`; robot files carry none).
+    pub fn from_chain(chain: &Chain, jerk: Option<&[f64]>) -> Result<Self> {
+        let lim = chain.limits();
+        let n = lim.len();
+        let jerk = match jerk {
+            Some(j) => j.to_vec(),
+            None => vec![f64::INFINITY; n],
+        };
+        let l = KinematicLimits {
+            lower: lim.iter().map(|l| l.lower).collect(),
+            upper: lim.iter().map(|l| l.upper).collect(),
+            velocity: lim.iter().map(|l| l.velocity.unwrap_or(f64::INFINITY)).collect(),
+            acceleration: lim.iter().map(|l| l.acceleration.unwrap_or(f64::INFINITY)).collect(),
+            jerk,
+        };
+        l.validate()?;
+        Ok(l)
+    }
+
+    /// The same limits with position limits `lower`, `upper` (rad or m).
+    pub fn with_position(mut self, lower: &[f64], upper: &[f64]) -> Result<Self> {
+        self.lower = lower.to_vec();
+        self.upper = upper.to_vec();
+        self.validate()?;
+        Ok(self)
+    }
+
+    /// Number of joints.
+    pub fn dof(&self) -> usize {
+        self.velocity.len()
+    }
+
+    fn validate(&self) -> Result<()> {
+        let n = self.velocity.len();
+        if n == 0 {
+            return Err(Error::shape("velocity limits", "at least one joint", "0 values"));
+        }
+        for (what, v) in [
+            ("lower", &self.lower),
+            ("upper", &self.upper),
+            ("acceleration limits", &self.acceleration),
+            ("jerk limits", &self.jerk),
+        ] {
+            if v.len() != n {
+                return Err(Error::shape(what, format!("{n} values"), format!("{} values", v.len())));
+            }
+        }
+        for (what, v) in [
+            ("velocity limits", &self.velocity),
+            ("acceleration limits", &self.acceleration),
+            ("jerk limits", &self.jerk),
+        ] {
+            if let Some(j) = v.iter().position(|x| !(*x > 0.0)) {
+                return Err(Error::invalid(
+                    what,
+                    format!("joint {j}: limit must be > 0, got {}", v[j]),
+                ));
+            }
+        }
+        for j in 0..n {
+            if self.lower[j].is_nan() || self.upper[j].is_nan() || self.lower[j] > self.upper[j] {
+                return Err(Error::invalid(
+                    "position limits",
+                    format!(
+                        "joint {j}: need lower ≤ upper, got [{}, {}]",
+                        self.lower[j], self.upper[j]
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    fn check_dof(&self, n: usize) -> Result<()> {
+        if self.dof() != n {
+            return Err(Error::shape(
+                "limits",
+                format!("{n} joints"),
+                format!("{} joints", self.dof()),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The quantity a limit bounds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Quantity {
+    /// Joint position (rad or m).
+    Position,
+    /// Joint velocity (per s).
+    Velocity,
+    /// Joint acceleration (per s²).
+    Acceleration,
+    /// Joint jerk (per s³).
+    Jerk,
+}
+
+impl Quantity {
+    /// Lower-case name: "position", "velocity", "acceleration", "jerk".
+    pub fn name(&self) -> &'static str {
+        match self {
+            Quantity::Position => "position",
+            Quantity::Velocity => "velocity",
+            Quantity::Acceleration => "acceleration",
+            Quantity::Jerk => "jerk",
+        }
+    }
+}
+
+/// The worst excess of one quantity of one joint over its limit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Violation {
+    /// Joint index.
+    pub joint: usize,
+    /// Which quantity.
+    pub quantity: Quantity,
+    /// Time of the worst value (s).
+    pub time: f64,
+    /// The worst value (signed; rad or m per s^k).
+    pub value: f64,
+    /// The limit it exceeds (the crossed bound for positions, the magnitude bound otherwise).
+    pub limit: f64,
+}
+
+/// Peak of one quantity of one joint: time (s) and signed value of the largest magnitude.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Peak {
+    /// Time of the peak (s).
+    pub time: f64,
+    /// Signed value at the peak.
+    pub value: f64,
+}
+
+impl JointTrajectory {
+    /// Exact peak magnitude of velocity (`order` 1), acceleration (2) or jerk (3) of every joint
+    /// over the whole trajectory.
+    pub fn peaks(&self, order: usize) -> Result<Vec<Peak>> {
+        if !(1..=3).contains(&order) {
+            return Err(Error::invalid("order", format!("1, 2 or 3 expected, got {order}")));
+        }
+        let n = self.dof();
+        let mut out = vec![Peak { time: 0.0, value: 0.0 }; n];
+        for k in 0..self.segments() {
+            let (t0, h) = (self.knots()[k], self.knots()[k + 1] - self.knots()[k]);
+            for (j, best) in out.iter_mut().enumerate() {
+                let mut c = *self.coefficients(k, j).expect("segment and joint in range");
+                for _ in 0..order {
+                    c = poly::derivative(&c);
+                }
+                let (tau, v) = poly::max_abs(&c, h);
+                if v.abs() > best.value.abs() {
+                    *best = Peak {
+                        time: t0 + tau,
+                        value: v,
+                    };
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// Exact lowest and highest position of every joint: (time s, value) pairs.
+    pub fn position_range(&self) -> Vec<(Peak, Peak)> {
+        let n = self.dof();
+        let mut out = Vec::with_capacity(n);
+        for j in 0..n {
+            let mut lo = Peak {
+                time: 0.0,
+                value: f64::INFINITY,
+            };
+            let mut hi = Peak {
+                time: 0.0,
+                value: f64::NEG_INFINITY,
+            };
+            for k in 0..self.segments() {
+                let (t0, h) = (self.knots()[k], self.knots()[k + 1] - self.knots()[k]);
+                let c = self.coefficients(k, j).expect("segment and joint in range");
+                let ((tl, vl), (th, vh)) = poly::min_max(c, h);
+                if vl < lo.value {
+                    lo = Peak {
+                        time: t0 + tl,
+                        value: vl,
+                    };
+                }
+                if vh > hi.value {
+                    hi = Peak {
+                        time: t0 + th,
+                        value: vh,
+                    };
+                }
+            }
+            out.push((lo, hi));
+        }
+        out
+    }
+
+    /// Every joint's worst violation of each limit (position, velocity, acceleration, jerk), found
+    /// exactly; empty when the trajectory respects all limits (to [`LIMIT_TOLERANCE`]).
+    pub fn check_limits(&self, limits: &KinematicLimits) -> Result<Vec<Violation>> {
+        limits.check_dof(self.dof())?;
+        let mut out = Vec::new();
+        for (j, (lo, hi)) in self.position_range().into_iter().enumerate() {
+            let slack = |b: f64| LIMIT_TOLERANCE * b.abs().max(1.0);
+            if lo.value < limits.lower[j] - slack(limits.lower[j]) {
+                out.push(Violation {
+                    joint: j,
+                    quantity: Quantity::Position,
+                    time: lo.time,
+                    value: lo.value,
+                    limit: limits.lower[j],
+                });
+            }
+            if hi.value > limits.upper[j] + slack(limits.upper[j]) {
+                out.push(Violation {
+                    joint: j,
+                    quantity: Quantity::Position,
+                    time: hi.time,
+                    value: hi.value,
+                    limit: limits.upper[j],
+                });
+            }
+        }
+        for (order, quantity, bound) in [
+            (1, Quantity::Velocity, &limits.velocity),
+            (2, Quantity::Acceleration, &limits.acceleration),
+            (3, Quantity::Jerk, &limits.jerk),
+        ] {
+            for (j, p) in self.peaks(order)?.into_iter().enumerate() {
+                if p.value.abs() > bound[j] * (1.0 + LIMIT_TOLERANCE) {
+                    out.push(Violation {
+                        joint: j,
+                        quantity,
+                        time: p.time,
+                        value: p.value,
+                        limit: bound[j],
+                    });
+                }
+            }
+        }
+        Ok(out)
+    }
+}
+
+/// Polynomial family of a single segment.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SegmentKind {
+    /// Cubic (boundary positions and velocities).
+    Cubic,
+    /// Quintic (boundary positions, velocities and accelerations).
+    Quintic,
+}
+
+/// Minimal duration (s) of a rest-to-rest segment from `q0` to `q1` under velocity, acceleration
+/// and jerk limits, in closed form. Per joint with h = |q1 − q0|, the peaks are
+/// cubic: 3h/(2T), 6h/T², 12h/T³; quintic: 15h/(8T), 10h/(√3·T²), 60h/T³; the duration is the
+/// largest T that puts one of them exactly at its limit. Zero when q0 = q1.
+pub fn minimal_duration_rest(q0: &[f64], q1: &[f64], limits: &KinematicLimits, kind: SegmentKind) -> Result<f64> {
+    let n = q0.len();
+    limits.check_dof(n)?;
+    check_vector("q0", q0, n)?;
+    check_vector("q1", q1, n)?;
+    let (kv, ka, kj) = match kind {
+        SegmentKind::Cubic => (1.5, 6.0, 12.0),
+        SegmentKind::Quintic => (15.0 / 8.0, 10.0 / 3f64.sqrt(), 60.0),
+    };
+    let mut t: f64 = 0.0;
+    for j in 0..n {
+        let h = (q1[j] - q0[j]).abs();
+        t = t
+            .max(kv * h / limits.velocity[j])
+            .max((ka * h / limits.acceleration[j]).sqrt())
+            .max((kj * h / limits.jerk[j]).cbrt());
+    }
+    Ok(t)
+}
+
+/// Whether the quintic from `start` to `end` in `duration` s respects the velocity, acceleration
+/// and jerk limits (exact peaks, no tolerance: a peak equal to its limit passes).
+pub fn quintic_feasible(start: &JointState, end: &JointState, duration: f64, limits: &KinematicLimits) -> bool {
+    let n = start.q.len();
+    for j in 0..n {
+        let c = poly::quintic(
+            start.q[j],
+            start.qd[j],
+            start.qdd[j],
+            end.q[j],
+            end.qd[j],
+            end.qdd[j],
+            duration,
+        );
+        let mut d = c;
+        for bound in [limits.velocity[j], limits.acceleration[j], limits.jerk[j]] {
+            d = poly::derivative(&d);
+            if poly::max_abs(&d, duration).1.abs() > bound {
+                return false;
+            }
+        }
+    }
+    true
+}
+
+/// Earliest duration T ≥ `not_before` (s) for which the quintic from `start` to `end` respects the
+/// velocity, acceleration and jerk limits.
+///
+/// Method: bisection on T, each step testing feasibility with the quintic's exact extrema
+/// ([`quintic_feasible`]). If `not_before` is infeasible, T grows by factors of 1.25 until a
+/// feasible duration is found (at most 1e6 s), then the boundary between the last infeasible and
+/// the first feasible duration is bisected to a relative width of 1e-13. The result is the earliest
+/// feasible duration on that grid; a feasible window narrower than one growth step would be missed
+/// (feasibility in T is not monotone in general when the boundary velocities are nonzero).
+pub fn earliest_quintic_duration(
+    start: &JointState,
+    end: &JointState,
+    limits: &KinematicLimits,
+    not_before: f64,
+) -> Result<f64> {
+    let n = start.check("start")?;
+    if end.check("end")? != n {
+        return Err(Error::shape(
+            "end.q",
+            format!("{n} values"),
+            format!("{} values", end.q.len()),
+        ));
+    }
+    limits.check_dof(n)?;
+    super::check_duration("not_before", not_before)?;
+    for (what, s) in [("start", start), ("end", end)] {
+        for j in 0..n {
+            let too_fast = s.qd[j].abs() > limits.velocity[j] * (1.0 + LIMIT_TOLERANCE);
+            let too_hard = s.qdd[j].abs() > limits.acceleration[j] * (1.0 + LIMIT_TOLERANCE);
+            if too_fast || too_hard {
+                return Err(Error::invalid(
+                    what,
+                    format!(
+                        "joint {j}: boundary velocity {} or acceleration {} exceeds the limits {} / {}; no duration \
+                         can help",
+                        s.qd[j], s.qdd[j], limits.velocity[j], limits.acceleration[j]
+                    ),
+                ));
+            }
+        }
+    }
+    if quintic_feasible(start, end, not_before, limits) {
+        return Ok(not_before);
+    }
+    let (mut bad, mut good) = (not_before, not_before * 1.25);
+    while !quintic_feasible(start, end, good, limits) {
+        bad = good;
+        good *= 1.25;
+        if good > 1e6 {
+            return Err(Error::invalid(
+                "limits",
+                "no quintic duration up to 1e6 s respects the velocity, acceleration and jerk limits",
+            ));
+        }
+    }
+    while good - bad > 1e-13 * good {
+        let mid = 0.5 * (bad + good);
+        if quintic_feasible(start, end, mid, limits) {
+            good = mid;
+        } else {
+            bad = mid;
+        }
+    }
+    Ok(good)
+}
+
+/// Minimal duration (s) of the quintic from `start` to `end` under the velocity, acceleration and
+/// jerk limits: [`earliest_quintic_duration`] from the necessary lower bound
+/// max_j(|Δq_j|/v_max, |Δv_j|/a_max) (or 1 ms when that is smaller).
+pub fn minimal_quintic_duration(start: &JointState, end: &JointState, limits: &KinematicLimits) -> Result<f64> {
+    let n = start.check("start")?;
+    if end.check("end")? != n {
+        return Err(Error::shape(
+            "end.q",
+            format!("{n} values"),
+            format!("{} values", end.q.len()),
+        ));
+    }
+    limits.check_dof(n)?;
+    let mut lower: f64 = 1e-3;
+    for j in 0..n {
+        lower = lower
+            .max((end.q[j] - start.q[j]).abs() / limits.velocity[j])
+            .max((end.qd[j] - start.qd[j]).abs() / limits.acceleration[j]);
+    }
+    earliest_quintic_duration(start, end, limits, lower)
+}
