@@ -190,7 +190,7 @@ impl JointTrajectory {
         for k in 0..self.segments() {
             let (t0, h) = (self.knots()[k], self.knots()[k + 1] - self.knots()[k]);
             for (j, best) in out.iter_mut().enumerate() {
-                let mut c = *self.coefficients(k, j).expect("segment and joint in range");
+                let mut c = self.coefficients(k, j).expect("segment and joint in range");
                 for _ in 0..order {
                     c = poly::derivative(&c);
                 }
@@ -222,7 +222,7 @@ impl JointTrajectory {
             for k in 0..self.segments() {
                 let (t0, h) = (self.knots()[k], self.knots()[k + 1] - self.knots()[k]);
                 let c = self.coefficients(k, j).expect("segment and joint in range");
-                let ((tl, vl), (th, vh)) = poly::min_max(c, h);
+                let ((tl, vl), (th, vh)) = poly::min_max(&c, h);
                 if vl < lo.value {
                     lo = Peak {
                         time: t0 + tl,
@@ -321,12 +321,12 @@ pub fn minimal_duration_rest(q0: &[f64], q1: &[f64], limits: &KinematicLimits, k
     Ok(t)
 }
 
-/// Whether the quintic from `start` to `end` in `duration` s respects the velocity, acceleration
-/// and jerk limits (exact peaks, no tolerance: a peak equal to its limit passes).
-pub fn quintic_feasible(start: &JointState, end: &JointState, duration: f64, limits: &KinematicLimits) -> bool {
-    let n = start.q.len();
-    for j in 0..n {
-        let c = poly::quintic(
+/// Largest ratio peak/limit of velocity, acceleration and jerk over the joints of the quintic from
+/// `start` to `end` in `duration` s (exact peaks); the quintic respects the limits iff it is ≤ 1.
+pub fn quintic_limit_ratio(start: &JointState, end: &JointState, duration: f64, limits: &KinematicLimits) -> f64 {
+    let mut worst: f64 = 0.0;
+    for j in 0..start.q.len() {
+        let mut d = poly::quintic(
             start.q[j],
             start.qd[j],
             start.qdd[j],
@@ -335,26 +335,27 @@ pub fn quintic_feasible(start: &JointState, end: &JointState, duration: f64, lim
             end.qdd[j],
             duration,
         );
-        let mut d = c;
         for bound in [limits.velocity[j], limits.acceleration[j], limits.jerk[j]] {
             d = poly::derivative(&d);
-            if poly::max_abs(&d, duration).1.abs() > bound {
-                return false;
+            if bound.is_finite() {
+                worst = worst.max(poly::max_abs(&d, duration).1.abs() / bound);
             }
         }
     }
-    true
+    worst
 }
 
 /// Earliest duration T ≥ `not_before` (s) for which the quintic from `start` to `end` respects the
 /// velocity, acceleration and jerk limits.
 ///
-/// Method: bisection on T, each step testing feasibility with the quintic's exact extrema
-/// ([`quintic_feasible`]). If `not_before` is infeasible, T grows by factors of 1.25 until a
-/// feasible duration is found (at most 1e6 s), then the boundary between the last infeasible and
-/// the first feasible duration is bisected to a relative width of 1e-13. The result is the earliest
-/// feasible duration on that grid; a feasible window narrower than one growth step would be missed
-/// (feasibility in T is not monotone in general when the boundary velocities are nonzero).
+/// Method: root bracketing on T, each step evaluating the quintic's exact extrema
+/// ([`quintic_limit_ratio`], roots of the derivative polynomials). If `not_before` is infeasible,
+/// T grows by factors of 1.25 until a feasible duration is found (at most 1e6 s); the crossing of
+/// the ratio through 1 between the last infeasible and the first feasible duration is then located
+/// by the Illinois variant of regula falsi (a bisection step when three steps shrink the bracket
+/// by less than 4) to a relative width of
+/// 1e-13, returning the feasible end. A feasible window narrower than one growth step would be
+/// missed (feasibility in T is not monotone in general when boundary velocities are nonzero).
 pub fn earliest_quintic_duration(
     start: &JointState,
     end: &JointState,
@@ -373,9 +374,7 @@ pub fn earliest_quintic_duration(
     super::check_duration("not_before", not_before)?;
     for (what, s) in [("start", start), ("end", end)] {
         for j in 0..n {
-            let too_fast = s.qd[j].abs() > limits.velocity[j] * (1.0 + LIMIT_TOLERANCE);
-            let too_hard = s.qdd[j].abs() > limits.acceleration[j] * (1.0 + LIMIT_TOLERANCE);
-            if too_fast || too_hard {
+            if s.qd[j].abs() > limits.velocity[j] || s.qdd[j].abs() > limits.acceleration[j] {
                 return Err(Error::invalid(
                     what,
                     format!(
@@ -387,29 +386,63 @@ pub fn earliest_quintic_duration(
             }
         }
     }
-    if quintic_feasible(start, end, not_before, limits) {
+    let g = |t: f64| quintic_limit_ratio(start, end, t, limits) - 1.0;
+    let mut fb = g(not_before);
+    if fb <= 0.0 {
         return Ok(not_before);
     }
-    let (mut bad, mut good) = (not_before, not_before * 1.25);
-    while !quintic_feasible(start, end, good, limits) {
-        bad = good;
-        good *= 1.25;
-        if good > 1e6 {
+    let (mut a, mut fa, mut b) = (not_before, fb, not_before * 1.25);
+    loop {
+        fb = g(b);
+        if fb <= 0.0 {
+            break;
+        }
+        (a, fa) = (b, fb);
+        b *= 1.25;
+        if b > 1e6 {
             return Err(Error::invalid(
                 "limits",
                 "no quintic duration up to 1e6 s respects the velocity, acceleration and jerk limits",
             ));
         }
     }
-    while good - bad > 1e-13 * good {
-        let mid = 0.5 * (bad + good);
-        if quintic_feasible(start, end, mid, limits) {
-            good = mid;
+    // Invariant: g(a) > 0 ≥ g(b).
+    let (mut side, mut checkpoint) = (0i8, b - a);
+    for iteration in 1..=300 {
+        if b - a <= 1e-13 * b {
+            break;
+        }
+        let mut x = (a * fb - b * fa) / (fb - fa);
+        if !(x > a && x < b) {
+            x = 0.5 * (a + b);
+        }
+        let fx = g(x);
+        if fx <= 0.0 {
+            (b, fb) = (x, fx);
+            if side == -1 {
+                fa *= 0.5;
+            }
+            side = -1;
         } else {
-            bad = mid;
+            (a, fa) = (x, fx);
+            if side == 1 {
+                fb *= 0.5;
+            }
+            side = 1;
+        }
+        if iteration % 3 == 0 && b - a > 0.25 * std::mem::replace(&mut checkpoint, b - a) {
+            // Three steps shrank the bracket by less than 4: one bisection step.
+            let m = 0.5 * (a + b);
+            let fm = g(m);
+            if fm <= 0.0 {
+                (b, fb) = (m, fm);
+            } else {
+                (a, fa) = (m, fm);
+            }
+            side = 0;
         }
     }
-    Ok(good)
+    Ok(b)
 }
 
 /// Minimal duration (s) of the quintic from `start` to `end` under the velocity, acceleration and

@@ -124,15 +124,32 @@ pub struct JointTrajectory {
     dof: usize,
     /// Segment boundaries (s), strictly increasing, `knots[0] = 0`.
     knots: Vec<f64>,
-    /// `coeffs[k * dof + j]`: polynomial of joint j on segment k.
-    coeffs: Vec<Coeffs>,
+    /// Coefficient of τᵖ of joint j on segment k at `powers[(6k + p)·dof + j]`: power-major, so
+    /// that one power of all joints is contiguous and sampling vectorises over joints.
+    powers: Vec<f64>,
 }
 
 impl JointTrajectory {
     /// Builds from knots (s, strictly increasing from 0) and per-segment, per-joint coefficients.
+    /// `coeffs[k·dof + j]` is the polynomial of joint j on segment k.
     pub(crate) fn from_parts(dof: usize, knots: Vec<f64>, coeffs: Vec<Coeffs>) -> Self {
         debug_assert!(knots.len() >= 2 && coeffs.len() == (knots.len() - 1) * dof);
-        JointTrajectory { dof, knots, coeffs }
+        let mut powers = vec![0.0; coeffs.len() * 6];
+        for (i, c) in coeffs.iter().enumerate() {
+            let (k, j) = (i / dof, i % dof);
+            for (p, &v) in c.iter().enumerate() {
+                powers[(6 * k + p) * dof + j] = v;
+            }
+        }
+        JointTrajectory { dof, knots, powers }
+    }
+
+    /// Appends the segments of `next` (same dof) after this trajectory's end.
+    pub(crate) fn append(mut self, next: JointTrajectory) -> Self {
+        let end = self.duration();
+        self.knots.extend(next.knots[1..].iter().map(|t| end + t));
+        self.powers.extend(next.powers);
+        self
     }
 
     /// Cubic from `q0` to `q1` (rad or m) in `duration` s with boundary velocities `v0`, `v1`
@@ -219,11 +236,28 @@ impl JointTrajectory {
     }
 
     /// Coefficients (ascending powers of τ = t − t_k) of joint `joint` on segment `segment`.
-    pub fn coefficients(&self, segment: usize, joint: usize) -> Option<&Coeffs> {
-        if joint >= self.dof {
+    pub fn coefficients(&self, segment: usize, joint: usize) -> Option<Coeffs> {
+        if joint >= self.dof || segment >= self.segments() {
             return None;
         }
-        self.coeffs.get(segment * self.dof + joint)
+        let mut c = [0.0; 6];
+        for (p, v) in c.iter_mut().enumerate() {
+            *v = self.powers[(6 * segment + p) * self.dof + joint];
+        }
+        Some(c)
+    }
+
+    /// The six coefficient rows (τ⁰ … τ⁵, each `dof` long) of segment `k`.
+    #[inline]
+    fn rows(&self, k: usize) -> [&[f64]; 6] {
+        let n = self.dof;
+        let seg = &self.powers[6 * k * n..6 * (k + 1) * n];
+        let (c0, r) = seg.split_at(n);
+        let (c1, r) = r.split_at(n);
+        let (c2, r) = r.split_at(n);
+        let (c3, r) = r.split_at(n);
+        let (c4, c5) = r.split_at(n);
+        [c0, c1, c2, c3, c4, c5]
     }
 
     /// The segment holding `t` and the local time in it; `t` must lie in [0, duration].
@@ -275,12 +309,14 @@ impl JointTrajectory {
     #[inline]
     fn sample_unchecked(&self, t: f64, q: &mut [f64], qd: &mut [f64], qdd: &mut [f64]) {
         let (k, tau) = self.locate(t);
-        let seg = &self.coeffs[k * self.dof..(k + 1) * self.dof];
-        for (j, c) in seg.iter().enumerate() {
-            let [p, v, a, _] = poly::eval(c, tau);
-            q[j] = p;
-            qd[j] = v;
-            qdd[j] = a;
+        let [c0, c1, c2, c3, c4, c5] = self.rows(k);
+        let n = self.dof;
+        let (q, qd, qdd) = (&mut q[..n], &mut qd[..n], &mut qdd[..n]);
+        let (c0, c1, c2, c3, c4, c5) = (&c0[..n], &c1[..n], &c2[..n], &c3[..n], &c4[..n], &c5[..n]);
+        for j in 0..n {
+            q[j] = ((((c5[j] * tau + c4[j]) * tau + c3[j]) * tau + c2[j]) * tau + c1[j]) * tau + c0[j];
+            qd[j] = (((5.0 * c5[j] * tau + 4.0 * c4[j]) * tau + 3.0 * c3[j]) * tau + 2.0 * c2[j]) * tau + c1[j];
+            qdd[j] = ((20.0 * c5[j] * tau + 12.0 * c4[j]) * tau + 6.0 * c3[j]) * tau + 2.0 * c2[j];
         }
     }
 
@@ -289,8 +325,9 @@ impl JointTrajectory {
         let t = self.check_time(t)?;
         self.check_out("jerk", jerk)?;
         let (k, tau) = self.locate(t);
-        for (j, c) in self.coeffs[k * self.dof..(k + 1) * self.dof].iter().enumerate() {
-            jerk[j] = poly::eval(c, tau)[3];
+        let [_, _, _, c3, c4, c5] = self.rows(k);
+        for j in 0..self.dof {
+            jerk[j] = (60.0 * c5[j] * tau + 24.0 * c4[j]) * tau + 6.0 * c3[j];
         }
         Ok(())
     }
@@ -356,8 +393,10 @@ impl JointTrajectory {
         let step = d / (n - 1) as f64;
         for (i, ti) in t.iter_mut().enumerate() {
             *ti = if i + 1 == n { d } else { i as f64 * step };
+        }
+        for (i, &ti) in t.iter().enumerate() {
             let r = i * self.dof..(i + 1) * self.dof;
-            self.sample_unchecked(*ti, &mut q[r.clone()], &mut qd[r.clone()], &mut qdd[r]);
+            self.sample_unchecked(ti, &mut q[r.clone()], &mut qd[r.clone()], &mut qdd[r]);
         }
         Ok(())
     }

@@ -38,6 +38,15 @@ pub fn quintic(q0: f64, v0: f64, a0: f64, q1: f64, v1: f64, a1: f64, tf: f64) ->
     [q0, v0, 0.5 * a0, c, b, a]
 }
 
+/// Position, velocity and acceleration of `c` at τ (Horner).
+#[inline]
+pub fn eval3(c: &Coeffs, tau: f64) -> [f64; 3] {
+    let q = ((((c[5] * tau + c[4]) * tau + c[3]) * tau + c[2]) * tau + c[1]) * tau + c[0];
+    let qd = (((5.0 * c[5] * tau + 4.0 * c[4]) * tau + 3.0 * c[3]) * tau + 2.0 * c[2]) * tau + c[1];
+    let qdd = ((20.0 * c[5] * tau + 12.0 * c[4]) * tau + 6.0 * c[3]) * tau + 2.0 * c[2];
+    [q, qd, qdd]
+}
+
 /// Position, velocity, acceleration and jerk of `c` at τ (Horner).
 #[inline]
 pub fn eval(c: &Coeffs, tau: f64) -> [f64; 4] {
@@ -78,6 +87,23 @@ pub fn roots_in(c: &Coeffs, lo: f64, hi: f64, out: &mut Vec<f64>) {
                 out.push(r);
             }
         }
+        2 => {
+            // Stable quadratic formula: q = −(c1 + sign(c1)·√disc)/2, roots q/c2 and c0/q.
+            let disc = c[1] * c[1] - 4.0 * c[2] * c[0];
+            if disc < 0.0 {
+                return;
+            }
+            let q = -0.5 * (c[1] + c[1].signum() * disc.sqrt());
+            let (mut r1, mut r2) = (q / c[2], if q != 0.0 { c[0] / q } else { q / c[2] });
+            if r1 > r2 {
+                std::mem::swap(&mut r1, &mut r2);
+            }
+            for r in [r1, r2] {
+                if r > lo && r < hi && out.last() != Some(&r) {
+                    out.push(r);
+                }
+            }
+        }
         _ => {
             let mut crit = Vec::with_capacity(5);
             roots_in(&derivative(c), lo, hi, &mut crit);
@@ -99,7 +125,7 @@ fn bisect(c: &Coeffs, mut a: f64, mut b: f64, fa: f64) -> f64 {
     let neg = fa < 0.0;
     loop {
         let m = 0.5 * (a + b);
-        if m <= a || m >= b {
+        if m <= a || m >= b || b - a <= 4.0 * f64::EPSILON * a.abs().max(b.abs()) {
             return m;
         }
         if (value(c, m) < 0.0) == neg {

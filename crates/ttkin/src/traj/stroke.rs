@@ -67,9 +67,7 @@ pub fn stroke(
     };
     let first = JointTrajectory::quintic_unchecked(start, hit, planned);
     let second = JointTrajectory::quintic_unchecked(hit, &rest, back);
-    let mut coeffs = first.coeffs;
-    coeffs.extend(second.coeffs);
-    let trajectory = JointTrajectory::from_parts(n, vec![0.0, planned, planned + back], coeffs);
+    let trajectory = first.append(second);
     let violations = trajectory.check_limits(limits)?;
     Ok(Stroke {
         trajectory,
