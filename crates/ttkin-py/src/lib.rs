@@ -1,1 +1,17 @@
+//! PyO3 bindings of ttkin (and later ttcan): conversion only. numpy in, numpy out, Rust errors
+//! to Python exceptions (`errors`), the GIL released around batch work. The Python package
+//! `ttmanip` imports this module as `ttmanip._ttmanip`.
 
+use pyo3::prelude::*;
+
+mod convert;
+mod errors;
+mod robot;
+
+/// The native extension module `ttmanip._ttmanip`.
+#[pymodule]
+fn _ttmanip(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    errors::register(m)?;
+    robot::register(m)?;
+    Ok(())
+}

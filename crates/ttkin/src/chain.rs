@@ -289,7 +289,7 @@ impl Chain {
 fn apply_motion(t: &mut IsometryMatrix3<f64>, kind: JointType, q: f64) {
     match kind {
         JointType::Revolute => {
-            let (s, c) = q.sin_cos();
+            let (s, c) = crate::trig::sin_cos(q);
             // Columns c0, c1 of R·Rz(q): c·c0 + s·c1, −s·c0 + c·c1; c2 and the origin are unchanged.
             let m = t.rotation.matrix_mut_unchecked();
             for r in 0..3 {

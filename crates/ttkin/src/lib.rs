@@ -18,6 +18,7 @@ pub mod robots;
 pub mod task;
 pub mod traj;
 pub mod transform;
+pub mod trig;
 pub mod urdf;
 
 pub use chain::{Chain, JacobianFrame};

@@ -3,7 +3,7 @@
 //!
 //! Export writes one URDF link per DH frame (`link1` … `linkN`), so frame i of a tool that loads
 //! the file is exactly our link frame i: `base_link` —(fixed: base)→ `link0` —(joint 1)→ `link1` …
-//! `linkN` —(fixed: tool)→ `tool`. A standard-DH joint moves before its fixed part, so it gets an
+//! `linkN` —(fixed: tool)→ `tool`. URDF 1.0 carries no acceleration limits, so they are not exported. A standard-DH joint moves before its fixed part, so it gets an
 //! extra `<joint name>_axis` link between the moving joint and a fixed joint to its DH frame.
 
 use std::collections::HashMap;
@@ -267,8 +267,8 @@ pub fn to_urdf_string(chain: &Chain) -> String {
                 upper: l.upper,
                 effort: l.effort.unwrap_or(f64::INFINITY),
                 velocity: l.velocity.unwrap_or(f64::INFINITY),
-                acceleration: l.acceleration.unwrap_or(f64::INFINITY),
-                deceleration: l.acceleration.unwrap_or(f64::INFINITY),
+                acceleration: f64::INFINITY,
+                deceleration: f64::INFINITY,
                 jerk: f64::INFINITY,
             },
             calibration: None,

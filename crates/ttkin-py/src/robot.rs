@@ -1,0 +1,407 @@
+//! `ttmanip.Robot`: a serial chain with forward kinematics and Jacobians, single or batched.
+//!
+//! Other binding modules add methods to `Robot` in their own `#[pymethods]` blocks
+//! (PyO3's `multiple-pymethods`), reaching the model through [`PyRobot::chain`].
+
+use std::sync::Arc;
+
+use numpy::{PyArrayDyn, PyArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::PyString;
+use ttkin::{Chain, Dh, DhConvention, JacobianFrame, Joint, JointType, Limits};
+
+use crate::convert::{f64_array, pose_to_numpy, shape_str, to_numpy, transform, vector, zeros};
+use crate::errors::{PyResultExt, ShapeError, TtmanipError};
+
+/// A serial robot arm: joints from base to tool (m, rad, s). Immutable; share it freely.
+#[pyclass(name = "Robot", module = "ttmanip", frozen)]
+pub struct PyRobot {
+    /// The kinematic (and later dynamic) model.
+    pub chain: Arc<Chain>,
+}
+
+impl PyRobot {
+    /// Wraps a chain.
+    pub fn new(chain: Chain) -> Self {
+        PyRobot { chain: Arc::new(chain) }
+    }
+
+    /// Reads `q` as one configuration (n,) or a batch (N, n); returns the batch size (None for one).
+    pub fn configs<'py>(
+        &self,
+        q: &Bound<'py, PyAny>,
+        what: &str,
+    ) -> PyResult<(crate::convert::F64Array<'py>, Option<usize>)> {
+        let a = f64_array(q, what)?;
+        let n = self.chain.dof();
+        let batch = match a.shape() {
+            [m] if *m == n => None,
+            [count, m] if *m == n => Some(*count),
+            _ => {
+                return Err(ShapeError::new_err(format!(
+                    "{what}: expected shape ({n},) or (N, {n}) for this {n}-joint robot, got {}",
+                    a.shape_str()
+                )))
+            }
+        };
+        Ok((a, batch))
+    }
+}
+
+fn frame_from_str(frame: &str) -> PyResult<JacobianFrame> {
+    match frame {
+        "base" | "world" => Ok(JacobianFrame::Base),
+        "tool" | "local" => Ok(JacobianFrame::Tool),
+        other => Err(TtmanipError::new_err(format!(
+            "frame: expected 'base' or 'tool', got '{other}'"
+        ))),
+    }
+}
+
+fn joint_types(types: Option<&Bound<'_, PyAny>>, n: usize) -> PyResult<Vec<JointType>> {
+    let Some(types) = types else {
+        return Ok(vec![JointType::Revolute; n]);
+    };
+    let items: Vec<String> = if let Ok(s) = types.cast::<PyString>() {
+        s.to_str()?.chars().map(String::from).collect()
+    } else {
+        types.extract().map_err(|_| {
+            TtmanipError::new_err("types: expected a string such as 'PRRRRR' or a list of 'revolute'/'prismatic'")
+        })?
+    };
+    if items.len() != n {
+        return Err(ShapeError::new_err(format!(
+            "types: expected {n} joint types, got {}",
+            items.len()
+        )));
+    }
+    items
+        .iter()
+        .map(|t| match t.to_ascii_lowercase().as_str() {
+            "r" | "revolute" => Ok(JointType::Revolute),
+            "p" | "prismatic" => Ok(JointType::Prismatic),
+            other => Err(TtmanipError::new_err(format!(
+                "types: unknown joint type '{other}'; use 'R'/'revolute' or 'P'/'prismatic'"
+            ))),
+        })
+        .collect()
+}
+
+fn limits_column(chain: &Chain, f: impl Fn(&Limits) -> Option<f64>) -> Vec<f64> {
+    chain.limits().iter().map(|l| f(l).unwrap_or(f64::INFINITY)).collect()
+}
+
+#[pymethods]
+impl PyRobot {
+    /// Robot from DH parameters: one value per joint in each of `a` (m), `alpha` (rad), `d` (m) and
+    /// `theta` (rad); `theta` (revolute) or `d` (prismatic) is the joint offset at q = 0.
+    /// `types` is a string like "PRRRRR" or a list of "revolute"/"prismatic" (default: all revolute);
+    /// `convention` is "standard" (distal) or "modified" (Craig: a, alpha are a_{i-1}, alpha_{i-1});
+    /// `limits` an (n, 2) array of lower/upper position limits; `base`, `tool` 4×4 rigid transforms.
+    #[staticmethod]
+    #[pyo3(signature = (a, alpha, d, theta, types=None, convention="standard", limits=None, base=None, tool=None, name="robot", names=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn from_dh(
+        a: &Bound<'_, PyAny>,
+        alpha: &Bound<'_, PyAny>,
+        d: &Bound<'_, PyAny>,
+        theta: &Bound<'_, PyAny>,
+        types: Option<&Bound<'_, PyAny>>,
+        convention: &str,
+        limits: Option<&Bound<'_, PyAny>>,
+        base: Option<&Bound<'_, PyAny>>,
+        tool: Option<&Bound<'_, PyAny>>,
+        name: &str,
+        names: Option<Vec<String>>,
+    ) -> PyResult<Self> {
+        let av = f64_array(a, "a")?;
+        let n = match av.shape() {
+            [n] if *n > 0 => *n,
+            _ => {
+                return Err(ShapeError::new_err(format!(
+                    "a: expected shape (n,) with n ≥ 1, got {}",
+                    av.shape_str()
+                )))
+            }
+        };
+        let a = vector(a, "a", n)?;
+        let alpha = vector(alpha, "alpha", n)?;
+        let d = vector(d, "d", n)?;
+        let theta = vector(theta, "theta", n)?;
+        let kinds = joint_types(types, n)?;
+        let conv = match convention {
+            "standard" => DhConvention::Standard,
+            "modified" | "craig" => DhConvention::Modified,
+            other => {
+                return Err(TtmanipError::new_err(format!(
+                    "convention: expected 'standard' or 'modified', got '{other}'"
+                )))
+            }
+        };
+        let lims = match limits {
+            None => None,
+            Some(l) => {
+                let la = f64_array(l, "limits")?;
+                if la.shape() != [n, 2] {
+                    return Err(ShapeError::new_err(format!(
+                        "limits: expected shape ({n}, 2), got {}",
+                        la.shape_str()
+                    )));
+                }
+                Some(la.data().to_vec())
+            }
+        };
+        let names = match names {
+            Some(v) if v.len() != n => {
+                return Err(ShapeError::new_err(format!(
+                    "names: expected {n} names, got {}",
+                    v.len()
+                )))
+            }
+            Some(v) => v,
+            None => (1..=n).map(|i| format!("joint{i}")).collect(),
+        };
+        let mut joints = Vec::with_capacity(n);
+        for i in 0..n {
+            let row = Dh {
+                a: a[i],
+                alpha: alpha[i],
+                d: d[i],
+                theta: theta[i],
+            };
+            let mut j = Joint::new(names[i].clone(), kinds[i], ttkin::Geometry::Dh(conv, row)).py()?;
+            if let Some(l) = &lims {
+                j = j.with_limits(Limits::position(l[2 * i], l[2 * i + 1])).py()?;
+            }
+            joints.push(j);
+        }
+        let base = base
+            .map(|b| transform(b, "base"))
+            .transpose()?
+            .unwrap_or_else(nalgebra::IsometryMatrix3::identity);
+        let tool = tool
+            .map(|t| transform(t, "tool"))
+            .transpose()?
+            .unwrap_or_else(nalgebra::IsometryMatrix3::identity);
+        Ok(PyRobot::new(Chain::new(name, joints, base, tool).py()?))
+    }
+
+    /// Robot from a ttmanip robot file (TOML).
+    #[staticmethod]
+    fn from_file(path: std::path::PathBuf) -> PyResult<Self> {
+        if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("urdf")) {
+            return Err(crate::errors::RobotFileError::new_err(format!(
+                "{}: a URDF needs the two ends of the chain: use Robot.from_urdf(path, base_link, tip_link)",
+                path.display()
+            )));
+        }
+        Ok(PyRobot::new(ttkin::description::load(&path).py()?))
+    }
+
+    /// Robot from robot-file text (TOML).
+    #[staticmethod]
+    fn from_toml(text: &str) -> PyResult<Self> {
+        Ok(PyRobot::new(ttkin::description::from_toml_str(text, "<string>").py()?))
+    }
+
+    /// Robot from the serial chain between `base_link` and `tip_link` of a URDF file.
+    #[staticmethod]
+    fn from_urdf(path: std::path::PathBuf, base_link: &str, tip_link: &str) -> PyResult<Self> {
+        Ok(PyRobot::new(ttkin::urdf::load(&path, base_link, tip_link).py()?))
+    }
+
+    /// Robot from URDF text (see `from_urdf`).
+    #[staticmethod]
+    fn from_urdf_string(text: &str, base_link: &str, tip_link: &str) -> PyResult<Self> {
+        Ok(PyRobot::new(
+            ttkin::urdf::from_urdf_str(text, base_link, tip_link).py()?,
+        ))
+    }
+
+    /// A built-in robot: "mobile8", "gantry6", "arm4" or "ur5".
+    #[staticmethod]
+    fn builtin(name: &str) -> PyResult<Self> {
+        Ok(PyRobot::new(ttkin::robots::by_name(name).py()?))
+    }
+
+    /// URDF text of this robot (links base_link, link0 … linkN, tool; link i is DH frame i).
+    fn to_urdf(&self) -> String {
+        ttkin::urdf::to_urdf_string(&self.chain)
+    }
+
+    /// Robot-file text (TOML, SI units) of this robot.
+    fn to_toml(&self) -> String {
+        ttkin::description::to_toml(&self.chain)
+    }
+
+    /// The same robot with another tool transform (last link frame → tool frame, 4×4).
+    fn with_tool(&self, tool: &Bound<'_, PyAny>) -> PyResult<Self> {
+        Ok(PyRobot::new(self.chain.with_tool(transform(tool, "tool")?).py()?))
+    }
+
+    /// The same robot with another base transform (base frame → frame 0, 4×4).
+    fn with_base(&self, base: &Bound<'_, PyAny>) -> PyResult<Self> {
+        Ok(PyRobot::new(self.chain.with_base(transform(base, "base")?).py()?))
+    }
+
+    /// Number of joints.
+    #[getter]
+    fn n(&self) -> usize {
+        self.chain.dof()
+    }
+
+    /// Robot name.
+    #[getter]
+    fn name(&self) -> String {
+        self.chain.name().to_string()
+    }
+
+    /// Joint names, base to tool.
+    #[getter]
+    fn joint_names(&self) -> Vec<String> {
+        self.chain.joints().iter().map(|j| j.name().to_string()).collect()
+    }
+
+    /// Joint types, "revolute" or "prismatic".
+    #[getter]
+    fn joint_types(&self) -> Vec<&'static str> {
+        self.chain
+            .joints()
+            .iter()
+            .map(|j| match j.kind() {
+                JointType::Revolute => "revolute",
+                JointType::Prismatic => "prismatic",
+            })
+            .collect()
+    }
+
+    /// (n, 2) lower and upper position limits (m or rad; ±inf where unbounded).
+    #[getter]
+    fn limits<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        let flat: Vec<f64> = self.chain.limits().iter().flat_map(|l| [l.lower, l.upper]).collect();
+        to_numpy(py, &[self.chain.dof(), 2], &flat)
+    }
+
+    /// (n,) speed limits (m/s or rad/s; inf where none).
+    #[getter]
+    fn velocity_limits<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        to_numpy(py, &[self.chain.dof()], &limits_column(&self.chain, |l| l.velocity))
+    }
+
+    /// (n,) acceleration limits (m/s² or rad/s²; inf where none).
+    #[getter]
+    fn acceleration_limits<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        to_numpy(py, &[self.chain.dof()], &limits_column(&self.chain, |l| l.acceleration))
+    }
+
+    /// (n,) effort limits (N or N·m; inf where none).
+    #[getter]
+    fn effort_limits<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        to_numpy(py, &[self.chain.dof()], &limits_column(&self.chain, |l| l.effort))
+    }
+
+    /// Base frame → frame 0 (4×4).
+    #[getter]
+    fn base<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        pose_to_numpy(py, self.chain.base())
+    }
+
+    /// Last link frame → tool frame (4×4).
+    #[getter]
+    fn tool<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        pose_to_numpy(py, self.chain.tool())
+    }
+
+    /// Tool pose in the base frame: (4, 4) for q of shape (n,), (N, 4, 4) for (N, n).
+    /// q in m (prismatic) and rad (revolute); limits are not enforced.
+    fn fk<'py>(&self, py: Python<'py>, q: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let (a, batch) = self.configs(q, "q")?;
+        match batch {
+            None => Ok(pose_to_numpy(py, &self.chain.fk(a.data()).py()?)),
+            Some(count) => {
+                let out = zeros(py, &[count, 4, 4]);
+                {
+                    let mut w = out.readwrite();
+                    let (qs, o, chain) = (a.data(), w.as_slice_mut().expect("fresh array"), &*self.chain);
+                    py.detach(|| chain.fk_batch(qs, o)).py()?;
+                }
+                Ok(out)
+            }
+        }
+    }
+
+    /// Every link frame in the base frame (tool transform not applied): (n, 4, 4) or (N, n, 4, 4).
+    fn fk_all<'py>(&self, py: Python<'py>, q: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let (a, batch) = self.configs(q, "q")?;
+        let n = self.chain.dof();
+        let (count, shape) = match batch {
+            None => (1, vec![n, 4, 4]),
+            Some(c) => (c, vec![c, n, 4, 4]),
+        };
+        let out = zeros(py, &shape);
+        {
+            let mut w = out.readwrite();
+            let (qs, o, chain) = (a.data(), w.as_slice_mut().expect("fresh array"), &*self.chain);
+            if count > 64 {
+                py.detach(|| chain.fk_all_batch(qs, o)).py()?;
+            } else {
+                chain.fk_all_batch(qs, o).py()?;
+            }
+        }
+        Ok(out)
+    }
+
+    /// Geometric Jacobian [v; ω] (v of the tool point), rows in the axes of `frame` ("base" or
+    /// "tool"): (6, n) for q of shape (n,), (N, 6, n) for (N, n). Units m/s and rad/s per joint unit.
+    #[pyo3(signature = (q, frame="base"))]
+    fn jacobian<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+        frame: &str,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let frame = frame_from_str(frame)?;
+        let (a, batch) = self.configs(q, "q")?;
+        let n = self.chain.dof();
+        match batch {
+            None => {
+                let j = self.chain.jacobian(a.data(), frame).py()?;
+                Ok(to_numpy(py, &[6, n], j.transpose().as_slice()))
+            }
+            Some(count) => {
+                let out = zeros(py, &[count, 6, n]);
+                {
+                    let mut w = out.readwrite();
+                    let (qs, o, chain) = (a.data(), w.as_slice_mut().expect("fresh array"), &*self.chain);
+                    py.detach(|| chain.jacobian_batch(qs, frame, o)).py()?;
+                }
+                Ok(out)
+            }
+        }
+    }
+
+    fn __repr__(&self) -> String {
+        let types: String = self
+            .chain
+            .joints()
+            .iter()
+            .map(|j| match j.kind() {
+                JointType::Revolute => 'R',
+                JointType::Prismatic => 'P',
+            })
+            .collect();
+        format!(
+            "Robot('{}', n={}, joints='{}')",
+            self.chain.name(),
+            self.chain.dof(),
+            types
+        )
+    }
+}
+
+/// Adds `Robot` to the module.
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyRobot>()?;
+    let _ = shape_str;
+    Ok(())
+}

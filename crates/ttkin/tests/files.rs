@@ -1,0 +1,64 @@
+//! Robot files and URDF: round trips and errors, from Rust.
+
+mod common;
+
+use common::*;
+use proptest::prelude::*;
+use ttkin::{description, urdf, Error};
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(50))]
+
+    #[test]
+    fn urdf_and_toml_round_trips_keep_fk(u in prop::collection::vec(0.0..1.0f64, 8)) {
+        for chain in robots() {
+            let tool = ttkin::transform::from_xyz_rpy([0.02, -0.01, 0.15], [0.3, 1.2, -0.4]);
+            let base = ttkin::transform::from_xyz_rpy([0.5, 0.1, 0.0], [0.0, 0.0, 0.7]);
+            let chain = chain.with_tool(tool).unwrap().with_base(base).unwrap();
+            let q = config_from_unit(&chain, &u);
+            let from_urdf = urdf::from_urdf_str(&urdf::to_urdf_string(&chain), urdf::BASE_LINK, urdf::TOOL_LINK).unwrap();
+            let from_toml = description::from_toml_str(&description::to_toml(&chain), "test").unwrap();
+            let t = chain.fk(&q).unwrap();
+            prop_assert!(pose_diff(&t, &from_urdf.fk(&q).unwrap()) < 1e-12);
+            prop_assert!(pose_diff(&t, &from_toml.fk(&q).unwrap()) < 1e-12);
+            // URDF 1.0 has no acceleration limits: compare the rest.
+            for (a, b) in from_urdf.limits().iter().zip(chain.limits()) {
+                prop_assert_eq!((a.lower, a.upper, a.velocity, a.effort), (b.lower, b.upper, b.velocity, b.effort));
+            }
+            prop_assert_eq!(from_toml.limits(), chain.limits());
+        }
+    }
+}
+
+#[test]
+fn urdf_errors_name_the_problem() {
+    let text = r#"<robot name="r"><link name="a"/><link name="b"/><link name="c"/>
+        <joint name="j" type="floating"><parent link="a"/><child link="b"/></joint></robot>"#;
+    let e = urdf::from_urdf_str(text, "a", "b").unwrap_err();
+    assert!(matches!(e, Error::Urdf(_)) && e.to_string().contains("Floating"), "{e}");
+    let e = urdf::from_urdf_str(text, "a", "c").unwrap_err();
+    assert!(e.to_string().contains("not connected"), "{e}");
+    let e = urdf::from_urdf_str(text, "a", "zzz").unwrap_err();
+    assert!(e.to_string().contains("no link named 'zzz'"), "{e}");
+    assert!(urdf::from_urdf_str("<robot", "a", "b").is_err());
+    assert!(matches!(
+        urdf::load("/nonexistent/robot.urdf", "a", "b"),
+        Err(Error::File { .. })
+    ));
+}
+
+#[test]
+fn robot_file_errors_name_the_problem() {
+    let e = description::from_toml_str("name = 'x'\n[[joint]]\nname = 'a'\ntype = 'revolute'\n", "t").unwrap_err();
+    assert!(e.to_string().contains("exactly one of 'dh' or 'origin'"), "{e}");
+    let e = description::from_toml_str(
+        "name = 'x'\nconvention = 'modified'\n[[joint]]\nname = 'a'\ntype = 'revolute'\ndh = {}\n[[joint]]\nname = 'a'\ntype = 'revolute'\ndh = {}\n",
+        "t",
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("used twice"), "{e}");
+    assert!(matches!(
+        description::load("/nonexistent.toml"),
+        Err(Error::File { .. })
+    ));
+}

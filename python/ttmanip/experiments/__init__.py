@@ -1,0 +1,1 @@
+"""Reproductions of the seed documents' experiments, each a module with ``run(out_dir) -> dict``."""

@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# Sets up the project (scripts/setup.sh) and runs every check and test: formatting and lints,
+# the Rust tests of the workspace, and the Python tests against the installed wheel.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+bash scripts/setup.sh
+
+echo "== cargo fmt / clippy / ruff"
+cargo fmt --all -- --check
+cargo clippy --workspace --all-targets --quiet -- -D warnings
+.venv/bin/ruff check python tests benches
+
+echo "== cargo test"
+cargo test --quiet
+
+echo "== pytest"
+.venv/bin/python -m pytest -q tests

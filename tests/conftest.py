@@ -1,0 +1,21 @@
+"""Shared fixtures: the built-in robots and random configurations within their limits."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import ttmanip
+
+BUILTINS = ("mobile8", "gantry6", "arm4", "ur5")
+
+
+def random_q(robot: ttmanip.Robot, count: int, seed: int = 0) -> np.ndarray:
+    """(count, n) configurations uniformly within the joint limits."""
+    lim = robot.limits
+    rng = np.random.default_rng(seed)
+    return lim[:, 0] + (lim[:, 1] - lim[:, 0]) * rng.random((count, robot.n))
+
+
+@pytest.fixture(params=BUILTINS)
+def robot(request) -> ttmanip.Robot:
+    return ttmanip.Robot.builtin(request.param)
