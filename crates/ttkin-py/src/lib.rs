@@ -7,11 +7,13 @@ use pyo3::prelude::*;
 mod convert;
 mod errors;
 mod robot;
+mod traj;
 
 /// The native extension module `ttmanip._ttmanip`.
 #[pymodule]
 fn _ttmanip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     errors::register(m)?;
     robot::register(m)?;
+    traj::register(m)?;
     Ok(())
 }

@@ -466,3 +466,52 @@ pub fn minimal_quintic_duration(start: &JointState, end: &JointState, limits: &K
     }
     earliest_quintic_duration(start, end, limits, lower)
 }
+
+impl super::Samples {
+    /// Worst violation per joint of the position, velocity and acceleration limits over the
+    /// samples (sampled, unlike [`JointTrajectory::check_limits`]; jerk is not sampled).
+    pub fn check_limits(&self, limits: &KinematicLimits) -> Result<Vec<Violation>> {
+        limits.check_dof(self.dof)?;
+        let n = self.dof;
+        let mut out = Vec::new();
+        let neg = |v: &[f64]| v.iter().map(|x| -x).collect::<Vec<f64>>();
+        let checks = [
+            (Quantity::Position, &self.q, limits.lower.clone(), limits.upper.clone()),
+            (
+                Quantity::Velocity,
+                &self.qd,
+                neg(&limits.velocity),
+                limits.velocity.clone(),
+            ),
+            (
+                Quantity::Acceleration,
+                &self.qdd,
+                neg(&limits.acceleration),
+                limits.acceleration.clone(),
+            ),
+        ];
+        for (quantity, x, lo, hi) in checks {
+            for j in 0..n {
+                let mut worst: Option<(f64, usize, f64)> = None;
+                for (i, row) in x.chunks_exact(n).enumerate() {
+                    let v = row[j];
+                    let excess = (lo[j] - v).max(v - hi[j]);
+                    let slack = LIMIT_TOLERANCE * hi[j].abs().min(lo[j].abs()).max(1.0);
+                    if excess > slack && worst.is_none_or(|(e, _, _)| excess > e) {
+                        worst = Some((excess, i, v));
+                    }
+                }
+                if let Some((_, i, v)) = worst {
+                    out.push(Violation {
+                        joint: j,
+                        quantity,
+                        time: self.t[i],
+                        value: v,
+                        limit: if v < lo[j] { lo[j] } else { hi[j] },
+                    });
+                }
+            }
+        }
+        Ok(out)
+    }
+}
