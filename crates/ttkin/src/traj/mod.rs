@@ -24,6 +24,9 @@ pub use cartesian::{CartesianState, CartesianTrajectory, Path, TimeLaw};
 pub use limits::{KinematicLimits, Quantity, Violation};
 pub use stroke::{stroke, Stroke};
 
+/// Coefficient rows per segment in [`JointTrajectory`]: q (6), q̇ (5), q̈ (4).
+const ROWS: usize = 15;
+
 /// Relative slack on the time interval: times in [−ε·T, (1 + ε)·T] are clamped into [0, T].
 const TIME_SLACK: f64 = 1e-9;
 
@@ -124,8 +127,10 @@ pub struct JointTrajectory {
     dof: usize,
     /// Segment boundaries (s), strictly increasing, `knots[0] = 0`.
     knots: Vec<f64>,
-    /// Coefficient of τᵖ of joint j on segment k at `powers[(6k + p)·dof + j]`: power-major, so
-    /// that one power of all joints is contiguous and sampling vectorises over joints.
+    /// Row-major table of `ROWS` rows of `dof` values per segment: the coefficients of q, q̇ and q̈
+    /// in ascending powers of τ (6 + 5 + 4 rows). Row r of segment k, joint j is at
+    /// `powers[(ROWS·k + r)·dof + j]`: one power of all joints is contiguous, so sampling
+    /// vectorises over joints and does no multiplication beyond Horner's.
     powers: Vec<f64>,
 }
 
@@ -134,11 +139,14 @@ impl JointTrajectory {
     /// `coeffs[k·dof + j]` is the polynomial of joint j on segment k.
     pub(crate) fn from_parts(dof: usize, knots: Vec<f64>, coeffs: Vec<Coeffs>) -> Self {
         debug_assert!(knots.len() >= 2 && coeffs.len() == (knots.len() - 1) * dof);
-        let mut powers = vec![0.0; coeffs.len() * 6];
+        let mut powers = vec![0.0; coeffs.len() * ROWS];
         for (i, c) in coeffs.iter().enumerate() {
             let (k, j) = (i / dof, i % dof);
-            for (p, &v) in c.iter().enumerate() {
-                powers[(6 * k + p) * dof + j] = v;
+            let d1 = poly::derivative(c);
+            let d2 = poly::derivative(&d1);
+            let rows = c.iter().chain(&d1[..5]).chain(&d2[..4]);
+            for (r, &v) in rows.enumerate() {
+                powers[(ROWS * k + r) * dof + j] = v;
             }
         }
         JointTrajectory { dof, knots, powers }
@@ -242,22 +250,17 @@ impl JointTrajectory {
         }
         let mut c = [0.0; 6];
         for (p, v) in c.iter_mut().enumerate() {
-            *v = self.powers[(6 * segment + p) * self.dof + joint];
+            *v = self.powers[(ROWS * segment + p) * self.dof + joint];
         }
         Some(c)
     }
 
-    /// The six coefficient rows (τ⁰ … τ⁵, each `dof` long) of segment `k`.
+    /// The `ROWS` coefficient rows (each `dof` long) of segment `k`: q (τ⁰…τ⁵), q̇ (τ⁰…τ⁴), q̈ (τ⁰…τ³).
     #[inline]
-    fn rows(&self, k: usize) -> [&[f64]; 6] {
+    fn rows(&self, k: usize) -> [&[f64]; ROWS] {
         let n = self.dof;
-        let seg = &self.powers[6 * k * n..6 * (k + 1) * n];
-        let (c0, r) = seg.split_at(n);
-        let (c1, r) = r.split_at(n);
-        let (c2, r) = r.split_at(n);
-        let (c3, r) = r.split_at(n);
-        let (c4, c5) = r.split_at(n);
-        [c0, c1, c2, c3, c4, c5]
+        let seg = &self.powers[ROWS * k * n..ROWS * (k + 1) * n];
+        std::array::from_fn(|r| &seg[r * n..(r + 1) * n])
     }
 
     /// The segment holding `t` and the local time in it; `t` must lie in [0, duration].
@@ -309,14 +312,16 @@ impl JointTrajectory {
     #[inline]
     fn sample_unchecked(&self, t: f64, q: &mut [f64], qd: &mut [f64], qdd: &mut [f64]) {
         let (k, tau) = self.locate(t);
-        let [c0, c1, c2, c3, c4, c5] = self.rows(k);
         let n = self.dof;
+        let rows = self.rows(k);
+        // Re-sliced to exactly n so that the compiler drops the bounds checks in the loop.
+        let r: [&[f64]; ROWS] = std::array::from_fn(|i| &rows[i][..n]);
         let (q, qd, qdd) = (&mut q[..n], &mut qd[..n], &mut qdd[..n]);
-        let (c0, c1, c2, c3, c4, c5) = (&c0[..n], &c1[..n], &c2[..n], &c3[..n], &c4[..n], &c5[..n]);
         for j in 0..n {
-            q[j] = ((((c5[j] * tau + c4[j]) * tau + c3[j]) * tau + c2[j]) * tau + c1[j]) * tau + c0[j];
-            qd[j] = (((5.0 * c5[j] * tau + 4.0 * c4[j]) * tau + 3.0 * c3[j]) * tau + 2.0 * c2[j]) * tau + c1[j];
-            qdd[j] = ((20.0 * c5[j] * tau + 12.0 * c4[j]) * tau + 6.0 * c3[j]) * tau + 2.0 * c2[j];
+            let c = |i: usize| r[i][j];
+            q[j] = ((((c(5) * tau + c(4)) * tau + c(3)) * tau + c(2)) * tau + c(1)) * tau + c(0);
+            qd[j] = (((c(10) * tau + c(9)) * tau + c(8)) * tau + c(7)) * tau + c(6);
+            qdd[j] = ((c(14) * tau + c(13)) * tau + c(12)) * tau + c(11);
         }
     }
 
@@ -325,9 +330,10 @@ impl JointTrajectory {
         let t = self.check_time(t)?;
         self.check_out("jerk", jerk)?;
         let (k, tau) = self.locate(t);
-        let [_, _, _, c3, c4, c5] = self.rows(k);
+        let r = self.rows(k);
         for j in 0..self.dof {
-            jerk[j] = (60.0 * c5[j] * tau + 24.0 * c4[j]) * tau + 6.0 * c3[j];
+            // Jerk is the derivative of q̈ = d0 + d1·τ + d2·τ² + d3·τ³ (rows 11–14).
+            jerk[j] = (3.0 * r[14][j] * tau + 2.0 * r[13][j]) * tau + r[12][j];
         }
         Ok(())
     }
