@@ -2,7 +2,7 @@
 //! duration of a polynomial segment.
 //!
 //! Peaks are exact up to rounding: on each polynomial piece the extrema of a derivative lie at the
-//! piece's ends or at roots of the next derivative, which [`poly::roots_in`] isolates and bisects.
+//! piece's ends or at roots of the next derivative, which [`poly::roots_in`] isolates (closed form up to degree 2, safeguarded Newton above).
 //! Nothing is sampled, so a violation between two control ticks is still found.
 
 use super::{poly, JointState, JointTrajectory};
@@ -321,6 +321,9 @@ pub fn minimal_duration_rest(q0: &[f64], q1: &[f64], limits: &KinematicLimits, k
     Ok(t)
 }
 
+/// Factor by which [`earliest_quintic_duration`] grows an infeasible duration while bracketing.
+pub const GROWTH: f64 = 1.5;
+
 /// Largest ratio peak/limit of velocity, acceleration and jerk over the joints of the quintic from
 /// `start` to `end` in `duration` s (exact peaks); the quintic respects the limits iff it is ≤ 1.
 pub fn quintic_limit_ratio(start: &JointState, end: &JointState, duration: f64, limits: &KinematicLimits) -> f64 {
@@ -350,7 +353,7 @@ pub fn quintic_limit_ratio(start: &JointState, end: &JointState, duration: f64, 
 ///
 /// Method: root bracketing on T, each step evaluating the quintic's exact extrema
 /// ([`quintic_limit_ratio`], roots of the derivative polynomials). If `not_before` is infeasible,
-/// T grows by factors of 1.25 until a feasible duration is found (at most 1e6 s); the crossing of
+/// T grows by factors of [`GROWTH`] until a feasible duration is found (at most 1e6 s); the crossing of
 /// the ratio through 1 between the last infeasible and the first feasible duration is then located
 /// by the Illinois variant of regula falsi (a bisection step when three steps shrink the bracket
 /// by less than 4) to a relative width of
@@ -391,14 +394,14 @@ pub fn earliest_quintic_duration(
     if fb <= 0.0 {
         return Ok(not_before);
     }
-    let (mut a, mut fa, mut b) = (not_before, fb, not_before * 1.25);
+    let (mut a, mut fa, mut b) = (not_before, fb, not_before * GROWTH);
     loop {
         fb = g(b);
         if fb <= 0.0 {
             break;
         }
         (a, fa) = (b, fb);
-        b *= 1.25;
+        b *= GROWTH;
         if b > 1e6 {
             return Err(Error::invalid(
                 "limits",

@@ -76,7 +76,7 @@ fn degree(c: &Coeffs) -> usize {
 ///
 /// Exact up to rounding: the critical points of `c` (roots of its derivative, found recursively)
 /// split (lo, hi) into intervals where `c` is monotone; each interval with a sign change holds one
-/// root, found by bisection down to adjacent floating-point numbers. A root where `c` only touches
+/// root, found by Newton steps safeguarded by bisection down to a few ulps (degree ≤ 2: closed form). A root where `c` only touches
 /// zero (even multiplicity) is reported when `c` is exactly zero at a critical point.
 pub fn roots_in(c: &Coeffs, lo: f64, hi: f64, out: &mut Vec<f64>) {
     match degree(c) {
@@ -121,19 +121,36 @@ pub fn roots_in(c: &Coeffs, lo: f64, hi: f64, out: &mut Vec<f64>) {
     }
 }
 
+/// Root of `c` in (a, b), where `c` is monotone and changes sign (`fa` = c(a)): Newton steps
+/// safeguarded by bisection (a Newton step leaving the bracket is replaced by its midpoint), down
+/// to a bracket of a few ulps or a step below 1e-16 of the root.
 fn bisect(c: &Coeffs, mut a: f64, mut b: f64, fa: f64) -> f64 {
     let neg = fa < 0.0;
-    loop {
-        let m = 0.5 * (a + b);
-        if m <= a || m >= b || b - a <= 4.0 * f64::EPSILON * a.abs().max(b.abs()) {
-            return m;
+    let d = derivative(c);
+    let mut x = 0.5 * (a + b);
+    for _ in 0..200 {
+        let fx = value(c, x);
+        if fx == 0.0 {
+            return x;
         }
-        if (value(c, m) < 0.0) == neg {
-            a = m;
+        if (fx < 0.0) == neg {
+            a = x;
         } else {
-            b = m;
+            b = x;
         }
+        let dx = value(&d, x);
+        let newton = x - fx / dx;
+        let next = if newton > a && newton < b {
+            newton
+        } else {
+            0.5 * (a + b)
+        };
+        if (next - x).abs() <= 1e-16 * x.abs().max(1e-300) || b - a <= 4.0 * f64::EPSILON * a.abs().max(b.abs()) {
+            return next;
+        }
+        x = next;
     }
+    x
 }
 
 /// The τ in [0, tf] and value of the largest |c(τ)|, exact up to rounding (endpoints and the

@@ -4,8 +4,10 @@
 //!
 //! Both legs are quintics (the patent's step S104). The hit leg keeps the requested hit time when
 //! it respects the velocity, acceleration and jerk limits; otherwise the hit time becomes the
-//! earliest feasible one after it, found by bisection on the duration with the quintic's exact
-//! extrema at every step ([`limits::earliest_quintic_duration`]). The return leg takes the minimal
+//! earliest feasible one after it, found by root bracketing on the duration (growth, then the
+//! Illinois regula falsi safeguarded by bisection) with the quintic's exact extrema (roots of its
+//! derivative polynomials) at every step ([`limits::earliest_quintic_duration`]); not a closed
+//! form, since the peaks of a quintic with nonzero boundary velocities are not monotone in T. The return leg takes the minimal
 //! feasible duration ([`limits::minimal_quintic_duration`]) unless one is given.
 
 use super::limits::{self, KinematicLimits, Violation};
