@@ -21,7 +21,6 @@ from __future__ import annotations
 import timeit
 
 import numpy as np
-
 import ttmanip.traj as tt
 
 try:
@@ -114,7 +113,8 @@ def compare_strokes(count: int = 10) -> None:
     for r in rows:
         rk = (f"{r['rk_hit']:.4f} / {r['rk_back']:.4f}" if "rk_hit" in r else "n/a")
         ratio = f"{r['tt_hit'] / r['rk_hit']:.3f}" if "rk_hit" in r else "n/a"
-        on = f"{'yes' if r['tt_on_time'] else 'no':>3} / {('yes' if r.get('rk_on_time') else 'no') if 'rk_hit' in r else 'n/a'}"
+        rk_on = ("yes" if r.get("rk_on_time") else "no") if "rk_hit" in r else "n/a"
+        on = f"{'yes' if r['tt_on_time'] else 'no':>3} / {rk_on}"
         rk_us = f"{r['rk_us']:7.1f}" if "rk_us" in r else "    n/a"
         print(f"{r['problem']:>2} | {r['tt_hit']:.4f} / {r['tt_back']:.4f} | {rk:>17} | {ratio:>9} | "
               f"{on:>13} | {r['tt_us']:7.1f} | {rk_us}")
@@ -141,9 +141,12 @@ def compare_sampling() -> None:
     tn, qn, qdn, qddn = quintic_numpy(q0, q1, 0.8, 101)
     assert np.abs(q - qn).max() < 1e-12 and np.abs(qdd - qddn).max() < 1e-10
     print("\nBuild an 8-joint quintic and sample 101 points (µs per call, median)")
-    print(f"  ttmanip.traj.quintic_samples     {per_call_us(lambda: tt.quintic_samples(q0, q1, 0.8, 101), 20000):7.2f}")
-    print(f"  ttmanip quintic + sample_uniform {per_call_us(lambda: tt.quintic(q0, q1, 0.8).sample_uniform(101), 20000):7.2f}")
-    print(f"  numpy closed form                {per_call_us(lambda: quintic_numpy(q0, q1, 0.8, 101), 5000):7.2f}")
+    one_call = per_call_us(lambda: tt.quintic_samples(q0, q1, 0.8, 101), 20000)
+    two_calls = per_call_us(lambda: tt.quintic(q0, q1, 0.8).sample_uniform(101), 20000)
+    numpy_ref = per_call_us(lambda: quintic_numpy(q0, q1, 0.8, 101), 5000)
+    print(f"  ttmanip.traj.quintic_samples     {one_call:7.2f}")
+    print(f"  ttmanip quintic + sample_uniform {two_calls:7.2f}")
+    print(f"  numpy closed form                {numpy_ref:7.2f}")
     if ruckig is not None:
         zeros = np.zeros(DOF)
 
@@ -158,7 +161,8 @@ def compare_sampling() -> None:
             otg.calculate(inp, traj)
             return [traj.at_time(ti) for ti in np.linspace(0.0, traj.duration, 101)]
 
-        print(f"  ruckig calculate + 101 at_time   {per_call_us(rk, 500):7.2f}  (time-optimal, not a quintic)")
+        rk_us = per_call_us(rk, 500)
+        print(f"  ruckig calculate + 101 at_time   {rk_us:7.2f}  (time-optimal, not a quintic)")
 
 
 if __name__ == "__main__":

@@ -39,9 +39,10 @@ UNITS = {"position": "rad", "velocity": "rad/s", "acceleration": "rad/s²"}
 WHY = (
     "The paper's Tables 1–3 cannot all be matched by a cubic, a quintic or even consistently with each "
     "other: its speeds (0, 1.5, 3.0, 1.5, 0 rad/s at 0, 0.5, 1, 1.5, 2 s) integrate to 3.0 rad (trapezoidal "
-    "and Simpson rules alike), nearly twice the 1.6 rad its Table 1 reaches; Table 1 is not symmetric about 1 s (0.7 rad "
-    "instead of 0.8 rad at half time) although Tables 2–3 are; and its accelerations 8, 0, −8, 0 rad/s² "
-    "are not on a line, as a cubic's must be (the corrected cubic gives 1.2, 0, −1.2, −2.4 rad/s²), while "
+    "and Simpson rules alike), nearly twice the 1.6 rad its Table 1 reaches; Table 1 is not symmetric "
+    "about 1 s (0.7 rad instead of 0.8 rad at half time) although Tables 2–3 are; and its "
+    "accelerations 8, 0, −8, 0 rad/s² are not on a line, as a cubic's must be (the corrected cubic "
+    "gives 1.2, 0, −1.2, −2.4 rad/s²), while "
     "the quintic that does end at zero acceleration peaks at 15·1.6/(8·2) = 1.5 rad/s, half the table's "
     "3.0 rad/s. We therefore show the corrected cubic and a quintic and do not fit to the tables."
 )
@@ -55,7 +56,9 @@ def _evaluate(kind: str) -> dict[str, list[float]]:
         "position": q[:, 0].tolist(),
         "velocity": qd[:, 0].tolist(),
         "acceleration": qdd[:, 0].tolist(),
-        "joint4_mirrors_joint2": bool(np.allclose(q[:, 1], -q[:, 0]) and np.allclose(qd[:, 1], -qd[:, 0])),
+        "joint4_mirrors_joint2": bool(
+            np.allclose(q[:, 1], -q[:, 0]) and np.allclose(qd[:, 1], -qd[:, 0])
+        ),
     }
 
 

@@ -394,7 +394,16 @@ pub fn earliest_quintic_duration(
     if fb <= 0.0 {
         return Ok(not_before);
     }
-    let (mut a, mut fa, mut b) = (not_before, fb, not_before * GROWTH);
+    // Nothing shorter than the necessary bound can be feasible: start bracketing there.
+    let from = not_before.max(necessary_duration(start, end, limits));
+    let (mut a, mut fa, mut b) = (not_before, fb, from * GROWTH);
+    if from > not_before {
+        let f = g(from);
+        if f <= 0.0 {
+            return Ok(from);
+        }
+        (a, fa) = (from, f);
+    }
     loop {
         fb = g(b);
         if fb <= 0.0 {
@@ -448,6 +457,19 @@ pub fn earliest_quintic_duration(
     Ok(b)
 }
 
+/// A duration below which no motion from `start` to `end` can respect the limits (s):
+/// max_j(|Δq_j|/v_max, |Δv_j|/a_max), since the mean velocity and the mean acceleration are bounded
+/// by the limits.
+fn necessary_duration(start: &JointState, end: &JointState, limits: &KinematicLimits) -> f64 {
+    let mut lower: f64 = 0.0;
+    for j in 0..start.q.len() {
+        lower = lower
+            .max((end.q[j] - start.q[j]).abs() / limits.velocity[j])
+            .max((end.qd[j] - start.qd[j]).abs() / limits.acceleration[j]);
+    }
+    lower
+}
+
 /// Minimal duration (s) of the quintic from `start` to `end` under the velocity, acceleration and
 /// jerk limits: [`earliest_quintic_duration`] from the necessary lower bound
 /// max_j(|Δq_j|/v_max, |Δv_j|/a_max) (or 1 ms when that is smaller).
@@ -461,13 +483,7 @@ pub fn minimal_quintic_duration(start: &JointState, end: &JointState, limits: &K
         ));
     }
     limits.check_dof(n)?;
-    let mut lower: f64 = 1e-3;
-    for j in 0..n {
-        lower = lower
-            .max((end.q[j] - start.q[j]).abs() / limits.velocity[j])
-            .max((end.qd[j] - start.qd[j]).abs() / limits.acceleration[j]);
-    }
-    earliest_quintic_duration(start, end, limits, lower)
+    earliest_quintic_duration(start, end, limits, necessary_duration(start, end, limits).max(1e-3))
 }
 
 impl super::Samples {
