@@ -4,7 +4,8 @@
 use nalgebra::{IsometryMatrix3, Rotation3, Translation3, Vector3};
 use proptest::prelude::*;
 use ttkin::traj::limits::{
-    earliest_quintic_duration, minimal_duration_rest, minimal_quintic_duration, SegmentKind, LIMIT_TOLERANCE,
+    earliest_quintic_duration, minimal_duration_rest, minimal_quintic_duration, quintic_limit_ratio, SegmentKind,
+    LIMIT_TOLERANCE,
 };
 use ttkin::traj::via::{self, ViaKind};
 use ttkin::traj::{stroke, CartesianTrajectory, JointState, JointTrajectory, KinematicLimits, Path, Quantity, TimeLaw};
@@ -598,10 +599,48 @@ fn infeasible_hit_time_moves_to_the_earliest_feasible_one() {
     assert!(!s.on_time() && s.t_hit > 0.1, "t_hit {}", s.t_hit);
     assert!(s.trajectory.check_limits(&limits).unwrap().is_empty());
     // Earliest: the hit leg a hair shorter breaks a limit.
-    let shorter = JointTrajectory::quintic_between(&start, &hit, s.t_hit * (1.0 - 1e-9)).unwrap();
-    assert!(!shorter.check_limits(&limits).unwrap().is_empty());
+    assert!(quintic_limit_ratio(&start, &hit, s.t_hit * (1.0 - 1e-9), &limits) > 1.0);
+    assert!(quintic_limit_ratio(&start, &hit, s.t_hit, &limits) <= 1.0);
     let (q, qd, _, _) = state_at(&s.trajectory, s.t_hit);
     assert!(max_diff(&q, &hit.q) < TOL && max_diff(&qd, &hit.qd) < TOL);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    #[test]
+    fn random_strokes_are_feasible_exact_and_earliest(
+        q0 in vecs(6), qd0 in prop::collection::vec(-1.0..1.0f64, 6), qdd0 in prop::collection::vec(-5.0..5.0f64, 6),
+        qh in vecs(6), qdh in prop::collection::vec(-2.9..2.9f64, 6), t_hit in 0.05..1.0f64
+    ) {
+        let start = JointState { q: q0, qd: qd0, qdd: qdd0 };
+        let hit = JointState { q: qh, qd: qdh, qdd: vec![0.0; 6] };
+        let limits = KinematicLimits::new(&[3.0; 6], &[30.0; 6], &[500.0; 6]).unwrap();
+        let s = match stroke(&start, &hit, t_hit, &[0.0; 6], None, &limits) {
+            Ok(s) => s,
+            Err(e) => {
+                // Only when no quintic can do a leg: a dense log-spaced scan of durations finds none.
+                let rest = JointState::rest(&[0.0; 6]);
+                let scan = |a: &JointState, b: &JointState, from: f64| {
+                    (0..4000)
+                        .map(|i| from * 10f64.powf(i as f64 / 1000.0))
+                        .find(|&t| quintic_limit_ratio(a, b, t, &limits) <= 1.0)
+                };
+                let (hit_leg, back_leg) = (scan(&start, &hit, t_hit), scan(&hit, &rest, 1e-3));
+                prop_assert!(hit_leg.is_none() || back_leg.is_none(), "{e} but {hit_leg:?} / {back_leg:?} s work");
+                return Ok(());
+            }
+        };
+        prop_assert!(s.t_hit >= t_hit && s.violations.is_empty(), "{:?}", s.violations);
+        let (q, qd, qdd, _) = state_at(&s.trajectory, s.t_hit);
+        prop_assert!(max_diff(&q, &hit.q) < 1e-11 && max_diff(&qd, &hit.qd) < 1e-11 && max_diff(&qdd, &hit.qdd) < 1e-10);
+        if !s.on_time() {
+            prop_assert!(quintic_limit_ratio(&start, &hit, s.t_hit * (1.0 - 1e-9), &limits) > 1.0);
+        }
+        // The return leg is minimal too: a hair shorter breaks a limit.
+        let rest = JointState::rest(&[0.0; 6]);
+        prop_assert!(quintic_limit_ratio(&hit, &rest, s.return_duration * (1.0 - 1e-9), &limits) > 1.0);
+    }
 }
 
 #[test]

@@ -321,6 +321,9 @@ pub fn minimal_duration_rest(q0: &[f64], q1: &[f64], limits: &KinematicLimits, k
     Ok(t)
 }
 
+/// Longest duration (s) [`earliest_quintic_duration`] tries before giving up.
+pub const MAX_DURATION: f64 = 1e4;
+
 /// Factor by which [`earliest_quintic_duration`] grows an infeasible duration while bracketing.
 pub const GROWTH: f64 = 1.5;
 
@@ -353,7 +356,8 @@ pub fn quintic_limit_ratio(start: &JointState, end: &JointState, duration: f64, 
 ///
 /// Method: root bracketing on T, each step evaluating the quintic's exact extrema
 /// ([`quintic_limit_ratio`], roots of the derivative polynomials). If `not_before` is infeasible,
-/// T grows by factors of [`GROWTH`] until a feasible duration is found (at most 1e6 s); the crossing of
+/// T grows by factors of [`GROWTH`] until a feasible duration is found (at most [`MAX_DURATION`]; beyond it, an error gives the closest
+/// peak/limit ratio seen); the crossing of
 /// the ratio through 1 between the last infeasible and the first feasible duration is then located
 /// by the Illinois variant of regula falsi (a bisection step when three steps shrink the bracket
 /// by less than 4) to a relative width of
@@ -404,17 +408,27 @@ pub fn earliest_quintic_duration(
         }
         (a, fa) = (from, f);
     }
+    let mut best = (a, fa);
     loop {
         fb = g(b);
         if fb <= 0.0 {
             break;
         }
+        if fb < best.1 {
+            best = (b, fb);
+        }
         (a, fa) = (b, fb);
         b *= GROWTH;
-        if b > 1e6 {
+        if b > MAX_DURATION {
             return Err(Error::invalid(
                 "limits",
-                "no quintic duration up to 1e6 s respects the velocity, acceleration and jerk limits",
+                format!(
+                    "no quintic of up to {MAX_DURATION} s respects the velocity, acceleration and jerk limits \
+                     (closest: peak/limit = {:.4} at {:.4} s); the boundary states ask for more than one \
+                     quintic can give",
+                    best.1 + 1.0,
+                    best.0
+                ),
             ));
         }
     }
