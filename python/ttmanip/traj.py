@@ -146,7 +146,8 @@ class Stroke:
         return not self.violations
 
 
-def _state(state: Any, n: int | None, what: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _state(state: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(q, qd, qdd) from a tuple, a mapping, an object with q/qd/qdd, or q alone (at rest)."""
     if isinstance(state, Mapping):
         q = np.asarray(state["q"], dtype=float)
         qd, qdd = state.get("qd"), state.get("qdd")
@@ -178,7 +179,7 @@ def stroke(robot: Robot | None, state: Any, q_hit: ArrayLike, qd_hit: ArrayLike,
     infeasible the earliest feasible later hit time is used (root bracketing on the duration with
     exact quintic extrema); the return leg takes its minimal feasible duration unless given.
     """
-    q0, qd0, qdd0 = _state(state, None, "state")
+    q0, qd0, qdd0 = _state(state)
     n = q0.shape[0]
     inf = np.full(n, np.inf)
     lower = upper = None
