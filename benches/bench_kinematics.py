@@ -14,7 +14,6 @@ import tempfile
 import timeit
 
 import numpy as np
-
 import ttmanip
 
 try:
@@ -60,7 +59,9 @@ def bench_robot(name: str, batch: int) -> list[tuple[str, str, str]]:
         fid = model.getFrameId("tool")
         pin.framesForwardKinematics(model, data, q)
         assert np.allclose(data.oMf[fid].homogeneous, t_ref, atol=1e-10)
-        assert np.allclose(pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL_WORLD_ALIGNED), j_ref, atol=1e-10)
+        assert np.allclose(
+            pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL_WORLD_ALIGNED), j_ref, atol=1e-10
+        )
 
         def pin_fk():
             pin.framesForwardKinematics(model, data, q)
@@ -94,7 +95,11 @@ def bench_robot(name: str, batch: int) -> list[tuple[str, str, str]]:
         rows.append((name, "rtb ETS jacob0 (C++)", f"{per_call_us(lambda: ets.jacob0(q)):.2f} µs"))
         small = qs[: min(batch, 50000)]
         rows.append(
-            (name, "rtb ETS eval vectorised", f"{per_item_rate(lambda: ets.eval(small), len(small), 3) / 1e6:.2f} M/s")
+            (
+                name,
+                "rtb ETS eval vectorised",
+                f"{per_item_rate(lambda: ets.eval(small), len(small), 3) / 1e6:.2f} M/s",
+            )
         )
     return rows
 

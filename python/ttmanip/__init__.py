@@ -9,7 +9,7 @@ seconds; poses are 4×4 homogeneous matrices in the robot's base frame.
 (4, 4)
 """
 
-from . import robots
+from . import motor, robots
 from ._ttmanip import (
     ModelError,
     NonFiniteError,
@@ -30,6 +30,7 @@ __all__ = [
     "SingularError",
     "TtmanipError",
     "UnreachableError",
+    "motor",
     "robots",
 ]
 

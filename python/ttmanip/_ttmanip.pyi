@@ -108,6 +108,42 @@ class Robot:
     def jacobian(self, q: ArrayLike, frame: str = "base") -> NDArray[np.float64]:
         """Geometric Jacobian [v; ω] of the tool point: (6, n) or (N, 6, n)."""
 
+class ServoSim:
+    """A simulated servo axis: ttcan's current/speed/position cascade on a DC motor plant (SI units)."""
+
+    def __init__(
+        self, params: dict[str, object] | None = None, plant: dict[str, object] | None = None
+    ) -> None:
+        """Controller from ``params`` (keys of ``defaults()``); plant: the same, overridden by ``plant``."""
+    @staticmethod
+    def defaults() -> dict[str, object]:
+        """The reference axis: maxon RE 25 + GP 26 A 14:1, 24 V, 20/5/1 kHz loops."""
+    @property
+    def params(self) -> dict[str, object]:
+        """The controller's parameters, SI units."""
+    @property
+    def plant_params(self) -> dict[str, object]:
+        """The simulated actuator's parameters, SI units."""
+    @property
+    def tuning(self) -> dict[str, object]:
+        """Per loop: kp, ki, crossover_hz, phase_margin_deg, bandwidth_hz; plus t_sigma (s)."""
+    @property
+    def rates(self) -> tuple[float, float, float]:
+        """Current, speed and position loop rates, Hz."""
+    def step(
+        self, kind: str, amplitude: float, duration: float, external_torque: float = 0.0, seed: int = 7
+    ) -> dict[str, object]:
+        """Step response in 'current' (A), 'velocity' (rad/s) or 'position' (rad) mode."""
+    def trajectory(
+        self,
+        q: ArrayLike,
+        qd: ArrayLike,
+        qdd: ArrayLike,
+        settle: float = 0.0,
+        external_torque: float = 0.0,
+        seed: int = 7,
+    ) -> dict[str, object]:
+        """Tracks (q, qd, qdd) given at the position-loop rate, then holds the end for ``settle`` s."""
 # --- trajectories (crates/ttkin-py/src/traj.rs) -------------------------------------------------
 
 _F = NDArray[np.float64]

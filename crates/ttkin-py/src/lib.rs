@@ -6,6 +6,7 @@ use pyo3::prelude::*;
 
 mod convert;
 mod errors;
+mod motor;
 mod robot;
 mod traj;
 
@@ -14,6 +15,7 @@ mod traj;
 fn _ttmanip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     errors::register(m)?;
     robot::register(m)?;
+    motor::register(m)?;
     traj::register(m)?;
     Ok(())
 }

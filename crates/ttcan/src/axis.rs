@@ -1,0 +1,593 @@
+//! One axis: the cascade of [`crate::loops`] for one motor, its sensing (position from encoder
+//! counts, speed by differencing), its operating mode and its fault state machine.
+//!
+//! States: `Disabled` (duty 0) → `enable(mode)` → `Enabled` → on a fault → `Stopping` (speed loop
+//! ramps the speed to zero at the quick-stop deceleration, current limited to the continuous
+//! rating) → `Faulted` (duty 0) → `clear_fault()` → `Disabled`. A lost current reading (NaN) skips
+//! the ramp: without it the current cannot be controlled, so the bridge goes to duty 0 at once
+//! (both low sides on: the winding is shorted and brakes the motor).
+//!
+//! Everything that can be wrong with the configuration is checked by [`Axis::new`]; [`Axis::tick`]
+//! never fails and never allocates.
+
+use crate::error::{finite, positive, Error, Result};
+use crate::loops::{CurrentLoop, LowPass, Pi, PositionLoop, PositionOutput, SpeedLoop};
+use crate::motor::{Measurement, MotorModel};
+use crate::stepper::{Due, Rates};
+use crate::tuning::{tune_cascade, CascadeTuning, TuningTargets, SPEED_WINDOW_MAX};
+
+/// Operating mode (the CiA 402 cyclic synchronous modes: torque, velocity, position).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mode {
+    /// Current (torque) reference, A.
+    Current,
+    /// Output speed reference, rad/s.
+    Velocity,
+    /// Output position reference with velocity and acceleration, rad, rad/s, rad/s².
+    Position,
+}
+
+/// Why an axis stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Fault {
+    /// The measured current exceeded the trip level.
+    OverCurrent,
+    /// |position reference − position| exceeded the following-error limit.
+    FollowingError,
+    /// The encoder moved further in one current-loop period than the axis can.
+    EncoderJump,
+    /// A reference was NaN or infinite.
+    InvalidReference,
+    /// The current reading was NaN or infinite.
+    InvalidMeasurement,
+}
+
+/// State of the axis' power stage and fault machine.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AxisState {
+    /// Bridge off (duty 0).
+    Disabled,
+    /// Loops running in the present mode.
+    Enabled,
+    /// Controlled stop after a fault.
+    Stopping(Fault),
+    /// Stopped after a fault, bridge off, waiting for `clear_fault`.
+    Faulted(Fault),
+}
+
+/// Everything an axis is built from. Start from [`AxisConfig::new`] and change fields.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AxisConfig {
+    /// The controller's model of the actuator (used for tuning and unit conversions).
+    pub model: MotorModel,
+    /// Loop rates.
+    pub rates: Rates,
+    /// Tuning targets.
+    pub tuning: TuningTargets,
+    /// Speed reference filter cut-off, Hz; `None`: 1/(2π a T_σ) from the tuning.
+    pub speed_reference_filter_hz: Option<f64>,
+    /// Continuous current rating, A.
+    pub continuous_current: f64,
+    /// Peak current, A (≥ continuous).
+    pub peak_current: f64,
+    /// How long the peak current may flow from cold before the I²t limit folds back, s.
+    pub peak_duration: f64,
+    /// Measured current that trips an over-current fault, A (> peak).
+    pub overcurrent_trip: f64,
+    /// Largest output speed, rad/s (the bus must be able to overcome its back-EMF).
+    pub max_speed: f64,
+    /// Largest allowed |position reference − position|, rad.
+    pub following_error_limit: f64,
+    /// Deceleration of the controlled stop, rad/s² at the output.
+    pub quick_stop_deceleration: f64,
+    /// Velocity feedforward in position mode.
+    pub velocity_feedforward: bool,
+    /// Acceleration feedforward (through inertia and torque constant to current) in position mode.
+    pub acceleration_feedforward: bool,
+    /// Back-EMF feedforward in the current loop (from the estimated speed).
+    pub emf_feedforward: bool,
+    /// Anti-windup in the current and speed PIs.
+    pub anti_windup: bool,
+    /// Cut-off of the low-pass on the speed estimate used by the back-EMF feedforward, Hz: the
+    /// estimate moves in whole encoder counts per speed period, and unfiltered those steps would
+    /// kick the current.
+    pub emf_filter_hz: f64,
+}
+
+impl AxisConfig {
+    /// Defaults for `model`: 20/5/1 kHz, 1 kHz current bandwidth, symmetric optimum a = 3, currents
+    /// 1.2 A continuous / 3.6 A peak for 1 s / 6 A trip, 30 rad/s, 0.1 rad following-error limit,
+    /// 200 rad/s² quick stop, all feedforwards and anti-windup on. The current and speed values
+    /// fit the maxon RE 25 + GP 26 A 14:1 of [`MotorModel::maxon_re25_gp26`].
+    pub fn new(model: MotorModel) -> Self {
+        AxisConfig {
+            model,
+            rates: Rates::default(),
+            tuning: TuningTargets::default(),
+            speed_reference_filter_hz: None,
+            continuous_current: 1.2,
+            peak_current: 3.6,
+            peak_duration: 1.0,
+            overcurrent_trip: 6.0,
+            max_speed: 30.0,
+            following_error_limit: 0.1,
+            quick_stop_deceleration: 200.0,
+            velocity_feedforward: true,
+            acceleration_feedforward: true,
+            emf_feedforward: true,
+            anti_windup: true,
+            emf_filter_hz: 100.0,
+        }
+    }
+}
+
+/// One axis: configuration-derived constants, the three loops, sensing and state.
+#[derive(Debug, Clone)]
+pub struct Axis {
+    config: AxisConfig,
+    tuning: CascadeTuning,
+    // Constants.
+    rad_per_count: f64,
+    speed_rate: f64,
+    speed_period: f64,
+    jump_limit: u64,
+    standstill: f64,
+    stop_timeout: f64,
+    // Loops.
+    current_loop: CurrentLoop,
+    emf_speed: LowPass,
+    speed_loop: SpeedLoop,
+    position_loop: PositionLoop,
+    // Sensing.
+    primed: bool,
+    count_offset: i64,
+    last_counts: i64,
+    position: f64,
+    /// Positions at the last `SPEED_WINDOW_MAX` speed ticks (ring buffer), rad.
+    speed_ring: [f64; SPEED_WINDOW_MAX],
+    speed_ring_index: usize,
+    speed_window: usize,
+    speed: f64,
+    // References and outputs.
+    state: AxisState,
+    mode: Mode,
+    current_command: f64,
+    speed_command: f64,
+    q_ref: f64,
+    qd_ref: f64,
+    qdd_ref: f64,
+    position_output: PositionOutput,
+    current_reference: f64,
+    duty: f64,
+    stop_reference: f64,
+    stop_time: f64,
+}
+
+impl Axis {
+    /// Validates `config`, tunes the loops and builds a disabled axis in current mode.
+    pub fn new(config: &AxisConfig) -> Result<Self> {
+        let c = config;
+        c.model.validate()?;
+        positive("continuous current (A)", c.continuous_current)?;
+        positive("peak current (A)", c.peak_current)?;
+        positive("peak duration (s)", c.peak_duration)?;
+        positive("over-current trip (A)", c.overcurrent_trip)?;
+        positive("max speed (rad/s)", c.max_speed)?;
+        positive("following error limit (rad)", c.following_error_limit)?;
+        positive("quick-stop deceleration (rad/s²)", c.quick_stop_deceleration)?;
+        if c.peak_current < c.continuous_current {
+            return Err(invalid(
+                "peak current (A)",
+                c.peak_current,
+                "must be >= the continuous current",
+            ));
+        }
+        if c.overcurrent_trip <= c.peak_current {
+            return Err(invalid(
+                "over-current trip (A)",
+                c.overcurrent_trip,
+                "must be > the peak current",
+            ));
+        }
+        let m = &c.model;
+        let n = m.gearbox.ratio;
+        let emf_at_max = m.motor.back_emf_constant * c.max_speed * n;
+        if emf_at_max + m.motor.resistance * c.continuous_current > m.max_voltage() {
+            return Err(invalid(
+                "max speed (rad/s)",
+                c.max_speed,
+                &format!(
+                    "back-EMF {emf_at_max:.2} V plus R·I_cont exceeds the usable bus voltage {:.2} V",
+                    m.max_voltage()
+                ),
+            ));
+        }
+        if c.emf_filter_hz.is_nan() || c.emf_filter_hz <= 0.0 {
+            return Err(invalid(
+                "EMF filter (Hz)",
+                c.emf_filter_hz,
+                "must be > 0 (infinite: no filter)",
+            ));
+        }
+        if let Some(f) = c.speed_reference_filter_hz {
+            if f.is_nan() || f <= 0.0 {
+                return Err(invalid(
+                    "speed reference filter (Hz)",
+                    f,
+                    "must be > 0 (infinite: no filter)",
+                ));
+            }
+        }
+        let [tc, ts, tp] = c.rates.periods();
+        let tuning = tune_cascade(m, [tc, ts, tp], &c.tuning)?;
+        finite("tuned speed gain", tuning.speed.kp)?;
+
+        let rad_per_count = m.radians_per_count();
+        let current_loop = CurrentLoop::new(
+            Pi::new(tuning.current.kp, tuning.current.ki, tc, c.anti_windup),
+            tc,
+            m.bus_voltage,
+            m.max_voltage(),
+            if c.emf_feedforward {
+                m.motor.back_emf_constant * n
+            } else {
+                0.0
+            },
+            c.peak_current,
+            c.continuous_current,
+            (c.peak_current * c.peak_current - c.continuous_current * c.continuous_current) * c.peak_duration,
+        );
+        let ref_filter_hz = c.speed_reference_filter_hz.unwrap_or(tuning.speed_reference_filter_hz);
+        let speed_loop = SpeedLoop::new(
+            Pi::new(tuning.speed.kp, tuning.speed.ki, ts, c.anti_windup),
+            c.max_speed,
+            LowPass::new(ref_filter_hz, ts),
+            LowPass::new(c.tuning.speed_output_filter_hz, ts),
+        );
+        let position_loop = PositionLoop::new(
+            tuning.position.kp,
+            1.0 / m.acceleration_per_amp(),
+            c.velocity_feedforward,
+            c.acceleration_feedforward,
+        );
+        // An encoder may move at most twice the largest speed's worth of counts per current period.
+        let jump_limit = (2.0 * c.max_speed * tc / rad_per_count).ceil() as u64 + 2;
+        Ok(Axis {
+            config: *c,
+            tuning,
+            rad_per_count,
+            speed_rate: 1.0 / (ts * c.tuning.speed_window as f64),
+            speed_period: ts,
+            jump_limit,
+            standstill: 0.05 * c.max_speed,
+            stop_timeout: 2.0 * c.max_speed / c.quick_stop_deceleration + 0.2,
+            current_loop,
+            emf_speed: LowPass::new(c.emf_filter_hz, ts),
+            speed_loop,
+            position_loop,
+            primed: false,
+            count_offset: 0,
+            last_counts: 0,
+            position: 0.0,
+            speed_ring: [0.0; SPEED_WINDOW_MAX],
+            speed_ring_index: 0,
+            speed_window: c.tuning.speed_window as usize,
+            speed: 0.0,
+            state: AxisState::Disabled,
+            mode: Mode::Current,
+            current_command: 0.0,
+            speed_command: 0.0,
+            q_ref: 0.0,
+            qd_ref: 0.0,
+            qdd_ref: 0.0,
+            position_output: PositionOutput::default(),
+            current_reference: 0.0,
+            duty: 0.0,
+            stop_reference: 0.0,
+            stop_time: 0.0,
+        })
+    }
+
+    /// One base tick: the current loop always, the speed and position loops when `due`; returns the
+    /// bridge duty cycle in [−1, 1]. Never fails, never allocates.
+    #[inline]
+    pub fn tick(&mut self, m: Measurement, due: Due) -> f64 {
+        self.sense(m.encoder_counts, due.speed);
+        let current = if m.current.is_finite() {
+            m.current
+        } else {
+            self.trip(Fault::InvalidMeasurement);
+            0.0
+        };
+        if current.abs() > self.config.overcurrent_trip {
+            self.trip(Fault::OverCurrent);
+        }
+        match self.state {
+            AxisState::Disabled | AxisState::Faulted(_) => {
+                self.current_reference = 0.0;
+                self.duty = 0.0;
+                return 0.0;
+            }
+            AxisState::Enabled => self.run_enabled(due),
+            AxisState::Stopping(_) => self.run_stopping(due),
+        }
+        if let AxisState::Faulted(_) = self.state {
+            self.duty = 0.0;
+            return 0.0;
+        }
+        self.duty = self
+            .current_loop
+            .step(self.current_reference, current, self.emf_speed.output());
+        self.duty
+    }
+
+    fn sense(&mut self, raw_counts: i64, speed_due: bool) {
+        let mut counts = raw_counts.wrapping_add(self.count_offset);
+        if self.primed {
+            let delta = counts.wrapping_sub(self.last_counts);
+            if delta.unsigned_abs() > self.jump_limit {
+                // Keep the position continuous across the jump, then stop.
+                self.count_offset = self.count_offset.wrapping_sub(delta);
+                counts = self.last_counts;
+                self.trip(Fault::EncoderJump);
+            }
+        } else {
+            self.primed = true;
+            let p = counts as f64 * self.rad_per_count;
+            self.speed_ring = [p; SPEED_WINDOW_MAX];
+            self.q_ref = p;
+        }
+        self.last_counts = counts;
+        self.position = counts as f64 * self.rad_per_count;
+        if speed_due {
+            // Difference over the last `speed_window` speed periods: the ring holds the positions
+            // of the last SPEED_WINDOW_MAX speed ticks, the oldest needed one `speed_window` back.
+            let i = self.speed_ring_index;
+            let old = (i + SPEED_WINDOW_MAX - self.speed_window) % SPEED_WINDOW_MAX;
+            self.speed = (self.position - self.speed_ring[old]) * self.speed_rate;
+            self.speed_ring[i] = self.position;
+            self.speed_ring_index = (i + 1) % SPEED_WINDOW_MAX;
+            self.emf_speed.step(self.speed);
+        }
+    }
+
+    fn run_enabled(&mut self, due: Due) {
+        match self.mode {
+            Mode::Current => self.current_reference = self.current_command,
+            Mode::Velocity => {
+                if due.speed {
+                    self.current_reference = self.speed_step(self.speed_command, 0.0, 0.0);
+                }
+            }
+            Mode::Position => {
+                if due.position {
+                    let o = self
+                        .position_loop
+                        .step(self.q_ref, self.qd_ref, self.qdd_ref, self.position);
+                    self.position_output = o;
+                    if o.following_error.abs() > self.config.following_error_limit {
+                        self.trip(Fault::FollowingError);
+                        self.run_stopping(due);
+                        return;
+                    }
+                }
+                if due.speed {
+                    let o = self.position_output;
+                    self.current_reference =
+                        self.speed_step(o.speed_command, o.speed_feedforward, o.current_feedforward);
+                }
+            }
+        }
+    }
+
+    #[inline]
+    fn speed_step(&mut self, command: f64, feedforward: f64, current_feedforward: f64) -> f64 {
+        let lim = self.current_loop.limit();
+        let lo = -lim - current_feedforward;
+        let hi = lim - current_feedforward;
+        self.speed_loop.step(command, feedforward, self.speed, lo, hi) + current_feedforward
+    }
+
+    fn run_stopping(&mut self, due: Due) {
+        if !due.speed {
+            return;
+        }
+        let fault = match self.state {
+            AxisState::Stopping(f) => f,
+            _ => return,
+        };
+        let dv = self.config.quick_stop_deceleration * self.speed_period;
+        let r = self.stop_reference;
+        self.stop_reference = if r > dv {
+            r - dv
+        } else if r < -dv {
+            r + dv
+        } else {
+            0.0
+        };
+        let lim = self.config.continuous_current.min(self.current_loop.limit());
+        self.current_reference = self.speed_loop.step(self.stop_reference, 0.0, self.speed, -lim, lim);
+        self.stop_time += self.speed_period;
+        let stopped = self.stop_reference == 0.0 && self.speed.abs() <= self.standstill;
+        if stopped || self.stop_time > self.stop_timeout {
+            self.state = AxisState::Faulted(fault);
+            self.current_reference = 0.0;
+            self.current_loop.reset();
+        }
+    }
+
+    fn trip(&mut self, fault: Fault) {
+        match self.state {
+            AxisState::Enabled if fault != Fault::InvalidMeasurement => {
+                self.state = AxisState::Stopping(fault);
+                self.stop_reference = self.speed.max(-self.config.max_speed).min(self.config.max_speed);
+                self.stop_time = 0.0;
+                self.speed_loop.reset(self.speed, self.current_reference);
+            }
+            AxisState::Enabled | AxisState::Disabled | AxisState::Stopping(_) if fault == Fault::InvalidMeasurement => {
+                self.state = AxisState::Faulted(fault);
+                self.current_loop.reset();
+            }
+            AxisState::Disabled => self.state = AxisState::Faulted(fault),
+            _ => {}
+        }
+    }
+
+    /// Switches the bridge on in `mode`, holding the present position (position mode) or zero speed
+    /// or current; only from `Disabled`. Returns whether the axis is now enabled.
+    pub fn enable(&mut self, mode: Mode) -> bool {
+        if self.state != AxisState::Disabled {
+            return false;
+        }
+        self.current_loop.reset();
+        self.state = AxisState::Enabled;
+        self.set_mode(mode);
+        true
+    }
+
+    /// Changes the mode without a bump: the new mode starts from the present position, speed and current.
+    pub fn set_mode(&mut self, mode: Mode) {
+        self.mode = mode;
+        self.current_command = 0.0;
+        self.speed_command = 0.0;
+        self.q_ref = self.position;
+        self.qd_ref = 0.0;
+        self.qdd_ref = 0.0;
+        self.position_output = PositionOutput::default();
+        self.speed_loop.reset(self.speed, self.current_reference);
+    }
+
+    /// Switches the bridge off (from any state but `Faulted`).
+    pub fn disable(&mut self) {
+        if !matches!(self.state, AxisState::Faulted(_)) {
+            self.state = AxisState::Disabled;
+            self.current_reference = 0.0;
+            self.current_loop.reset();
+        }
+    }
+
+    /// Acknowledges a fault after the stop: `Faulted` → `Disabled`. Returns whether it did.
+    pub fn clear_fault(&mut self) -> bool {
+        if let AxisState::Faulted(_) = self.state {
+            self.state = AxisState::Disabled;
+            true
+        } else {
+            false
+        }
+    }
+
+    /// Current reference for current mode, A (limited by the loop; NaN trips a fault).
+    pub fn set_current(&mut self, amps: f64) {
+        if amps.is_finite() {
+            self.current_command = amps;
+        } else {
+            self.trip(Fault::InvalidReference);
+        }
+    }
+
+    /// Speed reference for velocity mode, output rad/s (limited to the max speed; NaN trips a fault).
+    pub fn set_velocity(&mut self, speed: f64) {
+        if speed.is_finite() {
+            self.speed_command = speed;
+        } else {
+            self.trip(Fault::InvalidReference);
+        }
+    }
+
+    /// Position reference for position mode: rad, rad/s, rad/s² at the output (NaN trips a fault).
+    pub fn set_position(&mut self, q: f64, qd: f64, qdd: f64) {
+        if q.is_finite() && qd.is_finite() && qdd.is_finite() {
+            self.q_ref = q;
+            self.qd_ref = qd;
+            self.qdd_ref = qdd;
+        } else {
+            self.trip(Fault::InvalidReference);
+        }
+    }
+
+    /// The configuration the axis was built from.
+    pub fn config(&self) -> &AxisConfig {
+        &self.config
+    }
+
+    /// Loop rates.
+    pub fn rates(&self) -> &Rates {
+        &self.config.rates
+    }
+
+    /// Gains and achieved bandwidths and margins.
+    pub fn tuning(&self) -> &CascadeTuning {
+        &self.tuning
+    }
+
+    /// State of the fault machine.
+    pub fn state(&self) -> AxisState {
+        self.state
+    }
+
+    /// The fault being handled or waiting to be cleared, if any.
+    pub fn fault(&self) -> Option<Fault> {
+        match self.state {
+            AxisState::Stopping(f) | AxisState::Faulted(f) => Some(f),
+            _ => None,
+        }
+    }
+
+    /// Operating mode.
+    pub fn mode(&self) -> Mode {
+        self.mode
+    }
+
+    /// Measured output position, rad.
+    pub fn position(&self) -> f64 {
+        self.position
+    }
+
+    /// Estimated output speed, rad/s (encoder difference over `speed_window` speed periods).
+    pub fn speed(&self) -> f64 {
+        self.speed
+    }
+
+    /// Position reference, rad.
+    pub fn position_reference(&self) -> f64 {
+        self.q_ref
+    }
+
+    /// Speed reference after limiting, filtering and feedforward, rad/s.
+    pub fn speed_reference(&self) -> f64 {
+        self.speed_loop.reference()
+    }
+
+    /// Current reference after limiting, A.
+    pub fn current_reference(&self) -> f64 {
+        self.current_loop.reference()
+    }
+
+    /// Last duty cycle, in [−1, 1].
+    pub fn duty(&self) -> f64 {
+        self.duty
+    }
+
+    /// Position error at the last position-loop step, rad.
+    pub fn following_error(&self) -> f64 {
+        self.position_output.following_error
+    }
+
+    /// Present current limit (peak, or continuous after the I²t budget is spent), A.
+    pub fn current_limit(&self) -> f64 {
+        self.current_loop.limit()
+    }
+
+    /// Fraction of the I²t budget in use.
+    pub fn i2t_used(&self) -> f64 {
+        self.current_loop.i2t_used()
+    }
+}
+
+fn invalid(what: &str, value: f64, reason: &str) -> Error {
+    Error::InvalidParameter {
+        what: what.into(),
+        value,
+        reason: reason.into(),
+    }
+}

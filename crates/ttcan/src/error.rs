@@ -1,0 +1,92 @@
+//! The one error type of `ttcan`: every fallible constructor returns [`Result`].
+//!
+//! Errors happen only when something is built (a motor model, a controller, a stepper). The control
+//! loops themselves never return errors: a bad value at run time (a NaN reference, a NaN current
+//! reading, an encoder jump) is a [`crate::axis::Fault`] that brings the axis to a controlled stop.
+
+/// Result alias used across `ttcan`.
+pub type Result<T> = std::result::Result<T, Error>;
+
+/// Everything that can be wrong with a motor model, a controller configuration or a stepper.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A parameter is NaN or infinite.
+    #[error("{what} = {value}: every parameter must be finite")]
+    NonFinite {
+        /// Name of the parameter, with its unit.
+        what: String,
+        /// The offending value.
+        value: f64,
+    },
+    /// A parameter is finite but not physical or not allowed (negative resistance, zero inertia, ...).
+    #[error("{what} = {value}: {reason}")]
+    InvalidParameter {
+        /// Name of the parameter, with its unit.
+        what: String,
+        /// The offending value.
+        value: f64,
+        /// What is accepted.
+        reason: String,
+    },
+    /// Loop rates that the multi-rate stepper cannot schedule (not integer multiples of each other).
+    #[error("loop rates: {0}")]
+    Rates(String),
+    /// Several axes given to one stepper disagree (different loop rates, ...).
+    #[error("stepper: {0}")]
+    Stepper(String),
+}
+
+/// Checks that `value` is finite and strictly positive.
+pub fn positive(what: &str, value: f64) -> Result<f64> {
+    finite(what, value)?;
+    if value > 0.0 {
+        Ok(value)
+    } else {
+        Err(Error::InvalidParameter {
+            what: what.to_string(),
+            value,
+            reason: "must be > 0".to_string(),
+        })
+    }
+}
+
+/// Checks that `value` is finite and not negative.
+pub fn non_negative(what: &str, value: f64) -> Result<f64> {
+    finite(what, value)?;
+    if value >= 0.0 {
+        Ok(value)
+    } else {
+        Err(Error::InvalidParameter {
+            what: what.to_string(),
+            value,
+            reason: "must be >= 0".to_string(),
+        })
+    }
+}
+
+/// Checks that `value` is finite.
+pub fn finite(what: &str, value: f64) -> Result<f64> {
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(Error::NonFinite {
+            what: what.to_string(),
+            value,
+        })
+    }
+}
+
+/// Checks that `lo < value <= hi` (finite).
+pub fn in_range(what: &str, value: f64, lo: f64, hi: f64) -> Result<f64> {
+    finite(what, value)?;
+    if value > lo && value <= hi {
+        Ok(value)
+    } else {
+        Err(Error::InvalidParameter {
+            what: what.to_string(),
+            value,
+            reason: format!("must be in ({lo}, {hi}]"),
+        })
+    }
+}

@@ -1,0 +1,27 @@
+//! `ttcan`: motor control for the ttmanip motion stack.
+//!
+//! The cascade of seed 000 §2.1 (current, speed and position loops, its Figs 2–4) as allocation-free
+//! `f64` loops ([`loops`]), one motor's worth of them with sensing and a fault state machine
+//! ([`axis`]), a multi-rate stepper for many axes ([`stepper`]), gain tuning from motor parameters
+//! ([`tuning`]), and plant models with exact discretisation to simulate it all ([`motor`], [`sim`]).
+//! CANopen (CiA 402) over SocketCAN and the controller binary come later and sit on top of [`axis`].
+//!
+//! Units: SI; positions and speeds are at the output (joint) side of the gearbox unless a name says
+//! `motor`.
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+pub mod axis;
+pub mod error;
+pub mod loops;
+pub mod motor;
+pub mod sim;
+pub mod stepper;
+pub mod tuning;
+
+pub use axis::{Axis, AxisConfig, AxisState, Fault, Mode};
+pub use error::{Error, Result};
+pub use motor::{DcMotor, Gearbox, Load, Measurement, MotorModel, Plant};
+pub use sim::{Setpoint, Simulation, Trace};
+pub use stepper::{Due, Rates, Scheduler, Stepper};
+pub use tuning::{CascadeTuning, LoopReport, TuningTargets};

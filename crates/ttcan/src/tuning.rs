@@ -1,0 +1,257 @@
+//! PI gains from motor parameters and target bandwidths, and the bandwidths and stability margins
+//! that result, computed on the loop transfer functions (not quoted from rules of thumb).
+//!
+//! - Current loop, **discrete pole-zero cancellation**. The voltage-to-current plant with a duty held
+//!   over one period T (back-EMF compensated) is exactly P(z) = ((1 − a)/R) / (z − a), a = e^{−RT/L}.
+//!   The PI C(z) = Kp + Ki T/(z − 1) has its zero at 1 − Ki T/Kp; putting it on a gives the open loop
+//!   b/(z − 1) with b = Kp (1 − a)/R, and the closed loop b/(z − (1 − b)): first order, no overshoot.
+//!   b = 1 − e^{−ω_c T} places its pole where a continuous loop of bandwidth ω_c would have it, so
+//!   Kp = R (1 − e^{−ω_c T})/(1 − a) and Ki = Kp (1 − a)/T (→ L ω_c and R ω_c as T → 0).
+//! - Speed loop, **symmetric optimum** (Kessler). The plant seen by the speed PI is
+//!   K_acc/s · 1/(1 + T_σ s), where T_σ lumps the small lags: the closed current loop 1/ω_c,i, the
+//!   output filter T_f, the hold of the current reference T_s/2, the speed estimate by differencing
+//!   over w speed periods w·T_s/2 and the current loop's hold T_c/2. With a ≥ 2: Kp = 1/(a K_acc T_σ), T_i = a² T_σ,
+//!   crossover 1/(a T_σ), phase margin atan((a² − 1)/(2a)) (36.9° for a = 2, 53.1° for a = 3).
+//!   The reference low-pass 1/(1 + a T_σ s) takes the edge off the PI zero's overshoot.
+//! - Position loop: P gain Kp = ω_c,speed / r (r = 4 by default), velocity and acceleration
+//!   feedforward make the tracking independent of this gain to first order.
+//!
+//! The reported margins are evaluated on the full loop models (discrete current loop; speed and
+//! position loops with their filters and delays), by a logarithmic frequency sweep.
+
+use crate::error::{positive, Error, Result};
+use crate::motor::MotorModel;
+use nalgebra::Complex;
+use std::f64::consts::PI;
+
+/// Gains of one loop and what they achieve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LoopReport {
+    /// Proportional gain (V/A, A per rad/s, or 1/s for the position loop).
+    pub kp: f64,
+    /// Integral gain, 1/s times the unit of `kp` (0 for a P controller).
+    pub ki: f64,
+    /// Gain crossover frequency of the open loop, Hz.
+    pub crossover_hz: f64,
+    /// Phase margin at the crossover, degrees.
+    pub phase_margin_deg: f64,
+    /// Closed-loop −3 dB bandwidth, Hz.
+    pub bandwidth_hz: f64,
+}
+
+/// Gains and reports of the whole cascade.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CascadeTuning {
+    /// Current loop (V/A).
+    pub current: LoopReport,
+    /// Speed loop (A per output rad/s).
+    pub speed: LoopReport,
+    /// Position loop (1/s).
+    pub position: LoopReport,
+    /// Lumped small time constant T_σ of the speed loop, s.
+    pub t_sigma: f64,
+    /// Default speed reference filter cut-off 1/(2π a T_σ), Hz.
+    pub speed_reference_filter_hz: f64,
+}
+
+/// Targets for [`tune_cascade`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TuningTargets {
+    /// Current-loop closed-loop bandwidth, Hz (at most a sixth of the current-loop rate).
+    pub current_bandwidth_hz: f64,
+    /// Symmetric-optimum factor a (≥ 2; larger is slower and better damped).
+    pub speed_symmetric_optimum: f64,
+    /// Speed-loop output filter cut-off, Hz (may be infinite: no filter).
+    pub speed_output_filter_hz: f64,
+    /// Ratio of the speed-loop crossover to the position gain (≥ 2).
+    pub position_ratio: f64,
+    /// Speed periods over which the speed is estimated by differencing encoder positions
+    /// (1..=`SPEED_WINDOW_MAX`): a longer window divides the quantisation noise of the estimate by
+    /// the window and adds half a window of delay to T_σ.
+    pub speed_window: u32,
+}
+
+/// Longest speed-estimate window, speed periods.
+pub const SPEED_WINDOW_MAX: usize = 16;
+
+impl Default for TuningTargets {
+    fn default() -> Self {
+        TuningTargets {
+            current_bandwidth_hz: 1000.0,
+            speed_symmetric_optimum: 3.0,
+            speed_output_filter_hz: 1000.0,
+            position_ratio: 4.0,
+            speed_window: 4,
+        }
+    }
+}
+
+/// Current-loop gains by discrete pole-zero cancellation: (Kp V/A, Ki V/(A·s)).
+pub fn current_gains(model: &MotorModel, period: f64, bandwidth_hz: f64) -> Result<(f64, f64)> {
+    model.validate()?;
+    positive("current loop period (s)", period)?;
+    positive("current loop bandwidth (Hz)", bandwidth_hz)?;
+    if bandwidth_hz * period > 1.0 / 6.0 {
+        return Err(Error::InvalidParameter {
+            what: "current loop bandwidth (Hz)".into(),
+            value: bandwidth_hz,
+            reason: format!("must be at most a sixth of the current loop rate ({} Hz)", 1.0 / period),
+        });
+    }
+    let m = &model.motor;
+    let a = (-m.resistance * period / m.inductance).exp();
+    let b = 1.0 - (-2.0 * PI * bandwidth_hz * period).exp();
+    let kp = m.resistance * b / (1.0 - a);
+    Ok((kp, kp * (1.0 - a) / period))
+}
+
+/// Tunes the three loops for `model` at the given loop periods (s) and reports what they achieve.
+pub fn tune_cascade(model: &MotorModel, periods: [f64; 3], targets: &TuningTargets) -> Result<CascadeTuning> {
+    let [tc, ts, tp] = periods;
+    positive("speed loop period (s)", ts)?;
+    positive("position loop period (s)", tp)?;
+    let (kpc, kic) = current_gains(model, tc, targets.current_bandwidth_hz)?;
+    let a_so = targets.speed_symmetric_optimum;
+    crate::error::finite("speed symmetric optimum factor", a_so)?;
+    if a_so < 2.0 {
+        return Err(Error::InvalidParameter {
+            what: "speed symmetric optimum factor".into(),
+            value: a_so,
+            reason: "must be >= 2".into(),
+        });
+    }
+    let f_out = targets.speed_output_filter_hz;
+    if f_out.is_nan() || f_out <= 0.0 {
+        return Err(Error::InvalidParameter {
+            what: "speed output filter (Hz)".into(),
+            value: f_out,
+            reason: "must be > 0 (infinite: no filter)".into(),
+        });
+    }
+    let window = targets.speed_window;
+    if window == 0 || window as usize > SPEED_WINDOW_MAX {
+        return Err(Error::InvalidParameter {
+            what: "speed window (speed periods)".into(),
+            value: window as f64,
+            reason: format!("must be between 1 and {SPEED_WINDOW_MAX}"),
+        });
+    }
+    let r_pos = targets.position_ratio;
+    crate::error::finite("position ratio", r_pos)?;
+    if r_pos < 2.0 {
+        return Err(Error::InvalidParameter {
+            what: "position ratio".into(),
+            value: r_pos,
+            reason: "must be >= 2".into(),
+        });
+    }
+
+    // Current loop, discrete.
+    let m = &model.motor;
+    let a = (-m.resistance * tc / m.inductance).exp();
+    let plant_gain = (1.0 - a) / m.resistance;
+    let current_open = |w: f64| {
+        let z = Complex::from_polar(1.0, w * tc);
+        let c = Complex::new(kpc, 0.0) + kic * tc / (z - 1.0);
+        c * plant_gain / (z - a)
+    };
+    let current_margins = margins(&current_open, 1.0, PI / tc);
+
+    // Speed loop, continuous with lumped delays.
+    let w_ci = 2.0 * PI * targets.current_bandwidth_hz;
+    let t_f = if f_out.is_infinite() {
+        0.0
+    } else {
+        1.0 / (2.0 * PI * f_out)
+    };
+    let t_d = 0.5 * ts * (1.0 + window as f64) + 0.5 * tc;
+    let t_sigma = 1.0 / w_ci + t_f + t_d;
+    let k_acc = model.acceleration_per_amp();
+    let kps = 1.0 / (a_so * k_acc * t_sigma);
+    let ti = a_so * a_so * t_sigma;
+    let kis = kps / ti;
+    let jw = |w: f64| Complex::new(0.0, w);
+    let speed_open = |w: f64| {
+        let s = jw(w);
+        let c = kps * (1.0 + 1.0 / (s * ti));
+        let lags = (1.0 + s * t_f) * (1.0 + s / w_ci);
+        c * k_acc / s / lags * Complex::from_polar(1.0, -w * t_d)
+    };
+    let speed_margins = margins(&speed_open, 0.1, PI / tc);
+
+    // Position loop around the closed speed loop (with its reference filter).
+    let w_cs = speed_margins.crossover_hz * 2.0 * PI;
+    let kpp = w_cs / r_pos;
+    let t_r = a_so * t_sigma;
+    let position_open = |w: f64| {
+        let s = jw(w);
+        let l = speed_open(w);
+        let closed_speed = l / (1.0 + l) / (1.0 + s * t_r);
+        kpp / s * closed_speed * Complex::from_polar(1.0, -w * 0.5 * tp)
+    };
+    let position_margins = margins(&position_open, 0.01, PI / tc);
+
+    Ok(CascadeTuning {
+        current: current_margins.report(kpc, kic),
+        speed: speed_margins.report(kps, kis),
+        position: position_margins.report(kpp, 0.0),
+        t_sigma,
+        speed_reference_filter_hz: 1.0 / (2.0 * PI * t_r),
+    })
+}
+
+/// Crossover, phase margin and closed-loop bandwidth of an open loop L(jω), by a log sweep.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Margins {
+    crossover_hz: f64,
+    phase_margin_deg: f64,
+    bandwidth_hz: f64,
+}
+
+impl Margins {
+    fn report(self, kp: f64, ki: f64) -> LoopReport {
+        LoopReport {
+            kp,
+            ki,
+            crossover_hz: self.crossover_hz,
+            phase_margin_deg: self.phase_margin_deg,
+            bandwidth_hz: self.bandwidth_hz,
+        }
+    }
+}
+
+fn margins(open: &dyn Fn(f64) -> Complex<f64>, w_lo: f64, w_hi: f64) -> Margins {
+    const STEPS: usize = 4000;
+    let ratio = (w_hi / w_lo).ln() / STEPS as f64;
+    let mut crossover = f64::NAN;
+    let mut pm = f64::NAN;
+    let mut bandwidth = f64::NAN;
+    let mut phase_prev = open(w_lo).arg();
+    let mut phase = phase_prev;
+    for k in 1..=STEPS {
+        let w = w_lo * (ratio * k as f64).exp();
+        let l = open(w);
+        // Unwrap the phase along the sweep.
+        let mut p = l.arg();
+        while p - phase_prev > PI {
+            p -= 2.0 * PI;
+        }
+        while p - phase_prev < -PI {
+            p += 2.0 * PI;
+        }
+        phase += p - phase_prev;
+        phase_prev = p;
+        if crossover.is_nan() && l.norm() < 1.0 {
+            crossover = w;
+            pm = 180.0 + phase.to_degrees();
+        }
+        if bandwidth.is_nan() && (l / (1.0 + l)).norm() < std::f64::consts::FRAC_1_SQRT_2 {
+            bandwidth = w;
+        }
+    }
+    Margins {
+        crossover_hz: crossover / (2.0 * PI),
+        phase_margin_deg: pm,
+        bandwidth_hz: bandwidth / (2.0 * PI),
+    }
+}
