@@ -144,6 +144,7 @@ class ServoSim:
         seed: int = 7,
     ) -> dict[str, object]:
         """Tracks (q, qd, qdd) given at the position-loop rate, then holds the end for ``settle`` s."""
+
 # --- trajectories (crates/ttkin-py/src/traj.rs) -------------------------------------------------
 
 _F = NDArray[np.float64]
