@@ -228,3 +228,16 @@ def test_seed001_experiment_writes_its_outputs(tmp_path):
     assert data["paper_speed_integral"]["trapezoid_rad"] == pytest.approx(3.0)
     assert (tmp_path / "seed001_motion.png").stat().st_size > 10_000
     assert "cannot all be matched" in (tmp_path / "seed001_table.md").read_text()
+
+
+def test_stroke_with_robot_limits_reports_position_violations():
+    robot = ttmanip.robots.arm4()  # ±170° (joint 3: ±120°), 2 rad/s, no acceleration limit
+    q0 = np.zeros(4)
+    ok = tt.stroke(robot, q0, [0.5, -0.3, 0.4, 0.2], [1.0, 0.0, -0.5, 0.5], 0.8, q0)
+    assert ok.feasible and ok.on_time
+    peaks, _ = ok.trajectory.peaks(1)
+    assert np.all(np.abs(peaks) <= robot.velocity_limits * (1 + 1e-9))
+    # Hitting at 2.0 rad on joint 3 (limit 120° ≈ 2.094 rad) at 1.9 rad/s overshoots the limit.
+    over = tt.stroke(robot, q0, [0.0, 0.0, 2.0, 0.0], [0.0, 0.0, 1.9, 0.0], 2.0, q0)
+    assert not over.feasible
+    assert {(v["joint"], v["quantity"]) for v in over.violations} == {(2, "position")}
