@@ -2,7 +2,7 @@
 //! behind `ttmanip.traj` (conversion only; the maths is `ttkin::traj`).
 
 use nalgebra::Vector3;
-use numpy::ndarray::Array2;
+use numpy::ndarray::{Array2, ShapeBuilder};
 use numpy::{PyArray1, PyArray2, PyArrayDyn, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -162,7 +162,8 @@ impl PyJointTrajectory {
         samples_to_py(py, &s)
     }
 
-    /// (t, q, qd, qdd) at `n` ≥ 2 evenly spaced times from 0 to the duration.
+    /// (t, q, qd, qdd) at `n` ≥ 2 evenly spaced times from 0 to the duration; q, qd, qdd are
+    /// (n, dof) arrays in Fortran order.
     fn sample_uniform<'py>(&self, py: Python<'py>, n: usize) -> PyResult<Bound<'py, PyAny>> {
         sample_uniform(py, &self.inner, n)
     }
@@ -203,13 +204,16 @@ impl PyJointTrajectory {
     }
 }
 
+/// (t, q, qd, qdd) at `n` evenly spaced times. q, qd, qdd are (n, dof) arrays in Fortran (column)
+/// order: Rust fills them joint by joint, which vectorises over the samples, then hands them to
+/// numpy without a copy.
 fn sample_uniform<'py>(py: Python<'py>, traj: &JointTrajectory, n: usize) -> PyResult<Bound<'py, PyAny>> {
     let dof = traj.dof();
-    // Filled in Rust, then handed to numpy without a copy (no borrow tracking on fresh arrays).
     let (mut t, mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; n * dof], vec![0.0; n * dof], vec![0.0; n * dof]);
-    traj.sample_uniform_into(&mut t, &mut q, &mut qd, &mut qdd).py()?;
+    traj.sample_uniform_columns_into(&mut t, &mut q, &mut qd, &mut qdd)
+        .py()?;
     let matrix = |v: Vec<f64>| {
-        let a = Array2::from_shape_vec((n, dof), v).expect("n × dof values");
+        let a = Array2::from_shape_vec((n, dof).f(), v).expect("n × dof values");
         PyArray2::from_owned_array(py, a)
     };
     Ok((PyArray1::from_vec(py, t), matrix(q), matrix(qd), matrix(qdd))
@@ -302,7 +306,8 @@ fn traj_quintic(
     Ok(PyJointTrajectory { inner })
 }
 
-/// Builds a quintic and samples it at `n` evenly spaced times in one call: (t, q, qd, qdd).
+/// Builds a quintic and samples it at `n` evenly spaced times in one call: (t, q, qd, qdd), the
+/// last three (n, dof) in Fortran order.
 #[pyfunction]
 #[pyo3(signature = (q0, q1, duration, n=101, v0=None, v1=None, a0=None, a1=None))]
 #[allow(clippy::too_many_arguments)]

@@ -6,16 +6,26 @@ use std::hint::black_box;
 use ttkin::traj::{stroke, JointState, JointTrajectory, KinematicLimits};
 
 fn quintic_build_and_sample(c: &mut Criterion) {
-    // Vectors, not arrays, behind black_box: the joint count stays unknown to the compiler, as in a
-    // call from Python.
+    // Vectors, not arrays, and sizes behind black_box: the joint and sample counts stay unknown to
+    // the compiler, as in a call from Python.
     let q0 = black_box(vec![0.1, -0.2, 0.3, -0.4, 0.5, -0.6, 0.7, -0.8]);
     let q1 = black_box(vec![1.0, 0.9, -0.8, 0.7, -0.6, 0.5, 0.4, 0.3]);
     let v1 = black_box(vec![0.5; 8]);
-    let (mut t, mut q, mut qd, mut qdd) = (vec![0.0; 101], vec![0.0; 808], vec![0.0; 808], vec![0.0; 808]);
+    let n = black_box(101);
+    let (mut t, mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; 8 * n], vec![0.0; 8 * n], vec![0.0; 8 * n]);
     c.bench_function("quintic8_build_sample101", |b| {
         b.iter(|| {
             let traj = JointTrajectory::quintic(&q0, &q1, None, Some(&v1), None, None, black_box(0.8)).unwrap();
             traj.sample_uniform_into(&mut t, &mut q, &mut qd, &mut qdd).unwrap();
+            black_box(q[404])
+        })
+    });
+    // Joint-major output (numpy Fortran order), as the Python binding uses.
+    c.bench_function("quintic8_build_sample101_columns", |b| {
+        b.iter(|| {
+            let traj = JointTrajectory::quintic(&q0, &q1, None, Some(&v1), None, None, black_box(0.8)).unwrap();
+            traj.sample_uniform_columns_into(&mut t, &mut q, &mut qd, &mut qdd)
+                .unwrap();
             black_box(q[404])
         })
     });

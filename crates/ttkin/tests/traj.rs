@@ -117,6 +117,42 @@ fn sample_rate_covers_the_duration() {
     assert!((q[50] - 0.5).abs() < TOL, "symmetric quintic is halfway at half time");
 }
 
+#[test]
+fn column_sampling_equals_row_sampling() {
+    let (points, times) = via_data();
+    let trajs = [
+        JointTrajectory::quintic(
+            &[0.1, 0.2, 0.3],
+            &[1.0, -1.0, 0.5],
+            Some(&[0.3; 3]),
+            None,
+            None,
+            None,
+            0.7,
+        )
+        .unwrap(),
+        via::through(&points, &times, 2, ViaKind::Quintic).unwrap(),
+        via::through(&points, &times, 2, ViaKind::Spline).unwrap(),
+    ];
+    for traj in trajs {
+        for n in [2, 7, 101] {
+            let m = n * traj.dof();
+            let (mut t, mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; m], vec![0.0; m], vec![0.0; m]);
+            traj.sample_uniform_into(&mut t, &mut q, &mut qd, &mut qdd).unwrap();
+            let (mut tc, mut qc, mut qdc, mut qddc) = (vec![0.0; n], vec![0.0; m], vec![0.0; m], vec![0.0; m]);
+            traj.sample_uniform_columns_into(&mut tc, &mut qc, &mut qdc, &mut qddc)
+                .unwrap();
+            assert_eq!(t, tc);
+            for i in 0..n {
+                for j in 0..traj.dof() {
+                    let (r, c) = (i * traj.dof() + j, j * n + i);
+                    assert_eq!((q[r], qd[r], qdd[r]), (qc[c], qdc[c], qddc[c]), "sample {i} joint {j}");
+                }
+            }
+        }
+    }
+}
+
 // ---------------------------------------------------------------- via points
 
 fn via_data() -> (Vec<f64>, Vec<f64>) {
