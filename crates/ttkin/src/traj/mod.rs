@@ -447,6 +447,8 @@ impl JointTrajectory {
             };
             let knot = self.knots[k];
             let rows = self.rows(k);
+            // `j` picks one column across all fifteen rows: no single iterator to enumerate instead.
+            #[allow(clippy::needless_range_loop)]
             for j in 0..self.dof {
                 let c: [f64; ROWS] = std::array::from_fn(|r| rows[r][j]);
                 let col = j * n + start..j * n + end;
