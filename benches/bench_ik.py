@@ -172,6 +172,7 @@ def main() -> None:
         qs = lim[:, 0] + (lim[:, 1] - lim[:, 0]) * rng.random((args.count, robot.n))
         targets = robot.fk(qs)
         label = f"{name} {task}"
+
         def ours(t, robot=robot, q0=q0, task=task):
             return robot.ik(t, q0, task=task).q
 

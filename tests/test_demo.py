@@ -9,8 +9,12 @@ from ttmanip.cli import main
 
 def test_demo_writes_figures_and_summary(tmp_path):
     assert main(["demo", "--out", str(tmp_path)]) == 0
-    for name in ("kinematics/workspace_gantry6.png", "kinematics/workspace_mobile8.png",
-                 "pipeline/stroke_joints.png", "pipeline/stroke_torques.png"):
+    for name in (
+        "kinematics/workspace_gantry6.png",
+        "kinematics/workspace_mobile8.png",
+        "pipeline/stroke_joints.png",
+        "pipeline/stroke_torques.png",
+    ):
         data = (tmp_path / name).read_bytes()
         assert data.startswith(b"\x89PNG") and len(data) > 20_000, name
     summary = json.loads((tmp_path / "summary.json").read_text())

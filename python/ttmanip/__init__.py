@@ -9,7 +9,7 @@ seconds; poses are 4×4 homogeneous matrices in the robot's base frame.
 (4, 4)
 """
 
-from . import dynamics, motor, robots
+from . import dynamics, motor, robots, traj
 from ._ttmanip import (
     IkResult,
     ModelError,
@@ -38,6 +38,7 @@ __all__ = [
     "dynamics",
     "motor",
     "robots",
+    "traj",
     "task_line",
     "track",
     "wls_step",

@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -424,3 +425,127 @@ class IkResult:
     def restarts(self) -> int | NDArray[np.int64]:
         """Random restarts used."""
     def __bool__(self) -> bool: ...
+
+# --- trajectories (crates/ttkin-py/src/traj.rs) -------------------------------------------------
+
+_F = NDArray[np.float64]
+
+class JointTrajectory:
+    """Joint-space trajectory: piecewise polynomials of degree ≤ 5 per joint (rad or m, s)."""
+
+    @property
+    def duration(self) -> float:
+        """Duration (s)."""
+    @property
+    def dof(self) -> int:
+        """Number of joints."""
+    @property
+    def knots(self) -> _F:
+        """Segment boundaries (s), from 0 to the duration."""
+    @property
+    def coefficients(self) -> _F:
+        """(segments, dof, 6) coefficients in ascending powers of the local time (s)."""
+    def sample(self, t: float | ArrayLike) -> tuple[_F, _F, _F]:
+        """(q, qd, qdd) at t: each (dof,) for a scalar t, (N, dof) for N times."""
+    def jerk(self, t: float) -> _F:
+        """Jerk (per s³) at t, (dof,)."""
+    def sample_rate(self, hz: float) -> tuple[_F, _F, _F, _F]:
+        """(t, q, qd, qdd) at a control rate, end time included."""
+    def sample_uniform(self, n: int) -> tuple[_F, _F, _F, _F]:
+        """(t, q, qd, qdd) at n ≥ 2 evenly spaced times."""
+    def peaks(self, order: int) -> tuple[_F, _F]:
+        """Exact signed peaks of velocity (1), acceleration (2) or jerk (3) and their times."""
+    def check_limits(self, robot: Robot, jerk: ArrayLike | None = None) -> list[dict[str, Any]]:
+        """Exact limit check: worst violation per joint and quantity; empty when all hold."""
+
+class CartesianTrajectory:
+    """Task-space trajectory: tool pose (4×4, base frame, m) along a line or an arc."""
+
+    @staticmethod
+    def line(
+        t0: ArrayLike, t1: ArrayLike, duration: float, law: str = "quintic", blend: float = 0.25
+    ) -> CartesianTrajectory:
+        """Straight line between two poses, slerp orientation."""
+    @staticmethod
+    def arc_through(
+        t0: ArrayLike,
+        via: ArrayLike,
+        t1: ArrayLike,
+        duration: float,
+        law: str = "quintic",
+        blend: float = 0.25,
+    ) -> CartesianTrajectory:
+        """Circular arc from T0 through a point to T1, slerp orientation."""
+    @staticmethod
+    def arc_about(
+        t0: ArrayLike,
+        centre: ArrayLike,
+        axis: ArrayLike,
+        angle: float,
+        duration: float,
+        law: str = "quintic",
+        blend: float = 0.25,
+    ) -> CartesianTrajectory:
+        """Circular arc of T0 about an axis line; the tool turns with the arc."""
+    @property
+    def duration(self) -> float:
+        """Duration (s)."""
+    def sample(self, t: float) -> tuple[_F, _F, _F]:
+        """(pose (4, 4), twist [v; ω] (6,), twist derivative (6,)), base frame."""
+    def sample_rate(self, hz: float) -> tuple[_F, _F, _F, _F]:
+        """(t (N,), poses (N, 4, 4), twists (N, 6), twist derivatives (N, 6))."""
+    def to_joint(
+        self, hz: float, q_start: ArrayLike, ik: Callable[[_F, _F], ArrayLike]
+    ) -> tuple[_F, _F, _F, _F]:
+        """(t, q, qd, qdd) by IK at every sample; raises naming the first unsolvable sample."""
+    def check_limits(
+        self, robot: Robot, ik: Callable[[_F, _F], ArrayLike], q_start: ArrayLike, hz: float = 1000.0
+    ) -> list[dict[str, Any]]:
+        """Sampled limit check through IK."""
+
+def traj_cubic(
+    q0: ArrayLike, q1: ArrayLike, duration: float, v0: ArrayLike | None = None, v1: ArrayLike | None = None
+) -> JointTrajectory: ...
+def traj_quintic(
+    q0: ArrayLike,
+    q1: ArrayLike,
+    duration: float,
+    v0: ArrayLike | None = None,
+    v1: ArrayLike | None = None,
+    a0: ArrayLike | None = None,
+    a1: ArrayLike | None = None,
+) -> JointTrajectory: ...
+def traj_quintic_samples(
+    q0: ArrayLike,
+    q1: ArrayLike,
+    duration: float,
+    n: int = 101,
+    v0: ArrayLike | None = None,
+    v1: ArrayLike | None = None,
+    a0: ArrayLike | None = None,
+    a1: ArrayLike | None = None,
+) -> tuple[_F, _F, _F, _F]: ...
+def traj_via(
+    points: ArrayLike,
+    times: ArrayLike,
+    kind: str = "cubic",
+    velocities: ArrayLike | None = None,
+    accelerations: ArrayLike | None = None,
+    v_start: ArrayLike | None = None,
+    v_end: ArrayLike | None = None,
+) -> JointTrajectory: ...
+def traj_minimal_duration(
+    robot: Robot, q0: ArrayLike, q1: ArrayLike, kind: str = "quintic", jerk: ArrayLike | None = None
+) -> float: ...
+def traj_stroke(
+    start: tuple[ArrayLike, ArrayLike, ArrayLike],
+    hit: tuple[ArrayLike, ArrayLike, ArrayLike],
+    t_hit: float,
+    ready: ArrayLike,
+    velocity: ArrayLike,
+    acceleration: ArrayLike,
+    jerk: ArrayLike,
+    lower: ArrayLike | None = None,
+    upper: ArrayLike | None = None,
+    return_duration: float | None = None,
+) -> tuple[JointTrajectory, float, float, list[dict[str, Any]]]: ...

@@ -78,18 +78,31 @@ def workspace_figure(robot: Robot, q_ref: np.ndarray, path: Path, count: int = 2
 
 def run(out: Path) -> dict:
     """Runs the demo, writes the figures and ``summary.json`` into ``out``, returns a short summary."""
+    import importlib
+
+    from . import pipeline
+
     out.mkdir(parents=True, exist_ok=True)
-    gantry = robots.gantry6()
-    mobile = robots.mobile8()
+    kin = out / "kinematics"
+    kin.mkdir(exist_ok=True)
+    q_gantry = np.array([0.1, -0.2, 0.3, 0.4, 0.6, 0.0])
     results = {
-        "gantry6": workspace_figure(
-            gantry, np.array([0.1, -0.2, 0.3, 0.4, 0.6, 0.0]), out / "workspace_gantry6.png"
-        ),
-        "mobile8": workspace_figure(mobile, robots.mobile8_start(), out / "workspace_mobile8.png"),
+        "kinematics": {
+            "gantry6": workspace_figure(robots.gantry6(), q_gantry, kin / "workspace_gantry6.png"),
+            "mobile8": workspace_figure(robots.mobile8(), robots.mobile8_start(), kin / "workspace_mobile8.png"),
+        },
+        "pipeline": pipeline.run(out / "pipeline"),
     }
-    (out / "summary.json").write_text(json.dumps(results, indent=2))
+    for name in ("seed000", "seed001"):
+        results[name] = importlib.import_module(f"ttmanip.experiments.{name}").run(out / name)
+    (out / "summary.json").write_text(json.dumps(results, indent=2, default=str))
+    hit = results["pipeline"]
     return {
-        "figures": [str(out / "workspace_gantry6.png"), str(out / "workspace_mobile8.png")],
-        "summary": str(out / "summary.json"),
-        "batch_fk_per_second_mobile8": round(results["mobile8"]["batch_fk_per_second"]),
+        "output": str(out),
+        "figures": sum(1 for _ in out.rglob("*.png")),
+        "batch_fk_per_second_mobile8": round(results["kinematics"]["mobile8"]["batch_fk_per_second"]),
+        "hit_pose_error_m": hit["hit_pose_error_m"],
+        "hit_twist_error": hit["hit_twist_error"],
+        "stroke_feasible": hit["stroke_feasible"],
+        "seed000_max_tracking_error": results["seed000"].get("max_tracking_error"),
     }

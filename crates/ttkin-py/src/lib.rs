@@ -11,6 +11,7 @@ mod ik;
 mod mobile;
 mod motor;
 mod robot;
+mod traj;
 
 /// The native extension module `ttmanip._ttmanip`.
 #[pymodule]
@@ -21,5 +22,6 @@ fn _ttmanip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     dynamics::register(m)?;
     motor::register(m)?;
     ik::register(m)?;
+    traj::register(m)?;
     Ok(())
 }

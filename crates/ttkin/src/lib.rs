@@ -21,6 +21,7 @@ pub mod joint;
 pub mod redundancy;
 pub mod robots;
 pub mod task;
+pub mod traj;
 pub mod transform;
 pub mod trig;
 pub mod urdf;

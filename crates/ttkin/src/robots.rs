@@ -144,14 +144,14 @@ pub fn gantry6() -> Chain {
 /// Seed 002 with chosen lengths. Modified DH rows (α_{i−1}, a_{i−1}, θ_i, d_i):
 /// (90°, 0, 90°, d1), (90°, 0, 90°, d2), (90°, 0, θ3, L1), (90°, 0, θ4, 0), (0, L3, θ5, L2),
 /// (90°, 0, θ6, L4). Joint order d1, d2 (linear axes along −y and +x of the base), θ3..θ6.
-/// Strokes ±1.0 m and ±0.6 m; wrist joints ±180°, θ4 within ±90° (the upper arm stays below its
+/// Strokes ±1.0 m and ±0.6 m (d1 force 600 N: its axis moves every carriage, ≈ 17 kg at 20 m/s²); wrist joints ±180°, θ4 within ±90° (the upper arm stays below its
 /// shoulder, one σ2 branch of the IK). Inertias and drives are documented estimates (8 kg and
 /// 4 kg carriages, aluminium-tube wrist links with lumped motors, a 0.18 kg racket at the tool).
 pub fn gantry6_with(l: GantryLengths) -> Result<Chain> {
     let m = DhConvention::Modified;
     let a90 = 90.0 * DEG;
     let joints = vec![
-        Joint::prismatic("d1", m, dh(0.0, a90, 0.0, a90))?.with_limits(limits(-1.0, 1.0, 3.0, 20.0, 300.0))?,
+        Joint::prismatic("d1", m, dh(0.0, a90, 0.0, a90))?.with_limits(limits(-1.0, 1.0, 3.0, 20.0, 600.0))?,
         Joint::prismatic("d2", m, dh(0.0, a90, 0.0, a90))?.with_limits(limits(-0.6, 0.6, 3.0, 20.0, 200.0))?,
         Joint::revolute("theta3", m, dh(0.0, a90, l.l1, 0.0))?.with_limits(limits(-PI, PI, 10.0, 100.0, 30.0))?,
         Joint::revolute("theta4", m, dh(0.0, a90, 0.0, 0.0))?.with_limits(limits(

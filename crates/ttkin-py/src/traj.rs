@@ -1,0 +1,670 @@
+//! Trajectory bindings: `JointTrajectory`, `CartesianTrajectory` and the constructor functions
+//! behind `ttmanip.traj` (conversion only; the maths is `ttkin::traj`).
+
+use nalgebra::Vector3;
+use numpy::ndarray::{Array2, ShapeBuilder};
+use numpy::{PyArray1, PyArray2, PyArrayDyn, PyArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use ttkin::traj::cartesian::{CartesianState, CartesianTrajectory, TimeLaw};
+use ttkin::traj::limits::{self, KinematicLimits, SegmentKind, Violation};
+use ttkin::traj::via::{self, ViaKind};
+use ttkin::traj::{JointState, JointTrajectory, Samples};
+
+use crate::convert::{f64_array, pose_to_numpy, to_numpy, transform, vector, zeros};
+use crate::errors::{PyResultExt, ShapeError, SingularError, TtmanipError, UnreachableError};
+use crate::robot::PyRobot;
+
+/// Reads a vector of any length ≥ 1 (finite values).
+fn any_vector(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f64>> {
+    let a = f64_array(obj, what)?;
+    match a.shape() {
+        [n] if *n > 0 => {
+            ttkin::error::check_finite(what, a.data()).py()?;
+            Ok(a.data().to_vec())
+        }
+        _ => Err(ShapeError::new_err(format!(
+            "{what}: expected shape (n,) with n ≥ 1, got {}",
+            a.shape_str()
+        ))),
+    }
+}
+
+fn opt_vector(obj: Option<&Bound<'_, PyAny>>, what: &str, n: usize) -> PyResult<Option<Vec<f64>>> {
+    obj.map(|o| vector(o, what, n)).transpose()
+}
+
+/// Reads an (m, n) array; returns (data, m, n).
+fn matrix(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<(Vec<f64>, usize, usize)> {
+    let a = f64_array(obj, what)?;
+    match a.shape() {
+        [m, n] => Ok((a.data().to_vec(), *m, *n)),
+        [m] => Ok((a.data().to_vec(), *m, 1)),
+        _ => Err(ShapeError::new_err(format!(
+            "{what}: expected shape (m, n), got {}",
+            a.shape_str()
+        ))),
+    }
+}
+
+fn samples_to_py<'py>(py: Python<'py>, s: &Samples) -> PyResult<Bound<'py, PyAny>> {
+    let m = s.t.len();
+    let t = to_numpy(py, &[m], &s.t);
+    let q = to_numpy(py, &[m, s.dof], &s.q);
+    let qd = to_numpy(py, &[m, s.dof], &s.qd);
+    let qdd = to_numpy(py, &[m, s.dof], &s.qdd);
+    Ok((t, q, qd, qdd).into_pyobject(py)?.into_any())
+}
+
+fn violations_to_py<'py>(py: Python<'py>, v: &[Violation]) -> PyResult<Bound<'py, PyList>> {
+    let list = PyList::empty(py);
+    for x in v {
+        let d = PyDict::new(py);
+        d.set_item("joint", x.joint)?;
+        d.set_item("quantity", x.quantity.name())?;
+        d.set_item("time", x.time)?;
+        d.set_item("value", x.value)?;
+        d.set_item("limit", x.limit)?;
+        list.append(d)?;
+    }
+    Ok(list)
+}
+
+fn robot_limits(robot: &PyRobot, jerk: Option<&Bound<'_, PyAny>>) -> PyResult<KinematicLimits> {
+    let n = robot.chain.dof();
+    let jerk = opt_vector(jerk, "jerk", n)?;
+    KinematicLimits::from_chain(&robot.chain, jerk.as_deref()).py()
+}
+
+/// A joint-space trajectory: piecewise polynomials of degree ≤ 5 per joint (rad or m, s).
+#[pyclass(name = "JointTrajectory", module = "ttmanip", frozen)]
+pub struct PyJointTrajectory {
+    inner: JointTrajectory,
+}
+
+#[pymethods]
+impl PyJointTrajectory {
+    /// Duration (s).
+    #[getter]
+    fn duration(&self) -> f64 {
+        self.inner.duration()
+    }
+
+    /// Number of joints.
+    #[getter]
+    fn dof(&self) -> usize {
+        self.inner.dof()
+    }
+
+    /// Segment boundaries (s), from 0 to the duration.
+    #[getter]
+    fn knots<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        to_numpy(py, &[self.inner.knots().len()], self.inner.knots())
+    }
+
+    /// (segments, dof, 6) coefficients in ascending powers of the local time τ = t − knot (s).
+    #[getter]
+    fn coefficients<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        let (k, n) = (self.inner.segments(), self.inner.dof());
+        let mut flat = Vec::with_capacity(k * n * 6);
+        for s in 0..k {
+            for j in 0..n {
+                flat.extend_from_slice(&self.inner.coefficients(s, j).expect("in range"));
+            }
+        }
+        to_numpy(py, &[k, n, 6], &flat)
+    }
+
+    /// (q, qd, qdd) at time `t` (s): each (dof,) for a scalar t, (N, dof) for an array of N times.
+    fn sample<'py>(&self, py: Python<'py>, t: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+        let n = self.inner.dof();
+        if let Ok(t) = t.extract::<f64>() {
+            let (q, qd, qdd) = (zeros(py, &[n]), zeros(py, &[n]), zeros(py, &[n]));
+            {
+                let (mut a, mut b, mut c) = (q.readwrite(), qd.readwrite(), qdd.readwrite());
+                self.inner
+                    .sample(
+                        t,
+                        a.as_slice_mut().expect("fresh"),
+                        b.as_slice_mut().expect("fresh"),
+                        c.as_slice_mut().expect("fresh"),
+                    )
+                    .py()?;
+            }
+            return Ok((q, qd, qdd).into_pyobject(py)?.into_any());
+        }
+        let times = any_vector(t, "t")?;
+        let s = self.inner.sample_times(&times).py()?;
+        let m = times.len();
+        Ok((
+            to_numpy(py, &[m, n], &s.q),
+            to_numpy(py, &[m, n], &s.qd),
+            to_numpy(py, &[m, n], &s.qdd),
+        )
+            .into_pyobject(py)?
+            .into_any())
+    }
+
+    /// Jerk (rad/s³ or m/s³) at time `t` (s), (dof,).
+    fn jerk<'py>(&self, py: Python<'py>, t: f64) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let out = zeros(py, &[self.inner.dof()]);
+        {
+            let mut w = out.readwrite();
+            self.inner.jerk(t, w.as_slice_mut().expect("fresh")).py()?;
+        }
+        Ok(out)
+    }
+
+    /// (t, q, qd, qdd) at a control rate of `hz`: t (N,), the others (N, dof); the end time is
+    /// always included.
+    fn sample_rate<'py>(&self, py: Python<'py>, hz: f64) -> PyResult<Bound<'py, PyAny>> {
+        let s = self.inner.sample_rate(hz).py()?;
+        samples_to_py(py, &s)
+    }
+
+    /// (t, q, qd, qdd) at `n` ≥ 2 evenly spaced times from 0 to the duration; q, qd, qdd are
+    /// (n, dof) arrays in Fortran order.
+    fn sample_uniform<'py>(&self, py: Python<'py>, n: usize) -> PyResult<Bound<'py, PyAny>> {
+        sample_uniform(py, &self.inner, n)
+    }
+
+    /// Exact peaks of velocity (order 1), acceleration (2) or jerk (3): (values, times), each
+    /// (dof,), values signed.
+    fn peaks<'py>(&self, py: Python<'py>, order: usize) -> PyResult<Bound<'py, PyAny>> {
+        let p = self.inner.peaks(order).py()?;
+        let values: Vec<f64> = p.iter().map(|x| x.value).collect();
+        let times: Vec<f64> = p.iter().map(|x| x.time).collect();
+        let n = p.len();
+        Ok((to_numpy(py, &[n], &values), to_numpy(py, &[n], &times))
+            .into_pyobject(py)?
+            .into_any())
+    }
+
+    /// Exact limit check against the robot's position, velocity and acceleration limits and the
+    /// optional jerk limits (dof,): a list of dicts (joint, quantity, time, value, limit), the
+    /// worst violation per joint and quantity; empty when every limit holds.
+    #[pyo3(signature = (robot, jerk=None))]
+    fn check_limits<'py>(
+        &self,
+        py: Python<'py>,
+        robot: &PyRobot,
+        jerk: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyList>> {
+        let limits = robot_limits(robot, jerk)?;
+        violations_to_py(py, &self.inner.check_limits(&limits).py()?)
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "JointTrajectory(dof={}, duration={} s, segments={})",
+            self.inner.dof(),
+            self.inner.duration(),
+            self.inner.segments()
+        )
+    }
+}
+
+/// (t, q, qd, qdd) at `n` evenly spaced times. q, qd, qdd are (n, dof) arrays in Fortran (column)
+/// order: Rust fills them joint by joint, which vectorises over the samples, then hands them to
+/// numpy without a copy.
+fn sample_uniform<'py>(py: Python<'py>, traj: &JointTrajectory, n: usize) -> PyResult<Bound<'py, PyAny>> {
+    let dof = traj.dof();
+    let (mut t, mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; n * dof], vec![0.0; n * dof], vec![0.0; n * dof]);
+    traj.sample_uniform_columns_into(&mut t, &mut q, &mut qd, &mut qdd)
+        .py()?;
+    let matrix = |v: Vec<f64>| {
+        let a = Array2::from_shape_vec((n, dof).f(), v).expect("n × dof values");
+        PyArray2::from_owned_array(py, a)
+    };
+    Ok((PyArray1::from_vec(py, t), matrix(q), matrix(qd), matrix(qdd))
+        .into_pyobject(py)?
+        .into_any())
+}
+
+/// Cubic from q0 to q1 in `duration` s with boundary velocities v0, v1 (zero when None).
+#[pyfunction]
+#[pyo3(signature = (q0, q1, duration, v0=None, v1=None))]
+fn traj_cubic(
+    q0: &Bound<'_, PyAny>,
+    q1: &Bound<'_, PyAny>,
+    duration: f64,
+    v0: Option<&Bound<'_, PyAny>>,
+    v1: Option<&Bound<'_, PyAny>>,
+) -> PyResult<PyJointTrajectory> {
+    let q0 = any_vector(q0, "q0")?;
+    let n = q0.len();
+    let q1 = vector(q1, "q1", n)?;
+    let (v0, v1) = (opt_vector(v0, "v0", n)?, opt_vector(v1, "v1", n)?);
+    let inner = JointTrajectory::cubic(&q0, &q1, v0.as_deref(), v1.as_deref(), duration).py()?;
+    Ok(PyJointTrajectory { inner })
+}
+
+struct QuinticArgs<'a, 'py> {
+    v0: Option<&'a Bound<'py, PyAny>>,
+    v1: Option<&'a Bound<'py, PyAny>>,
+    a0: Option<&'a Bound<'py, PyAny>>,
+    a1: Option<&'a Bound<'py, PyAny>>,
+}
+
+/// Reads a boundary vector without copying when it is a contiguous float64 array.
+fn build_quintic(
+    q0: &Bound<'_, PyAny>,
+    q1: &Bound<'_, PyAny>,
+    duration: f64,
+    o: QuinticArgs<'_, '_>,
+) -> PyResult<JointTrajectory> {
+    let q0 = f64_array(q0, "q0")?;
+    let n = match q0.shape() {
+        [n] if *n > 0 => *n,
+        _ => {
+            return Err(ShapeError::new_err(format!(
+                "q0: expected shape (n,) with n ≥ 1, got {}",
+                q0.shape_str()
+            )))
+        }
+    };
+    let q1 = f64_array(q1, "q1")?;
+    if q1.shape() != [n] {
+        return Err(ShapeError::new_err(format!(
+            "q1: expected shape ({n},), got {}",
+            q1.shape_str()
+        )));
+    }
+    let read = |x: Option<&Bound<'_, PyAny>>, what: &str| -> PyResult<Option<Vec<f64>>> { opt_vector(x, what, n) };
+    let (v0, v1, a0, a1) = (
+        read(o.v0, "v0")?,
+        read(o.v1, "v1")?,
+        read(o.a0, "a0")?,
+        read(o.a1, "a1")?,
+    );
+    JointTrajectory::quintic(
+        q0.data(),
+        q1.data(),
+        v0.as_deref(),
+        v1.as_deref(),
+        a0.as_deref(),
+        a1.as_deref(),
+        duration,
+    )
+    .py()
+}
+
+/// Quintic from q0 to q1 in `duration` s with boundary velocities and accelerations (zero when None).
+#[pyfunction]
+#[pyo3(signature = (q0, q1, duration, v0=None, v1=None, a0=None, a1=None))]
+#[allow(clippy::too_many_arguments)]
+fn traj_quintic(
+    q0: &Bound<'_, PyAny>,
+    q1: &Bound<'_, PyAny>,
+    duration: f64,
+    v0: Option<&Bound<'_, PyAny>>,
+    v1: Option<&Bound<'_, PyAny>>,
+    a0: Option<&Bound<'_, PyAny>>,
+    a1: Option<&Bound<'_, PyAny>>,
+) -> PyResult<PyJointTrajectory> {
+    let inner = build_quintic(q0, q1, duration, QuinticArgs { v0, v1, a0, a1 })?;
+    Ok(PyJointTrajectory { inner })
+}
+
+/// Builds a quintic and samples it at `n` evenly spaced times in one call: (t, q, qd, qdd), the
+/// last three (n, dof) in Fortran order.
+#[pyfunction]
+#[pyo3(signature = (q0, q1, duration, n=101, v0=None, v1=None, a0=None, a1=None))]
+#[allow(clippy::too_many_arguments)]
+fn traj_quintic_samples<'py>(
+    py: Python<'py>,
+    q0: &Bound<'py, PyAny>,
+    q1: &Bound<'py, PyAny>,
+    duration: f64,
+    n: usize,
+    v0: Option<&Bound<'py, PyAny>>,
+    v1: Option<&Bound<'py, PyAny>>,
+    a0: Option<&Bound<'py, PyAny>>,
+    a1: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let traj = build_quintic(q0, q1, duration, QuinticArgs { v0, v1, a0, a1 })?;
+    sample_uniform(py, &traj, n)
+}
+
+/// Trajectory through via points (m, n) at strictly increasing times (m,): kind "cubic" (C¹,
+/// heuristic or given velocities), "spline" (C², clamped end velocities) or "quintic" (C²).
+#[pyfunction]
+#[pyo3(signature = (points, times, kind="cubic", velocities=None, accelerations=None, v_start=None, v_end=None))]
+#[allow(clippy::too_many_arguments)]
+fn traj_via(
+    points: &Bound<'_, PyAny>,
+    times: &Bound<'_, PyAny>,
+    kind: &str,
+    velocities: Option<&Bound<'_, PyAny>>,
+    accelerations: Option<&Bound<'_, PyAny>>,
+    v_start: Option<&Bound<'_, PyAny>>,
+    v_end: Option<&Bound<'_, PyAny>>,
+) -> PyResult<PyJointTrajectory> {
+    let (p, m, n) = matrix(points, "points")?;
+    let t = any_vector(times, "times")?;
+    if t.len() != m {
+        return Err(ShapeError::new_err(format!(
+            "times: expected {m} times (one per via point), got {}",
+            t.len()
+        )));
+    }
+    let read_m = |x: Option<&Bound<'_, PyAny>>, what: &str| -> PyResult<Option<Vec<f64>>> {
+        x.map(|o| {
+            let (d, rm, rn) = matrix(o, what)?;
+            if (rm, rn) != (m, n) {
+                return Err(ShapeError::new_err(format!(
+                    "{what}: expected shape ({m}, {n}), got ({rm}, {rn})"
+                )));
+            }
+            Ok(d)
+        })
+        .transpose()
+    };
+    let (vel, acc) = (
+        read_m(velocities, "velocities")?,
+        read_m(accelerations, "accelerations")?,
+    );
+    let inner = match ViaKind::from_name(kind).py()? {
+        ViaKind::Cubic => via::cubic(&p, &t, n, vel.as_deref()),
+        ViaKind::Spline => {
+            let (vs, ve) = (opt_vector(v_start, "v_start", n)?, opt_vector(v_end, "v_end", n)?);
+            via::spline(&p, &t, n, vs.as_deref(), ve.as_deref())
+        }
+        ViaKind::Quintic => via::quintic(&p, &t, n, vel.as_deref(), acc.as_deref()),
+    }
+    .py()?;
+    Ok(PyJointTrajectory { inner })
+}
+
+/// Minimal duration (s) of a rest-to-rest "cubic" or "quintic" from q0 to q1 under the robot's
+/// velocity and acceleration limits and optional jerk limits (closed form).
+#[pyfunction]
+#[pyo3(signature = (robot, q0, q1, kind="quintic", jerk=None))]
+fn traj_minimal_duration(
+    robot: &PyRobot,
+    q0: &Bound<'_, PyAny>,
+    q1: &Bound<'_, PyAny>,
+    kind: &str,
+    jerk: Option<&Bound<'_, PyAny>>,
+) -> PyResult<f64> {
+    let n = robot.chain.dof();
+    let (q0, q1) = (vector(q0, "q0", n)?, vector(q1, "q1", n)?);
+    let kind = match kind {
+        "cubic" => SegmentKind::Cubic,
+        "quintic" => SegmentKind::Quintic,
+        other => {
+            return Err(TtmanipError::new_err(format!(
+                "kind: expected cubic or quintic, got '{other}'"
+            )))
+        }
+    };
+    limits::minimal_duration_rest(&q0, &q1, &robot_limits(robot, jerk)?, kind).py()
+}
+
+/// Hitting stroke: from (q, qd, qdd) reach (q_hit, qd_hit, qdd_hit) at t_hit s (or the earliest
+/// feasible time after it), then rest at `ready`. Limits: explicit velocity/acceleration/jerk
+/// arrays, or the robot's. Returns (trajectory, t_hit, return_duration, violations).
+#[pyfunction]
+#[pyo3(signature = (start, hit, t_hit, ready, velocity, acceleration, jerk, lower=None, upper=None, return_duration=None))]
+#[allow(clippy::too_many_arguments)]
+fn traj_stroke<'py>(
+    py: Python<'py>,
+    start: (Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>),
+    hit: (Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>),
+    t_hit: f64,
+    ready: &Bound<'py, PyAny>,
+    velocity: &Bound<'py, PyAny>,
+    acceleration: &Bound<'py, PyAny>,
+    jerk: &Bound<'py, PyAny>,
+    lower: Option<&Bound<'py, PyAny>>,
+    upper: Option<&Bound<'py, PyAny>>,
+    return_duration: Option<f64>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let q = any_vector(&start.0, "state.q")?;
+    let n = q.len();
+    let state = |s: &(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>), w: &str| -> PyResult<JointState> {
+        Ok(JointState {
+            q: vector(&s.0, &format!("{w}.q"), n)?,
+            qd: vector(&s.1, &format!("{w}.qd"), n)?,
+            qdd: vector(&s.2, &format!("{w}.qdd"), n)?,
+        })
+    };
+    let (s0, s1) = (state(&start, "state")?, state(&hit, "hit")?);
+    let ready = vector(ready, "ready", n)?;
+    // Infinite limits are allowed here, so read them without the finiteness check.
+    let raw = |x: &Bound<'py, PyAny>, w: &str| -> PyResult<Vec<f64>> {
+        let a = f64_array(x, w)?;
+        if a.shape() != [n] {
+            return Err(ShapeError::new_err(format!(
+                "{w}: expected shape ({n},), got {}",
+                a.shape_str()
+            )));
+        }
+        Ok(a.data().to_vec())
+    };
+    let mut limits = KinematicLimits::new(
+        &raw(velocity, "velocity")?,
+        &raw(acceleration, "acceleration")?,
+        &raw(jerk, "jerk")?,
+    )
+    .py()?;
+    if let (Some(lo), Some(hi)) = (lower, upper) {
+        limits = limits.with_position(&raw(lo, "lower")?, &raw(hi, "upper")?).py()?;
+    }
+    let s = py
+        .detach(|| ttkin::traj::stroke(&s0, &s1, t_hit, &ready, return_duration, &limits))
+        .py()?;
+    let violations = violations_to_py(py, &s.violations)?;
+    Ok((
+        PyJointTrajectory { inner: s.trajectory },
+        s.t_hit,
+        s.return_duration,
+        violations,
+    )
+        .into_pyobject(py)?
+        .into_any())
+}
+
+/// A task-space trajectory: tool pose (4×4, base frame, m) along a line or arc under a time law.
+#[pyclass(name = "CartesianTrajectory", module = "ttmanip", frozen)]
+pub struct PyCartesianTrajectory {
+    inner: CartesianTrajectory,
+}
+
+fn law(name: &str, blend: f64) -> PyResult<TimeLaw> {
+    Ok(match TimeLaw::from_name(name).py()? {
+        TimeLaw::Trapezoid { .. } => TimeLaw::Trapezoid { blend },
+        other => other,
+    })
+}
+
+fn point(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vector3<f64>> {
+    let v = vector(obj, what, 3)?;
+    Ok(Vector3::new(v[0], v[1], v[2]))
+}
+
+fn state_to_py<'py>(py: Python<'py>, s: &CartesianState) -> PyResult<Bound<'py, PyAny>> {
+    Ok((
+        pose_to_numpy(py, &s.pose),
+        to_numpy(py, &[6], &s.twist()),
+        to_numpy(py, &[6], &s.twist_derivative()),
+    )
+        .into_pyobject(py)?
+        .into_any())
+}
+
+#[pymethods]
+impl PyCartesianTrajectory {
+    /// Straight line from pose T0 to pose T1 (4×4) in `duration` s, slerp orientation.
+    #[staticmethod]
+    #[pyo3(signature = (t0, t1, duration, law="quintic", blend=0.25))]
+    fn line(t0: &Bound<'_, PyAny>, t1: &Bound<'_, PyAny>, duration: f64, law: &str, blend: f64) -> PyResult<Self> {
+        let (a, b) = (transform(t0, "T0")?, transform(t1, "T1")?);
+        let inner = CartesianTrajectory::line(&a, &b, duration, self::law(law, blend)?).py()?;
+        Ok(PyCartesianTrajectory { inner })
+    }
+
+    /// Circular arc from pose T0 through point `via` (3,) to pose T1, slerp orientation.
+    #[staticmethod]
+    #[pyo3(signature = (t0, via, t1, duration, law="quintic", blend=0.25))]
+    fn arc_through(
+        t0: &Bound<'_, PyAny>,
+        via: &Bound<'_, PyAny>,
+        t1: &Bound<'_, PyAny>,
+        duration: f64,
+        law: &str,
+        blend: f64,
+    ) -> PyResult<Self> {
+        let (a, b) = (transform(t0, "T0")?, transform(t1, "T1")?);
+        let inner =
+            CartesianTrajectory::arc_through(&a, &point(via, "via")?, &b, duration, self::law(law, blend)?).py()?;
+        Ok(PyCartesianTrajectory { inner })
+    }
+
+    /// Circular arc from pose T0 about the axis line (centre (3,), axis (3,)) by `angle` rad; the
+    /// tool turns with the arc.
+    #[staticmethod]
+    #[pyo3(signature = (t0, centre, axis, angle, duration, law="quintic", blend=0.25))]
+    fn arc_about(
+        t0: &Bound<'_, PyAny>,
+        centre: &Bound<'_, PyAny>,
+        axis: &Bound<'_, PyAny>,
+        angle: f64,
+        duration: f64,
+        law: &str,
+        blend: f64,
+    ) -> PyResult<Self> {
+        let a = transform(t0, "T0")?;
+        let inner = CartesianTrajectory::arc_about(
+            &a,
+            &point(centre, "centre")?,
+            &point(axis, "axis")?,
+            angle,
+            duration,
+            self::law(law, blend)?,
+        )
+        .py()?;
+        Ok(PyCartesianTrajectory { inner })
+    }
+
+    /// Duration (s).
+    #[getter]
+    fn duration(&self) -> f64 {
+        self.inner.duration()
+    }
+
+    /// (pose (4, 4), twist [v; ω] (6,), twist derivative (6,)) at time `t` (s); base frame.
+    fn sample<'py>(&self, py: Python<'py>, t: f64) -> PyResult<Bound<'py, PyAny>> {
+        state_to_py(py, &self.inner.sample(t).py()?)
+    }
+
+    /// (t (N,), poses (N, 4, 4), twists (N, 6), twist derivatives (N, 6)) at `hz`.
+    fn sample_rate<'py>(&self, py: Python<'py>, hz: f64) -> PyResult<Bound<'py, PyAny>> {
+        let states = self.inner.sample_rate(hz).py()?;
+        let m = states.len();
+        let (mut t, mut poses, mut tw, mut dtw) = (
+            Vec::with_capacity(m),
+            vec![0.0; 16 * m],
+            Vec::with_capacity(6 * m),
+            Vec::with_capacity(6 * m),
+        );
+        for (i, s) in states.iter().enumerate() {
+            t.push(s.t);
+            ttkin::transform::write_row_major(&s.pose, &mut poses[16 * i..16 * (i + 1)]);
+            tw.extend_from_slice(&s.twist());
+            dtw.extend_from_slice(&s.twist_derivative());
+        }
+        Ok((
+            to_numpy(py, &[m], &t),
+            to_numpy(py, &[m, 4, 4], &poses),
+            to_numpy(py, &[m, 6], &tw),
+            to_numpy(py, &[m, 6], &dtw),
+        )
+            .into_pyobject(py)?
+            .into_any())
+    }
+
+    /// Joint samples (t, q, qd, qdd) at `hz` from `ik(pose (4, 4), seed (n,)) -> q (n,)`, seeded
+    /// with `q_start` then the previous solution; qd, qdd by finite differences. The first sample
+    /// the IK cannot solve raises, naming its index and time.
+    fn to_joint<'py>(
+        &self,
+        py: Python<'py>,
+        hz: f64,
+        q_start: &Bound<'py, PyAny>,
+        ik: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        samples_to_py(py, &self.joint_samples(py, hz, q_start, ik)?)
+    }
+
+    /// Sampled limit check through IK (see `to_joint`) against the robot's position, velocity and
+    /// acceleration limits: the worst violation per joint and quantity, as dicts.
+    #[pyo3(signature = (robot, ik, q_start, hz=1000.0))]
+    fn check_limits<'py>(
+        &self,
+        py: Python<'py>,
+        robot: &PyRobot,
+        ik: &Bound<'py, PyAny>,
+        q_start: &Bound<'py, PyAny>,
+        hz: f64,
+    ) -> PyResult<Bound<'py, PyList>> {
+        let limits = robot_limits(robot, None)?;
+        let samples = self.joint_samples(py, hz, q_start, ik)?;
+        violations_to_py(py, &samples.check_limits(&limits).py()?)
+    }
+
+    fn __repr__(&self) -> String {
+        let kind = match self.inner.path() {
+            ttkin::traj::Path::Line { .. } => "line",
+            ttkin::traj::Path::Arc { .. } => "arc",
+        };
+        format!(
+            "CartesianTrajectory({kind}, {:.4} m, duration={} s, law={:?})",
+            self.inner.path().length(),
+            self.inner.duration(),
+            self.inner.law()
+        )
+    }
+}
+
+impl PyCartesianTrajectory {
+    /// Joint samples through the Python callable `ik` (see `to_joint`).
+    fn joint_samples<'py>(
+        &self,
+        py: Python<'py>,
+        hz: f64,
+        q_start: &Bound<'py, PyAny>,
+        ik: &Bound<'py, PyAny>,
+    ) -> PyResult<Samples> {
+        let q0 = any_vector(q_start, "q_start")?;
+        let n = q0.len();
+        let result = self.inner.to_joint(hz, &q0, |pose, seed| {
+            let call = ik.call1((pose_to_numpy(py, pose), to_numpy(py, &[n], seed)));
+            let out = call.and_then(|r| any_vector(&r, "ik result"));
+            out.map_err(|e| {
+                let msg = e.value(py).to_string();
+                if e.is_instance_of::<UnreachableError>(py) {
+                    ttkin::Error::Unreachable(msg)
+                } else if e.is_instance_of::<SingularError>(py) {
+                    ttkin::Error::Singular(msg)
+                } else {
+                    ttkin::Error::invalid("ik", format!("{}: {msg}", e.get_type(py)))
+                }
+            })
+        });
+        result.py()
+    }
+}
+
+/// Adds the trajectory classes and functions to the module.
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyJointTrajectory>()?;
+    m.add_class::<PyCartesianTrajectory>()?;
+    m.add_function(wrap_pyfunction!(traj_cubic, m)?)?;
+    m.add_function(wrap_pyfunction!(traj_quintic, m)?)?;
+    m.add_function(wrap_pyfunction!(traj_quintic_samples, m)?)?;
+    m.add_function(wrap_pyfunction!(traj_via, m)?)?;
+    m.add_function(wrap_pyfunction!(traj_minimal_duration, m)?)?;
+    m.add_function(wrap_pyfunction!(traj_stroke, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,279 @@
+"""Trajectory generation: joint polynomials, via points, task-space lines and arcs, hitting strokes.
+
+The maths lives in the Rust core (``ttkin::traj``); these functions convert arguments and return
+the native trajectory objects. Units are SI: joint values in rad (revolute) or m (prismatic),
+time in s, poses 4×4 in the robot's base frame.
+
+Joint-space results are :class:`JointTrajectory` objects with ``duration``, ``sample(t)`` →
+``(q, qd, qdd)``, ``sample_rate(hz)`` → ``(t, q, qd, qdd)`` and ``check_limits(robot)`` (exact
+peaks, not sampled). Task-space results are :class:`CartesianTrajectory` objects whose
+``sample(t)`` gives ``(pose, twist, twist_dot)``.
+
+>>> import ttmanip.traj as tt
+>>> traj = tt.cubic([0.0], [1.6], 2.0)
+>>> [round(float(x[0]), 6) for x in traj.sample(0.5)]
+[0.25, 0.9, 1.2]
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ._ttmanip import (
+    CartesianTrajectory,
+    JointTrajectory,
+    Robot,
+    traj_cubic,
+    traj_minimal_duration,
+    traj_quintic,
+    traj_quintic_samples,
+    traj_stroke,
+    traj_via,
+)
+
+__all__ = [
+    "CartesianTrajectory",
+    "JointTrajectory",
+    "Stroke",
+    "arc",
+    "cubic",
+    "line",
+    "minimal_duration",
+    "quintic",
+    "quintic_samples",
+    "stroke",
+    "via",
+]
+
+
+def cubic(
+    q0: ArrayLike, q1: ArrayLike, duration: float, v0: ArrayLike | None = None, v1: ArrayLike | None = None
+) -> JointTrajectory:
+    """Cubic from ``q0`` to ``q1`` in ``duration`` s, boundary velocities ``v0``, ``v1`` (zero if None).
+
+    Seed 001's formulas, corrected: a2 = 3h/tf² − (2v0 + v1)/tf, a3 = −2h/tf³ + (v0 + v1)/tf².
+    """
+    return traj_cubic(q0, q1, duration, v0, v1)
+
+
+def quintic(
+    q0: ArrayLike,
+    q1: ArrayLike,
+    duration: float,
+    v0: ArrayLike | None = None,
+    v1: ArrayLike | None = None,
+    a0: ArrayLike | None = None,
+    a1: ArrayLike | None = None,
+) -> JointTrajectory:
+    """Quintic from ``q0`` to ``q1`` in ``duration`` s with boundary velocities and accelerations."""
+    return traj_quintic(q0, q1, duration, v0, v1, a0, a1)
+
+
+def quintic_samples(
+    q0: ArrayLike,
+    q1: ArrayLike,
+    duration: float,
+    n: int = 101,
+    v0: ArrayLike | None = None,
+    v1: ArrayLike | None = None,
+    a0: ArrayLike | None = None,
+    a1: ArrayLike | None = None,
+):
+    """Builds a quintic and samples it at ``n`` evenly spaced times in one native call.
+
+    Returns ``(t, q, qd, qdd)``: t of shape (n,), the others (n, dof).
+    """
+    return traj_quintic_samples(q0, q1, duration, n, v0, v1, a0, a1)
+
+
+def via(
+    points: ArrayLike,
+    times: ArrayLike,
+    kind: str = "cubic",
+    velocities: ArrayLike | None = None,
+    accelerations: ArrayLike | None = None,
+    v_start: ArrayLike | None = None,
+    v_end: ArrayLike | None = None,
+) -> JointTrajectory:
+    """Trajectory through via ``points`` (m, dof) reached at strictly increasing ``times`` (m,).
+
+    ``kind``: ``"cubic"`` (velocity continuous; via velocities given or by the usual heuristic),
+    ``"spline"`` (C² cubic spline, end velocities ``v_start``/``v_end``, zero by default) or
+    ``"quintic"`` (acceleration continuous). The trajectory's time starts at 0 at ``times[0]``.
+    """
+    return traj_via(points, times, kind, velocities, accelerations, v_start, v_end)
+
+
+def line(
+    T0: ArrayLike, T1: ArrayLike, duration: float, law: str = "quintic", blend: float = 0.25
+) -> CartesianTrajectory:
+    """Straight-line tool motion from pose ``T0`` to ``T1`` (4×4) with slerp orientation.
+
+    ``law``: ``"cubic"``, ``"quintic"`` or ``"trapezoid"`` (``blend``: fraction of the duration
+    spent accelerating, in (0, 0.5]).
+    """
+    return CartesianTrajectory.line(T0, T1, duration, law, blend)
+
+
+def arc(
+    T0: ArrayLike,
+    T1: ArrayLike | None = None,
+    duration: float | None = None,
+    *,
+    via: ArrayLike | None = None,
+    centre: ArrayLike | None = None,
+    axis: ArrayLike | None = None,
+    angle: float | None = None,
+    law: str = "quintic",
+    blend: float = 0.25,
+) -> CartesianTrajectory:
+    """Circular-arc tool motion, either through three points or about an axis.
+
+    ``arc(T0, T1, duration, via=p)``: from pose T0 through point p (3,) to pose T1, slerp orientation.
+    ``arc(T0, duration=d, centre=c, axis=k, angle=a)``: rotate pose T0 about the line through c
+    along k by a rad (right-handed); the tool turns with the arc.
+    """
+    if duration is None:
+        raise TypeError("arc: duration is required")
+    if via is not None:
+        if T1 is None or centre is not None or axis is not None or angle is not None:
+            raise TypeError("arc: give either (T1, via) or (centre, axis, angle)")
+        return CartesianTrajectory.arc_through(T0, via, T1, duration, law, blend)
+    if centre is None or axis is None or angle is None or T1 is not None:
+        raise TypeError("arc: give either (T1, via) or (centre, axis, angle)")
+    return CartesianTrajectory.arc_about(T0, centre, axis, angle, duration, law, blend)
+
+
+def minimal_duration(
+    robot: Robot, q0: ArrayLike, q1: ArrayLike, kind: str = "quintic", jerk: ArrayLike | None = None
+) -> float:
+    """Shortest rest-to-rest ``kind`` segment q0 → q1 (s) within the robot's (and ``jerk``) limits."""
+    return traj_minimal_duration(robot, q0, q1, kind, jerk)
+
+
+@dataclass(frozen=True)
+class Stroke:
+    """A planned hitting stroke: hit leg then return leg, time 0 = now."""
+
+    trajectory: JointTrajectory
+    t_hit: float
+    requested_t_hit: float
+    return_duration: float
+    violations: list[dict[str, Any]] = field(default_factory=list)
+
+    @property
+    def on_time(self) -> bool:
+        """Whether the requested hit time was kept."""
+        return self.t_hit == self.requested_t_hit
+
+    @property
+    def feasible(self) -> bool:
+        """Whether every limit holds (position limits included)."""
+        return not self.violations
+
+
+def _state(state: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(q, qd, qdd) from a tuple, a mapping, an object with q/qd/qdd, or q alone (at rest)."""
+    if isinstance(state, Mapping):
+        q = np.asarray(state["q"], dtype=float)
+        qd, qdd = state.get("qd"), state.get("qdd")
+    elif hasattr(state, "q"):
+        q = np.asarray(state.q, dtype=float)
+        qd, qdd = getattr(state, "qd", None), getattr(state, "qdd", None)
+    elif isinstance(state, Sequence) and len(state) in (1, 2, 3) and np.ndim(state[0]) == 1:
+        q = np.asarray(state[0], dtype=float)
+        qd = state[1] if len(state) > 1 else None
+        qdd = state[2] if len(state) > 2 else None
+    else:
+        q, qd, qdd = np.asarray(state, dtype=float), None, None
+    zero = np.zeros_like(q)
+    qd = zero if qd is None else np.asarray(qd, dtype=float)
+    qdd = zero if qdd is None else np.asarray(qdd, dtype=float)
+    return q, qd, qdd
+
+
+def stroke(
+    robot: Robot | None,
+    state: Any,
+    q_hit: ArrayLike,
+    qd_hit: ArrayLike,
+    t_hit: float,
+    ready: ArrayLike,
+    qdd_hit: ArrayLike | None = None,
+    *,
+    velocity: ArrayLike | None = None,
+    acceleration: ArrayLike | None = None,
+    jerk: ArrayLike | None = None,
+    return_duration: float | None = None,
+) -> Stroke:
+    """Plans a hitting stroke with quintics (the patent's step S104).
+
+    From ``state`` — ``(q, qd, qdd)``, a mapping or object with ``q``/``qd``/``qdd``, or just
+    ``q`` at rest — reach ``(q_hit, qd_hit, qdd_hit)`` (acceleration zero by default) at ``t_hit``
+    s, then rest at ``ready``. Limits: the robot's velocity, acceleration and position limits,
+    overridden by ``velocity``/``acceleration``; ``jerk`` optional (inf otherwise). When t_hit is
+    infeasible the earliest feasible later hit time is used (root bracketing on the duration with
+    exact quintic extrema); the return leg takes its minimal feasible duration unless given.
+    """
+    q0, qd0, qdd0 = _state(state)
+    n = q0.shape[0]
+    inf = np.full(n, np.inf)
+    lower = upper = None
+    if robot is not None:
+        vel, acc = robot.velocity_limits, robot.acceleration_limits
+        lim = robot.limits
+        lower, upper = lim[:, 0].copy(), lim[:, 1].copy()
+    else:
+        vel, acc = inf, inf
+    vel = vel if velocity is None else np.asarray(velocity, dtype=float)
+    acc = acc if acceleration is None else np.asarray(acceleration, dtype=float)
+    jrk = inf if jerk is None else np.asarray(jerk, dtype=float)
+    q_hit = np.asarray(q_hit, dtype=float)
+    hit = (
+        q_hit,
+        np.asarray(qd_hit, dtype=float),
+        np.zeros_like(q_hit) if qdd_hit is None else np.asarray(qdd_hit, dtype=float),
+    )
+    traj, t, back, violations = traj_stroke(
+        (q0, qd0, qdd0), hit, t_hit, ready, vel, acc, jrk, lower, upper, return_duration
+    )
+    return Stroke(traj, t, float(t_hit), back, violations)
+
+
+def check_cartesian_limits(
+    traj: CartesianTrajectory, robot: Robot, ik: Callable, q_start: ArrayLike, hz: float = 1000.0
+) -> list[dict[str, Any]]:
+    """Limit check of a task-space trajectory through IK at ``hz`` (sampled, finite differences).
+
+    Returns the worst violation per joint and quantity (position, velocity, acceleration) as
+    dicts like :meth:`JointTrajectory.check_limits`; unlike it, values are sampled, not exact.
+    """
+    t, q, qd, qdd = traj.to_joint(hz, q_start, ik)
+    lim = robot.limits
+    out = []
+    checks = (
+        ("position", q, lim[:, 0], lim[:, 1]),
+        ("velocity", qd, -robot.velocity_limits, robot.velocity_limits),
+        ("acceleration", qdd, -robot.acceleration_limits, robot.acceleration_limits),
+    )
+    for quantity, x, lo, hi in checks:
+        excess = np.maximum(lo - x, x - hi)
+        for j in range(x.shape[1]):
+            i = int(np.argmax(excess[:, j]))
+            if excess[i, j] > 1e-9:
+                bound = lo[j] if x[i, j] < lo[j] else hi[j]
+                out.append(
+                    {
+                        "joint": j,
+                        "quantity": quantity,
+                        "time": float(t[i]),
+                        "value": float(x[i, j]),
+                        "limit": float(bound),
+                    }
+                )
+    return out
