@@ -158,8 +158,8 @@ def test_torque_profile_of_a_planned_motion():
     np.testing.assert_allclose(profile.current, profile.motor / kt, rtol=1e-14)
     np.testing.assert_allclose(profile.peak, np.abs(profile.joint).max(axis=0))
     assert profile.within_limits and profile.violations == []
-    # the same motion 4× faster needs 16× the inertial torques: the wrist joints exceed their limits
-    fast = robot.torques((q, 4 * qd, 16 * qdd))
+    # the same motion 8× faster needs 64× the inertial torques: some joints exceed their effort limits
+    fast = robot.torques((q, 8 * qd, 64 * qdd))
     assert not fast.within_limits
     for sample, joint, torque, limit in fast.violations:
         assert abs(torque) > limit == robot.effort_limits[joint]

@@ -89,7 +89,9 @@ def run(out: Path) -> dict:
     results = {
         "kinematics": {
             "gantry6": workspace_figure(robots.gantry6(), q_gantry, kin / "workspace_gantry6.png"),
-            "mobile8": workspace_figure(robots.mobile8(), robots.mobile8_start(), kin / "workspace_mobile8.png"),
+            "mobile8": workspace_figure(
+                robots.mobile8(), robots.mobile8_start(), kin / "workspace_mobile8.png"
+            ),
         },
         "pipeline": pipeline.run(out / "pipeline"),
     }
