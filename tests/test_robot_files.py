@@ -222,3 +222,15 @@ def test_cli_export_and_info(tmp_path, capsys):
     assert main(["export", "arm4", "--out", str(tmp_path / "arm4.json")]) == 2
     assert main(["info", "gantry6"]) == 0
     assert "theta6" in capsys.readouterr().out
+
+
+def test_urdf_round_trip_of_a_robot_without_any_limits():
+    # no position, speed or effort limits: continuous/prismatic joints whose <limit> says "not given"
+    arm = ttmanip.Robot.from_dh(
+        a=[0, 0.3, 0.25], alpha=[np.pi / 2, 0, 0], d=[0.2, 0, 0], theta=[0, 0, 0], types="RPR"
+    )
+    back = ttmanip.Robot.from_urdf_string(arm.to_urdf(), "base_link", "tool")
+    q = np.array([0.3, 0.1, -0.7])
+    np.testing.assert_allclose(back.fk(q), arm.fk(q), atol=1e-14)
+    assert np.all(np.isinf(back.limits)) and np.all(np.isinf(back.velocity_limits))
+    assert np.all(np.isinf(back.effort_limits))

@@ -280,8 +280,9 @@ pub fn to_urdf_string(chain: &Chain) -> String {
             limit: urdf_rs::JointLimit {
                 lower: l.lower,
                 upper: l.upper,
-                effort: l.effort.unwrap_or(f64::INFINITY),
-                velocity: l.velocity.unwrap_or(f64::INFINITY),
+                // URDF requires both attributes; 0 stands for "not given" (read back as no limit).
+                effort: l.effort.unwrap_or(0.0),
+                velocity: l.velocity.unwrap_or(0.0),
                 acceleration: f64::INFINITY,
                 deceleration: f64::INFINITY,
                 jerk: f64::INFINITY,
