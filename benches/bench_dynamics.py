@@ -12,17 +12,12 @@ import timeit
 
 import numpy as np
 import ttmanip
+from timing import per_call_us
 
 try:
     import pinocchio as pin
 except ImportError:  # pragma: no cover - optional peer
     pin = None
-
-
-def per_call_us(fn, number: int = 20000, repeat: int = 7) -> float:
-    """Median time of one call of ``fn`` in µs."""
-    times = timeit.repeat(fn, number=number, repeat=repeat)
-    return float(np.median(times)) / number * 1e6
 
 
 def bench_robot(name: str, batch: int) -> list[tuple[str, str, str]]:

@@ -11,10 +11,10 @@ from __future__ import annotations
 
 import os
 import tempfile
-import timeit
 
 import numpy as np
 import ttmanip
+from timing import per_call_us, per_item_rate
 
 try:
     import pinocchio as pin
@@ -25,17 +25,6 @@ try:
     from roboticstoolbox.models.URDF.URDFRobot import URDF_file
 except ImportError:  # pragma: no cover - optional peer
     rtb = None
-
-
-def per_call_us(fn, number: int = 20000, repeat: int = 7) -> float:
-    """Median time of one call of ``fn`` in µs."""
-    times = timeit.repeat(fn, number=number, repeat=repeat)
-    return float(np.median(times)) / number * 1e6
-
-
-def per_item_rate(fn, count: int, repeat: int = 5) -> float:
-    """Items per second of a batch call over ``count`` items (best of ``repeat``)."""
-    return count / min(timeit.repeat(fn, number=1, repeat=repeat))
 
 
 def bench_robot(name: str, batch: int) -> list[tuple[str, str, str]]:

@@ -18,10 +18,9 @@ Run: ``.venv/bin/python benches/bench_traj.py`` (peer: ``pip install ruckig``).
 
 from __future__ import annotations
 
-import timeit
-
 import numpy as np
 import ttmanip.traj as tt
+from timing import per_call_us
 
 try:
     import ruckig
@@ -33,11 +32,6 @@ VMAX = np.full(DOF, 4.0)
 AMAX = np.full(DOF, 40.0)
 JMAX = np.full(DOF, 800.0)
 T_REQUEST = 0.5
-
-
-def per_call_us(fn, number: int = 2000, repeat: int = 5) -> float:
-    """Median time of one call of ``fn`` in µs."""
-    return float(np.median(timeit.repeat(fn, number=number, repeat=repeat))) / number * 1e6
 
 
 def problems(count: int, seed: int = 1) -> list[dict[str, np.ndarray]]:

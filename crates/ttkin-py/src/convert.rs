@@ -140,3 +140,17 @@ pub fn pose_to_numpy<'py>(py: Python<'py>, t: &IsometryMatrix3<f64>) -> Bound<'p
 pub fn zeros<'py>(py: Python<'py>, shape: &[usize]) -> Bound<'py, PyArrayDyn<f64>> {
     PyArrayDyn::zeros(py, IxDyn(shape), false)
 }
+
+/// A new float64 array of `shape` filled by `fill` with the GIL released (batch work).
+pub fn filled_without_gil<'py, F>(py: Python<'py>, shape: &[usize], fill: F) -> PyResult<Bound<'py, PyArrayDyn<f64>>>
+where
+    F: FnOnce(&mut [f64]) -> ttkin::Result<()> + Send,
+{
+    let out = zeros(py, shape);
+    {
+        let mut w = out.readwrite();
+        let o = w.as_slice_mut().expect("a fresh array is contiguous");
+        py.detach(|| fill(o)).py()?;
+    }
+    Ok(out)
+}

@@ -14,7 +14,7 @@ use pyo3::prelude::*;
 use ttkin::dynamics::{TorqueProfile, EARTH_GRAVITY};
 use ttkin::{Chain, Drive, Dynamics, DynamicsData, Inertial, Wrench};
 
-use crate::convert::{f64_array, to_numpy, vector, zeros, F64Array};
+use crate::convert::{f64_array, filled_without_gil, to_numpy, vector, zeros, F64Array};
 use crate::errors::{PyResultExt, ShapeError, TtmanipError};
 use crate::robot::PyRobot;
 
@@ -274,14 +274,8 @@ impl PyRobot {
                 .with_data(|dy, d| dy.mass_matrix(d, a.data()).map(|m| to_numpy(py, &[n, n], m.as_slice())))?
                 .py(),
             Some(count) => {
-                let dy = self.dynamics()?;
-                let out = zeros(py, &[count, n, n]);
-                {
-                    let mut w = out.readwrite();
-                    let (qs, o) = (a.data(), w.as_slice_mut().expect("fresh array"));
-                    py.detach(|| dy.mass_matrix_batch(qs, o)).py()?;
-                }
-                Ok(out)
+                let (dy, qs) = (self.dynamics()?, a.data());
+                filled_without_gil(py, &[count, n, n], |o| dy.mass_matrix_batch(qs, o))
             }
         }
     }
@@ -302,14 +296,8 @@ impl PyRobot {
                 .with_data(|dy, d| dy.gravity(d, a.data(), &g).map(|t| to_numpy(py, &[n], t.as_slice())))?
                 .py(),
             Some(count) => {
-                let dy = self.dynamics()?;
-                let out = zeros(py, &[count, n]);
-                {
-                    let mut w = out.readwrite();
-                    let (qs, o) = (a.data(), w.as_slice_mut().expect("fresh array"));
-                    py.detach(|| dy.gravity_batch(qs, &g, o)).py()?;
-                }
-                Ok(out)
+                let (dy, qs) = (self.dynamics()?, a.data());
+                filled_without_gil(py, &[count, n], |o| dy.gravity_batch(qs, &g, o))
             }
         }
     }
@@ -365,14 +353,9 @@ impl PyRobot {
                 .py(),
             Some(count) => {
                 let dy = self.dynamics()?;
-                let out = zeros(py, &[count, n]);
-                {
-                    let mut o = out.readwrite();
-                    let o = o.as_slice_mut().expect("fresh array");
-                    py.detach(|| dy.forward_dynamics_batch(q, qd, tau, &g, w.as_ref(), o))
-                        .py()?;
-                }
-                Ok(out)
+                filled_without_gil(py, &[count, n], |o| {
+                    dy.forward_dynamics_batch(q, qd, tau, &g, w.as_ref(), o)
+                })
             }
         }
     }

@@ -10,7 +10,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyString;
 use ttkin::{Chain, Dh, DhConvention, JacobianFrame, Joint, JointType, Limits};
 
-use crate::convert::{f64_array, pose_to_numpy, shape_str, to_numpy, transform, vector, zeros};
+use crate::convert::{f64_array, filled_without_gil, pose_to_numpy, shape_str, to_numpy, transform, vector, zeros};
 use crate::errors::{PyResultExt, ShapeError, TtmanipError};
 
 /// A serial robot arm: joints from base to tool (m, rad, s). Immutable; share it freely.
@@ -324,13 +324,8 @@ impl PyRobot {
         match batch {
             None => Ok(pose_to_numpy(py, &self.chain.fk(a.data()).py()?)),
             Some(count) => {
-                let out = zeros(py, &[count, 4, 4]);
-                {
-                    let mut w = out.readwrite();
-                    let (qs, o, chain) = (a.data(), w.as_slice_mut().expect("fresh array"), &*self.chain);
-                    py.detach(|| chain.fk_batch(qs, o)).py()?;
-                }
-                Ok(out)
+                let (qs, chain) = (a.data(), &*self.chain);
+                filled_without_gil(py, &[count, 4, 4], |o| chain.fk_batch(qs, o))
             }
         }
     }
@@ -343,16 +338,14 @@ impl PyRobot {
             None => (1, vec![n, 4, 4]),
             Some(c) => (c, vec![c, n, 4, 4]),
         };
-        let out = zeros(py, &shape);
-        {
-            let mut w = out.readwrite();
-            let (qs, o, chain) = (a.data(), w.as_slice_mut().expect("fresh array"), &*self.chain);
-            if count > 64 {
-                py.detach(|| chain.fk_all_batch(qs, o)).py()?;
-            } else {
-                chain.fk_all_batch(qs, o).py()?;
-            }
+        let (qs, chain) = (a.data(), &*self.chain);
+        if count > 64 {
+            return filled_without_gil(py, &shape, |o| chain.fk_all_batch(qs, o));
         }
+        let out = zeros(py, &shape);
+        chain
+            .fk_all_batch(qs, out.readwrite().as_slice_mut().expect("a fresh array is contiguous"))
+            .py()?;
         Ok(out)
     }
 
@@ -374,13 +367,8 @@ impl PyRobot {
                 Ok(to_numpy(py, &[6, n], j.transpose().as_slice()))
             }
             Some(count) => {
-                let out = zeros(py, &[count, 6, n]);
-                {
-                    let mut w = out.readwrite();
-                    let (qs, o, chain) = (a.data(), w.as_slice_mut().expect("fresh array"), &*self.chain);
-                    py.detach(|| chain.jacobian_batch(qs, frame, o)).py()?;
-                }
-                Ok(out)
+                let (qs, chain) = (a.data(), &*self.chain);
+                filled_without_gil(py, &[count, 6, n], |o| chain.jacobian_batch(qs, frame, o))
             }
         }
     }

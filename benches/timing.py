@@ -1,0 +1,18 @@
+"""Timing helpers shared by the Python benchmarks (run them as ``python benches/bench_*.py``)."""
+
+from __future__ import annotations
+
+import timeit
+
+import numpy as np
+
+
+def per_call_us(fn, number: int = 20000, repeat: int = 7) -> float:
+    """Median time of one call of ``fn`` in µs."""
+    times = timeit.repeat(fn, number=number, repeat=repeat)
+    return float(np.median(times)) / number * 1e6
+
+
+def per_item_rate(fn, count: int, repeat: int = 5) -> float:
+    """Items per second of a batch call over ``count`` items (best of ``repeat``)."""
+    return count / min(timeit.repeat(fn, number=1, repeat=repeat))
