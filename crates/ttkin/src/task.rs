@@ -238,7 +238,7 @@ pub fn rotation_log(r: &Matrix3<f64>) -> Vector3<f64> {
     a * theta
 }
 
-/// Skew-symmetric matrix [v]× with [v]× w = v × w.
+/// Skew-symmetric matrix `[v]×` with `[v]× w = v × w`.
 pub fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0)
 }
