@@ -6,10 +6,11 @@ cd "$(dirname "$0")/.."
 
 bash scripts/setup.sh
 
-echo "== cargo fmt / clippy / ruff"
+echo "== cargo fmt / clippy / ruff / rustdoc"
 cargo fmt --all -- --check
 cargo clippy --workspace --all-targets --quiet -- -D warnings
 .venv/bin/ruff check python tests benches
+RUSTDOCFLAGS="-D warnings" cargo doc --quiet --no-deps -p ttkin -p ttcan
 
 echo "== cargo test"
 cargo test --quiet
