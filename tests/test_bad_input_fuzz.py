@@ -4,10 +4,9 @@ crash, a panic or another exception type."""
 from __future__ import annotations
 
 import numpy as np
+import ttmanip
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
-import ttmanip
 
 ROBOTS = {name: ttmanip.Robot.builtin(name) for name in ("mobile8", "gantry6", "arm4", "ur5")}
 
