@@ -152,6 +152,9 @@ pub struct Drive {
     pub torque_constant: Option<f64>,
 }
 
+/// Joint speeds (rad/s or m/s) at or below which Coulomb friction is taken as 0.
+pub const COULOMB_DEADBAND: f64 = 1e-9;
+
 impl Drive {
     /// A drive with only a gear ratio: no rotor inertia, no friction, no torque constant.
     pub fn geared(gear_ratio: f64) -> Self {
@@ -169,12 +172,13 @@ impl Drive {
         self.gear_ratio * self.gear_ratio * self.rotor_inertia
     }
 
-    /// Friction torque (N·m or N) at joint speed `qd` (rad/s or m/s): b·q̇ + f_c·sign(q̇), with
-    /// sign(0) = 0.
+    /// Friction torque (N·m or N) at joint speed `qd` (rad/s or m/s): b·q̇ + f_c·sign(q̇), with the
+    /// Coulomb term 0 for |q̇| ≤ [`COULOMB_DEADBAND`] (a joint at rest, whose planned speed is
+    /// round-off, has no definite friction direction).
     pub fn friction(&self, qd: f64) -> f64 {
-        let sign = if qd > 0.0 {
+        let sign = if qd > COULOMB_DEADBAND {
             1.0
-        } else if qd < 0.0 {
+        } else if qd < -COULOMB_DEADBAND {
             -1.0
         } else {
             0.0
