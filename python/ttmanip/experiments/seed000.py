@@ -16,7 +16,7 @@ cannot bring it closer), while the arm from joint 2 to the racket centre spans a
 
 - Distance to x(4) (:func:`distance_to_x4`): ``|c − c₄| + NORMAL_WEIGHT · ∠(n, n₄)`` with the
   racket centres c (m), the face normals n and ``NORMAL_WEIGHT`` = 0.1 m/rad (1° of normal error
-  counts as 1.7 mm of centre error). At the optimum the normal matches n₄ to ~1e-3°, so the
+  counts as 1.7 mm of centre error). At the optimum the normal matches n₄ to < 1e-3°, so the
   lexicographic rule (nearest centre, then nearest normal) picks the same pose.
 - Reachable, with margins (:func:`nearest_reachable`): every joint at least ``LIMIT_MARGIN``
   (0.02 m for the prismatic joint, 5° for the revolute ones) inside its limits, and the smallest
