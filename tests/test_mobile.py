@@ -206,8 +206,14 @@ def test_track_on_a_diff_drive_base_keeps_the_wheels_within_limits():
     assert np.abs(wheels).max() <= 20.0 + 1e-9
 
 
-def test_seed000_experiment(tmp_path):
-    summary = seed000.run(tmp_path)
+@pytest.fixture(scope="module")
+def seed000_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("seed000")
+    return out, seed000.run(out)
+
+
+def test_seed000_experiment(seed000_run):
+    tmp_path, summary = seed000_run
     for name in (
         "fig08_joint_positions.png",
         "fig09_joint_speeds.png",
@@ -231,9 +237,62 @@ def test_seed000_experiment(tmp_path):
     lim = ttmanip.robots.mobile8().limits
     assert (q >= lim[:, 0]).all() and (q <= lim[:, 1]).all()
     np.testing.assert_allclose(data[-1, 17:22], summary["target"], atol=1e-6)
-    # the unweighted pseudo-inverse crosses a limit on the same motion
-    assert summary["unweighted"]["min_limit_margin"] < 0.0
-    assert summary["unweighted"]["joints_crossing_limits"]
+    # on this motion the unweighted pseudo-inverse comes closer to a limit (j2) than the weighted one
+    w, u = summary["min_limit_margin_per_joint"], summary["unweighted"]["min_limit_margin_per_joint"]
+    assert min(u[1:]) < min(w[1:]) - 0.05
+    # and on the straight task line to 15 % of x(4) it crosses a limit where the weighted one does not
+    assert summary["line15"]["unweighted"]["min_limit_margin"] < 0.0
+    assert summary["line15"]["unweighted"]["joints_crossing_limits"]
+    assert summary["line15"]["weighted_min_limit_margin"] > 0.0
+    assert summary["line15"]["weighted_max_tracking_error"] <= 1e-6
+
+
+def test_seed000_target_is_reachable_and_the_nearest_found(seed000_run, mobile8):
+    tmp_path, summary = seed000_run
+    q_t = np.array(summary["target_q"])
+    target = np.array(summary["target"])
+    # reachable: FK of the target configuration reproduces the target, within the margins
+    np.testing.assert_allclose(mobile8.task_coordinates(q_t), target, atol=1e-12)
+    lo, hi = seed000.margin_box(mobile8)
+    assert (q_t >= lo).all() and (q_t <= hi).all()
+    assert seed000.task_sigma_min(mobile8, q_t) >= seed000.SIGMA_MARGIN
+    # and reached: FK of the final tracked configuration reproduces it
+    data = np.loadtxt(tmp_path / "weighted.csv", delimiter=",", skiprows=1)
+    c, n = seed000.racket_centre_normal(mobile8, data[-1, 1:9])
+    c_t, n_t = seed000.racket_centre_normal(mobile8, q_t)
+    assert np.linalg.norm(c - c_t) < 1e-6 and np.linalg.norm(n - n_t) < 1e-6
+    # nearer to x(4) than the old target (15 % of the straight task line), under the metric
+    d_t = seed000.distance_of_coordinates(target)
+    assert d_t == pytest.approx(summary["target_distance_to_x4"], abs=1e-12)
+    old = np.asarray(summary["x0"]) + 0.15 * (seed000.X4_SEED - np.asarray(summary["x0"]))
+    assert d_t < seed000.distance_of_coordinates(old) - 0.1
+    # no sampled reachable pose is nearer: 100k random configurations within the same margins,
+    # and 100k within the bare joint limits (no singularity margin either)
+    rng = np.random.default_rng(12345)
+    q = lo + rng.random((100_000, 8)) * (hi - lo)
+    d = seed000.distance_to_x4(*seed000.racket_centre_normal(mobile8, q))
+    admissible = seed000.task_sigma_min(mobile8, q) >= seed000.SIGMA_MARGIN
+    assert admissible.sum() > 50_000
+    assert d[admissible].min() > d_t
+    lim = mobile8.limits
+    q = lim[:, 0] + rng.random((100_000, 8)) * (lim[:, 1] - lim[:, 0])
+    assert seed000.distance_to_x4(*seed000.racket_centre_normal(mobile8, q)).min() > d_t
+    # the distance is the documented metric
+    c4, n4 = seed000.x4_centre_normal()
+    np.testing.assert_allclose(seed000.distance_to_x4(c4, n4), 0.0, atol=1e-15)
+    assert seed000.distance_to_x4(c4 + [0.1, 0.0, 0.0], n4) == pytest.approx(0.1)
+    assert seed000.distance_to_x4(c4, -n4) == pytest.approx(seed000.NORMAL_WEIGHT * np.pi)
+
+
+def test_seed000_joint_path_task_rates_are_the_derivative_of_the_samples(mobile8):
+    q1 = Q_START + np.array([0.1, 0.2, -0.1, 0.1, 0.2, -0.2, 0.1, 0.1])
+    x, xdot, qp = seed000.joint_path_task_trajectory(mobile8, Q_START, q1, duration=1.0, rate_hz=1000.0)
+    np.testing.assert_allclose(qp[[0, -1]], [Q_START, q1], atol=1e-15)
+    np.testing.assert_allclose(x[0], mobile8.task_coordinates(Q_START), atol=1e-12)
+    np.testing.assert_allclose(x[-1], mobile8.task_coordinates(q1), atol=1e-12)
+    central = (x[2:] - x[:-2]) / 2e-3
+    np.testing.assert_allclose(xdot[1:-1], central, atol=1e-5)
+    np.testing.assert_allclose(xdot[[0, -1]], 0.0, atol=1e-15)
 
 
 def test_wls_step_at_a_singular_configuration():

@@ -433,8 +433,9 @@ impl<'a> Clik<'a> {
             self.q_pred.copy_from_slice(q);
             self.model.integrate(&mut self.q_pred, prev, dt);
             let tp = self.model.tool_pose_unchecked(&self.q_pred);
-            let target = self.task.target_pose(next_x, &tp);
-            self.task.error_into(&tp, &target, &mut self.cmd[..m]);
+            let next = self.task.target_pose(next_x, &tp);
+            // in the tangent basis of the Jacobian's target (the cached factorisation is reused)
+            self.task.error_in_basis_into(&tp, &next, &target, &mut self.cmd[..m]);
             for i in 0..m {
                 self.cmd[i] /= dt;
             }
@@ -520,6 +521,7 @@ impl<'a> Clik<'a> {
         let mut q = q0.to_vec();
         let mut u = vec![0.0; nu];
         let mut ff_next = [0.0; 6];
+        let mut ff_next_here = [0.0; 6];
         let mut coords = [0.0; 6];
         let (mut first, mut scaled, mut min_scale) = (f64::NAN, 0usize, 1.0f64);
         self.task.feedforward(trajectory.x(0), trajectory.xdot(0), &mut ff_next);
@@ -529,8 +531,15 @@ impl<'a> Clik<'a> {
             if k + 1 < count {
                 self.task
                     .feedforward(trajectory.x(k + 1), trajectory.xdot(k + 1), &mut ff_next);
+                // the average in one tangent basis: that of sample k, which the step's residual uses
+                self.task.feedforward_in_basis(
+                    trajectory.x(k + 1),
+                    trajectory.xdot(k + 1),
+                    trajectory.x(k),
+                    &mut ff_next_here,
+                );
                 for i in 0..m {
-                    self.ff[i] = 0.5 * (ff_k[i] + ff_next[i]);
+                    self.ff[i] = 0.5 * (ff_k[i] + ff_next_here[i]);
                 }
             } else {
                 self.ff[..m].copy_from_slice(&ff_k[..m]);

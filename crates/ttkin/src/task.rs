@@ -86,6 +86,26 @@ impl Task {
         }
     }
 
+    /// [`Task::error_into`] with the racket normal residual expressed in the tangent basis of
+    /// `basis`'s normal instead of `target`'s (m, rad): the residual that matches a Jacobian built
+    /// against `basis` (a corrector toward the next sample that reuses the current Jacobian; the
+    /// tangent basis switches its helper axis at |n_x| = 0.9). Pose and position ignore `basis`.
+    pub fn error_in_basis_into(
+        &self,
+        current: &IsometryMatrix3<f64>,
+        target: &IsometryMatrix3<f64>,
+        basis: &IsometryMatrix3<f64>,
+        e: &mut [f64],
+    ) {
+        self.error_into(current, target, e);
+        if let Task::Racket { .. } = self {
+            let r = racket_normal(current).cross(&racket_normal(target));
+            let (u1, u2) = tangent_basis(&racket_normal(basis));
+            e[3] = u1.dot(&r);
+            e[4] = u2.dot(&r);
+        }
+    }
+
     /// Task Jacobian (dim × n) from the base-frame geometric Jacobian `j` at pose `current`, such
     /// that the residual against `target` changes as ė = −J_e q̇.
     pub fn jacobian(
@@ -169,6 +189,13 @@ impl Task {
     /// the angular velocity (rad/s, base axes), not rotation-vector rates. Racket: ċ and
     /// Bᵀ(n* × ṅ*), with ṅ* from the polar and azimuth rates (B the tangent basis of n*).
     pub fn feedforward(&self, x: &[f64], xdot: &[f64], out: &mut [f64]) {
+        self.feedforward_in_basis(x, xdot, x, out);
+    }
+
+    /// [`Task::feedforward`] with the racket normal rows in the tangent basis of the normal of the
+    /// coordinates `basis_x` (so that feed-forwards of neighbouring samples can be averaged: the
+    /// tangent basis switches its helper axis at |n_x| = 0.9). Pose and position ignore `basis_x`.
+    pub fn feedforward_in_basis(&self, x: &[f64], xdot: &[f64], basis_x: &[f64], out: &mut [f64]) {
         match self {
             Task::Position | Task::Pose => out[..self.dim()].copy_from_slice(&xdot[..self.dim()]),
             Task::Racket { .. } => {
@@ -178,7 +205,9 @@ impl Task {
                 let dn_dp = Vector3::new(cp * ca, cp * sa, -sp);
                 let dn_da = Vector3::new(-sp * sa, sp * ca, 0.0);
                 let ndot = dn_dp * xdot[3] + dn_da * xdot[4];
-                let (u1, u2) = tangent_basis(&n);
+                let (sbp, cbp) = basis_x[3].sin_cos();
+                let (sba, cba) = basis_x[4].sin_cos();
+                let (u1, u2) = tangent_basis(&Vector3::new(sbp * cba, sbp * sba, cbp));
                 let r = n.cross(&ndot);
                 out[..3].copy_from_slice(&xdot[..3]);
                 out[3] = u1.dot(&r);

@@ -507,3 +507,70 @@ fn null_space_objectives_keep_the_task_and_do_their_job() {
     };
     assert!(criterion(&limits) < criterion(&plain), "limit gradient must lower H");
 }
+
+/// FK along the quintic joint path from the seed000 start to the experiment's target
+/// configuration: the racket normal's x component crosses 0.9, where the tangent basis switches.
+#[test]
+fn racket_tracking_is_accurate_where_the_tangent_basis_switches() {
+    let model = WholeBody::fixed(ttkin::robots::mobile8());
+    let chain = ttkin::robots::mobile8();
+    let q0 = ttkin::robots::mobile8_start();
+    let q1 = [0.3998, 2.0706, 1.0711, 0.2618, 3.4214, 0.3513, 3.8653, 1.7117];
+    let task = Task::Racket { offset: 0.15 };
+    let (duration, rate) = (4.0, 1000.0);
+    let coords = |t: f64| {
+        let s = t / duration;
+        let s = s * s * s * (10.0 - 15.0 * s + 6.0 * s * s);
+        let q: Vec<f64> = (0..8).map(|i| q0[i] + s * (q1[i] - q0[i])).collect();
+        racket_coordinates(&chain.fk(&q).unwrap(), 0.15)
+    };
+    let (mut x, mut xdot) = (Vec::new(), Vec::new());
+    let mut crossed = [false, false];
+    for k in 0..=4000 {
+        let t = k as f64 / rate;
+        let c = coords(t);
+        let nx = c[3].sin() * c[4].cos();
+        crossed[usize::from(nx > 0.9)] = true;
+        let h = 1e-5;
+        let (p, m) = (coords(t + h), coords(t - h));
+        x.extend_from_slice(&c);
+        xdot.extend((0..5).map(|i| (p[i] - m[i]) / (2.0 * h)));
+    }
+    assert!(crossed[0] && crossed[1], "the normal does not cross n_x = 0.9");
+    let traj = TaskTrajectory::new(task, rate, x, xdot).unwrap();
+    let r = track(&model, &q0, &traj, ClikOptions::default()).unwrap();
+    assert_eq!(r.status, ClikStatus::Completed);
+    let max_err = r.error.iter().cloned().fold(0.0, f64::max);
+    assert!(max_err <= 1e-7, "max tracking error {max_err}");
+}
+
+#[test]
+fn racket_residual_and_feedforward_in_another_basis_are_the_same_vector() {
+    let chain = ttkin::robots::mobile8();
+    let q = ttkin::robots::mobile8_start();
+    let t = chain.fk(&q).unwrap();
+    let task = Task::Racket { offset: 0.15 };
+    let x = racket_coordinates(&t, 0.15);
+    // a basis on the other side of the helper switch (normal with n_x > 0.9)
+    let xb: [f64; 5] = [0.0, 0.0, 0.0, 1.3, 0.1];
+    let nb = Vector3::new(xb[3].sin() * xb[4].cos(), xb[3].sin() * xb[4].sin(), xb[3].cos());
+    assert!(nb.x > 0.9);
+    let basis = task.target_pose(&xb, &t);
+    let (u1, u2) = ttkin::task::tangent_basis(&nb);
+    let target = task.target_pose(&[x[0] + 0.01, x[1], x[2], x[3] + 0.02, x[4] - 0.03], &t);
+    let mut e = [0.0; 5];
+    task.error_in_basis_into(&t, &target, &basis, &mut e);
+    let r = ttkin::task::racket_normal(&t).cross(&ttkin::task::racket_normal(&target));
+    assert!((e[3] - u1.dot(&r)).abs() < 1e-15 && (e[4] - u2.dot(&r)).abs() < 1e-15);
+    let mut same = [0.0; 5];
+    task.error_in_basis_into(&t, &target, &target, &mut same);
+    assert_eq!(same, task.error(&t, &target).as_slice());
+    let xdot = [0.1, -0.2, 0.05, 0.3, -0.4];
+    let (mut ff, mut fb) = ([0.0; 5], [0.0; 5]);
+    task.feedforward(&x, &xdot, &mut ff);
+    task.feedforward_in_basis(&x, &xdot, &xb, &mut fb);
+    let (v1, v2) = ttkin::task::tangent_basis(&ttkin::task::racket_normal(&task.target_pose(&x, &t)));
+    let w = v1 * ff[3] + v2 * ff[4]; // n × ṅ, perpendicular to n
+    assert!((fb[3] - u1.dot(&w)).abs() < 1e-14 && (fb[4] - u2.dot(&w)).abs() < 1e-14);
+    assert_eq!(ff[..3], fb[..3]);
+}
