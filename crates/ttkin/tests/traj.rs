@@ -745,3 +745,23 @@ fn bad_input_gives_clear_errors() {
     assert!(KinematicLimits::new(&[1.0, -1.0], &[1.0, 1.0], &[1.0, 1.0]).is_err());
     assert!(KinematicLimits::new(&[1.0, 1.0], &[1.0], &[1.0, 1.0]).is_err());
 }
+
+#[test]
+fn stroke_finds_a_feasible_window_narrower_than_the_coarse_bracketing() {
+    // Found by `random_strokes_are_feasible_exact_and_earliest`: the hit leg's feasible durations
+    // are not one interval, and the ×1.5 bracketing alone stepped over them.
+    let start = JointState {
+        q: vec![0.0, 0.0, 1.7419366464886947, 0.0, 0.0, 1.8549145569782817],
+        qd: vec![0.0, 0.0, 0.7891275682036328, 0.0, 0.0, -0.9374024515517073],
+        qdd: vec![0.0, 0.0, 3.356450837953605, 0.0, 0.0, -4.647946526217632],
+    };
+    let hit = JointState {
+        q: vec![0.0, 0.0, -1.5758944105970658, 0.0, 0.0, -1.3911186596207576],
+        qd: vec![0.0, 0.0, 1.4128170182357596, 0.0, 0.0, 1.8663263247847237],
+        qdd: vec![0.0; 6],
+    };
+    let limits = KinematicLimits::new(&[3.0; 6], &[30.0; 6], &[500.0; 6]).unwrap();
+    let s = stroke(&start, &hit, 0.05, &[0.0; 6], None, &limits).expect("a feasible stroke exists");
+    assert!(s.violations.is_empty());
+    assert!(quintic_limit_ratio(&start, &hit, s.t_hit, &limits) <= 1.0 + 1e-9);
+}

@@ -327,6 +327,25 @@ pub const MAX_DURATION: f64 = 1e4;
 /// Factor by which [`earliest_quintic_duration`] grows an infeasible duration while bracketing.
 pub const GROWTH: f64 = 1.5;
 
+/// Factor between consecutive durations of the fine scan that [`earliest_quintic_duration`] runs
+/// when the coarse bracketing finds no feasible duration (about 12,000 evaluations at most).
+pub const FINE_GROWTH: f64 = 1.001;
+
+/// First feasible duration of a log-spaced scan from `from` (infeasible: g(from) > 0) up to
+/// [`MAX_DURATION`]: returns (g(a), a, b, g(b)) with g(a) > 0 ≥ g(b) and b = a·[`FINE_GROWTH`].
+fn fine_scan(g: &impl Fn(f64) -> f64, from: f64) -> Option<(f64, f64, f64, f64)> {
+    let (mut a, mut fa) = (from, g(from));
+    while a < MAX_DURATION {
+        let b = a * FINE_GROWTH;
+        let fb = g(b);
+        if fb <= 0.0 {
+            return Some((fa, a, b, fb));
+        }
+        (a, fa) = (b, fb);
+    }
+    None
+}
+
 /// Largest ratio peak/limit of velocity, acceleration and jerk over the joints of the quintic from
 /// `start` to `end` in `duration` s (exact peaks); the quintic respects the limits iff it is ≤ 1.
 pub fn quintic_limit_ratio(start: &JointState, end: &JointState, duration: f64, limits: &KinematicLimits) -> f64 {
@@ -420,6 +439,12 @@ pub fn earliest_quintic_duration(
         (a, fa) = (b, fb);
         b *= GROWTH;
         if b > MAX_DURATION {
+            // The feasible durations need not form one interval: a window narrower than the coarse
+            // growth factor can lie between two infeasible samples. Scan finely before giving up.
+            if let Some((fa2, fine_a, fine_b, fine_fb)) = fine_scan(&g, from) {
+                (a, fa, b, fb) = (fine_a, fa2, fine_b, fine_fb);
+                break;
+            }
             return Err(Error::invalid(
                 "limits",
                 format!(

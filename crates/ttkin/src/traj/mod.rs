@@ -378,15 +378,15 @@ impl JointTrajectory {
         self.sample_times(&rate_times(self.duration(), hz)?)
     }
 
-    /// `n ≥ 2` samples evenly spaced from 0 to the duration, into row-major `n × dof` slices and
-    /// `t` (n long). Allocates nothing.
-    pub fn sample_uniform_into(&self, t: &mut [f64], q: &mut [f64], qd: &mut [f64], qdd: &mut [f64]) -> Result<()> {
+    /// Checks the output lengths of a uniform sampling (n ≥ 2 times, n × dof values each) and
+    /// writes the n evenly spaced times from 0 to the duration (the last one exactly) into `t`.
+    fn uniform_grid(&self, t: &mut [f64], q: &[f64], qd: &[f64], qdd: &[f64]) -> Result<()> {
         let n = t.len();
         if n < 2 {
             return Err(Error::shape("t", "at least 2 samples", format!("{n} samples")));
         }
         let m = n * self.dof;
-        for (what, out) in [("q", &*q), ("qd", &*qd), ("qdd", &*qdd)] {
+        for (what, out) in [("q", q), ("qd", qd), ("qdd", qdd)] {
             if out.len() != m {
                 return Err(Error::shape(
                     what,
@@ -400,6 +400,13 @@ impl JointTrajectory {
         for (i, ti) in t.iter_mut().enumerate() {
             *ti = if i + 1 == n { d } else { i as f64 * step };
         }
+        Ok(())
+    }
+
+    /// `n ≥ 2` samples evenly spaced from 0 to the duration, into row-major `n × dof` slices and
+    /// `t` (n long). Allocates nothing.
+    pub fn sample_uniform_into(&self, t: &mut [f64], q: &mut [f64], qd: &mut [f64], qdd: &mut [f64]) -> Result<()> {
+        self.uniform_grid(t, q, qd, qdd)?;
         for (i, &ti) in t.iter().enumerate() {
             let r = i * self.dof..(i + 1) * self.dof;
             self.sample_unchecked(ti, &mut q[r.clone()], &mut qd[r.clone()], &mut qdd[r]);
@@ -418,25 +425,8 @@ impl JointTrajectory {
         qd: &mut [f64],
         qdd: &mut [f64],
     ) -> Result<()> {
+        self.uniform_grid(t, q, qd, qdd)?;
         let n = t.len();
-        if n < 2 {
-            return Err(Error::shape("t", "at least 2 samples", format!("{n} samples")));
-        }
-        let m = n * self.dof;
-        for (what, out) in [("q", &*q), ("qd", &*qd), ("qdd", &*qdd)] {
-            if out.len() != m {
-                return Err(Error::shape(
-                    what,
-                    format!("{m} values"),
-                    format!("{} values", out.len()),
-                ));
-            }
-        }
-        let d = self.duration();
-        let step = d / (n - 1) as f64;
-        for (i, ti) in t.iter_mut().enumerate() {
-            *ti = if i + 1 == n { d } else { i as f64 * step };
-        }
         // Samples [start, end) fall in segment k (the last segment also takes t = duration).
         let mut start = 0;
         for k in 0..self.segments() {
