@@ -773,26 +773,11 @@ impl Dynamics {
         wrench: Option<&Wrench>,
         out: &mut [f64],
     ) -> Result<()> {
-        let n = self.dof();
-        let count = batch_count("q", q, n)?;
-        same_count("qd", qd, count, n)?;
-        same_count("qdd", qdd, count, n)?;
-        same_count("output buffer", out, count, n)?;
-        check_finite("qd", qd)?;
-        check_finite("qdd", qdd)?;
         let g = vec3("gravity", gravity)?;
-        let c = n * BATCH_CHUNK;
-        out.par_chunks_mut(c)
-            .zip(q.par_chunks(c).zip(qd.par_chunks(c).zip(qdd.par_chunks(c))))
-            .for_each(|(o, (q, (qd, qdd)))| {
-                let mut data = DynamicsData::new(self);
-                for (k, o) in o.chunks_exact_mut(n).enumerate() {
-                    let r = k * n..(k + 1) * n;
-                    self.rnea_unchecked(&mut data, &q[r.clone()], &qd[r.clone()], &qdd[r], &g, wrench);
-                    o.copy_from_slice(data.tau.as_slice());
-                }
-            });
-        Ok(())
+        self.batch3(["qd", "qdd"], q, qd, qdd, out, |data, q, qd, qdd| {
+            self.rnea_unchecked(data, q, qd, qdd, &g, wrench);
+            Ok(data.tau.as_slice())
+        })
     }
 
     /// Batch [`Dynamics::mass_matrix`]: `q` is N × n, `out` receives N row-major n × n matrices.
@@ -830,23 +815,34 @@ impl Dynamics {
         wrench: Option<&Wrench>,
         out: &mut [f64],
     ) -> Result<()> {
+        let g = vec3("gravity", gravity)?;
+        self.batch3(["qd", "tau"], q, qd, tau, out, |data, q, qd, tau| {
+            self.forward_unchecked(data, q, qd, tau, &g, wrench)?;
+            Ok(data.qdd.as_slice())
+        })
+    }
+
+    /// Runs `f` on every row of three N × n inputs in parallel (one scratch per rayon task) and
+    /// copies the n values it returns into row k of `out`; checks shapes and finiteness first.
+    fn batch3<F>(&self, names: [&str; 2], q: &[f64], b: &[f64], c: &[f64], out: &mut [f64], f: F) -> Result<()>
+    where
+        F: for<'d> Fn(&'d mut DynamicsData, &[f64], &[f64], &[f64]) -> Result<&'d [f64]> + Sync,
+    {
         let n = self.dof();
         let count = batch_count("q", q, n)?;
-        same_count("qd", qd, count, n)?;
-        same_count("tau", tau, count, n)?;
+        same_count(names[0], b, count, n)?;
+        same_count(names[1], c, count, n)?;
         same_count("output buffer", out, count, n)?;
-        check_finite("qd", qd)?;
-        check_finite("tau", tau)?;
-        let g = vec3("gravity", gravity)?;
-        let c = n * BATCH_CHUNK;
-        out.par_chunks_mut(c)
-            .zip(q.par_chunks(c).zip(qd.par_chunks(c).zip(tau.par_chunks(c))))
-            .try_for_each(|(o, (q, (qd, tau)))| {
+        check_finite(names[0], b)?;
+        check_finite(names[1], c)?;
+        let chunk = n * BATCH_CHUNK;
+        out.par_chunks_mut(chunk)
+            .zip(q.par_chunks(chunk).zip(b.par_chunks(chunk).zip(c.par_chunks(chunk))))
+            .try_for_each(|(o, (q, (b, c)))| {
                 let mut data = DynamicsData::new(self);
                 for (k, o) in o.chunks_exact_mut(n).enumerate() {
                     let r = k * n..(k + 1) * n;
-                    self.forward_unchecked(&mut data, &q[r.clone()], &qd[r.clone()], &tau[r], &g, wrench)?;
-                    o.copy_from_slice(data.qdd.as_slice());
+                    o.copy_from_slice(f(&mut data, &q[r.clone()], &b[r.clone()], &c[r])?);
                 }
                 Ok(())
             })
