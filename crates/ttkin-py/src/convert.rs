@@ -1,21 +1,34 @@
 //! numpy ↔ Rust conversion helpers shared by every binding module.
 //!
-//! Inputs: any array-like of numbers (lists, integer arrays, non-contiguous views) is accepted and
-//! converted once to a C-contiguous float64 array; float64 C-contiguous numpy arrays pass without a
-//! copy. Outputs are fresh numpy arrays owned by Python.
+//! Inputs: any array-like of real numbers is accepted: lists, integer and float arrays of any
+//! width (float16/32/64, int, uint), any byte order, any strides (views, Fortran order, negative
+//! steps), unaligned buffers (`np.frombuffer` at an odd offset, structured records, memory maps)
+//! and read-only arrays. What is not an aligned, native-byte-order, C-contiguous float64 array is
+//! copied once into one; the values (and so every result) are those of
+//! `np.ascontiguousarray(x, dtype=np.float64)`. An aligned C-contiguous float64 array passes
+//! without a copy. Complex, boolean, string and object data are refused, never cast.
+//!
+//! Rotations: the precision of the dtype the caller handed over is kept ([`F64Array::precision`])
+//! and decides how orthonormal a rotation block must be ([`rigid_tolerance`]).
+//!
+//! Outputs are fresh numpy arrays owned by Python; [`finite_to_numpy`] and
+//! [`filled_without_gil`] refuse a non-finite result with `NumericalError` (overflow of finite
+//! inputs), so a NaN or an infinity never leaves silently.
 
 use nalgebra::{IsometryMatrix3, Matrix4};
 use numpy::ndarray::ArrayView;
 use numpy::{IxDyn, PyArray, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
-use pyo3::types::PyDict;
 
-use crate::errors::{PyResultExt, ShapeError};
+use crate::errors::{InternalError, NumericalError, PyResultExt, ShapeError};
 
-/// A C-contiguous float64 view of a Python array-like.
+/// An aligned, C-contiguous, native float64 view of a Python array-like.
 pub struct F64Array<'py> {
+    /// Aligned and C-contiguous: checked where it is made (`f64_array`).
     array: PyReadonlyArrayDyn<'py, f64>,
+    /// Machine epsilon of the dtype the caller handed over (float64's for integers).
+    precision: f64,
 }
 
 impl<'py> F64Array<'py> {
@@ -26,12 +39,21 @@ impl<'py> F64Array<'py> {
 
     /// The values in C order.
     pub fn data(&self) -> &[f64] {
-        self.array.as_slice().expect("F64Array is C-contiguous by construction")
+        // `f64_array` only builds aligned C-contiguous arrays, for which `as_slice` cannot fail;
+        // should it ever, the empty slice makes the caller's length check fail (a ShapeError),
+        // never a panic.
+        self.array.as_slice().unwrap_or(&[])
     }
 
     /// The shape as Python would print it: `(8,)`, `(10, 8)`.
     pub fn shape_str(&self) -> String {
         shape_str(self.shape())
+    }
+
+    /// Machine epsilon of the input's dtype: 2.2e-16 for float64 and integers, 1.2e-7 for
+    /// float32, 9.8e-4 for float16.
+    pub fn precision(&self) -> f64 {
+        self.precision
     }
 }
 
@@ -45,56 +67,87 @@ pub fn shape_str(shape: &[usize]) -> String {
 
 struct NumpyFns {
     asarray: Py<PyAny>,
-    ascontiguousarray: Py<PyAny>,
+    require: Py<PyAny>,
 }
 
-/// Converts any array-like of real numbers (float or integer dtype) to a C-contiguous float64
-/// array; complex, boolean, string and object data are refused rather than silently cast.
-fn as_contiguous_f64<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<Bound<'py, PyAny>> {
+fn numpy_fns(py: Python<'_>) -> PyResult<&NumpyFns> {
     static NUMPY: PyOnceLock<NumpyFns> = PyOnceLock::new();
-    let py = obj.py();
-    let np = NUMPY.get_or_try_init(py, || -> PyResult<NumpyFns> {
+    NUMPY.get_or_try_init(py, || -> PyResult<NumpyFns> {
         let m = py.import("numpy")?;
         Ok(NumpyFns {
             asarray: m.getattr("asarray")?.unbind(),
-            ascontiguousarray: m.getattr("ascontiguousarray")?.unbind(),
+            require: m.getattr("require")?.unbind(),
         })
-    })?;
+    })
+}
+
+/// Machine epsilon of a float dtype of `itemsize` bytes (integers convert exactly: float64's).
+fn dtype_precision(kind: &str, itemsize: usize) -> f64 {
+    match (kind, itemsize) {
+        ("f", 2) => 9.765625e-4, // 2⁻¹⁰, IEEE half
+        ("f", 4) => f64::from(f32::EPSILON),
+        _ => f64::EPSILON,
+    }
+}
+
+/// Converts any array-like of real numbers to an aligned, native, C-contiguous float64 array
+/// (a copy); returns it with the machine epsilon of the original dtype.
+fn as_contiguous_f64<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<(Bound<'py, PyAny>, f64)> {
+    let py = obj.py();
+    let np = numpy_fns(py)?;
     let ty = || {
         obj.get_type()
             .name()
             .map(|n| n.to_string())
             .unwrap_or_else(|_| "?".into())
     };
-    let arr =
-        np.asarray.bind(py).call1((obj,)).map_err(|e| {
-            ShapeError::new_err(format!("{what}: expected an array of real numbers, got {} ({e})", ty()))
-        })?;
-    let kind: String = arr.getattr("dtype")?.getattr("kind")?.extract()?;
-    if !matches!(kind.as_str(), "f" | "i" | "u") {
-        let dtype = arr.getattr("dtype")?.str()?.to_string();
-        return Err(ShapeError::new_err(format!(
-            "{what}: expected an array of real numbers (float or integer), got {} of dtype {dtype}",
+    let refuse = |detail: String| {
+        ShapeError::new_err(format!(
+            "{what}: expected an array of real numbers (float or integer), got {} {detail}",
             ty()
-        )));
+        ))
+    };
+    let arr = np
+        .asarray
+        .bind(py)
+        .call1((obj,))
+        .map_err(|e| refuse(format!("({e})")))?;
+    let dtype = arr.getattr("dtype")?;
+    let kind: String = dtype.getattr("kind")?.extract()?;
+    if !matches!(kind.as_str(), "f" | "i" | "u") {
+        return Err(refuse(format!("of dtype {}", dtype.str()?)));
     }
-    let kwargs = PyDict::new(py);
-    kwargs.set_item("dtype", "float64")?;
-    np.ascontiguousarray.bind(py).call((arr,), Some(&kwargs))
+    let itemsize: usize = dtype.getattr("itemsize")?.extract()?;
+    // "C": C-contiguous, "A": aligned; the dtype makes it native-endian float64.
+    let converted = np.require.bind(py).call1((arr, "float64", "CA"))?;
+    Ok((converted, dtype_precision(&kind, itemsize)))
 }
 
-/// Reads `obj` as a float64 array named `what` in error messages.
+/// Reads `obj` as a float64 array named `what` in error messages (copying only when it must).
 pub fn f64_array<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<F64Array<'py>> {
     if let Ok(a) = obj.cast::<PyArrayDyn<f64>>() {
-        if a.is_c_contiguous() {
-            return Ok(F64Array { array: a.readonly() });
+        if a.is_c_contiguous() && a.is_aligned() {
+            if let Ok(array) = a.try_readonly() {
+                return Ok(F64Array {
+                    array,
+                    precision: f64::EPSILON,
+                });
+            }
         }
     }
-    let converted = as_contiguous_f64(obj, what)?;
+    let (converted, precision) = as_contiguous_f64(obj, what)?;
     let a = converted
         .cast::<PyArrayDyn<f64>>()
         .map_err(|_| ShapeError::new_err(format!("{what}: could not convert to a float64 array")))?;
-    Ok(F64Array { array: a.readonly() })
+    if !(a.is_c_contiguous() && a.is_aligned()) {
+        return Err(ShapeError::new_err(format!(
+            "{what}: could not make an aligned C-contiguous float64 copy"
+        )));
+    }
+    let array = a
+        .try_readonly()
+        .map_err(|e| ShapeError::new_err(format!("{what}: cannot read the array ({e})")))?;
+    Ok(F64Array { array, precision })
 }
 
 /// Reads a vector of exactly `n` finite values.
@@ -110,7 +163,15 @@ pub fn vector(obj: &Bound<'_, PyAny>, what: &str, n: usize) -> PyResult<Vec<f64>
     Ok(a.data().to_vec())
 }
 
-/// Reads a 4×4 homogeneous matrix and checks that it is a rigid transform.
+/// How far from rigid (|RᵀR − I|, bottom row) a 4×4 read at machine epsilon `precision` may be:
+/// `ttkin::transform::RIGID_TOLERANCE` (1e-9) for float64, 16·ε for coarser dtypes (1.9e-6 for
+/// float32: rounding each entry of an exact rotation to float32 leaves |RᵀR − I| ≤ 3ε).
+pub fn rigid_tolerance(precision: f64) -> f64 {
+    ttkin::transform::RIGID_TOLERANCE.max(16.0 * precision)
+}
+
+/// Reads a 4×4 homogeneous matrix and checks that it is a rigid transform (to the precision of
+/// its dtype; a float32 rotation is re-orthonormalised, see [`rigid_tolerance`]).
 pub fn transform(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<IsometryMatrix3<f64>> {
     let a = f64_array(obj, what)?;
     if a.shape() != [4, 4] {
@@ -120,13 +181,67 @@ pub fn transform(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<IsometryMatrix3
         )));
     }
     let m = Matrix4::from_row_slice(a.data());
-    ttkin::transform::isometry_from_matrix(what, &m).py()
+    ttkin::transform::isometry_from_matrix_within(what, &m, rigid_tolerance(a.precision())).py()
+}
+
+/// Reads one pose (4, 4) or a batch (N, 4, 4) of rigid transforms named `what` (`what[i]` for
+/// element i in messages); returns them and whether the input was a batch.
+pub fn transforms(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<(Vec<IsometryMatrix3<f64>>, bool)> {
+    let a = f64_array(obj, what)?;
+    let tol = rigid_tolerance(a.precision());
+    let read =
+        |name: &str, m: &[f64]| ttkin::transform::isometry_from_matrix_within(name, &Matrix4::from_row_slice(m), tol);
+    match a.shape() {
+        [4, 4] => Ok((vec![read(what, a.data()).py()?], false)),
+        [_, 4, 4] => {
+            let v = a
+                .data()
+                .chunks_exact(16)
+                .enumerate()
+                .map(|(i, m)| read(&format!("{what}[{i}]"), m))
+                .collect::<ttkin::Result<Vec<_>>>()
+                .py()?;
+            Ok((v, true))
+        }
+        _ => Err(ShapeError::new_err(format!(
+            "{what}: expected shape (4, 4) or (N, 4, 4), got {}",
+            a.shape_str()
+        ))),
+    }
 }
 
 /// A new numpy array of the given shape holding `data` (C order).
+///
+/// Values pass as they are (limits may be ±inf); results of computations go through
+/// [`finite_to_numpy`]. A shape that does not match the data is a bug in the caller; it
+/// panics, which the boundary guard turns into `InternalError`.
 pub fn to_numpy<'py>(py: Python<'py>, shape: &[usize], data: &[f64]) -> Bound<'py, PyArrayDyn<f64>> {
-    let view = ArrayView::from_shape(IxDyn(shape), data).expect("shape matches data length");
-    PyArray::from_array(py, &view)
+    match ArrayView::from_shape(IxDyn(shape), data) {
+        Ok(view) => PyArray::from_array(py, &view),
+        Err(e) => panic!(
+            "to_numpy: shape {} does not match {} values ({e})",
+            shape_str(shape),
+            data.len()
+        ),
+    }
+}
+
+/// Checks that a result is finite; otherwise `NumericalError` (the guard adds the call's name).
+pub fn check_finite_output(data: &[f64]) -> PyResult<()> {
+    match data.iter().position(|v| !v.is_finite()) {
+        None => Ok(()),
+        Some(i) => Err(NumericalError::new_err(format!(
+            "the result is not finite (element {i} is {}) although the inputs are: they are too \
+             large for float64 arithmetic (overflow); scale them down",
+            data[i]
+        ))),
+    }
+}
+
+/// [`to_numpy`] of a computed result, refusing NaN/inf with `NumericalError`.
+pub fn finite_to_numpy<'py>(py: Python<'py>, shape: &[usize], data: &[f64]) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    check_finite_output(data)?;
+    Ok(to_numpy(py, shape, data))
 }
 
 /// A 4×4 numpy array of a transform.
@@ -141,16 +256,20 @@ pub fn zeros<'py>(py: Python<'py>, shape: &[usize]) -> Bound<'py, PyArrayDyn<f64
     PyArrayDyn::zeros(py, IxDyn(shape), false)
 }
 
-/// A new float64 array of `shape` filled by `fill` with the GIL released (batch work).
+/// A new float64 array of `shape` filled by `fill` with the GIL released (batch work); a
+/// non-finite result is refused with `NumericalError`.
 pub fn filled_without_gil<'py, F>(py: Python<'py>, shape: &[usize], fill: F) -> PyResult<Bound<'py, PyArrayDyn<f64>>>
 where
     F: FnOnce(&mut [f64]) -> ttkin::Result<()> + Send,
 {
     let out = zeros(py, shape);
     {
-        let mut w = out.readwrite();
-        let o = w.as_slice_mut().expect("a fresh array is contiguous");
+        let mut w = out.try_readwrite().map_err(|e| InternalError::new_err(e.to_string()))?;
+        let o = w
+            .as_slice_mut()
+            .map_err(|e| InternalError::new_err(format!("fresh output array: {e}")))?;
         py.detach(|| fill(o)).py()?;
+        check_finite_output(o)?;
     }
     Ok(out)
 }

@@ -48,6 +48,19 @@ create_exception!(
     "A configuration is singular for the request."
 );
 
+create_exception!(
+    ttmanip,
+    NumericalError,
+    TtmanipError,
+    "A computation on finite inputs gave a non-finite result (overflow)."
+);
+create_exception!(
+    ttmanip,
+    InternalError,
+    TtmanipError,
+    "A bug inside ttmanip (a Rust panic caught at the boundary); please report it."
+);
+
 /// Converts a `ttkin` error to the matching Python exception.
 pub fn to_py(e: ttkin::Error) -> PyErr {
     use ttkin::Error as E;
@@ -85,5 +98,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("RobotFileError", py.get_type::<RobotFileError>())?;
     m.add("UnreachableError", py.get_type::<UnreachableError>())?;
     m.add("SingularError", py.get_type::<SingularError>())?;
+    m.add("NumericalError", py.get_type::<NumericalError>())?;
+    m.add("InternalError", py.get_type::<InternalError>())?;
     Ok(())
 }

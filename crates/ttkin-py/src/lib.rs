@@ -12,6 +12,9 @@ mod mobile;
 mod motor;
 mod robot;
 mod traj;
+// issue 14: argument validation and the boundary panic guard
+mod args;
+mod guard;
 
 /// The native extension module `ttmanip._ttmanip`.
 #[pymodule]
@@ -23,5 +26,6 @@ fn _ttmanip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     motor::register(m)?;
     ik::register(m)?;
     traj::register(m)?;
+    guard::register(m)?;
     Ok(())
 }

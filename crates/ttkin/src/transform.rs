@@ -47,9 +47,17 @@ pub fn to_xyz_rpy(t: &IsometryMatrix3<f64>) -> ([f64; 3], [f64; 3]) {
 /// Accepts a 4×4 homogeneous matrix as a rigid transform: finite, rotation block orthonormal with
 /// determinant +1 and bottom row (0, 0, 0, 1), each to [`RIGID_TOLERANCE`].
 pub fn isometry_from_matrix(what: &str, m: &Matrix4<f64>) -> Result<IsometryMatrix3<f64>> {
+    isometry_from_matrix_within(what, m, RIGID_TOLERANCE)
+}
+
+/// [`isometry_from_matrix`] with a tolerance of one's own, for data of a coarser precision than
+/// float64 (a float32 rotation is orthonormal to about 1e-7, not 1e-9). With `tolerance` above
+/// [`RIGID_TOLERANCE`] the accepted rotation block is re-orthonormalised (the nearest rotation,
+/// from its polar decomposition), so that every later product stays rigid to float64 precision.
+pub fn isometry_from_matrix_within(what: &str, m: &Matrix4<f64>, tolerance: f64) -> Result<IsometryMatrix3<f64>> {
     crate::error::check_finite(what, m.transpose().as_slice())?;
     let bottom = [m[(3, 0)], m[(3, 1)], m[(3, 2)], m[(3, 3)] - 1.0];
-    if bottom.iter().any(|v| v.abs() > RIGID_TOLERANCE) {
+    if bottom.iter().any(|v| v.abs() > tolerance) {
         return Err(Error::invalid(
             what,
             format!(
@@ -63,10 +71,10 @@ pub fn isometry_from_matrix(what: &str, m: &Matrix4<f64>) -> Result<IsometryMatr
     }
     let r: Matrix3<f64> = m.fixed_view::<3, 3>(0, 0).into_owned();
     let err = (r.transpose() * r - Matrix3::identity()).abs().max();
-    if err > RIGID_TOLERANCE {
+    if err > tolerance {
         return Err(Error::invalid(
             what,
-            format!("rotation block is not orthonormal (|RᵀR − I| = {err:.3e} > {RIGID_TOLERANCE:e})"),
+            format!("rotation block is not orthonormal (|RᵀR − I| = {err:.3e} > {tolerance:e})"),
         ));
     }
     if r.determinant() < 0.0 {
@@ -75,10 +83,24 @@ pub fn isometry_from_matrix(what: &str, m: &Matrix4<f64>) -> Result<IsometryMatr
             "rotation block has determinant −1 (a reflection, not a rotation)",
         ));
     }
+    let rotation = if tolerance > RIGID_TOLERANCE {
+        nearest_rotation(&r)
+    } else {
+        Rotation3::from_matrix_unchecked(r)
+    };
     Ok(IsometryMatrix3::from_parts(
         Translation3::new(m[(0, 3)], m[(1, 3)], m[(2, 3)]),
-        Rotation3::from_matrix_unchecked(r),
+        rotation,
     ))
+}
+
+/// The rotation nearest (Frobenius norm) to `r`, a matrix close to a rotation: U·Vᵀ of its SVD.
+fn nearest_rotation(r: &Matrix3<f64>) -> Rotation3<f64> {
+    let svd = r.svd(true, true);
+    match (svd.u, svd.v_t) {
+        (Some(u), Some(v_t)) => Rotation3::from_matrix_unchecked(u * v_t),
+        _ => Rotation3::from_matrix(r),
+    }
 }
 
 /// Writes the 4×4 homogeneous matrix of `t` row-major into `out` (16 values).

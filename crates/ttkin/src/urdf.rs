@@ -58,6 +58,50 @@ fn add_body(acc: &mut Option<Inertial>, body: Option<Inertial>) {
     }
 }
 
+/// Each link's parent joint, after checking that the joints make the links a tree (URDF's rule):
+/// every joint joins two declared links, no link has two parent joints, and no chain of joints
+/// comes back to where it started (a loop such as a → b and b → a).
+fn parent_joints<'a>(
+    robot: &'a urdf_rs::Robot,
+    links: &HashMap<&str, &urdf_rs::Link>,
+) -> Result<HashMap<&'a str, &'a urdf_rs::Joint>> {
+    let mut by_child: HashMap<&str, &urdf_rs::Joint> = HashMap::new();
+    for j in &robot.joints {
+        for end in [&j.parent.link, &j.child.link] {
+            if !links.contains_key(end.as_str()) {
+                return Err(Error::Urdf(format!(
+                    "joint '{}' refers to an undeclared link '{end}'",
+                    j.name
+                )));
+            }
+        }
+        if let Some(other) = by_child.insert(j.child.link.as_str(), j) {
+            return Err(Error::Urdf(format!(
+                "link '{}' has two parent joints, '{}' and '{}': a URDF's links must form a tree",
+                j.child.link, other.name, j.name
+            )));
+        }
+    }
+    // With one parent per link, walking up from any link either ends at a root or, within as many
+    // steps as there are joints, repeats a link: a loop.
+    for start in by_child.keys() {
+        let mut link = *start;
+        let mut seen = vec![link];
+        while let Some(j) = by_child.get(link) {
+            link = j.parent.link.as_str();
+            if seen.contains(&link) {
+                seen.push(link);
+                return Err(Error::Urdf(format!(
+                    "joints form a loop ({}): a URDF's links must form a tree",
+                    seen.iter().rev().copied().collect::<Vec<_>>().join(" → ")
+                )));
+            }
+            seen.push(link);
+        }
+    }
+    Ok(by_child)
+}
+
 /// Parses URDF text and extracts the serial chain from `base_link` to `tip_link`.
 ///
 /// Fixed joints on the path are folded into the next moving joint's origin (or into the tool
@@ -76,8 +120,8 @@ pub fn from_urdf_str(text: &str, base_link: &str, tip_link: &str) -> Result<Chai
             )));
         }
     }
-    let by_child: HashMap<&str, &urdf_rs::Joint> = robot.joints.iter().map(|j| (j.child.link.as_str(), j)).collect();
-    // Walk up from the tip to the base.
+    let by_child = parent_joints(&robot, &links)?;
+    // Walk up from the tip to the base (it ends: `parent_joints` proved the links form a tree).
     let mut path = Vec::new();
     let mut link = tip_link;
     while link != base_link {
