@@ -20,6 +20,7 @@ use numpy::ndarray::ArrayView;
 use numpy::{IxDyn, PyArray, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
+use pyo3::types::PyDict;
 
 use crate::errors::{InternalError, NumericalError, PyResultExt, ShapeError};
 
@@ -67,7 +68,8 @@ pub fn shape_str(shape: &[usize]) -> String {
 
 struct NumpyFns {
     asarray: Py<PyAny>,
-    require: Py<PyAny>,
+    ascontiguousarray: Py<PyAny>,
+    array: Py<PyAny>,
 }
 
 fn numpy_fns(py: Python<'_>) -> PyResult<&NumpyFns> {
@@ -76,7 +78,8 @@ fn numpy_fns(py: Python<'_>) -> PyResult<&NumpyFns> {
         let m = py.import("numpy")?;
         Ok(NumpyFns {
             asarray: m.getattr("asarray")?.unbind(),
-            require: m.getattr("require")?.unbind(),
+            ascontiguousarray: m.getattr("ascontiguousarray")?.unbind(),
+            array: m.getattr("array")?.unbind(),
         })
     })
 }
@@ -118,8 +121,14 @@ fn as_contiguous_f64<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<(Boun
         return Err(refuse(format!("of dtype {}", dtype.str()?)));
     }
     let itemsize: usize = dtype.getattr("itemsize")?.extract()?;
-    // "C": C-contiguous, "A": aligned; the dtype makes it native-endian float64.
-    let converted = np.require.bind(py).call1((arr, "float64", "CA"))?;
+    // Native-endian float64, C order: a fresh (aligned) array unless `arr` already was one; an
+    // unaligned one (a buffer at an odd offset) is then copied by `np.array`.
+    let kwargs = PyDict::new(py);
+    kwargs.set_item("dtype", "float64")?;
+    let mut converted = np.ascontiguousarray.bind(py).call((arr,), Some(&kwargs))?;
+    if converted.cast::<PyArrayDyn<f64>>().is_ok_and(|a| !a.is_aligned()) {
+        converted = np.array.bind(py).call1((converted,))?;
+    }
     Ok((converted, dtype_precision(&kind, itemsize)))
 }
 

@@ -1,0 +1,256 @@
+"""The registry of ttmanip's public API for the fuzzer (tests/test_api_fuzz.py).
+
+Every public callable of ``ttmanip`` (functions of the package and its public submodules,
+classes, their methods and properties) is found by :func:`public_callables`. The fuzzer calls
+each one, drawing every argument from a strategy chosen by the *parameter's name* (``q``, ``T``,
+``task``, ``duration``, ...; see ``tests/test_api_fuzz.py``), so a new public name is fuzzed by
+default. :data:`API` lists every name once, with what the fuzzer needs beyond that:
+
+- ``shape``: the documented result shape, from the drawn arguments (``n`` = joints of the robot,
+  ``N`` = batch size of the first array argument, ``None`` for one item);
+- ``may_be_inf``: the result may hold ±inf by definition (e.g. "inf where no limit");
+- ``receiver``: for methods, how to make the object (default: by class name, see the fuzzer);
+- ``args``: per-parameter strategy names overriding the by-name choice.
+
+``test_registry_covers_the_public_api`` fails when a public callable is missing here.
+"""
+
+from __future__ import annotations
+
+import inspect
+import types
+
+import ttmanip
+
+#: Submodules of ttmanip whose public names are part of the API.
+MODULES = ("dynamics", "motor", "robots", "traj")
+
+
+def _batched(*item):
+    """Shape `item` ("n" = joints) for one input, (N, *item) for a batch of N."""
+
+    def shape(n, N):
+        one = tuple(n if d == "n" else d for d in item)
+        return one if N is None else (N, *one)
+
+    return shape
+
+
+#: name -> options (see the module docstring). Keys are "name" for package functions,
+#: "module.name" for submodule functions, "Class" for constructors, "Class.attr" for members.
+API: dict[str, dict] = {
+    # --- package functions
+    "task_line": {},
+    "track": {"args": {"task_trajectory": "task_trajectory"}},
+    "wls_step": {},
+    # --- Robot
+    "Robot": {"skip_call": "Robot() has no constructor; the factories below make robots"},
+    "Robot.builtin": {"args": {"name": "robot_name"}},
+    "Robot.from_dh": {},
+    "Robot.from_file": {},
+    "Robot.from_toml": {},
+    "Robot.from_urdf": {},
+    "Robot.from_urdf_string": {},
+    "Robot.acceleration_limits": {"may_be_inf": True},
+    "Robot.velocity_limits": {"may_be_inf": True},
+    "Robot.effort_limits": {"may_be_inf": True},
+    "Robot.limits": {"may_be_inf": True},
+    "Robot.analytic_ik": {},
+    "Robot.armature": {},
+    "Robot.base": {},
+    "Robot.tool": {},
+    "Robot.coriolis": {"shape": _batched("n")},
+    "Robot.drives": {},
+    "Robot.fk": {"shape": _batched(4, 4)},
+    "Robot.fk_all": {"shape": _batched("n", 4, 4)},
+    "Robot.jacobian": {"shape": _batched(6, "n")},
+    "Robot.mass_matrix": {"shape": _batched("n", "n")},
+    "Robot.gravity": {"shape": _batched("n")},
+    "Robot.rnea": {"shape": _batched("n")},
+    "Robot.inverse_dynamics": {"shape": _batched("n")},
+    "Robot.forward_dynamics": {"shape": _batched("n")},
+    "Robot.nonlinear_effects": {"shape": _batched("n")},
+    "Robot.friction": {"shape": _batched("n")},
+    "Robot.kinetic_energy": {},
+    "Robot.potential_energy": {},
+    "Robot.ik": {},
+    "Robot.ik_all": {},
+    "Robot.ik_nearest": {},
+    "Robot.joint_velocity": {"shape": _batched("n")},
+    "Robot.joint_names": {},
+    "Robot.joint_types": {},
+    "Robot.masses": {},
+    "Robot.n": {},
+    "Robot.name": {},
+    "Robot.simulate": {},
+    "Robot.task_coordinates": {},
+    "Robot.task_jacobian": {},
+    "Robot.to_toml": {},
+    "Robot.to_urdf": {},
+    "Robot.torques": {},
+    "Robot.with_base": {},
+    "Robot.with_tool": {},
+    "Robot.with_drives": {},
+    "Robot.with_inertials": {},
+    # --- IkResult (made by Robot.ik)
+    "IkResult": {"skip_call": "made by Robot.ik only"},
+    "IkResult.q": {},
+    "IkResult.success": {},
+    "IkResult.position_error": {},
+    "IkResult.orientation_error": {},
+    "IkResult.iterations": {},
+    "IkResult.restarts": {},
+    # --- DiffDrive
+    "DiffDrive": {},
+    "DiffDrive.body_velocity": {},
+    "DiffDrive.integrate": {"shape": lambda n, N: (3,)},
+    "DiffDrive.limit_step": {"shape": lambda n, N: (2,)},
+    "DiffDrive.saturate": {"shape": lambda n, N: (2,)},
+    "DiffDrive.wheel_speeds": {"shape": lambda n, N: (2,)},
+    "DiffDrive.max_wheel_acceleration": {"may_be_inf": True},
+    "DiffDrive.max_wheel_speed": {"may_be_inf": True},
+    "DiffDrive.track": {},
+    "DiffDrive.wheel_radius": {},
+    # --- TrackResult (made by track)
+    "TrackResult": {"skip_call": "made by track only"},
+    **{
+        f"TrackResult.{a}": {}
+        for a in (
+            "error",
+            "joint_names",
+            "margin",
+            "message",
+            "ok",
+            "orientation_error",
+            "position_error",
+            "q",
+            "qdot",
+            "scale",
+            "sigma_min",
+            "status",
+            "time",
+            "x",
+        )
+    },
+    # --- dynamics
+    "dynamics.TorqueProfile": {"skip_call": "made by Robot.torques only"},
+    **{f"dynamics.TorqueProfile.{a}": {} for a in ("current", "joint", "motor", "peak", "violations", "within_limits")},
+    "dynamics.gantry6_example": {"args": {"samples": "small_count"}},
+    "dynamics.torque_figure": {"args": {"path": "out_path", "profile": "torque_profile"}},
+    # --- motor
+    "motor.DcMotor": {},
+    "motor.Drive": {},
+    "motor.Gearbox": {},
+    "motor.Load": {},
+    "motor.Loops": {},
+    "motor.Response": {"skip_call": "made by Servo.step_response only"},
+    "motor.Servo": {},
+    "motor.plot": {"args": {"path": "out_path"}},
+    "motor.quintic": {},
+    **{
+        f"motor.{cls}.{a}": {}
+        for cls, attrs in {
+            "DcMotor": (
+                "back_emf_constant",
+                "coulomb_friction",
+                "inductance",
+                "resistance",
+                "rotor_inertia",
+                "torque_constant",
+                "viscous_friction",
+            ),
+            "Drive": ("bus_voltage", "current_noise", "encoder_counts_per_rev", "max_duty"),
+            "Gearbox": ("efficiency", "inertia", "ratio"),
+            "Load": ("inertia", "viscous_friction"),
+            "Loops": (
+                "acceleration_feedforward",
+                "anti_windup",
+                "continuous_current",
+                "current_bandwidth_hz",
+                "current_hz",
+                "emf_feedforward",
+                "emf_filter_hz",
+                "following_error_limit",
+                "max_speed",
+                "overcurrent_trip",
+                "peak_current",
+                "peak_duration",
+                "position_hz",
+                "position_ratio",
+                "quick_stop_deceleration",
+                "speed_hz",
+                "speed_output_filter_hz",
+                "speed_reference_filter_hz",
+                "speed_symmetric_optimum",
+                "speed_window",
+                "velocity_feedforward",
+            ),
+            "Response": ("overshoot", "rise_time"),
+            "Servo": ("params", "rates", "step_response", "track", "track_quintic", "tuning"),
+        }.items()
+        for a in attrs
+    },
+    # --- robots
+    **{f"robots.{f}": {} for f in ("arm4", "gantry6", "mobile8", "mobile8_start", "ur5")},
+    # --- traj
+    "traj.arc": {},
+    "traj.cubic": {},
+    "traj.line": {},
+    "traj.minimal_duration": {},
+    "traj.quintic": {},
+    "traj.quintic_samples": {"args": {"n": "small_count"}},
+    "traj.stroke": {},
+    "traj.via": {},
+    "traj.CartesianTrajectory": {"skip_call": "made by traj.line / traj.arc only"},
+    "traj.JointTrajectory": {"skip_call": "made by traj.cubic / quintic / via only"},
+    "traj.Stroke": {"skip_call": "made by traj.stroke only"},
+    **{
+        f"traj.CartesianTrajectory.{a}": {}
+        for a in ("arc_about", "arc_through", "check_limits", "duration", "line", "sample", "sample_rate", "to_joint")
+    },
+    **{
+        f"traj.JointTrajectory.{a}": {}
+        for a in (
+            "check_limits",
+            "coefficients",
+            "dof",
+            "duration",
+            "jerk",
+            "knots",
+            "peaks",
+            "sample",
+            "sample_rate",
+            "sample_uniform",
+        )
+    },
+    "traj.Stroke.feasible": {},
+    "traj.Stroke.on_time": {},
+}
+
+
+def _members(prefix: str, cls: type) -> dict[str, object]:
+    out = {}
+    for a in dir(cls):
+        if a.startswith("_"):
+            continue
+        out[f"{prefix}.{a}"] = inspect.getattr_static(cls, a)
+    return out
+
+
+def public_callables() -> dict[str, object]:
+    """Every public callable of ttmanip: registry key -> the object (class, function, member)."""
+    found: dict[str, object] = {}
+    spaces = [("", ttmanip)] + [(f"{m}.", getattr(ttmanip, m)) for m in MODULES]
+    for prefix, mod in spaces:
+        for name in getattr(mod, "__all__", [n for n in dir(mod) if not n.startswith("_")]):
+            v = getattr(mod, name)
+            if isinstance(v, types.ModuleType):
+                continue
+            if inspect.isclass(v):
+                if issubclass(v, BaseException):
+                    continue
+                found[f"{prefix}{name}"] = v
+                found.update(_members(f"{prefix}{name}", v))
+            elif callable(v):
+                found[f"{prefix}{name}"] = v
+    return found

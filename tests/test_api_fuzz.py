@@ -1,0 +1,385 @@
+"""The API fuzzer (issue 14): random calls to every public callable of ttmanip.
+
+Each example picks a registry entry (tests/api_registry.py), makes the receiver for a method,
+and draws every argument from a strategy chosen by the parameter's name: arrays of random shape
+(mostly the shapes the call accepts), dtype (float64/32/16, int, uint), byte order, alignment
+(buffers at an odd offset), strides, Fortran order, read-only, or a list; values finite, huge
+(1e160–1e300), NaN, ±inf, empty. The call must either
+
+- return a result whose floating arrays are float64, of the documented shape (``shape`` in the
+  registry), and finite whenever every input was finite (unless ``may_be_inf``); or
+- raise a ``ttmanip.TtmanipError`` subclass. Anything else (another exception, PyO3's
+  ``PanicException`` — a ``BaseException`` — or a silent NaN) fails the test.
+
+CI (``CI=true``) runs a fixed, derandomized set of examples (``ci`` profile in conftest.py);
+``TTMANIP_FUZZ_EXAMPLES=10000`` runs a long local campaign.
+"""
+
+from __future__ import annotations
+
+import functools
+import inspect
+import math
+import os
+import tempfile
+
+import numpy as np
+import pytest
+import ttmanip
+from api_registry import API, public_callables
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+EXAMPLES = int(os.environ.get("TTMANIP_FUZZ_EXAMPLES", "600"))
+ROBOT_NAMES = ("mobile8", "gantry6", "arm4", "ur5")
+TMP = tempfile.mkdtemp(prefix="ttmanip-fuzz-")
+
+# ---------------------------------------------------------------- values and array layouts
+
+SPECIAL = [np.nan, np.inf, -np.inf, 1e300, -1e300, 1e160, -1e200, 1e-300, 0.0, -0.0]
+finite_special = [v for v in SPECIAL if math.isfinite(v)]
+
+
+class Draw:
+    """Draws arguments and remembers whether every drawn number was finite."""
+
+    def __init__(self, data):
+        self.data = data
+        self.finite = True
+
+    def __call__(self, strategy):
+        return self.data.draw(strategy)
+
+    def value(self) -> float:
+        """A float: mostly ordinary, sometimes huge, tiny, NaN or infinite."""
+        kind = self(st.integers(0, 9))
+        if kind < 6:
+            v = self(st.floats(-3.0, 3.0, allow_nan=False))
+        elif kind < 8:
+            v = self(st.sampled_from(finite_special))
+        else:
+            v = self(st.sampled_from(SPECIAL))
+        self.finite &= math.isfinite(v)
+        return v
+
+    def values(self, shape) -> np.ndarray:
+        size = int(np.prod(shape)) if shape else 1
+        mode = self(st.integers(0, 9))
+        if mode < 6:  # ordinary values, the call goes deep
+            a = self(st.lists(st.floats(-1.5, 1.5, allow_nan=False), min_size=size, max_size=size))
+        else:  # a few special values planted
+            a = [self(st.floats(-1.5, 1.5, allow_nan=False)) for _ in range(min(size, 3))] + [0.5] * max(
+                0, size - 3
+            )
+            for _ in range(self(st.integers(1, 3)) if size else 0):
+                a[self(st.integers(0, size - 1))] = self(st.sampled_from(SPECIAL))
+        arr = np.array(a, dtype=float).reshape(shape)
+        self.finite &= bool(np.isfinite(arr).all())
+        return arr
+
+    def layout(self, a: np.ndarray):
+        """The same values handed over in a random memory layout, dtype or container."""
+        how = self(
+            st.sampled_from(
+                ["plain", "plain", "unaligned", "swapped", "strided", "fortran", "readonly", "float32", "int", "list"]
+            )
+        )
+        if how == "unaligned":
+            buf = bytearray(a.nbytes + 1)
+            u = np.ndarray(a.shape, np.float64, buf, offset=1)
+            u[...] = a
+            return u
+        if how == "swapped":
+            return a.astype(a.dtype.newbyteorder(">" if a.dtype.byteorder != ">" else "<"))
+        if how == "strided":
+            big = np.repeat(a[..., None], 2, axis=-1) if a.ndim else a
+            return big[..., 0] if a.ndim else big
+        if how == "fortran":
+            return np.asfortranarray(a)
+        if how == "readonly":
+            b = a.copy()
+            b.flags.writeable = False
+            return b
+        if how == "float32":
+            with np.errstate(over="ignore"):
+                b = a.astype(np.float32)
+            self.finite &= bool(np.isfinite(b).all())
+            return b
+        if how == "int":
+            b = np.clip(np.nan_to_num(a), -5, 5).astype(np.int64)
+            return b
+        if how == "list":
+            return a.tolist()
+        return a
+
+    def array(self, shapes) -> object:
+        """An array of one of `shapes` (or a random shape), in a random layout."""
+        if self(st.integers(0, 9)) < 8 and shapes:
+            shape = self(st.sampled_from(shapes))
+        else:
+            shape = tuple(self(st.lists(st.integers(0, 7), max_size=3)))
+        return self.layout(self.values(shape))
+
+
+# ---------------------------------------------------------------- receivers and fixtures
+
+
+@functools.lru_cache(maxsize=None)
+def robot(name: str) -> ttmanip.Robot:
+    return ttmanip.Robot.builtin(name)
+
+
+def pose_of(d: Draw, r: ttmanip.Robot):
+    """A reachable pose of `r` (FK of a configuration within limits), in a random layout."""
+    lim = np.clip(r.limits, -3.0, 3.0)
+    u = np.array(d(st.lists(st.floats(0.0, 1.0), min_size=r.n, max_size=r.n)))
+    return r.fk(lim[:, 0] + (lim[:, 1] - lim[:, 0]) * u)
+
+
+def poses(d: Draw, r: ttmanip.Robot):
+    kind = d(st.integers(0, 9))
+    if kind < 5:
+        return d.layout(pose_of(d, r))
+    if kind < 7:
+        count = d(st.integers(0, 3))
+        return d.layout(np.array([pose_of(d, r) for _ in range(count)]).reshape(count, 4, 4))
+    return d.array([(4, 4), (2, 4, 4), (0, 4, 4)])
+
+
+@functools.lru_cache(maxsize=None)
+def sample_objects() -> dict[str, object]:
+    """One object of each public class that the API makes (receivers of methods)."""
+    m8, g6 = robot("mobile8"), robot("gantry6")
+    q0 = ttmanip.robots.mobile8_start()
+    x0 = m8.task_coordinates(q0)
+    t, x, xd = ttmanip.task_line(x0, x0 + 0.01, 0.05, rate_hz=200.0)
+    tr = ttmanip.track(m8, q0, (t, x, xd), rate_hz=200.0)
+    n = g6.n
+    qg = np.full(n, 0.1)
+    prof = g6.torques(np.zeros((3, n)), np.zeros((3, n)), np.zeros((3, n)))
+    servo = ttmanip.motor.Servo()
+    return {
+        "IkResult": g6.ik(g6.fk(qg)),
+        "DiffDrive": ttmanip.DiffDrive(0.1, 0.5, 2.0, 5.0),
+        "TrackResult": tr,
+        "dynamics.TorqueProfile": prof,
+        "motor.DcMotor": ttmanip.motor.DcMotor(),
+        "motor.Drive": ttmanip.motor.Drive(),
+        "motor.Gearbox": ttmanip.motor.Gearbox(),
+        "motor.Load": ttmanip.motor.Load(),
+        "motor.Loops": ttmanip.motor.Loops(),
+        "motor.Servo": servo,
+        "motor.Response": servo.step_response(0.01, 0.05),
+        "traj.JointTrajectory": ttmanip.traj.cubic(np.zeros(n), qg, 0.5),
+        "traj.CartesianTrajectory": ttmanip.traj.line(g6.fk(np.zeros(n)), g6.fk(qg), 0.5),
+        "traj.Stroke": ttmanip.traj.stroke(None, (qg, np.zeros(n), np.zeros(n)), qg + 0.1, np.zeros(n), 0.6, qg),
+    }
+
+
+# ---------------------------------------------------------------- arguments by parameter name
+
+CHOICES = {
+    "task": ["pose", "racket5", "position", "rpy", ""],
+    "frame": ["base", "tool", "world", "nope"],
+    "method": ["auto", "numeric", "analytic", "lm"],
+    "convention": ["standard", "modified", "craig", "x"],
+    "kind": ["cubic", "quintic", "linear", "trapezoid", "bogus"],
+    "law": ["quintic", "cubic", "trapezoid", "linear", "bogus"],
+    "weights": ["chan-dubey", "none", "identity", "bogus"],
+    "types": ["R", "P", "RRRRRR", "PRRRRRRR", "PPRRRR", "RRRR", "X"],
+    "robot_name": list(ROBOT_NAMES) + ["r2d2", ""],
+    "name": ["robot", "", "x" * 300],
+}
+INTS = {"max_iterations", "max_restarts", "seed", "samples", "n", "steps", "count"}
+BOOLS = {"info", "raise_on_failure", "respect_limits", "corrector", "friction", "gravity_on", "strict"}
+POSE_NAMES = {"T", "T0", "T1", "base", "tool", "mount", "target", "pose"}
+PATH_NAMES = {"path", "file"}
+
+
+def small_count(d: Draw, _ctx):
+    return d(st.integers(-2, 50))
+
+
+def out_path(d: Draw, _ctx):
+    return d(st.sampled_from([None, os.path.join(TMP, "out.png"), "/nonexistent-dir/out.png"]))
+
+
+def task_trajectory(d: Draw, ctx):
+    n = d(st.sampled_from([0, 1, 3]))
+    dim = d(st.sampled_from([5, 6, 3]))
+    t = d.layout(np.linspace(0.0, 0.01 * max(n - 1, 0), n)) if d(st.booleans()) else d.array([(n,)])
+    return (t, d.array([(n, dim)]), d.array([(n, dim)]))
+
+
+def torque_profile(d: Draw, _ctx):
+    return sample_objects()["dynamics.TorqueProfile"]
+
+
+SPECIAL_STRATEGIES = {
+    "small_count": small_count,
+    "out_path": out_path,
+    "task_trajectory": task_trajectory,
+    "torque_profile": torque_profile,
+    "robot_name": lambda d, ctx: d(st.sampled_from(CHOICES["robot_name"])),
+}
+
+
+def argument(d: Draw, pname: str, ctx: dict, override: str | None):
+    """A value for parameter `pname` (ctx: the robot of the call, its joint count n)."""
+    if override:
+        return SPECIAL_STRATEGIES[override](d, ctx)
+    n = ctx["n"]
+    if pname == "robot":
+        return d(st.sampled_from([robot(r) for r in ROBOT_NAMES] + [None]))
+    if pname in POSE_NAMES:
+        return poses(d, ctx["robot"])
+    if pname in CHOICES and d(st.integers(0, 9)) < 8:
+        return d(st.sampled_from(CHOICES[pname]))
+    if pname in INTS:
+        return d(st.one_of(st.integers(-3, 40), st.sampled_from([-(2**40), 2**64, 0])))
+    if pname in BOOLS:
+        return d(st.booleans())
+    if pname in PATH_NAMES:
+        return d(st.sampled_from(["/nonexistent/robot.toml", os.path.join(TMP, "garbage.toml")]))
+    if pname in ("text",):
+        return d(st.sampled_from(["", "garbage", "<robot", robot("arm4").to_toml(), robot("arm4").to_urdf()]))
+    if pname in ("base_link", "tip_link"):
+        return d(st.sampled_from(["base_link", "tool", "link0", "link3", "nope"]))
+    # numbers and arrays: the shapes the robot's calls accept
+    shapes = [(n,), (2, n), (0, n), (3,), (6,), (5,), (2,), (n, 2), (4, 4), ()]
+    kind = d(st.integers(0, 9))
+    if kind < 3:
+        return d.value()
+    if kind < 4:
+        return None
+    return d.array(shapes)
+
+
+# ---------------------------------------------------------------- the call and the verdict
+
+
+def arrays_in(result, depth=0):
+    """Every numpy array (and float) reachable in a result."""
+    if depth > 3:
+        return
+    if isinstance(result, np.ndarray):
+        yield result
+    elif isinstance(result, float):
+        yield np.array(result)
+    elif isinstance(result, (tuple, list)):
+        for r in result:
+            yield from arrays_in(r, depth + 1)
+    elif isinstance(result, dict):
+        for r in result.values():
+            yield from arrays_in(r, depth + 1)
+
+
+def parameters(fn) -> list[inspect.Parameter]:
+    try:
+        sig = inspect.signature(fn)
+    except (TypeError, ValueError):
+        return []
+    return [p for p in sig.parameters.values() if p.name != "self" and p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)]
+
+
+def resolve(key: str):
+    """The object a registry key names (module attribute path)."""
+    obj = ttmanip
+    for part in key.split("."):
+        obj = getattr(obj, part)
+    return obj
+
+
+def make_call(d: Draw, key: str, static):
+    """(callable, or None for an attribute read; receiver; attribute; args; kwargs; ctx)."""
+    spec = API.get(key, {})
+    ctx_robot = robot(d(st.sampled_from(ROBOT_NAMES)))
+    ctx = {"robot": ctx_robot, "n": ctx_robot.n}
+    owner, _, attr = key.rpartition(".")
+    receiver = None
+    owner_obj = resolve(owner) if owner else ttmanip
+    if inspect.isclass(owner_obj) and not isinstance(static, (staticmethod, classmethod)):
+        receiver = ctx_robot if owner == "Robot" else sample_objects()[owner]
+        member = getattr(receiver, attr)
+        target = member if callable(member) else None
+    else:
+        target = resolve(key)
+    args, kwargs = [], {}
+    if target is not None:
+        for p in parameters(target):
+            if p.default is not p.empty and d(st.integers(0, 9)) < 4:
+                continue
+            v = argument(d, p.name, ctx, spec.get("args", {}).get(p.name))
+            if p.kind == p.POSITIONAL_ONLY:
+                args.append(v)
+            else:
+                kwargs[p.name] = v
+    return target, receiver, attr, args, kwargs, ctx
+
+
+def check(key: str, result, d: Draw, kwargs: dict, ctx: dict):
+    spec = API.get(key, {})
+    for a in arrays_in(result):
+        if a.dtype.kind == "f":
+            assert a.dtype == np.float64, f"{key}: float result of dtype {a.dtype}, documented float64"
+            if d.finite and not spec.get("may_be_inf"):
+                assert np.isfinite(a).all(), f"{key}: non-finite result {a!r} for finite inputs {kwargs!r}"
+    shape = spec.get("shape")
+    if shape is not None:
+        first = next((v for v in kwargs.values() if isinstance(v, (np.ndarray, list))), None)
+        batch = np.asarray(first).shape[0] if first is not None and np.asarray(first).ndim >= 2 else None
+        n = getattr(ctx.get("receiver"), "n", ctx["n"])
+        assert isinstance(result, np.ndarray), f"{key}: expected an array, got {type(result)}"
+        assert result.shape == shape(n, batch), f"{key}: shape {result.shape}, documented {shape(n, batch)}"
+
+
+def run_one(d: Draw, key: str, obj):
+    spec = API.get(key, {})
+    if "skip_call" in spec:
+        return
+    target, receiver, attr, args, kwargs, ctx = make_call(d, key, obj)
+    ctx["receiver"] = receiver
+    try:
+        if target is None:
+            result = getattr(receiver, attr)
+        else:
+            result = target(*args, **kwargs)
+    except ttmanip.TtmanipError:
+        return
+    except BaseException as e:  # noqa: BLE001 - the point: nothing else may escape
+        if isinstance(e, KeyboardInterrupt):
+            raise
+        raise AssertionError(f"{key}({args!r}, {kwargs!r}) raised {type(e).__module__}.{type(e).__name__}: {e}") from e
+    check(key, result, d, kwargs, ctx)
+
+
+CALLABLES = public_callables()
+
+
+def test_registry_covers_the_public_api():
+    missing = sorted(set(CALLABLES) - set(API))
+    assert not missing, f"public callables missing from tests/api_registry.py: {missing}"
+    stale = sorted(set(API) - set(CALLABLES))
+    assert not stale, f"registry entries that are not public callables (any more): {stale}"
+
+
+@settings(
+    max_examples=EXAMPLES,
+    deadline=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large, HealthCheck.filter_too_much],
+)
+@given(data=st.data(), key=st.sampled_from(sorted(CALLABLES)))
+def test_fuzz_every_public_callable(data, key):
+    run_one(Draw(data), key, CALLABLES[key])
+
+
+@pytest.mark.parametrize("key", sorted(k for k in CALLABLES if "skip_call" not in API.get(k, {})))
+def test_each_callable_survives_a_few_calls(key):
+    """Every entry gets some calls of its own, whatever the random choice of keys above."""
+
+    @settings(max_examples=8, deadline=None, suppress_health_check=list(HealthCheck), derandomize=True)
+    @given(data=st.data())
+    def inner(data):
+        run_one(Draw(data), key, CALLABLES[key])
+
+    inner()
