@@ -18,6 +18,7 @@ pub mod error;
 pub mod ik;
 pub mod inertial;
 pub mod joint;
+pub mod linalg;
 pub mod redundancy;
 pub mod robots;
 pub mod task;
