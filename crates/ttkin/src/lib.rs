@@ -12,6 +12,7 @@
 pub mod chain;
 pub mod clik;
 pub mod description;
+pub mod dh;
 pub mod diffdrive;
 pub mod dynamics;
 pub mod error;
@@ -21,6 +22,7 @@ pub mod joint;
 pub mod linalg;
 pub mod redundancy;
 pub mod robots;
+pub mod tables;
 pub mod task;
 pub mod traj;
 pub mod transform;

@@ -71,6 +71,48 @@ impl Dynamics {
         })
     }
 
+    /// Batch [`Dynamics::inverse_dynamics`]: [`Dynamics::rnea_batch`] plus joint friction.
+    pub fn inverse_dynamics_batch(
+        &self,
+        q: &[f64],
+        qd: &[f64],
+        qdd: &[f64],
+        gravity: &[f64; 3],
+        wrench: Option<&Wrench>,
+        out: &mut [f64],
+    ) -> Result<()> {
+        let g = vec3("gravity", gravity)?;
+        self.batch3(["qd", "qdd"], q, qd, qdd, out, |data, q, qd, qdd| {
+            self.rnea_unchecked(data, q, qd, qdd, &g, wrench);
+            self.add_friction(&mut data.tau, qd);
+            Ok(data.tau.as_slice())
+        })
+    }
+
+    /// Batch [`Dynamics::coriolis`]: `q`, `qd` N × n, `out` receives N × n torques.
+    pub fn coriolis_batch(&self, q: &[f64], qd: &[f64], out: &mut [f64]) -> Result<()> {
+        self.nonlinear_effects_batch(q, qd, &[0.0; 3], out)
+    }
+
+    /// Batch [`Dynamics::nonlinear_effects`]: `q`, `qd` N × n, `out` receives N × n torques.
+    pub fn nonlinear_effects_batch(&self, q: &[f64], qd: &[f64], gravity: &[f64; 3], out: &mut [f64]) -> Result<()> {
+        let zeros = vec![0.0; q.len()];
+        self.rnea_batch(q, qd, &zeros, gravity, None, out)
+    }
+
+    /// Batch [`Dynamics::friction`]: joint friction at N × n speeds `qd` into `out` (N × n).
+    pub fn friction_batch(&self, qd: &[f64], out: &mut [f64]) -> Result<()> {
+        let n = self.dof();
+        let count = batch_count("qd", qd, n)?;
+        same_count("output buffer", out, count, n)?;
+        for (o, v) in out.chunks_exact_mut(n).zip(qd.chunks_exact(n)) {
+            for ((o, d), &v) in o.iter_mut().zip(&self.drives).zip(v) {
+                *o = d.map_or(0.0, |d| d.friction(v));
+            }
+        }
+        Ok(())
+    }
+
     /// Runs `f` on every row of three N × n inputs in parallel (one scratch per rayon task) and
     /// copies the n values it returns into row k of `out`; checks shapes and finiteness first.
     fn batch3<F>(&self, names: [&str; 2], q: &[f64], b: &[f64], c: &[f64], out: &mut [f64], f: F) -> Result<()>
