@@ -124,12 +124,10 @@ impl PyDiffDrive {
         command: &Bound<'py, PyAny>,
         dt: f64,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-        if !(dt >= 0.0 && dt.is_finite()) {
-            return Err(TtmanipError::new_err(format!("dt: must be finite and ≥ 0 s, got {dt}")));
-        }
         let w = self
             .drive
-            .limit_step(wheel_pair(previous, "previous")?, wheel_pair(command, "command")?, dt);
+            .limit_step_checked(wheel_pair(previous, "previous")?, wheel_pair(command, "command")?, dt)
+            .py()?;
         Ok(to_numpy(py, &[2], &w))
     }
 
@@ -218,7 +216,7 @@ impl PyRobot {
 /// coordinates, see `Robot.task_jacobian`) at `q`, with Chan–Dubey joint-limit weights (or none) and
 /// singularity-robust damping (λ_max = `damping`, starting below σ_min = `epsilon`).
 #[pyfunction]
-#[pyo3(signature = (robot, q, xdot, task="racket5", weights="chan-dubey", damping=0.05, epsilon=1e-3, qdot_prev=None, base=None, mount=None))]
+#[pyo3(signature = (robot, q, xdot, task="racket5", weights="chan-dubey", damping=Damping::default().lambda_max, epsilon=Damping::default().epsilon, qdot_prev=None, base=None, mount=None))]
 #[allow(clippy::too_many_arguments)]
 fn wls_step<'py>(
     py: Python<'py>,
@@ -335,11 +333,7 @@ impl PyTrackResult {
     /// "completed", "saturated" (finished, task velocity scaled at some samples) or "failed".
     #[getter]
     fn status(&self) -> &'static str {
-        match self.r.status {
-            ClikStatus::Completed => "completed",
-            ClikStatus::Saturated { .. } => "saturated",
-            ClikStatus::Failed { .. } => "failed",
-        }
+        self.r.status.name()
     }
     /// True when the motion completed with the full task velocity at every sample.
     #[getter]
@@ -349,18 +343,7 @@ impl PyTrackResult {
     /// A sentence on how the motion ended.
     #[getter]
     fn message(&self) -> String {
-        match &self.r.status {
-            ClikStatus::Completed => "completed: full task velocity at every sample".into(),
-            ClikStatus::Saturated {
-                first_time,
-                samples,
-                min_scale,
-            } => format!(
-                "saturated: limits scaled the task velocity at {samples} samples from t = {first_time:.3} s \
-                 (smallest scale {min_scale:.3})"
-            ),
-            ClikStatus::Failed { time, reason } => format!("failed at t = {time:.3} s: {reason}"),
-        }
+        self.r.status.to_string()
     }
     /// Names of the arm joints (columns of `margin`).
     #[getter]
@@ -380,8 +363,10 @@ impl PyTrackResult {
 /// differences). See `ttmanip.mobile.track` for the options.
 #[pyfunction]
 #[pyo3(signature = (robot, q0, task_trajectory, rate_hz=1000.0, task="racket5", velocities=None, weights="chan-dubey",
-                    gain=None, damping=0.05, epsilon=1e-3, input_weights=None, limit_gain=0.0,
-                    manipulability_gain=0.0, respect_limits=true, max_error=0.05, corrector=true, base=None, mount=None))]
+                    gain=None, damping=Damping::default().lambda_max, epsilon=Damping::default().epsilon, input_weights=None,
+                    limit_gain=ClikOptions::default().limit_gain, manipulability_gain=ClikOptions::default().manipulability_gain,
+                    respect_limits=ClikOptions::default().respect_limits, max_error=ClikOptions::default().max_error,
+                    corrector=ClikOptions::default().corrector, base=None, mount=None))]
 #[allow(clippy::too_many_arguments)]
 fn track<'py>(
     py: Python<'py>,
