@@ -32,6 +32,23 @@ impl PyRobot {
         self.dynamics.with_data(&self.chain, f).py()
     }
 
+    /// One configuration through `one` (shared scratch space), or a batch of `count` through
+    /// `many` without the GIL: shape `item`, or (count, *item).
+    fn one_or_many<'py, O, M>(&self, py: Python<'py>, batch: Option<usize>, item: &[usize], one: O, many: M) -> PyResult<Array<'py>>
+    where
+        O: for<'d> FnOnce(&Dynamics, &'d mut DynamicsData) -> ttkin::Result<&'d [f64]>,
+        M: FnOnce(&Dynamics, &mut [f64]) -> ttkin::Result<()> + Send,
+    {
+        let (_, shape) = out_shape(batch, item);
+        match batch {
+            None => self.with_data(|dy, d| one(dy, d).map(|v| to_numpy(py, &shape, v)))?.py(),
+            Some(_) => {
+                let dy = self.dynamics()?;
+                filled_without_gil(py, &shape, |o| many(dy, o))
+            }
+        }
+    }
+
     /// Reads several per-configuration arrays that must all be (n,) or all (N, n) with the same N.
     fn states<'py, const K: usize>(
         &self,
@@ -243,15 +260,13 @@ impl PyRobot {
     fn mass_matrix<'py>(&self, py: Python<'py>, q: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let (a, batch) = self.configs(q, "q")?;
         let n = self.chain.dof();
-        match batch {
-            None => self
-                .with_data(|dy, d| dy.mass_matrix(d, a.data()).map(|m| to_numpy(py, &[n, n], m.as_slice())))?
-                .py(),
-            Some(count) => {
-                let (dy, qs) = (self.dynamics()?, a.data());
-                filled_without_gil(py, &[count, n, n], |o| dy.mass_matrix_batch(qs, o))
-            }
-        }
+        self.one_or_many(
+            py,
+            batch,
+            &[n, n],
+            |dy, d| dy.mass_matrix(d, a.data()).map(|m| m.as_slice()),
+            |dy, o| dy.mass_matrix_batch(a.data(), o),
+        )
     }
 
     /// Gravity torques g(q) (N·m or N) that hold the robot still: (n,) or (N, n).
@@ -265,15 +280,14 @@ impl PyRobot {
         let g = gravity_arg(gravity)?;
         let (a, batch) = self.configs(q, "q")?;
         let n = self.chain.dof();
-        match batch {
-            None => self
-                .with_data(|dy, d| dy.gravity(d, a.data(), &g).map(|t| to_numpy(py, &[n], t.as_slice())))?
-                .py(),
-            Some(count) => {
-                let (dy, qs) = (self.dynamics()?, a.data());
-                filled_without_gil(py, &[count, n], |o| dy.gravity_batch(qs, &g, o))
-            }
-        }
+        let q = a.data();
+        self.one_or_many(
+            py,
+            batch,
+            &[n],
+            |dy, d| dy.gravity(d, q, &g).map(|t| t.as_slice()),
+            |dy, o| dy.gravity_batch(q, &g, o),
+        )
     }
 
     /// Coriolis and centrifugal torques C(q, q̇)·q̇ (N·m or N), gravity excluded: (n,) or (N, n).
@@ -285,15 +299,13 @@ impl PyRobot {
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let (arrays, batch) = self.states([(q, "q"), (qd, "qd")])?;
         let (q, qd, n) = (arrays[0].data(), arrays[1].data(), self.chain.dof());
-        match batch {
-            None => self
-                .with_data(|dy, d| dy.coriolis(d, q, qd).map(|t| to_numpy(py, &[n], t.as_slice())))?
-                .py(),
-            Some(count) => {
-                let dy = self.dynamics()?;
-                filled_without_gil(py, &[count, n], |o| dy.coriolis_batch(q, qd, o))
-            }
-        }
+        self.one_or_many(
+            py,
+            batch,
+            &[n],
+            |dy, d| dy.coriolis(d, q, qd).map(|t| t.as_slice()),
+            |dy, o| dy.coriolis_batch(q, qd, o),
+        )
     }
 
     /// Nonlinear effects h(q, q̇) = C(q, q̇)·q̇ + g(q) (N·m or N): (n,) or (N, n).
@@ -308,18 +320,13 @@ impl PyRobot {
         let g = gravity_arg(gravity)?;
         let (arrays, batch) = self.states([(q, "q"), (qd, "qd")])?;
         let (q, qd, n) = (arrays[0].data(), arrays[1].data(), self.chain.dof());
-        match batch {
-            None => self
-                .with_data(|dy, d| {
-                    dy.nonlinear_effects(d, q, qd, &g)
-                        .map(|t| to_numpy(py, &[n], t.as_slice()))
-                })?
-                .py(),
-            Some(count) => {
-                let dy = self.dynamics()?;
-                filled_without_gil(py, &[count, n], |o| dy.nonlinear_effects_batch(q, qd, &g, o))
-            }
-        }
+        self.one_or_many(
+            py,
+            batch,
+            &[n],
+            |dy, d| dy.nonlinear_effects(d, q, qd, &g).map(|t| t.as_slice()),
+            |dy, o| dy.nonlinear_effects_batch(q, qd, &g, o),
+        )
     }
 
     /// Forward dynamics q̈ = M⁻¹(τ − h + Jᵀw) (rad/s², m/s²) for q, qd, tau of shape (n,) or
@@ -339,20 +346,13 @@ impl PyRobot {
         let (arrays, batch) = self.states([(q, "q"), (qd, "qd"), (tau, "tau")])?;
         let n = self.chain.dof();
         let (q, qd, tau) = (arrays[0].data(), arrays[1].data(), arrays[2].data());
-        match batch {
-            None => self
-                .with_data(|dy, d| {
-                    dy.forward_dynamics(d, q, qd, tau, &g, w.as_ref())
-                        .map(|a| to_numpy(py, &[n], a.as_slice()))
-                })?
-                .py(),
-            Some(count) => {
-                let dy = self.dynamics()?;
-                filled_without_gil(py, &[count, n], |o| {
-                    dy.forward_dynamics_batch(q, qd, tau, &g, w.as_ref(), o)
-                })
-            }
-        }
+        self.one_or_many(
+            py,
+            batch,
+            &[n],
+            |dy, d| dy.forward_dynamics(d, q, qd, tau, &g, w.as_ref()).map(|a| a.as_slice()),
+            |dy, o| dy.forward_dynamics_batch(q, qd, tau, &g, w.as_ref(), o),
+        )
     }
 
     /// Joint friction b·q̇ + f_c·sign(q̇) (N·m or N) at speeds qd: (n,) or (N, n).
@@ -572,28 +572,27 @@ impl PyRobot {
         let (arrays, batch) = self.states([(q, "q"), (qd, "qd"), (qdd, "qdd")])?;
         let n = self.chain.dof();
         let (q, qd, qdd) = (arrays[0].data(), arrays[1].data(), arrays[2].data());
-        match batch {
-            None => self
-                .with_data(|dy, d| {
-                    let t = if friction {
-                        dy.inverse_dynamics(d, q, qd, qdd, &g, w.as_ref())
-                    } else {
-                        dy.rnea(d, q, qd, qdd, &g, w.as_ref())
-                    };
-                    t.map(|t| to_numpy(py, &[n], t.as_slice()))
-                })?
-                .py(),
-            Some(count) => {
-                let dy = self.dynamics()?;
-                filled_without_gil(py, &[count, n], |o| {
-                    if friction {
-                        dy.inverse_dynamics_batch(q, qd, qdd, &g, w.as_ref(), o)
-                    } else {
-                        dy.rnea_batch(q, qd, qdd, &g, w.as_ref(), o)
-                    }
-                })
-            }
-        }
+        let w = w.as_ref();
+        self.one_or_many(
+            py,
+            batch,
+            &[n],
+            |dy, d| {
+                let t = if friction {
+                    dy.inverse_dynamics(d, q, qd, qdd, &g, w)
+                } else {
+                    dy.rnea(d, q, qd, qdd, &g, w)
+                };
+                t.map(|t| t.as_slice())
+            },
+            |dy, o| {
+                if friction {
+                    dy.inverse_dynamics_batch(q, qd, qdd, &g, w, o)
+                } else {
+                    dy.rnea_batch(q, qd, qdd, &g, w, o)
+                }
+            },
+        )
     }
 }
 
