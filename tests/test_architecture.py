@@ -27,7 +27,11 @@ def _module_file(crate_dir: Path, parts: list[str]) -> Path | None:
         stem = base.joinpath(*parts[:k])
         for candidate in (stem.with_suffix(".rs"), stem / "mod.rs"):
             if candidate.is_file():
-                return candidate if k == len(parts) else (candidate if _names_item(candidate, parts[k:]) else None)
+                return (
+                    candidate
+                    if k == len(parts)
+                    else (candidate if _names_item(candidate, parts[k:]) else None)
+                )
     return None
 
 
@@ -81,7 +85,9 @@ def test_every_python_module_named_exists():
             if not any(f.is_file() for f in files):
                 # ttmanip.<module>.<name>: the module (or package) must exist and define the name.
                 parent = ROOT / PY_PACKAGE / Path(*parts[:-1])
-                mod = next((f for f in (parent.with_suffix(".py"), parent / "__init__.py") if f.is_file()), None)
+                mod = next(
+                    (f for f in (parent.with_suffix(".py"), parent / "__init__.py") if f.is_file()), None
+                )
                 if mod is None or not re.search(rf"\b{re.escape(parts[-1])}\b", mod.read_text()):
                     missing.append(path)
     assert not missing, f"ARCHITECTURE.md names Python modules that do not exist: {missing}"
@@ -120,7 +126,12 @@ def _imports(src: Path, file: Path, modules: set[tuple[str, ...]]) -> set[tuple[
                 break
         if target is None and base in modules:
             target = base
-        if target is not None and target != me and not _is_ancestor(target, me) and not _is_ancestor(me, target):
+        if (
+            target is not None
+            and target != me
+            and not _is_ancestor(target, me)
+            and not _is_ancestor(me, target)
+        ):
             out.add(target)
     return out
 
@@ -163,7 +174,9 @@ CRATES = [
     "ttkin-py",
     pytest.param(
         "ttcan",
-        marks=pytest.mark.xfail(strict=True, reason="axis.rs <-> stepper.rs: scheduling moves out on branch i10"),
+        marks=pytest.mark.xfail(
+            strict=True, reason="axis.rs <-> stepper.rs: scheduling moves out on branch i10"
+        ),
     ),
 ]
 

@@ -45,7 +45,7 @@ def torque_figure(robot, t, profile: TorqueProfile, path) -> None:
     import matplotlib.pyplot as plt
 
     t = np.asarray(t, dtype=float)
-    n = robot.n
+    n = robot.dof
     fig, axes = plt.subplots(n, 2, figsize=(10, 1.8 * n), sharex=True, squeeze=False)
     limits = robot.effort_limits
     for i, name in enumerate(robot.joint_names):
@@ -76,7 +76,7 @@ def gantry6_example(duration: float = 0.5, samples: int = 201):
     robot = robots.gantry6()
     t = np.linspace(0.0, duration, samples)
     q1 = np.array([0.3, -0.2, 1.0, 0.5, -0.8, 1.5])
-    q, qd, qdd = traj.quintic(np.zeros(robot.n), q1, duration).sample(t)
+    q, qd, qdd = traj.quintic(np.zeros(robot.dof), q1, duration).sample(t)
     return robot, t, robot.torques(q, qd, qdd)
 
 

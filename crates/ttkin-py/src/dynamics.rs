@@ -34,14 +34,23 @@ impl PyRobot {
 
     /// One configuration through `one` (shared scratch space), or a batch of `count` through
     /// `many` without the GIL: shape `item`, or (count, *item).
-    fn one_or_many<'py, O, M>(&self, py: Python<'py>, batch: Option<usize>, item: &[usize], one: O, many: M) -> PyResult<Array<'py>>
+    fn one_or_many<'py, O, M>(
+        &self,
+        py: Python<'py>,
+        batch: Option<usize>,
+        item: &[usize],
+        one: O,
+        many: M,
+    ) -> PyResult<Array<'py>>
     where
         O: for<'d> FnOnce(&Dynamics, &'d mut DynamicsData) -> ttkin::Result<&'d [f64]>,
         M: FnOnce(&Dynamics, &mut [f64]) -> ttkin::Result<()> + Send,
     {
         let (_, shape) = out_shape(batch, item);
         match batch {
-            None => self.with_data(|dy, d| one(dy, d).map(|v| to_numpy(py, &shape, v)))?.py(),
+            None => self
+                .with_data(|dy, d| one(dy, d).map(|v| to_numpy(py, &shape, v)))?
+                .py(),
             Some(_) => {
                 let dy = self.dynamics()?;
                 filled_without_gil(py, &shape, |o| many(dy, o))
@@ -260,12 +269,13 @@ impl PyRobot {
     fn mass_matrix<'py>(&self, py: Python<'py>, q: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let (a, batch) = self.configs(q, "q")?;
         let n = self.chain.dof();
+        let q = a.data();
         self.one_or_many(
             py,
             batch,
             &[n, n],
-            |dy, d| dy.mass_matrix(d, a.data()).map(|m| m.as_slice()),
-            |dy, o| dy.mass_matrix_batch(a.data(), o),
+            |dy, d| dy.mass_matrix(d, q).map(|m| m.as_slice()),
+            |dy, o| dy.mass_matrix_batch(q, o),
         )
     }
 

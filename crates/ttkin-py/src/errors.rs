@@ -149,6 +149,13 @@ impl Callback {
     }
 }
 
+/// Warns that the Python name `old` is deprecated in favour of `new` (a `DeprecationWarning`
+/// pointing at the caller's line); renamed names keep working for one release.
+pub fn deprecated(py: Python<'_>, old: &str, new: &str) -> PyResult<()> {
+    let msg = std::ffi::CString::new(format!("{old} is deprecated; use {new}")).expect("no NUL in names");
+    PyErr::warn(py, &py.get_type::<pyo3::exceptions::PyDeprecationWarning>(), &msg, 1)
+}
+
 /// `.py()` on a `ttkin::Result` gives a `PyResult`.
 pub trait PyResultExt<T> {
     /// Maps the error to its Python exception.

@@ -36,16 +36,28 @@ fn finite(what: &str, v: f64) -> PyResult<f64> {
 
 #[pymethods]
 impl PyDiffDrive {
-    /// Wheel radius and track (m); optional wheel speed (rad/s) and acceleration (rad/s²) limits.
+    /// Wheel radius and track width (m); optional wheel speed (rad/s) and acceleration (rad/s²)
+    /// limits. `track` is the deprecated name of `track_width`.
     #[new]
-    #[pyo3(signature = (wheel_radius, track, max_wheel_speed=None, max_wheel_acceleration=None))]
+    #[pyo3(signature = (wheel_radius, track_width=None, max_wheel_speed=None, max_wheel_acceleration=None, *, track=None))]
     fn new(
+        py: Python<'_>,
         wheel_radius: f64,
-        track: f64,
+        track_width: Option<f64>,
         max_wheel_speed: Option<f64>,
         max_wheel_acceleration: Option<f64>,
+        track: Option<f64>,
     ) -> PyResult<Self> {
-        let drive = DiffDrive::new(wheel_radius, track)
+        let width = match (track_width, track) {
+            (Some(w), None) => w,
+            (None, Some(w)) => {
+                crate::errors::deprecated(py, "DiffDrive(track=...)", "DiffDrive(track_width=...)")?;
+                w
+            }
+            (Some(_), Some(_)) => return Err(TtmanipError::new_err("track: give track_width only")),
+            (None, None) => return Err(TtmanipError::new_err("track_width: required (m)")),
+        };
+        let drive = DiffDrive::new(wheel_radius, width)
             .and_then(|d| {
                 d.with_limits(
                     max_wheel_speed.unwrap_or(f64::INFINITY),
@@ -64,8 +76,15 @@ impl PyDiffDrive {
 
     /// Distance between the wheel contact points (m).
     #[getter]
-    fn track(&self) -> f64 {
+    fn track_width(&self) -> f64 {
         self.drive.track()
+    }
+
+    /// Deprecated name of `track_width`.
+    #[getter]
+    fn track(&self, py: Python<'_>) -> PyResult<f64> {
+        crate::errors::deprecated(py, "DiffDrive.track", "DiffDrive.track_width")?;
+        Ok(self.drive.track())
     }
 
     /// Wheel speed limit (rad/s; inf when none).
@@ -292,8 +311,14 @@ impl PyTrackResult {
     }
     /// Commanded inputs (N, nu): joint rates (m/s, rad/s), base (v, ω) first.
     #[getter]
-    fn qdot<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+    fn qd<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
         to_numpy(py, &[self.r.len(), self.r.nu], &self.r.qdot)
+    }
+    /// Deprecated name of `qd`.
+    #[getter]
+    fn qdot<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        crate::errors::deprecated(py, "TrackResult.qdot", "TrackResult.qd")?;
+        Ok(self.qd(py))
     }
     /// Task coordinates reached (N, dim).
     #[getter]

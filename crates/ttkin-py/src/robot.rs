@@ -218,10 +218,17 @@ impl PyRobot {
         Ok(PyRobot::new(self.chain.with_base(transform(base, "base")?).py()?))
     }
 
-    /// Number of joints.
+    /// Number of joints (degrees of freedom).
     #[getter]
-    fn n(&self) -> usize {
+    fn dof(&self) -> usize {
         self.chain.dof()
+    }
+
+    /// Deprecated name of `dof`.
+    #[getter]
+    fn n(&self, py: Python<'_>) -> PyResult<usize> {
+        crate::errors::deprecated(py, "Robot.n", "Robot.dof")?;
+        Ok(self.chain.dof())
     }
 
     /// Robot name.

@@ -197,7 +197,7 @@ def nearest_reachable(
     start and from the ``starts`` nearest of ``samples`` random configurations (see module doc)."""
     lo, hi = margin_box(robot)
     rng = np.random.default_rng(seed)
-    q = lo + rng.random((samples, robot.n)) * (hi - lo)
+    q = lo + rng.random((samples, robot.dof)) * (hi - lo)
     d = distance_to_x4(*racket_centre_normal(robot, q))
     d = np.where(task_sigma_min(robot, q) >= SIGMA_MARGIN, d, np.inf)
     best, best_d = None, np.inf
@@ -283,7 +283,7 @@ def _fig_positions(robot: Robot, res: TrackResult, path: Path) -> None:
 
 
 def _fig_speeds(robot: Robot, res: TrackResult, path: Path) -> None:
-    qd, _ = _display(robot, res.qdot)
+    qd, _ = _display(robot, res.qd)
     vmax, _ = _display(robot, robot.velocity_limits)
     units = ["m/s" if k == "prismatic" else "°/s" for k in robot.joint_types]
     fig, axes = _joint_grid(robot)
@@ -379,7 +379,7 @@ def _csv(robot: Robot, res: TrackResult, x_target: np.ndarray, path: Path) -> No
         [
             res.time,
             res.q,
-            res.qdot,
+            res.qd,
             res.x,
             x_target[:n],
             res.error,
@@ -474,8 +474,8 @@ def run(out_dir: str | Path) -> dict:
         "min_limit_margin_joint": robot.joint_names[int(np.argmin(margin_w.min(axis=0)))],
         "min_limit_margin_per_joint": margin_w.min(axis=0).tolist(),
         "min_task_sigma_min": float(weighted.sigma_min.min()),
-        "max_joint_speed": float(np.abs(weighted.qdot).max()),
-        "max_joint_speed_per_joint": np.abs(weighted.qdot).max(axis=0).tolist(),
+        "max_joint_speed": float(np.abs(weighted.qd).max()),
+        "max_joint_speed_per_joint": np.abs(weighted.qd).max(axis=0).tolist(),
         "joints_beyond_limits": bool((margin_w < 0.0).any()),
         "track_call_seconds": t_weighted,
         "unweighted": _unweighted_summary(robot, unweighted, t_unweighted),
