@@ -1,5 +1,8 @@
 //! Kinetic and potential energy of the chain (for energy-conservation checks of the integrator).
 
+// Index loops over several per-joint arrays read like the equations.
+#![allow(clippy::needless_range_loop)]
+
 use nalgebra::Vector3;
 
 use super::model::{vec3, Dynamics, DynamicsData};

@@ -4,7 +4,7 @@
 //! a planned motion with its effort-limit check and motor-side torques and currents.
 //!
 //! Model/data separation as in Pinocchio: [`Dynamics`] is what the robot is (built once from a
-//! [`Chain`], validated, immutable), [`DynamicsData`] is the scratch space of the algorithms
+//! [`Chain`](crate::chain::Chain), validated, immutable), [`DynamicsData`] is the scratch space of the algorithms
 //! (allocated once; the single-configuration calls allocate nothing).
 //!
 //! Frames. Every joint is `pre · M(q) · post` (see [`crate::joint`]). The algorithms work in the

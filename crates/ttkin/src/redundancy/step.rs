@@ -1,6 +1,9 @@
 //! One weighted least-norm step of a whole-body model: task Jacobian at the current pose,
 //! Chan–Dubey weights, solve ([`WlsStep`]).
 
+// Index loops over several per-joint arrays read like the equations.
+#![allow(clippy::needless_range_loop)]
+
 use super::limits::{chan_dubey_weight, Weighting};
 use super::solver::{Damping, StepReport, WlsSolver};
 use super::SINGULAR_SIGMA;
