@@ -24,7 +24,7 @@ def bench_robot(name: str, batch: int) -> list[tuple[str, str, str]]:
     robot = ttmanip.Robot.builtin(name)
     lim = robot.limits
     rng = np.random.default_rng(0)
-    qs = lim[:, 0] + (lim[:, 1] - lim[:, 0]) * rng.random((batch, robot.n))
+    qs = lim[:, 0] + (lim[:, 1] - lim[:, 0]) * rng.random((batch, robot.dof))
     qds = rng.uniform(-1, 1, qs.shape)
     qdds = rng.uniform(-1, 1, qs.shape)
     q, qd, qdd = qs[0].copy(), qds[0].copy(), qdds[0].copy()

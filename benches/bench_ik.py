@@ -169,7 +169,7 @@ def main() -> None:
         robot = ttmanip.Robot.builtin(name)
         lim = robot.limits
         rng = np.random.default_rng(0)
-        qs = lim[:, 0] + (lim[:, 1] - lim[:, 0]) * rng.random((args.count, robot.n))
+        qs = lim[:, 0] + (lim[:, 1] - lim[:, 0]) * rng.random((args.count, robot.dof))
         targets = robot.fk(qs)
         label = f"{name} {task}"
 

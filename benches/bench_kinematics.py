@@ -31,7 +31,7 @@ def bench_robot(name: str, batch: int) -> list[tuple[str, str, str]]:
     robot = ttmanip.Robot.builtin(name)
     lim = robot.limits
     rng = np.random.default_rng(0)
-    qs = lim[:, 0] + (lim[:, 1] - lim[:, 0]) * rng.random((batch, robot.n))
+    qs = lim[:, 0] + (lim[:, 1] - lim[:, 0]) * rng.random((batch, robot.dof))
     q = qs[0].copy()
     rows = []
     t_ref = robot.fk(q)

@@ -13,7 +13,7 @@ def random_q(robot: ttmanip.Robot, count: int, seed: int = 0) -> np.ndarray:
     """(count, n) configurations uniformly within the joint limits."""
     lim = robot.limits
     rng = np.random.default_rng(seed)
-    return lim[:, 0] + (lim[:, 1] - lim[:, 0]) * rng.random((count, robot.n))
+    return lim[:, 0] + (lim[:, 1] - lim[:, 0]) * rng.random((count, robot.dof))
 
 
 @pytest.fixture(params=BUILTINS)

@@ -17,7 +17,7 @@ TOL = 1e-9
 
 def pinocchio_model(robot: ttmanip.Robot, gravity=(0.0, 0.0, -9.81)):
     model = pin.buildModelFromXML(robot.to_urdf())
-    assert model.nq == robot.n
+    assert model.nq == robot.dof
     model.armature = robot.armature
     model.gravity = pin.Motion(np.array(gravity, dtype=float), np.zeros(3))
     return model, model.createData()
@@ -26,7 +26,7 @@ def pinocchio_model(robot: ttmanip.Robot, gravity=(0.0, 0.0, -9.81)):
 def random_inertias(robot: ttmanip.Robot, seed: int):
     """(mass, com, inertia) of random physical links: triangle-valid principal moments, random axes."""
     rng = np.random.default_rng(seed)
-    n = robot.n
+    n = robot.dof
     mass = rng.uniform(0.1, 5.0, n)
     com = rng.uniform(-0.2, 0.2, (n, 3))
     inertia = np.empty((n, 3, 3))
@@ -41,7 +41,7 @@ def random_inertias(robot: ttmanip.Robot, seed: int):
 def randomised(name: str, seed: int) -> ttmanip.Robot:
     robot = ttmanip.Robot.builtin(name).with_inertials(*random_inertias(ttmanip.Robot.builtin(name), seed))
     rng = np.random.default_rng(seed + 1)
-    n = robot.n
+    n = robot.dof
     return robot.with_drives(
         rng.uniform(1.0, 120.0, n), rotor_inertia=rng.uniform(0.0, 1e-4, n), viscous=rng.uniform(0, 1, n)
     )
@@ -132,8 +132,8 @@ def test_simulation_conserves_energy_without_torque_or_friction():
     drifts = []
     for dt in (2e-4, 1e-4):
         steps = int(round(0.5 / dt))
-        qs, qds = robot.simulate(q0, qd0, np.zeros((steps, robot.n)), dt, friction=False)
-        assert qs.shape == (steps + 1, robot.n)
+        qs, qds = robot.simulate(q0, qd0, np.zeros((steps, robot.dof)), dt, friction=False)
+        assert qs.shape == (steps + 1, robot.dof)
         e = [robot.kinetic_energy(a, b) + robot.potential_energy(a) for a, b in zip(qs[::50], qds[::50])]
         drifts.append(np.abs(np.array(e) - energy0).max())
     # first-order integrator: halving the step halves the energy error, which stays small
@@ -144,13 +144,13 @@ def test_simulation_conserves_energy_without_torque_or_friction():
 def test_torque_profile_of_a_planned_motion():
     robot = ttmanip.robots.gantry6()
     t = np.linspace(0.0, 1.0, 101)[:, None]
-    q0, q1 = np.zeros(robot.n), np.array([0.3, -0.2, 1.0, 0.5, -0.8, 1.5])
+    q0, q1 = np.zeros(robot.dof), np.array([0.3, -0.2, 1.0, 0.5, -0.8, 1.5])
     s = 10 * t**3 - 15 * t**4 + 6 * t**5  # rest-to-rest quintic over 1 s
     sd = 30 * t**2 - 60 * t**3 + 30 * t**4
     sdd = 60 * t - 180 * t**2 + 120 * t**3
     q, qd, qdd = q0 + s * (q1 - q0), sd * (q1 - q0), sdd * (q1 - q0)
     profile = robot.torques(q, qd, qdd)
-    assert profile.joint.shape == (101, robot.n)
+    assert profile.joint.shape == (101, robot.dof)
     np.testing.assert_allclose(profile.joint, robot.inverse_dynamics(q, qd, qdd), atol=1e-12)
     gear = np.array([d["gear_ratio"] for d in robot.drives])
     kt = np.array([d["torque_constant"] for d in robot.drives])
@@ -185,7 +185,7 @@ def test_missing_inertia_names_the_link():
 
 def test_bad_input_is_a_clear_error():
     robot = ttmanip.robots.arm4()
-    n = robot.n
+    n = robot.dof
     mass, com, inertia = random_inertias(robot, 0)
     bad = inertia.copy()
     bad[2] = np.diag([1.0, 0.1, 0.1])
@@ -240,4 +240,4 @@ def test_torque_figure_is_written(tmp_path):
     ttmanip.dynamics.torque_figure(robot, np.linspace(0, 1, 30), robot.torques(q, qd, qdd), path)
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     gantry, t, profile = ttmanip.dynamics.gantry6_example()
-    assert profile.within_limits and profile.joint.shape == (len(t), gantry.n)
+    assert profile.within_limits and profile.joint.shape == (len(t), gantry.dof)

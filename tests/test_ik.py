@@ -19,7 +19,7 @@ def test_ik_all_branches_reproduce_the_pose_and_contain_the_original(name):
     for q in random_q(robot, 200, seed=1):
         t = robot.fk(q)
         sols = robot.ik_all(t)
-        assert sols.ndim == 2 and sols.shape[1] == robot.n and len(sols) >= 1
+        assert sols.ndim == 2 and sols.shape[1] == robot.dof and len(sols) >= 1
         for s in sols:
             assert pose_err(robot.fk(s), t) < 1e-12
         diff = np.angle(np.exp(1j * (sols - q)))  # revolute difference modulo 2π
@@ -106,7 +106,7 @@ def test_numeric_ik_reaches_fk_targets_within_its_reported_tolerance(name, task)
             assert tr[:3, 0] @ tt[:3, 0] > 1 - 1e-9
     # Batch: parallel, same answers as single solves with seed + i.
     batch = robot.ik(robot.fk(qs), task=task, time_budget=None)
-    assert batch.q.shape == (100, robot.n) and batch.success.dtype == bool
+    assert batch.q.shape == (100, robot.dof) and batch.success.dtype == bool
     assert batch.success.mean() >= 0.99
     single = robot.ik(robot.fk(qs[3]), task=task, time_budget=None, seed=3)
     np.testing.assert_array_equal(single.q, batch.q[3])

@@ -13,9 +13,9 @@ from hypothesis import strategies as st
 def numeric_jacobian(robot: ttmanip.Robot, q: np.ndarray, h: float = 1e-6) -> np.ndarray:
     """Central differences of fk: linear velocity of the tool point and ω from Ṙ Rᵀ (base axes)."""
     t0 = robot.fk(q)
-    jac = np.zeros((6, robot.n))
-    for i in range(robot.n):
-        dq = np.zeros(robot.n)
+    jac = np.zeros((6, robot.dof))
+    for i in range(robot.dof):
+        dq = np.zeros(robot.dof)
         dq[i] = h
         tp, tm = robot.fk(q + dq), robot.fk(q - dq)
         jac[:3, i] = (tp[:3, 3] - tm[:3, 3]) / (2 * h)
@@ -38,7 +38,7 @@ def test_jacobian_matches_central_differences(name, seed):
 
 
 def test_shapes_single_and_batch(robot):
-    n = robot.n
+    n = robot.dof
     q = random_q(robot, 7)
     assert robot.fk(q[0]).shape == (4, 4)
     assert robot.fk(q).shape == (7, 4, 4)

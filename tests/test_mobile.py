@@ -20,7 +20,7 @@ def mobile8() -> ttmanip.Robot:
 
 
 def test_diff_drive_body_velocity_and_wheel_speeds_are_the_corrected_formulas():
-    base = ttmanip.DiffDrive(wheel_radius=0.075, track=0.42)
+    base = ttmanip.DiffDrive(wheel_radius=0.075, track_width=0.42)
     v, w = base.body_velocity([2.0, 6.0])  # (left, right) rad/s
     assert v == pytest.approx(0.075 * (2.0 + 6.0) / 2)
     assert w == pytest.approx(0.075 * (6.0 - 2.0) / 0.42)  # (v_R − v_L)/l, not (2v_R − v_L)/l
@@ -28,7 +28,7 @@ def test_diff_drive_body_velocity_and_wheel_speeds_are_the_corrected_formulas():
 
 
 def test_diff_drive_integrate_matches_numerical_integration_and_special_cases():
-    base = ttmanip.DiffDrive(wheel_radius=0.1, track=0.5)
+    base = ttmanip.DiffDrive(wheel_radius=0.1, track_width=0.5)
     pose0 = np.array([0.3, -0.2, 0.7])
     wheels = np.array([3.0, 4.5])
     v, w = base.body_velocity(wheels)
@@ -46,11 +46,13 @@ def test_diff_drive_integrate_matches_numerical_integration_and_special_cases():
 
 
 def test_diff_drive_limits_and_bad_input():
-    base = ttmanip.DiffDrive(wheel_radius=0.1, track=0.5, max_wheel_speed=10.0, max_wheel_acceleration=20.0)
+    base = ttmanip.DiffDrive(
+        wheel_radius=0.1, track_width=0.5, max_wheel_speed=10.0, max_wheel_acceleration=20.0
+    )
     np.testing.assert_allclose(base.saturate([20.0, 10.0]), [10.0, 5.0])
     np.testing.assert_allclose(base.limit_step([0.0, 0.0], [5.0, 2.0], 0.1), [2.0, 0.8])
     with pytest.raises(ttmanip.TtmanipError, match="wheel_radius"):
-        ttmanip.DiffDrive(wheel_radius=-0.1, track=0.5)
+        ttmanip.DiffDrive(wheel_radius=-0.1, track_width=0.5)
     with pytest.raises(ttmanip.ShapeError):
         base.body_velocity([1.0, 2.0, 3.0])
     with pytest.raises(ttmanip.NonFiniteError):
@@ -138,7 +140,7 @@ def test_track_returns_plot_ready_arrays(mobile8):
     res = ttmanip.track(mobile8, Q_START, x, rate_hz=500.0, velocities=xdot)
     assert res.status == "completed" and res.ok
     assert len(res) == 501
-    assert res.time.shape == (501,) and res.q.shape == (501, 8) and res.qdot.shape == (501, 8)
+    assert res.time.shape == (501,) and res.q.shape == (501, 8) and res.qd.shape == (501, 8)
     assert res.x.shape == (501, 5) and res.margin.shape == (501, 8)
     np.testing.assert_allclose(res.time[-1], 1.0)
     np.testing.assert_allclose(res.x[-1], x[-1], atol=1e-8)
@@ -180,7 +182,7 @@ def test_track_bad_input(mobile8):
 
 def test_track_on_a_diff_drive_base_keeps_the_wheels_within_limits():
     arm = ttmanip.robots.ur5()
-    base = ttmanip.DiffDrive(wheel_radius=0.075, track=0.42, max_wheel_speed=20.0)
+    base = ttmanip.DiffDrive(wheel_radius=0.075, track_width=0.42, max_wheel_speed=20.0)
     mount = np.eye(4)
     mount[:3, 3] = [0.1, 0.0, 0.3]
     q0 = np.array([0.0, 0.0, 0.2, 0.3, -1.2, 1.4, -0.8, 1.2, 0.4])
@@ -200,9 +202,9 @@ def test_track_on_a_diff_drive_base_keeps_the_wheels_within_limits():
         input_weights=[10.0, 10.0, 1, 1, 1, 1, 1, 1],
     )
     assert res.ok, res.message
-    assert res.q.shape == (1001, 9) and res.qdot.shape == (1001, 8)
+    assert res.q.shape == (1001, 9) and res.qd.shape == (1001, 8)
     assert res.error.max() < 1e-6
-    wheels = np.array([base.wheel_speeds(v, w) for v, w in res.qdot[:, :2]])
+    wheels = np.array([base.wheel_speeds(v, w) for v, w in res.qd[:, :2]])
     assert np.abs(wheels).max() <= 20.0 + 1e-9
 
 

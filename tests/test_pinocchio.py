@@ -11,7 +11,7 @@ from conftest import BUILTINS, random_q
 
 def pinocchio_model(robot: ttmanip.Robot):
     model = pin.buildModelFromXML(robot.to_urdf())
-    assert model.nq == robot.n, "every exported joint is a 1-DoF joint"
+    assert model.nq == robot.dof, "every exported joint is a 1-DoF joint"
     return model, model.createData(), model.getFrameId("tool")
 
 
@@ -24,7 +24,7 @@ def test_fk_and_jacobian_agree_with_pinocchio(name):
     jb = robot.jacobian(qs, frame="base")
     jt = robot.jacobian(qs, frame="tool")
     frames = robot.fk_all(qs)
-    link_ids = [model.getFrameId(f"link{i + 1}") for i in range(robot.n)]
+    link_ids = [model.getFrameId(f"link{i + 1}") for i in range(robot.dof)]
     for k, q in enumerate(qs):
         pin.framesForwardKinematics(model, data, q)
         np.testing.assert_allclose(fk[k], data.oMf[tool].homogeneous, atol=1e-10)

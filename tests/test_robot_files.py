@@ -16,7 +16,7 @@ def test_urdf_round_trip_keeps_fk_and_limits(name, tmp_path):
     path = tmp_path / f"{name}.urdf"
     path.write_text(robot.to_urdf())
     back = ttmanip.Robot.from_urdf(path, "base_link", "tool")
-    assert back.n == robot.n
+    assert back.dof == robot.dof
     assert back.joint_names == robot.joint_names
     q = random_q(robot, 300, seed=4)
     np.testing.assert_allclose(back.fk(q), robot.fk(q), atol=1e-12)
@@ -87,7 +87,7 @@ def test_urdf_import_folds_fixed_joints_and_general_axes():
         """
     )
     robot = ttmanip.Robot.from_urdf_string(text, "world", "tip")
-    assert robot.n == 2 and robot.joint_types == ["revolute", "prismatic"]
+    assert robot.dof == 2 and robot.joint_types == ["revolute", "prismatic"]
 
     def rot(axis, angle):
         axis = np.asarray(axis, float) / np.linalg.norm(axis)

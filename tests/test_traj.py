@@ -148,7 +148,7 @@ def test_to_joint_with_a_python_ik_reproduces_the_poses():
 
 def test_check_limits_finds_planted_violations():
     robot = ttmanip.robots.arm4()  # ±170° (joint 3: ±120°), 2 rad/s
-    n = robot.n
+    n = robot.dof
     slow = tt.quintic(np.zeros(n), [1.0, 0.5, 1.5, 0.3], 5.0)
     assert slow.check_limits(robot) == []
     fast = tt.quintic(np.zeros(n), [1.0, 0.5, 2.5, 0.3], 0.5)

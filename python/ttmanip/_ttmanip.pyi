@@ -30,6 +30,9 @@ class UnreachableError(TtmanipError):
 class SingularError(TtmanipError):
     """A configuration is singular for the request."""
 
+class NotConvergedError(TtmanipError):
+    """A solver stopped before converging; the target may still be reachable."""
+
 class Robot:
     """A serial robot arm: joints from base to tool (m, rad, s). Immutable."""
 
@@ -72,8 +75,11 @@ class Robot:
     def with_base(self, base: ArrayLike) -> Robot:
         """The same robot with another base transform (4×4)."""
     @property
+    def dof(self) -> int:
+        """Number of joints (degrees of freedom)."""
+    @property
     def n(self) -> int:
-        """Number of joints."""
+        """Deprecated name of ``dof``."""
     @property
     def name(self) -> str:
         """Robot name."""
@@ -283,14 +289,20 @@ class DiffDrive:
     def __init__(
         self,
         wheel_radius: float,
-        track: float,
+        track_width: float | None = None,
         max_wheel_speed: float | None = None,
         max_wheel_acceleration: float | None = None,
-    ) -> None: ...
+        *,
+        track: float | None = None,
+    ) -> None:
+        """``track`` is the deprecated name of ``track_width`` (m)."""
     @property
     def wheel_radius(self) -> float: ...
     @property
-    def track(self) -> float: ...
+    def track_width(self) -> float: ...
+    @property
+    def track(self) -> float:
+        """Deprecated name of ``track_width``."""
     @property
     def max_wheel_speed(self) -> float: ...
     @property
@@ -314,7 +326,10 @@ class TrackResult:
     @property
     def q(self) -> NDArray[np.float64]: ...
     @property
-    def qdot(self) -> NDArray[np.float64]: ...
+    def qd(self) -> NDArray[np.float64]: ...
+    @property
+    def qdot(self) -> NDArray[np.float64]:
+        """Deprecated name of ``qd``."""
     @property
     def x(self) -> NDArray[np.float64]: ...
     @property
@@ -424,6 +439,9 @@ class IkResult:
     @property
     def restarts(self) -> int | NDArray[np.int64]:
         """Random restarts used."""
+    @property
+    def status(self) -> str | list[str]:
+        """Outcome per target: "solved", "unreachable" (proven out of reach) or "not_converged"."""
     def __bool__(self) -> bool: ...
 
 # --- trajectories (crates/ttkin-py/src/traj.rs) -------------------------------------------------

@@ -45,7 +45,7 @@ def torque_figure(robot, t, profile: TorqueProfile, path) -> None:
     import matplotlib.pyplot as plt
 
     t = np.asarray(t, dtype=float)
-    n = robot.n
+    n = robot.dof
     fig, axes = plt.subplots(n, 2, figsize=(10, 1.8 * n), sharex=True, squeeze=False)
     limits = robot.effort_limits
     for i, name in enumerate(robot.joint_names):
@@ -71,16 +71,13 @@ def torque_figure(robot, t, profile: TorqueProfile, path) -> None:
 def gantry6_example(duration: float = 0.5, samples: int = 201):
     """The patent's step S105 on gantry6: a rest-to-rest quintic from q = 0 to
     [0.3 m, −0.2 m, 1.0, 0.5, −0.8, 1.5 rad] in ``duration`` s; returns (robot, t, profile)."""
-    from . import robots
+    from . import robots, traj
 
     robot = robots.gantry6()
     t = np.linspace(0.0, duration, samples)
-    s = (t / duration)[:, None]
     q1 = np.array([0.3, -0.2, 1.0, 0.5, -0.8, 1.5])
-    pos = 10 * s**3 - 15 * s**4 + 6 * s**5
-    vel = (30 * s**2 - 60 * s**3 + 30 * s**4) / duration
-    acc = (60 * s - 180 * s**2 + 120 * s**3) / duration**2
-    return robot, t, robot.torques(pos * q1, vel * q1, acc * q1)
+    q, qd, qdd = traj.quintic(np.zeros(robot.dof), q1, duration).sample(t)
+    return robot, t, robot.torques(q, qd, qdd)
 
 
 if __name__ == "__main__":  # python -m ttmanip.dynamics OUT.png

@@ -6,7 +6,7 @@ the racket task "racket5" is seed 000's [centre x, y, z (m), polar, azimuth (rad
 centre 0.15 m along the last z axis and of the face normal.
 
 >>> import ttmanip
->>> base = ttmanip.DiffDrive(wheel_radius=0.075, track=0.42)
+>>> base = ttmanip.DiffDrive(wheel_radius=0.075, track_width=0.42)
 >>> [round(float(v), 6) for v in base.body_velocity([2.0, 6.0])]
 [0.3, 0.714286]
 """

@@ -253,27 +253,4 @@ def check_cartesian_limits(
     Returns the worst violation per joint and quantity (position, velocity, acceleration) as
     dicts like :meth:`JointTrajectory.check_limits`; unlike it, values are sampled, not exact.
     """
-    t, q, qd, qdd = traj.to_joint(hz, q_start, ik)
-    lim = robot.limits
-    out = []
-    checks = (
-        ("position", q, lim[:, 0], lim[:, 1]),
-        ("velocity", qd, -robot.velocity_limits, robot.velocity_limits),
-        ("acceleration", qdd, -robot.acceleration_limits, robot.acceleration_limits),
-    )
-    for quantity, x, lo, hi in checks:
-        excess = np.maximum(lo - x, x - hi)
-        for j in range(x.shape[1]):
-            i = int(np.argmax(excess[:, j]))
-            if excess[i, j] > 1e-9:
-                bound = lo[j] if x[i, j] < lo[j] else hi[j]
-                out.append(
-                    {
-                        "joint": j,
-                        "quantity": quantity,
-                        "time": float(t[i]),
-                        "value": float(x[i, j]),
-                        "limit": float(bound),
-                    }
-                )
-    return out
+    return traj.check_limits(robot, ik, q_start, hz)

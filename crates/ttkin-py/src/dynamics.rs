@@ -6,49 +6,55 @@
 //! scratch `DynamicsData` behind a mutex for single calls (a second thread that finds it busy
 //! uses a fresh one). Batches run in parallel without the GIL.
 
-use std::sync::{Arc, Mutex, OnceLock};
+use std::sync::Arc;
 
-use nalgebra::{Matrix3, Vector3};
-use numpy::{PyArrayDyn, PyArrayMethods};
+use nalgebra::Vector3;
+use numpy::PyArrayDyn;
 use pyo3::prelude::*;
 use ttkin::dynamics::{TorqueProfile, EARTH_GRAVITY};
-use ttkin::{Chain, Drive, Dynamics, DynamicsData, Inertial, Wrench};
+use ttkin::{Drive, Dynamics, DynamicsData, Wrench};
 
-use crate::convert::{f64_array, filled_without_gil, to_numpy, vector, zeros, F64Array};
+use crate::convert::{f64_array, filled_without_gil, to_numpy, vector, F64Array};
 use crate::errors::{PyResultExt, ShapeError, TtmanipError};
 use crate::robot::PyRobot;
 
 /// A numpy float64 array returned to Python.
 type Array<'py> = Bound<'py, PyArrayDyn<f64>>;
 
-/// The lazily built dynamic model of a robot and its scratch space.
-#[derive(Default)]
-pub struct DynamicsCache {
-    model: OnceLock<Result<Arc<Dynamics>, ttkin::Error>>,
-    scratch: Mutex<Option<DynamicsData>>,
-}
-
 impl PyRobot {
     /// The dynamic model (an error names the first link without inertia).
     fn dynamics(&self) -> PyResult<&Arc<Dynamics>> {
-        self.dynamics
-            .model
-            .get_or_init(|| Dynamics::new(&self.chain).map(Arc::new))
-            .as_ref()
-            .map_err(|e| e.clone())
-            .py()
+        self.dynamics.model(&self.chain).py()
     }
 
     /// Runs `f` with the model and a scratch space.
     fn with_data<T>(&self, f: impl FnOnce(&Dynamics, &mut DynamicsData) -> T) -> PyResult<T> {
-        let dy = self.dynamics()?;
-        let mut guard = self.dynamics.scratch.try_lock().ok();
-        match guard.as_deref_mut() {
-            Some(slot) => {
-                let data = slot.get_or_insert_with(|| DynamicsData::new(dy));
-                Ok(f(dy, data))
+        self.dynamics.with_data(&self.chain, f).py()
+    }
+
+    /// One configuration through `one` (shared scratch space), or a batch of `count` through
+    /// `many` without the GIL: shape `item`, or (count, *item).
+    fn one_or_many<'py, O, M>(
+        &self,
+        py: Python<'py>,
+        batch: Option<usize>,
+        item: &[usize],
+        one: O,
+        many: M,
+    ) -> PyResult<Array<'py>>
+    where
+        O: for<'d> FnOnce(&Dynamics, &'d mut DynamicsData) -> ttkin::Result<&'d [f64]>,
+        M: FnOnce(&Dynamics, &mut [f64]) -> ttkin::Result<()> + Send,
+    {
+        let (_, shape) = out_shape(batch, item);
+        match batch {
+            None => self
+                .with_data(|dy, d| one(dy, d).map(|v| to_numpy(py, &shape, v)))?
+                .py(),
+            Some(_) => {
+                let dy = self.dynamics()?;
+                filled_without_gil(py, &shape, |o| many(dy, o))
             }
-            None => Ok(f(dy, &mut DynamicsData::new(dy))),
         }
     }
 
@@ -225,12 +231,6 @@ fn per_joint(obj: &Bound<'_, PyAny>, what: &str, n: usize, k: usize) -> PyResult
     Ok(a.data().to_vec())
 }
 
-fn rebuild(chain: &Chain, joints: Vec<ttkin::Joint>) -> PyResult<PyRobot> {
-    Ok(PyRobot::new(
-        Chain::new(chain.name(), joints, *chain.base(), *chain.tool()).py()?,
-    ))
-}
-
 #[pymethods]
 impl PyRobot {
     /// Inverse dynamics (recursive Newton–Euler): joint torques (N·m) / forces (N) for q, qd, qdd
@@ -269,15 +269,14 @@ impl PyRobot {
     fn mass_matrix<'py>(&self, py: Python<'py>, q: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let (a, batch) = self.configs(q, "q")?;
         let n = self.chain.dof();
-        match batch {
-            None => self
-                .with_data(|dy, d| dy.mass_matrix(d, a.data()).map(|m| to_numpy(py, &[n, n], m.as_slice())))?
-                .py(),
-            Some(count) => {
-                let (dy, qs) = (self.dynamics()?, a.data());
-                filled_without_gil(py, &[count, n, n], |o| dy.mass_matrix_batch(qs, o))
-            }
-        }
+        let q = a.data();
+        self.one_or_many(
+            py,
+            batch,
+            &[n, n],
+            |dy, d| dy.mass_matrix(d, q).map(|m| m.as_slice()),
+            |dy, o| dy.mass_matrix_batch(q, o),
+        )
     }
 
     /// Gravity torques g(q) (N·m or N) that hold the robot still: (n,) or (N, n).
@@ -291,15 +290,14 @@ impl PyRobot {
         let g = gravity_arg(gravity)?;
         let (a, batch) = self.configs(q, "q")?;
         let n = self.chain.dof();
-        match batch {
-            None => self
-                .with_data(|dy, d| dy.gravity(d, a.data(), &g).map(|t| to_numpy(py, &[n], t.as_slice())))?
-                .py(),
-            Some(count) => {
-                let (dy, qs) = (self.dynamics()?, a.data());
-                filled_without_gil(py, &[count, n], |o| dy.gravity_batch(qs, &g, o))
-            }
-        }
+        let q = a.data();
+        self.one_or_many(
+            py,
+            batch,
+            &[n],
+            |dy, d| dy.gravity(d, q, &g).map(|t| t.as_slice()),
+            |dy, o| dy.gravity_batch(q, &g, o),
+        )
     }
 
     /// Coriolis and centrifugal torques C(q, q̇)·q̇ (N·m or N), gravity excluded: (n,) or (N, n).
@@ -309,9 +307,15 @@ impl PyRobot {
         q: &Bound<'py, PyAny>,
         qd: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-        let zero = to_numpy(py, &[3], &[0.0; 3]);
-        let qdd = zeros(py, f64_array(qd, "qd")?.shape());
-        self.inverse(py, q, qd, qdd.as_any(), Some(zero.as_any()), None, false)
+        let (arrays, batch) = self.states([(q, "q"), (qd, "qd")])?;
+        let (q, qd, n) = (arrays[0].data(), arrays[1].data(), self.chain.dof());
+        self.one_or_many(
+            py,
+            batch,
+            &[n],
+            |dy, d| dy.coriolis(d, q, qd).map(|t| t.as_slice()),
+            |dy, o| dy.coriolis_batch(q, qd, o),
+        )
     }
 
     /// Nonlinear effects h(q, q̇) = C(q, q̇)·q̇ + g(q) (N·m or N): (n,) or (N, n).
@@ -323,8 +327,16 @@ impl PyRobot {
         qd: &Bound<'py, PyAny>,
         gravity: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-        let qdd = zeros(py, f64_array(qd, "qd")?.shape());
-        self.inverse(py, q, qd, qdd.as_any(), gravity, None, false)
+        let g = gravity_arg(gravity)?;
+        let (arrays, batch) = self.states([(q, "q"), (qd, "qd")])?;
+        let (q, qd, n) = (arrays[0].data(), arrays[1].data(), self.chain.dof());
+        self.one_or_many(
+            py,
+            batch,
+            &[n],
+            |dy, d| dy.nonlinear_effects(d, q, qd, &g).map(|t| t.as_slice()),
+            |dy, o| dy.nonlinear_effects_batch(q, qd, &g, o),
+        )
     }
 
     /// Forward dynamics q̈ = M⁻¹(τ − h + Jᵀw) (rad/s², m/s²) for q, qd, tau of shape (n,) or
@@ -344,33 +356,22 @@ impl PyRobot {
         let (arrays, batch) = self.states([(q, "q"), (qd, "qd"), (tau, "tau")])?;
         let n = self.chain.dof();
         let (q, qd, tau) = (arrays[0].data(), arrays[1].data(), arrays[2].data());
-        match batch {
-            None => self
-                .with_data(|dy, d| {
-                    dy.forward_dynamics(d, q, qd, tau, &g, w.as_ref())
-                        .map(|a| to_numpy(py, &[n], a.as_slice()))
-                })?
-                .py(),
-            Some(count) => {
-                let dy = self.dynamics()?;
-                filled_without_gil(py, &[count, n], |o| {
-                    dy.forward_dynamics_batch(q, qd, tau, &g, w.as_ref(), o)
-                })
-            }
-        }
+        self.one_or_many(
+            py,
+            batch,
+            &[n],
+            |dy, d| dy.forward_dynamics(d, q, qd, tau, &g, w.as_ref()).map(|a| a.as_slice()),
+            |dy, o| dy.forward_dynamics_batch(q, qd, tau, &g, w.as_ref(), o),
+        )
     }
 
     /// Joint friction b·q̇ + f_c·sign(q̇) (N·m or N) at speeds qd: (n,) or (N, n).
     fn friction<'py>(&self, py: Python<'py>, qd: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let (a, batch) = self.configs(qd, "qd")?;
         let dy = self.dynamics()?;
-        let n = self.chain.dof();
-        let mut out = Vec::with_capacity(a.data().len());
-        for v in a.data().chunks_exact(n) {
-            out.extend(dy.friction(v).py()?.iter());
-        }
-        let (_, shape) = out_shape(batch, &[n]);
-        Ok(to_numpy(py, &shape, &out))
+        let (_, shape) = out_shape(batch, &[self.chain.dof()]);
+        let qd = a.data();
+        filled_without_gil(py, &shape, |o| dy.friction_batch(qd, o))
     }
 
     /// Kinetic energy ½ q̇ᵀ M q̇ (J) at one state (n,).
@@ -511,22 +512,8 @@ impl PyRobot {
             ttkin::error::check_finite("inertia", a.data()).py()?;
             Ok(a.data().to_vec())
         })?;
-        let joints = self
-            .chain
-            .joints()
-            .iter()
-            .enumerate()
-            .map(|(k, j)| {
-                let inertial = Inertial {
-                    mass: m[k],
-                    com: Vector3::new(c[3 * k], c[3 * k + 1], c[3 * k + 2]),
-                    inertia: Matrix3::from_row_slice(&i[9 * k..9 * k + 9]),
-                };
-                j.clone().with_inertial(inertial)
-            })
-            .collect::<ttkin::Result<Vec<_>>>()
-            .py()?;
-        rebuild(&self.chain, joints)
+        let inertials = ttkin::tables::inertials_from_columns(&m, &c, &i).py()?;
+        Ok(PyRobot::new(self.chain.with_inertials(&inertials).py()?))
     }
 
     /// The same robot with new drives, one value per joint (n,): gear ratio G (> 0), rotor inertia
@@ -542,8 +529,8 @@ impl PyRobot {
         torque_constant: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<PyRobot> {
         let n = self.chain.dof();
-        let column = |obj: Option<&Bound<'_, PyAny>>, what: &str| -> PyResult<Vec<f64>> {
-            obj.map_or(Ok(vec![0.0; n]), |o| vector(o, what, n))
+        let column = |obj: Option<&Bound<'_, PyAny>>, what: &str| -> PyResult<Option<Vec<f64>>> {
+            obj.map(|o| vector(o, what, n)).transpose()
         };
         let g = vector(gear_ratio, "gear_ratio", n)?;
         let (j, b, c) = (
@@ -551,8 +538,8 @@ impl PyRobot {
             column(viscous, "viscous")?,
             column(coulomb, "coulomb")?,
         );
-        let kt: Vec<Option<f64>> = match torque_constant {
-            None => vec![None; n],
+        let kt = match torque_constant {
+            None => None,
             Some(o) => {
                 let a = f64_array(o, "torque_constant")?;
                 if a.shape() != [n] {
@@ -561,26 +548,19 @@ impl PyRobot {
                         a.shape_str()
                     )));
                 }
-                a.data().iter().map(|&v| (!v.is_nan()).then_some(v)).collect()
+                Some(a.data().to_vec())
             }
         };
-        let joints = self
-            .chain
-            .joints()
-            .iter()
-            .enumerate()
-            .map(|(k, joint)| {
-                joint.clone().with_drive(Drive {
-                    gear_ratio: g[k],
-                    rotor_inertia: j[k],
-                    viscous: b[k],
-                    coulomb: c[k],
-                    torque_constant: kt[k],
-                })
-            })
-            .collect::<ttkin::Result<Vec<_>>>()
-            .py()?;
-        rebuild(&self.chain, joints)
+        let drives = ttkin::tables::DriveColumns {
+            gear_ratio: &g,
+            rotor_inertia: j.as_deref(),
+            viscous: b.as_deref(),
+            coulomb: c.as_deref(),
+            torque_constant: kt.as_deref(),
+        }
+        .drives()
+        .py()?;
+        Ok(PyRobot::new(self.chain.with_drives(&drives).py()?))
     }
 }
 
@@ -602,39 +582,27 @@ impl PyRobot {
         let (arrays, batch) = self.states([(q, "q"), (qd, "qd"), (qdd, "qdd")])?;
         let n = self.chain.dof();
         let (q, qd, qdd) = (arrays[0].data(), arrays[1].data(), arrays[2].data());
-        match batch {
-            None => self
-                .with_data(|dy, d| {
-                    let t = if friction {
-                        dy.inverse_dynamics(d, q, qd, qdd, &g, w.as_ref())
-                    } else {
-                        dy.rnea(d, q, qd, qdd, &g, w.as_ref())
-                    };
-                    t.map(|t| to_numpy(py, &[n], t.as_slice()))
-                })?
-                .py(),
-            Some(count) => {
-                let dy = self.dynamics()?;
-                let out = zeros(py, &[count, n]);
-                {
-                    let mut o = out.readwrite();
-                    let o = o.as_slice_mut().expect("fresh array");
-                    py.detach(|| -> ttkin::Result<()> {
-                        dy.rnea_batch(q, qd, qdd, &g, w.as_ref(), o)?;
-                        if friction {
-                            for (row, v) in o.chunks_exact_mut(n).zip(qd.chunks_exact(n)) {
-                                for (t, f) in row.iter_mut().zip(dy.friction(v)?.iter()) {
-                                    *t += f;
-                                }
-                            }
-                        }
-                        Ok(())
-                    })
-                    .py()?;
+        let w = w.as_ref();
+        self.one_or_many(
+            py,
+            batch,
+            &[n],
+            |dy, d| {
+                let t = if friction {
+                    dy.inverse_dynamics(d, q, qd, qdd, &g, w)
+                } else {
+                    dy.rnea(d, q, qd, qdd, &g, w)
+                };
+                t.map(|t| t.as_slice())
+            },
+            |dy, o| {
+                if friction {
+                    dy.inverse_dynamics_batch(q, qd, qdd, &g, w, o)
+                } else {
+                    dy.rnea_batch(q, qd, qdd, &g, w, o)
                 }
-                Ok(out)
-            }
-        }
+            },
+        )
     }
 }
 

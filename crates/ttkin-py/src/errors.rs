@@ -1,9 +1,30 @@
-//! Rust errors → Python exceptions, in one place. Every exception derives from
-//! `ttmanip.TtmanipError`, itself a `ValueError`.
+//! Rust errors → Python exceptions, in one place, for both core crates (`ttkin` and `ttcan`).
+//! Every exception derives from `ttmanip.TtmanipError`, itself a `ValueError`.
+//!
+//! One kind of mistake, one class, whichever crate finds it:
+//!
+//! | kind | `ttkin::Error` | `ttcan::Error` | Python |
+//! | --- | --- | --- | --- |
+//! | wrong length or shape | `Shape` | – | `ShapeError` |
+//! | NaN or infinity | `NonFinite` | `NonFinite` | `NonFiniteError` |
+//! | non-physical or inconsistent model / configuration | `Model` | `InvalidParameter`, `Rates`, `Stepper` | `ModelError` |
+//! | robot file or URDF unreadable | `File`, `Urdf` | – | `RobotFileError` |
+//! | target proven out of reach | `Unreachable` | – | `UnreachableError` |
+//! | solver did not converge (maybe reachable) | (an [`IkStatus`]) | – | `NotConvergedError` |
+//! | singular configuration | `Singular` | – | `SingularError` |
+//! | any other bad argument | `InvalidArgument` | – | `TtmanipError` |
+//! | finite inputs, non-finite result (overflow) | – | – | `NumericalError` (`convert`) |
+//! | a Rust panic (a bug) caught at the boundary | – | – | `InternalError` (`guard`) |
+//!
+//! An exception raised by a user's Python callback that Rust calls (an IK callable) is not
+//! turned into text: [`Callback`] keeps it and re-raises it with its own type and traceback.
+
+use std::cell::RefCell;
 
 use pyo3::create_exception;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
+use ttkin::ik::IkStatus;
 
 create_exception!(
     ttmanip,
@@ -43,6 +64,12 @@ create_exception!(
 );
 create_exception!(
     ttmanip,
+    NotConvergedError,
+    TtmanipError,
+    "A solver stopped before converging; the target may still be reachable."
+);
+create_exception!(
+    ttmanip,
     SingularError,
     TtmanipError,
     "A configuration is singular for the request."
@@ -76,6 +103,74 @@ pub fn to_py(e: ttkin::Error) -> PyErr {
     }
 }
 
+/// Converts a `ttcan` error to the matching Python exception (same classes as [`to_py`]).
+pub fn ttcan_to_py(e: ttcan::Error) -> PyErr {
+    use ttcan::Error as E;
+    let msg = e.to_string();
+    match e {
+        E::NonFinite { .. } => NonFiniteError::new_err(msg),
+        E::InvalidParameter { .. } | E::Rates(_) | E::Stepper(_) => ModelError::new_err(msg),
+        _ => TtmanipError::new_err(msg),
+    }
+}
+
+/// The exception of an IK outcome that is not solved: `UnreachableError` when proven out of reach,
+/// `NotConvergedError` otherwise.
+pub fn ik_failure(status: IkStatus, msg: String) -> PyErr {
+    match status {
+        IkStatus::Unreachable => UnreachableError::new_err(msg),
+        _ => NotConvergedError::new_err(msg),
+    }
+}
+
+/// Keeps the first exception a Python callback raised while Rust called it, so that it reaches
+/// the caller with its own type and traceback instead of as text.
+#[derive(Default)]
+pub struct Callback {
+    raised: RefCell<Option<PyErr>>,
+}
+
+impl Callback {
+    /// A ttkin error standing for a callback's exception: ttmanip's own exceptions keep their
+    /// variant (so Rust can add where it happened); any other exception is stored.
+    pub fn error(&self, py: Python<'_>, e: PyErr) -> ttkin::Error {
+        let msg = e.value(py).to_string();
+        let core = if e.is_instance_of::<UnreachableError>(py) {
+            ttkin::Error::Unreachable(msg)
+        } else if e.is_instance_of::<SingularError>(py) {
+            ttkin::Error::Singular(msg)
+        } else {
+            ttkin::Error::invalid("ik", format!("{}: {msg}", e.get_type(py)))
+        };
+        self.raised.borrow_mut().get_or_insert(e);
+        core
+    }
+
+    /// The result for Python: a ttmanip exception raised by the callback comes back as the
+    /// mapped core error (with the context Rust added) chained to the original (`__cause__`);
+    /// any other exception is re-raised as it was raised.
+    pub fn finish<T>(self, py: Python<'_>, r: ttkin::Result<T>) -> PyResult<T> {
+        let raised = self.raised.into_inner();
+        match (r, raised) {
+            (Ok(v), _) => Ok(v),
+            (Err(e), Some(original)) if original.is_instance_of::<TtmanipError>(py) => {
+                let mapped = to_py(e);
+                mapped.set_cause(py, Some(original));
+                Err(mapped)
+            }
+            (Err(_), Some(original)) => Err(original),
+            (Err(e), None) => Err(to_py(e)),
+        }
+    }
+}
+
+/// Warns that the Python name `old` is deprecated in favour of `new` (a `DeprecationWarning`
+/// pointing at the caller's line); renamed names keep working for one release.
+pub fn deprecated(py: Python<'_>, old: &str, new: &str) -> PyResult<()> {
+    let msg = std::ffi::CString::new(format!("{old} is deprecated; use {new}")).expect("no NUL in names");
+    PyErr::warn(py, &py.get_type::<pyo3::exceptions::PyDeprecationWarning>(), &msg, 1)
+}
+
 /// `.py()` on a `ttkin::Result` gives a `PyResult`.
 pub trait PyResultExt<T> {
     /// Maps the error to its Python exception.
@@ -85,6 +180,12 @@ pub trait PyResultExt<T> {
 impl<T> PyResultExt<T> for ttkin::Result<T> {
     fn py(self) -> PyResult<T> {
         self.map_err(to_py)
+    }
+}
+
+impl<T> PyResultExt<T> for ttcan::Result<T> {
+    fn py(self) -> PyResult<T> {
+        self.map_err(ttcan_to_py)
     }
 }
 
@@ -98,6 +199,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("RobotFileError", py.get_type::<RobotFileError>())?;
     m.add("UnreachableError", py.get_type::<UnreachableError>())?;
     m.add("SingularError", py.get_type::<SingularError>())?;
+    m.add("NotConvergedError", py.get_type::<NotConvergedError>())?;
     m.add("NumericalError", py.get_type::<NumericalError>())?;
     m.add("InternalError", py.get_type::<InternalError>())?;
     Ok(())

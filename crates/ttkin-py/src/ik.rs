@@ -2,25 +2,20 @@
 //! form), `ik_all` / `ik_nearest` (analytic branches), `joint_velocity` (differential IK).
 //! Conversion only: the maths is `ttkin::ik`. Batches over (N, 4, 4) run without the GIL.
 
-use std::time::Duration;
-
 use nalgebra::{IsometryMatrix3, Matrix4};
 use numpy::{PyArray1, PyArrayDyn, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use ttkin::ik::numeric::{measure, residual_dim};
-use ttkin::ik::{Analytic, DifferentialIk, IkResult, IkScratch, IkSolver, LimitFilter, MAX_BRANCHES};
+use ttkin::ik::batch::{analytic_for, time_budget as time_budget_from};
+use ttkin::ik::{
+    Analytic, DifferentialIk, IkBatchSolver, IkMethod, IkResult, IkSolver, IkStatus, LimitFilter, MAX_BRANCHES,
+};
 use ttkin::task::Task;
 use ttkin::JacobianFrame;
 
 use crate::convert::{f64_array, to_numpy, transform, vector, zeros};
-use crate::errors::{PyResultExt, ShapeError, TtmanipError};
+use crate::errors::{PyResultExt, ShapeError};
 use crate::robot::PyRobot;
-
-thread_local! {
-    /// Buffers of the numeric solver, one per thread (the caller's and each rayon worker's).
-    static SCRATCH: std::cell::RefCell<Option<IkScratch>> = const { std::cell::RefCell::new(None) };
-}
 
 /// Result of `Robot.ik`: arrays for a batch, scalars for one target.
 #[pyclass(name = "IkResult", module = "ttmanip", frozen, get_all)]
@@ -37,13 +32,16 @@ pub struct PyIkResult {
     iterations: Py<PyAny>,
     /// Random restarts used.
     restarts: Py<PyAny>,
+    /// "solved", "unreachable" (proven) or "not_converged": str, or a list of str for a batch.
+    status: Py<PyAny>,
 }
 
 #[pymethods]
 impl PyIkResult {
     fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
         Ok(format!(
-            "IkResult(success={}, position_error={}, orientation_error={}, iterations={}, q={})",
+            "IkResult(status={}, success={}, position_error={}, orientation_error={}, iterations={}, q={})",
+            self.status.bind(py).repr()?,
             self.success.bind(py).repr()?,
             self.position_error.bind(py).repr()?,
             self.orientation_error.bind(py).repr()?,
@@ -55,15 +53,6 @@ impl PyIkResult {
     fn __bool__(&self, py: Python<'_>) -> PyResult<bool> {
         self.success.bind(py).is_truthy()
     }
-}
-
-fn task_from(task: &str, racket_offset: Option<f64>) -> PyResult<Task> {
-    let t = Task::from_name(task).py()?;
-    Ok(match (t, racket_offset) {
-        (Task::Racket { .. }, Some(offset)) => Task::Racket { offset },
-        (_, Some(_)) => return Err(TtmanipError::new_err("racket_offset: only for task='racket5'")),
-        (t, None) => t,
-    })
 }
 
 /// Reads T as one pose (4, 4) or a batch (N, 4, 4) of rigid transforms.
@@ -93,40 +82,7 @@ fn poses(t: &Bound<'_, PyAny>) -> PyResult<(Vec<IsometryMatrix3<f64>>, bool)> {
 
 impl PyRobot {
     fn analytic(&self) -> PyResult<Analytic> {
-        Analytic::for_chain(&self.chain).ok_or_else(|| {
-            TtmanipError::new_err(format!(
-                "robot '{}' has no analytic IK (gantry6 and arm4 structures have one); use robot.ik(T)",
-                self.chain.name()
-            ))
-        })
-    }
-
-    /// Default start: the middle of each finite joint range, 0 otherwise.
-    fn default_start(&self) -> Vec<f64> {
-        self.chain
-            .limits()
-            .iter()
-            .map(|l| {
-                if l.lower.is_finite() && l.upper.is_finite() {
-                    0.5 * (l.lower + l.upper)
-                } else {
-                    0.0
-                }
-            })
-            .collect()
-    }
-}
-
-/// An `IkResult` for an analytic configuration `q` of the pose task.
-fn analytic_result(chain: &ttkin::Chain, t: &IsometryMatrix3<f64>, q: Vec<f64>, solver: &IkSolver) -> IkResult {
-    let (p, o) = measure(&Task::Pose, &chain.fk_unchecked(&q), t);
-    IkResult {
-        q,
-        success: p <= solver.position_tolerance && o <= solver.orientation_tolerance,
-        position_error: p,
-        orientation_error: o,
-        iterations: 0,
-        restarts: 0,
+        analytic_for(&self.chain).py()
     }
 }
 
@@ -160,45 +116,20 @@ impl PyRobot {
         racket_offset: Option<f64>,
         raise_on_failure: bool,
     ) -> PyResult<PyIkResult> {
-        let task = task_from(task, racket_offset)?;
-        let time_budget = match time_budget {
-            None => None,
-            Some(s) if s > 0.0 && s.is_finite() => Some(Duration::from_secs_f64(s)),
-            Some(s) => {
-                return Err(TtmanipError::new_err(format!(
-                    "time_budget: expected seconds > 0 or None, got {s}"
-                )))
-            }
-        };
         let solver = IkSolver {
-            task,
+            task: Task::from_name_with_offset(task, racket_offset).py()?,
             position_tolerance,
             orientation_tolerance,
             max_iterations,
             max_restarts,
-            time_budget,
+            time_budget: time_budget_from(time_budget).py()?,
             seed,
         };
-        solver.validate().py()?;
-        let analytic = match method {
-            "numeric" => None,
-            "auto" if task != Task::Pose => None,
-            "auto" => Analytic::for_chain(&self.chain),
-            "analytic" if task != Task::Pose => {
-                return Err(TtmanipError::new_err("method='analytic' solves task='pose' only"));
-            }
-            "analytic" => Some(self.analytic()?),
-            other => {
-                return Err(TtmanipError::new_err(format!(
-                    "method: expected 'auto', 'numeric' or 'analytic', got '{other}'"
-                )))
-            }
-        };
-        let strict = method == "analytic";
+        let front = IkBatchSolver::new(&self.chain, solver, method.parse::<IkMethod>().py()?).py()?;
         let (targets, batch) = poses(T)?;
         let n = self.chain.dof();
         let q0s: Vec<Vec<f64>> = match q0 {
-            None => vec![self.default_start()],
+            None => Vec::new(),
             Some(q) => {
                 let (a, qb) = self.configs(q, "q0")?;
                 ttkin::error::check_finite("q0", a.data()).py()?;
@@ -214,51 +145,26 @@ impl PyRobot {
             }
         };
         let chain = &*self.chain;
-        let solve_one = |i: usize, t: &IsometryMatrix3<f64>| -> ttkin::Result<IkResult> {
-            let q0 = if q0s.len() == 1 { &q0s[0] } else { &q0s[i] };
-            if let Some(ik) = &analytic {
-                // The nearest branch within limits; none: an error for method="analytic", the
-                // numeric solver's best effort otherwise.
-                match ik.nearest(t, q0, LimitFilter::Enforce) {
-                    Ok(q) => return Ok(analytic_result(chain, t, q, &solver)),
-                    Err(e) if strict => return Err(e),
-                    Err(_) => {}
-                }
-            }
-            let seeded = IkSolver {
-                seed: solver.seed.wrapping_add(i as u64),
-                ..solver.clone()
-            };
-            // One scratch per thread, reused across calls (resized when the robot or task changes).
-            SCRATCH.with(|cell| {
-                let mut slot = cell.borrow_mut();
-                let scratch = slot.get_or_insert_with(|| IkScratch::new(chain, residual_dim(&seeded.task)));
-                seeded.solve_with(chain, t, q0, scratch)
-            })
-        };
-        let results: Vec<IkResult> = if batch {
-            use rayon::prelude::*;
-            py.detach(|| {
-                targets
-                    .par_iter()
-                    .enumerate()
-                    .map(|(i, t)| solve_one(i, t))
-                    .collect::<ttkin::Result<_>>()
-            })
-            .py()?
-        } else {
-            vec![solve_one(0, &targets[0]).py()?]
-        };
+        let outcomes = py.detach(|| front.solve(chain, &targets, &q0s)).py()?;
         if raise_on_failure {
-            if let Some((i, r)) = results.iter().enumerate().find(|(_, r)| !r.success) {
-                return Err(crate::errors::UnreachableError::new_err(format!(
-                    "IK failed for target {i}: position error {:.3e} m, orientation error {:.3e} rad",
-                    r.position_error, r.orientation_error
-                )));
+            if let Some((i, o)) = outcomes.iter().enumerate().find(|(_, o)| o.status != IkStatus::Solved) {
+                let r = &o.result;
+                let msg = format!(
+                    "IK {} for target {i}: position error {:.3e} m, orientation error {:.3e} rad",
+                    if o.status == IkStatus::Unreachable {
+                        "failed, target unreachable,"
+                    } else {
+                        "did not converge"
+                    },
+                    r.position_error,
+                    r.orientation_error
+                );
+                return Err(crate::errors::ik_failure(o.status, msg));
             }
         }
+        let results: Vec<&IkResult> = outcomes.iter().map(|o| &o.result).collect();
         if !batch {
-            let r = &results[0];
+            let r = results[0];
             return Ok(PyIkResult {
                 q: to_numpy(py, &[n], &r.q).into_any().unbind(),
                 success: r.success.into_pyobject(py)?.to_owned().into_any().unbind(),
@@ -266,11 +172,13 @@ impl PyRobot {
                 orientation_error: r.orientation_error.into_pyobject(py)?.into_any().unbind(),
                 iterations: r.iterations.into_pyobject(py)?.into_any().unbind(),
                 restarts: r.restarts.into_pyobject(py)?.into_any().unbind(),
+                status: outcomes[0].status.as_str().into_pyobject(py)?.into_any().unbind(),
             });
         }
+
         let count = results.len();
         let q: Vec<f64> = results.iter().flat_map(|r| r.q.iter().copied()).collect();
-        let column = |f: &dyn Fn(&IkResult) -> f64| -> Vec<f64> { results.iter().map(f).collect() };
+        let column = |f: &dyn Fn(&IkResult) -> f64| -> Vec<f64> { results.iter().map(|r| f(r)).collect() };
         Ok(PyIkResult {
             q: to_numpy(py, &[count, n], &q).into_any().unbind(),
             success: PyArray1::from_vec(py, results.iter().map(|r| r.success).collect())
@@ -286,6 +194,13 @@ impl PyRobot {
                 .into_any()
                 .unbind(),
             restarts: PyArray1::from_vec(py, results.iter().map(|r| r.restarts as i64).collect())
+                .into_any()
+                .unbind(),
+            status: outcomes
+                .iter()
+                .map(|o| o.status.as_str())
+                .collect::<Vec<_>>()
+                .into_pyobject(py)?
                 .into_any()
                 .unbind(),
         })
@@ -391,15 +306,7 @@ impl PyRobot {
         let q = vector(q, "q", n)?;
         let twist = vector(twist, "twist", 6)?;
         let weights = weights.map(|w| vector(w, "weights", n)).transpose()?;
-        let frame = match frame {
-            "base" | "world" => JacobianFrame::Base,
-            "tool" | "local" => JacobianFrame::Tool,
-            other => {
-                return Err(TtmanipError::new_err(format!(
-                    "frame: expected 'base' or 'tool', got '{other}'"
-                )))
-            }
-        };
+        let frame: JacobianFrame = frame.parse::<JacobianFrame>().py()?;
         let d = DifferentialIk {
             threshold,
             max_damping,

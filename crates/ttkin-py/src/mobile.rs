@@ -36,16 +36,28 @@ fn finite(what: &str, v: f64) -> PyResult<f64> {
 
 #[pymethods]
 impl PyDiffDrive {
-    /// Wheel radius and track (m); optional wheel speed (rad/s) and acceleration (rad/s²) limits.
+    /// Wheel radius and track width (m); optional wheel speed (rad/s) and acceleration (rad/s²)
+    /// limits. `track` is the deprecated name of `track_width`.
     #[new]
-    #[pyo3(signature = (wheel_radius, track, max_wheel_speed=None, max_wheel_acceleration=None))]
+    #[pyo3(signature = (wheel_radius, track_width=None, max_wheel_speed=None, max_wheel_acceleration=None, *, track=None))]
     fn new(
+        py: Python<'_>,
         wheel_radius: f64,
-        track: f64,
+        track_width: Option<f64>,
         max_wheel_speed: Option<f64>,
         max_wheel_acceleration: Option<f64>,
+        track: Option<f64>,
     ) -> PyResult<Self> {
-        let drive = DiffDrive::new(wheel_radius, track)
+        let width = match (track_width, track) {
+            (Some(w), None) => w,
+            (None, Some(w)) => {
+                crate::errors::deprecated(py, "DiffDrive(track=...)", "DiffDrive(track_width=...)")?;
+                w
+            }
+            (Some(_), Some(_)) => return Err(TtmanipError::new_err("track: give track_width only")),
+            (None, None) => return Err(TtmanipError::new_err("track_width: required (m)")),
+        };
+        let drive = DiffDrive::new(wheel_radius, width)
             .and_then(|d| {
                 d.with_limits(
                     max_wheel_speed.unwrap_or(f64::INFINITY),
@@ -64,8 +76,15 @@ impl PyDiffDrive {
 
     /// Distance between the wheel contact points (m).
     #[getter]
-    fn track(&self) -> f64 {
+    fn track_width(&self) -> f64 {
         self.drive.track()
+    }
+
+    /// Deprecated name of `track_width`.
+    #[getter]
+    fn track(&self, py: Python<'_>) -> PyResult<f64> {
+        crate::errors::deprecated(py, "DiffDrive.track", "DiffDrive.track_width")?;
+        Ok(self.drive.track())
     }
 
     /// Wheel speed limit (rad/s; inf when none).
@@ -124,12 +143,10 @@ impl PyDiffDrive {
         command: &Bound<'py, PyAny>,
         dt: f64,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-        if !(dt >= 0.0 && dt.is_finite()) {
-            return Err(TtmanipError::new_err(format!("dt: must be finite and ≥ 0 s, got {dt}")));
-        }
         let w = self
             .drive
-            .limit_step(wheel_pair(previous, "previous")?, wheel_pair(command, "command")?, dt);
+            .limit_step_checked(wheel_pair(previous, "previous")?, wheel_pair(command, "command")?, dt)
+            .py()?;
         Ok(to_numpy(py, &[2], &w))
     }
 
@@ -218,7 +235,7 @@ impl PyRobot {
 /// coordinates, see `Robot.task_jacobian`) at `q`, with Chan–Dubey joint-limit weights (or none) and
 /// singularity-robust damping (λ_max = `damping`, starting below σ_min = `epsilon`).
 #[pyfunction]
-#[pyo3(signature = (robot, q, xdot, task="racket5", weights="chan-dubey", damping=0.05, epsilon=1e-3, qdot_prev=None, base=None, mount=None))]
+#[pyo3(signature = (robot, q, xdot, task="racket5", weights="chan-dubey", damping=Damping::default().lambda_max, epsilon=Damping::default().epsilon, qdot_prev=None, base=None, mount=None))]
 #[allow(clippy::too_many_arguments)]
 fn wls_step<'py>(
     py: Python<'py>,
@@ -294,8 +311,14 @@ impl PyTrackResult {
     }
     /// Commanded inputs (N, nu): joint rates (m/s, rad/s), base (v, ω) first.
     #[getter]
-    fn qdot<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+    fn qd<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
         to_numpy(py, &[self.r.len(), self.r.nu], &self.r.qdot)
+    }
+    /// Deprecated name of `qd`.
+    #[getter]
+    fn qdot<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        crate::errors::deprecated(py, "TrackResult.qdot", "TrackResult.qd")?;
+        Ok(self.qd(py))
     }
     /// Task coordinates reached (N, dim).
     #[getter]
@@ -335,11 +358,7 @@ impl PyTrackResult {
     /// "completed", "saturated" (finished, task velocity scaled at some samples) or "failed".
     #[getter]
     fn status(&self) -> &'static str {
-        match self.r.status {
-            ClikStatus::Completed => "completed",
-            ClikStatus::Saturated { .. } => "saturated",
-            ClikStatus::Failed { .. } => "failed",
-        }
+        self.r.status.name()
     }
     /// True when the motion completed with the full task velocity at every sample.
     #[getter]
@@ -349,18 +368,7 @@ impl PyTrackResult {
     /// A sentence on how the motion ended.
     #[getter]
     fn message(&self) -> String {
-        match &self.r.status {
-            ClikStatus::Completed => "completed: full task velocity at every sample".into(),
-            ClikStatus::Saturated {
-                first_time,
-                samples,
-                min_scale,
-            } => format!(
-                "saturated: limits scaled the task velocity at {samples} samples from t = {first_time:.3} s \
-                 (smallest scale {min_scale:.3})"
-            ),
-            ClikStatus::Failed { time, reason } => format!("failed at t = {time:.3} s: {reason}"),
-        }
+        self.r.status.to_string()
     }
     /// Names of the arm joints (columns of `margin`).
     #[getter]
@@ -380,8 +388,10 @@ impl PyTrackResult {
 /// differences). See `ttmanip.mobile.track` for the options.
 #[pyfunction]
 #[pyo3(signature = (robot, q0, task_trajectory, rate_hz=1000.0, task="racket5", velocities=None, weights="chan-dubey",
-                    gain=None, damping=0.05, epsilon=1e-3, input_weights=None, limit_gain=0.0,
-                    manipulability_gain=0.0, respect_limits=true, max_error=0.05, corrector=true, base=None, mount=None))]
+                    gain=None, damping=Damping::default().lambda_max, epsilon=Damping::default().epsilon, input_weights=None,
+                    limit_gain=ClikOptions::default().limit_gain, manipulability_gain=ClikOptions::default().manipulability_gain,
+                    respect_limits=ClikOptions::default().respect_limits, max_error=ClikOptions::default().max_error,
+                    corrector=ClikOptions::default().corrector, base=None, mount=None))]
 #[allow(clippy::too_many_arguments)]
 fn track<'py>(
     py: Python<'py>,

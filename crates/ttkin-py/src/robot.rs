@@ -5,10 +5,11 @@
 
 use std::sync::Arc;
 
+use nalgebra::IsometryMatrix3;
 use numpy::{PyArrayDyn, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyString;
-use ttkin::{Chain, Dh, DhConvention, JacobianFrame, Joint, JointType, Limits};
+use ttkin::{Chain, Dh, DhConvention, JacobianFrame, JointType, Limits};
 
 use crate::convert::{f64_array, filled_without_gil, pose_to_numpy, shape_str, to_numpy, transform, vector, zeros};
 use crate::errors::{PyResultExt, ShapeError, TtmanipError};
@@ -18,8 +19,8 @@ use crate::errors::{PyResultExt, ShapeError, TtmanipError};
 pub struct PyRobot {
     /// The kinematic (and later dynamic) model.
     pub chain: Arc<Chain>,
-    /// The dynamic model, built on first use, and its scratch space (see `dynamics.rs`).
-    pub dynamics: crate::dynamics::DynamicsCache,
+    /// The dynamic model, built on first use, and its scratch space.
+    pub dynamics: ttkin::dynamics::DynamicsCache,
 }
 
 impl PyRobot {
@@ -53,43 +54,31 @@ impl PyRobot {
     }
 }
 
-fn frame_from_str(frame: &str) -> PyResult<JacobianFrame> {
-    match frame {
-        "base" | "world" => Ok(JacobianFrame::Base),
-        "tool" | "local" => Ok(JacobianFrame::Tool),
-        other => Err(TtmanipError::new_err(format!(
-            "frame: expected 'base' or 'tool', got '{other}'"
-        ))),
-    }
-}
-
+/// Joint types from a string such as "PRRRRR" or a list of "revolute"/"prismatic" (default: all
+/// revolute).
 fn joint_types(types: Option<&Bound<'_, PyAny>>, n: usize) -> PyResult<Vec<JointType>> {
     let Some(types) = types else {
         return Ok(vec![JointType::Revolute; n]);
     };
-    let items: Vec<String> = if let Ok(s) = types.cast::<PyString>() {
-        s.to_str()?.chars().map(String::from).collect()
+    let kinds: Vec<JointType> = if let Ok(s) = types.cast::<PyString>() {
+        JointType::from_letters(s.to_str()?).py()?
     } else {
-        types.extract().map_err(|_| {
+        let items: Vec<String> = types.extract().map_err(|_| {
             TtmanipError::new_err("types: expected a string such as 'PRRRRR' or a list of 'revolute'/'prismatic'")
-        })?
+        })?;
+        items
+            .iter()
+            .map(|s| s.parse::<JointType>())
+            .collect::<ttkin::Result<Vec<_>>>()
+            .py()?
     };
-    if items.len() != n {
+    if kinds.len() != n {
         return Err(ShapeError::new_err(format!(
             "types: expected {n} joint types, got {}",
-            items.len()
+            kinds.len()
         )));
     }
-    items
-        .iter()
-        .map(|t| match t.to_ascii_lowercase().as_str() {
-            "r" | "revolute" => Ok(JointType::Revolute),
-            "p" | "prismatic" => Ok(JointType::Prismatic),
-            other => Err(TtmanipError::new_err(format!(
-                "types: unknown joint type '{other}'; use 'R'/'revolute' or 'P'/'prismatic'"
-            ))),
-        })
-        .collect()
+    Ok(kinds)
 }
 
 fn limits_column(chain: &Chain, f: impl Fn(&Limits) -> Option<f64>) -> Vec<f64> {
@@ -134,16 +123,8 @@ impl PyRobot {
         let d = vector(d, "d", n)?;
         let theta = vector(theta, "theta", n)?;
         let kinds = joint_types(types, n)?;
-        let conv = match convention {
-            "standard" => DhConvention::Standard,
-            "modified" | "craig" => DhConvention::Modified,
-            other => {
-                return Err(TtmanipError::new_err(format!(
-                    "convention: expected 'standard' or 'modified', got '{other}'"
-                )))
-            }
-        };
-        let lims = match limits {
+        let conv: DhConvention = convention.parse::<DhConvention>().py()?;
+        let lims: Option<Vec<(f64, f64)>> = match limits {
             None => None,
             Some(l) => {
                 let la = f64_array(l, "limits")?;
@@ -153,42 +134,30 @@ impl PyRobot {
                         la.shape_str()
                     )));
                 }
-                Some(la.data().to_vec())
+                Some(la.data().chunks_exact(2).map(|r| (r[0], r[1])).collect())
             }
         };
-        let names = match names {
-            Some(v) if v.len() != n => {
-                return Err(ShapeError::new_err(format!(
-                    "names: expected {n} names, got {}",
-                    v.len()
-                )))
-            }
-            Some(v) => v,
-            None => (1..=n).map(|i| format!("joint{i}")).collect(),
-        };
-        let mut joints = Vec::with_capacity(n);
-        for i in 0..n {
-            let row = Dh {
-                a: a[i],
-                alpha: alpha[i],
-                d: d[i],
-                theta: theta[i],
-            };
-            let mut j = Joint::new(names[i].clone(), kinds[i], ttkin::Geometry::Dh(conv, row)).py()?;
-            if let Some(l) = &lims {
-                j = j.with_limits(Limits::position(l[2 * i], l[2 * i + 1])).py()?;
-            }
-            joints.push(j);
-        }
+        let rows: Vec<(JointType, Dh)> = (0..n)
+            .map(|i| {
+                let dh = Dh {
+                    a: a[i],
+                    alpha: alpha[i],
+                    d: d[i],
+                    theta: theta[i],
+                };
+                (kinds[i], dh)
+            })
+            .collect();
         let base = base
             .map(|b| transform(b, "base"))
             .transpose()?
-            .unwrap_or_else(nalgebra::IsometryMatrix3::identity);
+            .unwrap_or_else(IsometryMatrix3::identity);
         let tool = tool
             .map(|t| transform(t, "tool"))
             .transpose()?
-            .unwrap_or_else(nalgebra::IsometryMatrix3::identity);
-        Ok(PyRobot::new(Chain::new(name, joints, base, tool).py()?))
+            .unwrap_or_else(IsometryMatrix3::identity);
+        let chain = Chain::from_dh(name, conv, &rows, lims.as_deref(), names, base, tool).py()?;
+        Ok(PyRobot::new(chain))
     }
 
     /// Robot from a ttmanip robot file (TOML).
@@ -249,10 +218,17 @@ impl PyRobot {
         Ok(PyRobot::new(self.chain.with_base(transform(base, "base")?).py()?))
     }
 
-    /// Number of joints.
+    /// Number of joints (degrees of freedom).
     #[getter]
-    fn n(&self) -> usize {
+    fn dof(&self) -> usize {
         self.chain.dof()
+    }
+
+    /// Deprecated name of `dof`.
+    #[getter]
+    fn n(&self, py: Python<'_>) -> PyResult<usize> {
+        crate::errors::deprecated(py, "Robot.n", "Robot.dof")?;
+        Ok(self.chain.dof())
     }
 
     /// Robot name.
@@ -358,7 +334,7 @@ impl PyRobot {
         q: &Bound<'py, PyAny>,
         frame: &str,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-        let frame = frame_from_str(frame)?;
+        let frame: JacobianFrame = frame.parse::<JacobianFrame>().py()?;
         let (a, batch) = self.configs(q, "q")?;
         let n = self.chain.dof();
         match batch {

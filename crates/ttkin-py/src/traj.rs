@@ -12,7 +12,7 @@ use ttkin::traj::via::{self, ViaKind};
 use ttkin::traj::{JointState, JointTrajectory, Samples};
 
 use crate::convert::{f64_array, pose_to_numpy, to_numpy, transform, vector, zeros};
-use crate::errors::{PyResultExt, ShapeError, SingularError, TtmanipError, UnreachableError};
+use crate::errors::{Callback, PyResultExt, ShapeError, TtmanipError};
 use crate::robot::PyRobot;
 
 /// Reads a vector of any length ≥ 1 (finite values).
@@ -638,21 +638,13 @@ impl PyCartesianTrajectory {
     ) -> PyResult<Samples> {
         let q0 = any_vector(q_start, "q_start")?;
         let n = q0.len();
+        let callback = Callback::default();
         let result = self.inner.to_joint(hz, &q0, |pose, seed| {
             let call = ik.call1((pose_to_numpy(py, pose), to_numpy(py, &[n], seed)));
-            let out = call.and_then(|r| any_vector(&r, "ik result"));
-            out.map_err(|e| {
-                let msg = e.value(py).to_string();
-                if e.is_instance_of::<UnreachableError>(py) {
-                    ttkin::Error::Unreachable(msg)
-                } else if e.is_instance_of::<SingularError>(py) {
-                    ttkin::Error::Singular(msg)
-                } else {
-                    ttkin::Error::invalid("ik", format!("{}: {msg}", e.get_type(py)))
-                }
-            })
+            call.and_then(|r| any_vector(&r, "ik result"))
+                .map_err(|e| callback.error(py, e))
         });
-        result.py()
+        callback.finish(py, result)
     }
 }
 

@@ -95,6 +95,41 @@ impl Chain {
         Chain::new(self.name.clone(), self.joints.clone(), base, self.tool)
     }
 
+    /// An upper bound (m) on the distance from the base-frame origin of joint 1's frame
+    /// (`base · pre_0`) to the tool point over every configuration within the limits: the sum of
+    /// the fixed translations plus the largest travel of each prismatic joint (rotations keep
+    /// lengths). +∞ when a prismatic joint is unbounded. A target farther than this is unreachable.
+    pub fn reach(&self) -> f64 {
+        let fixed: f64 = self.fixed[1..].iter().map(|t| t.translation.vector.norm()).sum();
+        let travel: f64 = self
+            .joints
+            .iter()
+            .filter(|j| j.kind() == JointType::Prismatic)
+            .map(|j| j.limits().lower.abs().max(j.limits().upper.abs()))
+            .sum();
+        fixed + travel
+    }
+
+    /// Origin of joint 1's frame (`base · pre_0`) in the base frame, m: the centre of [`Chain::reach`].
+    pub fn reach_centre(&self) -> Vector3<f64> {
+        self.fixed[0].translation.vector
+    }
+
+    /// The middle of each finite joint range, 0 for an unbounded joint (m, rad): the default
+    /// start of the numeric solvers.
+    pub fn mid_range(&self) -> Vec<f64> {
+        self.limits()
+            .iter()
+            .map(|l| {
+                if l.lower.is_finite() && l.upper.is_finite() {
+                    0.5 * (l.lower + l.upper)
+                } else {
+                    0.0
+                }
+            })
+            .collect()
+    }
+
     /// Name of the robot.
     pub fn name(&self) -> &str {
         &self.name

@@ -242,6 +242,36 @@ pub enum ClikStatus {
     },
 }
 
+impl ClikStatus {
+    /// `"completed"`, `"saturated"` or `"failed"`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            ClikStatus::Completed => "completed",
+            ClikStatus::Saturated { .. } => "saturated",
+            ClikStatus::Failed { .. } => "failed",
+        }
+    }
+}
+
+impl std::fmt::Display for ClikStatus {
+    /// A sentence on how the motion ended.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ClikStatus::Completed => f.write_str("completed: full task velocity at every sample"),
+            ClikStatus::Saturated {
+                first_time,
+                samples,
+                min_scale,
+            } => write!(
+                f,
+                "saturated: limits scaled the task velocity at {samples} samples from t = {first_time:.3} s \
+                 (smallest scale {min_scale:.3})"
+            ),
+            ClikStatus::Failed { time, reason } => write!(f, "failed at t = {time:.3} s: {reason}"),
+        }
+    }
+}
+
 /// Arrays of a tracked motion, row-major, one row per sample (N rows).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ClikResult {

@@ -159,6 +159,17 @@ impl DiffDrive {
         let s = if peak > max_d { max_d / peak } else { 1.0 };
         self.saturate_speeds([previous[0] + s * d[0], previous[1] + s * d[1]]).0
     }
+
+    /// [`DiffDrive::limit_step`] with the step checked: `dt` must be finite and ≥ 0 s.
+    pub fn limit_step_checked(&self, previous: [f64; 2], command: [f64; 2], dt: f64) -> crate::error::Result<[f64; 2]> {
+        if !(dt >= 0.0 && dt.is_finite()) {
+            return Err(crate::error::Error::invalid(
+                "dt",
+                format!("must be finite and ≥ 0 s, got {dt}"),
+            ));
+        }
+        Ok(self.limit_step(previous, command, dt))
+    }
 }
 
 /// Dead-reckoning odometry: pose (x, y, θ) of the axle midpoint from wheel encoder increments.

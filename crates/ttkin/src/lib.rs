@@ -12,14 +12,17 @@
 pub mod chain;
 pub mod clik;
 pub mod description;
+pub mod dh;
 pub mod diffdrive;
 pub mod dynamics;
 pub mod error;
 pub mod ik;
 pub mod inertial;
 pub mod joint;
+pub mod linalg;
 pub mod redundancy;
 pub mod robots;
+pub mod tables;
 pub mod task;
 pub mod traj;
 pub mod transform;

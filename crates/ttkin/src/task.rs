@@ -29,6 +29,15 @@ pub enum Task {
     },
 }
 
+impl std::str::FromStr for Task {
+    type Err = Error;
+
+    /// [`Task::from_name`].
+    fn from_str(s: &str) -> Result<Task> {
+        Task::from_name(s)
+    }
+}
+
 impl Task {
     /// Parses `"pose"`, `"position"` or `"racket5"` (seed offset 0.15 m).
     pub fn from_name(name: &str) -> Result<Task> {
@@ -42,6 +51,19 @@ impl Task {
                 "task",
                 format!("unknown task '{other}'; choose 'pose', 'position' or 'racket5'"),
             )),
+        }
+    }
+
+    /// Parses a task name as [`Task::from_name`], with an optional racket-centre offset (m along
+    /// tool z) that only `"racket5"` accepts.
+    pub fn from_name_with_offset(name: &str, racket_offset: Option<f64>) -> Result<Task> {
+        match (Task::from_name(name)?, racket_offset) {
+            (Task::Racket { .. }, Some(offset)) => {
+                crate::error::check_finite("racket_offset", &[offset])?;
+                Ok(Task::Racket { offset })
+            }
+            (_, Some(_)) => Err(Error::invalid("racket_offset", "only for task='racket5'")),
+            (t, None) => Ok(t),
         }
     }
 

@@ -57,8 +57,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from .. import robots  # noqa: E402
-from .._ttmanip import Robot, TrackResult, task_line, track  # noqa: E402
+from .. import Robot, robots, traj  # noqa: E402
+from ..mobile import TrackResult, task_line, track  # noqa: E402
 
 #: The seed's start configuration (m, rad).
 Q_START = np.array([0.26, *np.radians([200.0, 90.0, 80.0, 250.0, 105.0, 180.0, 135.0])])
@@ -124,11 +124,12 @@ def _centre_normal_jacobians(robot: Robot, q: np.ndarray):
 
 
 def task_sigma_min(robot: Robot, q: np.ndarray) -> np.ndarray:
-    """Smallest singular value of the racket5 task Jacobian for q (n,) or (N, n) (batched).
-
-    [J_c; [n]×J_ω] has the singular values of [J_c; Bᵀ[n*]×[n]×J_ω] at n* = n plus one zero."""
-    jc, jn, _, _ = _centre_normal_jacobians(robot, q)
-    return np.linalg.svd(np.concatenate([jc, jn], axis=-2), compute_uv=False)[..., 4]
+    """Smallest singular value of the racket5 task Jacobian (``Robot.task_jacobian``) for q (n,)
+    or (N, n)."""
+    q = np.asarray(q, dtype=float)
+    jacobians = np.array([robot.task_jacobian(row, "racket5") for row in q.reshape(-1, q.shape[-1])])
+    sigma = np.linalg.svd(jacobians, compute_uv=False)[:, -1]
+    return sigma.reshape(q.shape[:-1])
 
 
 def margin_box(robot: Robot) -> tuple[np.ndarray, np.ndarray]:
@@ -196,7 +197,7 @@ def nearest_reachable(
     start and from the ``starts`` nearest of ``samples`` random configurations (see module doc)."""
     lo, hi = margin_box(robot)
     rng = np.random.default_rng(seed)
-    q = lo + rng.random((samples, robot.n)) * (hi - lo)
+    q = lo + rng.random((samples, robot.dof)) * (hi - lo)
     d = distance_to_x4(*racket_centre_normal(robot, q))
     d = np.where(task_sigma_min(robot, q) >= SIGMA_MARGIN, d, np.inf)
     best, best_d = None, np.inf
@@ -218,11 +219,7 @@ def joint_path_task_trajectory(
     """Racket task samples x (N, 5) and exact rates ẋ (N, 5) along the quintic joint path
     q0 → q1, and that path (N, n); azimuth unwrapped."""
     count = int(round(duration * rate_hz)) + 1
-    tau = np.linspace(0.0, 1.0, count)
-    s = tau**3 * (10.0 - 15.0 * tau + 6.0 * tau**2)
-    sdot = 30.0 * tau**2 * (1.0 - tau) ** 2 / duration
-    q = q0 + s[:, None] * (q1 - q0)
-    qdot = sdot[:, None] * (q1 - q0)
+    q, qdot, _ = traj.quintic(q0, q1, duration).sample(np.linspace(0.0, duration, count))
     jc, jn, c, n = _centre_normal_jacobians(robot, q)
     cdot = np.einsum("kij,kj->ki", jc, qdot)
     ndot = np.einsum("kij,kj->ki", jn, qdot)
@@ -286,7 +283,7 @@ def _fig_positions(robot: Robot, res: TrackResult, path: Path) -> None:
 
 
 def _fig_speeds(robot: Robot, res: TrackResult, path: Path) -> None:
-    qd, _ = _display(robot, res.qdot)
+    qd, _ = _display(robot, res.qd)
     vmax, _ = _display(robot, robot.velocity_limits)
     units = ["m/s" if k == "prismatic" else "°/s" for k in robot.joint_types]
     fig, axes = _joint_grid(robot)
@@ -382,7 +379,7 @@ def _csv(robot: Robot, res: TrackResult, x_target: np.ndarray, path: Path) -> No
         [
             res.time,
             res.q,
-            res.qdot,
+            res.qd,
             res.x,
             x_target[:n],
             res.error,
@@ -477,8 +474,8 @@ def run(out_dir: str | Path) -> dict:
         "min_limit_margin_joint": robot.joint_names[int(np.argmin(margin_w.min(axis=0)))],
         "min_limit_margin_per_joint": margin_w.min(axis=0).tolist(),
         "min_task_sigma_min": float(weighted.sigma_min.min()),
-        "max_joint_speed": float(np.abs(weighted.qdot).max()),
-        "max_joint_speed_per_joint": np.abs(weighted.qdot).max(axis=0).tolist(),
+        "max_joint_speed": float(np.abs(weighted.qd).max()),
+        "max_joint_speed_per_joint": np.abs(weighted.qd).max(axis=0).tolist(),
         "joints_beyond_limits": bool((margin_w < 0.0).any()),
         "track_call_seconds": t_weighted,
         "unweighted": _unweighted_summary(robot, unweighted, t_unweighted),

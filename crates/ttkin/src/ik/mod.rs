@@ -4,6 +4,8 @@
 //! - [`gantry`]: closed-form IK of seed 002's 6-joint gantry, every (σ1, σ2) branch.
 //! - [`arm4`]: closed-form IK of seed 001's 4-DOF arm, with the exact set of poses it can reach.
 //! - [`numeric`]: bounded Levenberg–Marquardt with restarts for any chain and any [`crate::task::Task`].
+//! - [`batch`]: the front end every caller shares: method choice and fallback, per-target seeds,
+//!   per-thread scratch, a parallel batch with a status per target ([`IkStatus`]).
 //! - [`differential`]: q̇ = J⁻¹V with singularity detection and a damped fallback.
 //!
 //! [`Analytic::for_chain`] finds the analytic solver of a chain by a structural check of its DH
@@ -16,6 +18,7 @@
 //! [`IkResult`] with `success = false` and its best configuration.
 
 pub mod arm4;
+pub mod batch;
 pub mod differential;
 pub mod gantry;
 pub mod numeric;
@@ -31,6 +34,7 @@ use crate::joint::{Dh, DhConvention, Geometry, JointType, Limits};
 use crate::transform::isometry_from_matrix;
 
 pub use arm4::Arm4Ik;
+pub use batch::{IkBatchSolver, IkMethod, IkOutcome, IkStatus};
 pub use differential::{joint_velocity, DifferentialIk, JointVelocity};
 pub use gantry::GantryIk;
 pub use numeric::{IkResult, IkScratch, IkSolver};

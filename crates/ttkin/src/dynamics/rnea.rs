@@ -1,0 +1,161 @@
+//! Inverse dynamics by the recursive Newton–Euler algorithm (Featherstone 2008, §5.3) and its
+//! special cases: gravity torques, Coriolis torques, nonlinear effects, and with joint friction.
+
+// The recursions index several per-joint arrays at once: index loops read like the textbook.
+#![allow(clippy::needless_range_loop)]
+
+use nalgebra::{DVector, Vector3};
+
+use super::model::{vec3, Dynamics, DynamicsData};
+use super::Wrench;
+use crate::error::{check_finite, check_vector, Result};
+use crate::joint::JointType;
+
+impl Dynamics {
+    /// Recursive Newton–Euler without argument checks; result in `data.tau`.
+    pub(super) fn rnea_unchecked(
+        &self,
+        data: &mut DynamicsData,
+        q: &[f64],
+        qd: &[f64],
+        qdd: &[f64],
+        gravity: &Vector3<f64>,
+        wrench: Option<&Wrench>,
+    ) {
+        let n = self.dof();
+        self.place(data, q);
+        // The base is fixed; gravity enters as an upward acceleration of the base, a_0 = −g.
+        let (mut w, mut v, mut dw, mut dv) = (Vector3::zeros(), Vector3::zeros(), Vector3::zeros(), -gravity);
+        for i in 0..n {
+            let rt = data.rot[i].transpose();
+            let p = &data.pos[i];
+            let dv_parent = dv + dw.cross(p);
+            let v_parent = v + w.cross(p);
+            w = rt * w;
+            v = rt * v_parent;
+            dw = rt * dw;
+            dv = rt * dv_parent;
+            let z = Vector3::z();
+            match self.kinds[i] {
+                JointType::Revolute => {
+                    w.z += qd[i];
+                    // a_i += S·q̈ + v_i ×ₘ S·q̇, S = (ẑ; 0).
+                    dw += w.cross(&z) * qd[i];
+                    dw.z += qdd[i];
+                    dv += v.cross(&z) * qd[i];
+                }
+                JointType::Prismatic => {
+                    v.z += qd[i];
+                    // a_i += S·q̈ + v_i ×ₘ S·q̇, S = (0; ẑ).
+                    dv += w.cross(&z) * qd[i];
+                    dv.z += qdd[i];
+                }
+            }
+            // f_i = I·a + v ×* (I·v).
+            let body = &self.bodies[i];
+            let (ia_n, ia_f) = body.apply(&dw, &dv);
+            let (iv_n, iv_f) = body.apply(&w, &v);
+            data.moment[i] = ia_n + w.cross(&iv_n) + v.cross(&iv_f);
+            data.force[i] = ia_f + w.cross(&iv_f);
+            data.w[i] = w;
+            data.v[i] = v;
+        }
+        if let Some(ext) = wrench {
+            // The environment pushes on the tool: the joints need that much less.
+            let t = &self.fixed[n];
+            let f = t.rotation * ext.force;
+            let m = t.rotation * ext.torque + t.translation.vector.cross(&f);
+            data.force[n - 1] -= f;
+            data.moment[n - 1] -= m;
+        }
+        for i in (0..n).rev() {
+            data.tau[i] = match self.kinds[i] {
+                JointType::Revolute => data.moment[i].z,
+                JointType::Prismatic => data.force[i].z,
+            } + self.armature[i] * qdd[i];
+            if i > 0 {
+                let r = &data.rot[i];
+                let f = r * data.force[i];
+                let m = r * data.moment[i] + data.pos[i].cross(&f);
+                data.force[i - 1] += f;
+                data.moment[i - 1] += m;
+            }
+        }
+    }
+
+    /// Inverse dynamics (recursive Newton–Euler): joint torques (N·m) / forces (N) that produce
+    /// `qdd` at (`q`, `qd`) under `gravity` (m/s², base frame) with an optional `wrench` on the
+    /// tool; rigid bodies plus armature, no friction (Pinocchio's `rnea`).
+    pub fn rnea<'d>(
+        &self,
+        data: &'d mut DynamicsData,
+        q: &[f64],
+        qd: &[f64],
+        qdd: &[f64],
+        gravity: &[f64; 3],
+        wrench: Option<&Wrench>,
+    ) -> Result<&'d DVector<f64>> {
+        self.check_state(data, q, qd)?;
+        check_vector("qdd", qdd, self.dof())?;
+        let g = vec3("gravity", gravity)?;
+        if let Some(w) = wrench {
+            check_finite(
+                "wrench",
+                &[w.force.x, w.force.y, w.force.z, w.torque.x, w.torque.y, w.torque.z],
+            )?;
+        }
+        self.rnea_unchecked(data, q, qd, qdd, &g, wrench);
+        Ok(&data.tau)
+    }
+
+    /// Torques the drives must deliver at the joints: [`Dynamics::rnea`] plus joint friction.
+    pub fn inverse_dynamics<'d>(
+        &self,
+        data: &'d mut DynamicsData,
+        q: &[f64],
+        qd: &[f64],
+        qdd: &[f64],
+        gravity: &[f64; 3],
+        wrench: Option<&Wrench>,
+    ) -> Result<&'d DVector<f64>> {
+        self.rnea(data, q, qd, qdd, gravity, wrench)?;
+        self.add_friction(&mut data.tau, qd);
+        Ok(&data.tau)
+    }
+
+    /// Gravity torques g(q) (N·m or N): what holds the robot still at `q` under `gravity`.
+    pub fn gravity<'d>(&self, data: &'d mut DynamicsData, q: &[f64], gravity: &[f64; 3]) -> Result<&'d DVector<f64>> {
+        self.check_data(data)?;
+        check_vector("q", q, self.dof())?;
+        let g = vec3("gravity", gravity)?;
+        let zeros = std::mem::take(&mut data.zeros);
+        self.rnea_unchecked(data, q, zeros.as_slice(), zeros.as_slice(), &g, None);
+        data.zeros = zeros;
+        Ok(&data.tau)
+    }
+
+    /// Coriolis and centrifugal torques C(q, q̇)·q̇ (N·m or N), gravity excluded.
+    pub fn coriolis<'d>(&self, data: &'d mut DynamicsData, q: &[f64], qd: &[f64]) -> Result<&'d DVector<f64>> {
+        self.check_state(data, q, qd)?;
+        let zeros = std::mem::take(&mut data.zeros);
+        self.rnea_unchecked(data, q, qd, zeros.as_slice(), &Vector3::zeros(), None);
+        data.zeros = zeros;
+        Ok(&data.tau)
+    }
+
+    /// Nonlinear effects h(q, q̇) = C(q, q̇)·q̇ + g(q) (N·m or N), Pinocchio's `nonLinearEffects`.
+    pub fn nonlinear_effects<'d>(
+        &self,
+        data: &'d mut DynamicsData,
+        q: &[f64],
+        qd: &[f64],
+        gravity: &[f64; 3],
+    ) -> Result<&'d DVector<f64>> {
+        self.check_state(data, q, qd)?;
+        let g = vec3("gravity", gravity)?;
+        let zeros = std::mem::take(&mut data.zeros);
+        self.rnea_unchecked(data, q, qd, zeros.as_slice(), &g, None);
+        data.zeros = zeros;
+        Ok(&data.tau)
+    }
+}

@@ -1,0 +1,93 @@
+"""Renamed Python names (see the glossary of ARCHITECTURE.md) keep working, warn, and agree with
+their new names; IK statuses tell unreachable from not converged."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import ttmanip
+
+
+def test_robot_n_is_a_deprecated_dof():
+    robot = ttmanip.robots.ur5()
+    with pytest.warns(DeprecationWarning, match=r"Robot\.n is deprecated; use Robot\.dof"):
+        n = robot.n
+    assert n == robot.dof == 6
+
+
+def test_diff_drive_track_is_a_deprecated_track_width():
+    with pytest.warns(DeprecationWarning, match="track_width"):
+        old = ttmanip.DiffDrive(wheel_radius=0.1, track=0.5)
+    new = ttmanip.DiffDrive(wheel_radius=0.1, track_width=0.5)
+    assert new.track_width == 0.5
+    with pytest.warns(DeprecationWarning, match=r"DiffDrive\.track is deprecated"):
+        assert old.track == new.track_width
+    np.testing.assert_array_equal(old.wheel_speeds(0.3, 0.2), new.wheel_speeds(0.3, 0.2))
+    with pytest.raises(ttmanip.TtmanipError, match="track_width"):
+        ttmanip.DiffDrive(wheel_radius=0.1)
+
+
+def test_track_result_qdot_is_a_deprecated_qd():
+    from ttmanip.experiments import seed000
+
+    robot = ttmanip.robots.mobile8()
+    q0 = seed000.Q_START
+    x0 = robot.task_coordinates(q0)
+    x, xdot = ttmanip.task_line(x0, x0 + np.array([0.01, 0, 0, 0, 0]), 0.1)
+    res = ttmanip.track(robot, q0, x, velocities=xdot)
+    with pytest.warns(DeprecationWarning, match=r"TrackResult\.qdot"):
+        old = res.qdot
+    np.testing.assert_array_equal(old, res.qd)
+
+
+def test_ik_status_tells_unreachable_from_not_converged():
+    robot = ttmanip.robots.ur5()
+    reachable = robot.fk(np.array([0.3, -0.9, 1.1, -0.4, 0.8, 0.2]))
+    far = np.eye(4)
+    far[0, 3] = 5.0
+    batch = robot.ik(np.stack([reachable, far, reachable]), time_budget=None, max_restarts=20)
+    assert batch.status == ["solved", "unreachable", "solved"]
+    assert list(batch.success) == [True, False, True]
+    starved = robot.ik(
+        reachable,
+        q0=[-2.0, 1.0, -1.0, 2.0, -2.0, 2.0],
+        method="numeric",
+        max_iterations=1,
+        max_restarts=0,
+        time_budget=None,
+    )
+    assert starved.status == "not_converged" and not starved.success
+    with pytest.raises(ttmanip.NotConvergedError):
+        robot.ik(
+            reachable,
+            q0=[-2.0, 1.0, -1.0, 2.0, -2.0, 2.0],
+            method="numeric",
+            max_iterations=1,
+            max_restarts=0,
+            time_budget=None,
+            raise_on_failure=True,
+        )
+    with pytest.raises(ttmanip.UnreachableError):
+        robot.ik(far, time_budget=None, max_restarts=3, raise_on_failure=True)
+    assert not issubclass(ttmanip.NotConvergedError, ttmanip.UnreachableError)
+
+
+def test_callback_exception_keeps_its_type():
+    line = ttmanip.traj.line(np.eye(4), np.eye(4) @ np.diag([1.0, 1, 1, 1]), 0.1)
+
+    class Boom(RuntimeError):
+        pass
+
+    def ik(pose, seed):
+        raise Boom("from the user's callback")
+
+    with pytest.raises(Boom, match="user's callback"):
+        line.to_joint(100.0, np.zeros(6), ik)
+
+    def unreachable(pose, seed):
+        raise ttmanip.UnreachableError("beyond the rail")
+
+    with pytest.raises(ttmanip.UnreachableError, match=r"^unreachable: sample 0 at t = ") as info:
+        line.to_joint(100.0, np.zeros(6), unreachable)
+    assert isinstance(info.value.__cause__, ttmanip.UnreachableError)
+    assert "beyond the rail" in str(info.value.__cause__)
