@@ -3,41 +3,23 @@
 //! `TtmanipError` subclass (never PyO3's `OverflowError` for a negative count).
 
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyInt};
 
 use crate::convert::f64_array;
 use crate::errors::{NonFiniteError, ShapeError, TtmanipError};
 
-/// Reads a non-negative integer argument (`max_iterations`, `max_restarts`, `seed`, ...) that
-/// fits in `T`; a negative, too large, boolean or non-integer value is a `TtmanipError` naming it.
-pub fn unsigned<T: TryFrom<u64>>(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<T> {
-    let got = || obj.repr().map(|r| r.to_string()).unwrap_or_else(|_| "?".to_string());
-    let max = || {
-        // the largest u64 that converts to T, for the message
-        let mut hi = u64::MAX;
-        while T::try_from(hi).is_err() {
-            hi >>= 1;
-        }
-        hi
-    };
-    if obj.is_instance_of::<PyBool>() {
-        return Err(TtmanipError::new_err(format!(
-            "{what}: expected a non-negative integer, got {}",
-            got()
-        )));
-    }
-    match obj.extract::<u64>() {
-        Ok(v) => T::try_from(v)
-            .map_err(|_| TtmanipError::new_err(format!("{what}: expected an integer in 0..={}, got {v}", max()))),
-        Err(_) if obj.is_instance_of::<PyInt>() || obj.hasattr("__index__").unwrap_or(false) => Err(
-            TtmanipError::new_err(format!("{what}: expected an integer in 0..={}, got {}", max(), got())),
-        ),
-        Err(_) => Err(TtmanipError::new_err(format!(
-            "{what}: expected a non-negative integer, got {} of type {}",
-            got(),
-            obj.get_type().name().map(|n| n.to_string()).unwrap_or_default()
-        ))),
-    }
+/// A non-negative integer argument (`max_iterations`, `max_restarts`, `seed`, ...) that fits in
+/// `T`. Bind the parameter as `i128` (PyO3 then takes any Python int, negative included, and
+/// keeps literal defaults in the signature) and convert here: a negative or too large value is a
+/// `TtmanipError` naming the argument, not PyO3's `OverflowError`.
+pub fn unsigned<T: TryFrom<i128>>(v: i128, what: &str) -> PyResult<T> {
+    T::try_from(v).map_err(|_| {
+        let max = (0..128)
+            .rev()
+            .map(|b| (1i128 << b).wrapping_sub(1).max(0))
+            .find(|&m| T::try_from(m).is_ok())
+            .unwrap_or(0);
+        TtmanipError::new_err(format!("{what}: expected an integer in 0..={max}, got {v}"))
+    })
 }
 
 /// A finite float argument.

@@ -247,6 +247,12 @@ pub fn check_finite_output(data: &[f64]) -> PyResult<()> {
     }
 }
 
+/// A computed scalar, refusing NaN/inf with `NumericalError`.
+pub fn finite_scalar(v: f64) -> PyResult<f64> {
+    check_finite_output(&[v])?;
+    Ok(v)
+}
+
 /// [`to_numpy`] of a computed result, refusing NaN/inf with `NumericalError`.
 pub fn finite_to_numpy<'py>(py: Python<'py>, shape: &[usize], data: &[f64]) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
     check_finite_output(data)?;
@@ -265,6 +271,16 @@ pub fn zeros<'py>(py: Python<'py>, shape: &[usize]) -> Bound<'py, PyArrayDyn<f64
     PyArrayDyn::zeros(py, IxDyn(shape), false)
 }
 
+/// Runs `fill` on the data of `out`, a fresh array made by [`zeros`] (never borrowed elsewhere,
+/// so the borrow and slice cannot fail; if they ever did: `InternalError`, not a panic).
+pub fn fill_fresh<R>(out: &Bound<'_, PyArrayDyn<f64>>, fill: impl FnOnce(&mut [f64]) -> PyResult<R>) -> PyResult<R> {
+    let mut w = out.try_readwrite().map_err(|e| InternalError::new_err(e.to_string()))?;
+    let o = w
+        .as_slice_mut()
+        .map_err(|e| InternalError::new_err(format!("fresh output array: {e}")))?;
+    fill(o)
+}
+
 /// A new float64 array of `shape` filled by `fill` with the GIL released (batch work); a
 /// non-finite result is refused with `NumericalError`.
 pub fn filled_without_gil<'py, F>(py: Python<'py>, shape: &[usize], fill: F) -> PyResult<Bound<'py, PyArrayDyn<f64>>>
@@ -272,13 +288,9 @@ where
     F: FnOnce(&mut [f64]) -> ttkin::Result<()> + Send,
 {
     let out = zeros(py, shape);
-    {
-        let mut w = out.try_readwrite().map_err(|e| InternalError::new_err(e.to_string()))?;
-        let o = w
-            .as_slice_mut()
-            .map_err(|e| InternalError::new_err(format!("fresh output array: {e}")))?;
+    fill_fresh(&out, |o| {
         py.detach(|| fill(o)).py()?;
-        check_finite_output(o)?;
-    }
+        check_finite_output(o)
+    })?;
     Ok(out)
 }

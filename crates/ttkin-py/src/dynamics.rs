@@ -14,7 +14,7 @@ use pyo3::prelude::*;
 use ttkin::dynamics::{TorqueProfile, EARTH_GRAVITY};
 use ttkin::{Drive, Dynamics, DynamicsData, Wrench};
 
-use crate::convert::{f64_array, filled_without_gil, to_numpy, vector, F64Array};
+use crate::convert::{f64_array, filled_without_gil, finite_to_numpy, to_numpy, vector, F64Array};
 use crate::errors::{PyResultExt, ShapeError, TtmanipError};
 use crate::robot::PyRobot;
 
@@ -49,8 +49,8 @@ impl PyRobot {
         let (_, shape) = out_shape(batch, item);
         match batch {
             None => self
-                .with_data(|dy, d| one(dy, d).map(|v| to_numpy(py, &shape, v)))?
-                .py(),
+                .with_data(|dy, d| one(dy, d).map(|v| finite_to_numpy(py, &shape, v)))?
+                .py()?,
             Some(_) => {
                 let dy = self.dynamics()?;
                 filled_without_gil(py, &shape, |o| many(dy, o))
@@ -125,6 +125,7 @@ pub struct PyTorqueProfile {
     profile: TorqueProfile,
 }
 
+#[ttkin_py_guard::guarded]
 #[pymethods]
 impl PyTorqueProfile {
     /// (N, n) joint torques (N·m) / forces (N): rigid body + armature + friction.
@@ -199,8 +200,9 @@ fn trajectory_arrays<'py>(
             for names in [["q", "qd", "qdd"], ["position", "velocity", "acceleration"]] {
                 let got: PyResult<Vec<Bound<'py, PyAny>>> = names.iter().map(|n| trajectory.getattr(*n)).collect();
                 if let Ok(v) = got {
-                    let [q, qd, qdd]: [Bound<'py, PyAny>; 3] = v.try_into().expect("three names");
-                    return Ok([q, qd, qdd]);
+                    if let Ok([q, qd, qdd]) = <[Bound<'py, PyAny>; 3]>::try_from(v) {
+                        return Ok([q, qd, qdd]);
+                    }
                 }
             }
             Err(TtmanipError::new_err(
@@ -231,6 +233,7 @@ fn per_joint(obj: &Bound<'_, PyAny>, what: &str, n: usize, k: usize) -> PyResult
     Ok(a.data().to_vec())
 }
 
+#[ttkin_py_guard::guarded]
 #[pymethods]
 impl PyRobot {
     /// Inverse dynamics (recursive Newton–Euler): joint torques (N·m) / forces (N) for q, qd, qdd
@@ -378,7 +381,7 @@ impl PyRobot {
     fn kinetic_energy(&self, q: &Bound<'_, PyAny>, qd: &Bound<'_, PyAny>) -> PyResult<f64> {
         let n = self.chain.dof();
         let (q, qd) = (vector(q, "q", n)?, vector(qd, "qd", n)?);
-        self.with_data(|dy, d| dy.kinetic_energy(d, &q, &qd))?.py()
+        crate::convert::finite_scalar(self.with_data(|dy, d| dy.kinetic_energy(d, &q, &qd))?.py()?)
     }
 
     /// Potential energy −Σ m_i g·c_i (J) at one configuration (n,).
@@ -386,7 +389,7 @@ impl PyRobot {
     fn potential_energy(&self, q: &Bound<'_, PyAny>, gravity: Option<&Bound<'_, PyAny>>) -> PyResult<f64> {
         let g = gravity_arg(gravity)?;
         let q = vector(q, "q", self.chain.dof())?;
-        self.dynamics()?.potential_energy(&q, &g).py()
+        crate::convert::finite_scalar(self.dynamics()?.potential_energy(&q, &g).py()?)
     }
 
     /// Simulates with the semi-implicit Euler integrator: from q0, qd0 (n,) under torques tau

@@ -2,7 +2,7 @@
 //! form), `ik_all` / `ik_nearest` (analytic branches), `joint_velocity` (differential IK).
 //! Conversion only: the maths is `ttkin::ik`. Batches over (N, 4, 4) run without the GIL.
 
-use nalgebra::{IsometryMatrix3, Matrix4};
+use nalgebra::IsometryMatrix3;
 use numpy::{PyArray1, PyArrayDyn, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -13,6 +13,7 @@ use ttkin::ik::{
 use ttkin::task::Task;
 use ttkin::JacobianFrame;
 
+use crate::args;
 use crate::convert::{f64_array, to_numpy, transform, vector, zeros};
 use crate::errors::{PyResultExt, ShapeError};
 use crate::robot::PyRobot;
@@ -36,6 +37,7 @@ pub struct PyIkResult {
     status: Py<PyAny>,
 }
 
+#[ttkin_py_guard::guarded]
 #[pymethods]
 impl PyIkResult {
     fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
@@ -55,29 +57,10 @@ impl PyIkResult {
     }
 }
 
-/// Reads T as one pose (4, 4) or a batch (N, 4, 4) of rigid transforms.
+/// Reads T as one pose (4, 4) or a batch (N, 4, 4) of rigid transforms (to the precision of
+/// its dtype: see `convert::rigid_tolerance`).
 fn poses(t: &Bound<'_, PyAny>) -> PyResult<(Vec<IsometryMatrix3<f64>>, bool)> {
-    let a = f64_array(t, "T")?;
-    match a.shape() {
-        [4, 4] => Ok((
-            vec![ttkin::transform::isometry_from_matrix("T", &Matrix4::from_row_slice(a.data())).py()?],
-            false,
-        )),
-        [_, 4, 4] => {
-            let v = a
-                .data()
-                .chunks_exact(16)
-                .enumerate()
-                .map(|(i, m)| ttkin::transform::isometry_from_matrix(&format!("T[{i}]"), &Matrix4::from_row_slice(m)))
-                .collect::<ttkin::Result<Vec<_>>>()
-                .py()?;
-            Ok((v, true))
-        }
-        _ => Err(ShapeError::new_err(format!(
-            "T: expected shape (4, 4) or (N, 4, 4), got {}",
-            a.shape_str()
-        ))),
-    }
+    crate::convert::transforms(t, "T")
 }
 
 impl PyRobot {
@@ -86,6 +69,7 @@ impl PyRobot {
     }
 }
 
+#[ttkin_py_guard::guarded]
 #[pymethods]
 impl PyRobot {
     /// Inverse kinematics of a tool pose T (4, 4), or of a batch (N, 4, 4) in parallel.
@@ -109,13 +93,17 @@ impl PyRobot {
         method: &str,
         position_tolerance: f64,
         orientation_tolerance: f64,
-        max_iterations: usize,
-        max_restarts: usize,
+        max_iterations: i128,
+        max_restarts: i128,
         time_budget: Option<f64>,
-        seed: u64,
+        seed: i128,
         racket_offset: Option<f64>,
         raise_on_failure: bool,
     ) -> PyResult<PyIkResult> {
+        let max_iterations: usize = args::unsigned(max_iterations, "max_iterations")?;
+        let max_restarts: usize = args::unsigned(max_restarts, "max_restarts")?;
+        let seed: u64 = args::unsigned(seed, "seed")?;
+        let racket_offset = racket_offset.map(|v| args::finite("racket_offset", v)).transpose()?;
         let solver = IkSolver {
             task: Task::from_name_with_offset(task, racket_offset).py()?,
             position_tolerance,
@@ -238,11 +226,42 @@ impl PyRobot {
                 let count = *count;
                 let out = zeros(py, &[count, MAX_BRANCHES, n]);
                 let mut counts = vec![0usize; count];
+                let hint = hint.map(|h| vector(h, "hint", n)).transpose()?;
                 {
-                    let mut w = out.readwrite();
-                    let o = w.as_slice_mut().expect("fresh array");
-                    let data = a.data();
-                    py.detach(|| ik.solve_batch(data, filter, o, &mut counts)).py()?;
+                    let mut w = out
+                        .try_readwrite()
+                        .map_err(|e| crate::errors::InternalError::new_err(e.to_string()))?;
+                    let o = w
+                        .as_slice_mut()
+                        .map_err(|e| crate::errors::InternalError::new_err(e.to_string()))?;
+                    let f64_input = a.precision() <= f64::EPSILON;
+                    if hint.is_none() && f64_input {
+                        let data = a.data();
+                        py.detach(|| ik.solve_batch(data, filter, o, &mut counts)).py()?;
+                    } else {
+                        // A hint (θ3 on the gantry's s45 = 0 family) or a float32 batch (rigid
+                        // to its own precision, re-orthonormalised): pose by pose; an unreachable
+                        // pose gives 0 branches and NaN rows, as in the batch solver.
+                        let (targets, _) = crate::convert::transforms(T, "T")?;
+                        let h = hint.as_deref();
+                        o.fill(f64::NAN);
+                        py.detach(|| -> ttkin::Result<()> {
+                            for (i, t) in targets.iter().enumerate() {
+                                let sols = match ik.solve(t, h, filter) {
+                                    Ok(sols) => sols,
+                                    Err(ttkin::Error::Unreachable(_)) => ttkin::ik::Solutions::empty(n),
+                                    Err(e) => return Err(e),
+                                };
+                                counts[i] = sols.len().min(MAX_BRANCHES);
+                                let row = &mut o[i * MAX_BRANCHES * n..(i + 1) * MAX_BRANCHES * n];
+                                for (dst, q) in row.chunks_exact_mut(n).zip(sols.iter()) {
+                                    dst.copy_from_slice(q);
+                                }
+                            }
+                            Ok(())
+                        })
+                        .py()?;
+                    }
                 }
                 let counts = PyArray1::from_vec(py, counts.into_iter().map(|c| c as i64).collect());
                 Ok((out, counts).into_pyobject(py)?.into_any())
@@ -307,9 +326,10 @@ impl PyRobot {
         let twist = vector(twist, "twist", 6)?;
         let weights = weights.map(|w| vector(w, "weights", n)).transpose()?;
         let frame: JacobianFrame = frame.parse::<JacobianFrame>().py()?;
+        // inf is meaningless for both: damping everywhere, or without bound (qdot = 0)
         let d = DifferentialIk {
-            threshold,
-            max_damping,
+            threshold: args::non_negative("threshold", threshold)?,
+            max_damping: args::non_negative("max_damping", max_damping)?,
             frame,
         };
         let r = d.solve(&self.chain, &q, &twist, weights.as_deref()).py()?;

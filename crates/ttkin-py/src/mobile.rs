@@ -9,7 +9,7 @@ use ttkin::redundancy::{Damping, Weighting, WlsStep};
 use ttkin::task::Task;
 use ttkin::wholebody::WholeBody;
 
-use crate::convert::{f64_array, to_numpy, transform, vector};
+use crate::convert::{f64_array, finite_to_numpy, to_numpy, transform, vector};
 use crate::errors::{PyResultExt, ShapeError, TtmanipError};
 use crate::robot::PyRobot;
 
@@ -34,6 +34,7 @@ fn finite(what: &str, v: f64) -> PyResult<f64> {
     Ok(v)
 }
 
+#[ttkin_py_guard::guarded]
 #[pymethods]
 impl PyDiffDrive {
     /// Wheel radius and track width (m); optional wheel speed (rad/s) and acceleration (rad/s²)
@@ -107,7 +108,7 @@ impl PyDiffDrive {
     /// Wheel speeds (left, right) in rad/s for a body velocity (v m/s, ω rad/s), shape (2,).
     fn wheel_speeds<'py>(&self, py: Python<'py>, v: f64, omega: f64) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let w = self.drive.wheel_speeds(finite("v", v)?, finite("omega", omega)?);
-        Ok(to_numpy(py, &[2], &w))
+        finite_to_numpy(py, &[2], &w)
     }
 
     /// Pose (x, y, θ) after `duration` s at constant wheel speeds (left, right) rad/s from `pose`:
@@ -122,7 +123,7 @@ impl PyDiffDrive {
         let p = vector(pose, "pose", 3)?;
         let w = wheel_pair(wheel_speeds, "wheel_speeds")?;
         let out = self.drive.try_integrate([p[0], p[1], p[2]], w, duration).py()?;
-        Ok(to_numpy(py, &[3], &out))
+        finite_to_numpy(py, &[3], &out)
     }
 
     /// Wheel speeds scaled together to the speed limit (curvature kept), shape (2,).
@@ -132,7 +133,7 @@ impl PyDiffDrive {
         wheel_speeds: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let (w, _) = self.drive.saturate_speeds(wheel_pair(wheel_speeds, "wheel_speeds")?);
-        Ok(to_numpy(py, &[2], &w))
+        finite_to_numpy(py, &[2], &w)
     }
 
     /// Wheel speeds reachable from `previous` toward `command` in `dt` s under both limits, (2,).
@@ -147,7 +148,7 @@ impl PyDiffDrive {
             .drive
             .limit_step_checked(wheel_pair(previous, "previous")?, wheel_pair(command, "command")?, dt)
             .py()?;
-        Ok(to_numpy(py, &[2], &w))
+        finite_to_numpy(py, &[2], &w)
     }
 
     fn __repr__(&self) -> String {
@@ -188,6 +189,7 @@ fn make_damping(lambda_max: f64, epsilon: f64) -> PyResult<Damping> {
     Ok(d)
 }
 
+#[ttkin_py_guard::guarded]
 #[pymethods]
 impl PyRobot {
     /// Task Jacobian J_e (m, n) of `task` ("pose", "position", "racket5") at `q`, rows in the task's
@@ -211,7 +213,7 @@ impl PyRobot {
             None => t,
         };
         let je = task.jacobian(&j, &t, &target);
-        Ok(to_numpy(py, &[task.dim(), n], je.transpose().as_slice()))
+        finite_to_numpy(py, &[task.dim(), n], je.transpose().as_slice())
     }
 
     /// Task coordinates of the tool pose at `q`: position (3,); position and rotation vector (6,);
@@ -227,13 +229,14 @@ impl PyRobot {
         let q = vector(q, "q", self.chain.dof())?;
         let mut x = [0.0; 6];
         task.coordinates(&self.chain.fk_unchecked(&q), &mut x);
-        Ok(to_numpy(py, &[task.dim()], &x[..task.dim()]))
+        finite_to_numpy(py, &[task.dim()], &x[..task.dim()])
     }
 }
 
 /// One weighted least-norm step: inputs q̇ (nu,) that realise task velocity `xdot` (residual
 /// coordinates, see `Robot.task_jacobian`) at `q`, with Chan–Dubey joint-limit weights (or none) and
 /// singularity-robust damping (λ_max = `damping`, starting below σ_min = `epsilon`).
+#[ttkin_py_guard::guarded]
 #[pyfunction]
 #[pyo3(signature = (robot, q, xdot, task="racket5", weights="chan-dubey", damping=Damping::default().lambda_max, epsilon=Damping::default().epsilon, qdot_prev=None, base=None, mount=None))]
 #[allow(clippy::too_many_arguments)]
@@ -261,11 +264,12 @@ fn wls_step<'py>(
     };
     let mut step = WlsStep::new(&model, task, weighting, make_damping(damping, epsilon)?).py()?;
     let (qd, _) = step.try_solve(&q, &xdot, &prev).py()?;
-    Ok(to_numpy(py, &[qd.len()], &qd))
+    finite_to_numpy(py, &[qd.len()], &qd)
 }
 
 /// Samples (N, dim) and rates (N, dim) of a straight task-space line from `x0` to `x1` over
 /// `duration` s with the quintic rest-to-rest time law, at `rate_hz` (both ends included).
+#[ttkin_py_guard::guarded]
 #[pyfunction]
 #[pyo3(signature = (x0, x1, duration, rate_hz=1000.0, task="racket5"))]
 fn task_line<'py>(
@@ -287,7 +291,7 @@ fn task_line<'py>(
         x.extend_from_slice(traj.x(k));
         xd.extend_from_slice(traj.xdot(k));
     }
-    Ok((to_numpy(py, &[n, d], &x), to_numpy(py, &[n, d], &xd)))
+    Ok((finite_to_numpy(py, &[n, d], &x)?, finite_to_numpy(py, &[n, d], &xd)?))
 }
 
 /// The arrays of a tracked motion (one row per control sample) and how it ended.
@@ -297,6 +301,7 @@ pub struct PyTrackResult {
     joint_names: Vec<String>,
 }
 
+#[ttkin_py_guard::guarded]
 #[pymethods]
 impl PyTrackResult {
     /// Sample times (N,), s.
@@ -318,7 +323,7 @@ impl PyTrackResult {
     #[getter]
     fn qdot<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         crate::errors::deprecated(py, "TrackResult.qdot", "TrackResult.qd")?;
-        Ok(self.qd(py))
+        self.qd(py) // (a PyResult: #[guarded] makes every method return one)
     }
     /// Task coordinates reached (N, dim).
     #[getter]
@@ -378,14 +383,15 @@ impl PyTrackResult {
     fn __len__(&self) -> usize {
         self.r.len()
     }
-    fn __repr__(&self) -> String {
-        format!("TrackResult({} samples, {})", self.r.len(), self.message())
+    fn __repr__(&self) -> PyResult<String> {
+        Ok(format!("TrackResult({} samples, {})", self.r.len(), self.message()?))
     }
 }
 
 /// Closed-loop tracking of a task trajectory sampled at `rate_hz` (N, dim) from `q0`; the loop
 /// runs in Rust without the GIL. `velocities` (N, dim) are the task rates (default: finite
 /// differences). See `ttmanip.mobile.track` for the options.
+#[ttkin_py_guard::guarded]
 #[pyfunction]
 #[pyo3(signature = (robot, q0, task_trajectory, rate_hz=1000.0, task="racket5", velocities=None, weights="chan-dubey",
                     gain=None, damping=Damping::default().lambda_max, epsilon=Damping::default().epsilon, input_weights=None,

@@ -253,6 +253,7 @@ impl PyServoSim {
     }
 }
 
+#[ttkin_py_guard::guarded]
 #[pymethods]
 impl PyServoSim {
     /// Builds the controller from `params` (keys of `defaults()`, SI units; missing keys keep the

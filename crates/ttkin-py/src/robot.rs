@@ -6,7 +6,7 @@
 use std::sync::Arc;
 
 use nalgebra::IsometryMatrix3;
-use numpy::{PyArrayDyn, PyArrayMethods};
+use numpy::PyArrayDyn;
 use pyo3::prelude::*;
 use pyo3::types::PyString;
 use ttkin::{Chain, Dh, DhConvention, JacobianFrame, JointType, Limits};
@@ -85,6 +85,7 @@ fn limits_column(chain: &Chain, f: impl Fn(&Limits) -> Option<f64>) -> Vec<f64> 
     chain.limits().iter().map(|l| f(l).unwrap_or(f64::INFINITY)).collect()
 }
 
+#[ttkin_py_guard::guarded]
 #[pymethods]
 impl PyRobot {
     /// Robot from DH parameters: one value per joint in each of `a` (m), `alpha` (rad), `d` (m) and
@@ -319,9 +320,7 @@ impl PyRobot {
             return filled_without_gil(py, &shape, |o| chain.fk_all_batch(qs, o));
         }
         let out = zeros(py, &shape);
-        chain
-            .fk_all_batch(qs, out.readwrite().as_slice_mut().expect("a fresh array is contiguous"))
-            .py()?;
+        crate::convert::fill_fresh(&out, |o| chain.fk_all_batch(qs, o).py())?;
         Ok(out)
     }
 

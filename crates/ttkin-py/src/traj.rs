@@ -3,7 +3,7 @@
 
 use nalgebra::Vector3;
 use numpy::ndarray::{Array2, ShapeBuilder};
-use numpy::{PyArray1, PyArray2, PyArrayDyn, PyArrayMethods};
+use numpy::{PyArray1, PyArray2, PyArrayDyn};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use ttkin::traj::cartesian::{CartesianState, CartesianTrajectory, TimeLaw};
@@ -82,6 +82,7 @@ pub struct PyJointTrajectory {
     inner: JointTrajectory,
 }
 
+#[ttkin_py_guard::guarded]
 #[pymethods]
 impl PyJointTrajectory {
     /// Duration (s).
@@ -104,15 +105,18 @@ impl PyJointTrajectory {
 
     /// (segments, dof, 6) coefficients in ascending powers of the local time τ = t − knot (s).
     #[getter]
-    fn coefficients<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+    fn coefficients<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let (k, n) = (self.inner.segments(), self.inner.dof());
         let mut flat = Vec::with_capacity(k * n * 6);
         for s in 0..k {
             for j in 0..n {
-                flat.extend_from_slice(&self.inner.coefficients(s, j).expect("in range"));
+                let c = self.inner.coefficients(s, j).ok_or_else(|| {
+                    crate::errors::InternalError::new_err(format!("coefficients: segment {s}, joint {j} out of range"))
+                })?;
+                flat.extend_from_slice(&c);
             }
         }
-        to_numpy(py, &[k, n, 6], &flat)
+        Ok(to_numpy(py, &[k, n, 6], &flat))
     }
 
     /// (q, qd, qdd) at time `t` (s): each (dof,) for a scalar t, (N, dof) for an array of N times.
@@ -120,17 +124,11 @@ impl PyJointTrajectory {
         let n = self.inner.dof();
         if let Ok(t) = t.extract::<f64>() {
             let (q, qd, qdd) = (zeros(py, &[n]), zeros(py, &[n]), zeros(py, &[n]));
-            {
-                let (mut a, mut b, mut c) = (q.readwrite(), qd.readwrite(), qdd.readwrite());
-                self.inner
-                    .sample(
-                        t,
-                        a.as_slice_mut().expect("fresh"),
-                        b.as_slice_mut().expect("fresh"),
-                        c.as_slice_mut().expect("fresh"),
-                    )
-                    .py()?;
-            }
+            crate::convert::fill_fresh(&q, |a| {
+                crate::convert::fill_fresh(&qd, |b| {
+                    crate::convert::fill_fresh(&qdd, |c| self.inner.sample(t, a, b, c).py())
+                })
+            })?;
             return Ok((q, qd, qdd).into_pyobject(py)?.into_any());
         }
         let times = any_vector(t, "t")?;
@@ -148,10 +146,7 @@ impl PyJointTrajectory {
     /// Jerk (rad/s³ or m/s³) at time `t` (s), (dof,).
     fn jerk<'py>(&self, py: Python<'py>, t: f64) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let out = zeros(py, &[self.inner.dof()]);
-        {
-            let mut w = out.readwrite();
-            self.inner.jerk(t, w.as_slice_mut().expect("fresh")).py()?;
-        }
+        crate::convert::fill_fresh(&out, |o| self.inner.jerk(t, o).py())?;
         Ok(out)
     }
 
@@ -212,16 +207,18 @@ fn sample_uniform<'py>(py: Python<'py>, traj: &JointTrajectory, n: usize) -> PyR
     let (mut t, mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; n * dof], vec![0.0; n * dof], vec![0.0; n * dof]);
     traj.sample_uniform_columns_into(&mut t, &mut q, &mut qd, &mut qdd)
         .py()?;
-    let matrix = |v: Vec<f64>| {
-        let a = Array2::from_shape_vec((n, dof).f(), v).expect("n × dof values");
-        PyArray2::from_owned_array(py, a)
+    let matrix = |v: Vec<f64>| -> PyResult<_> {
+        let a = Array2::from_shape_vec((n, dof).f(), v)
+            .map_err(|e| crate::errors::InternalError::new_err(format!("sample_uniform: {e}")))?;
+        Ok(PyArray2::from_owned_array(py, a))
     };
-    Ok((PyArray1::from_vec(py, t), matrix(q), matrix(qd), matrix(qdd))
+    Ok((PyArray1::from_vec(py, t), matrix(q)?, matrix(qd)?, matrix(qdd)?)
         .into_pyobject(py)?
         .into_any())
 }
 
 /// Cubic from q0 to q1 in `duration` s with boundary velocities v0, v1 (zero when None).
+#[ttkin_py_guard::guarded]
 #[pyfunction]
 #[pyo3(signature = (q0, q1, duration, v0=None, v1=None))]
 fn traj_cubic(
@@ -290,6 +287,7 @@ fn build_quintic(
 }
 
 /// Quintic from q0 to q1 in `duration` s with boundary velocities and accelerations (zero when None).
+#[ttkin_py_guard::guarded]
 #[pyfunction]
 #[pyo3(signature = (q0, q1, duration, v0=None, v1=None, a0=None, a1=None))]
 #[allow(clippy::too_many_arguments)]
@@ -308,6 +306,7 @@ fn traj_quintic(
 
 /// Builds a quintic and samples it at `n` evenly spaced times in one call: (t, q, qd, qdd), the
 /// last three (n, dof) in Fortran order.
+#[ttkin_py_guard::guarded]
 #[pyfunction]
 #[pyo3(signature = (q0, q1, duration, n=101, v0=None, v1=None, a0=None, a1=None))]
 #[allow(clippy::too_many_arguments)]
@@ -328,6 +327,7 @@ fn traj_quintic_samples<'py>(
 
 /// Trajectory through via points (m, n) at strictly increasing times (m,): kind "cubic" (C¹,
 /// heuristic or given velocities), "spline" (C², clamped end velocities) or "quintic" (C²).
+#[ttkin_py_guard::guarded]
 #[pyfunction]
 #[pyo3(signature = (points, times, kind="cubic", velocities=None, accelerations=None, v_start=None, v_end=None))]
 #[allow(clippy::too_many_arguments)]
@@ -378,6 +378,7 @@ fn traj_via(
 
 /// Minimal duration (s) of a rest-to-rest "cubic" or "quintic" from q0 to q1 under the robot's
 /// velocity and acceleration limits and optional jerk limits (closed form).
+#[ttkin_py_guard::guarded]
 #[pyfunction]
 #[pyo3(signature = (robot, q0, q1, kind="quintic", jerk=None))]
 fn traj_minimal_duration(
@@ -404,6 +405,7 @@ fn traj_minimal_duration(
 /// Hitting stroke: from (q, qd, qdd) reach (q_hit, qd_hit, qdd_hit) at t_hit s (or the earliest
 /// feasible time after it), then rest at `ready`. Limits: explicit velocity/acceleration/jerk
 /// arrays, or the robot's. Returns (trajectory, t_hit, return_duration, violations).
+#[ttkin_py_guard::guarded]
 #[pyfunction]
 #[pyo3(signature = (start, hit, t_hit, ready, velocity, acceleration, jerk, lower=None, upper=None, return_duration=None))]
 #[allow(clippy::too_many_arguments)]
@@ -493,6 +495,7 @@ fn state_to_py<'py>(py: Python<'py>, s: &CartesianState) -> PyResult<Bound<'py, 
         .into_any())
 }
 
+#[ttkin_py_guard::guarded]
 #[pymethods]
 impl PyCartesianTrajectory {
     /// Straight line from pose T0 to pose T1 (4×4) in `duration` s, slerp orientation.
