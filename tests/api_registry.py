@@ -10,7 +10,9 @@ default. :data:`API` lists every name once, with what the fuzzer needs beyond th
   ``N`` = batch size of the first array argument, ``None`` for one item);
 - ``may_be_inf``: the result may hold ±inf by definition (e.g. "inf where no limit");
 - ``receiver``: for methods, how to make the object (default: by class name, see the fuzzer);
-- ``args``: per-parameter strategy names overriding the by-name choice.
+- ``args``: per-parameter strategy names overriding the by-name choice;
+- ``type_error``: messages of TypeErrors the call documents for a wrong *set* of arguments;
+- ``skip_call``: why the entry is not called (a class without a Python constructor).
 
 ``test_registry_covers_the_public_api`` fails when a public callable is missing here.
 """
@@ -41,8 +43,8 @@ def _batched(*item):
 API: dict[str, dict] = {
     # --- package functions
     "task_line": {},
-    "track": {"args": {"task_trajectory": "task_trajectory"}},
-    "wls_step": {},
+    "track": {"args": {"task_trajectory": "task_trajectory", "base": "diffdrive_or_none"}},
+    "wls_step": {"args": {"base": "diffdrive_or_none"}},
     # --- Robot
     "Robot": {"skip_call": "Robot() has no constructor; the factories below make robots"},
     "Robot.builtin": {"args": {"name": "robot_name"}},
@@ -74,13 +76,14 @@ API: dict[str, dict] = {
     "Robot.kinetic_energy": {},
     "Robot.potential_energy": {},
     "Robot.ik": {},
-    "Robot.ik_all": {},
-    "Robot.ik_nearest": {},
+    "Robot.ik_all": {"args": {"limits": "flag"}},
+    "Robot.ik_nearest": {"args": {"limits": "flag"}},
     "Robot.joint_velocity": {"shape": _batched("n")},
     "Robot.joint_names": {},
     "Robot.joint_types": {},
     "Robot.masses": {},
     "Robot.n": {},
+    "Robot.dof": {},
     "Robot.name": {},
     "Robot.simulate": {},
     "Robot.task_coordinates": {},
@@ -100,6 +103,7 @@ API: dict[str, dict] = {
     "IkResult.orientation_error": {},
     "IkResult.iterations": {},
     "IkResult.restarts": {},
+    "IkResult.status": {},
     # --- DiffDrive
     "DiffDrive": {},
     "DiffDrive.body_velocity": {},
@@ -110,6 +114,7 @@ API: dict[str, dict] = {
     "DiffDrive.max_wheel_acceleration": {"may_be_inf": True},
     "DiffDrive.max_wheel_speed": {"may_be_inf": True},
     "DiffDrive.track": {},
+    "DiffDrive.track_width": {},
     "DiffDrive.wheel_radius": {},
     # --- TrackResult (made by track)
     "TrackResult": {"skip_call": "made by track only"},
@@ -124,6 +129,7 @@ API: dict[str, dict] = {
             "orientation_error",
             "position_error",
             "q",
+            "qd",
             "qdot",
             "scale",
             "sigma_min",
@@ -144,8 +150,10 @@ API: dict[str, dict] = {
     "motor.Load": {},
     "motor.Loops": {},
     "motor.Response": {"skip_call": "made by Servo.step_response only"},
-    "motor.Servo": {},
-    "motor.plot": {"args": {"path": "out_path"}},
+    "motor.Servo": {
+        "args": {"motor": "dc_motor", "gearbox": "gearbox", "load": "load", "drive": "drive", "loops": "loops"}
+    },
+    "motor.plot": {"args": {"path": "out_path", "response": "response"}},
     "motor.quintic": {},
     **{
         f"motor.{cls}.{a}": {}
@@ -193,21 +201,24 @@ API: dict[str, dict] = {
     # --- robots
     **{f"robots.{f}": {} for f in ("arm4", "gantry6", "mobile8", "mobile8_start", "ur5")},
     # --- traj
-    "traj.arc": {},
+    # arc's optional arguments come in documented combinations; a missing or mixed one is a
+    # TypeError, Python's answer to a wrong set of arguments
+    "traj.arc": {"type_error": ("duration is required", "give either")},
     "traj.cubic": {},
     "traj.line": {},
     "traj.minimal_duration": {},
     "traj.quintic": {},
     "traj.quintic_samples": {"args": {"n": "small_count"}},
-    "traj.stroke": {},
+    "traj.stroke": {"args": {"state": "state"}},
     "traj.via": {},
     "traj.CartesianTrajectory": {"skip_call": "made by traj.line / traj.arc only"},
     "traj.JointTrajectory": {"skip_call": "made by traj.cubic / quintic / via only"},
     "traj.Stroke": {"skip_call": "made by traj.stroke only"},
     **{
         f"traj.CartesianTrajectory.{a}": {}
-        for a in ("arc_about", "arc_through", "check_limits", "duration", "line", "sample", "sample_rate", "to_joint")
+        for a in ("arc_about", "arc_through", "check_limits", "duration", "line", "sample_rate", "to_joint")
     },
+    "traj.CartesianTrajectory.sample": {"args": {"t": "time"}},
     **{
         f"traj.JointTrajectory.{a}": {}
         for a in (
@@ -215,7 +226,6 @@ API: dict[str, dict] = {
             "coefficients",
             "dof",
             "duration",
-            "jerk",
             "knots",
             "peaks",
             "sample",
@@ -223,6 +233,7 @@ API: dict[str, dict] = {
             "sample_uniform",
         )
     },
+    "traj.JointTrajectory.jerk": {"args": {"t": "time"}},
     "traj.Stroke.feasible": {},
     "traj.Stroke.on_time": {},
 }

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._ttmanip import TorqueProfile
+from ._ttmanip import ShapeError, TorqueProfile
 
 __all__ = ["EARTH_GRAVITY", "MOBILE8_GRAVITY", "TorqueProfile", "gantry6_example", "torque_figure"]
 
@@ -46,6 +46,11 @@ def torque_figure(robot, t, profile: TorqueProfile, path) -> None:
 
     t = np.asarray(t, dtype=float)
     n = robot.dof
+    if t.shape != (profile.joint.shape[0],) or profile.joint.shape[1] != n:
+        raise ShapeError(
+            f"t: expected shape ({profile.joint.shape[0]},) matching the profile of "
+            f"{profile.joint.shape[1]} joints for this {n}-joint robot, got {t.shape}"
+        )
     fig, axes = plt.subplots(n, 2, figsize=(10, 1.8 * n), sharex=True, squeeze=False)
     limits = robot.effort_limits
     for i, name in enumerate(robot.joint_names):

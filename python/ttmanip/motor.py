@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ._ttmanip import ServoSim
+from ._ttmanip import ServoSim, TtmanipError
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -145,7 +145,9 @@ class Response:
 def quintic(distance: float, duration: float, rate_hz: float, start: float = 0.0):
     """Rest-to-rest quintic sampled at ``rate_hz``: arrays (t, q, qd, qdd) in s, rad, rad/s, rad/s²."""
     if not (duration > 0 and rate_hz > 0 and np.isfinite(distance) and np.isfinite(start)):
-        raise ValueError("quintic: need finite distance and start, duration > 0 and rate_hz > 0")
+        raise TtmanipError("quintic: need finite distance and start, duration > 0 and rate_hz > 0")
+    if not duration * rate_hz <= 1e8:
+        raise TtmanipError(f"quintic: duration × rate_hz = {duration * rate_hz:.3g} samples, at most 1e8")
     t = np.arange(int(round(duration * rate_hz)) + 1) / rate_hz
     s = np.clip(t / duration, 0.0, 1.0)
     q = start + distance * s**3 * (10 - 15 * s + 6 * s**2)

@@ -22,6 +22,21 @@ pub fn unsigned<T: TryFrom<i128>>(v: i128, what: &str) -> PyResult<T> {
     })
 }
 
+/// Most samples one call may ask for (10⁸: 800 MB per float64 column); more is refused rather
+/// than left to fail the allocation, which aborts the process.
+pub const MAX_SAMPLES: usize = 100_000_000;
+
+/// A sample count (`n`, `samples`): an integer in 0..=[`MAX_SAMPLES`], named in the error.
+pub fn sample_count(v: i128, what: &str) -> PyResult<usize> {
+    let n: usize = unsigned(v, what)?;
+    if n > MAX_SAMPLES {
+        return Err(TtmanipError::new_err(format!(
+            "{what}: at most {MAX_SAMPLES} samples per call, got {n}"
+        )));
+    }
+    Ok(n)
+}
+
 /// A finite float argument.
 pub fn finite(what: &str, v: f64) -> PyResult<f64> {
     if v.is_finite() {

@@ -541,19 +541,11 @@ impl PyRobot {
             column(viscous, "viscous")?,
             column(coulomb, "coulomb")?,
         );
-        let kt = match torque_constant {
-            None => None,
-            Some(o) => {
-                let a = f64_array(o, "torque_constant")?;
-                if a.shape() != [n] {
-                    return Err(ShapeError::new_err(format!(
-                        "torque_constant: expected shape ({n},), got {}",
-                        a.shape_str()
-                    )));
-                }
-                Some(a.data().to_vec())
-            }
-        };
+        // NaN: unknown; otherwise finite and > 0, errors named torque_constant[i] (issue 14)
+        let kt = torque_constant
+            .map(|o| crate::args::positive_or_nan_vector(o, "torque_constant", n))
+            .transpose()?
+            .map(|v| v.into_iter().map(|k| k.unwrap_or(f64::NAN)).collect::<Vec<f64>>());
         let drives = ttkin::tables::DriveColumns {
             gear_ratio: &g,
             rotor_inertia: j.as_deref(),

@@ -336,8 +336,9 @@ impl PyServoSim {
         amplitude: f64,
         duration: f64,
         external_torque: f64,
-        seed: u64,
+        seed: i128,
     ) -> PyResult<Bound<'py, PyDict>> {
+        let seed: u64 = crate::args::unsigned(seed, "seed")?; // not PyO3's OverflowError (issue 14)
         let mode = mode_from_str(kind)?;
         let amplitude = finite("amplitude", amplitude)?;
         let external_torque = finite("external_torque", external_torque)?;
@@ -374,8 +375,9 @@ impl PyServoSim {
         qdd: &Bound<'py, PyAny>,
         settle: f64,
         external_torque: f64,
-        seed: u64,
+        seed: i128,
     ) -> PyResult<Bound<'py, PyDict>> {
+        let seed: u64 = crate::args::unsigned(seed, "seed")?; // not PyO3's OverflowError (issue 14)
         let read = |a: &Bound<'py, PyAny>, what: &str| -> PyResult<Vec<f64>> {
             let arr = f64_array(a, what)?;
             match arr.shape() {

@@ -159,8 +159,8 @@ impl PyJointTrajectory {
 
     /// (t, q, qd, qdd) at `n` ≥ 2 evenly spaced times from 0 to the duration; q, qd, qdd are
     /// (n, dof) arrays in Fortran order.
-    fn sample_uniform<'py>(&self, py: Python<'py>, n: usize) -> PyResult<Bound<'py, PyAny>> {
-        sample_uniform(py, &self.inner, n)
+    fn sample_uniform<'py>(&self, py: Python<'py>, n: i128) -> PyResult<Bound<'py, PyAny>> {
+        sample_uniform(py, &self.inner, crate::args::sample_count(n, "n")?)
     }
 
     /// Exact peaks of velocity (order 1), acceleration (2) or jerk (3): (values, times), each
@@ -315,14 +315,14 @@ fn traj_quintic_samples<'py>(
     q0: &Bound<'py, PyAny>,
     q1: &Bound<'py, PyAny>,
     duration: f64,
-    n: usize,
+    n: i128,
     v0: Option<&Bound<'py, PyAny>>,
     v1: Option<&Bound<'py, PyAny>>,
     a0: Option<&Bound<'py, PyAny>>,
     a1: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let traj = build_quintic(q0, q1, duration, QuinticArgs { v0, v1, a0, a1 })?;
-    sample_uniform(py, &traj, n)
+    sample_uniform(py, &traj, crate::args::sample_count(n, "n")?)
 }
 
 /// Trajectory through via points (m, n) at strictly increasing times (m,): kind "cubic" (C¹,
