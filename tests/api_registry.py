@@ -12,6 +12,7 @@ default. :data:`API` lists every name once, with what the fuzzer needs beyond th
 - ``receiver``: for methods, how to make the object (default: by class name, see the fuzzer);
 - ``args``: per-parameter strategy names overriding the by-name choice;
 - ``type_error``: messages of TypeErrors the call documents for a wrong *set* of arguments;
+- ``os_error``: the call writes a file; an unwritable path is an ``OSError`` (Python's file error);
 - ``skip_call``: why the entry is not called (a class without a Python constructor).
 
 ``test_registry_covers_the_public_api`` fails when a public callable is missing here.
@@ -142,7 +143,7 @@ API: dict[str, dict] = {
     "dynamics.TorqueProfile": {"skip_call": "made by Robot.torques only"},
     **{f"dynamics.TorqueProfile.{a}": {} for a in ("current", "joint", "motor", "peak", "violations", "within_limits")},
     "dynamics.gantry6_example": {"args": {"samples": "small_count"}},
-    "dynamics.torque_figure": {"args": {"path": "out_path", "profile": "torque_profile"}},
+    "dynamics.torque_figure": {"args": {"path": "out_path", "profile": "torque_profile"}, "os_error": True},
     # --- motor
     "motor.DcMotor": {},
     "motor.Drive": {},
@@ -153,7 +154,7 @@ API: dict[str, dict] = {
     "motor.Servo": {
         "args": {"motor": "dc_motor", "gearbox": "gearbox", "load": "load", "drive": "drive", "loops": "loops"}
     },
-    "motor.plot": {"args": {"path": "out_path", "response": "response"}},
+    "motor.plot": {"args": {"path": "out_path", "response": "response"}, "os_error": True},
     "motor.quintic": {},
     **{
         f"motor.{cls}.{a}": {}
@@ -193,11 +194,13 @@ API: dict[str, dict] = {
                 "speed_window",
                 "velocity_feedforward",
             ),
-            "Response": ("overshoot", "rise_time"),
+            "Response": (),
             "Servo": ("params", "rates", "step_response", "track", "track_quintic", "tuning"),
         }.items()
         for a in attrs
     },
+    "motor.Response.overshoot": {"args": {"target": "time"}},
+    "motor.Response.rise_time": {"args": {"target": "time"}, "may_be_inf": True},  # inf: never rises
     # --- robots
     **{f"robots.{f}": {} for f in ("arm4", "gantry6", "mobile8", "mobile8_start", "ur5")},
     # --- traj

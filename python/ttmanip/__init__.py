@@ -22,9 +22,12 @@ from ._ttmanip import (
     TtmanipError,
     UnreachableError,
 )
+from ._ttmanip import InternalError, NumericalError  # issue 14: overflow, caught panics
 from .mobile import DiffDrive, TrackResult, task_line, track, wls_step
 
 __all__ = [
+    "InternalError",
+    "NumericalError",
     "DiffDrive",
     "IkResult",
     "ModelError",

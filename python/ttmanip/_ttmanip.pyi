@@ -33,6 +33,12 @@ class SingularError(TtmanipError):
 class NotConvergedError(TtmanipError):
     """A solver stopped before converging; the target may still be reachable."""
 
+class NumericalError(TtmanipError):
+    """A computation on finite inputs gave a non-finite result (overflow)."""
+
+class InternalError(TtmanipError):
+    """A bug inside ttmanip (a Rust panic caught at the boundary); please report it."""
+
 class Robot:
     """A serial robot arm: joints from base to tool (m, rad, s). Immutable."""
 

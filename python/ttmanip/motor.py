@@ -131,7 +131,7 @@ class Response:
 
     def rise_time(self, signal: str, target: float) -> float:
         """10 %–90 % rise time of ``signal`` (a field name) towards ``target``, s (inf if never)."""
-        y = getattr(self, signal) / target
+        y = getattr(self, signal) / _target(target)
         above10, above90 = np.flatnonzero(y >= 0.1), np.flatnonzero(y >= 0.9)
         if len(above10) == 0 or len(above90) == 0:
             return float("inf")
@@ -139,7 +139,14 @@ class Response:
 
     def overshoot(self, signal: str, target: float) -> float:
         """Largest excursion of ``signal`` beyond ``target``, as a fraction of ``target``."""
-        return float(np.max(getattr(self, signal)) / target - 1.0)
+        return float(np.max(getattr(self, signal)) / _target(target) - 1.0)
+
+
+def _target(target: float) -> float:
+    """A step target: finite and non-zero (the ratios above divide by it)."""
+    if not (np.isfinite(target) and target != 0.0):
+        raise TtmanipError(f"target: expected a finite, non-zero value, got {target}")
+    return float(target)
 
 
 def quintic(distance: float, duration: float, rate_hz: float, start: float = 0.0):

@@ -88,6 +88,25 @@ impl<'a> WlsStep<'a> {
         self.model.check_q("q", q)?;
         crate::error::check_vector("xdot", xdot, self.task.dim())?;
         crate::error::check_vector("qdot_prev", previous, self.model.nu())?;
+        if self.weighting == Weighting::ChanDubey {
+            // H of Chan & Dubey (1995) is defined inside the limits only; outside, its gradient
+            // changes sign and the weights steer the step anywhere (issue 14: a silent residual).
+            for (k, &(lo, hi)) in self.limits.iter().enumerate() {
+                if let Some(c) = self.model.input_coordinate(k) {
+                    if !(lo..=hi).contains(&q[c]) {
+                        return Err(Error::invalid(
+                            "q",
+                            format!(
+                                "q[{c}] = {} is outside its joint limits [{lo}, {hi}]: the Chan–Dubey \
+                                 joint-limit weights are undefined there; start inside the limits or use \
+                                 weights='none'",
+                                q[c]
+                            ),
+                        ));
+                    }
+                }
+            }
+        }
         let undamped = self.solver.damping().lambda_max == 0.0;
         let (qd, rep) = self.solve(q, xdot, previous);
         if qd.iter().any(|v| !v.is_finite()) || (undamped && rep.sigma_min < SINGULAR_SIGMA) {
