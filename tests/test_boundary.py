@@ -275,6 +275,7 @@ def test_float32_tolerance_is_not_a_blank_cheque():
         (lambda: G6.forward_dynamics(np.zeros((0, 6)), np.zeros((0, 6)), np.zeros((0, 6))), (0, 6)),
         (lambda: G6.ik(np.zeros((0, 4, 4))).q, (0, 6)),
         (lambda: G6.ik_all(np.zeros((0, 4, 4)))[0], (0, 4, 6)),
+        (lambda: ttmanip.traj.cubic(np.zeros(6), np.ones(6), 1.0).sample(np.zeros(0))[0], (0, 6)),
     ],
 )
 def test_an_empty_batch_gives_an_empty_result(call, shape):

@@ -30,6 +30,21 @@ fn any_vector(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f64>> {
     }
 }
 
+/// Reads a batch of N ≥ 0 finite values (N = 0: an empty batch, an empty result).
+fn batch_vector(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f64>> {
+    let a = f64_array(obj, what)?;
+    match a.shape() {
+        [_] => {
+            ttkin::error::check_finite(what, a.data()).py()?;
+            Ok(a.data().to_vec())
+        }
+        _ => Err(ShapeError::new_err(format!(
+            "{what}: expected shape (N,), got {}",
+            a.shape_str()
+        ))),
+    }
+}
+
 fn opt_vector(obj: Option<&Bound<'_, PyAny>>, what: &str, n: usize) -> PyResult<Option<Vec<f64>>> {
     obj.map(|o| vector(o, what, n)).transpose()
 }
@@ -131,7 +146,7 @@ impl PyJointTrajectory {
             })?;
             return Ok((q, qd, qdd).into_pyobject(py)?.into_any());
         }
-        let times = any_vector(t, "t")?;
+        let times = batch_vector(t, "t")?;
         let s = self.inner.sample_times(&times).py()?;
         let m = times.len();
         Ok((
