@@ -131,7 +131,7 @@ class Response:
 
     def rise_time(self, signal: str, target: float) -> float:
         """10 %–90 % rise time of ``signal`` (a field name) towards ``target``, s (inf if never)."""
-        y = getattr(self, signal) / _target(target)
+        y = self._signal(signal) / _target(target)
         above10, above90 = np.flatnonzero(y >= 0.1), np.flatnonzero(y >= 0.9)
         if len(above10) == 0 or len(above90) == 0:
             return float("inf")
@@ -139,7 +139,14 @@ class Response:
 
     def overshoot(self, signal: str, target: float) -> float:
         """Largest excursion of ``signal`` beyond ``target``, as a fraction of ``target``."""
-        return float(np.max(getattr(self, signal)) / _target(target) - 1.0)
+        return float(np.max(self._signal(signal)) / _target(target) - 1.0)
+
+    def _signal(self, signal: str) -> np.ndarray:
+        """The array field named ``signal``; another name is a TtmanipError listing the fields."""
+        fields = [f for f, v in vars(self).items() if isinstance(v, np.ndarray) and v.dtype.kind == "f"]
+        if signal not in fields:
+            raise TtmanipError(f"signal: expected one of {', '.join(fields)}, got {signal!r}")
+        return getattr(self, signal)
 
 
 def _target(target: float) -> float:
