@@ -56,7 +56,10 @@ def run_child(pythonpath: str | None) -> dict[str, float]:
     env = dict(os.environ)
     if pythonpath:
         env["PYTHONPATH"] = pythonpath
-    code = f"import sys; sys.path.insert(0, {HERE!r}); import bench_boundary, json; print(json.dumps(bench_boundary.measure()))"
+    code = (
+        f"import sys; sys.path.insert(0, {HERE!r}); import bench_boundary, json; "
+        "print(json.dumps(bench_boundary.measure()))"
+    )
     res = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
     return json.loads(res.stdout.strip().splitlines()[-1])
 

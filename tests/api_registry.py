@@ -141,7 +141,10 @@ API: dict[str, dict] = {
     },
     # --- dynamics
     "dynamics.TorqueProfile": {"skip_call": "made by Robot.torques only"},
-    **{f"dynamics.TorqueProfile.{a}": {} for a in ("current", "joint", "motor", "peak", "violations", "within_limits")},
+    **{
+        f"dynamics.TorqueProfile.{a}": {}
+        for a in ("current", "joint", "motor", "peak", "violations", "within_limits")
+    },
     "dynamics.gantry6_example": {"args": {"samples": "small_count"}},
     "dynamics.torque_figure": {"args": {"path": "out_path", "profile": "torque_profile"}, "os_error": True},
     # --- motor
@@ -152,7 +155,13 @@ API: dict[str, dict] = {
     "motor.Loops": {},
     "motor.Response": {"skip_call": "made by Servo.step_response only"},
     "motor.Servo": {
-        "args": {"motor": "dc_motor", "gearbox": "gearbox", "load": "load", "drive": "drive", "loops": "loops"}
+        "args": {
+            "motor": "dc_motor",
+            "gearbox": "gearbox",
+            "load": "load",
+            "drive": "drive",
+            "loops": "loops",
+        }
     },
     "motor.plot": {"args": {"path": "out_path", "response": "response"}, "os_error": True},
     "motor.quintic": {},

@@ -82,7 +82,18 @@ class Draw:
         """The same values handed over in a random memory layout, dtype or container."""
         how = self(
             st.sampled_from(
-                ["plain", "plain", "unaligned", "swapped", "strided", "fortran", "readonly", "float32", "int", "list"]
+                [
+                    "plain",
+                    "plain",
+                    "unaligned",
+                    "swapped",
+                    "strided",
+                    "fortran",
+                    "readonly",
+                    "float32",
+                    "int",
+                    "list",
+                ]
             )
         )
         if how == "unaligned":
@@ -125,7 +136,7 @@ class Draw:
 # ---------------------------------------------------------------- receivers and fixtures
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def robot(name: str) -> ttmanip.Robot:
     return ttmanip.Robot.builtin(name)
 
@@ -147,7 +158,7 @@ def poses(d: Draw, r: ttmanip.Robot):
     return d.array([(4, 4), (2, 4, 4), (0, 4, 4)])
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def sample_objects() -> dict[str, object]:
     """One object of each public class that the API makes (receivers of methods)."""
     m8, g6 = robot("mobile8"), robot("gantry6")
@@ -173,7 +184,9 @@ def sample_objects() -> dict[str, object]:
         "motor.Response": servo.step_response("position", 0.01, 0.05),
         "traj.JointTrajectory": ttmanip.traj.cubic(np.zeros(n), qg, 0.5),
         "traj.CartesianTrajectory": ttmanip.traj.line(g6.fk(np.zeros(n)), g6.fk(qg), 0.5),
-        "traj.Stroke": ttmanip.traj.stroke(None, (qg, np.zeros(n), np.zeros(n)), qg + 0.1, np.zeros(n), 0.6, qg),
+        "traj.Stroke": ttmanip.traj.stroke(
+            None, (qg, np.zeros(n), np.zeros(n)), qg + 0.1, np.zeros(n), 0.6, qg
+        ),
     }
 
 
@@ -335,7 +348,11 @@ def parameters(fn) -> list[inspect.Parameter]:
         sig = inspect.signature(fn)
     except (TypeError, ValueError):
         return []
-    return [p for p in sig.parameters.values() if p.name != "self" and p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)]
+    return [
+        p
+        for p in sig.parameters.values()
+        if p.name != "self" and p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)
+    ]
 
 
 def resolve(key: str):
@@ -411,7 +428,9 @@ def run_one(d: Draw, key: str, obj):
             return  # an unwritable output path (see the registry)
         if isinstance(e, TypeError) and any(m in str(e) for m in spec.get("type_error", ())):
             return  # a documented TypeError (see the registry)
-        raise AssertionError(f"{key}({args!r}, {kwargs!r}) raised {type(e).__module__}.{type(e).__name__}: {e}") from e
+        raise AssertionError(
+            f"{key}({args!r}, {kwargs!r}) raised {type(e).__module__}.{type(e).__name__}: {e}"
+        ) from e
     check(key, result, d, kwargs, ctx)
 
 

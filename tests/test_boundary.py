@@ -71,10 +71,23 @@ CALLS = {
     "kinetic_energy": lambda f: G6.kinetic_energy(f(Q6), f(Q6)),
     "potential_energy": lambda f: G6.potential_energy(f(Q6)),
     "DiffDrive.body_velocity": lambda f: ttmanip.DiffDrive(0.1, 0.5).body_velocity(f([1.0, 2.0])),
-    "DiffDrive.integrate": lambda f: ttmanip.DiffDrive(0.1, 0.5).integrate(f([0.0, 0.0, 0.1]), f([1.0, 2.0]), 0.1),
+    "DiffDrive.integrate": lambda f: ttmanip.DiffDrive(0.1, 0.5).integrate(
+        f([0.0, 0.0, 0.1]), f([1.0, 2.0]), 0.1
+    ),
     "wls_step": lambda f: ttmanip.wls_step(M8, f(Q8), f(np.full(5, 0.01))),
     "task_line": lambda f: ttmanip.task_line(f(np.zeros(5)), f(np.full(5, 0.1)), 0.1, rate_hz=100.0),
-    "track": lambda f: ttmanip.track(M8, f(Q8), f(ttmanip.task_line(M8.task_coordinates(Q8), M8.task_coordinates(Q8) + 0.01, 0.05, rate_hz=200.0)[0]), rate_hz=200.0).q,
+    "track": lambda f: (
+        ttmanip.track(
+            M8,
+            f(Q8),
+            f(
+                ttmanip.task_line(
+                    M8.task_coordinates(Q8), M8.task_coordinates(Q8) + 0.01, 0.05, rate_hz=200.0
+                )[0]
+            ),
+            rate_hz=200.0,
+        ).q
+    ),
 }
 
 
@@ -105,7 +118,9 @@ def test_the_issue_reproduction_no_longer_panics():
 def test_float32_and_int_inputs_equal_their_float64_values():
     q32 = Q6.astype(np.float32)
     np.testing.assert_array_equal(G6.fk(q32), G6.fk(q32.astype(np.float64)))
-    np.testing.assert_array_equal(G6.jacobian(np.array([0, 0, 1, 1, 0, 0])), G6.jacobian(np.array([0.0, 0, 1, 1, 0, 0])))
+    np.testing.assert_array_equal(
+        G6.jacobian(np.array([0, 0, 1, 1, 0, 0])), G6.jacobian(np.array([0.0, 0, 1, 1, 0, 0]))
+    )
 
 
 def test_a_panic_becomes_internal_error_not_panic_exception():
@@ -124,7 +139,9 @@ def test_every_binding_block_is_guarded():
         lines = path.read_text().splitlines()
         for i, line in enumerate(lines):
             if line.strip() in ("#[pymethods]", "#[pyfunction]"):
-                assert lines[i - 1].strip() == "#[ttkin_py_guard::guarded]", f"{path.name}:{i + 1} not guarded"
+                assert lines[i - 1].strip() == "#[ttkin_py_guard::guarded]", (
+                    f"{path.name}:{i + 1} not guarded"
+                )
 
 
 # ---------------------------------------------------------------- unreachable: a status
@@ -172,7 +189,15 @@ def test_ik_all_batch_uses_the_hint():
         G6.ik_all(np.array([t, t]), hint=np.full(6, np.nan))
 
 
-@pytest.mark.parametrize("kw", [{"threshold": np.inf}, {"max_damping": np.inf}, {"threshold": np.inf, "max_damping": np.inf}, {"max_damping": -1.0}])
+@pytest.mark.parametrize(
+    "kw",
+    [
+        {"threshold": np.inf},
+        {"max_damping": np.inf},
+        {"threshold": np.inf, "max_damping": np.inf},
+        {"max_damping": -1.0},
+    ],
+)
 def test_joint_velocity_refuses_meaningless_thresholds(kw):
     name = next(iter(kw))
     with pytest.raises(ttmanip.TtmanipError, match=name):
@@ -291,7 +316,10 @@ def test_a_urdf_whose_joints_form_a_loop_is_refused():
         '<limit lower="-1" upper="1" effort="1" velocity="1"/></joint>'
     )
     text = (
-        '<robot name="r"><link name="a"/><link name="b"/>' + joint.format("ab", "a", "b") + joint.format("ba", "b", "a") + "</robot>"
+        '<robot name="r"><link name="a"/><link name="b"/>'
+        + joint.format("ab", "a", "b")
+        + joint.format("ba", "b", "a")
+        + "</robot>"
     )
     with pytest.raises(ttmanip.RobotFileError, match="loop"):
         ttmanip.Robot.from_urdf_string(text, "a", "b")

@@ -10,11 +10,13 @@ seconds; poses are 4×4 homogeneous matrices in the robot's base frame.
 """
 
 from . import dynamics, motor, robots, traj
-from ._ttmanip import (
+from ._ttmanip import (  # issue 14: overflow, caught panics
     IkResult,
+    InternalError,
     ModelError,
     NonFiniteError,
     NotConvergedError,
+    NumericalError,
     Robot,
     RobotFileError,
     ShapeError,
@@ -22,7 +24,6 @@ from ._ttmanip import (
     TtmanipError,
     UnreachableError,
 )
-from ._ttmanip import InternalError, NumericalError  # issue 14: overflow, caught panics
 from .mobile import DiffDrive, TrackResult, task_line, track, wls_step
 
 __all__ = [
