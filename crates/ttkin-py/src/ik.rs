@@ -3,7 +3,7 @@
 //! Conversion only: the maths is `ttkin::ik`. Batches over (N, 4, 4) run without the GIL.
 
 use nalgebra::IsometryMatrix3;
-use numpy::{PyArray1, PyArrayDyn, PyArrayMethods};
+use numpy::{PyArray1, PyArrayDyn};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use ttkin::ik::batch::{analytic_for, time_budget as time_budget_from};
@@ -227,42 +227,17 @@ impl PyRobot {
                 let out = zeros(py, &[count, MAX_BRANCHES, n]);
                 let mut counts = vec![0usize; count];
                 let hint = hint.map(|h| vector(h, "hint", n)).transpose()?;
-                {
-                    let mut w = out
-                        .try_readwrite()
-                        .map_err(|e| crate::errors::InternalError::new_err(e.to_string()))?;
-                    let o = w
-                        .as_slice_mut()
-                        .map_err(|e| crate::errors::InternalError::new_err(e.to_string()))?;
-                    let f64_input = a.precision() <= f64::EPSILON;
-                    if hint.is_none() && f64_input {
+                crate::convert::fill_fresh(&out, |o| {
+                    if hint.is_none() && a.precision() <= f64::EPSILON {
                         let data = a.data();
-                        py.detach(|| ik.solve_batch(data, filter, o, &mut counts)).py()?;
+                        py.detach(|| ik.solve_batch(data, filter, o, &mut counts)).py()
                     } else {
-                        // A hint (θ3 on the gantry's s45 = 0 family) or a float32 batch (rigid
-                        // to its own precision, re-orthonormalised): pose by pose; an unreachable
-                        // pose gives 0 branches and NaN rows, as in the batch solver.
+                        // a hint, or poses rigid to a coarser dtype's precision (float32)
                         let (targets, _) = crate::convert::transforms(T, "T")?;
                         let h = hint.as_deref();
-                        o.fill(f64::NAN);
-                        py.detach(|| -> ttkin::Result<()> {
-                            for (i, t) in targets.iter().enumerate() {
-                                let sols = match ik.solve(t, h, filter) {
-                                    Ok(sols) => sols,
-                                    Err(ttkin::Error::Unreachable(_)) => ttkin::ik::Solutions::empty(n),
-                                    Err(e) => return Err(e),
-                                };
-                                counts[i] = sols.len().min(MAX_BRANCHES);
-                                let row = &mut o[i * MAX_BRANCHES * n..(i + 1) * MAX_BRANCHES * n];
-                                for (dst, q) in row.chunks_exact_mut(n).zip(sols.iter()) {
-                                    dst.copy_from_slice(q);
-                                }
-                            }
-                            Ok(())
-                        })
-                        .py()?;
+                        py.detach(|| ik.solve_poses(&targets, h, filter, o, &mut counts)).py()
                     }
-                }
+                })?;
                 let counts = PyArray1::from_vec(py, counts.into_iter().map(|c| c as i64).collect());
                 Ok((out, counts).into_pyobject(py)?.into_any())
             }

@@ -248,6 +248,49 @@ impl Analytic {
         Ok(sols.nearest(current, info, filter))
     }
 
+    /// Batch of [`Analytic::solve`] over poses already read as rigid transforms (e.g. float32 data
+    /// accepted to its own precision), in parallel, with an optional `hint` (n,) for every pose
+    /// (θ3 on the gantry's s45 = 0 family). Outputs as in [`Analytic::solve_batch`]; an unreachable
+    /// pose gives 0 branches and NaN rows.
+    pub fn solve_poses(
+        &self,
+        targets: &[IsometryMatrix3<f64>],
+        hint: Option<&[f64]>,
+        filter: LimitFilter,
+        out: &mut [f64],
+        counts: &mut [usize],
+    ) -> Result<()> {
+        let n = self.dof();
+        if let Some(h) = hint {
+            crate::error::check_vector("hint", h, n)?;
+        }
+        let count = targets.len();
+        if out.len() != count * MAX_BRANCHES * n || counts.len() != count {
+            return Err(Error::shape(
+                "output buffers",
+                format!("{} and {count} values", count * MAX_BRANCHES * n),
+                format!("{} and {}", out.len(), counts.len()),
+            ));
+        }
+        out.par_chunks_mut(MAX_BRANCHES * n.max(1))
+            .zip(counts.par_iter_mut())
+            .zip(targets.par_iter())
+            .try_for_each(|((oi, ci), pose)| {
+                oi.fill(f64::NAN);
+                *ci = match self.solve(pose, hint, filter) {
+                    Ok(sols) => {
+                        for (dst, q) in oi.chunks_exact_mut(n).zip(sols.iter()) {
+                            dst.copy_from_slice(q);
+                        }
+                        sols.len()
+                    }
+                    Err(Error::Unreachable(_)) => 0,
+                    Err(e) => return Err(e),
+                };
+                Ok(())
+            })
+    }
+
     /// Batch of [`Analytic::solve`] in parallel: `targets` holds N row-major 4×4 tool poses (N × 16),
     /// `out` receives N × [`MAX_BRANCHES`] × n joint values (NaN past each pose's branch count) and
     /// `counts` the N branch counts, 0 for an unreachable pose. A non-rigid or non-finite matrix is
