@@ -232,6 +232,10 @@ def out_path(d: Draw, _ctx):
     return d(st.sampled_from([None, os.path.join(TMP, "out.png"), "/nonexistent-dir/out.png"]))
 
 
+def out_path_required(d: Draw, _ctx):
+    return d(st.sampled_from([os.path.join(TMP, "out.png"), "/nonexistent-dir/out.png"]))
+
+
 def task_trajectory(d: Draw, ctx):
     """(N, dim) task samples: a short line near the start pose of mobile8 or random values."""
     if d(st.booleans()):
@@ -280,6 +284,7 @@ SPECIAL_STRATEGIES = {
     "response": lambda d, _ctx: sample_objects()["motor.Response"],
     "small_count": small_count,
     "out_path": out_path,
+    "out_path_required": out_path_required,
     "task_trajectory": task_trajectory,
     "torque_profile": torque_profile,
     "robot_name": lambda d, ctx: d(st.sampled_from(CHOICES["robot_name"])),

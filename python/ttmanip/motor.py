@@ -144,7 +144,7 @@ class Response:
     def _signal(self, signal: str) -> np.ndarray:
         """The array field named ``signal``; another name is a TtmanipError listing the fields."""
         fields = [f for f, v in vars(self).items() if isinstance(v, np.ndarray) and v.dtype.kind == "f"]
-        if signal not in fields:
+        if not isinstance(signal, str) or signal not in fields:
             raise TtmanipError(f"signal: expected one of {', '.join(fields)}, got {signal!r}")
         return getattr(self, signal)
 
