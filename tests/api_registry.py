@@ -146,7 +146,10 @@ API: dict[str, dict] = {
         for a in ("current", "joint", "motor", "peak", "violations", "within_limits")
     },
     "dynamics.gantry6_example": {"args": {"samples": "small_count"}},
-    "dynamics.torque_figure": {"args": {"path": "out_path_required", "profile": "torque_profile"}, "os_error": True},
+    "dynamics.torque_figure": {
+        "args": {"path": "out_path_required", "profile": "torque_profile"},
+        "os_error": True,
+    },
     # --- motor
     "motor.DcMotor": {},
     "motor.Drive": {},
