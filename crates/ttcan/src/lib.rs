@@ -12,6 +12,7 @@
 #![warn(missing_docs)]
 
 pub mod axis;
+pub mod cases;
 pub mod error;
 pub mod loops;
 pub mod motor;
