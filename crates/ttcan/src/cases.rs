@@ -14,7 +14,10 @@ use ttkin::traj::limits::KinematicLimits;
 use ttkin::traj::{stroke::stroke, JointState, JointTrajectory};
 use ttkin::{Chain, Dynamics, DynamicsData};
 
+use crate::axis::{AxisConfig, Mode};
 use crate::error::{Error, Result};
+use crate::motor::{Load, MotorModel};
+use crate::sim::{Simulation, Trace};
 
 /// The gantry6 demo stroke: the planned joint trajectory (m, rad) and its hit time (s).
 #[derive(Debug, Clone)]
@@ -84,4 +87,116 @@ pub fn mean_joint_inertia(chain: &Chain, trajectory: &JointTrajectory, joint: us
         sum += m[(joint, joint)] - if with_armature { 0.0 } else { dynamics.armature()[joint] };
     }
     Ok(sum / samples as f64)
+}
+
+/// What the θ5 case measures.
+#[derive(Debug, Clone)]
+pub struct Theta5Case {
+    /// Load inertia about θ5 used (mean M₄₄ along the stroke, armature of gantry6's own θ5 drive
+    /// included, as in the issue), kg·m².
+    pub load_inertia: f64,
+    /// Rate at which the position setpoints reach the drive, Hz.
+    pub setpoint_hz: f64,
+    /// RMS(i − i_ref) over the run, A.
+    pub current_ripple_rms: f64,
+    /// RMS(i − i_needed) over the run, A: i_needed = the current the reference motion needs
+    /// (inertia × acceleration plus friction of the model, through k_t and the gear).
+    pub current_error_rms: f64,
+    /// Largest |q_ref(t) − q(t)| of the true joint against the reference trajectory at the
+    /// setpoint instants, rad.
+    pub max_following_error: f64,
+    /// The recorded run (one sample per current-loop period).
+    pub trace: Trace,
+    /// The current the motion needs at each sample, A.
+    pub current_needed: Vec<f64>,
+}
+
+/// Runs the θ5 case with setpoints arriving at `setpoint_hz` (a divisor of the speed-loop rate;
+/// the position-loop rate gives the demo's case) with the default axis configuration of the
+/// RE 25 + GP 26 A 14:1 actuator carrying the θ5 load.
+pub fn theta5_case(setpoint_hz: f64) -> Result<Theta5Case> {
+    theta5_case_with(setpoint_hz, |_| {})
+}
+
+/// [`theta5_case`] with the axis configuration changed by `tune` first.
+pub fn theta5_case_with(setpoint_hz: f64, tune: impl FnOnce(&mut AxisConfig)) -> Result<Theta5Case> {
+    let chain = ttkin::robots::gantry6();
+    let s = gantry6_demo_stroke(&chain)?;
+    let load_inertia = mean_joint_inertia(&chain, &s.trajectory, 4, true)?;
+    let mut model = MotorModel::maxon_re25_gp26();
+    model.load = Load {
+        inertia: load_inertia,
+        viscous_friction: 0.0,
+    };
+    let mut config = AxisConfig::new(model);
+    config.setpoint_period = Some(1.0 / setpoint_hz);
+    tune(&mut config);
+    theta5_run(&s, 4, &model, &config, setpoint_hz, 0.05)
+}
+
+/// Drives joint `joint` of `stroke` (relative to its start) with one axis, setpoints at
+/// `setpoint_hz`, then holds the end for `settle` s.
+pub fn theta5_run(
+    stroke: &DemoStroke,
+    joint: usize,
+    model: &MotorModel,
+    config: &AxisConfig,
+    setpoint_hz: f64,
+    settle: f64,
+) -> Result<Theta5Case> {
+    let mut sim = Simulation::new(model, config)?;
+    sim.enable(Mode::Position);
+    // Start on a position-loop tick, so that each setpoint is used the tick it arrives.
+    while !sim.next_due().position {
+        sim.step();
+    }
+    let traj = &stroke.trajectory;
+    let n = traj.dof();
+    let (mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    traj.sample(0.0, &mut q, &mut qd, &mut qdd).map_err(ttkin_error)?;
+    // Relative to where the axis believes it starts (mid-count), so that the first setpoint is no step.
+    let q0 = q[joint] - sim.axis.position();
+    let dt = config.rates.periods()[0];
+    let ticks_per_setpoint = (1.0 / (setpoint_hz * dt)).round().max(1.0) as u64;
+    let total = ((traj.duration() + settle) / dt).round() as u64;
+    let mut reference = |t: f64| -> (f64, f64, f64) {
+        let tt = t.clamp(0.0, traj.duration());
+        let _ = traj.sample(tt, &mut q, &mut qd, &mut qdd);
+        (q[joint] - q0, qd[joint], qdd[joint])
+    };
+    let mut trace = Trace::default();
+    let mut needed = Vec::with_capacity(total as usize);
+    let mut max_fe = 0.0f64;
+    let k_acc = model.acceleration_per_amp();
+    let lead = if config.setpoint_period.is_some() { 1.0 / setpoint_hz } else { 0.0 };
+    for k in 0..total {
+        let t = k as f64 * dt;
+        if k % ticks_per_setpoint == 0 {
+            // A host sends each setpoint one interpolation period ahead (the drive interpolates
+            // from the previous setpoint to it over that period).
+            let (a, b, c) = reference(t + lead);
+            sim.axis.set_position(a, b, c);
+        }
+        let (qr, qdr, qddr) = reference(t);
+        let m = &model.motor;
+        let n_g = model.gearbox.ratio;
+        let w_m = qdr * n_g;
+        let friction = m.viscous_friction * w_m + if w_m.abs() > 1e-9 { m.coulomb_friction * w_m.signum() } else { 0.0 };
+        needed.push(qddr / k_acc + friction / m.torque_constant);
+        sim.record_into(&mut trace);
+        if k % ticks_per_setpoint == 0 {
+            max_fe = max_fe.max((qr - sim.plant.output_position()).abs());
+        }
+        sim.step();
+    }
+    let rms = |a: &[f64], b: &[f64]| (a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / a.len().max(1) as f64).sqrt();
+    Ok(Theta5Case {
+        load_inertia: model.load.inertia,
+        setpoint_hz,
+        current_ripple_rms: rms(&trace.current, &trace.current_reference),
+        current_error_rms: rms(&trace.current, &needed),
+        max_following_error: max_fe,
+        trace,
+        current_needed: needed,
+    })
 }

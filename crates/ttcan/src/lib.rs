@@ -16,6 +16,8 @@ pub mod cases;
 pub mod error;
 pub mod loops;
 pub mod motor;
+pub mod observer;
+pub mod setpoint;
 pub mod sim;
 pub mod stepper;
 pub mod tuning;
