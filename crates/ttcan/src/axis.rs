@@ -147,6 +147,7 @@ pub struct Axis {
     // Constants.
     rad_per_count: f64,
     speed_period: f64,
+    current_period: f64,
     jump_limit: u64,
     standstill: f64,
     stop_timeout: f64,
@@ -177,6 +178,9 @@ pub struct Axis {
     qd_ref: f64,
     qdd_ref: f64,
     torque_feedforward: f64,
+    /// Torque feed-forward before and after the latest cyclic setpoint (interpolated between).
+    torque_segment: [f64; 2],
+    host_torque: bool,
     position_output: PositionOutput,
     current_reference: f64,
     duty: f64,
@@ -310,6 +314,7 @@ impl Axis {
             tuning,
             rad_per_count,
             speed_period: ts,
+            current_period: tc,
             jump_limit,
             standstill: 0.05 * c.max_speed,
             stop_timeout: 2.0 * c.max_speed / c.quick_stop_deceleration + 0.2,
@@ -335,6 +340,8 @@ impl Axis {
             qd_ref: 0.0,
             qdd_ref: 0.0,
             torque_feedforward: 0.0,
+            torque_segment: [0.0; 2],
+            host_torque: false,
             position_output: PositionOutput::default(),
             current_reference: 0.0,
             duty: 0.0,
@@ -347,6 +354,15 @@ impl Axis {
     /// bridge duty cycle in [−1, 1]. Never fails, never allocates.
     #[inline]
     pub fn tick(&mut self, m: Measurement, due: Due) -> f64 {
+        let duty = self.control(m, due);
+        if self.interpolating {
+            self.interpolator.advance(self.current_period);
+        }
+        duty
+    }
+
+    #[inline]
+    fn control(&mut self, m: Measurement, due: Due) -> f64 {
         let current = if m.current.is_finite() {
             m.current
         } else {
@@ -415,6 +431,10 @@ impl Axis {
             }
             Mode::Position => {
                 if self.interpolating && due.speed {
+                    let mid = self.interpolator.age() + 0.5 * self.speed_period;
+                    let s = (mid / self.interpolator.period()).min(1.0);
+                    let [t0, t1] = self.torque_segment;
+                    self.torque_feedforward = t0 + s * (t1 - t0);
                     let [q, qd, qdd] = self.interpolator.sample(self.speed_period);
                     (self.q_ref, self.qd_ref, self.qdd_ref) = (q, qd, qdd);
                     if self.interpolator.lost() {
@@ -436,7 +456,9 @@ impl Axis {
                 }
                 if due.speed {
                     let o = self.position_output;
-                    let ff = o.current_feedforward + self.torque_feedforward * self.amps_per_joint_torque;
+                    // A host torque feed-forward holds the inertia torque already: not twice.
+                    let own = if self.host_torque { 0.0 } else { o.current_feedforward };
+                    let ff = own + self.torque_feedforward * self.amps_per_joint_torque;
                     self.current_reference = self.speed_step(o.speed_command, o.speed_feedforward, ff);
                 }
             }
@@ -517,6 +539,8 @@ impl Axis {
         self.qd_ref = 0.0;
         self.qdd_ref = 0.0;
         self.torque_feedforward = 0.0;
+        self.torque_segment = [0.0; 2];
+        self.host_torque = false;
         self.interpolator.reset(self.position);
         self.position_output = PositionOutput::default();
         self.speed_loop.reset(self.speed, self.current_reference);
@@ -574,10 +598,20 @@ impl Axis {
 
     /// Joint-side torque feed-forward, N·m (N for a linear axis): the host's inverse dynamics,
     /// turned into a current through the gear ratio and k_t and added after the speed PI in
-    /// velocity and position mode (the analogue of CiA 402 0x60B2); NaN trips a fault.
+    /// velocity and position mode (the analogue of CiA 402 0x60B2); with cyclic setpoints it is
+    /// interpolated like them (it belongs to the setpoint that came with it). From the first call until the
+    /// next mode change it replaces the axis' own acceleration feed-forward (the host's inverse
+    /// dynamics holds the inertia torque, with the coupling the axis cannot know). NaN trips a fault.
     pub fn set_torque_feedforward(&mut self, torque: f64) {
         if torque.is_finite() {
-            self.torque_feedforward = torque;
+            if self.interpolating && self.mode == Mode::Position {
+                // Ramp from where the torque is now to the new value over one setpoint period,
+                // in step with the position segment.
+                self.torque_segment = [self.torque_feedforward, torque];
+            } else {
+                self.torque_feedforward = torque;
+            }
+            self.host_torque = true;
         } else {
             self.trip(Fault::InvalidReference);
         }

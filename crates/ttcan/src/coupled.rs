@@ -179,6 +179,8 @@ pub fn axis_config_from_drive(
     c.overcurrent_trip = c.peak_current * 5.0 / 3.0;
     c.max_speed = 0.9 * (model.max_voltage() - model.motor.resistance * c.continuous_current) / (kt * drive.gear_ratio);
     c.following_error_limit = 0.05;
+    if let Ok(v) = std::env::var("TTCAN_OBS_BW") { c.tuning.observer_bandwidth_hz = v.parse().unwrap(); c.max_quantisation_ripple_share = 1.0; }
+    if std::env::var("TTCAN_NO_ACC").is_ok() { c.tuning.observer_acceleration_input = false; }
     c
 }
 
@@ -434,7 +436,9 @@ impl CoupledSim {
         }
         for k in 0..n {
             self.axes[k].set_position(q[k], qd[k], qdd[k]);
-            self.axes[k].set_torque_feedforward(tau_ff.map_or(0.0, |t| t[k]));
+            if let Some(t) = tau_ff {
+                self.axes[k].set_torque_feedforward(t[k]);
+            }
         }
         Ok(())
     }

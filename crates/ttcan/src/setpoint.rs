@@ -62,16 +62,25 @@ impl SetpointInterpolator {
         self.started = true;
     }
 
-    /// Reference at the present instant, then advances the clock by `dt` s.
+    /// Reference for the speed-loop period of `hold` s that starts now: the position at its start
+    /// (where the measurement is), the velocity and acceleration at its middle (the speed loop
+    /// holds its output over the period, so the mean speed it produces is the one asked for at
+    /// the middle; sampling them at the start would lag the motion by hold/2).
     #[inline]
-    pub fn sample(&mut self, dt: f64) -> [f64; 3] {
-        let r = if self.age <= self.period {
-            eval3(&self.segment, self.age)
+    pub fn sample(&self, hold: f64) -> [f64; 3] {
+        if self.age <= self.period {
+            let [q, _, _] = eval3(&self.segment, self.age);
+            let [_, qd, qdd] = eval3(&self.segment, (self.age + 0.5 * hold).min(self.period));
+            [q, qd, qdd]
         } else {
             [self.last[0], 0.0, 0.0]
-        };
+        }
+    }
+
+    /// Advances the clock by `dt` s (every current-loop period, after the control step).
+    #[inline]
+    pub fn advance(&mut self, dt: f64) {
         self.age += dt;
-        r
     }
 
     /// True once `max_missed` setpoints in a row are overdue (by half a period, the jitter allowance).

@@ -94,7 +94,7 @@ impl Default for TuningTargets {
             speed_symmetric_optimum: 3.0,
             speed_output_filter_hz: 1000.0,
             position_ratio: 4.0,
-            observer_bandwidth_hz: 30.0,
+            observer_bandwidth_hz: 100.0,
             observer_acceleration_input: true,
         }
     }

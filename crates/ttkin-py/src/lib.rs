@@ -5,6 +5,7 @@
 use pyo3::prelude::*;
 
 mod convert;
+mod drives;
 mod dynamics;
 mod errors;
 mod ik;
@@ -23,5 +24,6 @@ fn _ttmanip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     motor::register(m)?;
     ik::register(m)?;
     traj::register(m)?;
+    drives::register(m)?;
     Ok(())
 }
