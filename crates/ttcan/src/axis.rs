@@ -301,7 +301,11 @@ impl Axis {
         if let Some(p) = c.setpoint_period {
             positive("setpoint period (s)", p)?;
             if p < ts * (1.0 - 1e-9) {
-                return Err(invalid("setpoint period (s)", p, "must be at least one speed-loop period"));
+                return Err(invalid(
+                    "setpoint period (s)",
+                    p,
+                    "must be at least one speed-loop period",
+                ));
             }
         }
         if c.setpoint_max_missed == 0 {

@@ -57,7 +57,11 @@ pub fn gantry6_demo_stroke(chain: &Chain) -> Result<DemoStroke> {
         .map_err(ttkin_error)?
         .qdot;
     let limits = KinematicLimits::from_chain(chain, None).map_err(ttkin_error)?;
-    let (lower, upper): (Vec<f64>, Vec<f64>) = chain.joints().iter().map(|j| (j.limits().lower, j.limits().upper)).unzip();
+    let (lower, upper): (Vec<f64>, Vec<f64>) = chain
+        .joints()
+        .iter()
+        .map(|j| (j.limits().lower, j.limits().upper))
+        .unzip();
     let limits = limits.with_position(&lower, &upper).map_err(ttkin_error)?;
     let hit = JointState {
         q: q_hit.clone(),
@@ -73,7 +77,12 @@ pub fn gantry6_demo_stroke(chain: &Chain) -> Result<DemoStroke> {
 
 /// Mean of the mass-matrix diagonal entry of `joint` (the drive armature G²·J included or not), sampled at
 /// 50 instants along `trajectory` (kg·m² or kg).
-pub fn mean_joint_inertia(chain: &Chain, trajectory: &JointTrajectory, joint: usize, with_armature: bool) -> Result<f64> {
+pub fn mean_joint_inertia(
+    chain: &Chain,
+    trajectory: &JointTrajectory,
+    joint: usize,
+    with_armature: bool,
+) -> Result<f64> {
     let dynamics = Dynamics::new(chain).map_err(ttkin_error)?;
     let mut data = DynamicsData::new(&dynamics);
     let n = dynamics.dof();
@@ -168,7 +177,11 @@ pub fn theta5_run(
     let mut needed = Vec::with_capacity(total as usize);
     let mut max_fe = 0.0f64;
     let k_acc = model.acceleration_per_amp();
-    let lead = if config.setpoint_period.is_some() { 1.0 / setpoint_hz } else { 0.0 };
+    let lead = if config.setpoint_period.is_some() {
+        1.0 / setpoint_hz
+    } else {
+        0.0
+    };
     for k in 0..total {
         let t = k as f64 * dt;
         if k % ticks_per_setpoint == 0 {
@@ -181,7 +194,12 @@ pub fn theta5_run(
         let m = &model.motor;
         let n_g = model.gearbox.ratio;
         let w_m = qdr * n_g;
-        let friction = m.viscous_friction * w_m + if w_m.abs() > 1e-9 { m.coulomb_friction * w_m.signum() } else { 0.0 };
+        let friction = m.viscous_friction * w_m
+            + if w_m.abs() > 1e-9 {
+                m.coulomb_friction * w_m.signum()
+            } else {
+                0.0
+            };
         needed.push(qddr / k_acc + friction / m.torque_constant);
         sim.record_into(&mut trace);
         if k % ticks_per_setpoint == 0 {
@@ -189,7 +207,9 @@ pub fn theta5_run(
         }
         sim.step();
     }
-    let rms = |a: &[f64], b: &[f64]| (a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / a.len().max(1) as f64).sqrt();
+    let rms = |a: &[f64], b: &[f64]| {
+        (a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / a.len().max(1) as f64).sqrt()
+    };
     Ok(Theta5Case {
         load_inertia: model.load.inertia,
         setpoint_hz,

@@ -133,7 +133,8 @@ fn model_error(e: ttkin::Error) -> Error {
 /// the joint's effort limit through gear and k_t (3.6 A/s without one), continuous a third of the
 /// peak, over-current trip 5/3 of it, the drive's gear ratio (efficiency 1:
 /// the losses are the drive's friction), rotor inertia and `link_inertia` as the load, a 4096-count
-/// encoder, and the smallest of the 24 V, 48 V and 325 V (rectified 230 V AC) buses whose 80 %
+/// encoder, the tracking observer without acceleration input at 100 Hz (the joints are coupled),
+/// and the smallest of the 24 V, 48 V and 325 V (rectified 230 V AC) buses whose 80 %
 /// covers the back-EMF at `speed_limit` (joint rad/s or m/s).
 pub fn axis_config_from_drive(
     drive: &ttkin::Drive,
@@ -179,8 +180,10 @@ pub fn axis_config_from_drive(
     c.overcurrent_trip = c.peak_current * 5.0 / 3.0;
     c.max_speed = 0.9 * (model.max_voltage() - model.motor.resistance * c.continuous_current) / (kt * drive.gear_ratio);
     c.following_error_limit = 0.05;
-    if let Ok(v) = std::env::var("TTCAN_OBS_BW") { c.tuning.observer_bandwidth_hz = v.parse().unwrap(); c.max_quantisation_ripple_share = 1.0; }
-    if std::env::var("TTCAN_NO_ACC").is_ok() { c.tuning.observer_acceleration_input = false; }
+    // Coupled joints: the observer must not trust the axis' own acceleration model (see
+    // `TuningTargets::observer_acceleration_input`): PLL alone, 100 Hz.
+    c.tuning.observer_acceleration_input = false;
+    c.tuning.observer_bandwidth_hz = 100.0;
     c
 }
 
@@ -191,7 +194,10 @@ impl CoupledSim {
         let dynamics = Dynamics::new(chain).map_err(model_error)?;
         let n = dynamics.dof();
         if configs.len() != n {
-            return Err(Error::Stepper(format!("{} axis configurations for {n} joints", configs.len())));
+            return Err(Error::Stepper(format!(
+                "{} axis configurations for {n} joints",
+                configs.len()
+            )));
         }
         if options.refresh_ticks == 0 {
             return Err(Error::InvalidParameter {
@@ -328,7 +334,10 @@ impl CoupledSim {
             .nonlinear_effects(&mut self.data, &self.q, &self.qd, &self.options.gravity)
             .map_err(model_error)?;
         self.h.copy_from(h);
-        let m = self.dynamics.mass_matrix(&mut self.data, &self.q).map_err(model_error)?;
+        let m = self
+            .dynamics
+            .mass_matrix(&mut self.data, &self.q)
+            .map_err(model_error)?;
         for k in 0..n {
             self.diag[k] = m[(k, k)];
         }
@@ -353,7 +362,11 @@ impl CoupledSim {
         let due = self.scheduler.next_tick();
         for k in 0..n {
             let w = self.windings[k];
-            let noise = if w.current_noise > 0.0 { w.current_noise * self.normal() } else { 0.0 };
+            let noise = if w.current_noise > 0.0 {
+                w.current_noise * self.normal()
+            } else {
+                0.0
+            };
             let motor_angle = self.q[k] * w.gear;
             let counts = (motor_angle * w.counts_per_rev / (2.0 * std::f64::consts::PI)).floor();
             let m = Measurement {

@@ -83,7 +83,12 @@ pub struct TuningTargets {
     /// of the current-loop rate): higher follows unmodelled torques faster and lets more encoder
     /// quantisation through.
     pub observer_bandwidth_hz: f64,
-    /// Feed the measured current × k_acc to the observer as its acceleration input.
+    /// Feed the measured current × k_acc to the observer as its acceleration input (default on:
+    /// a single axis with a matched model gets an estimate without lag, so the speed loop keeps
+    /// its gain and a 30 Hz observer suffices). It trusts the axis' own model of its
+    /// acceleration, which a joint inertially coupled to others does not have (their torques reach
+    /// it through M⁻¹'s off-diagonal terms): on gantry6 with it on, θ4 and θ5 limit-cycle against
+    /// each other at the current limit, so [`crate::coupled`] switches it off (PLL alone, 100 Hz).
     pub observer_acceleration_input: bool,
 }
 
@@ -94,7 +99,7 @@ impl Default for TuningTargets {
             speed_symmetric_optimum: 3.0,
             speed_output_filter_hz: 1000.0,
             position_ratio: 4.0,
-            observer_bandwidth_hz: 100.0,
+            observer_bandwidth_hz: 30.0,
             observer_acceleration_input: true,
         }
     }
@@ -146,7 +151,11 @@ pub fn tune_cascade(model: &MotorModel, periods: [f64; 3], targets: &TuningTarge
     let observer = TrackingObserver::new(
         targets.observer_bandwidth_hz,
         tc,
-        if targets.observer_acceleration_input { k_acc } else { 0.0 },
+        if targets.observer_acceleration_input {
+            k_acc
+        } else {
+            0.0
+        },
     )?;
     let r_pos = targets.position_ratio;
     crate::error::finite("position ratio", r_pos)?;

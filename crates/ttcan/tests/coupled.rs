@@ -36,7 +36,8 @@ fn gantry6_tracks_the_demo_stroke_with_inverse_dynamics_feedforward() {
     let mut sim = CoupledSim::from_chain(&chain, &q[..n], CoupledOptions::default()).unwrap();
     // Settle on gravity first: hold the start with the gravity feed-forward.
     let g0: Vec<f64> = tau[..n].to_vec();
-    sim.set_setpoint(&q[..n], &vec![0.0; n], &vec![0.0; n], Some(&g0)).unwrap();
+    sim.set_setpoint(&q[..n], &vec![0.0; n], &vec![0.0; n], Some(&g0))
+        .unwrap();
     let tr = sim.run(&t, &q, &qd, &qdd, Some(&tau), 1e-3).unwrap();
     assert!(tr.faults.iter().all(|f| f.is_empty()), "faults {:?}", tr.faults);
     let k_hit = (t_hit / 5e-5).round() as usize;
@@ -47,27 +48,13 @@ fn gantry6_tracks_the_demo_stroke_with_inverse_dynamics_feedforward() {
         let rms = ((0..tr.len()).map(|k| tr.current[k * n + j].powi(2)).sum::<f64>() / tr.len() as f64).sqrt();
         let c = sim.axes()[j].config();
         println!("joint {j}: error at hit {e:.3e}, peak current {peak:.3} A (peak rating {:.2}), RMS {rms:.3} A (continuous {:.2})", c.peak_current, c.continuous_current);
-        let bound = if kinds[j] == JointType::Revolute { 0.5e-3 } else { 0.1e-3 };
+        let bound = if kinds[j] == JointType::Revolute {
+            0.5e-3
+        } else {
+            0.1e-3
+        };
         assert!(e <= bound, "joint {j}: tracking error at the hit {e}");
         assert!(peak <= c.peak_current, "joint {j}: peak current {peak} A");
         assert!(rms <= c.continuous_current, "joint {j}: RMS current {rms} A");
     }
-}
-
-
-#[test]
-fn dbg_theta5() {
-    let chain = ttkin::robots::gantry6();
-    let (t, q, qd, qdd, tau, _t_hit) = stroke_samples();
-    let n = 6;
-    let mut sim = CoupledSim::from_chain(&chain, &q[..n], CoupledOptions::default()).unwrap();
-    for j in 0..n { let c = sim.axes()[j].config(); println!("axis {j}: bus {} R {:.2} peak {:.3} cont {:.3} max speed {:.2} kp_s {:.3} ripple {:.4} load {:.4}", c.model.bus_voltage, c.model.motor.resistance, c.peak_current, c.continuous_current, c.max_speed, sim.axes()[j].tuning().speed.kp, sim.axes()[j].tuning().quantisation_ripple_rms, c.model.load.inertia); }
-    let tr = sim.run(&t, &q, &qd, &qdd, Some(&tau), 1e-3).unwrap();
-    let j = 4;
-    let mut first = None;
-    for k in 0..tr.len() { if sim.axes()[j].fault().is_some() && first.is_none() { first = Some(k); } }
-    for k in (0..tr.len()).step_by(400) {
-        println!("t {:.3} q {:.4} qref {:.4} e {:.2e} i {:.3} iref {:.3}", tr.t[k], tr.q[k*n+j], tr.q_ref[k*n+j], tr.q[k*n+j]-tr.q_ref[k*n+j], tr.current[k*n+j], tr.current_ref[k*n+j]);
-    }
-    println!("{:?}", tr.faults);
 }

@@ -18,7 +18,11 @@ fn theta5_current_ripple_and_following_error_at_1khz_setpoints() {
         c.load_inertia, c.current_ripple_rms, c.current_error_rms, c.max_following_error
     );
     assert!((c.load_inertia - 0.0148).abs() < 5e-4, "θ5 load {}", c.load_inertia);
-    assert!(c.current_ripple_rms <= 0.03, "RMS(i − i_ref) = {} A", c.current_ripple_rms);
+    assert!(
+        c.current_ripple_rms <= 0.03,
+        "RMS(i − i_ref) = {} A",
+        c.current_ripple_rms
+    );
     assert!(
         c.max_following_error <= 1.5 * BASELINE_FOLLOWING_ERROR,
         "following error {} rad",
@@ -33,6 +37,10 @@ fn theta5_current_follows_the_motion_with_setpoints_at_250hz() {
         "250 Hz: RMS(i − i_ref) = {:.4} A, RMS(i − i_needed) = {:.4} A, max following error {:.3e} rad",
         c.current_ripple_rms, c.current_error_rms, c.max_following_error
     );
-    assert!(c.current_error_rms <= 0.06, "RMS(i − i_needed) = {} A", c.current_error_rms);
+    assert!(
+        c.current_error_rms <= 0.06,
+        "RMS(i − i_needed) = {} A",
+        c.current_error_rms
+    );
     assert!(c.max_following_error <= 1.5 * BASELINE_FOLLOWING_ERROR);
 }

@@ -55,7 +55,11 @@ impl DriveSim {
             )));
         }
         let options = CoupledOptions {
-            gravity: if gravity { ttkin::dynamics::EARTH_GRAVITY } else { [0.0; 3] },
+            gravity: if gravity {
+                ttkin::dynamics::EARTH_GRAVITY
+            } else {
+                [0.0; 3]
+            },
             ideal_current,
             seed,
             setpoint_period: Some(1.0 / setpoint_rate),
@@ -95,8 +99,14 @@ impl DriveSim {
         let n = self.sim.dof();
         let q = vector(q, "q", n)?;
         let zeros = vec![0.0; n];
-        let qd = qd.map(|v| vector(v, "qd", n)).transpose()?.unwrap_or_else(|| zeros.clone());
-        let qdd = qdd.map(|v| vector(v, "qdd", n)).transpose()?.unwrap_or_else(|| zeros.clone());
+        let qd = qd
+            .map(|v| vector(v, "qd", n))
+            .transpose()?
+            .unwrap_or_else(|| zeros.clone());
+        let qdd = qdd
+            .map(|v| vector(v, "qdd", n))
+            .transpose()?
+            .unwrap_or_else(|| zeros.clone());
         let tau = tau_ff.map(|v| vector(v, "tau_ff", n)).transpose()?;
         self.sim.set_setpoint(&q, &qd, &qdd, tau.as_deref()).map_err(to_py)
     }
