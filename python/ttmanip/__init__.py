@@ -22,6 +22,7 @@ from ._ttmanip import (
     UnreachableError,
 )
 from .mobile import DiffDrive, TrackResult, task_line, track, wls_step
+from ._ttmanip import DriveSim  # noqa: E402  (issue 10: coupled multi-axis drive simulation)
 
 __all__ = [
     "DiffDrive",
@@ -42,6 +43,7 @@ __all__ = [
     "task_line",
     "track",
     "wls_step",
+    "DriveSim",
 ]
 
 __version__ = "0.1.0"

@@ -27,6 +27,7 @@ fn stepper(rates: Rates) -> (Stepper<AXES>, Vec<[Measurement; AXES]>) {
             std::array::from_fn(|j| Measurement {
                 current: 0.01 * (((k * 7 + j * 3) % 11) as f64 - 5.0),
                 encoder_counts: ((k + j) % 3) as i64 - 1,
+                bus_voltage: Some(24.0),
             })
         })
         .collect();

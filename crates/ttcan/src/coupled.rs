@@ -36,7 +36,7 @@
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 use ttkin::{Chain, Dynamics, DynamicsData, JointType};
 
-use crate::axis::{Axis, AxisConfig, AxisState, Mode};
+use crate::axis::{Axis, AxisConfig, Mode};
 use crate::error::{Error, Result};
 use crate::motor::{DcMotor, Gearbox, Load, Measurement, MotorModel};
 use crate::stepper::Scheduler;
@@ -179,7 +179,11 @@ pub fn axis_config_from_drive(
     c.continuous_current = c.peak_current / 3.0;
     c.overcurrent_trip = c.peak_current * 5.0 / 3.0;
     c.max_speed = 0.9 * (model.max_voltage() - model.motor.resistance * c.continuous_current) / (kt * drive.gear_ratio);
-    c.following_error_limit = 0.05;
+    c.following_error_limit = 0.01;
+    c.following_error_per_speed = 0.005;
+    c.overspeed_limit = 1.2 * c.max_speed;
+    c.bus_overvoltage = 1.25 * bus_voltage;
+    c.bus_undervoltage = 0.7 * bus_voltage;
     // Coupled joints: the observer must not trust the axis' own acceleration model (see
     // `TuningTargets::observer_acceleration_input`): PLL alone, 100 Hz.
     c.tuning.observer_acceleration_input = false;
@@ -372,9 +376,10 @@ impl CoupledSim {
             let m = Measurement {
                 current: self.current[k] + noise,
                 encoder_counts: counts as i64,
+                bus_voltage: Some(w.bus_voltage),
             };
             let duty = self.axes[k].tick(m, due);
-            let bridge_on = matches!(self.axes[k].state(), AxisState::Enabled | AxisState::Stopping(_));
+            let bridge_on = self.axes[k].bridge_on();
             let omega_m = w.gear * self.qd[k];
             let emf = w.back_emf_constant * omega_m;
             let i0 = self.current[k];

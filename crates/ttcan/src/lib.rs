@@ -12,6 +12,7 @@
 #![warn(missing_docs)]
 
 pub mod axis;
+pub mod axis_config;
 pub mod cases;
 pub mod coupled;
 pub mod error;
@@ -23,7 +24,7 @@ pub mod sim;
 pub mod stepper;
 pub mod tuning;
 
-pub use axis::{Axis, AxisConfig, AxisState, Fault, Mode};
+pub use axis::{Axis, AxisConfig, AxisState, Fault, HoldingBrake, Mode, Reaction};
 pub use coupled::{CoupledOptions, CoupledSim, CoupledTrace, EnergyBalance};
 pub use error::{Error, Result};
 pub use motor::{DcMotor, Gearbox, Load, Measurement, MotorModel, Plant};

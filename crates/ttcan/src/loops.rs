@@ -156,6 +156,16 @@ impl CurrentLoop {
         }
     }
 
+    /// Sets the measured bus voltage (V, > 0): the duty is the commanded voltage divided by it, and
+    /// the usable voltage scales with it (max voltage × measured / nominal).
+    #[inline]
+    pub fn set_bus_voltage(&mut self, volts: f64) {
+        if volts > 0.0 && volts.is_finite() {
+            self.max_voltage *= volts / self.bus_voltage;
+            self.bus_voltage = volts;
+        }
+    }
+
     /// Present current limit, A: the peak current, or the continuous current while folded back.
     #[inline]
     pub fn limit(&self) -> f64 {

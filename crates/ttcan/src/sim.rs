@@ -126,7 +126,11 @@ impl Simulation {
         let m = self.plant.measure();
         let due = self.scheduler.next_tick();
         let duty = self.axis.tick(m, due);
-        self.plant.step(duty);
+        if self.axis.bridge_on() {
+            self.plant.step(duty);
+        } else {
+            self.plant.step_open();
+        }
         self.time += self.plant.dt();
     }
 
