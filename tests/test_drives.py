@@ -41,8 +41,9 @@ def test_tick_by_tick_holds_against_gravity_and_reports_state():
     sim = ttmanip.DriveSim(robot)
     q0 = np.array([0.0, 0.0, 0.0, 0.6, 0.6, 0.0])
     sim.reset(q0)
+    g = robot.gravity(q0)  # the host's gravity feed-forward (without it θ5 sags past its limit)
     for _ in range(200):  # 0.2 s of 1 kHz setpoints
-        sim.set_setpoint(q0)
+        sim.set_setpoint(q0, tau_ff=g)
         sim.tick(20)
     assert sim.t == pytest.approx(0.2 + 1.0 / sim.tick_rate, abs=1e-9)
     assert np.abs(sim.q - q0).max() < 1e-3
