@@ -121,6 +121,7 @@ pub struct CoupledSim {
     rhs: DVector<f64>,
     energy: EnergyBalance,
     rng: u64,
+    spare_normal: Option<f64>,
 }
 
 fn model_error(e: ttkin::Error) -> Error {
@@ -269,6 +270,7 @@ impl CoupledSim {
             rhs: DVector::zeros(n),
             energy: EnergyBalance::default(),
             rng: options.seed ^ 0x5eed_c0de,
+            spare_normal: None,
         };
         sim.reset(&vec![0.0; n], None)?;
         Ok(sim)
@@ -316,6 +318,7 @@ impl CoupledSim {
         self.ticks = 0;
         self.energy = EnergyBalance::default();
         self.rng = self.options.seed ^ 0x5eed_c0de;
+        self.spare_normal = None;
         let rates = *self.axes[0].rates();
         self.scheduler = Scheduler::new(&rates);
         for k in 0..n {
@@ -429,8 +432,11 @@ impl CoupledSim {
         }
     }
 
+    /// Standard normal sample (SplitMix64 + Box–Muller, both values of each pair used).
     fn normal(&mut self) -> f64 {
-        // SplitMix64 + Box–Muller.
+        if let Some(v) = self.spare_normal.take() {
+            return v;
+        }
         let mut next = || {
             self.rng = self.rng.wrapping_add(0x9e37_79b9_7f4a_7c15);
             let mut z = self.rng;
@@ -439,7 +445,10 @@ impl CoupledSim {
             (((z ^ (z >> 31)) >> 11) as f64 + 1.0) / (1u64 << 53) as f64
         };
         let (a, b) = (next(), next());
-        (-2.0 * a.ln()).sqrt() * (2.0 * std::f64::consts::PI * b).cos()
+        let r = (-2.0 * a.ln()).sqrt();
+        let (sin, cos) = (2.0 * std::f64::consts::PI * b).sin_cos();
+        self.spare_normal = Some(r * sin);
+        r * cos
     }
 
     /// Hands every axis a position setpoint (joint space: rad or m, per s, per s²) and a
