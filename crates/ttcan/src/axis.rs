@@ -17,7 +17,7 @@ use crate::loops::{CurrentLoop, LowPass, Pi, PositionLoop, PositionOutput, Speed
 use crate::motor::Measurement;
 use crate::observer::TrackingObserver;
 use crate::setpoint::SetpointInterpolator;
-use crate::stepper::{Due, Rates};
+use crate::schedule::{Due, Rates};
 use crate::tuning::{tune_cascade, CascadeTuning};
 
 /// Operating mode (the CiA 402 cyclic synchronous modes: torque, velocity, position).

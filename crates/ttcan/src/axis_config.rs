@@ -5,7 +5,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::motor::MotorModel;
-use crate::stepper::Rates;
+use crate::schedule::Rates;
 use crate::tuning::TuningTargets;
 
 /// Everything an axis is built from. Start from [`AxisConfig::new`] and change fields; every

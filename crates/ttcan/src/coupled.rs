@@ -39,7 +39,7 @@ use ttkin::{Chain, Dynamics, DynamicsData, JointType};
 use crate::axis::{Axis, AxisConfig, Mode};
 use crate::error::{Error, Result};
 use crate::motor::{DcMotor, Gearbox, Load, Measurement, MotorModel};
-use crate::stepper::Scheduler;
+use crate::schedule::Scheduler;
 
 /// The electrical side of one joint's actuator, as simulated.
 #[derive(Debug, Clone, Copy, PartialEq)]

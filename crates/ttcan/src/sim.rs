@@ -4,7 +4,7 @@
 use crate::axis::{Axis, AxisConfig, AxisState, Mode};
 use crate::error::{Error, Result};
 use crate::motor::{MotorModel, Plant};
-use crate::stepper::Scheduler;
+use crate::schedule::Scheduler;
 
 /// Reference for one axis at one instant.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -100,7 +100,7 @@ impl Simulation {
     }
 
     /// Which loops run on the next [`Simulation::step`].
-    pub fn next_due(&self) -> crate::stepper::Due {
+    pub fn next_due(&self) -> crate::schedule::Due {
         self.scheduler.peek()
     }
 
