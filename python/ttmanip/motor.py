@@ -101,7 +101,6 @@ class Loops:
     speed_reference_filter_hz: float | None = _D["speed_reference_filter_hz"]  # None: 1/(2π a T_σ)
     continuous_current: float = _D["continuous_current"]  # A
     peak_current: float = _D["peak_current"]  # A
-    peak_duration: float = _D["peak_duration"]  # s at peak current before the I²t fold-back
     overcurrent_trip: float = _D["overcurrent_trip"]  # A
     max_speed: float = _D["max_speed"]  # rad/s at the output
     following_error_limit: float = _D["following_error_limit"]  # rad

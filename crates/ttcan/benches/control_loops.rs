@@ -78,16 +78,7 @@ fn control_cycle(c: &mut Criterion) {
 }
 
 fn current_loop_step(c: &mut Criterion) {
-    let mut l = CurrentLoop::new(
-        Pi::new(1.62, 1.25e4, 5e-5, true),
-        5e-5,
-        24.0,
-        22.8,
-        0.61,
-        3.6,
-        1.2,
-        11.52,
-    );
+    let mut l = CurrentLoop::new(Pi::new(1.62, 1.25e4, 5e-5, true), 24.0, 22.8, 0.61, 3.6);
     let mut k = 0u32;
     c.bench_function("current_loop_step", |b| {
         b.iter(|| {

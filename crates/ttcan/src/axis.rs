@@ -16,8 +16,9 @@ use crate::error::{finite, non_negative, positive, Error, Result};
 use crate::loops::{CurrentLoop, LowPass, Pi, PositionLoop, PositionOutput, SpeedLoop};
 use crate::motor::Measurement;
 use crate::observer::TrackingObserver;
-use crate::setpoint::SetpointInterpolator;
 use crate::schedule::{Due, Rates};
+use crate::setpoint::SetpointInterpolator;
+use crate::thermal::ThermalState;
 use crate::tuning::{tune_cascade, CascadeTuning};
 
 /// Operating mode (the CiA 402 cyclic synchronous modes: torque, velocity, position).
@@ -119,6 +120,7 @@ pub struct Axis {
     q_hold: f64,
     // Loops.
     current_loop: CurrentLoop,
+    thermal: ThermalState,
     emf_speed: LowPass,
     speed_loop: SpeedLoop,
     position_loop: PositionLoop,
@@ -161,7 +163,6 @@ impl Axis {
         c.model.validate()?;
         positive("continuous current (A)", c.continuous_current)?;
         positive("peak current (A)", c.peak_current)?;
-        positive("peak duration (s)", c.peak_duration)?;
         positive("over-current trip (A)", c.overcurrent_trip)?;
         positive("max speed (rad/s)", c.max_speed)?;
         positive("following error limit (rad)", c.following_error_limit)?;
@@ -239,7 +240,6 @@ impl Axis {
         let rad_per_count = m.radians_per_count();
         let current_loop = CurrentLoop::new(
             Pi::new(tuning.current.kp, tuning.current.ki, tc, c.anti_windup),
-            tc,
             m.bus_voltage,
             m.max_voltage(),
             if c.emf_feedforward {
@@ -248,9 +248,8 @@ impl Axis {
                 0.0
             },
             c.peak_current,
-            c.continuous_current,
-            (c.peak_current * c.peak_current - c.continuous_current * c.continuous_current) * c.peak_duration,
         );
+        let thermal = ThermalState::new(&c.thermal, m.motor.resistance)?;
         let ref_filter_hz = c.speed_reference_filter_hz.unwrap_or(tuning.speed_reference_filter_hz);
         let speed_loop = SpeedLoop::new(
             Pi::new(tuning.speed.kp, tuning.speed.ki, ts, c.anti_windup),
@@ -341,6 +340,7 @@ impl Axis {
             disable_pending: false,
             q_hold: 0.0,
             current_loop,
+            thermal,
             emf_speed: LowPass::new(c.emf_filter_hz, ts),
             speed_loop,
             position_loop,
@@ -392,6 +392,11 @@ impl Axis {
             0.0
         };
         self.sense(m.encoder_counts, current, due.speed);
+        self.thermal.step(current, self.current_period);
+        self.current_loop.set_limit(
+            self.thermal
+                .limit(self.config.peak_current, self.config.continuous_current),
+        );
         if current.abs() > self.config.overcurrent_trip {
             self.trip(Fault::OverCurrent);
         }
@@ -814,14 +819,24 @@ impl Axis {
         self.position_output.following_error
     }
 
-    /// Present current limit (peak, or continuous after the I²t budget is spent), A.
+    /// Present current limit (the peak current, derated with the winding temperature), A.
     pub fn current_limit(&self) -> f64 {
         self.current_loop.limit()
     }
 
-    /// Fraction of the I²t budget in use.
-    pub fn i2t_used(&self) -> f64 {
-        self.current_loop.i2t_used()
+    /// True while the thermal derating holds the current limit below the peak current.
+    pub fn thermal_limit_active(&self) -> bool {
+        self.current_loop.limit() < self.config.peak_current
+    }
+
+    /// Winding and housing temperatures, °C (for a planner: how much peak current is left).
+    pub fn thermal_state(&self) -> &ThermalState {
+        &self.thermal
+    }
+
+    /// Mutable thermal state (to start from a warm motor).
+    pub fn thermal_state_mut(&mut self) -> &mut ThermalState {
+        &mut self.thermal
     }
 }
 

@@ -6,6 +6,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::motor::MotorModel;
 use crate::schedule::Rates;
+use crate::thermal::ThermalModel;
 use crate::tuning::TuningTargets;
 
 /// Everything an axis is built from. Start from [`AxisConfig::new`] and change fields; every
@@ -24,8 +25,8 @@ pub struct AxisConfig {
     pub continuous_current: f64,
     /// Peak current, A (≥ continuous).
     pub peak_current: f64,
-    /// How long the peak current may flow from cold before the I²t limit folds back, s.
-    pub peak_duration: f64,
+    /// Winding/housing thermal model (datasheet values) that derates the current limit.
+    pub thermal: ThermalModel,
     /// Measured current that trips an over-current fault, A (> peak).
     pub overcurrent_trip: f64,
     /// Largest output speed, rad/s (the bus must be able to overcome its back-EMF).
@@ -83,7 +84,7 @@ pub struct HoldingBrake {
 
 impl AxisConfig {
     /// Defaults for `model`: 20/5/1 kHz, 1 kHz current bandwidth, symmetric optimum a = 3, currents
-    /// 1.2 A continuous / 3.6 A peak for 1 s / 6 A trip, 30 rad/s, 0.1 rad following-error limit,
+    /// 1.2 A continuous / 3.6 A peak (derated by the RE 25 thermal model) / 6 A trip, 30 rad/s, 0.1 rad following-error limit,
     /// 200 rad/s² quick stop, all feedforwards and anti-windup on. The current and speed values
     /// fit the maxon RE 25 + GP 26 A 14:1 of [`crate::motor::MotorModel::maxon_re25_gp26`].
     pub fn new(model: MotorModel) -> Self {
@@ -94,7 +95,7 @@ impl AxisConfig {
             speed_reference_filter_hz: None,
             continuous_current: 1.2,
             peak_current: 3.6,
-            peak_duration: 1.0,
+            thermal: ThermalModel::maxon_re25(),
             overcurrent_trip: 6.0,
             max_speed: 30.0,
             following_error_limit: 0.1,
