@@ -11,6 +11,7 @@ seconds; poses are 4×4 homogeneous matrices in the robot's base frame.
 
 from . import dynamics, motor, robots, traj
 from ._ttmanip import (
+    DriveSim,
     IkResult,
     ModelError,
     NonFiniteError,
@@ -22,10 +23,10 @@ from ._ttmanip import (
     UnreachableError,
 )
 from .mobile import DiffDrive, TrackResult, task_line, track, wls_step
-from ._ttmanip import DriveSim  # noqa: E402  (issue 10: coupled multi-axis drive simulation)
 
 __all__ = [
     "DiffDrive",
+    "DriveSim",
     "IkResult",
     "ModelError",
     "NonFiniteError",
@@ -43,7 +44,6 @@ __all__ = [
     "task_line",
     "track",
     "wls_step",
-    "DriveSim",
 ]
 
 __version__ = "0.1.0"

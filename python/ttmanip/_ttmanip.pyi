@@ -607,7 +607,7 @@ class DriveSim:
         qdd: ArrayLike,
         tau_ff: ArrayLike | None = None,
     ) -> dict[str, Any]:
-        """Runs a reference trajectory; arrays t (K,), q, qd, q_ref, current, current_ref, torque (K, n), faults."""
+        """Runs a reference trajectory: t (K,); q, qd, q_ref, current, current_ref, torque (K, n); faults."""
 
 def drive_theta5_case(setpoint_rate: float = 1000.0) -> dict[str, Any]:
     """Issue 10's θ5 case (gantry6 demo stroke on θ5, RE 25 + 14:1, 4096 counts): RMS numbers and traces."""

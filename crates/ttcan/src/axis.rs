@@ -401,7 +401,7 @@ impl Axis {
             self.trip(Fault::OverCurrent);
         }
         if let Some(v) = m.bus_voltage {
-            if !(v <= self.config.bus_overvoltage) {
+            if v.is_nan() || v > self.config.bus_overvoltage {
                 self.trip(Fault::OverVoltage);
             } else if v < self.config.bus_undervoltage {
                 self.trip(Fault::UnderVoltage);

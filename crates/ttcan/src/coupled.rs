@@ -574,7 +574,7 @@ impl CoupledSim {
                 });
             }
         }
-        if let Some(i) = times.windows(2).position(|w| !(w[1] > w[0])) {
+        if let Some(i) = times.windows(2).position(|w| w[1] <= w[0]) {
             return Err(Error::InvalidParameter {
                 what: format!("t[{}]", i + 1),
                 value: times[i + 1],
@@ -666,6 +666,7 @@ fn open_winding_step(w: &Winding, i0: f64, emf: f64, t: f64) -> (f64, f64, f64, 
     (u, i1, mean, mean_sq)
 }
 
+#[allow(clippy::too_many_arguments)]
 fn interpolate(
     times: &[f64],
     t: f64,

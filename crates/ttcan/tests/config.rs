@@ -156,10 +156,16 @@ fn issue_10_bad_configurations_are_rejected_when_the_axis_is_built() {
         engage_delay: 0.01,
     };
     assert_names(&axis_error(|c| c.holding_brake = Some(long)), "brake release delay");
-    assert_names(&axis_error(|c| c.thermal.winding_time_constant = 0.0), "thermal time constant winding");
+    assert_names(
+        &axis_error(|c| c.thermal.winding_time_constant = 0.0),
+        "thermal time constant winding",
+    );
     assert_names(&axis_error(|c| c.overspeed_limit = 10.0), "overspeed limit");
     assert_names(&axis_error(|c| c.bus_overvoltage = 20.0), "bus over-voltage");
     assert_names(&axis_error(|c| c.position_limits = Some((1.0, -1.0))), "position limit");
     assert_names(&axis_error(|c| c.setpoint_period = Some(0.0)), "setpoint period");
-    assert_names(&axis_error(|c| c.tuning.observer_bandwidth_hz = 1000.0), "observer bandwidth");
+    assert_names(
+        &axis_error(|c| c.tuning.observer_bandwidth_hz = 1000.0),
+        "observer bandwidth",
+    );
 }

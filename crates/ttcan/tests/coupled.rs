@@ -1,4 +1,6 @@
 //! All axes together (issue 10): gantry6's six drives on its rigid-body dynamics with gravity.
+// Per-joint loops index several row-major arrays at once.
+#![allow(clippy::needless_range_loop)]
 
 use ttcan::cases::gantry6_demo_stroke;
 use ttcan::{CoupledOptions, CoupledSim};
@@ -6,8 +8,11 @@ use ttkin::{Dynamics, DynamicsData, JointType};
 
 const G: [f64; 3] = ttkin::dynamics::EARTH_GRAVITY;
 
+/// t, q, qd, qdd, inverse-dynamics torques (row-major) and the hit time.
+type Samples = (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, f64);
+
 /// The demo stroke sampled at 1 kHz with its inverse-dynamics torques (row-major).
-fn stroke_samples() -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, f64) {
+fn stroke_samples() -> Samples {
     let chain = ttkin::robots::gantry6();
     let s = gantry6_demo_stroke(&chain).unwrap();
     let d = Dynamics::new(&chain).unwrap();

@@ -58,7 +58,8 @@ proptest! {
 
 #[test]
 fn missing_or_bad_thermal_constants_are_rejected_naming_the_field() {
-    let cases: [(fn(&mut ThermalModel), &str); 5] = [
+    type Case = (fn(&mut ThermalModel), &'static str);
+    let cases: [Case; 5] = [
         (|m| m.winding_time_constant = 0.0, "thermal time constant winding"),
         (|m| m.housing_time_constant = f64::NAN, "thermal time constant housing"),
         (
