@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ._ttmanip import ServoSim, drive_theta5_case
+from ._ttmanip import ServoSim, drive_theta5_case, step_metrics
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -141,28 +141,26 @@ class Response:
         return cls(**d)
 
     def rise_time(self, signal: str, target: float) -> float:
-        """10 %–90 % rise time of ``signal`` (a field name) towards ``target``, s (inf if never)."""
-        y = getattr(self, signal) / target
-        above10, above90 = np.flatnonzero(y >= 0.1), np.flatnonzero(y >= 0.9)
-        if len(above10) == 0 or len(above90) == 0:
-            return float("inf")
-        return float(self.time[above90[0]] - self.time[above10[0]])
+        """10 %–90 % rise time of ``signal`` (a field name) towards ``target``, s (inf if never);
+        defined once, in Rust (``ttcan::sim::rise_time``)."""
+        return step_metrics(self.time, getattr(self, signal), target)[0]
 
     def overshoot(self, signal: str, target: float) -> float:
-        """Largest excursion of ``signal`` beyond ``target``, as a fraction of ``target``."""
-        return float(np.max(getattr(self, signal)) / target - 1.0)
+        """Largest excursion of ``signal`` beyond ``target``, as a fraction of ``target``; defined
+        once, in Rust (``ttcan::sim::overshoot``)."""
+        return step_metrics(self.time, getattr(self, signal), target)[1]
 
 
 def quintic(distance: float, duration: float, rate_hz: float, start: float = 0.0):
-    """Rest-to-rest quintic sampled at ``rate_hz``: arrays (t, q, qd, qdd) in s, rad, rad/s, rad/s²."""
+    """Rest-to-rest quintic sampled at ``rate_hz``: arrays (t, q, qd, qdd) in s, rad, rad/s, rad/s²
+    (``ttmanip.traj``'s quintic, the one in Rust)."""
     if not (duration > 0 and rate_hz > 0 and np.isfinite(distance) and np.isfinite(start)):
         raise ValueError("quintic: need finite distance and start, duration > 0 and rate_hz > 0")
+    from . import traj
+
     t = np.arange(int(round(duration * rate_hz)) + 1) / rate_hz
-    s = np.clip(t / duration, 0.0, 1.0)
-    q = start + distance * s**3 * (10 - 15 * s + 6 * s**2)
-    qd = distance / duration * 30 * s**2 * (1 - s) ** 2
-    qdd = distance / duration**2 * 60 * s * (1 - s) * (1 - 2 * s)
-    return t, q, qd, qdd
+    q, qd, qdd = traj.quintic([start], [start + distance], duration).sample(np.minimum(t, duration))
+    return t, q[:, 0], qd[:, 0], qdd[:, 0]
 
 
 class Servo:

@@ -69,6 +69,28 @@ impl Trace {
     }
 }
 
+/// 10 %–90 % rise time of `y` (sampled at times `t`, s) towards `target` (≠ 0): the time from the
+/// first sample at or beyond 10 % of the target to the first at or beyond 90 %, s; infinite if
+/// either is never reached. The one definition of rise time in ttmanip (Rust and Python).
+pub fn rise_time(t: &[f64], y: &[f64], target: f64) -> f64 {
+    let first = |level: f64| {
+        t.iter()
+            .zip(y)
+            .find(|(_, v)| **v / target >= level)
+            .map(|(t, _)| *t)
+    };
+    match (first(0.1), first(0.9)) {
+        (Some(a), Some(b)) => b - a,
+        _ => f64::INFINITY,
+    }
+}
+
+/// Largest excursion of `y` beyond `target` (≠ 0), as a fraction of `target` (0.05 = 5 %); NaN
+/// for an empty signal. The one definition of overshoot in ttmanip (Rust and Python).
+pub fn overshoot(y: &[f64], target: f64) -> f64 {
+    y.iter().map(|v| v / target).fold(f64::NAN, f64::max) - 1.0
+}
+
 /// One axis controlling one simulated actuator.
 #[derive(Debug, Clone)]
 pub struct Simulation {

@@ -211,9 +211,31 @@ impl DriveSim {
     }
 }
 
-/// Adds `DriveSim` and `drive_theta5_case` to the module.
+/// (10–90 % rise time in s, overshoot as a fraction) of `y` sampled at `t` towards `target`.
+#[pyfunction]
+fn step_metrics(t: &Bound<'_, PyAny>, y: &Bound<'_, PyAny>, target: f64) -> PyResult<(f64, f64)> {
+    let t = f64_array(t, "t")?;
+    let y = f64_array(y, "y")?;
+    if t.data().len() != y.data().len() {
+        return Err(crate::errors::ShapeError::new_err(format!(
+            "t and y: expected equal lengths, got {} and {}",
+            t.data().len(),
+            y.data().len()
+        )));
+    }
+    if !(target.is_finite() && target != 0.0) {
+        return Err(TtmanipError::new_err(format!("target: expected a finite value ≠ 0, got {target}")));
+    }
+    Ok((
+        ttcan::sim::rise_time(t.data(), y.data(), target),
+        ttcan::sim::overshoot(y.data(), target),
+    ))
+}
+
+/// Adds `DriveSim`, `drive_theta5_case` and `step_metrics` to the module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<DriveSim>()?;
+    m.add_function(wrap_pyfunction!(step_metrics, m)?)?;
     m.add_function(wrap_pyfunction!(drive_theta5_case, m)?)
 }
 
