@@ -192,6 +192,27 @@ pub fn axis_config_from_drive(
     c
 }
 
+/// One [`axis_config_from_drive`] per joint of `chain`, each joint's link inertia at `q0` as its
+/// load, with the setpoint period and noise scale of `options`.
+pub fn axis_configs_from_chain(chain: &Chain, q0: &[f64], options: &CoupledOptions) -> Result<Vec<AxisConfig>> {
+    let dynamics = Dynamics::new(chain).map_err(model_error)?;
+    let mut data = DynamicsData::new(&dynamics);
+    let m = dynamics.mass_matrix(&mut data, q0).map_err(model_error)?;
+    crate::error::non_negative("noise scale", options.noise_scale)?;
+    let mut configs = Vec::with_capacity(dynamics.dof());
+    for (k, j) in chain.joints().iter().enumerate() {
+        let drive = j
+            .drive()
+            .ok_or_else(|| Error::Model(format!("joint '{}' has no drive", j.name())))?;
+        let v = j.limits().velocity.unwrap_or(10.0);
+        let mut c = axis_config_from_drive(drive, m[(k, k)] - dynamics.armature()[k], v, j.limits().effort);
+        c.setpoint_period = options.setpoint_period;
+        c.model.current_noise *= options.noise_scale;
+        configs.push(c);
+    }
+    Ok(configs)
+}
+
 impl CoupledSim {
     /// One axis per joint of `chain` (which needs inertias and drives), axis `k` built from
     /// `configs[k]`, all on the loop rates of `configs[0]`, at rest at q = 0.
@@ -276,24 +297,10 @@ impl CoupledSim {
         Ok(sim)
     }
 
-    /// One axis per joint built by [`axis_config_from_drive`] with each joint's link inertia at
-    /// `q0` as its load, then [`CoupledSim::reset`] to (`q0`, 0).
+    /// One axis per joint built by [`axis_configs_from_chain`] at `q0`, then
+    /// [`CoupledSim::reset`] to (`q0`, 0).
     pub fn from_chain(chain: &Chain, q0: &[f64], options: CoupledOptions) -> Result<Self> {
-        let dynamics = Dynamics::new(chain).map_err(model_error)?;
-        let mut data = DynamicsData::new(&dynamics);
-        let m = dynamics.mass_matrix(&mut data, q0).map_err(model_error)?;
-        let mut configs = Vec::with_capacity(dynamics.dof());
-        for (k, j) in chain.joints().iter().enumerate() {
-            let drive = j
-                .drive()
-                .ok_or_else(|| Error::Model(format!("joint '{}' has no drive", j.name())))?;
-            let v = j.limits().velocity.unwrap_or(10.0);
-            let mut c = axis_config_from_drive(drive, m[(k, k)] - dynamics.armature()[k], v, j.limits().effort);
-            c.setpoint_period = options.setpoint_period;
-            crate::error::non_negative("noise scale", options.noise_scale)?;
-            c.model.current_noise *= options.noise_scale;
-            configs.push(c);
-        }
+        let configs = axis_configs_from_chain(chain, q0, &options)?;
         let mut sim = CoupledSim::new(chain, &configs, options)?;
         sim.reset(q0, None)?;
         Ok(sim)

@@ -22,6 +22,7 @@ pub mod observer;
 pub mod schedule;
 pub mod setpoint;
 pub mod sim;
+pub mod sizing;
 pub mod stepper;
 pub mod thermal;
 pub mod tuning;

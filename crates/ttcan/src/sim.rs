@@ -73,12 +73,7 @@ impl Trace {
 /// first sample at or beyond 10 % of the target to the first at or beyond 90 %, s; infinite if
 /// either is never reached. The one definition of rise time in ttmanip (Rust and Python).
 pub fn rise_time(t: &[f64], y: &[f64], target: f64) -> f64 {
-    let first = |level: f64| {
-        t.iter()
-            .zip(y)
-            .find(|(_, v)| **v / target >= level)
-            .map(|(t, _)| *t)
-    };
+    let first = |level: f64| t.iter().zip(y).find(|(_, v)| **v / target >= level).map(|(t, _)| *t);
     match (first(0.1), first(0.9)) {
         (Some(a), Some(b)) => b - a,
         _ => f64::INFINITY,

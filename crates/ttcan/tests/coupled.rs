@@ -148,3 +148,20 @@ fn energy_bookkeeping_closes() {
     );
     assert!(residual.abs() < 0.01 * scale, "residual {residual} J of {scale} J");
 }
+
+#[test]
+fn sizing_gantry6_drives_pass_the_demo_stroke_and_the_re25_on_theta5_does_not() {
+    let chain = ttkin::robots::gantry6();
+    let (_t, q, qd, qdd, _tau, _) = stroke_samples();
+    let mut configs = ttcan::coupled::axis_configs_from_chain(&chain, &q[..6], &CoupledOptions::default()).unwrap();
+    let sizing = ttcan::sizing::size_drives(&chain, &configs, &q, &qd, &qdd, &G).unwrap();
+    for s in &sizing {
+        println!("{s:?}");
+        assert!(s.passes(), "{} fails its sizing", s.joint);
+    }
+    // The θ5 actuator (RE 25 + 14:1, 1.2 A continuous) with gravity: too small.
+    configs[4] = ttcan::AxisConfig::new(ttcan::MotorModel::maxon_re25_gp26());
+    let s = &ttcan::sizing::size_drives(&chain, &configs, &q, &qd, &qdd, &G).unwrap()[4];
+    println!("θ5 on the RE 25 + 14:1: {s:?}");
+    assert!(s.rms_current > s.continuous_rating && !s.passes());
+}

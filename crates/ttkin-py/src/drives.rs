@@ -224,7 +224,9 @@ fn step_metrics(t: &Bound<'_, PyAny>, y: &Bound<'_, PyAny>, target: f64) -> PyRe
         )));
     }
     if !(target.is_finite() && target != 0.0) {
-        return Err(TtmanipError::new_err(format!("target: expected a finite value ≠ 0, got {target}")));
+        return Err(TtmanipError::new_err(format!(
+            "target: expected a finite value ≠ 0, got {target}"
+        )));
     }
     Ok((
         ttcan::sim::rise_time(t.data(), y.data(), target),
