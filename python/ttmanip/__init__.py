@@ -11,6 +11,7 @@ seconds; poses are 4×4 homogeneous matrices in the robot's base frame.
 
 from . import dynamics, motor, robots, traj
 from ._ttmanip import (  # issue 14: overflow, caught panics
+    DriveSim,
     IkResult,
     InternalError,
     ModelError,
@@ -30,6 +31,7 @@ __all__ = [
     "InternalError",
     "NumericalError",
     "DiffDrive",
+    "DriveSim",
     "IkResult",
     "ModelError",
     "NonFiniteError",

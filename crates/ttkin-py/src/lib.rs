@@ -5,6 +5,7 @@
 use pyo3::prelude::*;
 
 mod convert;
+mod drives;
 mod dynamics;
 mod errors;
 mod ik;
@@ -27,5 +28,6 @@ fn _ttmanip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     ik::register(m)?;
     traj::register(m)?;
     guard::register(m)?;
+    drives::register(m)?;
     Ok(())
 }
