@@ -12,6 +12,7 @@
 //! s², s³. Time runs from 0 to [`JointTrajectory::duration`].
 
 pub mod cartesian;
+pub mod jerk;
 pub mod limits;
 pub mod poly;
 pub mod stroke;
