@@ -65,7 +65,11 @@ pub fn jerk_limited(
         ));
     }
     if limits.dof() != n {
-        return Err(Error::shape("limits", format!("{n} joints"), format!("{} joints", limits.dof())));
+        return Err(Error::shape(
+            "limits",
+            format!("{n} joints"),
+            format!("{} joints", limits.dof()),
+        ));
     }
     for (what, v) in [
         ("velocity limits", &limits.velocity),
@@ -99,8 +103,16 @@ pub fn jerk_limited(
         let mut lo = input.current_position.clone();
         let mut hi = input.current_position.clone();
         for j in 0..n {
-            lo[j] = if limits.lower[j].is_finite() { limits.lower[j] } else { -1e12 };
-            hi[j] = if limits.upper[j].is_finite() { limits.upper[j] } else { 1e12 };
+            lo[j] = if limits.lower[j].is_finite() {
+                limits.lower[j]
+            } else {
+                -1e12
+            };
+            hi[j] = if limits.upper[j].is_finite() {
+                limits.upper[j]
+            } else {
+                1e12
+            };
         }
         input.min_position = Some(lo);
         input.max_position = Some(hi);
@@ -176,8 +188,22 @@ fn to_joint_trajectory(traj: &Trajectory<0>, n: usize, duration: f64) -> JointTr
         let (t0, t1) = (w[0], w[1]);
         // The state at the segment start (continuous across phases) and the jerk inside it.
         let mut section = None;
-        traj.at_time(t0, &mut Some(&mut p), &mut Some(&mut v), &mut Some(&mut a), &mut None, &mut section);
-        traj.at_time(0.5 * (t0 + t1), &mut None, &mut None, &mut None, &mut Some(&mut jerk), &mut section);
+        traj.at_time(
+            t0,
+            &mut Some(&mut p),
+            &mut Some(&mut v),
+            &mut Some(&mut a),
+            &mut None,
+            &mut section,
+        );
+        traj.at_time(
+            0.5 * (t0 + t1),
+            &mut None,
+            &mut None,
+            &mut None,
+            &mut Some(&mut jerk),
+            &mut section,
+        );
         for j in 0..n {
             coeffs.push([p[j], v[j], 0.5 * a[j], jerk[j] / 6.0, 0.0, 0.0]);
         }

@@ -311,7 +311,7 @@ impl JointTrajectory {
     }
 
     #[inline]
-    fn sample_unchecked(&self, t: f64, q: &mut [f64], qd: &mut [f64], qdd: &mut [f64]) {
+    pub(crate) fn sample_unchecked(&self, t: f64, q: &mut [f64], qd: &mut [f64], qdd: &mut [f64]) {
         let (k, tau) = self.locate(t);
         let n = self.dof;
         let rows = self.rows(k);
