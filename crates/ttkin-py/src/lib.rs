@@ -7,6 +7,7 @@ use pyo3::prelude::*;
 mod convert;
 mod dynamics;
 mod errors;
+mod hit;
 mod ik;
 mod mobile;
 mod motor;
@@ -23,5 +24,6 @@ fn _ttmanip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     motor::register(m)?;
     ik::register(m)?;
     traj::register(m)?;
+    hit::register(m)?;
     Ok(())
 }
