@@ -22,6 +22,7 @@ from ._ttmanip import (
     UnreachableError,
 )
 from .mobile import DiffDrive, TrackResult, task_line, track, wls_step
+from .pipeline import DEMO_HIT, Hit, HitError, HitPlan, SimResult, plan_hit, plan_hits, simulate
 
 __all__ = [
     "DiffDrive",
@@ -42,6 +43,15 @@ __all__ = [
     "task_line",
     "track",
     "wls_step",
+    # hit pipeline (issue 12)
+    "DEMO_HIT",
+    "Hit",
+    "HitError",
+    "HitPlan",
+    "SimResult",
+    "plan_hit",
+    "plan_hits",
+    "simulate",
 ]
 
 __version__ = "0.1.0"
