@@ -254,8 +254,14 @@ fn start_state(
 ) -> PyResult<Option<JointState>> {
     let Some(q) = q else { return Ok(None) };
     let q = vector(q, "state.q", n)?;
-    let qd = qd.map(|v| vector(v, "state.qd", n)).transpose()?.unwrap_or(vec![0.0; n]);
-    let qdd = qdd.map(|v| vector(v, "state.qdd", n)).transpose()?.unwrap_or(vec![0.0; n]);
+    let qd = qd
+        .map(|v| vector(v, "state.qd", n))
+        .transpose()?
+        .unwrap_or(vec![0.0; n]);
+    let qdd = qdd
+        .map(|v| vector(v, "state.qdd", n))
+        .transpose()?
+        .unwrap_or(vec![0.0; n]);
     Ok(Some(JointState { q, qd, qdd }))
 }
 
@@ -287,7 +293,9 @@ fn hit_plan(
     let state = start_state(n, q, qd, qdd)?;
     let ready = ready.map(|r| vector(r, "ready", n)).transpose()?;
     let planner = HitPlanner::new(&robot.chain, options(robot, profile, task, jerk)?).py()?;
-    let plan = py.detach(|| planner.plan(&hit, state.as_ref(), ready.as_deref())).py()?;
+    let plan = py
+        .detach(|| planner.plan(&hit, state.as_ref(), ready.as_deref()))
+        .py()?;
     Ok(PyHitPlan {
         plan,
         chain: robot.chain.clone(),
@@ -366,7 +374,10 @@ fn racket_frame<'py>(
     handle: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let n = vector(normal, "normal", 3)?;
-    let h = handle.map(|h| vector(h, "handle", 3)).transpose()?.unwrap_or(vec![0.0, 0.0, 1.0]);
+    let h = handle
+        .map(|h| vector(h, "handle", 3))
+        .transpose()?
+        .unwrap_or(vec![0.0, 0.0, 1.0]);
     let r = hit::racket_frame(&Vector3::from_column_slice(&n), &Vector3::from_column_slice(&h)).py()?;
     let m = r.matrix();
     let rows: Vec<f64> = (0..3).flat_map(|i| (0..3).map(move |j| m[(i, j)])).collect();

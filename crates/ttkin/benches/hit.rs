@@ -56,7 +56,13 @@ fn plan(c: &mut Criterion) {
     c.bench_function("jerk_limited/gantry6", |b| {
         b.iter(|| {
             i = (i + 1) % legs.len();
-            black_box(jerk_limited(&start, &legs[i], planner.limits(), None, PositionLimits::Ignore))
+            black_box(jerk_limited(
+                &start,
+                &legs[i],
+                planner.limits(),
+                None,
+                PositionLimits::Ignore,
+            ))
         })
     });
 }

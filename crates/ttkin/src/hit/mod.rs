@@ -169,7 +169,7 @@ pub struct HitOptions {
 }
 
 impl Default for HitOptions {
-    /// Auto profile and task, default jerk limits, standard gravity, 16 effort points per leg,
+    /// Auto profile and task, default jerk limits, standard gravity, 12 effort points per leg,
     /// search up to 10 s.
     fn default() -> Self {
         HitOptions {
@@ -177,7 +177,7 @@ impl Default for HitOptions {
             task: HitTask::Auto,
             jerk: None,
             gravity: GRAVITY,
-            effort_points: 16,
+            effort_points: 12,
             max_t_hit: 10.0,
         }
     }
@@ -247,7 +247,8 @@ pub struct HitPlan {
     pub sigma_min: f64,
     /// Planned hit time (s); NaN when no stroke was planned.
     pub t_hit: f64,
-    /// Earliest feasible hit time (s) of the planner's profiles; NaN when unknown.
+    /// Earliest feasible hit time (s) when planning found it (a late plan); NaN otherwise: then
+    /// [`HitPlanner::earliest_t_hit`] computes it on demand.
     pub earliest_t_hit: f64,
     /// Profile of the hit leg actually used (`Quintic` or `Jerk`); `Auto` when no stroke.
     pub profile: StrokeProfile,
@@ -356,6 +357,22 @@ impl HitPlanner {
     /// otherwise the middle of each joint's position limits (0 where unbounded).
     pub fn default_ready(&self) -> &[f64] {
         &self.ready
+    }
+
+    /// The earliest feasible hit time (s) of `plan`: its own when planning found it, otherwise the
+    /// earliest time at which the planner's profile meets the velocity, acceleration and jerk
+    /// limits from the plan's start to its hit state (effort limits are not re-searched then: the
+    /// plan itself met them at its hit time). NaN when the plan has no hit state.
+    pub fn earliest_t_hit(&self, plan: &HitPlan) -> f64 {
+        if plan.earliest_t_hit.is_finite() || plan.trajectory.is_none() {
+            return plan.earliest_t_hit;
+        }
+        let hit = JointState {
+            q: plan.q_hit.clone(),
+            qd: plan.qd_hit.clone(),
+            qdd: vec![0.0; plan.q_hit.len()],
+        };
+        stroke::earliest_kinematic(self, &plan.start, &hit).map_or(f64::NAN, |t| t.min(plan.t_hit))
     }
 
     /// Plans `hit` from `state` (at rest at `ready` when `None`) back to rest at `ready` (the

@@ -2,11 +2,13 @@
 //! rest at the ready pose), its kinematic limits, its torques against the effort limits, and
 //! the earliest feasible hit time.
 //!
-//! Profile choice ([`StrokeProfile::Auto`]): the time-optimal jerk-limited hit leg gives the
-//! earliest kinematically feasible hit time T*. A request before T* is planned at T* (status
-//! too early). Otherwise the quintic is used when it meets the requested time within the
-//! limits, else the jerk-limited leg stretched to the requested time. The return leg is
-//! time-optimal jerk-limited (quintic of minimal duration for [`StrokeProfile::Quintic`]).
+//! Profile choice ([`StrokeProfile::Auto`]): the quintic when it meets the requested hit time
+//! within the velocity, acceleration and jerk limits (one exact peak evaluation); otherwise the
+//! jerk-limited leg with the requested time as minimum duration, which is the time-optimal one
+//! (the earliest kinematically feasible hit time T*) when the request is earlier than T* (status
+//! too early). The return leg follows the hit leg's family: time-optimal jerk-limited after a
+//! jerk-limited hit leg, a quintic within 10 % of its minimal duration after a quintic one.
+//! T* is computed on demand ([`super::HitPlanner::earliest_t_hit`]) when planning did not need it.
 //! A leg that leaves the position limits is replanned jerk-limited with position limits.
 //! When the torques at the check points exceed an effort limit, the return leg is slowed, and
 //! the hit time is moved later (growth by 10 %, then bisection to 0.1 %) until they do not.
@@ -15,7 +17,7 @@ use super::{HitPlan, HitPlanner, HitStatus, StrokeProfile};
 use crate::dynamics::DynamicsData;
 use crate::error::Result;
 use crate::traj::jerk::{jerk_limited, PositionLimits};
-use crate::traj::limits::{self, LIMIT_TOLERANCE};
+use crate::traj::limits::{self, Quantity, Violation, LIMIT_TOLERANCE};
 use crate::traj::{JointState, JointTrajectory};
 
 /// Relative precision of the earliest hit time under effort limits.
@@ -106,8 +108,11 @@ pub(super) fn plan_stroke(p: &HitPlanner, plan: &mut HitPlan, mut data: Option<&
     plan.t_hit = t_hit;
     plan.profile = legs.profile;
     plan.return_duration = legs.back.duration();
+    // Speed, acceleration and jerk hold by construction (Ruckig's profiles; quintics accepted only
+    // when their exact peaks are within the limits): only the position limits are left to check.
+    plan.violations = position_violations(p, &legs.hit, 0.0);
+    plan.violations.extend(position_violations(p, &legs.back, t_hit));
     let trajectory = legs.hit.append(legs.back);
-    plan.violations = trajectory.check_limits(lim)?;
     plan.trajectory = Some(trajectory);
     if matches!(plan.status, HitStatus::Ok | HitStatus::TooEarly) && !plan.violations.is_empty() {
         let v = &plan.violations[0];
@@ -124,7 +129,8 @@ pub(super) fn plan_stroke(p: &HitPlanner, plan: &mut HitPlan, mut data: Option<&
     Ok(())
 }
 
-/// The legs before position and effort checks, and the earliest kinematically feasible hit time.
+/// The legs before position and effort checks, and the earliest kinematically feasible hit time
+/// when it came out of the planning for free (NaN otherwise: [`earliest_kinematic`] on demand).
 fn first_legs(
     p: &HitPlanner,
     start: &JointState,
@@ -135,51 +141,104 @@ fn first_legs(
 ) -> Result<(Legs, f64)> {
     let lim = &p.limits;
     if profile == StrokeProfile::Quintic {
-        let earliest = limits::minimal_quintic_duration(start, hit, lim)?;
         let t = limits::earliest_quintic_duration(start, hit, lim, t_req)?;
-        let back_t = limits::minimal_quintic_duration(hit, rest, lim)?;
         let legs = Legs {
             hit: JointTrajectory::quintic_unchecked(start, hit, t),
-            back: JointTrajectory::quintic_unchecked(hit, rest, back_t),
+            back: quick_quintic(hit, rest, lim),
             profile,
         };
-        return Ok((legs, earliest.min(t)));
+        return Ok((legs, if t > t_req { t } else { f64::NAN }));
     }
-    let fastest = jerk_limited(start, hit, lim, None, PositionLimits::Ignore)?;
-    let earliest = fastest.duration;
-    let (leg, used) = if t_req <= earliest {
-        (fastest.trajectory, StrokeProfile::Jerk)
-    } else if profile == StrokeProfile::Auto
-        && limits::quintic_limit_ratio(start, hit, t_req, lim) <= 1.0 + LIMIT_TOLERANCE
-    {
-        (
-            JointTrajectory::quintic_unchecked(start, hit, t_req),
-            StrokeProfile::Quintic,
-        )
+    if profile == StrokeProfile::Auto && limits::quintic_limit_ratio(start, hit, t_req, lim) <= 1.0 + LIMIT_TOLERANCE {
+        let legs = Legs {
+            hit: JointTrajectory::quintic_unchecked(start, hit, t_req),
+            back: quick_quintic(hit, rest, lim),
+            profile: StrokeProfile::Quintic,
+        };
+        return Ok((legs, f64::NAN));
+    }
+    // Ruckig with a minimum duration returns the time-optimal trajectory when that is later.
+    let leg = jerk_limited(start, hit, lim, Some(t_req), PositionLimits::Ignore)?;
+    let earliest = if leg.duration > t_req * (1.0 + 1e-12) {
+        leg.duration
     } else {
-        (
-            jerk_limited(start, hit, lim, Some(t_req), PositionLimits::Ignore)?.trajectory,
-            StrokeProfile::Jerk,
-        )
+        f64::NAN
     };
     let back = jerk_limited(hit, rest, lim, None, PositionLimits::Ignore)?.trajectory;
     Ok((
         Legs {
-            hit: leg,
+            hit: leg.trajectory,
             back,
-            profile: used,
+            profile: StrokeProfile::Jerk,
         },
         earliest,
     ))
 }
 
+/// The earliest hit time (s) at which the planner's profile meets the velocity, acceleration and
+/// jerk limits from `start` to `hit`: the time-optimal jerk-limited duration (`Auto`, `Jerk`) or
+/// the minimal quintic duration (`Quintic`).
+pub(super) fn earliest_kinematic(p: &HitPlanner, start: &JointState, hit: &JointState) -> Result<f64> {
+    match p.options.profile {
+        StrokeProfile::Quintic => limits::minimal_quintic_duration(start, hit, &p.limits),
+        _ => Ok(jerk_limited(start, hit, &p.limits, None, PositionLimits::Ignore)?.duration),
+    }
+}
+
+/// Factor by which [`quick_quintic`] grows the return leg until it respects the limits.
+const QUICK_GROWTH: f64 = 1.1;
+
+/// A quintic from `from` to `to` within the velocity, acceleration and jerk limits, not minimal:
+/// the duration starts at the largest rest-to-rest quintic bound (15h/8v, √(10h/√3a), ∛(60h/j))
+/// and the time to cancel the start velocity and acceleration, and grows by [`QUICK_GROWTH`] until
+/// the exact peaks are within the limits (within 10 % of the minimal duration of that family).
+fn quick_quintic(from: &JointState, to: &JointState, lim: &limits::KinematicLimits) -> JointTrajectory {
+    let mut t: f64 = 1e-3;
+    for j in 0..from.q.len() {
+        let h = (to.q[j] - from.q[j]).abs();
+        t = t
+            .max(15.0 * h / (8.0 * lim.velocity[j]))
+            .max((10.0 * h / (3f64.sqrt() * lim.acceleration[j])).sqrt())
+            .max((60.0 * h / lim.jerk[j]).cbrt())
+            .max((to.qd[j] - from.qd[j]).abs() / lim.acceleration[j])
+            .max((to.qdd[j] - from.qdd[j]).abs() / lim.jerk[j]);
+    }
+    for _ in 0..200 {
+        if limits::quintic_limit_ratio(from, to, t, lim) <= 1.0 + LIMIT_TOLERANCE {
+            break;
+        }
+        t *= QUICK_GROWTH;
+    }
+    JointTrajectory::quintic_unchecked(from, to, t)
+}
+
+/// Position-limit violations of `traj` (exact extrema per segment), times shifted by `t0` s.
+fn position_violations(p: &HitPlanner, traj: &JointTrajectory, t0: f64) -> Vec<Violation> {
+    let lim = &p.limits;
+    let slack = |b: f64| LIMIT_TOLERANCE * b.abs().max(1.0);
+    let mut out = Vec::new();
+    for (j, (lo, hi)) in traj.position_range().into_iter().enumerate() {
+        for (peak, limit, bad) in [
+            (lo, lim.lower[j], lo.value < lim.lower[j] - slack(lim.lower[j])),
+            (hi, lim.upper[j], hi.value > lim.upper[j] + slack(lim.upper[j])),
+        ] {
+            if bad {
+                out.push(Violation {
+                    joint: j,
+                    quantity: Quantity::Position,
+                    time: t0 + peak.time,
+                    value: peak.value,
+                    limit,
+                });
+            }
+        }
+    }
+    out
+}
+
 /// True when `traj` stays inside the position limits (exact extrema).
 fn inside(p: &HitPlanner, traj: &JointTrajectory) -> bool {
-    let lim = &p.limits;
-    traj.position_range().iter().enumerate().all(|(j, (lo, hi))| {
-        let slack = |b: f64| LIMIT_TOLERANCE * b.abs().max(1.0);
-        lo.value >= lim.lower[j] - slack(lim.lower[j]) && hi.value <= lim.upper[j] + slack(lim.upper[j])
-    })
+    position_violations(p, traj, 0.0).is_empty()
 }
 
 /// Replans a leg that leaves the position limits jerk-limited with position limits (the hit leg

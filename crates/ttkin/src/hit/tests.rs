@@ -39,7 +39,9 @@ fn demo_hit_is_met_on_time_within_every_limit() {
     let plan = p.plan(&demo_hit(0.35), None, None).unwrap();
     assert!(plan.ok(), "{:?}: {}", plan.status, plan.message);
     assert_eq!(plan.t_hit, 0.35);
-    assert!(plan.earliest_t_hit <= 0.35);
+    assert!(plan.earliest_t_hit.is_nan());
+    let earliest = p.earliest_t_hit(&plan);
+    assert!(earliest > 0.25 && earliest < 0.35, "{earliest}");
     let (pe, te) = hit_errors(&p, &plan);
     assert!(pe < 1e-9 && te < 1e-8, "pose {pe}, twist {te}");
     assert!(plan.violations.is_empty());
@@ -73,7 +75,7 @@ fn auto_profile_prefers_the_quintic_when_it_is_on_time() {
     let slow = p.plan(&demo_hit(1.0), None, None).unwrap();
     assert!(slow.ok());
     assert_eq!(slow.profile, StrokeProfile::Quintic);
-    let fast = p.plan(&demo_hit(slow.earliest_t_hit * 1.01), None, None).unwrap();
+    let fast = p.plan(&demo_hit(p.earliest_t_hit(&slow) * 1.01), None, None).unwrap();
     assert!(fast.ok(), "{}", fast.message);
     assert_eq!(fast.profile, StrokeProfile::Jerk);
 }
@@ -154,7 +156,11 @@ fn batch_equals_single_calls() {
     let hits: Vec<Hit> = [0.02, 0.3, 0.5, 1.0].iter().map(|&t| demo_hit(t)).collect();
     let batch = p.plan_batch(&hits, None, None).unwrap();
     for (h, b) in hits.iter().zip(&batch) {
-        assert_eq!(&p.plan(h, None, None).unwrap(), b);
+        let single = p.plan(h, None, None).unwrap();
+        assert_eq!(single.status, b.status);
+        assert_eq!(single.t_hit, b.t_hit, "{:?}", b.status);
+        assert_eq!(single.q_hit, b.q_hit);
+        assert_eq!(single.trajectory, b.trajectory);
     }
 }
 
@@ -189,8 +195,11 @@ proptest! {
             prop_assert!(pe < 1e-8 && te < 1e-6, "pose {} twist {}", pe, te);
             if matches!(plan.status, HitStatus::Ok | HitStatus::TooEarly) {
                 prop_assert!(plan.violations.is_empty(), "{:?}", plan.violations);
+                // Independent exact check of every kinematic limit (position, speed, acceleration, jerk).
+                let all = plan.trajectory.as_ref().unwrap().check_limits(p.limits()).unwrap();
+                prop_assert!(all.is_empty(), "{:?}", all);
                 prop_assert!(plan.t_hit >= hit.t * (1.0 - 1e-12));
-                prop_assert!(plan.t_hit >= plan.earliest_t_hit * (1.0 - 1e-9));
+                prop_assert!(plan.t_hit >= p.earliest_t_hit(&plan) * (1.0 - 1e-9));
             }
             if plan.status == HitStatus::Ok {
                 prop_assert_eq!(plan.t_hit, hit.t);

@@ -86,7 +86,24 @@ pub fn jerk_limited(
     if let Some(d) = minimum_duration {
         super::check_duration("minimum_duration", d)?;
     }
-    let mut input = InputParameter::<0>::new(Some(n));
+    match n {
+        6 => solve::<6>(start, end, limits, minimum_duration, position),
+        _ => solve::<0>(start, end, limits, minimum_duration, position),
+    }
+}
+
+/// [`jerk_limited`] after the checks, with Ruckig's data on the stack for `N` > 0 joints (heap for
+/// `N` = 0, any count).
+fn solve<const N: usize>(
+    start: &JointState,
+    end: &JointState,
+    limits: &KinematicLimits,
+    minimum_duration: Option<f64>,
+    position: PositionLimits,
+) -> Result<JerkLimited> {
+    let n = start.q.len();
+    let dofs = if N == 0 { Some(n) } else { None };
+    let mut input = InputParameter::<N>::new(dofs);
     for j in 0..n {
         input.current_position[j] = start.q[j];
         input.current_velocity[j] = start.qd[j];
@@ -117,8 +134,8 @@ pub fn jerk_limited(
         input.min_position = Some(lo);
         input.max_position = Some(hi);
     }
-    let mut otg = Ruckig::<0, IgnoreErrorHandler>::new(Some(n), 1e-3);
-    let mut traj = Trajectory::<0>::new(Some(n));
+    let mut otg = Ruckig::<N, IgnoreErrorHandler>::new(dofs, 1e-3);
+    let mut traj = Trajectory::<N>::new(dofs);
     let result = otg
         .calculate(&input, &mut traj)
         .map_err(|e| Error::invalid("jerk-limited stroke", format!("{e:?}")))?;
@@ -148,14 +165,14 @@ pub fn jerk_limited(
         ));
     }
     Ok(JerkLimited {
-        trajectory: to_joint_trajectory(&traj, n, duration),
+        trajectory: to_joint_trajectory::<N>(&traj, n, duration),
         duration,
     })
 }
 
 /// Converts Ruckig's per-joint phase profiles into one piecewise-cubic [`JointTrajectory`] on
 /// the union of the phase boundaries.
-fn to_joint_trajectory(traj: &Trajectory<0>, n: usize, duration: f64) -> JointTrajectory {
+fn to_joint_trajectory<const N: usize>(traj: &Trajectory<N>, n: usize, duration: f64) -> JointTrajectory {
     let profiles = &traj.get_profiles()[0];
     let mut knots = Vec::with_capacity(9 * n + 2);
     knots.push(0.0);
@@ -179,10 +196,10 @@ fn to_joint_trajectory(traj: &Trajectory<0>, n: usize, duration: f64) -> JointTr
         knots.remove(last - 1);
     }
 
-    let mut p = input_vec(n);
-    let mut v = input_vec(n);
-    let mut a = input_vec(n);
-    let mut jerk = input_vec(n);
+    let mut p = input_vec::<N>(n);
+    let mut v = input_vec::<N>(n);
+    let mut a = input_vec::<N>(n);
+    let mut jerk = input_vec::<N>(n);
     let mut coeffs: Vec<Coeffs> = Vec::with_capacity((knots.len() - 1) * n);
     for w in knots.windows(2) {
         let (t0, t1) = (w[0], w[1]);
@@ -211,8 +228,8 @@ fn to_joint_trajectory(traj: &Trajectory<0>, n: usize, duration: f64) -> JointTr
     JointTrajectory::from_parts(n, knots, coeffs)
 }
 
-fn input_vec(n: usize) -> rsruckig::prelude::DataArrayOrVec<f64, 0> {
-    rsruckig::prelude::DataArrayOrVec::new(Some(n), 0.0)
+fn input_vec<const N: usize>(n: usize) -> rsruckig::prelude::DataArrayOrVec<f64, N> {
+    rsruckig::prelude::DataArrayOrVec::new(if N == 0 { Some(n) } else { None }, 0.0)
 }
 
 #[cfg(test)]
