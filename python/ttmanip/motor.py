@@ -85,7 +85,7 @@ class Loops:
     speed_symmetric_optimum: float = _D["speed_symmetric_optimum"]  # a ≥ 2
     speed_output_filter_hz: float = _D["speed_output_filter_hz"]
     position_ratio: float = _D["position_ratio"]  # speed crossover / position gain
-    speed_window: int = _D["speed_window"]  # speed periods of encoder differencing, 1..16
+    observer_bandwidth_hz: float = _D["observer_bandwidth_hz"]  # tracking observer (speed/position estimate)
     speed_reference_filter_hz: float | None = _D["speed_reference_filter_hz"]  # None: 1/(2π a T_σ)
     continuous_current: float = _D["continuous_current"]  # A
     peak_current: float = _D["peak_current"]  # A

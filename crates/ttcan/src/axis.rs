@@ -1,5 +1,6 @@
-//! One axis: the cascade of [`crate::loops`] for one motor, its sensing (position from encoder
-//! counts, speed by differencing), its operating mode and its fault state machine.
+//! One axis: the cascade of [`crate::loops`] for one motor, its sensing (position and speed from
+//! the tracking observer of [`crate::observer`] on the encoder and the measured current), its
+//! operating mode and its fault state machine.
 //!
 //! States: `Disabled` (duty 0) → `enable(mode)` → `Enabled` → on a fault → `Stopping` (speed loop
 //! ramps the speed to zero at the quick-stop deceleration, current limited to the continuous
@@ -13,8 +14,10 @@
 use crate::error::{finite, positive, Error, Result};
 use crate::loops::{CurrentLoop, LowPass, Pi, PositionLoop, PositionOutput, SpeedLoop};
 use crate::motor::{Measurement, MotorModel};
+use crate::observer::TrackingObserver;
+use crate::setpoint::SetpointInterpolator;
 use crate::stepper::{Due, Rates};
-use crate::tuning::{tune_cascade, CascadeTuning, TuningTargets, SPEED_WINDOW_MAX};
+use crate::tuning::{tune_cascade, CascadeTuning, TuningTargets};
 
 /// Operating mode (the CiA 402 cyclic synchronous modes: torque, velocity, position).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -40,6 +43,8 @@ pub enum Fault {
     InvalidReference,
     /// The current reading was NaN or infinite.
     InvalidMeasurement,
+    /// `setpoint_max_missed` cyclic position setpoints in a row did not arrive.
+    SetpointsLost,
 }
 
 /// State of the axis' power stage and fault machine.
@@ -92,6 +97,16 @@ pub struct AxisConfig {
     /// estimate moves in whole encoder counts per speed period, and unfiltered those steps would
     /// kick the current.
     pub emf_filter_hz: f64,
+    /// Largest RMS current-reference ripple from encoder quantisation (the tuning's
+    /// `quantisation_ripple_rms`), as a share of the continuous current; a configuration above it
+    /// is refused (lower the observer bandwidth or use a finer encoder).
+    pub max_quantisation_ripple_share: f64,
+    /// Period of cyclic position setpoints, s (CiA 402 interpolation time, 0x60C2): `Some` makes
+    /// the axis interpolate them at the speed-loop rate (see [`crate::setpoint`]) and watch their
+    /// age; `None` uses each setpoint as it comes, with no watchdog.
+    pub setpoint_period: Option<f64>,
+    /// Cyclic setpoints missed in a row before the axis quick-stops with [`Fault::SetpointsLost`].
+    pub setpoint_max_missed: u32,
 }
 
 impl AxisConfig {
@@ -117,6 +132,9 @@ impl AxisConfig {
             emf_feedforward: true,
             anti_windup: true,
             emf_filter_hz: 100.0,
+            max_quantisation_ripple_share: 0.05,
+            setpoint_period: None,
+            setpoint_max_missed: 3,
         }
     }
 }
@@ -128,8 +146,8 @@ pub struct Axis {
     tuning: CascadeTuning,
     // Constants.
     rad_per_count: f64,
-    speed_rate: f64,
     speed_period: f64,
+    current_period: f64,
     jump_limit: u64,
     standstill: f64,
     stop_timeout: f64,
@@ -138,15 +156,18 @@ pub struct Axis {
     emf_speed: LowPass,
     speed_loop: SpeedLoop,
     position_loop: PositionLoop,
+    interpolator: SetpointInterpolator,
+    interpolating: bool,
+    amps_per_joint_torque: f64,
     // Sensing.
     primed: bool,
     count_offset: i64,
     last_counts: i64,
+    /// Encoder position (mid-count), rad.
+    encoder_position: f64,
+    observer: TrackingObserver,
+    /// Observer position and speed, sampled at the speed-loop rate, rad and rad/s.
     position: f64,
-    /// Positions at the last `SPEED_WINDOW_MAX` speed ticks (ring buffer), rad.
-    speed_ring: [f64; SPEED_WINDOW_MAX],
-    speed_ring_index: usize,
-    speed_window: usize,
     speed: f64,
     // References and outputs.
     state: AxisState,
@@ -156,6 +177,10 @@ pub struct Axis {
     q_ref: f64,
     qd_ref: f64,
     qdd_ref: f64,
+    torque_feedforward: f64,
+    /// Torque feed-forward before and after the latest cyclic setpoint (interpolated between).
+    torque_segment: [f64; 2],
+    host_torque: bool,
     position_output: PositionOutput,
     current_reference: f64,
     duty: f64,
@@ -221,6 +246,29 @@ impl Axis {
         let [tc, ts, tp] = c.rates.periods();
         let tuning = tune_cascade(m, [tc, ts, tp], &c.tuning)?;
         finite("tuned speed gain", tuning.speed.kp)?;
+        positive("max quantisation ripple share", c.max_quantisation_ripple_share)?;
+        let ripple = tuning.quantisation_ripple_rms;
+        if ripple > c.max_quantisation_ripple_share * c.continuous_current {
+            return Err(invalid(
+                "observer bandwidth (Hz)",
+                c.tuning.observer_bandwidth_hz,
+                &format!(
+                    "encoder quantisation puts {ripple:.3} A RMS on the current reference (Kp·Δω), above {:.0} % of the \
+                     continuous current {:.2} A: lower the observer bandwidth or use a finer encoder",
+                    100.0 * c.max_quantisation_ripple_share,
+                    c.continuous_current
+                ),
+            ));
+        }
+        let observer = TrackingObserver::new(
+            c.tuning.observer_bandwidth_hz,
+            tc,
+            if c.tuning.observer_acceleration_input {
+                m.acceleration_per_amp()
+            } else {
+                0.0
+            },
+        )?;
 
         let rad_per_count = m.radians_per_count();
         let current_loop = CurrentLoop::new(
@@ -250,14 +298,27 @@ impl Axis {
             c.velocity_feedforward,
             c.acceleration_feedforward,
         );
+        if let Some(p) = c.setpoint_period {
+            positive("setpoint period (s)", p)?;
+            if p < ts * (1.0 - 1e-9) {
+                return Err(invalid(
+                    "setpoint period (s)",
+                    p,
+                    "must be at least one speed-loop period",
+                ));
+            }
+        }
+        if c.setpoint_max_missed == 0 {
+            return Err(invalid("setpoint max missed", 0.0, "must be >= 1"));
+        }
         // An encoder may move at most twice the largest speed's worth of counts per current period.
         let jump_limit = (2.0 * c.max_speed * tc / rad_per_count).ceil() as u64 + 2;
         Ok(Axis {
             config: *c,
             tuning,
             rad_per_count,
-            speed_rate: 1.0 / (ts * c.tuning.speed_window as f64),
             speed_period: ts,
+            current_period: tc,
             jump_limit,
             standstill: 0.05 * c.max_speed,
             stop_timeout: 2.0 * c.max_speed / c.quick_stop_deceleration + 0.2,
@@ -265,13 +326,15 @@ impl Axis {
             emf_speed: LowPass::new(c.emf_filter_hz, ts),
             speed_loop,
             position_loop,
+            interpolator: SetpointInterpolator::new(c.setpoint_period.unwrap_or(tp), c.setpoint_max_missed),
+            interpolating: c.setpoint_period.is_some(),
+            amps_per_joint_torque: 1.0 / (m.motor.torque_constant * n),
             primed: false,
             count_offset: 0,
             last_counts: 0,
+            encoder_position: 0.0,
+            observer,
             position: 0.0,
-            speed_ring: [0.0; SPEED_WINDOW_MAX],
-            speed_ring_index: 0,
-            speed_window: c.tuning.speed_window as usize,
             speed: 0.0,
             state: AxisState::Disabled,
             mode: Mode::Current,
@@ -280,6 +343,9 @@ impl Axis {
             q_ref: 0.0,
             qd_ref: 0.0,
             qdd_ref: 0.0,
+            torque_feedforward: 0.0,
+            torque_segment: [0.0; 2],
+            host_torque: false,
             position_output: PositionOutput::default(),
             current_reference: 0.0,
             duty: 0.0,
@@ -292,13 +358,22 @@ impl Axis {
     /// bridge duty cycle in [−1, 1]. Never fails, never allocates.
     #[inline]
     pub fn tick(&mut self, m: Measurement, due: Due) -> f64 {
-        self.sense(m.encoder_counts, due.speed);
+        let duty = self.control(m, due);
+        if self.interpolating {
+            self.interpolator.advance(self.current_period);
+        }
+        duty
+    }
+
+    #[inline]
+    fn control(&mut self, m: Measurement, due: Due) -> f64 {
         let current = if m.current.is_finite() {
             m.current
         } else {
             self.trip(Fault::InvalidMeasurement);
             0.0
         };
+        self.sense(m.encoder_counts, current, due.speed);
         if current.abs() > self.config.overcurrent_trip {
             self.trip(Fault::OverCurrent);
         }
@@ -321,7 +396,7 @@ impl Axis {
         self.duty
     }
 
-    fn sense(&mut self, raw_counts: i64, speed_due: bool) {
+    fn sense(&mut self, raw_counts: i64, current: f64, speed_due: bool) {
         let mut counts = raw_counts.wrapping_add(self.count_offset);
         if self.primed {
             let delta = counts.wrapping_sub(self.last_counts);
@@ -333,20 +408,18 @@ impl Axis {
             }
         } else {
             self.primed = true;
-            let p = counts as f64 * self.rad_per_count;
-            self.speed_ring = [p; SPEED_WINDOW_MAX];
+            let p = (counts as f64 + 0.5) * self.rad_per_count;
+            self.observer.reset(p, 0.0);
+            self.interpolator.reset(p);
             self.q_ref = p;
         }
         self.last_counts = counts;
-        self.position = counts as f64 * self.rad_per_count;
+        // The encoder reads floor(θ/Δ): the middle of the count is the unbiased position.
+        self.encoder_position = (counts as f64 + 0.5) * self.rad_per_count;
+        self.observer.step(self.encoder_position, current);
         if speed_due {
-            // Difference over the last `speed_window` speed periods: the ring holds the positions
-            // of the last SPEED_WINDOW_MAX speed ticks, the oldest needed one `speed_window` back.
-            let i = self.speed_ring_index;
-            let old = (i + SPEED_WINDOW_MAX - self.speed_window) % SPEED_WINDOW_MAX;
-            self.speed = (self.position - self.speed_ring[old]) * self.speed_rate;
-            self.speed_ring[i] = self.position;
-            self.speed_ring_index = (i + 1) % SPEED_WINDOW_MAX;
+            self.position = self.observer.position();
+            self.speed = self.observer.speed();
             self.emf_speed.step(self.speed);
         }
     }
@@ -356,11 +429,25 @@ impl Axis {
             Mode::Current => self.current_reference = self.current_command,
             Mode::Velocity => {
                 if due.speed {
-                    self.current_reference = self.speed_step(self.speed_command, 0.0, 0.0);
+                    let ff = self.torque_feedforward * self.amps_per_joint_torque;
+                    self.current_reference = self.speed_step(self.speed_command, 0.0, ff);
                 }
             }
             Mode::Position => {
-                if due.position {
+                if self.interpolating && due.speed {
+                    let mid = self.interpolator.age() + 0.5 * self.speed_period;
+                    let s = (mid / self.interpolator.period()).min(1.0);
+                    let [t0, t1] = self.torque_segment;
+                    self.torque_feedforward = t0 + s * (t1 - t0);
+                    let [q, qd, qdd] = self.interpolator.sample(self.speed_period);
+                    (self.q_ref, self.qd_ref, self.qdd_ref) = (q, qd, qdd);
+                    if self.interpolator.lost() {
+                        self.trip(Fault::SetpointsLost);
+                        self.run_stopping(due);
+                        return;
+                    }
+                }
+                if due.position || (self.interpolating && due.speed) {
                     let o = self
                         .position_loop
                         .step(self.q_ref, self.qd_ref, self.qdd_ref, self.position);
@@ -373,8 +460,10 @@ impl Axis {
                 }
                 if due.speed {
                     let o = self.position_output;
-                    self.current_reference =
-                        self.speed_step(o.speed_command, o.speed_feedforward, o.current_feedforward);
+                    // A host torque feed-forward holds the inertia torque already: not twice.
+                    let own = if self.host_torque { 0.0 } else { o.current_feedforward };
+                    let ff = own + self.torque_feedforward * self.amps_per_joint_torque;
+                    self.current_reference = self.speed_step(o.speed_command, o.speed_feedforward, ff);
                 }
             }
         }
@@ -453,6 +542,10 @@ impl Axis {
         self.q_ref = self.position;
         self.qd_ref = 0.0;
         self.qdd_ref = 0.0;
+        self.torque_feedforward = 0.0;
+        self.torque_segment = [0.0; 2];
+        self.host_torque = false;
+        self.interpolator.reset(self.position);
         self.position_output = PositionOutput::default();
         self.speed_loop.reset(self.speed, self.current_reference);
     }
@@ -496,10 +589,33 @@ impl Axis {
 
     /// Position reference for position mode: rad, rad/s, rad/s² at the output (NaN trips a fault).
     pub fn set_position(&mut self, q: f64, qd: f64, qdd: f64) {
-        if q.is_finite() && qd.is_finite() && qdd.is_finite() {
+        if !(q.is_finite() && qd.is_finite() && qdd.is_finite()) {
+            self.trip(Fault::InvalidReference);
+        } else if self.interpolating {
+            self.interpolator.push(q, qd, qdd);
+        } else {
             self.q_ref = q;
             self.qd_ref = qd;
             self.qdd_ref = qdd;
+        }
+    }
+
+    /// Joint-side torque feed-forward, N·m (N for a linear axis): the host's inverse dynamics,
+    /// turned into a current through the gear ratio and k_t and added after the speed PI in
+    /// velocity and position mode (the analogue of CiA 402 0x60B2); with cyclic setpoints it is
+    /// interpolated like them (it belongs to the setpoint that came with it). From the first call until the
+    /// next mode change it replaces the axis' own acceleration feed-forward (the host's inverse
+    /// dynamics holds the inertia torque, with the coupling the axis cannot know). NaN trips a fault.
+    pub fn set_torque_feedforward(&mut self, torque: f64) {
+        if torque.is_finite() {
+            if self.interpolating && self.mode == Mode::Position {
+                // Ramp from where the torque is now to the new value over one setpoint period,
+                // in step with the position segment.
+                self.torque_segment = [self.torque_feedforward, torque];
+            } else {
+                self.torque_feedforward = torque;
+            }
+            self.host_torque = true;
         } else {
             self.trip(Fault::InvalidReference);
         }
@@ -538,12 +654,12 @@ impl Axis {
         self.mode
     }
 
-    /// Measured output position, rad.
+    /// Estimated output position (tracking observer, sampled at the speed-loop rate), rad.
     pub fn position(&self) -> f64 {
         self.position
     }
 
-    /// Estimated output speed, rad/s (encoder difference over `speed_window` speed periods).
+    /// Estimated output speed (tracking observer, sampled at the speed-loop rate), rad/s.
     pub fn speed(&self) -> f64 {
         self.speed
     }

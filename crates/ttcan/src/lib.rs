@@ -12,14 +12,19 @@
 #![warn(missing_docs)]
 
 pub mod axis;
+pub mod cases;
+pub mod coupled;
 pub mod error;
 pub mod loops;
 pub mod motor;
+pub mod observer;
+pub mod setpoint;
 pub mod sim;
 pub mod stepper;
 pub mod tuning;
 
 pub use axis::{Axis, AxisConfig, AxisState, Fault, Mode};
+pub use coupled::{CoupledOptions, CoupledSim, CoupledTrace, EnergyBalance};
 pub use error::{Error, Result};
 pub use motor::{DcMotor, Gearbox, Load, Measurement, MotorModel, Plant};
 pub use sim::{Setpoint, Simulation, Trace};

@@ -99,6 +99,11 @@ impl Simulation {
         self.time
     }
 
+    /// Which loops run on the next [`Simulation::step`].
+    pub fn next_due(&self) -> crate::stepper::Due {
+        self.scheduler.peek()
+    }
+
     /// Enables the axis in `mode` (after one disabled tick so that the encoder origin is known).
     pub fn enable(&mut self, mode: Mode) -> bool {
         if self.scheduler.ticks() == 0 {
@@ -132,7 +137,7 @@ impl Simulation {
         let mut trace = Trace::with_capacity(n);
         for _ in 0..n {
             self.apply(reference(self.time));
-            self.record(&mut trace);
+            self.record_into(&mut trace);
             self.step();
         }
         Ok(trace)
@@ -171,7 +176,7 @@ impl Simulation {
                 self.axis.set_position(q[k], qd[k], qdd[k]);
                 k += 1;
             }
-            self.record(&mut trace);
+            self.record_into(&mut trace);
             self.step();
         }
         Ok(trace)
@@ -188,7 +193,8 @@ impl Simulation {
         Ok((duration / self.plant.dt()).round() as usize)
     }
 
-    fn record(&self, t: &mut Trace) {
+    /// Appends the present signals to `t` (what [`Simulation::run`] records every period).
+    pub fn record_into(&self, t: &mut Trace) {
         let a = &self.axis;
         t.time.push(self.time);
         t.current.push(self.plant.current());

@@ -80,8 +80,14 @@ fn unreachable_tuning_targets_are_rejected() {
         &axis_error(|c| c.tuning.speed_output_filter_hz = 0.0),
         "speed output filter",
     );
-    assert_names(&axis_error(|c| c.tuning.speed_window = 0), "speed window");
-    assert_names(&axis_error(|c| c.tuning.speed_window = 17), "speed window");
+    assert_names(
+        &axis_error(|c| c.tuning.observer_bandwidth_hz = 0.0),
+        "observer bandwidth",
+    );
+    assert_names(
+        &axis_error(|c| c.tuning.observer_bandwidth_hz = 5000.0),
+        "observer bandwidth",
+    );
 }
 
 #[test]

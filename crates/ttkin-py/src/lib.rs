@@ -5,6 +5,7 @@
 use pyo3::prelude::*;
 
 mod convert;
+mod drives;
 mod dynamics;
 mod errors;
 mod hit;
@@ -25,5 +26,6 @@ fn _ttmanip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     ik::register(m)?;
     traj::register(m)?;
     hit::register(m)?;
+    drives::register(m)?;
     Ok(())
 }

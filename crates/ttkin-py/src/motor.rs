@@ -50,7 +50,7 @@ const LOOP_KEYS: [&str; 21] = [
     "speed_symmetric_optimum",
     "speed_output_filter_hz",
     "position_ratio",
-    "speed_window",
+    "observer_bandwidth_hz",
     "speed_reference_filter_hz",
     "continuous_current",
     "peak_current",
@@ -96,7 +96,7 @@ fn config_dict<'py>(py: Python<'py>, c: &AxisConfig) -> PyResult<Bound<'py, PyDi
     d.set_item("speed_symmetric_optimum", c.tuning.speed_symmetric_optimum)?;
     d.set_item("speed_output_filter_hz", c.tuning.speed_output_filter_hz)?;
     d.set_item("position_ratio", c.tuning.position_ratio)?;
-    d.set_item("speed_window", c.tuning.speed_window)?;
+    d.set_item("observer_bandwidth_hz", c.tuning.observer_bandwidth_hz)?;
     d.set_item("speed_reference_filter_hz", c.speed_reference_filter_hz)?;
     d.set_item("continuous_current", c.continuous_current)?;
     d.set_item("peak_current", c.peak_current)?;
@@ -178,11 +178,7 @@ fn apply_config(d: &Bound<'_, PyDict>, c: &mut AxisConfig) -> PyResult<()> {
     float(d, "speed_symmetric_optimum", &mut c.tuning.speed_symmetric_optimum)?;
     float(d, "speed_output_filter_hz", &mut c.tuning.speed_output_filter_hz)?;
     float(d, "position_ratio", &mut c.tuning.position_ratio)?;
-    if let Some(v) = d.get_item("speed_window")? {
-        c.tuning.speed_window = v
-            .extract::<u32>()
-            .map_err(|_| ModelError::new_err("speed_window: expected a positive integer (speed periods)"))?;
-    }
+    float(d, "observer_bandwidth_hz", &mut c.tuning.observer_bandwidth_hz)?;
     if let Some(v) = d.get_item("speed_reference_filter_hz")? {
         c.speed_reference_filter_hz = v
             .extract::<Option<f64>>()
