@@ -286,7 +286,7 @@ def simulate(
     inverse-dynamics torques as feed-forward, setpoints handed to every axis's drive at
     ``setpoint_rate`` Hz, optional sensor ``noise`` (see ``DriveSim``), gravity on. Returns the
     executed states, currents, the racket over time and its errors at the hit."""
-    from . import DriveSim
+    from ._ttmanip import DriveSim
 
     if not isinstance(plan, HitPlan):
         raise TtmanipError(f"plan: expected a ttmanip.HitPlan, got {type(plan).__name__}")
