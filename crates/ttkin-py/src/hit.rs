@@ -8,7 +8,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use ttkin::hit::{self, Hit, HitOptions, HitPlan, HitPlanner, HitTask, StrokeProfile};
 use ttkin::traj::JointState;
-use ttkin::{Chain, Dynamics};
+use ttkin::Dynamics;
 
 use crate::convert::{f64_array, pose_to_numpy, to_numpy, transform, vector};
 use crate::errors::{PyResultExt, ShapeError, TtmanipError};
@@ -19,7 +19,7 @@ use crate::traj::PyJointTrajectory;
 #[pyclass(name = "HitPlan", module = "ttmanip", frozen)]
 pub struct PyHitPlan {
     plan: HitPlan,
-    chain: Arc<Chain>,
+    planner: Arc<HitPlanner>,
 }
 
 fn vec_py<'py>(py: Python<'py>, v: &[f64]) -> Bound<'py, PyAny> {
@@ -83,10 +83,11 @@ impl PyHitPlan {
         self.plan.hit.t
     }
 
-    /// Earliest feasible hit time (s); NaN when unknown.
+    /// Earliest feasible hit time (s), computed on first need when planning did not find it;
+    /// NaN when there is no hit state.
     #[getter]
     fn earliest_t_hit(&self) -> f64 {
-        self.plan.earliest_t_hit
+        self.planner.earliest_t_hit(&self.plan)
     }
 
     /// Profile of the hit leg: "quintic" or "jerk" ("auto" when no stroke).
@@ -200,7 +201,7 @@ impl PyHitPlan {
     #[pyo3(signature = (rate=1000.0))]
     fn torques<'py>(&self, py: Python<'py>, rate: f64) -> PyResult<Bound<'py, PyAny>> {
         let s = self.stroke()?.sample_rate(rate).py()?;
-        let dy = Dynamics::new(&self.chain).py()?;
+        let dy = Dynamics::new(self.planner.chain()).py()?;
         let profile = py
             .detach(|| dy.torque_profile(&s.q, &s.qd, &s.qdd, &hit::GRAVITY, None))
             .py()?;
@@ -292,14 +293,11 @@ fn hit_plan(
         .map_err(|e| TtmanipError::new_err(format!("hit.{e}")))?;
     let state = start_state(n, q, qd, qdd)?;
     let ready = ready.map(|r| vector(r, "ready", n)).transpose()?;
-    let planner = HitPlanner::new(&robot.chain, options(robot, profile, task, jerk)?).py()?;
+    let planner = Arc::new(HitPlanner::new(&robot.chain, options(robot, profile, task, jerk)?).py()?);
     let plan = py
         .detach(|| planner.plan(&hit, state.as_ref(), ready.as_deref()))
         .py()?;
-    Ok(PyHitPlan {
-        plan,
-        chain: robot.chain.clone(),
-    })
+    Ok(PyHitPlan { plan, planner })
 }
 
 /// Plans N hits in parallel (GIL released): poses (N, 4, 4), twists (N, 6), times (N,); the
@@ -351,7 +349,7 @@ fn hit_plan_batch(
     }
     let state = start_state(n, q, qd, qdd)?;
     let ready = ready.map(|r| vector(r, "ready", n)).transpose()?;
-    let planner = HitPlanner::new(&robot.chain, options(robot, profile, task, jerk)?).py()?;
+    let planner = Arc::new(HitPlanner::new(&robot.chain, options(robot, profile, task, jerk)?).py()?);
     let plans = py
         .detach(|| planner.plan_batch(&hits, state.as_ref(), ready.as_deref()))
         .py()?;
@@ -359,7 +357,7 @@ fn hit_plan_batch(
         .into_iter()
         .map(|plan| PyHitPlan {
             plan,
-            chain: robot.chain.clone(),
+            planner: planner.clone(),
         })
         .collect())
 }

@@ -8,7 +8,8 @@ use crate::chain::JacobianFrame;
 use crate::clik::{self, ClikOptions, ClikStatus, TaskTrajectory};
 use crate::error::Error;
 use crate::ik::{wrap, DifferentialIk, IkSolver, LimitFilter};
-use crate::redundancy::{limit_gradient, Damping, WlsSolver};
+use crate::joint::JointType;
+use crate::redundancy::limit_gradient;
 use crate::task::{racket_coordinates, tangent_basis, Task};
 use crate::wholebody::WholeBody;
 
@@ -16,6 +17,10 @@ use crate::wholebody::WholeBody;
 /// current racket pose to the hit pose (only its end configuration is kept).
 const TRACK_DURATION: f64 = 1.0;
 const TRACK_RATE: f64 = 500.0;
+
+/// Cost factor of a prismatic joint in the weighted least norm of the 5-D racket task: on
+/// seed 000's mobile8 joint 1 is the heavy base rolling on its wheels; it should move little.
+const PRISMATIC_COST: f64 = 10.0;
 
 /// Largest 5-D task residual (m and rad) accepted at the end of the tracked line.
 const TRACK_TOLERANCE: f64 = 1e-6;
@@ -101,8 +106,8 @@ fn pose(p: &HitPlanner, hit: &Hit, tool_target: &IsometryMatrix3<f64>, current: 
 
 /// Seed 000's 5-D racket hit: the weighted least-norm tracker follows a line in task coordinates
 /// from the current racket to the hit racket; at its end the Chan–Dubey weighted least-norm
-/// joint velocities of the task velocity [v_centre; u1·ω; u2·ω] ((u1, u2) spanning the face),
-/// each joint inside its speed box (saturated joints are held at their limit, the rest re-solved).
+/// joint velocities (a prismatic joint, the base, costs [`PRISMATIC_COST`]) of the task velocity [v_centre; u1·ω; u2·ω] ((u1, u2) spanning the face),
+/// (a joint beyond its speed limit is reported by the stroke planner).
 fn racket5(p: &HitPlanner, hit: &Hit, tool_target: &IsometryMatrix3<f64>, current: &[f64]) -> Outcome {
     let chain = &p.chain;
     let offset = p.racket.in_tool.translation.vector.z;
@@ -122,7 +127,16 @@ fn racket5(p: &HitPlanner, hit: &Hit, tool_target: &IsometryMatrix3<f64>, curren
     let mut x1 = racket_coordinates(tool_target, offset);
     x1[4] = x0[4] + wrap(x1[4] - x0[4]);
     let line = TaskTrajectory::line(task, &x0, &x1, TRACK_DURATION, TRACK_RATE).map_err(unreachable)?;
-    let r = clik::track(&model, current, &line, ClikOptions::default()).map_err(unreachable)?;
+    let base_cost: Vec<f64> = chain
+        .joints()
+        .iter()
+        .map(|j| if j.kind() == JointType::Prismatic { PRISMATIC_COST } else { 1.0 })
+        .collect();
+    let options = ClikOptions {
+        input_weights: Some(base_cost.clone()),
+        ..ClikOptions::default()
+    };
+    let r = clik::track(&model, current, &line, options).map_err(unreachable)?;
     if let ClikStatus::Failed { reason, .. } = &r.status {
         return Err((HitStatus::Unreachable, format!("racket task tracker: {reason}")));
     }
@@ -158,35 +172,34 @@ fn racket5(p: &HitPlanner, hit: &Hit, tool_target: &IsometryMatrix3<f64>, curren
     let weights: Vec<f64> = q
         .iter()
         .zip(&limits)
-        .map(|(&qi, l)| 1.0 + limit_gradient(qi, l.lower, l.upper).abs())
+        .zip(&base_cost)
+        .map(|((&qi, l), c)| c * (1.0 + limit_gradient(qi, l.lower, l.upper).abs()))
         .collect();
-    let mut solver = WlsSolver::new(5, n, Damping::none()).map_err(unreachable)?;
-    let mut qd = vec![0.0; n];
-    let upper: Vec<f64> = p.limits.velocity.clone();
-    let lower: Vec<f64> = upper.iter().map(|v| -v).collect();
-    let report = solver.solve(jt.as_slice(), &weights, &xdot, None, &lower, &upper, &mut qd);
-    if report.scale < 1.0 - 1e-12 {
-        return Err((
-            HitStatus::HitSpeedLimit,
-            format!(
-                "the joint speed limits allow only {:.1} % of the racket velocity at the hit",
-                100.0 * report.scale
-            ),
-        ));
+    let mut jw = jt.clone();
+    for (c, w) in weights.iter().enumerate() {
+        jw.column_mut(c).scale_mut(1.0 / w.sqrt());
     }
-    if !(report.sigma_min > 1e-6) || qd.iter().any(|v| !v.is_finite()) {
+    let sigma_min = jw.singular_values().min();
+    // Seed 000's (20): q̇ = W⁻¹Jᵀ(JW⁻¹Jᵀ)⁻¹ẋ, J of full row rank (checked by σ_min).
+    let winv_jt = DMatrix::from_fn(n, 5, |r, c| jt[(c, r)] / weights[r]);
+    let gram = &jt * &winv_jt;
+    let y = gram
+        .lu()
+        .solve(&nalgebra::DVector::from_column_slice(&xdot))
+        .unwrap_or_else(|| nalgebra::DVector::from_element(5, f64::NAN));
+    let qd: Vec<f64> = (winv_jt * y).iter().copied().collect();
+    if !(sigma_min > 1e-6) || qd.iter().any(|v| !v.is_finite()) {
         return Err((
             HitStatus::Singular,
             format!(
-                "the racket task is singular at the hit configuration (σ_min = {:.2e})",
-                report.sigma_min
+                "the racket task is singular at the hit configuration (σ_min = {sigma_min:.2e})"
             ),
         ));
     }
     Ok(HitState {
         q,
         qd,
-        sigma_min: report.sigma_min,
+        sigma_min,
         branches: 1,
     })
 }
