@@ -146,12 +146,13 @@ def run_hit(robot: Robot, hit: Hit, out: Path, prefix: str, *, gif: bool = True,
 
 
 def mobile8_hit() -> Hit:
-    """Seed 000's robot: a racket hit 6–8 cm from the racket's start pose, face tilted up, centre
-    moving at (0.2, 0.3, 0.1) m/s at 1 s (the 5-D racket task; the rotation about the normal is free)."""
+    """Seed 000's robot: a 5-D racket hit 8.3 cm from the racket's start pose (centre offset
+    (0.02, −0.04, −0.07) m, same face normal), centre moving at (−0.29, 0.19, 0.25) m/s at 1.5 s; the
+    rotation about the normal is free."""
     robot = robots.mobile8()
     q0 = robots.mobile8_start()
     _, c, n, _ = racket_states(robot, q0, np.zeros(robot.n))
-    return Hit.from_normal(c[0] + [0.05, 0.08, 0.05], n[0] + [0.0, 0.0, 0.2], [0.2, 0.3, 0.1], 1.0)
+    return Hit.from_normal(c[0] + [0.02, -0.04, -0.07], n[0], [-0.29, 0.19, 0.25], 1.5)
 
 
 def run(out: Path, progress=None, workspace: bool = True) -> dict:

@@ -226,7 +226,13 @@ impl PyHitPlan {
 }
 
 /// Options from the Python keywords.
-fn options(robot: &PyRobot, profile: &str, task: &str, jerk: Option<&Bound<'_, PyAny>>) -> PyResult<HitOptions> {
+fn options(
+    robot: &PyRobot,
+    profile: &str,
+    task: &str,
+    jerk: Option<&Bound<'_, PyAny>>,
+    effort: bool,
+) -> PyResult<HitOptions> {
     let task = match task {
         "auto" => HitTask::Auto,
         "pose" => HitTask::Pose,
@@ -242,6 +248,7 @@ fn options(robot: &PyRobot, profile: &str, task: &str, jerk: Option<&Bound<'_, P
         profile: StrokeProfile::from_name(profile).py()?,
         task,
         jerk,
+        check_effort: effort,
         ..Default::default()
     })
 }
@@ -268,9 +275,9 @@ fn start_state(
 
 /// Plans one hit: racket pose (4, 4), racket-centre twist (6,), hit time (s); optional start
 /// state (q, qd, qdd), ready configuration, profile ("auto", "quintic", "jerk"), task ("auto",
-/// "pose", "racket5"), jerk limits (n,).
+/// "pose", "racket5"), jerk limits (n,), effort (check the effort limits).
 #[pyfunction]
-#[pyo3(signature = (robot, pose, twist, t, q=None, qd=None, qdd=None, ready=None, profile="auto", task="auto", jerk=None))]
+#[pyo3(signature = (robot, pose, twist, t, q=None, qd=None, qdd=None, ready=None, profile="auto", task="auto", jerk=None, effort=true))]
 #[allow(clippy::too_many_arguments)]
 fn hit_plan(
     py: Python<'_>,
@@ -285,6 +292,7 @@ fn hit_plan(
     profile: &str,
     task: &str,
     jerk: Option<&Bound<'_, PyAny>>,
+    effort: bool,
 ) -> PyResult<PyHitPlan> {
     let n = robot.chain.dof();
     let pose = transform(pose, "hit.pose")?;
@@ -293,7 +301,7 @@ fn hit_plan(
         .map_err(|e| TtmanipError::new_err(format!("hit.{e}")))?;
     let state = start_state(n, q, qd, qdd)?;
     let ready = ready.map(|r| vector(r, "ready", n)).transpose()?;
-    let planner = Arc::new(HitPlanner::new(&robot.chain, options(robot, profile, task, jerk)?).py()?);
+    let planner = Arc::new(HitPlanner::new(&robot.chain, options(robot, profile, task, jerk, effort)?).py()?);
     let plan = py
         .detach(|| planner.plan(&hit, state.as_ref(), ready.as_deref()))
         .py()?;
@@ -303,7 +311,7 @@ fn hit_plan(
 /// Plans N hits in parallel (GIL released): poses (N, 4, 4), twists (N, 6), times (N,); the
 /// other arguments as for `hit_plan`. Returns a list of N `HitPlan`s.
 #[pyfunction]
-#[pyo3(signature = (robot, poses, twists, times, q=None, qd=None, qdd=None, ready=None, profile="auto", task="auto", jerk=None))]
+#[pyo3(signature = (robot, poses, twists, times, q=None, qd=None, qdd=None, ready=None, profile="auto", task="auto", jerk=None, effort=true))]
 #[allow(clippy::too_many_arguments)]
 fn hit_plan_batch(
     py: Python<'_>,
@@ -318,6 +326,7 @@ fn hit_plan_batch(
     profile: &str,
     task: &str,
     jerk: Option<&Bound<'_, PyAny>>,
+    effort: bool,
 ) -> PyResult<Vec<PyHitPlan>> {
     let n = robot.chain.dof();
     let p = f64_array(poses, "poses")?;
@@ -349,7 +358,7 @@ fn hit_plan_batch(
     }
     let state = start_state(n, q, qd, qdd)?;
     let ready = ready.map(|r| vector(r, "ready", n)).transpose()?;
-    let planner = Arc::new(HitPlanner::new(&robot.chain, options(robot, profile, task, jerk)?).py()?);
+    let planner = Arc::new(HitPlanner::new(&robot.chain, options(robot, profile, task, jerk, effort)?).py()?);
     let plans = py
         .detach(|| planner.plan_batch(&hits, state.as_ref(), ready.as_deref()))
         .py()?;

@@ -162,6 +162,8 @@ pub struct HitOptions {
     pub jerk: Option<Vec<f64>>,
     /// Gravity (m/s², base frame) for the torques.
     pub gravity: [f64; 3],
+    /// Check (and retime for) the effort limits by inverse dynamics; off: kinematic limits only.
+    pub check_effort: bool,
     /// Evenly spaced instants per leg at which torques are checked against the effort limits (≥ 2).
     pub effort_points: usize,
     /// Latest hit time (s) the earliest-feasible search tries.
@@ -177,6 +179,7 @@ impl Default for HitOptions {
             task: HitTask::Auto,
             jerk: None,
             gravity: GRAVITY,
+            check_effort: true,
             effort_points: 12,
             max_t_hit: 10.0,
         }
@@ -323,7 +326,7 @@ impl HitPlanner {
         let effort = lim.iter().map(|l| l.effort.unwrap_or(f64::INFINITY)).collect();
         Ok(HitPlanner {
             chain: chain.clone(),
-            dynamics: Dynamics::new(chain).ok(),
+            dynamics: if options.check_effort { Dynamics::new(chain).ok() } else { None },
             analytic: Analytic::for_chain(chain),
             racket: Racket::for_chain(chain),
             limits,
