@@ -89,7 +89,7 @@ def test_fk_ik_info_export(tmp_path):
          ["hits[0].t", "> 0"]),
         ({"hits": [{"centre": [0, -0.5, 0], "normal": [0, 0, 0], "velocity": [0, -3, 0], "t": 0.3}]},
          ["hits[0].normal", "nonzero"]),
-        ({"units": {"length": "mm"}, **HIT}, ["units.length", "'m'"]),
+        ({**HIT, "units": {"length": "mm"}}, ["units.length", "'m'"]),
         ({**HIT, "robot": "r2d2"}, ["robot", "r2d2"]),
         ({"hits": [{"centre": [0, -0.5, 0], "normal": [0, -1, 0], "velocity": [0, -3, 0], "t": 0.3, "speed": 3}]},
          ["hits[0].speed", "unknown key"]),

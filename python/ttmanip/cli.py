@@ -281,7 +281,7 @@ def _ik(args: argparse.Namespace) -> int:
         hit = Hit.from_normal(centre, normal, np.zeros(3), 1.0)
         branches = robot.ik_all(hit.pose)
     except TtmanipError as e:
-        raise CliError(f"ik: {e}") from e
+        raise CliError(f"--centre/--normal: {e}") from e
     ok = np.isfinite(branches).all(axis=1)
     if not ok.any():
         raise CliError(f"--centre: the racket pose at {centre.tolist()} is outside {robot.name}'s reach")
