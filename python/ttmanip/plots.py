@@ -108,10 +108,20 @@ def _draw_table(ax) -> None:
     yn = y0 - length / 2
     ax.plot([x0 - w / 2 - 0.15, x0 + w / 2 + 0.15, x0 + w / 2 + 0.15, x0 - w / 2 - 0.15, x0 - w / 2 - 0.15],
             [yn] * 5, [z, z, z + net, z + net, z], color="gray", lw=1.2, label="net")
-    floor = z - TABLE["height"]
-    for xl in (x0 - w / 2, x0 + w / 2):
-        for yl in (y0, y0 - length):
-            ax.plot([xl, xl], [yl, yl], [floor, z], color="darkgreen", lw=0.6)
+
+
+def _frame(ax, points: np.ndarray) -> None:
+    """Axis limits spanning ``points`` and the near half of the table up to the net, equal scale."""
+    x0, y0 = TABLE_PLACEMENT["near_end_centre"]
+    z = TABLE_PLACEMENT["surface_z"]
+    w, half = TABLE["width"], TABLE["length"] / 2
+    table = np.array([[x0 - w / 2, y0 - half - 0.05, z], [x0 + w / 2, y0, z + TABLE["net"]]])
+    allp = np.vstack([points, table])
+    lo, hi = allp.min(axis=0) - 0.05, allp.max(axis=0) + 0.05
+    ax.set_xlim(lo[0], hi[0])
+    ax.set_ylim(lo[1], hi[1])
+    ax.set_zlim(lo[2], hi[2])
+    ax.set_box_aspect(hi - lo)
 
 
 def racket_figure(robot, centre, normal, q_hit, hit_pose, path, *, planned_centre=None,
@@ -134,12 +144,7 @@ def racket_figure(robot, centre, normal, q_hit, hit_pose, path, *, planned_centr
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.set_zlabel("z [m]")
-    allp = np.vstack([centre, pts])
-    mid = allp.mean(axis=0)
-    span = max(float(np.ptp(allp, axis=0).max()), 0.8)
-    ax.set_xlim(mid[0] - span, mid[0] + span)
-    ax.set_ylim(mid[1] - span, mid[1] + span)
-    ax.set_zlim(TABLE_PLACEMENT["surface_z"] - 0.1, mid[2] + span)
+    _frame(ax, np.vstack([centre, pts]))
     ax.legend(fontsize=7, loc="upper left")
     ax.set_title(f"{robot.name}: racket path, base frame")
     path = Path(path)
@@ -184,11 +189,7 @@ def animation(robot, t, q, centre, path, *, frames: int = 30, fps: int = 15) -> 
     fig = plt.figure(figsize=(4.5, 4), dpi=70)
     ax = fig.add_subplot(projection="3d")
     _draw_table(ax)
-    allp = np.vstack([centre, *sticks])
-    mid, span = allp.mean(axis=0), max(float(np.ptp(allp, axis=0).max()) * 0.6, 0.5)
-    ax.set_xlim(mid[0] - span, mid[0] + span)
-    ax.set_ylim(mid[1] - span, mid[1] + span)
-    ax.set_zlim(mid[2] - span, mid[2] + span)
+    _frame(ax, np.vstack([centre, *sticks]))
     (arm,) = ax.plot([], [], [], "o-", color="C3", lw=2, ms=3)
     (trail,) = ax.plot([], [], [], color="C1", lw=1)
     label = ax.set_title("")
