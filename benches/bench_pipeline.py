@@ -22,7 +22,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-
 import ttmanip
 from ttmanip import robots
 
@@ -125,7 +124,9 @@ def main() -> None:
         print("hand-made Pinocchio + ruckig: skipped (pip install pin ruckig)")
         return
     hand = HandMade(robot)
-    print(f"hand-made Pinocchio + ruckig, same hits (Python loop): {hand.per_hit_us(hits[:300]):.1f} µs per hit")
+    print(
+        f"hand-made Pinocchio + ruckig, same hits (Python loop): {hand.per_hit_us(hits[:300]):.1f} µs per hit"
+    )
 
 
 if __name__ == "__main__":

@@ -13,14 +13,25 @@ import pytest
 HIT = {
     "robot": "gantry6",
     "units": {"length": "m", "time": "s"},
-    "hits": [{"centre": [0.35, -0.55, 0.05], "normal": [0.3, -1.0, -0.2], "velocity": [0.86, -2.87, -0.57],
-              "t": 0.35}],
+    "hits": [
+        {
+            "centre": [0.35, -0.55, 0.05],
+            "normal": [0.3, -1.0, -0.2],
+            "velocity": [0.86, -2.87, -0.57],
+            "t": 0.35,
+        }
+    ],
 }
 
 
 def ttmanip(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "ttmanip.cli", *map(str, args)], capture_output=True,
-                          text=True, cwd=cwd, timeout=600)
+    return subprocess.run(
+        [sys.executable, "-m", "ttmanip.cli", *map(str, args)],
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        timeout=600,
+    )
 
 
 def write(tmp_path, data, name="hit.json"):
@@ -67,7 +78,9 @@ def test_simulate_writes_the_errors_at_the_hit(tmp_path):
 def test_fk_ik_info_export(tmp_path):
     r = ttmanip("fk", "gantry6", "--q", "0.1,0,0.2,0.3,0.4,0.5", "--out", tmp_path / "fk")
     assert r.returncode == 0 and json.loads((tmp_path / "fk" / "fk.json").read_text())["pose"]
-    r = ttmanip("ik", "gantry6", "--centre", "0.35,-0.55,0.05", "--normal", "0.3,-1,-0.2", "--out", tmp_path / "ik")
+    r = ttmanip(
+        "ik", "gantry6", "--centre", "0.35,-0.55,0.05", "--normal", "0.3,-1,-0.2", "--out", tmp_path / "ik"
+    )
     assert r.returncode == 0, r.stderr
     assert len(json.loads((tmp_path / "ik" / "ik.json").read_text())["branches"]) >= 1
     r = ttmanip("info", "mobile8", "--out", tmp_path / "info")
@@ -81,18 +94,42 @@ def test_fk_ik_info_export(tmp_path):
     "content, fragments",
     [
         ("{not json", ["not valid JSON"]),
-        ({"hits": [{"normal": [0, -1, 0], "velocity": [0, -3, 0], "t": 0.3}]}, ["hits[0].centre", "missing key"]),
-        ({"hits": [{"centre": [0, -0.5, 0], "normal": [0, -1, 0], "velocity": [0, -3, 0]}]}, ["hits[0].t", "missing"]),
-        ({"hits": [{"centre": [0, -0.5], "normal": [0, -1, 0], "velocity": [0, -3, 0], "t": 0.3}]},
-         ["hits[0].centre", "expected 3 numbers"]),
-        ({"hits": [{"centre": [0, -0.5, 0], "normal": [0, -1, 0], "velocity": [0, -3, 0], "t": -1}]},
-         ["hits[0].t", "> 0"]),
-        ({"hits": [{"centre": [0, -0.5, 0], "normal": [0, 0, 0], "velocity": [0, -3, 0], "t": 0.3}]},
-         ["hits[0].normal", "nonzero"]),
+        (
+            {"hits": [{"normal": [0, -1, 0], "velocity": [0, -3, 0], "t": 0.3}]},
+            ["hits[0].centre", "missing key"],
+        ),
+        (
+            {"hits": [{"centre": [0, -0.5, 0], "normal": [0, -1, 0], "velocity": [0, -3, 0]}]},
+            ["hits[0].t", "missing"],
+        ),
+        (
+            {"hits": [{"centre": [0, -0.5], "normal": [0, -1, 0], "velocity": [0, -3, 0], "t": 0.3}]},
+            ["hits[0].centre", "expected 3 numbers"],
+        ),
+        (
+            {"hits": [{"centre": [0, -0.5, 0], "normal": [0, -1, 0], "velocity": [0, -3, 0], "t": -1}]},
+            ["hits[0].t", "> 0"],
+        ),
+        (
+            {"hits": [{"centre": [0, -0.5, 0], "normal": [0, 0, 0], "velocity": [0, -3, 0], "t": 0.3}]},
+            ["hits[0].normal", "nonzero"],
+        ),
         ({**HIT, "units": {"length": "mm"}}, ["units.length", "'m'"]),
         ({**HIT, "robot": "r2d2"}, ["robot", "r2d2"]),
-        ({"hits": [{"centre": [0, -0.5, 0], "normal": [0, -1, 0], "velocity": [0, -3, 0], "t": 0.3, "speed": 3}]},
-         ["hits[0].speed", "unknown key"]),
+        (
+            {
+                "hits": [
+                    {
+                        "centre": [0, -0.5, 0],
+                        "normal": [0, -1, 0],
+                        "velocity": [0, -3, 0],
+                        "t": 0.3,
+                        "speed": 3,
+                    }
+                ]
+            },
+            ["hits[0].speed", "unknown key"],
+        ),
         ({"hits": []}, ["hits", "non-empty"]),
         ({**HIT, "state": {"qd": [0] * 6}}, ["state.q", "missing"]),
     ],
@@ -103,15 +140,21 @@ def test_bad_hit_files_name_the_key(tmp_path, content, fragments):
 
 
 def test_unreachable_hit_exits_nonzero_naming_the_hit(tmp_path):
-    far = {"hits": [HIT["hits"][0], {"centre": [0.3, -0.5, 2.0], "normal": [0, -1, 0], "velocity": [0, -3, 0],
-                                     "t": 0.5}]}
+    far = {
+        "hits": [
+            HIT["hits"][0],
+            {"centre": [0.3, -0.5, 2.0], "normal": [0, -1, 0], "velocity": [0, -3, 0], "t": 0.5},
+        ]
+    }
     r = ttmanip("plan", write(tmp_path, far), "--out", tmp_path / "out")
     assert r.returncode == 1
     one_line_error(r, "hits[1]", "unreachable")
 
 
 def test_other_user_errors_are_one_line(tmp_path):
-    one_line_error(ttmanip("plan", tmp_path / "missing.json", "--out", tmp_path / "o"), "missing.json", "cannot read")
+    one_line_error(
+        ttmanip("plan", tmp_path / "missing.json", "--out", tmp_path / "o"), "missing.json", "cannot read"
+    )
     one_line_error(ttmanip("plan", write(tmp_path, "a: 1", "hit.yaml"), "--out", tmp_path / "o"), "YAML")
     one_line_error(ttmanip("fk", "gantry6", "--q", "1,2,x"), "--q", "numbers")
     one_line_error(ttmanip("fk", "gantry6", "--q", "1,2"), "--q", "6 numbers")

@@ -11,8 +11,13 @@ from ttmanip.cli import main
 def test_demo_writes_figures_and_summary(tmp_path):
     assert main(["demo", "--out", str(tmp_path)]) == 0
     assert (tmp_path / "gantry6_errors.png").read_bytes().startswith(b"\x89PNG")
-    for name in ("gantry6_joints.png", "gantry6_racket.png", "mobile8_joints.png",
-                 "kinematics/workspace_gantry6.png", "kinematics/workspace_mobile8.png"):
+    for name in (
+        "gantry6_joints.png",
+        "gantry6_racket.png",
+        "mobile8_joints.png",
+        "kinematics/workspace_gantry6.png",
+        "kinematics/workspace_mobile8.png",
+    ):
         data = (tmp_path / name).read_bytes()
         assert data.startswith(b"\x89PNG") and len(data) > 20_000, name
     assert (tmp_path / "gantry6_stroke.gif").read_bytes().startswith(b"GIF8")

@@ -7,7 +7,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import ruckig
-
 import ttmanip
 from ttmanip import robots
 from ttmanip.pipeline import racket_states
@@ -171,8 +170,13 @@ def test_mobile8_racket_task_hit_is_planned_and_simulated():
         (lambda: ttmanip.plan_hit(GANTRY, ttmanip.DEMO_HIT, [0.0] * 5), "state.q"),
         (lambda: ttmanip.plan_hit(GANTRY, ttmanip.DEMO_HIT, profile="fast"), "profile"),
         (lambda: ttmanip.plan_hit(GANTRY, ttmanip.DEMO_HIT, ready=[0.0]), "ready"),
-        (lambda: ttmanip.Hit(np.diag([2.0, 1, 1, 1]), np.zeros(6), 0.3) and
-         ttmanip.plan_hit(GANTRY, ttmanip.Hit(np.diag([2.0, 1, 1, 1]), np.zeros(6), 0.3)), "hit.pose"),
+        (
+            lambda: (
+                ttmanip.Hit(np.diag([2.0, 1, 1, 1]), np.zeros(6), 0.3)
+                and ttmanip.plan_hit(GANTRY, ttmanip.Hit(np.diag([2.0, 1, 1, 1]), np.zeros(6), 0.3))
+            ),
+            "hit.pose",
+        ),
     ],
 )
 def test_bad_input_is_a_ttmanip_error_naming_the_argument(make, match):

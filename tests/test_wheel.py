@@ -37,15 +37,25 @@ def test_wheel_is_abi3_and_runs_the_demo_in_a_clean_venv(tmp_path):
     subprocess.run([py, "-m", "pip", "install", "--quiet", str(wheel)], check=True, timeout=900)
     out = tmp_path / "demo"
     exe = env_dir / "bin" / "ttmanip"
-    r = subprocess.run([exe, "demo", "--no-workspace", "--out", out], capture_output=True, text=True,
-                       timeout=900, cwd=tmp_path)
+    r = subprocess.run(
+        [exe, "demo", "--no-workspace", "--out", out],
+        capture_output=True,
+        text=True,
+        timeout=900,
+        cwd=tmp_path,
+    )
     assert r.returncode == 0, r.stderr
     summary = json.loads((out / "summary.json").read_text())
     assert summary["racket_position_error_m"] <= 1e-3
     assert summary["racket_normal_error_deg"] <= 0.5
     assert summary["racket_velocity_error_rel"] <= 0.02
     # The clean environment imports the installed package, not this checkout.
-    r = subprocess.run([py, "-c", "import ttmanip; print(ttmanip.__file__)"], capture_output=True, text=True,
-                       cwd=tmp_path, check=True)
+    r = subprocess.run(
+        [py, "-c", "import ttmanip; print(ttmanip.__file__)"],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        check=True,
+    )
     assert str(env_dir) in r.stdout, r.stdout
     assert sys.executable != str(py)

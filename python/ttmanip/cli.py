@@ -29,11 +29,13 @@ import numpy as np
 EXPERIMENTS = ("seed000", "seed001", "seed002")
 ROBOTS = ("mobile8", "gantry6", "arm4", "ur5")
 
-HIT_FILE_HELP = """hit file (JSON): {"robot": "gantry6", "hits": [{"centre": [x, y, z], "normal": [nx, ny, nz],
-"velocity": [vx, vy, vz], "t": 0.35}]} in m, m/s, s (base frame). A hit may instead give "pose" (4x4) and
-"twist" (6); optional per hit: "omega" (rad/s), "handle"; optional top level: "units" ({"length": "m",
-"time": "s", "angle": "rad"}), "state" ({"q": [...], "qd": [...]}), "ready" ([...]), "profile"
-("auto", "quintic", "jerk"). A single hit may stand at the top level instead of "hits"."""
+HIT_FILE_HELP = """hit file (JSON):
+  {"robot": "gantry6", "hits": [{"centre": [x, y, z], "normal": [nx, ny, nz],
+                                 "velocity": [vx, vy, vz], "t": 0.35}]}
+in m, m/s, s (base frame). A hit may instead give "pose" (4x4) and "twist" (6); optional per
+hit: "omega" (rad/s), "handle"; optional top level: "units" ({"length": "m", "time": "s",
+"angle": "rad"}), "state" ({"q": [...], "qd": [...]}), "ready" ([...]), "profile" ("auto",
+"quintic", "jerk"). A single hit may stand at the top level instead of "hits"."""
 
 
 class CliError(Exception):
@@ -149,9 +151,14 @@ def _hit(entry, where: str):
         normal = _vector(entry, "normal", where, 3)
         if np.linalg.norm(normal) < 1e-12:
             raise CliError(f"{where}.normal: the face normal must be a nonzero vector")
-        return Hit.from_normal(centre, normal, _vector(entry, "velocity", where, 3), float(t),
-                               omega=_vector(entry, "omega", where, 3, required=False),
-                               handle=_vector(entry, "handle", where, 3, required=False))
+        return Hit.from_normal(
+            centre,
+            normal,
+            _vector(entry, "velocity", where, 3),
+            float(t),
+            omega=_vector(entry, "omega", where, 3, required=False),
+            handle=_vector(entry, "handle", where, 3, required=False),
+        )
     except TtmanipError as e:
         raise CliError(f"{where}: {e}") from e
 
@@ -188,8 +195,12 @@ def read_hit_file(path: str) -> dict:
             raise CliError("hits: expected a non-empty list of hits")
         hits = [_hit(e, f"hits[{i}]") for i, e in enumerate(entries)]
     else:
-        hits = [_hit({k: v for k, v in data.items() if k not in ("robot", "units", "state", "ready", "profile")},
-                     "hit")]
+        hits = [
+            _hit(
+                {k: v for k, v in data.items() if k not in ("robot", "units", "state", "ready", "profile")},
+                "hit",
+            )
+        ]
     robot = _robot(robot_name)
     state = None
     if "state" in data:
@@ -232,10 +243,23 @@ def _demo(args: argparse.Namespace) -> int:
         summary = run(out, progress=bar, workspace=not args.no_workspace)
     finally:
         bar.close()
-    _print_summary(summary, ("status", "t_hit", "profile", "racket_position_error_m", "racket_normal_error_deg",
-                             "racket_velocity_error_mps", "racket_velocity_error_rel", "faults"))
-    print(f"mobile8: {summary['mobile8']['status']}, racket error "
-          f"{summary['mobile8'].get('racket_position_error_m', float('nan')):.2e} m")
+    _print_summary(
+        summary,
+        (
+            "status",
+            "t_hit",
+            "profile",
+            "racket_position_error_m",
+            "racket_normal_error_deg",
+            "racket_velocity_error_mps",
+            "racket_velocity_error_rel",
+            "faults",
+        ),
+    )
+    print(
+        f"mobile8: {summary['mobile8']['status']}, racket error "
+        f"{summary['mobile8'].get('racket_position_error_m', float('nan')):.2e} m"
+    )
     print(f"wrote {out / 'summary.json'}")
     return 0
 
@@ -296,9 +320,19 @@ def _ik(args: argparse.Namespace) -> int:
 
 
 def _plan_summary(p) -> dict:
-    return {"status": p.status, "message": p.message, "t_hit": p.t_hit, "t_hit_requested": p.requested_t_hit,
-            "earliest_t_hit": p.earliest_t_hit, "profile": p.profile, "q_hit": p.q_hit, "qd_hit": p.qd_hit,
-            "duration": p.duration, "peak_effort": p.peak_effort, "violations": p.violations}
+    return {
+        "status": p.status,
+        "message": p.message,
+        "t_hit": p.t_hit,
+        "t_hit_requested": p.requested_t_hit,
+        "earliest_t_hit": p.earliest_t_hit,
+        "profile": p.profile,
+        "q_hit": p.q_hit,
+        "qd_hit": p.qd_hit,
+        "duration": p.duration,
+        "peak_effort": p.peak_effort,
+        "violations": p.violations,
+    }
 
 
 def _plan(args: argparse.Namespace) -> int:
@@ -341,16 +375,29 @@ def _simulate(args: argparse.Namespace) -> int:
     bar = Progress(4 * len(spec["hits"]))
     try:
         for i, hit in enumerate(spec["hits"]):
-            results.append(run_hit(spec["robot"], hit, out, f"hit{i}", gif=args.gif, state=spec["state"],
-                                   noise=args.noise, setpoint_rate=args.setpoint_rate, progress=bar))
+            results.append(
+                run_hit(
+                    spec["robot"],
+                    hit,
+                    out,
+                    f"hit{i}",
+                    gif=args.gif,
+                    state=spec["state"],
+                    noise=args.noise,
+                    setpoint_rate=args.setpoint_rate,
+                    progress=bar,
+                )
+            )
     finally:
         bar.close()
     _write_json(out / "summary.json", {"robot": spec["robot"].name, "hits": results})
     for i, r in enumerate(results):
         err = r.get("racket_position_error_m", float("nan"))
-        print(f"hits[{i}]: {r['status']}, racket centre error {err:.3e} m, normal "
-              f"{r.get('racket_normal_error_deg', float('nan')):.3f}°, velocity "
-              f"{r.get('racket_velocity_error_mps', float('nan')):.4f} m/s")
+        print(
+            f"hits[{i}]: {r['status']}, racket centre error {err:.3e} m, normal "
+            f"{r.get('racket_normal_error_deg', float('nan')):.3f}°, velocity "
+            f"{r.get('racket_velocity_error_mps', float('nan')):.4f} m/s"
+        )
     print(f"wrote {out / 'summary.json'}")
     bad = [(i, r) for i, r in enumerate(results) if not r["ok"]]
     if bad:
@@ -367,8 +414,17 @@ def _info(args: argparse.Namespace) -> int:
     for j, (name, kind, (lo, hi)) in enumerate(zip(robot.joint_names, robot.joint_types, robot.limits)):
         v, a, e = robot.velocity_limits[j], robot.acceleration_limits[j], robot.effort_limits[j]
         print(f"  {name:10s} {kind:9s} [{lo: .4f}, {hi: .4f}]  v {v:g}  a {a:g}  effort {e:g}")
-        rows.append({"name": name, "type": kind, "lower": lo, "upper": hi, "velocity": v, "acceleration": a,
-                     "effort": e})
+        rows.append(
+            {
+                "name": name,
+                "type": kind,
+                "lower": lo,
+                "upper": hi,
+                "velocity": v,
+                "acceleration": a,
+                "effort": e,
+            }
+        )
     if args.out:
         out = _out_dir(args.out)
         _write_json(out / "info.json", {"robot": robot.name, "joints": rows})
@@ -404,64 +460,96 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="ttmanip", description=__doc__, formatter_class=fmt)
     sub = parser.add_subparsers(dest="command", required=True)
 
-    demo = sub.add_parser("demo", help="plan and simulate a gantry6 hit on every axis, write the figures",
-                          description="Plans seed 002's demo hit on gantry6, simulates it through every "
-                          "axis's drive with gravity, then a mobile8 racket hit; writes figures, CSV and "
-                          "summary.json.\n\nexample:\n  ttmanip demo --out out/demo", formatter_class=fmt)
+    demo = sub.add_parser(
+        "demo",
+        help="plan and simulate a gantry6 hit on every axis, write the figures",
+        description="Plans seed 002's demo hit on gantry6, simulates it through every "
+        "axis's drive with gravity, then a mobile8 racket hit; writes figures, CSV and "
+        "summary.json.\n\nexample:\n  ttmanip demo --out out/demo",
+        formatter_class=fmt,
+    )
     demo.add_argument("--out", default="out/demo", help="output folder (default: out/demo)")
     demo.add_argument("--no-workspace", action="store_true", help="skip the workspace figures")
     demo.set_defaults(func=_demo)
 
-    exp = sub.add_parser("experiment", help="reproduce a seed document's experiment",
-                         description="Runs a seed experiment and writes every product.\n\nexample:\n"
-                         "  ttmanip experiment seed002 --out out/seed002", formatter_class=fmt)
+    exp = sub.add_parser(
+        "experiment",
+        help="reproduce a seed document's experiment",
+        description="Runs a seed experiment and writes every product.\n\nexample:\n"
+        "  ttmanip experiment seed002 --out out/seed002",
+        formatter_class=fmt,
+    )
     exp.add_argument("name", choices=EXPERIMENTS)
     exp.add_argument("--out", required=True, help="output folder")
     exp.set_defaults(func=_experiment)
 
-    fk = sub.add_parser("fk", help="tool pose of a built-in robot at a configuration",
-                        description="Prints the 4x4 tool pose (base frame, m).\n\nexample:\n"
-                        "  ttmanip fk gantry6 --q 0.1,0,0.2,0.3,0.4,0.5 --out out/fk", formatter_class=fmt)
+    fk = sub.add_parser(
+        "fk",
+        help="tool pose of a built-in robot at a configuration",
+        description="Prints the 4x4 tool pose (base frame, m).\n\nexample:\n"
+        "  ttmanip fk gantry6 --q 0.1,0,0.2,0.3,0.4,0.5 --out out/fk",
+        formatter_class=fmt,
+    )
     fk.add_argument("robot", choices=ROBOTS)
     fk.add_argument("--q", required=True, help="joint values, comma-separated (m, rad)")
     fk.add_argument("--out", help="output folder for fk.json")
     fk.set_defaults(func=_fk)
 
-    ik = sub.add_parser("ik", help="every IK branch for a racket centre and face normal",
-                        description="Prints every analytic IK branch reaching the racket pose.\n\nexample:\n"
-                        "  ttmanip ik gantry6 --centre 0.35,-0.55,0.05 --normal 0.3,-1,-0.2", formatter_class=fmt)
+    ik = sub.add_parser(
+        "ik",
+        help="every IK branch for a racket centre and face normal",
+        description="Prints every analytic IK branch reaching the racket pose.\n\nexample:\n"
+        "  ttmanip ik gantry6 --centre 0.35,-0.55,0.05 --normal 0.3,-1,-0.2",
+        formatter_class=fmt,
+    )
     ik.add_argument("robot", choices=ROBOTS)
     ik.add_argument("--centre", required=True, help="racket centre x,y,z (m, base frame)")
     ik.add_argument("--normal", required=True, help="face normal nx,ny,nz (base axes)")
     ik.add_argument("--out", help="output folder for ik.json and ik.csv")
     ik.set_defaults(func=_ik)
 
-    plan = sub.add_parser("plan", help="plan the hits of a JSON hit file",
-                          description=HIT_FILE_HELP + "\n\nexample:\n  ttmanip plan hit.json --out out/plan",
-                          formatter_class=fmt)
+    plan = sub.add_parser(
+        "plan",
+        help="plan the hits of a JSON hit file",
+        description=HIT_FILE_HELP + "\n\nexample:\n  ttmanip plan hit.json --out out/plan",
+        formatter_class=fmt,
+    )
     plan.add_argument("file", help="hit file (.json)")
     plan.add_argument("--out", default="out/plan", help="output folder (default: out/plan)")
     plan.set_defaults(func=_plan)
 
-    sim = sub.add_parser("simulate", help="plan and simulate the hits of a JSON hit file on the drives",
-                         description=HIT_FILE_HELP + "\n\nexample:\n  ttmanip simulate hit.json --out out/sim",
-                         formatter_class=fmt)
+    sim = sub.add_parser(
+        "simulate",
+        help="plan and simulate the hits of a JSON hit file on the drives",
+        description=HIT_FILE_HELP + "\n\nexample:\n  ttmanip simulate hit.json --out out/sim",
+        formatter_class=fmt,
+    )
     sim.add_argument("file", help="hit file (.json)")
     sim.add_argument("--out", default="out/simulate", help="output folder (default: out/simulate)")
-    sim.add_argument("--noise", type=float, default=None, help="current-sense noise (A, DriveSim's default if unset)")
+    sim.add_argument(
+        "--noise", type=float, default=None, help="current-sense noise (A, DriveSim's default if unset)"
+    )
     sim.add_argument("--setpoint-rate", type=float, default=1000.0, help="setpoint rate to the drives (Hz)")
     sim.add_argument("--gif", action="store_true", help="also write a GIF of each stroke")
     sim.set_defaults(func=_simulate)
 
-    info = sub.add_parser("info", help="print a built-in robot's joints and limits",
-                          description="example:\n  ttmanip info gantry6 --out out/info", formatter_class=fmt)
+    info = sub.add_parser(
+        "info",
+        help="print a built-in robot's joints and limits",
+        description="example:\n  ttmanip info gantry6 --out out/info",
+        formatter_class=fmt,
+    )
     info.add_argument("robot", choices=ROBOTS)
     info.add_argument("--out", help="output folder for info.json")
     info.set_defaults(func=_info)
 
-    export = sub.add_parser("export", help="write a built-in robot as URDF and as a ttmanip robot file",
-                            description="--out is a folder (both files) or a file ending in .urdf or .toml."
-                            "\n\nexample:\n  ttmanip export gantry6 --out out/robots", formatter_class=fmt)
+    export = sub.add_parser(
+        "export",
+        help="write a built-in robot as URDF and as a ttmanip robot file",
+        description="--out is a folder (both files) or a file ending in .urdf or .toml."
+        "\n\nexample:\n  ttmanip export gantry6 --out out/robots",
+        formatter_class=fmt,
+    )
     export.add_argument("robot", choices=ROBOTS)
     export.add_argument("--out", required=True, help="output folder, or a file ending in .urdf or .toml")
     export.set_defaults(func=_export)

@@ -88,8 +88,18 @@ def write_csv(path: Path, columns: dict) -> Path:
     return Path(path)
 
 
-def run_hit(robot: Robot, hit: Hit, out: Path, prefix: str, *, gif: bool = True, state=None,
-            noise=None, setpoint_rate: float = 1000.0, progress=None) -> dict:
+def run_hit(
+    robot: Robot,
+    hit: Hit,
+    out: Path,
+    prefix: str,
+    *,
+    gif: bool = True,
+    state=None,
+    noise=None,
+    setpoint_rate: float = 1000.0,
+    progress=None,
+) -> dict:
     """Plans and simulates ``hit`` on ``robot``; writes figures and CSVs named ``prefix_*`` into
     ``out``; returns the JSON-ready summary."""
     step = progress or (lambda _msg: None)
@@ -119,29 +129,55 @@ def run_hit(robot: Robot, hit: Hit, out: Path, prefix: str, *, gif: bool = True,
     step("simulate")
     sim = simulate(robot, plan, setpoint_rate=setpoint_rate, noise=noise)
     ex = sim.arrays
-    write_csv(out / f"{prefix}_sim.csv", {"t": ex["t"], "q": ex["q"], "qd": ex["qd"],
-                                          "current": ex["current"], "torque": ex["torque"]})
+    write_csv(
+        out / f"{prefix}_sim.csv",
+        {"t": ex["t"], "q": ex["q"], "qd": ex["qd"], "current": ex["current"], "torque": ex["torque"]},
+    )
     step("figures")
     figures = [
-        plots.joint_figure(robot, t, q, qd, qdd, tau, out / f"{prefix}_joints.png",
-                           current=np.asarray(ex["current"]), t_hit=plan.t_hit,
-                           executed={"t": np.asarray(ex["t"]), "q": np.asarray(ex["q"]),
-                                     "qd": np.asarray(ex["qd"])}),
-        plots.racket_figure(robot, sim.racket_centre, sim.racket_normal, plan.q_hit, plan.hit_pose,
-                            out / f"{prefix}_racket.png",
-                            planned_centre=racket_states(robot, q, qd)[1], velocity=plan.hit_twist[:3]),
+        plots.joint_figure(
+            robot,
+            t,
+            q,
+            qd,
+            qdd,
+            tau,
+            out / f"{prefix}_joints.png",
+            current=np.asarray(ex["current"]),
+            t_hit=plan.t_hit,
+            executed={"t": np.asarray(ex["t"]), "q": np.asarray(ex["q"]), "qd": np.asarray(ex["qd"])},
+        ),
+        plots.racket_figure(
+            robot,
+            sim.racket_centre,
+            sim.racket_normal,
+            plan.q_hit,
+            plan.hit_pose,
+            out / f"{prefix}_racket.png",
+            planned_centre=racket_states(robot, q, qd)[1],
+            velocity=plan.hit_twist[:3],
+        ),
         plots.error_figure(sim.summary(), out / f"{prefix}_errors.png"),
     ]
     if gif:
-        figures.append(plots.animation(robot, np.asarray(ex["t"]), np.asarray(ex["q"]), sim.racket_centre,
-                                       out / f"{prefix}_stroke.gif"))
+        figures.append(
+            plots.animation(
+                robot,
+                np.asarray(ex["t"]),
+                np.asarray(ex["q"]),
+                sim.racket_centre,
+                out / f"{prefix}_stroke.gif",
+            )
+        )
     summary.update(sim.summary())
-    summary.update({
-        "peak_torques": np.abs(tau).max(axis=0).tolist(),
-        "effort_limits": np.asarray(robot.effort_limits).tolist(),
-        "stroke_duration": plan.duration,
-        "figures": [str(p) for p in figures],
-    })
+    summary.update(
+        {
+            "peak_torques": np.abs(tau).max(axis=0).tolist(),
+            "effort_limits": np.asarray(robot.effort_limits).tolist(),
+            "stroke_duration": plan.duration,
+            "figures": [str(p) for p in figures],
+        }
+    )
     return summary
 
 
@@ -167,9 +203,12 @@ def run(out: Path, progress=None, workspace: bool = True) -> dict:
         kin = out / "kinematics"
         kin.mkdir(exist_ok=True)
         summary["kinematics"] = {
-            "gantry6": workspace_figure(robots.gantry6(), np.array([0.1, -0.2, 0.3, 0.4, 0.6, 0.0]),
-                                        kin / "workspace_gantry6.png"),
-            "mobile8": workspace_figure(robots.mobile8(), robots.mobile8_start(), kin / "workspace_mobile8.png"),
+            "gantry6": workspace_figure(
+                robots.gantry6(), np.array([0.1, -0.2, 0.3, 0.4, 0.6, 0.0]), kin / "workspace_gantry6.png"
+            ),
+            "mobile8": workspace_figure(
+                robots.mobile8(), robots.mobile8_start(), kin / "workspace_mobile8.png"
+            ),
         }
     (out / "summary.json").write_text(json.dumps(summary, indent=2, default=str))
     return summary

@@ -174,12 +174,21 @@ def plan_hit(
     ``"quintic"`` or ``"jerk"``; ``task``: ``"auto"`` (6-D pose, or the 5-D racket task for a
     redundant robot), ``"pose"`` or ``"racket5"``; ``jerk``: jerk limits (n,), default 200 × the
     acceleration limits; ``effort``: check the torques (inverse dynamics with friction and gravity
-    at 12 instants per leg) against the effort limits and move the hit later until they hold. An infeasible hit gives a plan with ``ok`` False and a ``status``; with
-    ``raise_on_failure`` it raises :class:`HitError` instead.
+    at 12 instants per leg) against the effort limits and move the hit later until they hold.
+    An infeasible hit gives a plan with ``ok`` False and a ``status``; with ``raise_on_failure``
+    it raises :class:`HitError` instead.
     """
     hit = _check_hit(hit)
     plan = _ttmanip.hit_plan(
-        robot, hit.pose, hit.twist, hit.t, ready=ready, profile=profile, task=task, jerk=jerk, effort=effort,
+        robot,
+        hit.pose,
+        hit.twist,
+        hit.t,
+        ready=ready,
+        profile=profile,
+        task=task,
+        jerk=jerk,
+        effort=effort,
         **_state(robot, state),
     )
     if raise_on_failure and not plan.ok:
@@ -207,7 +216,15 @@ def plan_hits(
     twists = np.stack([h.twist for h in hits])
     times = np.array([h.t for h in hits])
     plans = _ttmanip.hit_plan_batch(
-        robot, poses, twists, times, ready=ready, profile=profile, task=task, jerk=jerk, effort=effort,
+        robot,
+        poses,
+        twists,
+        times,
+        ready=ready,
+        profile=profile,
+        task=task,
+        jerk=jerk,
+        effort=effort,
         **_state(robot, state),
     )
     if raise_on_failure:

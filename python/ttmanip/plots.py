@@ -50,15 +50,17 @@ def _named(robot, attr, n):
     return np.full(n, np.nan) if v is None else np.asarray(v, float)
 
 
-def joint_figure(robot, t, q, qd, qdd, tau, path, *, current=None, t_hit=None, executed=None,
-                 title: str = "") -> Path:
+def joint_figure(
+    robot, t, q, qd, qdd, tau, path, *, current=None, t_hit=None, executed=None, title: str = ""
+) -> Path:
     """Per joint (columns): position, velocity, acceleration, torque and (if given) current
     against time, with the limits as dashed red lines; ``executed`` (dict with ``t``, ``q``,
     ``qd``) overlays the simulated motion."""
     n = q.shape[1]
     rows = 5 if current is not None else 4
-    fig, axes = plt.subplots(rows, n, figsize=(2.6 * n + 1, 1.9 * rows + 1), sharex=True,
-                             constrained_layout=True, squeeze=False)
+    fig, axes = plt.subplots(
+        rows, n, figsize=(2.6 * n + 1, 1.9 * rows + 1), sharex=True, constrained_layout=True, squeeze=False
+    )
     lower, upper = _limits(robot)
     vmax = _named(robot, "velocity_limits", n)
     amax = _named(robot, "acceleration_limits", n)
@@ -67,14 +69,23 @@ def joint_figure(robot, t, q, qd, qdd, tau, path, *, current=None, t_hit=None, e
     for j in range(n):
         u = "m" if kinds[j] == "prismatic" else "rad"
         f = "N" if kinds[j] == "prismatic" else "N·m"
-        data = [(q, f"q [{u}]", (lower[j], upper[j])), (qd, f"q̇ [{u}/s]", (-vmax[j], vmax[j])),
-                (qdd, f"q̈ [{u}/s²]", (-amax[j], amax[j])), (tau, f"τ [{f}]", (-emax[j], emax[j]))]
+        data = [
+            (q, f"q [{u}]", (lower[j], upper[j])),
+            (qd, f"q̇ [{u}/s]", (-vmax[j], vmax[j])),
+            (qdd, f"q̈ [{u}/s²]", (-amax[j], amax[j])),
+            (tau, f"τ [{f}]", (-emax[j], emax[j])),
+        ]
         if current is not None:
             data.append((current, "i [A]", (np.nan, np.nan)))
         for r, (arr, label, (lo, hi)) in enumerate(data):
             ax = axes[r, j]
-            ax.plot(t if arr is not current else executed["t"], arr[:, j], lw=1.2, color="C0",
-                    label="planned" if arr is not current else "executed")
+            ax.plot(
+                t if arr is not current else executed["t"],
+                arr[:, j],
+                lw=1.2,
+                color="C0",
+                label="planned" if arr is not current else "executed",
+            )
             if executed is not None and r < 2:
                 key = "q" if r == 0 else "qd"
                 ax.plot(executed["t"], executed[key][:, j], lw=0.9, ls="--", color="C1", label="executed")
@@ -106,8 +117,14 @@ def _draw_table(ax) -> None:
     ax.plot(xs, ys, [z] * 5, color="darkgreen", lw=1.5, label="table")
     ax.plot([x0, x0], [y0, y0 - length], [z, z], color="white", lw=0.8)
     yn = y0 - length / 2
-    ax.plot([x0 - w / 2 - 0.15, x0 + w / 2 + 0.15, x0 + w / 2 + 0.15, x0 - w / 2 - 0.15, x0 - w / 2 - 0.15],
-            [yn] * 5, [z, z, z + net, z + net, z], color="gray", lw=1.2, label="net")
+    ax.plot(
+        [x0 - w / 2 - 0.15, x0 + w / 2 + 0.15, x0 + w / 2 + 0.15, x0 - w / 2 - 0.15, x0 - w / 2 - 0.15],
+        [yn] * 5,
+        [z, z, z + net, z + net, z],
+        color="gray",
+        lw=1.2,
+        label="net",
+    )
 
 
 def _frame(ax, points: np.ndarray) -> None:
@@ -124,8 +141,9 @@ def _frame(ax, points: np.ndarray) -> None:
     ax.set_box_aspect(hi - lo)
 
 
-def racket_figure(robot, centre, normal, q_hit, hit_pose, path, *, planned_centre=None,
-                  velocity=None) -> Path:
+def racket_figure(
+    robot, centre, normal, q_hit, hit_pose, path, *, planned_centre=None, velocity=None
+) -> Path:
     """The racket-centre path in 3-D (executed and planned), the table and net, the robot as a
     stick figure at the hit configuration, the face normal and the velocity at the hit."""
     fig = plt.figure(figsize=(8, 6.5), constrained_layout=True)
@@ -160,9 +178,16 @@ def error_figure(errors: dict, path, thresholds: dict | None = None) -> Path:
         "racket_normal_error_deg": 0.5,
         "racket_velocity_error_rel": 0.02,
     }
-    labels = {"racket_position_error_m": "centre [mm]", "racket_normal_error_deg": "normal [°]",
-              "racket_velocity_error_rel": "velocity [%]"}
-    scale = {"racket_position_error_m": 1e3, "racket_normal_error_deg": 1.0, "racket_velocity_error_rel": 100.0}
+    labels = {
+        "racket_position_error_m": "centre [mm]",
+        "racket_normal_error_deg": "normal [°]",
+        "racket_velocity_error_rel": "velocity [%]",
+    }
+    scale = {
+        "racket_position_error_m": 1e3,
+        "racket_normal_error_deg": 1.0,
+        "racket_velocity_error_rel": 100.0,
+    }
     keys = list(thresholds)
     fig, ax = plt.subplots(figsize=(6, 3.5), constrained_layout=True)
     vals = [errors[k] * scale[k] for k in keys]

@@ -348,11 +348,16 @@ fn hit_plan_batch(
     }
     let ts = vector(times, "times", k)?;
     let mut hits = Vec::with_capacity(k);
-    for i in 0..k {
-        let m = nalgebra::Matrix4::from_row_slice(&p.data()[16 * i..16 * (i + 1)]);
+    for (i, ((m, w), &t)) in p
+        .data()
+        .chunks_exact(16)
+        .zip(tw.data().chunks_exact(6))
+        .zip(&ts)
+        .enumerate()
+    {
+        let m = nalgebra::Matrix4::from_row_slice(m);
         let pose = ttkin::transform::isometry_from_matrix(&format!("poses[{i}]"), &m).py()?;
-        let w = &tw.data()[6 * i..6 * (i + 1)];
-        let hit = Hit::new(pose, [w[0], w[1], w[2], w[3], w[4], w[5]], ts[i])
+        let hit = Hit::new(pose, [w[0], w[1], w[2], w[3], w[4], w[5]], t)
             .map_err(|e| TtmanipError::new_err(format!("hits[{i}].{e}")))?;
         hits.push(hit);
     }

@@ -66,52 +66,89 @@ def run(out_dir: str | Path) -> dict:
         quintic = plan_hit(robot, hit, profile="quintic")
         jerk = plan_hit(robot, hit, profile="jerk")
         branches = robot.ik_all(hit.pose)
-        _dump(d / "s102_ik.json", {"branches": branches[np.isfinite(branches).all(axis=1)],
-                                   "nearest_within_limits": plan.q_hit, "ready": plan.ready})
+        _dump(
+            d / "s102_ik.json",
+            {
+                "branches": branches[np.isfinite(branches).all(axis=1)],
+                "nearest_within_limits": plan.q_hit,
+                "ready": plan.ready,
+            },
+        )
         entry = {"status": plan.status, "message": plan.message}
         if plan.trajectory is None:
             results[name] = entry
             continue
-        _dump(d / "s103_velocity.json", {"jacobian": robot.jacobian(plan.q_hit), "qd_hit": plan.qd_hit,
-                                         "sigma_min": plan.sigma_min})
+        _dump(
+            d / "s103_velocity.json",
+            {"jacobian": robot.jacobian(plan.q_hit), "qd_hit": plan.qd_hit, "sigma_min": plan.sigma_min},
+        )
         for label, p in (("quintic", quintic), ("jerk", jerk)):
             if p.trajectory is not None:
                 t, q, qd, qdd = p.sample(1000.0)
                 write_csv(d / f"s104_{label}.csv", {"t": t, "q": q, "qd": qd, "qdd": qdd})
-        _dump(d / "s104_strokes.json", {
-            "requested_t_hit": hit.t,
-            "planned": {"profile": plan.profile, "t_hit": plan.t_hit, "status": plan.status},
-            "quintic": {"t_hit": quintic.t_hit, "status": quintic.status, "earliest": quintic.earliest_t_hit},
-            "jerk": {"t_hit": jerk.t_hit, "status": jerk.status, "earliest": jerk.earliest_t_hit},
-        })
+        _dump(
+            d / "s104_strokes.json",
+            {
+                "requested_t_hit": hit.t,
+                "planned": {"profile": plan.profile, "t_hit": plan.t_hit, "status": plan.status},
+                "quintic": {
+                    "t_hit": quintic.t_hit,
+                    "status": quintic.status,
+                    "earliest": quintic.earliest_t_hit,
+                },
+                "jerk": {"t_hit": jerk.t_hit, "status": jerk.status, "earliest": jerk.earliest_t_hit},
+            },
+        )
         t, q, qd, qdd = plan.sample(1000.0)
         tau = plan.torques(1000.0)
         write_csv(d / "s105_torques.csv", {"t": t, "tau": tau})
         sim = simulate(robot, plan)
         ex = sim.arrays
-        write_csv(d / "s106_drives.csv", {"t": ex["t"], "q": ex["q"], "qd": ex["qd"], "current": ex["current"]})
-        plots.joint_figure(robot, t, q, qd, qdd, tau, d / "joints.png", current=np.asarray(ex["current"]),
-                           t_hit=plan.t_hit, executed={"t": np.asarray(ex["t"]), "q": np.asarray(ex["q"]),
-                                                       "qd": np.asarray(ex["qd"])},
-                           title=f"seed 002, hit '{name}': S104 stroke, S105 torques, S106 drives")
-        plots.racket_figure(robot, sim.racket_centre, sim.racket_normal, plan.q_hit, plan.hit_pose,
-                            d / "racket.png", planned_centre=racket_states(robot, q, qd)[1],
-                            velocity=plan.hit_twist[:3])
-        entry.update({
-            "t_hit": plan.t_hit,
-            "profile": plan.profile,
-            "quintic_t_hit": quintic.t_hit,
-            "jerk_t_hit": jerk.t_hit,
-            "peak_torques": np.abs(tau).max(axis=0).tolist(),
-            **sim.summary(),
-        })
+        write_csv(
+            d / "s106_drives.csv", {"t": ex["t"], "q": ex["q"], "qd": ex["qd"], "current": ex["current"]}
+        )
+        plots.joint_figure(
+            robot,
+            t,
+            q,
+            qd,
+            qdd,
+            tau,
+            d / "joints.png",
+            current=np.asarray(ex["current"]),
+            t_hit=plan.t_hit,
+            executed={"t": np.asarray(ex["t"]), "q": np.asarray(ex["q"]), "qd": np.asarray(ex["qd"])},
+            title=f"seed 002, hit '{name}': S104 stroke, S105 torques, S106 drives",
+        )
+        plots.racket_figure(
+            robot,
+            sim.racket_centre,
+            sim.racket_normal,
+            plan.q_hit,
+            plan.hit_pose,
+            d / "racket.png",
+            planned_centre=racket_states(robot, q, qd)[1],
+            velocity=plan.hit_twist[:3],
+        )
+        entry.update(
+            {
+                "t_hit": plan.t_hit,
+                "profile": plan.profile,
+                "quintic_t_hit": quintic.t_hit,
+                "jerk_t_hit": jerk.t_hit,
+                "peak_torques": np.abs(tau).max(axis=0).tolist(),
+                **sim.summary(),
+            }
+        )
         results[name] = entry
     summary = {
         "hits": {name: {"centre": c, "normal": n, "speed_mps": s, "t_hit_s": t} for name, c, n, s, t in HITS},
         "results": results,
         "all_within_acceptance": all(
-            r.get("racket_position_error_m", 1.0) <= 1e-3 and r.get("racket_normal_error_deg", 9.0) <= 0.5
-            and r.get("racket_velocity_error_rel", 1.0) <= 0.02 for r in results.values()
+            r.get("racket_position_error_m", 1.0) <= 1e-3
+            and r.get("racket_normal_error_deg", 9.0) <= 0.5
+            and r.get("racket_velocity_error_rel", 1.0) <= 0.02
+            for r in results.values()
         ),
     }
     _dump(out / "summary.json", summary)

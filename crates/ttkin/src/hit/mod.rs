@@ -326,7 +326,11 @@ impl HitPlanner {
         let effort = lim.iter().map(|l| l.effort.unwrap_or(f64::INFINITY)).collect();
         Ok(HitPlanner {
             chain: chain.clone(),
-            dynamics: if options.check_effort { Dynamics::new(chain).ok() } else { None },
+            dynamics: if options.check_effort {
+                Dynamics::new(chain).ok()
+            } else {
+                None
+            },
             analytic: Analytic::for_chain(chain),
             racket: Racket::for_chain(chain),
             limits,

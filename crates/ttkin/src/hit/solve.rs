@@ -130,7 +130,13 @@ fn racket5(p: &HitPlanner, hit: &Hit, tool_target: &IsometryMatrix3<f64>, curren
     let base_cost: Vec<f64> = chain
         .joints()
         .iter()
-        .map(|j| if j.kind() == JointType::Prismatic { PRISMATIC_COST } else { 1.0 })
+        .map(|j| {
+            if j.kind() == JointType::Prismatic {
+                PRISMATIC_COST
+            } else {
+                1.0
+            }
+        })
         .collect();
     let options = ClikOptions {
         input_weights: Some(base_cost.clone()),
@@ -191,9 +197,7 @@ fn racket5(p: &HitPlanner, hit: &Hit, tool_target: &IsometryMatrix3<f64>, curren
     if !(sigma_min > 1e-6) || qd.iter().any(|v| !v.is_finite()) {
         return Err((
             HitStatus::Singular,
-            format!(
-                "the racket task is singular at the hit configuration (σ_min = {sigma_min:.2e})"
-            ),
+            format!("the racket task is singular at the hit configuration (σ_min = {sigma_min:.2e})"),
         ));
     }
     Ok(HitState {

@@ -190,7 +190,7 @@ proptest! {
     fn every_planned_stroke_meets_its_hit_and_limits(hit in random_hit()) {
         let p = planner();
         let plan = p.plan(&hit, None, None).unwrap();
-        if let Some(_) = plan.trajectory {
+        if plan.trajectory.is_some() {
             let (pe, te) = hit_errors(&p, &plan);
             prop_assert!(pe < 1e-8 && te < 1e-6, "pose {} twist {}", pe, te);
             if matches!(plan.status, HitStatus::Ok | HitStatus::TooEarly) {
