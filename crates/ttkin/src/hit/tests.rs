@@ -125,9 +125,10 @@ fn mobile8_racket_task_hit_meets_centre_and_normal() {
     let p = HitPlanner::new(&chain, HitOptions::default()).unwrap();
     let q0 = p.default_ready().to_vec();
     let now = p.racket().racket_pose(&chain.fk(&q0).unwrap());
-    let c = now.translation.vector + Vector3::new(0.05, 0.08, 0.05);
+    // The demo's mobile8 hit (python/ttmanip/demo.py: mobile8_hit).
+    let c = now.translation.vector + Vector3::new(0.02, -0.04, -0.07);
     let n = now.rotation.matrix().column(2).into_owned();
-    let hit = Hit::from_normal([c.x, c.y, c.z], [n.x, n.y, n.z + 0.2], [0.2, 0.3, 0.1], 1.0, None, None).unwrap();
+    let hit = Hit::from_normal([c.x, c.y, c.z], [n.x, n.y, n.z], [-0.29, 0.19, 0.25], 1.5, None, None).unwrap();
     let plan = p.plan(&hit, None, None).unwrap();
     assert!(
         matches!(plan.status, HitStatus::Ok | HitStatus::TooEarly),
