@@ -150,6 +150,8 @@ def run(out_dir: str | Path) -> dict:
             and r.get("racket_velocity_error_rel", 1.0) <= 0.02
             for r in results.values()
         ),
+        # Drive faults (e.g. a following-error trip) are the drive layer's verdict; listed, not hidden.
+        "drive_faults": {name: [f for f in r.get("faults", []) if f] for name, r in results.items()},
     }
     _dump(out / "summary.json", summary)
     return summary
