@@ -439,6 +439,8 @@ def _export(args: argparse.Namespace) -> int:
         f"# Built-in robot {args.robot} of ttmanip, written by `ttmanip export {args.robot}`; SI units.\n"
         "# tests/test_robot_files.py checks that this file and the built-in model agree.\n"
     )
+    if out.suffix and out.suffix not in (".urdf", ".toml"):
+        raise CliError(f"--out: expected a folder or a file ending in .urdf or .toml, got '{out}'")
     if out.suffix in (".urdf", ".toml"):
         _out_dir(str(out.parent) if str(out.parent) else ".")
         targets = [out]
