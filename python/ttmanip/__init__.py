@@ -26,6 +26,7 @@ from ._ttmanip import (  # issue 14: overflow, caught panics
     UnreachableError,
 )
 from .mobile import DiffDrive, TrackResult, task_line, track, wls_step
+from .pipeline import DEMO_HIT, Hit, HitError, HitPlan, SimResult, plan_hit, plan_hits, simulate
 
 __all__ = [
     "InternalError",
@@ -50,6 +51,15 @@ __all__ = [
     "task_line",
     "track",
     "wls_step",
+    # hit pipeline (issue 12)
+    "DEMO_HIT",
+    "Hit",
+    "HitError",
+    "HitPlan",
+    "SimResult",
+    "plan_hit",
+    "plan_hits",
+    "simulate",
 ]
 
 __version__ = "0.1.0"

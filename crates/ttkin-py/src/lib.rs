@@ -8,6 +8,7 @@ mod convert;
 mod drives;
 mod dynamics;
 mod errors;
+mod hit;
 mod ik;
 mod mobile;
 mod motor;
@@ -28,6 +29,7 @@ fn _ttmanip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     ik::register(m)?;
     traj::register(m)?;
     guard::register(m)?;
+    hit::register(m)?;
     drives::register(m)?;
     Ok(())
 }

@@ -61,7 +61,7 @@ fn joint_types(types: Option<&Bound<'_, PyAny>>, n: usize) -> PyResult<Vec<Joint
         return Ok(vec![JointType::Revolute; n]);
     };
     let kinds: Vec<JointType> = if let Ok(s) = types.cast::<PyString>() {
-        JointType::from_letters(s.to_str()?).py()?
+        JointType::from_letters(&s.to_cow()?).py()?
     } else {
         let items: Vec<String> = types.extract().map_err(|_| {
             TtmanipError::new_err("types: expected a string such as 'PRRRRR' or a list of 'revolute'/'prismatic'")

@@ -16,6 +16,7 @@ pub mod dh;
 pub mod diffdrive;
 pub mod dynamics;
 pub mod error;
+pub mod hit;
 pub mod ik;
 pub mod inertial;
 pub mod joint;
