@@ -1,0 +1,357 @@
+//! The closed loop in simulation: an opponent plays a ball, a camera observes it, the robot
+//! estimates, plans and executes its stroke, the ball meets the racket and flies back.
+//!
+//! **Incoming balls** (ordinary club-level rallies, not elite play): played from behind the
+//! opponent's end line, x ∈ [1.45, 1.9] m, |y| ≤ 0.5 m, 0.1–0.35 m above the surface, landing on
+//! the robot's half at x ∈ [−1.15, −0.35] m, |y| ≤ 0.55 m after 0.35–0.6 s (ball speeds about 4–8
+//! m/s), spin of 0–40 rev/s (0–250 rad/s) about a uniformly random axis (top, back and side spin
+//! alike). Balls that would touch the net are drawn again.
+//!
+//! **Camera**: 200 Hz, positions with Gaussian noise σ = 2 mm per axis, 2 % outliers displaced by
+//! up to 10 cm, observed from 0.02 s to 0.22 s after the opponent's hit, delivered 10 ms later
+//! (latency); planning happens at the delivery of the last observation.
+//!
+//! **Execution**: the planned stroke is executed exactly (no drive simulation): the racket follows
+//! the quintic hit leg and then a 0.4 s quintic back to the ready configuration; the racket pose and
+//! velocity at the impact come from forward kinematics and the Jacobian along it. The true ball is
+//! integrated at 1 ms; the impact happens when the ball's distance to the racket plane falls to its
+//! radius (bisection) and counts when the contact point lies within the racket radius of its
+//! centre; the ball then leaves by the racket impact model with the racket's actual normal and
+//! point velocity. **Scoring**: returned when its first contact is the table on the opponent's
+//! half. A ball is **in reach** when its true flight, after its bounce on the robot's half, passes
+//! through the reach box at least the shortest stroke time after planning.
+
+use super::estimate::{estimate, EstimateOptions};
+use super::flight::{BallState, EventKind, Flight};
+use super::hitplan::{shoot, HitPlanner, HitStatus};
+use crate::chain::JacobianFrame;
+use crate::traj::{JointState, JointTrajectory};
+use nalgebra::Vector3;
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// Camera model.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Camera {
+    /// Frame rate (Hz).
+    pub rate: f64,
+    /// Delay from exposure to delivery (s).
+    pub latency: f64,
+    /// Position noise σ per axis (m).
+    pub noise: f64,
+    /// Probability of an outlier observation.
+    pub outlier_rate: f64,
+    /// Largest outlier displacement per axis (m).
+    pub outlier_size: f64,
+    /// First observation after the opponent's hit (s).
+    pub start: f64,
+    /// Observation window (s).
+    pub window: f64,
+}
+
+impl Default for Camera {
+    fn default() -> Self {
+        Camera {
+            rate: 200.0,
+            latency: 0.010,
+            noise: 0.002,
+            outlier_rate: 0.02,
+            outlier_size: 0.10,
+            start: 0.02,
+            window: 0.20,
+        }
+    }
+}
+
+/// Rally settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RallyConfig {
+    /// Camera.
+    pub camera: Camera,
+    /// Landing target of the return (x, y, m, world; on the opponent's half).
+    pub target: [f64; 2],
+    /// Largest incoming spin (rev/s).
+    pub max_spin_rps: f64,
+    /// Random seed.
+    pub seed: u64,
+    /// Balls for which the true flight is kept as a path (for figures): the first `paths`.
+    pub paths: usize,
+}
+
+impl Default for RallyConfig {
+    fn default() -> Self {
+        RallyConfig {
+            camera: Camera::default(),
+            target: [0.9, 0.0],
+            max_spin_rps: 40.0,
+            seed: 0,
+            paths: 5,
+        }
+    }
+}
+
+/// What happened to one ball.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BallOutcome {
+    /// Incoming state at the opponent's hit (t = 0).
+    pub incoming: BallState,
+    /// Whether the true flight enters the reach box in time (see the module doc).
+    pub in_reach: bool,
+    /// Planner status name ("ok", "no_bounce", ...), or "estimate: ..." when estimation failed.
+    pub status: String,
+    /// Whether the racket met the ball.
+    pub contact: bool,
+    /// Whether the ball landed on the opponent's half.
+    pub returned: bool,
+    /// Distance (m) of the contact point from the racket centre (NaN without contact).
+    pub racket_error: f64,
+    /// Planning time (µs): estimate, predict, choose hit, IK, stroke.
+    pub plan_time_us: f64,
+    /// Landing point (m, world) of the return (NaN when it did not touch the table).
+    pub landing: [f64; 3],
+    /// Distance (m) from the landing point to the target (NaN without landing).
+    pub landing_error: f64,
+    /// Error (m/s) of the estimated velocity at the last observation.
+    pub velocity_error: f64,
+    /// Sampled true ball path (m, world; 5 ms) and racket-centre path, for the first balls.
+    pub path: Vec<[f64; 3]>,
+    /// Racket-centre path (m, world), same times as `path` while the stroke lasts.
+    pub racket_path: Vec<[f64; 3]>,
+}
+
+fn gauss(rng: &mut fastrand::Rng) -> f64 {
+    let u = rng.f64().max(1e-300);
+    let v = rng.f64();
+    (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+}
+
+fn uniform(rng: &mut fastrand::Rng, lo: f64, hi: f64) -> f64 {
+    lo + (hi - lo) * rng.f64()
+}
+
+/// An incoming ball from the opponent (see the module doc), drawn with `rng`.
+pub fn serve(flight: &Flight, rng: &mut fastrand::Rng, max_spin_rps: f64) -> BallState {
+    let r = flight.model.radius;
+    loop {
+        let p = Vector3::new(
+            uniform(rng, 1.45, 1.9),
+            uniform(rng, -0.5, 0.5),
+            uniform(rng, 0.10, 0.35),
+        );
+        let land = Vector3::new(uniform(rng, -1.15, -0.35), uniform(rng, -0.55, 0.55), r);
+        let tf = uniform(rng, 0.35, 0.6);
+        let axis = Vector3::new(gauss(rng), gauss(rng), gauss(rng));
+        let w = axis.normalize() * uniform(rng, 0.0, max_spin_rps) * std::f64::consts::TAU;
+        let Some(v) = shoot(flight, &p, &w, &land, tf) else {
+            continue;
+        };
+        let s = BallState { t: 0.0, p, v, w };
+        let (_, ev) = flight.run(&s, tf + 0.1, None);
+        if ev
+            .first()
+            .is_some_and(|e| e.kind == EventKind::Table && e.before.p.x < 0.0)
+        {
+            return s;
+        }
+    }
+}
+
+/// Plays ball `index` of the rally: serve, observe, plan, execute, score.
+pub fn play(planner: &HitPlanner, truth: &Flight, cfg: &RallyConfig, index: u64) -> BallOutcome {
+    let mut rng = fastrand::Rng::with_seed(
+        cfg.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ index.wrapping_mul(0xD1B5_4A32_D192_ED03),
+    );
+    let s0 = serve(truth, &mut rng, cfg.max_spin_rps);
+    let cam = &cfg.camera;
+    let count = (cam.window * cam.rate).round() as usize + 1;
+    let times: Vec<f64> = (0..count).map(|k| cam.start + k as f64 / cam.rate).collect();
+    let truth_path = super::predict::predict(truth, &s0, &times).expect("valid times");
+    let obs: Vec<[f64; 3]> = truth_path
+        .positions
+        .iter()
+        .map(|p| {
+            let mut o = *p;
+            let outlier = rng.f64() < cam.outlier_rate;
+            for x in o.iter_mut() {
+                *x += cam.noise * gauss(&mut rng);
+                if outlier {
+                    *x += uniform(&mut rng, -cam.outlier_size, cam.outlier_size);
+                }
+            }
+            o
+        })
+        .collect();
+    let t_last = *times.last().expect("non-empty");
+    let now = t_last + cam.latency;
+    let (truth_at_last, _) = truth.run(&s0, t_last, None);
+    let in_reach = planner.reachable(truth, &s0, now);
+    let mut out = BallOutcome {
+        incoming: s0,
+        in_reach,
+        status: String::new(),
+        contact: false,
+        returned: false,
+        racket_error: f64::NAN,
+        plan_time_us: f64::NAN,
+        landing: [f64::NAN; 3],
+        landing_error: f64::NAN,
+        velocity_error: f64::NAN,
+        path: Vec::new(),
+        racket_path: Vec::new(),
+    };
+    let opts = EstimateOptions {
+        flight: planner.flight,
+        ..EstimateOptions::default()
+    };
+    let clock = Instant::now();
+    let est = match estimate(&times, &obs, &opts) {
+        Ok(e) => e,
+        Err(e) => {
+            out.status = format!("estimate: {e}");
+            return out;
+        }
+    };
+    let plan = planner.plan(&est.state, now, cfg.target);
+    out.plan_time_us = clock.elapsed().as_secs_f64() * 1e6;
+    out.velocity_error = (est.state.v - truth_at_last.v).norm();
+    let plan = match plan {
+        Ok(p) => p,
+        Err(e) => {
+            out.status = format!("plan: {e}");
+            return out;
+        }
+    };
+    out.status = plan.status.name().to_string();
+    let keep_path = (index as usize) < cfg.paths;
+    let Some(hit) = plan.hit.filter(|_| plan.status == HitStatus::Ok) else {
+        if keep_path {
+            out.path = sample_path(truth, &s0, 1.2);
+        }
+        return out;
+    };
+    // The stroke: hit leg from rest at the ready configuration, then back to it.
+    let n = hit.q_hit.len();
+    let ready = JointState::rest(&planner.ready);
+    let at_hit = JointState {
+        q: hit.q_hit.clone(),
+        qd: hit.qd_hit.clone(),
+        qdd: vec![0.0; n],
+    };
+    let stroke = JointTrajectory::quintic_unchecked(&ready, &at_hit, hit.t_hit)
+        .append(JointTrajectory::quintic_unchecked(&at_hit, &ready, 0.4));
+    let world = planner.placement.world_from_base();
+    let (mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    // Racket centre, normal, velocity and angular velocity (world) at time t (s, absolute).
+    let mut racket_at = |t: f64| {
+        let tt = (t - now).clamp(0.0, stroke.duration());
+        stroke.sample(tt, &mut q, &mut qd, &mut qdd).expect("sizes match");
+        let pose = world * planner.chain.fk(&q).expect("sizes match");
+        let jac = planner.chain.jacobian(&q, JacobianFrame::Base).expect("sizes match");
+        let tw = jac * nalgebra::DVector::from_column_slice(&qd);
+        let v = world.rotation * Vector3::new(tw[0], tw[1], tw[2]);
+        let w = world.rotation * Vector3::new(tw[3], tw[4], tw[5]);
+        let n = pose.rotation * Vector3::z();
+        (pose.translation.vector, n, v, w)
+    };
+    let r = truth.model.radius;
+    let t_open = now + hit.t_hit - 0.06;
+    let (mut ball, _) = truth.run(&truth_at_last, t_open, None);
+    let gap =
+        |b: &BallState, rk: &(Vector3<f64>, Vector3<f64>, Vector3<f64>, Vector3<f64>)| rk.1.dot(&(b.p - rk.0)) - r;
+    let mut contact = None;
+    let mut closest = f64::INFINITY;
+    let dt = 0.0005;
+    let mut rk = racket_at(ball.t);
+    let mut g = gap(&ball, &rk);
+    while ball.t < now + hit.t_hit + 0.06 && contact.is_none() {
+        let (next, ev) = truth.advance(&ball, ball.t + dt, None);
+        if ev.is_some_and(|e| e.kind.terminal()) {
+            break;
+        }
+        let rk1 = racket_at(next.t);
+        let g1 = gap(&next, &rk1);
+        let off = |b: &BallState, rk: &(Vector3<f64>, Vector3<f64>, Vector3<f64>, Vector3<f64>)| {
+            let d = b.p - rk.0;
+            (d - rk.1 * rk.1.dot(&d)).norm()
+        };
+        closest = closest.min(off(&next, &rk1));
+        if g > 0.0 && g1 <= 0.0 && ev.is_none() {
+            let (mut lo, mut hi) = (0.0, next.t - ball.t);
+            for _ in 0..40 {
+                let mid = 0.5 * (lo + hi);
+                let b = truth.rk4(&ball, mid);
+                if gap(&b, &racket_at(b.t)) > 0.0 {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            let b = truth.rk4(&ball, lo);
+            let rkc = racket_at(b.t);
+            let offset = off(&b, &rkc);
+            contact = Some((b, rkc, offset));
+        }
+        ball = next;
+        rk = rk1;
+        g = g1;
+    }
+    let _ = rk;
+    if keep_path {
+        out.path = sample_path(truth, &s0, now + hit.t_hit);
+        out.racket_path = (0..out.path.len())
+            .map(|k| racket_at(k as f64 * 0.005).0.into())
+            .collect();
+    }
+    let Some((b, rkc, offset)) = contact else {
+        out.racket_error = closest;
+        out.status = "missed".into();
+        return out;
+    };
+    out.racket_error = offset;
+    if offset > planner.racket.radius {
+        out.status = "missed".into();
+        return out;
+    }
+    out.contact = true;
+    let point = b.p - r * rkc.1;
+    let v_point = rkc.2 + rkc.3.cross(&(point - rkc.0));
+    let (v, w) = planner.racket.hit(&truth.model, &b.v, &b.w, &rkc.1, &v_point);
+    let after = BallState { v, w, ..b };
+    let (_, events) = truth.run(&after, b.t + 2.0, None);
+    if keep_path {
+        let tail = sample_path(truth, &after, 1.0);
+        out.path.extend(tail);
+    }
+    match events.first() {
+        Some(e) if e.kind == EventKind::Table => {
+            out.landing = e.before.p.into();
+            out.landing_error = (e.before.p.xy() - Vector3::new(cfg.target[0], cfg.target[1], 0.0).xy()).norm();
+            out.returned = truth.table.on_opponent_half(e.before.p.x, e.before.p.y);
+            out.status = if out.returned {
+                "returned".into()
+            } else {
+                "landed_short".into()
+            };
+        }
+        Some(e) => out.status = format!("return_hit_{}", e.kind.name()),
+        None => out.status = "return_long".into(),
+    }
+    out
+}
+
+/// True positions every 5 ms for `duration` s from `s`, ending at a terminal event.
+fn sample_path(flight: &Flight, s: &BallState, duration: f64) -> Vec<[f64; 3]> {
+    let times: Vec<f64> = (0..=((duration - s.t).max(0.0) / 0.005) as usize)
+        .map(|k| s.t + k as f64 * 0.005)
+        .collect();
+    let pred = super::predict::predict(flight, s, &times).expect("valid times");
+    pred.positions.into_iter().filter(|p| p[0].is_finite()).collect()
+}
+
+/// Plays balls 0..`n` in parallel.
+pub fn rally(planner: &HitPlanner, truth: &Flight, cfg: &RallyConfig, n: usize) -> Vec<BallOutcome> {
+    (0..n as u64)
+        .into_par_iter()
+        .map(|i| play(planner, truth, cfg, i))
+        .collect()
+}
