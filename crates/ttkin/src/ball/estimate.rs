@@ -157,7 +157,7 @@ pub fn estimate(t: &[f64], p: &[[f64; 3]], opts: &EstimateOptions) -> Result<Est
     let bounce = find_bounce(&idx, p, opts);
     let (arc, segment) = match bounce {
         None => (&idx[..], Segment::Whole),
-        Some(k) if idx.len() - k - 1 >= need => (&idx[k + 1..], Segment::AfterBounce),
+        Some(k) if idx.len() - k > need => (&idx[k + 1..], Segment::AfterBounce),
         Some(k) if k >= need => (&idx[..k], Segment::BeforeBounce),
         Some(k) => {
             return Err(EstimateError::TooFew {

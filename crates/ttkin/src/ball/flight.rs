@@ -288,9 +288,9 @@ impl Flight {
 /// The first armed guard that is ≤ 0 (the most negative when several are).
 fn fired(armed: &[bool; 4], g: &Guards) -> Option<usize> {
     let mut best: Option<(usize, f64)> = None;
-    for k in 0..4 {
-        if armed[k] && g.0[k] <= 0.0 && best.is_none_or(|(_, v)| g.0[k] < v) {
-            best = Some((k, g.0[k]));
+    for (k, (&on, &v)) in armed.iter().zip(g.0.iter()).enumerate() {
+        if on && v <= 0.0 && best.is_none_or(|(_, b)| v < b) {
+            best = Some((k, v));
         }
     }
     best.map(|(k, _)| k)

@@ -404,10 +404,10 @@ impl HitPlanner {
             return None;
         }
         let mut pos_margin = f64::INFINITY;
-        for i in 0..q.len() {
+        for (i, &qi) in q.iter().enumerate() {
             let (lo, hi) = (self.limits.lower[i], self.limits.upper[i]);
             if lo.is_finite() && hi.is_finite() {
-                pos_margin = pos_margin.min(2.0 * (q[i] - lo).min(hi - q[i]) / (hi - lo));
+                pos_margin = pos_margin.min(2.0 * (qi - lo).min(hi - qi) / (hi - lo));
             }
         }
         Some(Hit {
