@@ -9,8 +9,8 @@
 //!    post-impact spin, is at (x_t, y_t, r) after the return flight time T: Broyden's method on the
 //!    3×3 map v₀ ↦ p(T), started from the drag-free solution with Jacobian T·I; T from
 //!    `return_times` in order until the flight clears the net and first touches the table at the
-//!    target. The post-impact spin depends on the racket, which depends on v₀: the two are iterated
-//!    (a fixed point, three rounds) until the exactly executed impact lands within 1 mm.
+//!    target (within 1 mm). The post-impact spin depends on the racket, which depends on v₀: every
+//!    evaluation of the map solves the racket for its v₀ and flies the ball with that spin.
 //! 3. **Racket.** [`super::impact::Racket::solve`] gives the face normal and the racket velocity
 //!    (along the normal); the racket centre is the ball centre minus r·n (the ball touches the face
 //!    centre); the racket frame has its z axis on the face normal and its x axis (the handle) as
@@ -197,9 +197,11 @@ impl HitPlanner {
             flight: Flight { step: 0.005, ..flight },
             min_stroke_time: 0.12,
             candidates: 3,
-            return_times: [0.55, 0.7, 0.85],
+            return_times: [0.65, 0.8, 0.5],
         };
-        let centre = 0.5 * (planner.reach.lo + planner.reach.hi);
+        // Ready: racket facing forward at the box centre, 0.2 m back, so that a stroke accelerates
+        // forward into the hit (the hit velocity points toward the net).
+        let centre = 0.5 * (planner.reach.lo + planner.reach.hi) - Vector3::new(0.2, 0.0, 0.0);
         let pose = planner.base_pose(&centre, &Vector3::x());
         planner.ready = planner.ik.nearest(&pose, &planner.ready, LimitFilter::Enforce)?;
         Ok(planner)
@@ -267,21 +269,34 @@ impl HitPlanner {
                 candidates: 0,
             });
         }
+        // `candidates` evenly spread first; more of them only when none of those is feasible.
         let k = self.candidates.max(1).min(list.len());
+        let extra = (2 * k).min(list.len());
         let mut best: Option<Hit> = None;
         let mut any_return = false;
-        for j in 0..k {
-            let s = list[(2 * j + 1) * list.len() / (2 * k)];
-            let Some((v_out, racket, landing)) = self.outgoing(&s, target) else {
-                continue;
-            };
-            any_return = true;
-            if let Some(hit) = self.robot_hit(&s, now, v_out, racket, landing) {
-                if best.as_ref().is_none_or(|b| hit.margin > b.margin) {
-                    best = Some(hit);
+        let mut tried = 0;
+        for (round, count) in [(0, k), (1, extra)] {
+            if round == 1 && (best.is_some() || extra <= k) {
+                break;
+            }
+            for j in 0..count {
+                let s = list[(2 * j + 1) * list.len() / (2 * count)];
+                tried += 1;
+                for &tf in &self.return_times {
+                    let Some((v_out, racket, landing)) = self.outgoing(&s, target, tf) else {
+                        continue;
+                    };
+                    any_return = true;
+                    if let Some(hit) = self.robot_hit(&s, now, v_out, racket, landing) {
+                        if best.as_ref().is_none_or(|b| hit.margin > b.margin) {
+                            best = Some(hit);
+                        }
+                        break;
+                    }
                 }
             }
         }
+        let k = tried;
         let status = match (&best, any_return) {
             (Some(_), _) => HitStatus::Ok,
             (None, true) => HitStatus::Infeasible,
@@ -329,48 +344,27 @@ impl HitPlanner {
         (out, bounced)
     }
 
-    /// Outgoing velocity, racket and landing point returning the ball at `s` to `target`.
-    fn outgoing(&self, s: &BallState, target: [f64; 2]) -> Option<(Vector3<f64>, RacketHit, Vector3<f64>)> {
+    /// Outgoing velocity, racket and landing point returning the ball at `s` to `target` in a
+    /// return flight of `tf` s.
+    fn outgoing(&self, s: &BallState, target: [f64; 2], tf: f64) -> Option<(Vector3<f64>, RacketHit, Vector3<f64>)> {
         let f = &self.flight;
         let goal = Vector3::new(target[0], target[1], f.model.radius);
-        for &tf in &self.return_times {
-            let mut spin = -s.w; // first guess; replaced by the impact's outgoing spin
-            let mut result = None;
-            for _ in 0..4 {
-                let Some(v_out) = shoot(f, &s.p, &spin, &goal, tf) else {
-                    break;
-                };
-                let Ok(racket) = self.racket.solve(&f.model, &s.v, &s.w, &v_out) else {
-                    break;
-                };
-                spin = racket.spin_out;
-                let out = BallState {
-                    v: v_out,
-                    w: racket.spin_out,
-                    ..*s
-                };
-                let (_, events) = f.run(&out, s.t + tf + 0.5, None);
-                match events.first() {
-                    Some(e) if e.kind == EventKind::Table && f.table.on_opponent_half(e.before.p.x, e.before.p.y) => {
-                        let landing = e.before.p;
-                        result = Some((v_out, racket, landing));
-                        if (landing - goal).xy().norm() < 1e-3 {
-                            break;
-                        }
-                    }
-                    _ => {
-                        result = None;
-                        break;
-                    }
-                }
-            }
-            if let Some(r) = result {
-                if (r.2 - goal).xy().norm() < 5e-3 {
-                    return Some(r);
-                }
-            }
-        }
-        None
+        let racket = |v: &Vector3<f64>| self.racket.solve(&f.model, &s.v, &s.w, v).ok();
+        // The outgoing spin follows the racket, which follows v₀: solved together.
+        let v_out = shoot(f, &s.p, &goal, tf, |v| racket(v).map(|r| r.spin_out))?;
+        let hit = racket(&v_out)?;
+        let out = BallState {
+            v: v_out,
+            w: hit.spin_out,
+            ..*s
+        };
+        let (_, events) = f.run(&out, s.t + tf + 0.5, None);
+        let e = events.first()?;
+        let landing = e.before.p;
+        let ok = e.kind == EventKind::Table
+            && f.table.on_opponent_half(landing.x, landing.y)
+            && (landing - goal).xy().norm() < 1e-3;
+        ok.then_some((v_out, hit, landing))
     }
 
     fn robot_hit(
@@ -425,17 +419,24 @@ impl HitPlanner {
     }
 }
 
-/// Velocity v₀ (m/s) with which a ball at `p` spinning with `w` is at `goal` after `tf` s of free
-/// flight (no contacts): Broyden's method from the drag-free solution, to 1e-5 m.
-pub fn shoot(f: &Flight, p: &Vector3<f64>, w: &Vector3<f64>, goal: &Vector3<f64>, tf: f64) -> Option<Vector3<f64>> {
+/// Velocity v₀ (m/s) with which a ball at `p`, spinning with `spin(v₀)` (rad/s; a constant or the
+/// spin a racket gives it), is at `goal` after `tf` s of free flight (no contacts): Broyden's method
+/// from the drag-free solution, to 1e-5 m. `None` when `spin` has no answer or it does not converge.
+pub fn shoot<S>(f: &Flight, p: &Vector3<f64>, goal: &Vector3<f64>, tf: f64, spin: S) -> Option<Vector3<f64>>
+where
+    S: Fn(&Vector3<f64>) -> Option<Vector3<f64>>,
+{
     let g = Vector3::new(0.0, 0.0, -f.model.gravity);
     let mut v = (goal - p - 0.5 * g * tf * tf) / tf;
     let end = |v: &Vector3<f64>| {
+        let Some(w) = spin(v) else {
+            return Vector3::repeat(f64::NAN);
+        };
         let mut s = BallState {
             t: 0.0,
             p: *p,
             v: *v,
-            w: *w,
+            w,
         };
         while s.t < tf - 1e-12 {
             s = f.rk4(&s, f.step.min(tf - s.t));
@@ -444,6 +445,9 @@ pub fn shoot(f: &Flight, p: &Vector3<f64>, w: &Vector3<f64>, goal: &Vector3<f64>
     };
     let mut jinv = Matrix3::identity() / tf; // inverse Jacobian (Broyden, "good" update on the inverse)
     let mut r = end(&v);
+    if !r.norm().is_finite() {
+        return None;
+    }
     for _ in 0..20 {
         if r.norm() < 1e-5 {
             return Some(v);

@@ -142,7 +142,7 @@ pub fn serve(flight: &Flight, rng: &mut fastrand::Rng, max_spin_rps: f64) -> Bal
         let tf = uniform(rng, 0.35, 0.6);
         let axis = Vector3::new(gauss(rng), gauss(rng), gauss(rng));
         let w = axis.normalize() * uniform(rng, 0.0, max_spin_rps) * std::f64::consts::TAU;
-        let Some(v) = shoot(flight, &p, &w, &land, tf) else {
+        let Some(v) = shoot(flight, &p, &land, tf, |_| Some(w)) else {
             continue;
         };
         let s = BallState { t: 0.0, p, v, w };
