@@ -12,6 +12,8 @@ mod mobile;
 mod motor;
 mod robot;
 mod traj;
+// issue 13
+mod ball;
 
 /// The native extension module `ttmanip._ttmanip`.
 #[pymodule]
@@ -23,5 +25,6 @@ fn _ttmanip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     motor::register(m)?;
     ik::register(m)?;
     traj::register(m)?;
+    ball::register(m)?;
     Ok(())
 }
