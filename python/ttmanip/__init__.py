@@ -22,6 +22,8 @@ from ._ttmanip import (
     UnreachableError,
 )
 from .mobile import DiffDrive, TrackResult, task_line, track, wls_step
+from . import ball  # issue 13
+from .rally import rally  # issue 13
 
 __all__ = [
     "DiffDrive",
@@ -42,6 +44,8 @@ __all__ = [
     "task_line",
     "track",
     "wls_step",
+    "ball",
+    "rally",
 ]
 
 __version__ = "0.1.0"

@@ -83,6 +83,10 @@ def build_parser() -> argparse.ArgumentParser:
     export.add_argument("robot", choices=("mobile8", "gantry6", "arm4", "ur5"))
     export.add_argument("--out", required=True, help="file ending in .urdf or .toml")
     export.set_defaults(func=_export)
+
+    from . import rally_cli  # issue 13
+
+    rally_cli.add_parser(sub)
     return parser
 
 
