@@ -323,7 +323,7 @@ fn rally_returns_most_balls_in_reach() {
         seed: 5,
         ..RallyConfig::default()
     };
-    let out = rally::rally(&pl, &truth, &cfg, 200);
+    let out = rally::rally(&pl, &truth, &cfg, 120);
     let in_reach = out.iter().filter(|o| o.in_reach).count();
     let returned = out.iter().filter(|o| o.in_reach && o.returned).count();
     let mut statuses: Vec<String> = out
@@ -332,7 +332,7 @@ fn rally_returns_most_balls_in_reach() {
         .map(|o| o.status.clone())
         .collect();
     statuses.sort();
-    eprintln!("in reach {in_reach}/200, returned {returned}; failures {statuses:?}");
-    assert!(in_reach >= 100);
+    eprintln!("in reach {in_reach}/120, returned {returned}; failures {statuses:?}");
+    assert!(in_reach >= 60);
     assert!(returned as f64 >= 0.95 * in_reach as f64, "{returned}/{in_reach}");
 }

@@ -2,8 +2,8 @@
 //!
 //! Method. Observations with a non-finite value are dropped (counted). A bounce inside the window
 //! is found as an interior minimum of the (median-of-three filtered) height near the surface; the
-//! fit then uses the observations after it when there are enough, otherwise those before it and
-//! predicts through the bounce. On one flight arc the state at the arc's last observation time t0
+//! fit then uses the observations after it when they last long enough to fit the spin
+//! (`spin_min_duration`, ≥ 8 observations), otherwise those before it, predicted through the bounce. On one flight arc the state at the arc's last observation time t0
 //! is fitted by a fixed-point iteration on the flight model: with the current estimate integrated
 //! to every observation time, x(t_i), the part not explained by p0 + v0·τ + ½·A·τ² (τ = t_i − t0,
 //! A = k_m·ω × v0 the Magnus acceleration at t0) is subtracted from the observations and
@@ -155,9 +155,14 @@ pub fn estimate(t: &[f64], p: &[[f64; 3]], opts: &EstimateOptions) -> Result<Est
         });
     }
     let bounce = find_bounce(&idx, p, opts);
+    // After a bounce, the arc after it is used once it is long enough to fit the spin (or the arc
+    // before it is too short); otherwise the longer arc before it, predicted through the bounce.
+    let long_after = |k: usize| {
+        idx.len() - k > need.max(8) && t[*idx.last().expect("non-empty")] - t[idx[k + 1]] >= opts.spin_min_duration
+    };
     let (arc, segment) = match bounce {
         None => (&idx[..], Segment::Whole),
-        Some(k) if idx.len() - k > need => (&idx[k + 1..], Segment::AfterBounce),
+        Some(k) if idx.len() - k > need && (long_after(k) || k < need) => (&idx[k + 1..], Segment::AfterBounce),
         Some(k) if k >= need => (&idx[..k], Segment::BeforeBounce),
         Some(k) => {
             return Err(EstimateError::TooFew {

@@ -4,7 +4,8 @@
 //! 1. **Candidates.** The ball is predicted from its state (through its bounce on the robot's half)
 //!    and every 5 ms sample inside the reach box ([`Reach`], the racket centre's region reachable by
 //!    gantry6 with a forward-facing racket, world frame), after the bounce and at least
-//!    `min_stroke_time` after `now`, is a candidate; `candidates` of them, evenly spread, are tried.
+//!    `min_stroke_time` after `now`, is a candidate; `candidates` of them, evenly spread, are tried
+//!    (up to 12 when none of those is feasible).
 //! 2. **Outgoing velocity.** Shooting: the velocity v₀ with which the ball, spinning with its
 //!    post-impact spin, is at (x_t, y_t, r) after the return flight time T: Broyden's method on the
 //!    3×3 map v₀ ↦ p(T), started from the drag-free solution with Jacobian T·I; T from
@@ -173,8 +174,11 @@ pub struct HitPlanner {
     pub flight: Flight,
     /// Shortest stroke (s) between planning and hitting.
     pub min_stroke_time: f64,
-    /// Candidates tried at most.
+    /// Candidates tried first (evenly spread); all of them (up to 12) when none of these is feasible.
     pub candidates: usize,
+    /// How far (m) beyond the reach box the planner still looks for hits, so that a ball whose
+    /// estimate lies just outside the box is still tried (IK decides).
+    pub search_margin: f64,
     /// Return flight times (s) tried in order.
     pub return_times: [f64; 3],
 }
@@ -197,6 +201,7 @@ impl HitPlanner {
             flight: Flight { step: 0.005, ..flight },
             min_stroke_time: 0.12,
             candidates: 3,
+            search_margin: 0.03,
             return_times: [0.65, 0.8, 0.5],
         };
         // Ready: racket facing forward at the box centre, 0.2 m back, so that a stroke accelerates
@@ -245,7 +250,16 @@ impl HitPlanner {
     /// Plans the hit of the ball `ball` (state at time `ball.t`, s) for a stroke starting at rest
     /// at the ready configuration at time `now` (s), returning the ball to `target` (x, y, m, world).
     pub fn plan(&self, ball: &BallState, now: f64, target: [f64; 2]) -> Result<HitPlan> {
+        self.plan_from(ball, now, target, &JointState::rest(&self.ready))
+    }
+
+    /// [`HitPlanner::plan`] for a stroke starting from the joint state `start` at `now` (re-planning
+    /// during a stroke with a newer estimate).
+    pub fn plan_from(&self, ball: &BallState, now: f64, target: [f64; 2], start: &JointState) -> Result<HitPlan> {
         self.check_target(target)?;
+        if start.check("start")? != self.chain.dof() {
+            return Err(Error::shape("start.q", format!("{} values", self.chain.dof()), start.q.len()));
+        }
         ball.validate("ball")?;
         if !now.is_finite() {
             return Err(Error::NonFinite {
@@ -254,7 +268,7 @@ impl HitPlanner {
                 value: now,
             });
         }
-        let (list, bounced) = self.candidate_states(&self.flight, ball, now);
+        let (list, bounced) = self.candidate_states(&self.flight, ball, now, self.search_margin);
         if !bounced {
             return Ok(HitPlan {
                 status: HitStatus::NoBounce,
@@ -271,7 +285,7 @@ impl HitPlanner {
         }
         // `candidates` evenly spread first; more of them only when none of those is feasible.
         let k = self.candidates.max(1).min(list.len());
-        let extra = (2 * k).min(list.len());
+        let extra = list.len().min(12);
         let mut best: Option<Hit> = None;
         let mut any_return = false;
         let mut tried = 0;
@@ -287,7 +301,7 @@ impl HitPlanner {
                         continue;
                     };
                     any_return = true;
-                    if let Some(hit) = self.robot_hit(&s, now, v_out, racket, landing) {
+                    if let Some(hit) = self.robot_hit(&s, now, start, v_out, racket, landing) {
                         if best.as_ref().is_none_or(|b| hit.margin > b.margin) {
                             best = Some(hit);
                         }
@@ -312,12 +326,13 @@ impl HitPlanner {
     /// Whether the ball from `ball`, flying by `flight`, bounces on the robot's half and then passes
     /// through the reach box at least `min_stroke_time` after `now` (s).
     pub fn reachable(&self, flight: &Flight, ball: &BallState, now: f64) -> bool {
-        !self.candidate_states(flight, ball, now).0.is_empty()
+        !self.candidate_states(flight, ball, now, 0.0).0.is_empty()
     }
 
     /// Predicted states every 5 ms inside the reach box after the bounce on the robot's half, and
     /// whether that bounce happens.
-    fn candidate_states(&self, f: &Flight, ball: &BallState, now: f64) -> (Vec<BallState>, bool) {
+    fn candidate_states(&self, f: &Flight, ball: &BallState, now: f64, margin: f64) -> (Vec<BallState>, bool) {
+        let reach = Reach { lo: self.reach.lo - Vector3::repeat(margin), hi: self.reach.hi + Vector3::repeat(margin) };
         let mut cur = *ball;
         let mut bounced = false;
         let mut out = Vec::new();
@@ -334,7 +349,7 @@ impl HitPlanner {
                 }
                 continue;
             }
-            if bounced && cur.t >= now + self.min_stroke_time && self.reach.contains(&cur.p) && cur.v.x < 0.0 {
+            if bounced && cur.t >= now + self.min_stroke_time && reach.contains(&cur.p) && cur.v.x < 0.0 {
                 out.push(cur);
             }
             if cur.p.x < self.reach.lo.x - 0.05 || (cur.v.x >= 0.0 && cur.p.x < 0.0) {
@@ -371,6 +386,7 @@ impl HitPlanner {
         &self,
         s: &BallState,
         now: f64,
+        start: &JointState,
         v_out: Vector3<f64>,
         racket: RacketHit,
         landing: Vector3<f64>,
@@ -378,7 +394,7 @@ impl HitPlanner {
         let r = self.flight.model.radius;
         let centre = s.p - r * racket.normal;
         let pose = self.base_pose(&centre, &racket.normal);
-        let q = self.ik.nearest(&pose, &self.ready, LimitFilter::Enforce).ok()?;
+        let q = self.ik.nearest(&pose, &start.q, LimitFilter::Enforce).ok()?;
         let rot_bw = self.placement.world_from_base().rotation.inverse();
         let v_b = rot_bw * racket.velocity;
         let twist = [v_b.x, v_b.y, v_b.z, 0.0, 0.0, 0.0];
@@ -387,13 +403,12 @@ impl HitPlanner {
             return None;
         }
         let t_hit = s.t - now;
-        let start = JointState::rest(&self.ready);
         let end = JointState {
             q: q.clone(),
             qd: jv.qdot.clone(),
             qdd: vec![0.0; q.len()],
         };
-        let ratio = quintic_limit_ratio(&start, &end, t_hit, &self.limits);
+        let ratio = quintic_limit_ratio(start, &end, t_hit, &self.limits);
         if !(ratio <= 1.0) {
             return None;
         }

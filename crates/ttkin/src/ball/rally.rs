@@ -76,6 +76,10 @@ pub struct RallyConfig {
     pub seed: u64,
     /// Balls for which the true flight is kept as a path (for figures): the first `paths`.
     pub paths: usize,
+    /// Re-planning period (s) during the stroke with the newest observations; 0 plans once.
+    pub replan_period: f64,
+    /// Longest observation window (s) of a re-plan's estimate.
+    pub max_window: f64,
 }
 
 impl Default for RallyConfig {
@@ -86,6 +90,8 @@ impl Default for RallyConfig {
             max_spin_rps: 40.0,
             seed: 0,
             paths: 5,
+            replan_period: 0.04,
+            max_window: 0.25,
         }
     }
 }
@@ -113,6 +119,8 @@ pub struct BallOutcome {
     pub landing_error: f64,
     /// Error (m/s) of the estimated velocity at the last observation.
     pub velocity_error: f64,
+    /// Re-plans adopted during the stroke.
+    pub replans: usize,
     /// Sampled true ball path (m, world; 5 ms) and racket-centre path, for the first balls.
     pub path: Vec<[f64; 3]>,
     /// Racket-centre path (m, world), same times as `path` while the stroke lasts.
@@ -156,14 +164,39 @@ pub fn serve(flight: &Flight, rng: &mut fastrand::Rng, max_spin_rps: f64) -> Bal
     }
 }
 
-/// Plays ball `index` of the rally: serve, observe, plan, execute, score.
+/// A stroke made of pieces: each re-plan replaces the motion from its start time (s, absolute).
+struct Motion {
+    pieces: Vec<(f64, JointTrajectory)>,
+}
+
+impl Motion {
+    /// Joint state at absolute time `t` (s); before the first piece, rest at its start.
+    fn sample(&self, t: f64, q: &mut [f64], qd: &mut [f64], qdd: &mut [f64]) {
+        let (t0, traj) = self.pieces.iter().rev().find(|(t0, _)| *t0 <= t).unwrap_or(&self.pieces[0]);
+        let tt = (t - t0).clamp(0.0, traj.duration());
+        traj.sample(tt, q, qd, qdd).expect("sizes match");
+        if t - t0 > traj.duration() {
+            qd.fill(0.0);
+            qdd.fill(0.0);
+        }
+    }
+
+    fn state(&self, t: f64, n: usize) -> JointState {
+        let (mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        self.sample(t, &mut q, &mut qd, &mut qdd);
+        JointState { q, qd, qdd }
+    }
+}
+
+/// Plays ball `index` of the rally: serve, observe, plan, re-plan, execute, score.
 pub fn play(planner: &HitPlanner, truth: &Flight, cfg: &RallyConfig, index: u64) -> BallOutcome {
     let mut rng = fastrand::Rng::with_seed(
         cfg.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ index.wrapping_mul(0xD1B5_4A32_D192_ED03),
     );
     let s0 = serve(truth, &mut rng, cfg.max_spin_rps);
     let cam = &cfg.camera;
-    let count = (cam.window * cam.rate).round() as usize + 1;
+    // The camera runs for the whole incoming flight; each plan sees what was delivered by then.
+    let count = (1.2 * cam.rate) as usize;
     let times: Vec<f64> = (0..count).map(|k| cam.start + k as f64 / cam.rate).collect();
     let truth_path = super::predict::predict(truth, &s0, &times).expect("valid times");
     let obs: Vec<[f64; 3]> = truth_path
@@ -181,7 +214,8 @@ pub fn play(planner: &HitPlanner, truth: &Flight, cfg: &RallyConfig, index: u64)
             o
         })
         .collect();
-    let t_last = *times.last().expect("non-empty");
+    let first = (cam.window * cam.rate).round() as usize + 1;
+    let t_last = times[first - 1];
     let now = t_last + cam.latency;
     let (truth_at_last, _) = truth.run(&s0, t_last, None);
     let in_reach = planner.reachable(truth, &s0, now);
@@ -196,15 +230,13 @@ pub fn play(planner: &HitPlanner, truth: &Flight, cfg: &RallyConfig, index: u64)
         landing: [f64::NAN; 3],
         landing_error: f64::NAN,
         velocity_error: f64::NAN,
+        replans: 0,
         path: Vec::new(),
         racket_path: Vec::new(),
     };
-    let opts = EstimateOptions {
-        flight: planner.flight,
-        ..EstimateOptions::default()
-    };
+    let opts = EstimateOptions { flight: planner.flight, ..EstimateOptions::default() };
     let clock = Instant::now();
-    let est = match estimate(&times, &obs, &opts) {
+    let est = match estimate(&times[..first], &obs[..first], &opts) {
         Ok(e) => e,
         Err(e) => {
             out.status = format!("estimate: {e}");
@@ -223,28 +255,45 @@ pub fn play(planner: &HitPlanner, truth: &Flight, cfg: &RallyConfig, index: u64)
     };
     out.status = plan.status.name().to_string();
     let keep_path = (index as usize) < cfg.paths;
-    let Some(hit) = plan.hit.filter(|_| plan.status == HitStatus::Ok) else {
+    let Some(mut hit) = plan.hit.filter(|_| plan.status == HitStatus::Ok) else {
         if keep_path {
             out.path = sample_path(truth, &s0, 1.2);
         }
         return out;
     };
-    // The stroke: hit leg from rest at the ready configuration, then back to it.
     let n = hit.q_hit.len();
     let ready = JointState::rest(&planner.ready);
-    let at_hit = JointState {
-        q: hit.q_hit.clone(),
-        qd: hit.qd_hit.clone(),
-        qdd: vec![0.0; n],
+    let leg = |from: &JointState, hit: &super::hitplan::Hit| {
+        let at_hit = JointState { q: hit.q_hit.clone(), qd: hit.qd_hit.clone(), qdd: vec![0.0; n] };
+        JointTrajectory::quintic_unchecked(from, &at_hit, hit.t_hit)
+            .append(JointTrajectory::quintic_unchecked(&at_hit, &ready, 0.4))
     };
-    let stroke = JointTrajectory::quintic_unchecked(&ready, &at_hit, hit.t_hit)
-        .append(JointTrajectory::quintic_unchecked(&at_hit, &ready, 0.4));
+    let mut motion = Motion { pieces: vec![(now, leg(&ready, &hit))] };
+    let mut hit_abs = now + hit.t_hit;
+    // Re-plan every `replan_period` with the newest observations (at most `max_window` s of them)
+    // while the stroke has at least `min_stroke_time` left.
+    let mut t_plan = now + cfg.replan_period;
+    while cfg.replan_period > 0.0 && hit_abs - t_plan > planner.min_stroke_time {
+        let seen = times.partition_point(|&t| t + cam.latency <= t_plan);
+        let from = times[..seen].partition_point(|&t| t < times[seen - 1] - cfg.max_window);
+        if let Ok(e) = estimate(&times[from..seen], &obs[from..seen], &opts) {
+            let start = motion.state(t_plan, n);
+            if let Ok(p) = planner.plan_from(&e.state, t_plan, cfg.target, &start) {
+                if let Some(h) = p.hit.filter(|_| p.status == HitStatus::Ok) {
+                    hit = h;
+                    hit_abs = t_plan + hit.t_hit;
+                    motion.pieces.push((t_plan, leg(&start, &hit)));
+                    out.replans += 1;
+                }
+            }
+        }
+        t_plan += cfg.replan_period;
+    }
     let world = planner.placement.world_from_base();
     let (mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     // Racket centre, normal, velocity and angular velocity (world) at time t (s, absolute).
     let mut racket_at = |t: f64| {
-        let tt = (t - now).clamp(0.0, stroke.duration());
-        stroke.sample(tt, &mut q, &mut qd, &mut qdd).expect("sizes match");
+        motion.sample(t, &mut q, &mut qd, &mut qdd);
         let pose = world * planner.chain.fk(&q).expect("sizes match");
         let jac = planner.chain.jacobian(&q, JacobianFrame::Base).expect("sizes match");
         let tw = jac * nalgebra::DVector::from_column_slice(&qd);
@@ -254,7 +303,7 @@ pub fn play(planner: &HitPlanner, truth: &Flight, cfg: &RallyConfig, index: u64)
         (pose.translation.vector, n, v, w)
     };
     let r = truth.model.radius;
-    let t_open = now + hit.t_hit - 0.06;
+    let t_open = hit_abs - 0.06;
     let (mut ball, _) = truth.run(&truth_at_last, t_open, None);
     let gap =
         |b: &BallState, rk: &(Vector3<f64>, Vector3<f64>, Vector3<f64>, Vector3<f64>)| rk.1.dot(&(b.p - rk.0)) - r;
@@ -263,7 +312,7 @@ pub fn play(planner: &HitPlanner, truth: &Flight, cfg: &RallyConfig, index: u64)
     let dt = 0.0005;
     let mut rk = racket_at(ball.t);
     let mut g = gap(&ball, &rk);
-    while ball.t < now + hit.t_hit + 0.06 && contact.is_none() {
+    while ball.t < hit_abs + 0.06 && contact.is_none() {
         let (next, ev) = truth.advance(&ball, ball.t + dt, None);
         if ev.is_some_and(|e| e.kind.terminal()) {
             break;
@@ -297,7 +346,7 @@ pub fn play(planner: &HitPlanner, truth: &Flight, cfg: &RallyConfig, index: u64)
     }
     let _ = rk;
     if keep_path {
-        out.path = sample_path(truth, &s0, now + hit.t_hit);
+        out.path = sample_path(truth, &s0, hit_abs);
         out.racket_path = (0..out.path.len())
             .map(|k| racket_at(k as f64 * 0.005).0.into())
             .collect();
