@@ -12,11 +12,14 @@ use ttkin::ball::rally;
 
 /// Noisy observations (200 Hz, σ = 2 mm, 0.02–0.22 s) of `count` incoming balls.
 fn observations(count: usize) -> Vec<(Vec<f64>, Vec<[f64; 3]>)> {
-    let truth = Flight { step: 0.001, ..Flight::default() };
+    let truth = Flight {
+        step: 0.001,
+        ..Flight::default()
+    };
     let mut rng = fastrand::Rng::with_seed(1);
     (0..count)
         .map(|_| {
-            let s = rally::serve(&truth, &mut rng, 40.0);
+            let s = rally::serve(&truth, &mut rng, 40.0, 0.2);
             let t: Vec<f64> = (0..41).map(|k| 0.02 + k as f64 * 0.005).collect();
             let p = predict(&truth, &s, &t).unwrap().positions;
             let p = p
@@ -36,7 +39,13 @@ fn observations(count: usize) -> Vec<(Vec<f64>, Vec<[f64; 3]>)> {
 
 fn ball(c: &mut Criterion) {
     let obs = observations(64);
-    let opts = EstimateOptions { flight: Flight { step: 0.005, ..Flight::default() }, ..EstimateOptions::default() };
+    let opts = EstimateOptions {
+        flight: Flight {
+            step: 0.005,
+            ..Flight::default()
+        },
+        ..EstimateOptions::default()
+    };
     let mut k = 0;
     c.bench_function("ball_estimate_41obs", |b| {
         b.iter(|| {
@@ -45,7 +54,10 @@ fn ball(c: &mut Criterion) {
         })
     });
     let states: Vec<BallState> = obs.iter().map(|o| estimate(&o.0, &o.1, &opts).unwrap().state).collect();
-    let plane = Plane { point: Vector3::new(-1.6, 0.0, 0.0), normal: Vector3::x() };
+    let plane = Plane {
+        point: Vector3::new(-1.6, 0.0, 0.0),
+        normal: Vector3::x(),
+    };
     let flight = Flight::default();
     c.bench_function("ball_crossing_hitting_plane", |b| {
         b.iter(|| {

@@ -157,7 +157,7 @@ fn prediction_at_the_hitting_plane_is_within_1mm_of_a_fine_reference() {
     };
     let mut rng = fastrand::Rng::with_seed(7);
     for _ in 0..40 {
-        let s = rally::serve(&fine(), &mut rng, 40.0);
+        let s = rally::serve(&fine(), &mut rng, 40.0, 0.2);
         let a = crossing(&Flight::default(), &s, &plane, 2.0).unwrap();
         let b = crossing(&fine(), &s, &plane, 2.0).unwrap();
         match (a, b) {
@@ -201,7 +201,7 @@ fn estimation_recovers_velocity_from_noisy_observations() {
     let mut rng = fastrand::Rng::with_seed(3);
     let mut worst: f64 = 0.0;
     for seed in 0..30 {
-        let s = rally::serve(&fine(), &mut rng, 40.0);
+        let s = rally::serve(&fine(), &mut rng, 40.0, 0.2);
         let (t, p, truth) = observe(&s, 0.002, 41, true, seed);
         let e = estimate(&t, &p, &EstimateOptions::default()).unwrap();
         assert!(e.outliers >= 3, "outliers found: {}", e.outliers);
@@ -271,7 +271,7 @@ fn executed_hit_returns_the_ball_to_its_target() {
     let mut rng = fastrand::Rng::with_seed(11);
     let mut planned = 0;
     for _ in 0..30 {
-        let s = rally::serve(&pl.flight, &mut rng, 30.0);
+        let s = rally::serve(&pl.flight, &mut rng, 30.0, 0.2);
         let plan = pl.plan(&s, 0.2, [0.9, 0.2]).unwrap();
         let Some(hit) = plan.hit else { continue };
         planned += 1;

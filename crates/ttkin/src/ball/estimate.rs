@@ -3,20 +3,22 @@
 //! Method. Observations with a non-finite value are dropped (counted). A bounce inside the window
 //! is found as an interior minimum of the (median-of-three filtered) height near the surface; the
 //! fit then uses the observations after it when they last long enough to fit the spin
-//! (`spin_min_duration`, ≥ 8 observations), otherwise those before it, predicted through the bounce. On one flight arc the state at the arc's last observation time t0
-//! is fitted by a fixed-point iteration on the flight model: with the current estimate integrated
-//! to every observation time, x(t_i), the part not explained by p0 + v0·τ + ½·A·τ² (τ = t_i − t0,
-//! A = k_m·ω × v0 the Magnus acceleration at t0) is subtracted from the observations and
-//! (p0, v0, A) re-solved by weighted linear least squares, shared 3×3 normal equations for the
-//! three axes. The spin follows from A: ω⊥ = v0 × A / (k_m·|v0|²), the part perpendicular to v0
-//! (the component along v0 produces no force in flight and is not observable; it is 0). Weights
-//! are Huber's (c = 3σ on the 3-D residual, σ from the median residual: for Gaussian noise σ_axis =
-//! median|r| / 1.538, the median of a χ₃) and residuals beyond 6σ get weight 0 (outliers). The
-//! contraction factor of the iteration is about k_d·|v|·T (≈ 0.15 for a 0.2 s window), so it
-//! converges in a few iterations. Covariance: σ²·(BᵀWB)⁻¹ per axis, for (p0, v0) and A.
+//! (`spin_min_duration`, ≥ 8 observations), otherwise those before it, predicted through the bounce.
+//!
+//! On one flight arc the state at the arc's last observation time t0 is fitted by a fixed-point
+//! iteration on the flight model: with the current estimate integrated to every observation time,
+//! x(t_i), the part not explained by the linear model p0 + v0·τ + k_m·ω × V2(τ) (τ = t_i − t0,
+//! V2 the double integral of the velocity, v0·τ²/2 + a·τ³/6) is subtracted from the observations and
+//! (p0, v0, ω) re-solved by weighted linear least squares (9 × 9 normal equations). The spin
+//! component along the velocity makes no Magnus force: it is observable only through the arc's
+//! curvature, so a ridge (prior σ = 200 rad/s per component) keeps it bounded. Weights are Huber's
+//! (c = 3σ on the 3-D residual, σ from the median residual: for Gaussian noise σ_axis = median|r| /
+//! 1.538, the median of a χ₃) and residuals beyond 6σ get weight 0 (outliers). The contraction
+//! factor of the iteration is about k_d·|v|·T (≈ 0.15 for a 0.2 s window), so it converges in a
+//! few iterations. Covariance: σ²·(BᵀWB + ridge)⁻¹.
 
 use super::flight::{BallState, Flight};
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
 /// Options of [`estimate`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -208,63 +210,75 @@ fn find_bounce(idx: &[usize], p: &[[f64; 3]], opts: &EstimateOptions) -> Option<
     }
 }
 
+/// Prior standard deviation (rad/s) of each spin component: a ridge that keeps the component
+/// along the velocity (no Magnus force, unobservable on a straight arc) near zero.
+const SPIN_PRIOR: f64 = 40.0;
+
+/// Double integral of the velocity from t0 over τ (τ ≤ 0), to second order: v0·τ²/2 + a·τ³/6.
+fn v2(v0: &Vector3<f64>, a: &Vector3<f64>, tau: f64) -> Vector3<f64> {
+    v0 * (0.5 * tau * tau) + a * (tau * tau * tau / 6.0)
+}
+
 fn fit_arc(t: &[f64], p: &[[f64; 3]], arc: &[usize], opts: &EstimateOptions) -> Result<Estimate, EstimateError> {
     let flight = &opts.flight;
-    let km = flight.model.k_magnus;
+    let m = &flight.model;
+    let km = m.k_magnus;
     let n = arc.len();
     let t0 = t[arc[n - 1]];
     let tau: Vec<f64> = arc.iter().map(|&i| t[i] - t0).collect();
     let obs: Vec<Vector3<f64>> = arc.iter().map(|&i| Vector3::from(p[i])).collect();
     let with_spin = km > 0.0 && -tau[0] >= opts.spin_min_duration && n >= 8;
-    let dim = if with_spin { 3 } else { 2 };
-    let basis = |tk: f64| [1.0, tk, 0.5 * tk * tk];
     let mut weights = vec![1.0; n];
-    let mut model_path = vec![Vector3::zeros(); n]; // x(t_i) − (p0 + v0 τ + ½Aτ²) of the current estimate
-    for (k, &tk) in tau.iter().enumerate() {
-        model_path[k] = Vector3::new(0.0, 0.0, -0.5 * flight.model.gravity * tk * tk);
-    }
-    let (mut p0, mut v0, mut acc) = (Vector3::zeros(), Vector3::zeros(), Vector3::zeros());
+    // x(t_i) − (p0 + v0·τ + k_m·ω × V2(τ)) of the current estimate; gravity only to start.
+    let mut model_path: Vec<Vector3<f64>> = tau
+        .iter()
+        .map(|&tk| Vector3::new(0.0, 0.0, -0.5 * m.gravity * tk * tk))
+        .collect();
+    let (mut p0, mut v0, mut w) = (Vector3::zeros(), Vector3::zeros(), Vector3::zeros());
     let mut sigma = opts.sigma_floor;
-    let mut cov = Matrix3::zeros();
+    let mut cov = SMatrix::<f64, 9, 9>::zeros();
     for iter in 0..opts.iterations.max(2) {
-        // Weighted linear least squares on the basis, the same normal matrix for the 3 axes.
-        let mut ata = Matrix3::zeros();
-        let mut atb = [Vector3::zeros(); 3]; // per basis function, the 3 axes
+        // Weighted linear least squares in (p0, v0, ω): rows [I, τ·I, −k_m·[V2(τ)]×].
+        let acc = Vector3::new(0.0, 0.0, -m.gravity) - m.k_drag * v0.norm() * v0;
+        let mut ata = SMatrix::<f64, 9, 9>::zeros();
+        let mut atb = SVector::<f64, 9>::zeros();
         for k in 0..n {
-            let b = basis(tau[k]);
-            let y = obs[k] - model_path[k];
-            for r in 0..dim {
-                for c in 0..dim {
-                    ata[(r, c)] += weights[k] * b[r] * b[c];
-                }
-                atb[r] += weights[k] * b[r] * y;
+            let mut b = SMatrix::<f64, 3, 9>::zeros();
+            b.fixed_view_mut::<3, 3>(0, 0).copy_from(&Matrix3::identity());
+            b.fixed_view_mut::<3, 3>(0, 3)
+                .copy_from(&(Matrix3::identity() * tau[k]));
+            if with_spin {
+                b.fixed_view_mut::<3, 3>(0, 6)
+                    .copy_from(&(-km * v2(&v0, &acc, tau[k]).cross_matrix()));
             }
+            let y = obs[k] - model_path[k];
+            ata += weights[k] * b.transpose() * b;
+            atb += weights[k] * b.transpose() * y;
         }
-        if dim == 2 {
-            ata[(2, 2)] = 1.0;
+        let ridge = if with_spin { (sigma / SPIN_PRIOR).powi(2) } else { 1.0 };
+        for r in 6..9 {
+            ata[(r, r)] += ridge;
         }
         let inv = ata
             .try_inverse()
             .ok_or_else(|| EstimateError::Degenerate("observation times do not span the fit".into()))?;
-        let coef = |r: usize| (0..dim).fold(Vector3::zeros(), |s, c| s + inv[(r, c)] * atb[c]);
-        let (np0, nv0) = (coef(0), coef(1));
-        let nacc = if with_spin { coef(2) } else { Vector3::zeros() };
-        let change = (np0 - p0).norm() + 0.05 * (nv0 - v0).norm();
-        (p0, v0, acc) = (np0, nv0, nacc);
-        cov = inv;
-        // Residuals and robust weights.
-        let spin = spin_from(&v0, &acc, km);
-        let state = BallState {
-            t: t0,
-            p: p0,
-            v: v0,
-            w: spin,
+        let x = inv * atb;
+        let (np0, nv0) = (Vector3::new(x[0], x[1], x[2]), Vector3::new(x[3], x[4], x[5]));
+        let nw = if with_spin {
+            Vector3::new(x[6], x[7], x[8])
+        } else {
+            Vector3::zeros()
         };
+        let change = (np0 - p0).norm() + 0.05 * (nv0 - v0).norm() + 1e-4 * (nw - w).norm();
+        (p0, v0, w) = (np0, nv0, nw);
+        cov = inv;
+        // Residuals against the flight model and robust weights.
+        let state = BallState { t: t0, p: p0, v: v0, w };
         let path = integrate_back(flight, &state, &tau);
-        let am = km * spin.cross(&v0);
-        let mut res: Vec<f64> = (0..n).map(|k| (obs[k] - path[k]).norm()).collect();
+        let acc = Vector3::new(0.0, 0.0, -m.gravity) - m.k_drag * v0.norm() * v0;
+        let res: Vec<f64> = (0..n).map(|k| (obs[k] - path[k]).norm()).collect();
         for k in 0..n {
-            model_path[k] = path[k] - (p0 + v0 * tau[k] + 0.5 * am * tau[k] * tau[k]);
+            model_path[k] = path[k] - (p0 + v0 * tau[k] + km * w.cross(&v2(&v0, &acc, tau[k])));
         }
         let mut sorted = res.clone();
         sorted.sort_by(|a, b| a.total_cmp(b));
@@ -279,7 +293,6 @@ fn fit_arc(t: &[f64], p: &[[f64; 3]], arc: &[usize], opts: &EstimateOptions) -> 
                 1.0
             };
         }
-        res.clear();
         if iter >= 2 && change < 1e-9 {
             break;
         }
@@ -292,26 +305,19 @@ fn fit_arc(t: &[f64], p: &[[f64; 3]], arc: &[usize], opts: &EstimateOptions) -> 
             need: opts.min_observations.max(4),
         });
     }
-    let spin = spin_from(&v0, &acc, km);
-    let state = BallState {
-        t: t0,
-        p: p0,
-        v: v0,
-        w: spin,
-    };
+    let state = BallState { t: t0, p: p0, v: v0, w };
     if state.validate("state").is_err() {
         return Err(EstimateError::Degenerate("non-finite state".into()));
     }
     let s2 = sigma * sigma;
     let mut covariance = [[0.0; 6]; 6];
-    for ax in 0..3 {
-        covariance[ax][ax] = s2 * cov[(0, 0)];
-        covariance[ax][ax + 3] = s2 * cov[(0, 1)];
-        covariance[ax + 3][ax] = s2 * cov[(1, 0)];
-        covariance[ax + 3][ax + 3] = s2 * cov[(1, 1)];
+    for (r, row) in covariance.iter_mut().enumerate() {
+        for (c, x) in row.iter_mut().enumerate() {
+            *x = s2 * cov[(r, c)];
+        }
     }
     let spin_std = if with_spin {
-        sigma * cov[(2, 2)].sqrt() / (km * v0.norm().max(1e-3))
+        sigma * ((cov[(6, 6)] + cov[(7, 7)] + cov[(8, 8)]) / 3.0).sqrt()
     } else {
         0.0
     };
@@ -327,16 +333,6 @@ fn fit_arc(t: &[f64], p: &[[f64; 3]], arc: &[usize], opts: &EstimateOptions) -> 
         bounce_time: None,
         segment: Segment::Whole,
     })
-}
-
-/// Spin perpendicular to `v` (rad/s) that makes the Magnus acceleration `acc` (m/s²).
-fn spin_from(v: &Vector3<f64>, acc: &Vector3<f64>, km: f64) -> Vector3<f64> {
-    let v2 = v.norm_squared();
-    if km > 0.0 && v2 > 1e-6 {
-        v.cross(acc) / (km * v2)
-    } else {
-        Vector3::zeros()
-    }
 }
 
 /// Positions at times t0 + τ_k (τ ≤ 0, increasing) by integrating `state` backward, no events.

@@ -250,15 +250,27 @@ impl HitPlanner {
     /// Plans the hit of the ball `ball` (state at time `ball.t`, s) for a stroke starting at rest
     /// at the ready configuration at time `now` (s), returning the ball to `target` (x, y, m, world).
     pub fn plan(&self, ball: &BallState, now: f64, target: [f64; 2]) -> Result<HitPlan> {
-        self.plan_from(ball, now, target, &JointState::rest(&self.ready))
+        self.plan_from(ball, now, target, &JointState::rest(&self.ready), false)
     }
 
     /// [`HitPlanner::plan`] for a stroke starting from the joint state `start` at `now` (re-planning
-    /// during a stroke with a newer estimate).
-    pub fn plan_from(&self, ball: &BallState, now: f64, target: [f64; 2], start: &JointState) -> Result<HitPlan> {
+    /// during a stroke with a newer estimate); `after_bounce` says that `ball` is already past its
+    /// bounce on the robot's half (an estimate from observations after it).
+    pub fn plan_from(
+        &self,
+        ball: &BallState,
+        now: f64,
+        target: [f64; 2],
+        start: &JointState,
+        after_bounce: bool,
+    ) -> Result<HitPlan> {
         self.check_target(target)?;
         if start.check("start")? != self.chain.dof() {
-            return Err(Error::shape("start.q", format!("{} values", self.chain.dof()), start.q.len()));
+            return Err(Error::shape(
+                "start.q",
+                format!("{} values", self.chain.dof()),
+                start.q.len(),
+            ));
         }
         ball.validate("ball")?;
         if !now.is_finite() {
@@ -268,7 +280,7 @@ impl HitPlanner {
                 value: now,
             });
         }
-        let (list, bounced) = self.candidate_states(&self.flight, ball, now, self.search_margin);
+        let (list, bounced) = self.candidate_states(&self.flight, ball, now, self.search_margin, after_bounce);
         if !bounced {
             return Ok(HitPlan {
                 status: HitStatus::NoBounce,
@@ -326,15 +338,25 @@ impl HitPlanner {
     /// Whether the ball from `ball`, flying by `flight`, bounces on the robot's half and then passes
     /// through the reach box at least `min_stroke_time` after `now` (s).
     pub fn reachable(&self, flight: &Flight, ball: &BallState, now: f64) -> bool {
-        !self.candidate_states(flight, ball, now, 0.0).0.is_empty()
+        !self.candidate_states(flight, ball, now, 0.0, false).0.is_empty()
     }
 
     /// Predicted states every 5 ms inside the reach box after the bounce on the robot's half, and
     /// whether that bounce happens.
-    fn candidate_states(&self, f: &Flight, ball: &BallState, now: f64, margin: f64) -> (Vec<BallState>, bool) {
-        let reach = Reach { lo: self.reach.lo - Vector3::repeat(margin), hi: self.reach.hi + Vector3::repeat(margin) };
+    fn candidate_states(
+        &self,
+        f: &Flight,
+        ball: &BallState,
+        now: f64,
+        margin: f64,
+        after_bounce: bool,
+    ) -> (Vec<BallState>, bool) {
+        let reach = Reach {
+            lo: self.reach.lo - Vector3::repeat(margin),
+            hi: self.reach.hi + Vector3::repeat(margin),
+        };
         let mut cur = *ball;
-        let mut bounced = false;
+        let mut bounced = after_bounce;
         let mut out = Vec::new();
         let t_end = ball.t + 2.0;
         while cur.t < t_end {

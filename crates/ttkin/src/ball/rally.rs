@@ -4,8 +4,13 @@
 //! **Incoming balls** (ordinary club-level rallies, not elite play): played from behind the
 //! opponent's end line, x ∈ [1.45, 1.9] m, |y| ≤ 0.5 m, 0.1–0.35 m above the surface, landing on
 //! the robot's half at x ∈ [−1.15, −0.35] m, |y| ≤ 0.55 m after 0.35–0.6 s (ball speeds about 4–8
-//! m/s), spin of 0–40 rev/s (0–250 rad/s) about a uniformly random axis (top, back and side spin
-//! alike). Balls that would touch the net are drawn again.
+//! m/s), spin of 0–40 rev/s (0–250 rad/s) about an axis at a uniformly random angle between the
+//! top/back-spin axis (horizontal, across the flight) and the side-spin axis (vertical), tilted
+//! toward the flight direction by at most ±11° (`corkscrew` = 0.2). Spin about the flight direction
+//! (corkscrew) produces no Magnus force, so it cannot be seen in flight, yet the bounce turns it
+//! into sideways speed (r·ω = 2 m/s at 100 rad/s); ordinary strokes (drive, loop, push, chop,
+//! side-spin serve) put the axis mostly across the flight, which is what is drawn here. Balls that
+//! would touch the net are drawn again.
 //!
 //! **Camera**: 200 Hz, positions with Gaussian noise σ = 2 mm per axis, 2 % outliers displaced by
 //! up to 10 cm, observed from 0.02 s to 0.22 s after the opponent's hit, delivered 10 ms later
@@ -72,11 +77,15 @@ pub struct RallyConfig {
     pub target: [f64; 2],
     /// Largest incoming spin (rev/s).
     pub max_spin_rps: f64,
+    /// Largest corkscrew tilt of the spin axis toward the flight direction (tan of the angle; 0.2 ≈ 11°).
+    pub corkscrew: f64,
     /// Random seed.
     pub seed: u64,
     /// Balls for which the true flight is kept as a path (for figures): the first `paths`.
     pub paths: usize,
-    /// Re-planning period (s) during the stroke with the newest observations; 0 plans once.
+    /// Re-planning period (s) during the stroke with the newest observations; 0 (default) plans
+    /// once. Experimental: with the estimator as it is, re-planning lowers the return rate (the
+    /// spin along the flight direction is poorly observed and later windows move the hit point).
     pub replan_period: f64,
     /// Longest observation window (s) of a re-plan's estimate.
     pub max_window: f64,
@@ -88,9 +97,10 @@ impl Default for RallyConfig {
             camera: Camera::default(),
             target: [0.9, 0.0],
             max_spin_rps: 40.0,
+            corkscrew: 0.2,
             seed: 0,
             paths: 5,
-            replan_period: 0.04,
+            replan_period: 0.0,
             max_window: 0.25,
         }
     }
@@ -138,7 +148,7 @@ fn uniform(rng: &mut fastrand::Rng, lo: f64, hi: f64) -> f64 {
 }
 
 /// An incoming ball from the opponent (see the module doc), drawn with `rng`.
-pub fn serve(flight: &Flight, rng: &mut fastrand::Rng, max_spin_rps: f64) -> BallState {
+pub fn serve(flight: &Flight, rng: &mut fastrand::Rng, max_spin_rps: f64, corkscrew: f64) -> BallState {
     let r = flight.model.radius;
     loop {
         let p = Vector3::new(
@@ -148,7 +158,12 @@ pub fn serve(flight: &Flight, rng: &mut fastrand::Rng, max_spin_rps: f64) -> Bal
         );
         let land = Vector3::new(uniform(rng, -1.15, -0.35), uniform(rng, -0.55, 0.55), r);
         let tf = uniform(rng, 0.35, 0.6);
-        let axis = Vector3::new(gauss(rng), gauss(rng), gauss(rng));
+        // Spin axis: top/back spin (horizontal, across the flight) to side spin (vertical), tilted
+        // toward the flight direction (corkscrew spin) by at most `corkscrew` (tan of the tilt).
+        let d = Vector3::new(land.x - p.x, land.y - p.y, 0.0).normalize();
+        let phi = uniform(rng, 0.0, std::f64::consts::TAU);
+        let axis =
+            phi.cos() * Vector3::z().cross(&d) + phi.sin() * Vector3::z() + uniform(rng, -corkscrew, corkscrew) * d;
         let w = axis.normalize() * uniform(rng, 0.0, max_spin_rps) * std::f64::consts::TAU;
         let Some(v) = shoot(flight, &p, &land, tf, |_| Some(w)) else {
             continue;
@@ -172,7 +187,12 @@ struct Motion {
 impl Motion {
     /// Joint state at absolute time `t` (s); before the first piece, rest at its start.
     fn sample(&self, t: f64, q: &mut [f64], qd: &mut [f64], qdd: &mut [f64]) {
-        let (t0, traj) = self.pieces.iter().rev().find(|(t0, _)| *t0 <= t).unwrap_or(&self.pieces[0]);
+        let (t0, traj) = self
+            .pieces
+            .iter()
+            .rev()
+            .find(|(t0, _)| *t0 <= t)
+            .unwrap_or(&self.pieces[0]);
         let tt = (t - t0).clamp(0.0, traj.duration());
         traj.sample(tt, q, qd, qdd).expect("sizes match");
         if t - t0 > traj.duration() {
@@ -193,7 +213,7 @@ pub fn play(planner: &HitPlanner, truth: &Flight, cfg: &RallyConfig, index: u64)
     let mut rng = fastrand::Rng::with_seed(
         cfg.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ index.wrapping_mul(0xD1B5_4A32_D192_ED03),
     );
-    let s0 = serve(truth, &mut rng, cfg.max_spin_rps);
+    let s0 = serve(truth, &mut rng, cfg.max_spin_rps, cfg.corkscrew);
     let cam = &cfg.camera;
     // The camera runs for the whole incoming flight; each plan sees what was delivered by then.
     let count = (1.2 * cam.rate) as usize;
@@ -234,7 +254,10 @@ pub fn play(planner: &HitPlanner, truth: &Flight, cfg: &RallyConfig, index: u64)
         path: Vec::new(),
         racket_path: Vec::new(),
     };
-    let opts = EstimateOptions { flight: planner.flight, ..EstimateOptions::default() };
+    let opts = EstimateOptions {
+        flight: planner.flight,
+        ..EstimateOptions::default()
+    };
     let clock = Instant::now();
     let est = match estimate(&times[..first], &obs[..first], &opts) {
         Ok(e) => e,
@@ -264,21 +287,51 @@ pub fn play(planner: &HitPlanner, truth: &Flight, cfg: &RallyConfig, index: u64)
     let n = hit.q_hit.len();
     let ready = JointState::rest(&planner.ready);
     let leg = |from: &JointState, hit: &super::hitplan::Hit| {
-        let at_hit = JointState { q: hit.q_hit.clone(), qd: hit.qd_hit.clone(), qdd: vec![0.0; n] };
+        let at_hit = JointState {
+            q: hit.q_hit.clone(),
+            qd: hit.qd_hit.clone(),
+            qdd: vec![0.0; n],
+        };
         JointTrajectory::quintic_unchecked(from, &at_hit, hit.t_hit)
             .append(JointTrajectory::quintic_unchecked(&at_hit, &ready, 0.4))
     };
-    let mut motion = Motion { pieces: vec![(now, leg(&ready, &hit))] };
+    let mut motion = Motion {
+        pieces: vec![(now, leg(&ready, &hit))],
+    };
     let mut hit_abs = now + hit.t_hit;
     // Re-plan every `replan_period` with the newest observations (at most `max_window` s of them)
-    // while the stroke has at least `min_stroke_time` left.
+    // while the stroke has at least `replan.min_stroke_time` left. Observations are split at the
+    // bounce predicted by the latest estimate: before it the arc before the bounce is used; once
+    // the arc after it lasts long enough to fit the spin, that arc alone.
+    let mut replanner = planner.clone();
+    replanner.min_stroke_time = 0.06;
+    let bounce_of = |s: &BallState| {
+        let (_, ev) = planner.flight.run(s, s.t + 1.5, None);
+        ev.iter()
+            .find(|e| e.kind == EventKind::Table && e.before.p.x < 0.0)
+            .map(|e| e.before.t)
+    };
+    let mut t_bounce = bounce_of(&est.state);
     let mut t_plan = now + cfg.replan_period;
-    while cfg.replan_period > 0.0 && hit_abs - t_plan > planner.min_stroke_time {
+    while cfg.replan_period > 0.0 && hit_abs - t_plan > replanner.min_stroke_time {
         let seen = times.partition_point(|&t| t + cam.latency <= t_plan);
-        let from = times[..seen].partition_point(|&t| t < times[seen - 1] - cfg.max_window);
-        if let Ok(e) = estimate(&times[from..seen], &obs[from..seen], &opts) {
+        let t_new = times[seen - 1];
+        let (lo, hi, after) = match t_bounce {
+            Some(tb) if t_new > tb + 0.005 + opts.spin_min_duration => (tb + 0.005, t_new, true),
+            Some(tb) if t_new > tb - 0.005 => {
+                t_plan += cfg.replan_period;
+                continue;
+            }
+            _ => (t_new - cfg.max_window, t_new, false),
+        };
+        let from = times.partition_point(|&t| t < lo.max(t_new - cfg.max_window));
+        let to = times.partition_point(|&t| t <= hi);
+        if let Ok(e) = estimate(&times[from..to], &obs[from..to], &opts) {
+            if !after {
+                t_bounce = bounce_of(&e.state).or(t_bounce);
+            }
             let start = motion.state(t_plan, n);
-            if let Ok(p) = planner.plan_from(&e.state, t_plan, cfg.target, &start) {
+            if let Ok(p) = replanner.plan_from(&e.state, t_plan, cfg.target, &start, after) {
                 if let Some(h) = p.hit.filter(|_| p.status == HitStatus::Ok) {
                     hit = h;
                     hit_abs = t_plan + hit.t_hit;
@@ -338,7 +391,10 @@ pub fn play(planner: &HitPlanner, truth: &Flight, cfg: &RallyConfig, index: u64)
             let b = truth.rk4(&ball, lo);
             let rkc = racket_at(b.t);
             let offset = off(&b, &rkc);
-            contact = Some((b, rkc, offset));
+            // The face plane passing the ball outside the racket is no contact: keep looking.
+            if offset <= planner.racket.radius {
+                contact = Some((b, rkc, offset));
+            }
         }
         ball = next;
         rk = rk1;
