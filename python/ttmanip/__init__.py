@@ -9,7 +9,13 @@ seconds; poses are 4×4 homogeneous matrices in the robot's base frame.
 (4, 4)
 """
 
-from . import dynamics, motor, robots, traj
+from . import (
+    ball,  # issue 13
+    dynamics,
+    motor,
+    robots,
+    traj,
+)
 from ._ttmanip import (
     IkResult,
     ModelError,
@@ -22,7 +28,6 @@ from ._ttmanip import (
     UnreachableError,
 )
 from .mobile import DiffDrive, TrackResult, task_line, track, wls_step
-from . import ball  # issue 13
 from .rally import rally  # issue 13
 
 __all__ = [

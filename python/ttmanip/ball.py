@@ -105,7 +105,9 @@ def _model(model: BallModel | str) -> str:
 
 def state(p: ArrayLike, v: ArrayLike, w: ArrayLike = (0.0, 0.0, 0.0), t: float = 0.0) -> NDArray[np.float64]:
     """A ball state (10,) from position (m), velocity (m/s), spin (rad/s) and time (s)."""
-    return np.r_[float(t), np.asarray(p, float).ravel(), np.asarray(v, float).ravel(), np.asarray(w, float).ravel()]
+    return np.r_[
+        float(t), np.asarray(p, float).ravel(), np.asarray(v, float).ravel(), np.asarray(w, float).ravel()
+    ]
 
 
 def estimate(t: ArrayLike, p: ArrayLike, model: BallModel | str = "default") -> Estimate:
@@ -125,7 +127,9 @@ def predict(state: ArrayLike, times: ArrayLike, model: BallModel | str = "defaul
     return (d["positions"], d["events"]) if events else d["positions"]
 
 
-def predict_batch(states: ArrayLike, times: ArrayLike, model: BallModel | str = "default") -> NDArray[np.float64]:
+def predict_batch(
+    states: ArrayLike, times: ArrayLike, model: BallModel | str = "default"
+) -> NDArray[np.float64]:
     """Positions (N, K, 3) of N balls ``states`` (N, 10) at ``times`` (K,), in parallel."""
     return _t.ball_predict_batch(states, times, _model(model))
 
@@ -152,7 +156,9 @@ def crossing(
     return _t.ball_crossing(state, point, normal, t_max, _model(model))
 
 
-def plan_return(state: ArrayLike, now: float, target: ArrayLike = (0.9, 0.0), model: BallModel | str = "default"):
+def plan_return(
+    state: ArrayLike, now: float, target: ArrayLike = (0.9, 0.0), model: BallModel | str = "default"
+):
     """Plans gantry6's return of the ball ``state`` for a stroke starting at rest at time ``now`` (s).
 
     Returns a dict with ``status`` ("ok", "no_bounce", "out_of_reach", "no_return", "infeasible")
@@ -166,9 +172,13 @@ def plan_return(state: ArrayLike, now: float, target: ArrayLike = (0.9, 0.0), mo
         from . import pipeline
 
         hit_cls = getattr(pipeline, "Hit", None)
-        d["hit"] = hit_cls(d["pose"], d["twist"], d["t_hit"]) if hit_cls is not None else {
-            "pose": d["pose"],
-            "twist": d["twist"],
-            "t": d["t_hit"],
-        }
+        d["hit"] = (
+            hit_cls(d["pose"], d["twist"], d["t_hit"])
+            if hit_cls is not None
+            else {
+                "pose": d["pose"],
+                "twist": d["twist"],
+                "t": d["t_hit"],
+            }
+        )
     return d

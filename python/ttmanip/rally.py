@@ -58,7 +58,14 @@ def rally(
     for start in range(0, n, chunk):
         m = min(chunk, n - start)
         parts.append(
-            _t.ball_rally(m, int(seed), start, (float(target[0]), float(target[1])), float(max_spin_rps), 5 if start == 0 else 0)
+            _t.ball_rally(
+                m,
+                int(seed),
+                start,
+                (float(target[0]), float(target[1])),
+                float(max_spin_rps),
+                5 if start == 0 else 0,
+            )
         )
         if progress:
             _progress(start + m, n)
@@ -84,7 +91,13 @@ def rally(
         "statuses": dict(sorted(statuses.items())),
         "target": list(map(float, target)),
         "max_spin_rps": float(max_spin_rps),
-        "camera": {"rate_hz": 200.0, "latency_s": 0.010, "noise_m": 0.002, "outliers": 0.02, "window_s": 0.20},
+        "camera": {
+            "rate_hz": 200.0,
+            "latency_s": 0.010,
+            "noise_m": 0.002,
+            "outliers": 0.02,
+            "window_s": 0.20,
+        },
         "stroke_execution": "planned quintic stroke executed exactly (no drive simulation)",
     }
     if out is not None:
@@ -97,7 +110,11 @@ def rally(
 
 
 def _table(ax) -> None:
-    ax.add_patch(__import__("matplotlib.patches", fromlist=["Rectangle"]).Rectangle((-1.37, -0.7625), 2.74, 1.525, fill=False))
+    ax.add_patch(
+        __import__("matplotlib.patches", fromlist=["Rectangle"]).Rectangle(
+            (-1.37, -0.7625), 2.74, 1.525, fill=False
+        )
+    )
     ax.plot([0, 0], [-0.915, 0.915], "k-", lw=2)
 
 
@@ -131,7 +148,14 @@ def _figures(res: dict, in_reach: np.ndarray, returned: np.ndarray, target, out:
     ax.plot_surface(xs, ys, np.zeros_like(xs), alpha=0.15, color="C2")
     ax.plot([0, 0], [-0.915, 0.915], [0.1525, 0.1525], "k-")
     # gantry6: base at (−2.0, 0, 0.15), d1 along x (±1 m), d2 along y (±0.6 m)
-    ax.plot([-3.0, -1.0, -1.0, -3.0, -3.0], [-0.6, -0.6, 0.6, 0.6, -0.6], [0.15] * 5, "k--", lw=1, label="gantry axes (d1 × d2)")
+    ax.plot(
+        [-3.0, -1.0, -1.0, -3.0, -3.0],
+        [-0.6, -0.6, 0.6, 0.6, -0.6],
+        [0.15] * 5,
+        "k--",
+        lw=1,
+        label="gantry axes (d1 × d2)",
+    )
     for k, p in enumerate(res["paths"]):
         b, r = p["ball"], p["racket"]
         ax.plot(b[:, 0], b[:, 1], b[:, 2], color=f"C{k}", lw=1, label=f"ball {k}: {p['status']}")
@@ -151,9 +175,14 @@ def _figures(res: dict, in_reach: np.ndarray, returned: np.ndarray, target, out:
     spin = np.linalg.norm(inc[:, 7:10], axis=1) / (2 * np.pi)
     fig, axes = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
     for ax, x, name in ((axes[0], speed, "incoming speed [m/s]"), (axes[1], spin, "incoming spin [rev/s]")):
-        edges = np.linspace(x[in_reach].min(), x[in_reach].max(), 9) if in_reach.any() else np.linspace(0, 1, 9)
+        edges = (
+            np.linspace(x[in_reach].min(), x[in_reach].max(), 9) if in_reach.any() else np.linspace(0, 1, 9)
+        )
         idx = np.clip(np.digitize(x, edges) - 1, 0, len(edges) - 2)
-        rate = [returned[in_reach & (idx == b)].sum() / max((in_reach & (idx == b)).sum(), 1) for b in range(len(edges) - 1)]
+        rate = [
+            returned[in_reach & (idx == b)].sum() / max((in_reach & (idx == b)).sum(), 1)
+            for b in range(len(edges) - 1)
+        ]
         ax.bar(0.5 * (edges[:-1] + edges[1:]), rate, width=np.diff(edges) * 0.9)
         ax.set_ylim(0, 1.05)
         ax.set_xlabel(name)
