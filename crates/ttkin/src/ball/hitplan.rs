@@ -2,7 +2,7 @@
 //! target on the opponent's half.
 //!
 //! 1. **Candidates.** The ball is predicted from its state (through its bounce on the robot's half)
-//!    and every 5 ms sample inside the reach box ([`Reach`], the racket centre's region reachable by
+//!    and every 10 ms sample inside the reach box ([`Reach`], the racket centre's region reachable by
 //!    gantry6 with a forward-facing racket, world frame), after the bounce and at least
 //!    `min_stroke_time` after `now`, is a candidate; `candidates` of them, evenly spread, are tried
 //!    (up to 12 when none of those is feasible).
@@ -22,7 +22,8 @@
 //!    exact velocity and acceleration peaks stay within the limits.
 //! 5. **Choice.** Among feasible candidates, the one with the largest margin: the smallest of the
 //!    joints' normalised distance to their position limits at the hit and 1 − the stroke's
-//!    peak/limit ratio.
+//!    peak/limit ratio. Candidates are tried from the middle of the spread outward and the search
+//!    stops at the first with a margin ≥ `good_margin` (0.25), which bounds the planning time.
 
 use super::flight::{BallState, EventKind, Flight};
 use super::impact::{Racket, RacketHit};
@@ -170,7 +171,7 @@ pub struct HitPlanner {
     pub ready: Vec<f64>,
     /// Racket rubber.
     pub racket: Racket,
-    /// Flight model used for planning (5 ms step).
+    /// Flight model used for planning (10 ms RK4 step).
     pub flight: Flight,
     /// Shortest stroke (s) between planning and hitting.
     pub min_stroke_time: f64,
@@ -179,8 +180,10 @@ pub struct HitPlanner {
     /// How far (m) beyond the reach box the planner still looks for hits, so that a ball whose
     /// estimate lies just outside the box is still tried (IK decides).
     pub search_margin: f64,
-    /// Return flight times (s) tried in order.
+    /// Return flight times (s) tried in order (slower returns first: they need less racket speed).
     pub return_times: [f64; 3],
+    /// A feasible hit with at least this margin ends the search (candidates are tried middle first).
+    pub good_margin: f64,
 }
 
 impl HitPlanner {
@@ -198,11 +201,12 @@ impl HitPlanner {
             placement: Placement::default(),
             reach: Reach::default(),
             racket: Racket::default(),
-            flight: Flight { step: 0.005, ..flight },
+            flight: Flight { step: 0.01, ..flight },
             min_stroke_time: 0.12,
             candidates: 3,
             search_margin: 0.03,
-            return_times: [0.65, 0.8, 0.5],
+            return_times: [0.8, 0.65, 0.95],
+            good_margin: 0.25,
         };
         // Ready: racket facing forward at the box centre, 0.2 m back, so that a stroke accelerates
         // forward into the hit (the hit velocity points toward the net).
@@ -305,7 +309,13 @@ impl HitPlanner {
             if round == 1 && (best.is_some() || extra <= k) {
                 break;
             }
-            for j in 0..count {
+            // Middle of the spread first: it is the likeliest to have the largest margin.
+            let mut order: Vec<usize> = (0..count).collect();
+            order.sort_by_key(|&j| (2 * j + 1).abs_diff(count));
+            for j in order {
+                if best.as_ref().is_some_and(|b| b.margin >= self.good_margin) {
+                    break;
+                }
                 let s = list[(2 * j + 1) * list.len() / (2 * count)];
                 tried += 1;
                 for &tf in &self.return_times {
@@ -341,7 +351,7 @@ impl HitPlanner {
         !self.candidate_states(flight, ball, now, 0.0, false).0.is_empty()
     }
 
-    /// Predicted states every 5 ms inside the reach box after the bounce on the robot's half, and
+    /// Predicted states every 10 ms inside the reach box after the bounce on the robot's half, and
     /// whether that bounce happens.
     fn candidate_states(
         &self,
@@ -360,7 +370,7 @@ impl HitPlanner {
         let mut out = Vec::new();
         let t_end = ball.t + 2.0;
         while cur.t < t_end {
-            let (next, ev) = f.advance(&cur, cur.t + 0.005, None);
+            let (next, ev) = f.advance(&cur, cur.t + 0.01, None);
             cur = next;
             if let Some(e) = ev {
                 match e.kind {
