@@ -229,6 +229,7 @@ fn ball_plan_return<'py>(
         d.set_item("t_hit", h.t_hit)?;
         d.set_item("q_hit", to_numpy(py, &[h.q_hit.len()], &h.q_hit))?;
         d.set_item("qd_hit", to_numpy(py, &[h.qd_hit.len()], &h.qd_hit))?;
+        d.set_item("qdd_hit", to_numpy(py, &[h.qdd_hit.len()], &h.qdd_hit))?;
         d.set_item("ball", to_numpy(py, &[10], &state_vec(&h.ball)))?;
         d.set_item("v_out", to_numpy(py, &[3], h.v_out.as_slice()))?;
         d.set_item("normal", to_numpy(py, &[3], h.racket.normal.as_slice()))?;

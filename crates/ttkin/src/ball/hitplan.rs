@@ -18,8 +18,9 @@
 //!    close to world up as possible (the convention of `python/ttmanip/pipeline.py`).
 //! 4. **Robot.** The pose and twist go to the base frame ([`Placement`]), analytic IK (branch
 //!    nearest the ready configuration, within the limits), q̇ = J⁻¹·V, and a quintic stroke from
-//!    rest at the ready configuration at `now` to (q, q̇, 0) at the hit. Feasible when the stroke's
-//!    exact velocity and acceleration peaks stay within the limits.
+//!    rest at the ready configuration at `now` to (q, q̇, q̈) at the hit, q̈ = 0 or a fraction of
+//!    the matching cubic's end acceleration, whichever has the lowest peaks. Feasible when the
+//!    stroke's exact velocity and acceleration peaks stay within the limits.
 //! 5. **Choice.** Among feasible candidates, the one with the largest margin: the smallest of the
 //!    joints' normalised distance to their position limits at the hit and 1 − the stroke's
 //!    peak/limit ratio. Candidates are tried from the middle of the spread outward and the search
@@ -139,6 +140,8 @@ pub struct Hit {
     pub q_hit: Vec<f64>,
     /// Joint velocities (m/s, rad/s) at the hit.
     pub qd_hit: Vec<f64>,
+    /// Joint accelerations (m/s², rad/s²) at the hit chosen for the stroke (see `robot_hit`).
+    pub qdd_hit: Vec<f64>,
     /// Choice margin (see the module doc), in (0, 1].
     pub margin: f64,
     /// Landing point (m, world) of the exactly executed impact and its flight time (s).
@@ -435,12 +438,21 @@ impl HitPlanner {
             return None;
         }
         let t_hit = s.t - now;
-        let end = JointState {
-            q: q.clone(),
-            qd: jv.qdot.clone(),
-            qdd: vec![0.0; q.len()],
-        };
-        let ratio = quintic_limit_ratio(start, &end, t_hit, &self.limits);
+        // The acceleration at the hit is free (the ball only sees pose and velocity): zero, or a
+        // fraction of the end acceleration of the cubic through the same boundary positions and
+        // velocities, −6·Δq/T² + 2·(q̇0 + 2·q̇1)/T, whichever gives the lowest peak/limit ratio.
+        let cubic: Vec<f64> = (0..q.len())
+            .map(|i| -6.0 * (q[i] - start.q[i]) / (t_hit * t_hit) + 2.0 * (start.qd[i] + 2.0 * jv.qdot[i]) / t_hit)
+            .collect();
+        let mut best: Option<(f64, JointState)> = None;
+        for alpha in [0.0, 0.5, 1.0] {
+            let end = JointState { q: q.clone(), qd: jv.qdot.clone(), qdd: cubic.iter().map(|a| alpha * a).collect() };
+            let ratio = quintic_limit_ratio(start, &end, t_hit, &self.limits);
+            if best.as_ref().is_none_or(|(r, _)| ratio < *r) {
+                best = Some((ratio, end));
+            }
+        }
+        let (ratio, end) = best.expect("three trials");
         if !(ratio <= 1.0) {
             return None;
         }
@@ -460,6 +472,7 @@ impl HitPlanner {
             t_hit,
             q_hit: q,
             qd_hit: jv.qdot,
+            qdd_hit: end.qdd,
             margin: pos_margin.min(1.0 - ratio),
             landing,
         })

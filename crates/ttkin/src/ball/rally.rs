@@ -290,7 +290,7 @@ pub fn play(planner: &HitPlanner, truth: &Flight, cfg: &RallyConfig, index: u64)
         let at_hit = JointState {
             q: hit.q_hit.clone(),
             qd: hit.qd_hit.clone(),
-            qdd: vec![0.0; n],
+            qdd: hit.qdd_hit.clone(),
         };
         JointTrajectory::quintic_unchecked(from, &at_hit, hit.t_hit)
             .append(JointTrajectory::quintic_unchecked(&at_hit, &ready, 0.4))
