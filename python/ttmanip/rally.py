@@ -46,7 +46,8 @@ def rally(
     ``summary.json`` and figures into ``out`` when given).
 
     Summary keys: ``balls``, ``in_reach``, ``out_of_reach``, ``returned``, ``return_rate``
-    (returned / in_reach), ``racket_error_m_median``, ``plan_time_us_median``,
+    (returned / in_reach), ``in_box`` and ``return_rate_in_box`` (over every ball passing the
+    reach box, whether or not the robot is fast enough for it), ``racket_error_m_median``, ``plan_time_us_median``,
     ``landing_error_m_median``, ``velocity_error_mps_median``, ``statuses`` (counts of every
     outcome, in reach or not) and the stated simulation settings.
     """
@@ -72,6 +73,7 @@ def rally(
     res = {k: np.concatenate([np.asarray(p[k]) for p in parts]) for k in parts[0] if k != "paths"}
     res["paths"] = parts[0]["paths"]
     in_reach = res["in_reach"].astype(bool)
+    in_box = res["in_box"].astype(bool)
     returned = res["returned"].astype(bool) & in_reach
     statuses: dict[str, int] = {}
     for s, r in zip(res["status"], in_reach):
@@ -84,6 +86,13 @@ def rally(
         "out_of_reach": int((~in_reach).sum()),
         "returned": int(returned.sum()),
         "return_rate": float(returned.sum() / in_reach.sum()) if in_reach.any() else None,
+        "in_box": int(in_box.sum()),
+        "returned_in_box": int((res["returned"].astype(bool) & in_box).sum()),
+        "return_rate_in_box": float((res["returned"].astype(bool) & in_box).sum() / in_box.sum())
+        if in_box.any()
+        else None,
+        "in_reach_definition": "true flight passes the reach box after its bounce and the planner, given the "
+        "true ball state, finds a hit within the robot's limits; in_box drops the second condition",
         "racket_error_m_median": _median(res["racket_error"][in_reach]),
         "plan_time_us_median": _median(res["plan_time_us"]),
         "landing_error_m_median": _median(res["landing_error"][returned]),

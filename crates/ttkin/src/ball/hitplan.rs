@@ -446,7 +446,11 @@ impl HitPlanner {
             .collect();
         let mut best: Option<(f64, JointState)> = None;
         for alpha in [0.0, 0.5, 1.0] {
-            let end = JointState { q: q.clone(), qd: jv.qdot.clone(), qdd: cubic.iter().map(|a| alpha * a).collect() };
+            let end = JointState {
+                q: q.clone(),
+                qd: jv.qdot.clone(),
+                qdd: cubic.iter().map(|a| alpha * a).collect(),
+            };
             let ratio = quintic_limit_ratio(start, &end, t_hit, &self.limits);
             if best.as_ref().is_none_or(|(r, _)| ratio < *r) {
                 best = Some((ratio, end));

@@ -23,8 +23,12 @@
 //! radius (bisection) and counts when the contact point lies within the racket radius of its
 //! centre; the ball then leaves by the racket impact model with the racket's actual normal and
 //! point velocity. **Scoring**: returned when its first contact is the table on the opponent's
-//! half. A ball is **in reach** when its true flight, after its bounce on the robot's half, passes
-//! through the reach box at least the shortest stroke time after planning.
+//! half. A ball is **in the box** when its true flight, after its bounce on the robot's half,
+//! passes through the reach box at least the shortest stroke time after planning, and **in reach**
+//! when, in addition, the planner given the ball's true state finds a hit within the robot's
+//! limits (position, velocity and acceleration of every axis): the balls this robot could return
+//! with perfect perception. The return rate over them measures perception, planning and execution;
+//! the rate over all balls in the box also counts the robot's speed limits.
 
 use super::estimate::{estimate, EstimateOptions};
 use super::flight::{BallState, EventKind, Flight};
@@ -112,6 +116,9 @@ pub struct BallOutcome {
     /// Incoming state at the opponent's hit (t = 0).
     pub incoming: BallState,
     /// Whether the true flight enters the reach box in time (see the module doc).
+    pub in_box: bool,
+    /// Whether the ball is in the box and the planner, given its true state, finds a hit within
+    /// the robot's limits (the robot could return it with perfect perception).
     pub in_reach: bool,
     /// Planner status name ("ok", "no_bounce", ...), or "estimate: ..." when estimation failed.
     pub status: String,
@@ -238,9 +245,16 @@ pub fn play(planner: &HitPlanner, truth: &Flight, cfg: &RallyConfig, index: u64)
     let t_last = times[first - 1];
     let now = t_last + cam.latency;
     let (truth_at_last, _) = truth.run(&s0, t_last, None);
-    let in_reach = planner.reachable(truth, &s0, now);
+    let in_box = planner.reachable(truth, &s0, now);
+    // In reach: in the box and hittable within the robot's limits with perfect perception (the
+    // planner on the true state finds a feasible hit).
+    let in_reach = in_box
+        && planner
+            .plan(&truth_at_last, now, cfg.target)
+            .is_ok_and(|p| p.status == HitStatus::Ok);
     let mut out = BallOutcome {
         incoming: s0,
+        in_box,
         in_reach,
         status: String::new(),
         contact: false,
