@@ -9,7 +9,7 @@ seconds; poses are 4×4 homogeneous matrices in the robot's base frame.
 (4, 4)
 """
 
-from . import dynamics, motor, robots, traj
+from . import ball, dynamics, motor, robots, traj
 from ._ttmanip import (  # issue 14: overflow, caught panics
     DriveSim,
     IkResult,
@@ -27,6 +27,7 @@ from ._ttmanip import (  # issue 14: overflow, caught panics
 )
 from .mobile import DiffDrive, TrackResult, task_line, track, wls_step
 from .pipeline import DEMO_HIT, Hit, HitError, HitPlan, SimResult, plan_hit, plan_hits, simulate
+from .rally import rally  # issue 13
 
 __all__ = [
     "InternalError",
@@ -60,6 +61,8 @@ __all__ = [
     "plan_hit",
     "plan_hits",
     "simulate",
+    "ball",
+    "rally",
 ]
 
 __version__ = "0.1.0"

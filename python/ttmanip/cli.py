@@ -555,6 +555,10 @@ def build_parser() -> argparse.ArgumentParser:
     export.add_argument("robot", choices=ROBOTS)
     export.add_argument("--out", required=True, help="output folder, or a file ending in .urdf or .toml")
     export.set_defaults(func=_export)
+
+    from . import rally_cli  # issue 13
+
+    rally_cli.add_parser(sub)
     return parser
 
 

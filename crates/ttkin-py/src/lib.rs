@@ -17,6 +17,8 @@ mod traj;
 // issue 14: argument validation and the boundary panic guard
 mod args;
 mod guard;
+// issue 13
+mod ball;
 
 /// The native extension module `ttmanip._ttmanip`.
 #[pymodule]
@@ -31,5 +33,6 @@ fn _ttmanip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     guard::register(m)?;
     hit::register(m)?;
     drives::register(m)?;
+    ball::register(m)?;
     Ok(())
 }

@@ -30,6 +30,8 @@ pub mod transform;
 pub mod trig;
 pub mod urdf;
 pub mod wholebody;
+// issue 13: ball flight, estimation, prediction, hit planning, rally
+pub mod ball;
 
 pub use chain::{Chain, JacobianFrame};
 pub use dynamics::{Dynamics, DynamicsData, Wrench};

@@ -1,0 +1,328 @@
+//! Bindings of `ttkin::ball`: conversion only. A ball state is a (10,) array
+//! [t, px, py, pz, vx, vy, vz, wx, wy, wz] (s, m, m/s, rad/s, world frame of `ttkin::ball`).
+
+use numpy::PyArrayDyn;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use rayon::prelude::*;
+use ttkin::ball::estimate::{estimate, EstimateOptions, Segment};
+use ttkin::ball::flight::{BallState, Flight, Plane};
+use ttkin::ball::hitplan::HitPlanner;
+use ttkin::ball::model::BallModel;
+use ttkin::ball::predict::{crossing, predict, CrossingOutcome};
+use ttkin::ball::rally::{self, RallyConfig};
+
+use crate::convert::{f64_array, filled_without_gil, pose_to_numpy, to_numpy, vector};
+use crate::errors::{PyResultExt, ShapeError};
+
+fn flight(model: &str) -> PyResult<Flight> {
+    Ok(Flight::new(BallModel::by_name(model).py()?))
+}
+
+fn state_from(v: &[f64]) -> BallState {
+    BallState::new(v[0], [v[1], v[2], v[3]], [v[4], v[5], v[6]], [v[7], v[8], v[9]])
+}
+
+fn state_vec(s: &BallState) -> Vec<f64> {
+    vec![s.t, s.p.x, s.p.y, s.p.z, s.v.x, s.v.y, s.v.z, s.w.x, s.w.y, s.w.z]
+}
+
+fn state_arg(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<BallState> {
+    Ok(state_from(&vector(obj, what, 10)?))
+}
+
+/// Fits a ball state to observed positions `p` (N, 3) at times `t` (N,); see `ttkin::ball::estimate`.
+#[pyfunction]
+#[pyo3(signature = (t, p, model = "default"))]
+fn ball_estimate<'py>(
+    py: Python<'py>,
+    t: &Bound<'py, PyAny>,
+    p: &Bound<'py, PyAny>,
+    model: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    let ta = f64_array(t, "t")?;
+    if ta.shape().len() != 1 {
+        return Err(ShapeError::new_err(format!(
+            "t: expected shape (N,), got {}",
+            ta.shape_str()
+        )));
+    }
+    let pa = f64_array(p, "p")?;
+    if pa.shape().len() != 2 || pa.shape()[1] != 3 {
+        return Err(ShapeError::new_err(format!(
+            "p: expected shape (N, 3), got {}",
+            pa.shape_str()
+        )));
+    }
+    let times = ta.data().to_vec();
+    let obs: Vec<[f64; 3]> = pa.data().chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    let opts = EstimateOptions {
+        flight: flight(model)?,
+        ..EstimateOptions::default()
+    };
+    let e = py
+        .detach(|| estimate(&times, &obs, &opts))
+        .map_err(ttkin::Error::from)
+        .py()?;
+    let d = PyDict::new(py);
+    d.set_item("state", to_numpy(py, &[10], &state_vec(&e.state)))?;
+    let cov: Vec<f64> = e.covariance.iter().flatten().copied().collect();
+    d.set_item("covariance", to_numpy(py, &[6, 6], &cov))?;
+    d.set_item("spin_std", e.spin_std)?;
+    d.set_item("spin_fitted", e.spin_fitted)?;
+    d.set_item("sigma", e.sigma)?;
+    d.set_item("used", e.used)?;
+    d.set_item("outliers", e.outliers)?;
+    d.set_item("nonfinite", e.nonfinite)?;
+    d.set_item("bounce_time", e.bounce_time)?;
+    let seg = match e.segment {
+        Segment::Whole => "whole",
+        Segment::AfterBounce => "after_bounce",
+        Segment::BeforeBounce => "before_bounce",
+    };
+    d.set_item("segment", seg)?;
+    Ok(d)
+}
+
+/// Positions (K, 3) of the ball from `state` at `times` (K,), the events met and the terminal event.
+#[pyfunction]
+#[pyo3(signature = (state, times, model = "default"))]
+fn ball_predict<'py>(
+    py: Python<'py>,
+    state: &Bound<'py, PyAny>,
+    times: &Bound<'py, PyAny>,
+    model: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    let s = state_arg(state, "state")?;
+    let ta = f64_array(times, "times")?;
+    if ta.shape().len() != 1 {
+        return Err(ShapeError::new_err(format!(
+            "times: expected shape (K,), got {}",
+            ta.shape_str()
+        )));
+    }
+    let ts = ta.data().to_vec();
+    let f = flight(model)?;
+    let pred = py.detach(|| predict(&f, &s, &ts)).py()?;
+    let d = PyDict::new(py);
+    let flat: Vec<f64> = pred.positions.iter().flatten().copied().collect();
+    d.set_item("positions", to_numpy(py, &[ts.len(), 3], &flat))?;
+    let events = PyList::empty(py);
+    for e in &pred.events {
+        let ev = PyDict::new(py);
+        ev.set_item("kind", e.kind.name())?;
+        ev.set_item("before", to_numpy(py, &[10], &state_vec(&e.before)))?;
+        ev.set_item("after", to_numpy(py, &[10], &state_vec(&e.after)))?;
+        events.append(ev)?;
+    }
+    d.set_item("events", events)?;
+    d.set_item("end", pred.end.map(|k| k.name()))?;
+    Ok(d)
+}
+
+/// Positions (N, K, 3) of N balls (`states` (N, 10)) at `times` (K,), in parallel; NaN after a
+/// terminal event.
+#[pyfunction]
+#[pyo3(signature = (states, times, model = "default"))]
+fn ball_predict_batch<'py>(
+    py: Python<'py>,
+    states: &Bound<'py, PyAny>,
+    times: &Bound<'py, PyAny>,
+    model: &str,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    let sa = f64_array(states, "states")?;
+    if sa.shape().len() != 2 || sa.shape()[1] != 10 {
+        return Err(ShapeError::new_err(format!(
+            "states: expected shape (N, 10), got {}",
+            sa.shape_str()
+        )));
+    }
+    let ta = f64_array(times, "times")?;
+    if ta.shape().len() != 1 {
+        return Err(ShapeError::new_err(format!(
+            "times: expected shape (K,), got {}",
+            ta.shape_str()
+        )));
+    }
+    let list: Vec<BallState> = sa.data().chunks_exact(10).map(state_from).collect();
+    let ts = ta.data().to_vec();
+    let f = flight(model)?;
+    let k = ts.len();
+    filled_without_gil(py, &[list.len(), k, 3], |out| {
+        out.par_chunks_mut((3 * k).max(1))
+            .zip(list.par_iter())
+            .enumerate()
+            .try_for_each(|(i, (o, s))| {
+                let pred =
+                    predict(&f, s, &ts).map_err(|e| ttkin::Error::invalid(format!("states[{i}]"), e.to_string()))?;
+                for (dst, p) in o.chunks_exact_mut(3).zip(&pred.positions) {
+                    dst.copy_from_slice(p);
+                }
+                Ok(())
+            })
+    })
+}
+
+/// Where and when the ball from `state` crosses the plane through `point` with normal `normal`
+/// (from its positive side), searching until `t_max` (s).
+#[pyfunction]
+#[pyo3(signature = (state, point, normal, t_max = 2.0, model = "default"))]
+fn ball_crossing<'py>(
+    py: Python<'py>,
+    state: &Bound<'py, PyAny>,
+    point: &Bound<'py, PyAny>,
+    normal: &Bound<'py, PyAny>,
+    t_max: f64,
+    model: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    let s = state_arg(state, "state")?;
+    let pt = vector(point, "point", 3)?;
+    let n = vector(normal, "normal", 3)?;
+    let nn = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    if !(nn > 1e-12) {
+        return Err(ttkin::Error::invalid("normal", "must be a non-zero vector")).py();
+    }
+    let plane = Plane {
+        point: nalgebra::Vector3::new(pt[0], pt[1], pt[2]),
+        normal: nalgebra::Vector3::new(n[0] / nn, n[1] / nn, n[2] / nn),
+    };
+    let f = flight(model)?;
+    let out = py.detach(|| crossing(&f, &s, &plane, t_max)).py()?;
+    let d = PyDict::new(py);
+    match out {
+        CrossingOutcome::Crossed { state, bounces } => {
+            d.set_item("outcome", "crossed")?;
+            d.set_item("state", to_numpy(py, &[10], &state_vec(&state)))?;
+            d.set_item("bounces", bounces.iter().map(|e| e.kind.name()).collect::<Vec<_>>())?;
+        }
+        CrossingOutcome::Ended(e) => {
+            d.set_item("outcome", e.kind.name())?;
+            d.set_item("state", to_numpy(py, &[10], &state_vec(&e.before)))?;
+        }
+        CrossingOutcome::Timeout => d.set_item("outcome", "timeout")?,
+    }
+    Ok(d)
+}
+
+/// Plans gantry6's return of the ball `state` for a stroke starting at time `now` (s), landing at
+/// `target` (x, y, m, world).
+#[pyfunction]
+#[pyo3(signature = (state, now, target, model = "default"))]
+fn ball_plan_return<'py>(
+    py: Python<'py>,
+    state: &Bound<'py, PyAny>,
+    now: f64,
+    target: &Bound<'py, PyAny>,
+    model: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    let s = state_arg(state, "state")?;
+    let tg = vector(target, "target", 2)?;
+    let planner = HitPlanner::new(ttkin::robots::gantry6(), flight(model)?).py()?;
+    let plan = py.detach(|| planner.plan(&s, now, [tg[0], tg[1]])).py()?;
+    let d = PyDict::new(py);
+    d.set_item("status", plan.status.name())?;
+    d.set_item("candidates", plan.candidates)?;
+    d.set_item("ready", to_numpy(py, &[planner.ready.len()], &planner.ready))?;
+    if let Some(h) = plan.hit {
+        d.set_item("pose", pose_to_numpy(py, &h.pose))?;
+        d.set_item("twist", to_numpy(py, &[6], &h.twist))?;
+        d.set_item("t_hit", h.t_hit)?;
+        d.set_item("q_hit", to_numpy(py, &[h.q_hit.len()], &h.q_hit))?;
+        d.set_item("qd_hit", to_numpy(py, &[h.qd_hit.len()], &h.qd_hit))?;
+        d.set_item("qdd_hit", to_numpy(py, &[h.qdd_hit.len()], &h.qdd_hit))?;
+        d.set_item("ball", to_numpy(py, &[10], &state_vec(&h.ball)))?;
+        d.set_item("v_out", to_numpy(py, &[3], h.v_out.as_slice()))?;
+        d.set_item("normal", to_numpy(py, &[3], h.racket.normal.as_slice()))?;
+        d.set_item("racket_velocity", to_numpy(py, &[3], h.racket.velocity.as_slice()))?;
+        d.set_item("spin_out", to_numpy(py, &[3], h.racket.spin_out.as_slice()))?;
+        d.set_item("margin", h.margin)?;
+        d.set_item("landing", to_numpy(py, &[3], h.landing.as_slice()))?;
+    }
+    Ok(d)
+}
+
+/// Plays balls `start`..`start + n` of a simulated rally (see `ttkin::ball::rally`) in parallel.
+#[pyfunction]
+#[pyo3(signature = (n, seed = 0, start = 0, target = (0.9, 0.0), max_spin_rps = 40.0, paths = 5))]
+fn ball_rally<'py>(
+    py: Python<'py>,
+    n: usize,
+    seed: u64,
+    start: u64,
+    target: (f64, f64),
+    max_spin_rps: f64,
+    paths: usize,
+) -> PyResult<Bound<'py, PyDict>> {
+    let planner = HitPlanner::new(ttkin::robots::gantry6(), Flight::default()).py()?;
+    planner.check_target([target.0, target.1]).py()?;
+    if !(max_spin_rps >= 0.0 && max_spin_rps.is_finite()) {
+        return Err(ttkin::Error::invalid(
+            "max_spin_rps",
+            format!("must be finite and ≥ 0, got {max_spin_rps}"),
+        ))
+        .py();
+    }
+    let truth = Flight {
+        step: 0.001,
+        ..Flight::default()
+    };
+    let cfg = RallyConfig {
+        target: [target.0, target.1],
+        max_spin_rps,
+        seed,
+        paths,
+        ..RallyConfig::default()
+    };
+    let out: Vec<rally::BallOutcome> = py.detach(|| {
+        (start..start + n as u64)
+            .into_par_iter()
+            .map(|i| rally::play(&planner, &truth, &cfg, i))
+            .collect()
+    });
+    let d = PyDict::new(py);
+    let col = |f: &dyn Fn(&rally::BallOutcome) -> f64| out.iter().map(f).collect::<Vec<f64>>();
+    d.set_item(
+        "incoming",
+        to_numpy(
+            py,
+            &[n, 10],
+            &out.iter().flat_map(|o| state_vec(&o.incoming)).collect::<Vec<_>>(),
+        ),
+    )?;
+    d.set_item("in_reach", out.iter().map(|o| o.in_reach).collect::<Vec<_>>())?;
+    d.set_item("in_box", out.iter().map(|o| o.in_box).collect::<Vec<_>>())?;
+    d.set_item("returned", out.iter().map(|o| o.returned).collect::<Vec<_>>())?;
+    d.set_item("contact", out.iter().map(|o| o.contact).collect::<Vec<_>>())?;
+    d.set_item("status", out.iter().map(|o| o.status.clone()).collect::<Vec<_>>())?;
+    d.set_item("racket_error", to_numpy(py, &[n], &col(&|o| o.racket_error)))?;
+    d.set_item("plan_time_us", to_numpy(py, &[n], &col(&|o| o.plan_time_us)))?;
+    d.set_item("landing_error", to_numpy(py, &[n], &col(&|o| o.landing_error)))?;
+    d.set_item("velocity_error", to_numpy(py, &[n], &col(&|o| o.velocity_error)))?;
+    d.set_item(
+        "landing",
+        to_numpy(py, &[n, 3], &out.iter().flat_map(|o| o.landing).collect::<Vec<_>>()),
+    )?;
+    let paths_list = PyList::empty(py);
+    for o in out.iter().filter(|o| !o.path.is_empty()) {
+        let pd = PyDict::new(py);
+        let flat: Vec<f64> = o.path.iter().flatten().copied().collect();
+        pd.set_item("ball", to_numpy(py, &[o.path.len(), 3], &flat))?;
+        let flat: Vec<f64> = o.racket_path.iter().flatten().copied().collect();
+        pd.set_item("racket", to_numpy(py, &[o.racket_path.len(), 3], &flat))?;
+        pd.set_item("status", o.status.clone())?;
+        paths_list.append(pd)?;
+    }
+    d.set_item("paths", paths_list)?;
+    Ok(d)
+}
+
+/// Adds the ball functions to the module.
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(ball_estimate, m)?)?;
+    m.add_function(wrap_pyfunction!(ball_predict, m)?)?;
+    m.add_function(wrap_pyfunction!(ball_predict_batch, m)?)?;
+    m.add_function(wrap_pyfunction!(ball_crossing, m)?)?;
+    m.add_function(wrap_pyfunction!(ball_plan_return, m)?)?;
+    m.add_function(wrap_pyfunction!(ball_rally, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,79 @@
+//! Ball benchmarks: estimation from a 0.2 s window, prediction to the hitting plane, and the whole
+//! per-ball planning step (estimate, predict, choose hit, IK, stroke) of the rally.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use nalgebra::Vector3;
+use std::hint::black_box;
+use ttkin::ball::estimate::{estimate, EstimateOptions};
+use ttkin::ball::flight::{BallState, Flight, Plane};
+use ttkin::ball::hitplan::HitPlanner;
+use ttkin::ball::predict::{crossing, predict};
+use ttkin::ball::rally;
+
+/// Noisy observations (200 Hz, σ = 2 mm, 0.02–0.22 s) of `count` incoming balls.
+fn observations(count: usize) -> Vec<(Vec<f64>, Vec<[f64; 3]>)> {
+    let truth = Flight {
+        step: 0.001,
+        ..Flight::default()
+    };
+    let mut rng = fastrand::Rng::with_seed(1);
+    (0..count)
+        .map(|_| {
+            let s = rally::serve(&truth, &mut rng, 40.0, 0.2);
+            let t: Vec<f64> = (0..41).map(|k| 0.02 + k as f64 * 0.005).collect();
+            let p = predict(&truth, &s, &t).unwrap().positions;
+            let p = p
+                .iter()
+                .map(|x| {
+                    let mut o = *x;
+                    for v in o.iter_mut() {
+                        *v += 0.002 * (rng.f64() + rng.f64() + rng.f64() - 1.5) * 2.0;
+                    }
+                    o
+                })
+                .collect();
+            (t, p)
+        })
+        .collect()
+}
+
+fn ball(c: &mut Criterion) {
+    let obs = observations(64);
+    let opts = EstimateOptions {
+        flight: Flight {
+            step: 0.005,
+            ..Flight::default()
+        },
+        ..EstimateOptions::default()
+    };
+    let mut k = 0;
+    c.bench_function("ball_estimate_41obs", |b| {
+        b.iter(|| {
+            k = (k + 1) % obs.len();
+            black_box(estimate(&obs[k].0, &obs[k].1, &opts).unwrap())
+        })
+    });
+    let states: Vec<BallState> = obs.iter().map(|o| estimate(&o.0, &o.1, &opts).unwrap().state).collect();
+    let plane = Plane {
+        point: Vector3::new(-1.6, 0.0, 0.0),
+        normal: Vector3::x(),
+    };
+    let flight = Flight::default();
+    c.bench_function("ball_crossing_hitting_plane", |b| {
+        b.iter(|| {
+            k = (k + 1) % states.len();
+            black_box(crossing(&flight, &states[k], &plane, 2.0).unwrap())
+        })
+    });
+    let planner = HitPlanner::new(ttkin::robots::gantry6(), Flight::default()).unwrap();
+    c.bench_function("ball_plan_per_ball", |b| {
+        b.iter(|| {
+            k = (k + 1) % obs.len();
+            let e = estimate(&obs[k].0, &obs[k].1, &opts).unwrap();
+            black_box(planner.plan(&e.state, 0.23, [0.9, 0.0]).unwrap())
+        })
+    });
+}
+
+criterion_group!(benches, ball);
+criterion_main!(benches);

@@ -1,0 +1,297 @@
+//! Ball flight: fixed-step RK4 on the model of [`super::model`] with event detection.
+//!
+//! After every step the guards are evaluated: distance to the table top minus the radius, the same
+//! for the net, height above the floor, and optionally a user plane. When one falls to ≤ 0 during a
+//! step, the event time is located by bisection on the step length (each trial one RK4 step from
+//! the start of the step, 48 halvings: below 1e-15 s) and the state just before the contact is
+//! returned. Table (surface) and edge contacts bounce ([`super::contact::impulse`]) and the flight
+//! goes on; net and floor contacts end it; a plane crossing is reported. RK4's global error is
+//! O(h⁴): at the default 2 ms step a 1 s flight is within 1e-6 m of a 0.05 ms reference (tested).
+
+use super::contact::{floor_distance, impulse, net_distance, table_distance};
+use super::model::{BallModel, Table};
+use crate::error::{Error, Result};
+use nalgebra::Vector3;
+
+/// Ball state at time `t` (s): position `p` (m), velocity `v` (m/s), spin `w` (rad/s), world frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BallState {
+    /// Time (s).
+    pub t: f64,
+    /// Centre position (m, world).
+    pub p: Vector3<f64>,
+    /// Velocity (m/s, world).
+    pub v: Vector3<f64>,
+    /// Spin (rad/s, world axes).
+    pub w: Vector3<f64>,
+}
+
+impl BallState {
+    /// A state from arrays: time (s), position (m), velocity (m/s), spin (rad/s).
+    pub fn new(t: f64, p: [f64; 3], v: [f64; 3], w: [f64; 3]) -> Self {
+        BallState {
+            t,
+            p: p.into(),
+            v: v.into(),
+            w: w.into(),
+        }
+    }
+
+    /// Checks that every component is finite; `what` names the argument.
+    pub fn validate(&self, what: &str) -> Result<()> {
+        let all = [self.t]
+            .into_iter()
+            .chain(self.p.iter().copied())
+            .chain(self.v.iter().copied())
+            .chain(self.w.iter().copied());
+        for (i, x) in all.enumerate() {
+            if !x.is_finite() {
+                return Err(Error::NonFinite {
+                    what: what.to_string(),
+                    index: i,
+                    value: x,
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// What happened at an event.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EventKind {
+    /// Bounce on the playing surface.
+    Table,
+    /// Contact with an edge or side of the table top (bounce with a non-vertical normal).
+    Edge,
+    /// Contact with the net (ends the flight).
+    Net,
+    /// Reached the floor (ends the flight).
+    Floor,
+    /// Crossed the user plane from its positive to its negative side.
+    Plane,
+}
+
+impl EventKind {
+    /// Short lower-case name ("table", "edge", "net", "floor", "plane").
+    pub fn name(&self) -> &'static str {
+        match self {
+            EventKind::Table => "table",
+            EventKind::Edge => "edge",
+            EventKind::Net => "net",
+            EventKind::Floor => "floor",
+            EventKind::Plane => "plane",
+        }
+    }
+
+    /// Whether the flight ends at this event.
+    pub fn terminal(&self) -> bool {
+        matches!(self, EventKind::Net | EventKind::Floor)
+    }
+}
+
+/// An event: its kind, the state just before and just after (equal except for bounces).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Event {
+    /// What happened.
+    pub kind: EventKind,
+    /// State at the contact, before the impulse.
+    pub before: BallState,
+    /// State after the impulse (same as `before` for non-bouncing events).
+    pub after: BallState,
+}
+
+/// A plane n·(p − point) = 0 (world); crossing means n·(p − point) goes from > 0 to ≤ 0.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Plane {
+    /// A point on the plane (m, world).
+    pub point: Vector3<f64>,
+    /// Unit normal (world), pointing to the side the ball comes from.
+    pub normal: Vector3<f64>,
+}
+
+impl Plane {
+    /// Signed distance (m) of `p` to the plane.
+    pub fn distance(&self, p: &Vector3<f64>) -> f64 {
+        self.normal.dot(&(p - self.point))
+    }
+}
+
+/// The flight integrator: model, table and step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Flight {
+    /// Ball and air model.
+    pub model: BallModel,
+    /// Table geometry.
+    pub table: Table,
+    /// RK4 step (s), default 2 ms.
+    pub step: f64,
+}
+
+impl Default for Flight {
+    fn default() -> Self {
+        Flight {
+            model: BallModel::default(),
+            table: Table::default(),
+            step: 0.002,
+        }
+    }
+}
+
+/// Guard values of a state: (table, net, floor, plane); an event fires when one becomes ≤ 0.
+#[derive(Clone, Copy)]
+struct Guards([f64; 4]);
+
+impl Flight {
+    /// Flight with `model` on the ITTF table and the default 2 ms step.
+    pub fn new(model: BallModel) -> Self {
+        Flight {
+            model,
+            ..Flight::default()
+        }
+    }
+
+    /// Checks model, table and step.
+    pub fn validate(&self) -> Result<()> {
+        self.model.validate()?;
+        self.table.validate()?;
+        if !(self.step > 0.0 && self.step <= 0.05) {
+            return Err(Error::invalid(
+                "step",
+                format!("must lie in (0, 0.05] s, got {}", self.step),
+            ));
+        }
+        Ok(())
+    }
+
+    /// One RK4 step of length `h` (s) without events (spin constant).
+    pub fn rk4(&self, s: &BallState, h: f64) -> BallState {
+        let m = &self.model;
+        let w = s.w;
+        let a1 = m.acceleration(&s.v, &w);
+        let v2 = s.v + 0.5 * h * a1;
+        let a2 = m.acceleration(&v2, &w);
+        let v3 = s.v + 0.5 * h * a2;
+        let a3 = m.acceleration(&v3, &w);
+        let v4 = s.v + h * a3;
+        let a4 = m.acceleration(&v4, &w);
+        BallState {
+            t: s.t + h,
+            p: s.p + h / 6.0 * (s.v + 2.0 * v2 + 2.0 * v3 + v4),
+            v: s.v + h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4),
+            w,
+        }
+    }
+
+    fn guards(&self, s: &BallState, plane: Option<&Plane>) -> Guards {
+        let r = self.model.radius;
+        Guards([
+            table_distance(&self.table, &s.p).0 - r,
+            net_distance(&self.table, &s.p).0 - r,
+            floor_distance(&self.table, &self.model, &s.p),
+            plane.map_or(f64::INFINITY, |pl| pl.distance(&s.p)),
+        ])
+    }
+
+    /// Integrates from `s` up to time `t_end` (s) or the first event, whichever comes first.
+    /// Returns the state reached (after the bounce impulse at a table or edge event) and the event.
+    /// Guards already ≤ 0 at `s` are ignored (e.g. a ball resting on a plane it just crossed).
+    pub fn advance(&self, s: &BallState, t_end: f64, plane: Option<&Plane>) -> (BallState, Option<Event>) {
+        let mut cur = *s;
+        let g0 = self.guards(&cur, plane);
+        let armed: [bool; 4] = std::array::from_fn(|k| g0.0[k] > 0.0);
+        while cur.t < t_end {
+            let h = self.step.min(t_end - cur.t);
+            let next = self.rk4(&cur, h);
+            let g1 = self.guards(&next, plane);
+            if let Some(k) = fired(&armed, &g1) {
+                // Bisection on the step length: lo keeps every armed guard > 0, hi has one ≤ 0.
+                let (mut lo, mut hi) = (0.0, h);
+                let mut hit_k = k;
+                for _ in 0..48 {
+                    let mid = 0.5 * (lo + hi);
+                    let g = self.guards(&self.rk4(&cur, mid), plane);
+                    match fired(&armed, &g) {
+                        Some(kk) => {
+                            hi = mid;
+                            hit_k = kk;
+                        }
+                        None => lo = mid,
+                    }
+                }
+                let before = if lo > 0.0 { self.rk4(&cur, lo) } else { cur };
+                return (self.apply(&before, hit_k), Some(self.event(before, hit_k)));
+            }
+            cur = next;
+        }
+        (cur, None)
+    }
+
+    fn event(&self, before: BallState, k: usize) -> Event {
+        let kind = match k {
+            0 => {
+                let (_, n) = table_distance(&self.table, &before.p);
+                if n.z > 0.999_999 {
+                    EventKind::Table
+                } else {
+                    EventKind::Edge
+                }
+            }
+            1 => EventKind::Net,
+            2 => EventKind::Floor,
+            _ => EventKind::Plane,
+        };
+        Event {
+            kind,
+            before,
+            after: self.apply(&before, k),
+        }
+    }
+
+    fn apply(&self, s: &BallState, k: usize) -> BallState {
+        if k != 0 {
+            return *s;
+        }
+        let (_, n) = table_distance(&self.table, &s.p);
+        let m = &self.model;
+        let (dv, dw) = impulse(m, &s.v, &s.w, &n, m.table_restitution, m.table_friction);
+        BallState {
+            v: s.v + dv,
+            w: s.w + dw,
+            ..*s
+        }
+    }
+
+    /// Integrates from `s` to `t_end` (s) through bounces, collecting the events, until `t_end`,
+    /// a terminal event (net, floor) or a plane crossing. Returns the final state and the events.
+    pub fn run(&self, s: &BallState, t_end: f64, plane: Option<&Plane>) -> (BallState, Vec<Event>) {
+        let mut cur = *s;
+        let mut events = Vec::new();
+        // Each bounce loses energy; 64 events bound a flight of any practical length.
+        while cur.t < t_end && events.len() < 64 {
+            let (next, ev) = self.advance(&cur, t_end, plane);
+            cur = next;
+            match ev {
+                Some(e) => {
+                    events.push(e);
+                    if e.kind.terminal() || e.kind == EventKind::Plane {
+                        break;
+                    }
+                }
+                None => break,
+            }
+        }
+        (cur, events)
+    }
+}
+
+/// The first armed guard that is ≤ 0 (the most negative when several are).
+fn fired(armed: &[bool; 4], g: &Guards) -> Option<usize> {
+    let mut best: Option<(usize, f64)> = None;
+    for (k, (&on, &v)) in armed.iter().zip(g.0.iter()).enumerate() {
+        if on && v <= 0.0 && best.is_none_or(|(_, b)| v < b) {
+            best = Some((k, v));
+        }
+    }
+    best.map(|(k, _)| k)
+}

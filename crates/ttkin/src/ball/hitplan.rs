@@ -1,0 +1,534 @@
+//! Hit planning: where, when and how the robot hits the predicted ball so that it lands on a
+//! target on the opponent's half.
+//!
+//! 1. **Candidates.** The ball is predicted from its state (through its bounce on the robot's half)
+//!    and every 10 ms sample inside the reach box ([`Reach`], the racket centre's region reachable by
+//!    gantry6 with a forward-facing racket, world frame), after the bounce and at least
+//!    `min_stroke_time` after `now`, is a candidate; `candidates` of them, evenly spread, are tried
+//!    (up to 12 when none of those is feasible).
+//! 2. **Outgoing velocity.** Shooting: the velocity v₀ with which the ball, spinning with its
+//!    post-impact spin, is at (x_t, y_t, r) after the return flight time T: Broyden's method on the
+//!    3×3 map v₀ ↦ p(T), started from the drag-free solution with Jacobian T·I; T from
+//!    `return_times` in order until the flight clears the net and first touches the table at the
+//!    target (within 1 mm). The post-impact spin depends on the racket, which depends on v₀: every
+//!    evaluation of the map solves the racket for its v₀ and flies the ball with that spin.
+//! 3. **Racket.** [`super::impact::Racket::solve`] gives the face normal and the racket velocity
+//!    (along the normal); the racket centre is the ball centre minus r·n (the ball touches the face
+//!    centre); the racket frame has its z axis on the face normal and its x axis (the handle) as
+//!    close to world up as possible (the convention of `python/ttmanip/pipeline.py`).
+//! 4. **Robot.** The pose and twist go to the base frame ([`Placement`]), analytic IK (branch
+//!    nearest the ready configuration, within the limits), q̇ = J⁻¹·V, and a quintic stroke from
+//!    rest at the ready configuration at `now` to (q, q̇, q̈) at the hit, q̈ = 0 or a fraction of
+//!    the matching cubic's end acceleration, whichever has the lowest peaks. Feasible when the
+//!    stroke's exact velocity and acceleration peaks stay within the limits.
+//! 5. **Choice.** Among feasible candidates, the one with the largest margin: the smallest of the
+//!    joints' normalised distance to their position limits at the hit and 1 − the stroke's
+//!    peak/limit ratio. Candidates are tried from the middle of the spread outward and the search
+//!    stops at the first with a margin ≥ `good_margin` (0.25), which bounds the planning time.
+
+use super::flight::{BallState, EventKind, Flight};
+use super::impact::{Racket, RacketHit};
+use crate::chain::Chain;
+use crate::error::{Error, Result};
+use crate::ik::{joint_velocity, Analytic, LimitFilter};
+use crate::traj::limits::{quintic_limit_ratio, KinematicLimits};
+use crate::traj::JointState;
+use nalgebra::{IsometryMatrix3, Matrix3, Rotation3, Translation3, Vector3};
+
+/// Where the robot's base frame sits in the world frame: base = world ∘ (translation, yaw about z).
+///
+/// gantry6 default: origin at (−2.0, 0, 0.15) m, yaw +90°, so base x = world y (the d2 axis moves
+/// across the table), base y = −world x (d1 moves along the table: its axis is −y of the base, i.e.
+/// toward the net), base z = world z. The racket then reaches about x ∈ [−2.9, −0.9] m along the
+/// table, |y| ≤ 0.6 m across it and 0.15 ± 0.45 m in height.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Placement {
+    /// Base-frame origin (m, world).
+    pub origin: Vector3<f64>,
+    /// Rotation of the base about world z (rad).
+    pub yaw: f64,
+}
+
+impl Default for Placement {
+    fn default() -> Self {
+        Placement {
+            origin: Vector3::new(-2.0, 0.0, 0.15),
+            yaw: std::f64::consts::FRAC_PI_2,
+        }
+    }
+}
+
+impl Placement {
+    /// The base frame in the world frame.
+    pub fn world_from_base(&self) -> IsometryMatrix3<f64> {
+        IsometryMatrix3::from_parts(
+            Translation3::from(self.origin),
+            Rotation3::from_axis_angle(&Vector3::z_axis(), self.yaw),
+        )
+    }
+}
+
+/// The racket-centre region (world frame, m) where the planner looks for hits: an axis-aligned box.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Reach {
+    /// Lower corner (m, world).
+    pub lo: Vector3<f64>,
+    /// Upper corner (m, world).
+    pub hi: Vector3<f64>,
+}
+
+impl Default for Reach {
+    fn default() -> Self {
+        Reach {
+            lo: Vector3::new(-2.0, -0.5, 0.06),
+            hi: Vector3::new(-1.3, 0.5, 0.45),
+        }
+    }
+}
+
+impl Reach {
+    /// Whether the world point `p` (m) lies in the box.
+    pub fn contains(&self, p: &Vector3<f64>) -> bool {
+        (0..3).all(|k| p[k] >= self.lo[k] && p[k] <= self.hi[k])
+    }
+}
+
+/// Why a ball got no hit, or that it got one.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum HitStatus {
+    /// A feasible hit was planned.
+    Ok,
+    /// The ball does not bounce on the robot's half and come back up (net, long, wide, floor).
+    NoBounce,
+    /// The ball never enters the reach box after its bounce, or too early for a stroke.
+    OutOfReach,
+    /// No outgoing flight reaches the target over the net.
+    NoReturn,
+    /// Every candidate violates the robot's limits (IK, joint velocity or stroke).
+    Infeasible,
+}
+
+impl HitStatus {
+    /// Short lower-case name ("ok", "no_bounce", "out_of_reach", "no_return", "infeasible").
+    pub fn name(&self) -> &'static str {
+        match self {
+            HitStatus::Ok => "ok",
+            HitStatus::NoBounce => "no_bounce",
+            HitStatus::OutOfReach => "out_of_reach",
+            HitStatus::NoReturn => "no_return",
+            HitStatus::Infeasible => "infeasible",
+        }
+    }
+}
+
+/// A planned hit: what the racket must do, and what the robot must do for it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Hit {
+    /// Predicted ball state at the impact (world).
+    pub ball: BallState,
+    /// Outgoing ball velocity (m/s, world) and the racket producing it.
+    pub v_out: Vector3<f64>,
+    /// Racket normal, velocity and outgoing spin (world).
+    pub racket: RacketHit,
+    /// Racket pose (racket frame in the robot base frame, m): the `pose` of `ttmanip.Hit`.
+    pub pose: IsometryMatrix3<f64>,
+    /// Racket twist [v; ω] (m/s, rad/s, base axes): the `twist` of `ttmanip.Hit`.
+    pub twist: [f64; 6],
+    /// Hit time (s from `now`): the `t` of `ttmanip.Hit`.
+    pub t_hit: f64,
+    /// Joint configuration (m, rad) and velocities at the hit.
+    pub q_hit: Vec<f64>,
+    /// Joint velocities (m/s, rad/s) at the hit.
+    pub qd_hit: Vec<f64>,
+    /// Joint accelerations (m/s², rad/s²) at the hit chosen for the stroke (see `robot_hit`).
+    pub qdd_hit: Vec<f64>,
+    /// Choice margin (see the module doc), in (0, 1].
+    pub margin: f64,
+    /// Landing point (m, world) of the exactly executed impact and its flight time (s).
+    pub landing: Vector3<f64>,
+}
+
+/// The result of [`HitPlanner::plan`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct HitPlan {
+    /// Outcome.
+    pub status: HitStatus,
+    /// The hit when `status` is [`HitStatus::Ok`].
+    pub hit: Option<Hit>,
+    /// Candidates examined.
+    pub candidates: usize,
+}
+
+/// The hit planner of one robot: its chain, placement, reach box, ready configuration and racket.
+#[derive(Debug, Clone)]
+pub struct HitPlanner {
+    /// Robot chain (base frame as in [`Placement`]; tool frame = racket frame).
+    pub chain: Chain,
+    ik: Analytic,
+    limits: KinematicLimits,
+    /// Base frame in the world.
+    pub placement: Placement,
+    /// Reach box of the racket centre (world).
+    pub reach: Reach,
+    /// Ready configuration (m, rad) from which strokes start at rest.
+    pub ready: Vec<f64>,
+    /// Racket rubber.
+    pub racket: Racket,
+    /// Flight model used for planning (10 ms RK4 step).
+    pub flight: Flight,
+    /// Shortest stroke (s) between planning and hitting.
+    pub min_stroke_time: f64,
+    /// Candidates tried first (evenly spread); all of them (up to 12) when none of these is feasible.
+    pub candidates: usize,
+    /// How far (m) beyond the reach box the planner still looks for hits, so that a ball whose
+    /// estimate lies just outside the box is still tried (IK decides).
+    pub search_margin: f64,
+    /// Return flight times (s) tried in order (slower returns first: they need less racket speed).
+    pub return_times: [f64; 3],
+    /// A feasible hit with at least this margin ends the search (candidates are tried middle first).
+    pub good_margin: f64,
+}
+
+impl HitPlanner {
+    /// The planner for `chain` (an analytic-IK gantry6 structure) with defaults: placement and reach
+    /// of gantry6, ready configuration = IK of a forward-facing racket at the reach box's centre.
+    pub fn new(chain: Chain, flight: Flight) -> Result<Self> {
+        let ik = Analytic::for_chain(&chain)
+            .ok_or_else(|| Error::Model("hit planning needs a chain with analytic IK (gantry6)".into()))?;
+        let limits = KinematicLimits::from_chain(&chain, None)?;
+        let mut planner = HitPlanner {
+            ready: vec![0.0; chain.dof()],
+            chain,
+            ik,
+            limits,
+            placement: Placement::default(),
+            reach: Reach::default(),
+            racket: Racket::default(),
+            flight: Flight { step: 0.01, ..flight },
+            min_stroke_time: 0.12,
+            candidates: 3,
+            search_margin: 0.03,
+            return_times: [0.8, 0.65, 0.95],
+            good_margin: 0.25,
+        };
+        // Ready: racket facing forward at the box centre, 0.2 m back, so that a stroke accelerates
+        // forward into the hit (the hit velocity points toward the net).
+        let centre = 0.5 * (planner.reach.lo + planner.reach.hi) - Vector3::new(0.2, 0.0, 0.0);
+        let pose = planner.base_pose(&centre, &Vector3::x());
+        planner.ready = planner.ik.nearest(&pose, &planner.ready, LimitFilter::Enforce)?;
+        Ok(planner)
+    }
+
+    /// Racket pose in the base frame for a racket centre `c` and face normal `n` (world).
+    pub fn base_pose(&self, c: &Vector3<f64>, n: &Vector3<f64>) -> IsometryMatrix3<f64> {
+        let z = n.normalize();
+        let hint = if z.z.abs() < 0.95 { Vector3::z() } else { Vector3::x() };
+        let x = (hint - z * hint.dot(&z)).normalize();
+        let rot = Rotation3::from_matrix_unchecked(Matrix3::from_columns(&[x, z.cross(&x), z]));
+        let world = IsometryMatrix3::from_parts(Translation3::from(*c), rot);
+        self.placement.world_from_base().inverse() * world
+    }
+
+    /// Checks that `target` (x, y in m, world) lies on the opponent's half, a ball radius inside.
+    pub fn check_target(&self, target: [f64; 2]) -> Result<()> {
+        let t = &self.flight.table;
+        let r = self.flight.model.radius;
+        let ok = target[0].is_finite()
+            && target[1].is_finite()
+            && target[0] > r
+            && target[0] < t.half_length() - r
+            && target[1].abs() < t.half_width() - r;
+        if ok {
+            Ok(())
+        } else {
+            Err(Error::invalid(
+                "target",
+                format!(
+                    "({}, {}) m is off the opponent's half: need {r} < x < {} and |y| < {} (world frame)",
+                    target[0],
+                    target[1],
+                    t.half_length() - r,
+                    t.half_width() - r
+                ),
+            ))
+        }
+    }
+
+    /// Plans the hit of the ball `ball` (state at time `ball.t`, s) for a stroke starting at rest
+    /// at the ready configuration at time `now` (s), returning the ball to `target` (x, y, m, world).
+    pub fn plan(&self, ball: &BallState, now: f64, target: [f64; 2]) -> Result<HitPlan> {
+        self.plan_from(ball, now, target, &JointState::rest(&self.ready), false)
+    }
+
+    /// [`HitPlanner::plan`] for a stroke starting from the joint state `start` at `now` (re-planning
+    /// during a stroke with a newer estimate); `after_bounce` says that `ball` is already past its
+    /// bounce on the robot's half (an estimate from observations after it).
+    pub fn plan_from(
+        &self,
+        ball: &BallState,
+        now: f64,
+        target: [f64; 2],
+        start: &JointState,
+        after_bounce: bool,
+    ) -> Result<HitPlan> {
+        self.check_target(target)?;
+        if start.check("start")? != self.chain.dof() {
+            return Err(Error::shape(
+                "start.q",
+                format!("{} values", self.chain.dof()),
+                start.q.len(),
+            ));
+        }
+        ball.validate("ball")?;
+        if !now.is_finite() {
+            return Err(Error::NonFinite {
+                what: "now".into(),
+                index: 0,
+                value: now,
+            });
+        }
+        let (list, bounced) = self.candidate_states(&self.flight, ball, now, self.search_margin, after_bounce);
+        if !bounced {
+            return Ok(HitPlan {
+                status: HitStatus::NoBounce,
+                hit: None,
+                candidates: 0,
+            });
+        }
+        if list.is_empty() {
+            return Ok(HitPlan {
+                status: HitStatus::OutOfReach,
+                hit: None,
+                candidates: 0,
+            });
+        }
+        // `candidates` evenly spread first; more of them only when none of those is feasible.
+        let k = self.candidates.max(1).min(list.len());
+        let extra = list.len().min(12);
+        let mut best: Option<Hit> = None;
+        let mut any_return = false;
+        let mut tried = 0;
+        for (round, count) in [(0, k), (1, extra)] {
+            if round == 1 && (best.is_some() || extra <= k) {
+                break;
+            }
+            // Middle of the spread first: it is the likeliest to have the largest margin.
+            let mut order: Vec<usize> = (0..count).collect();
+            order.sort_by_key(|&j| (2 * j + 1).abs_diff(count));
+            for j in order {
+                if best.as_ref().is_some_and(|b| b.margin >= self.good_margin) {
+                    break;
+                }
+                let s = list[(2 * j + 1) * list.len() / (2 * count)];
+                tried += 1;
+                for &tf in &self.return_times {
+                    let Some((v_out, racket, landing)) = self.outgoing(&s, target, tf) else {
+                        continue;
+                    };
+                    any_return = true;
+                    if let Some(hit) = self.robot_hit(&s, now, start, v_out, racket, landing) {
+                        if best.as_ref().is_none_or(|b| hit.margin > b.margin) {
+                            best = Some(hit);
+                        }
+                        break;
+                    }
+                }
+            }
+        }
+        let k = tried;
+        let status = match (&best, any_return) {
+            (Some(_), _) => HitStatus::Ok,
+            (None, true) => HitStatus::Infeasible,
+            (None, false) => HitStatus::NoReturn,
+        };
+        Ok(HitPlan {
+            status,
+            hit: best,
+            candidates: k,
+        })
+    }
+
+    /// Whether the ball from `ball`, flying by `flight`, bounces on the robot's half and then passes
+    /// through the reach box at least `min_stroke_time` after `now` (s).
+    pub fn reachable(&self, flight: &Flight, ball: &BallState, now: f64) -> bool {
+        !self.candidate_states(flight, ball, now, 0.0, false).0.is_empty()
+    }
+
+    /// Predicted states every 10 ms inside the reach box after the bounce on the robot's half, and
+    /// whether that bounce happens.
+    fn candidate_states(
+        &self,
+        f: &Flight,
+        ball: &BallState,
+        now: f64,
+        margin: f64,
+        after_bounce: bool,
+    ) -> (Vec<BallState>, bool) {
+        let reach = Reach {
+            lo: self.reach.lo - Vector3::repeat(margin),
+            hi: self.reach.hi + Vector3::repeat(margin),
+        };
+        let mut cur = *ball;
+        let mut bounced = after_bounce;
+        let mut out = Vec::new();
+        let t_end = ball.t + 2.0;
+        while cur.t < t_end {
+            let (next, ev) = f.advance(&cur, cur.t + 0.01, None);
+            cur = next;
+            if let Some(e) = ev {
+                match e.kind {
+                    EventKind::Table if e.before.p.x < 0.0 && !bounced => bounced = true,
+                    EventKind::Table | EventKind::Edge if bounced => break,
+                    EventKind::Net | EventKind::Floor => break,
+                    _ => {}
+                }
+                continue;
+            }
+            if bounced && cur.t >= now + self.min_stroke_time && reach.contains(&cur.p) && cur.v.x < 0.0 {
+                out.push(cur);
+            }
+            if cur.p.x < self.reach.lo.x - 0.05 || (cur.v.x >= 0.0 && cur.p.x < 0.0) {
+                break;
+            }
+        }
+        (out, bounced)
+    }
+
+    /// Outgoing velocity, racket and landing point returning the ball at `s` to `target` in a
+    /// return flight of `tf` s.
+    fn outgoing(&self, s: &BallState, target: [f64; 2], tf: f64) -> Option<(Vector3<f64>, RacketHit, Vector3<f64>)> {
+        let f = &self.flight;
+        let goal = Vector3::new(target[0], target[1], f.model.radius);
+        let racket = |v: &Vector3<f64>| self.racket.solve(&f.model, &s.v, &s.w, v).ok();
+        // The outgoing spin follows the racket, which follows v₀: solved together.
+        let v_out = shoot(f, &s.p, &goal, tf, |v| racket(v).map(|r| r.spin_out))?;
+        let hit = racket(&v_out)?;
+        let out = BallState {
+            v: v_out,
+            w: hit.spin_out,
+            ..*s
+        };
+        let (_, events) = f.run(&out, s.t + tf + 0.5, None);
+        let e = events.first()?;
+        let landing = e.before.p;
+        let ok = e.kind == EventKind::Table
+            && f.table.on_opponent_half(landing.x, landing.y)
+            && (landing - goal).xy().norm() < 1e-3;
+        ok.then_some((v_out, hit, landing))
+    }
+
+    fn robot_hit(
+        &self,
+        s: &BallState,
+        now: f64,
+        start: &JointState,
+        v_out: Vector3<f64>,
+        racket: RacketHit,
+        landing: Vector3<f64>,
+    ) -> Option<Hit> {
+        let r = self.flight.model.radius;
+        let centre = s.p - r * racket.normal;
+        let pose = self.base_pose(&centre, &racket.normal);
+        let q = self.ik.nearest(&pose, &start.q, LimitFilter::Enforce).ok()?;
+        let rot_bw = self.placement.world_from_base().rotation.inverse();
+        let v_b = rot_bw * racket.velocity;
+        let twist = [v_b.x, v_b.y, v_b.z, 0.0, 0.0, 0.0];
+        let jv = joint_velocity(&self.chain, &q, &twist).ok()?;
+        if jv.singular {
+            return None;
+        }
+        let t_hit = s.t - now;
+        // The acceleration at the hit is free (the ball only sees pose and velocity): zero, or a
+        // fraction of the end acceleration of the cubic through the same boundary positions and
+        // velocities, −6·Δq/T² + 2·(q̇0 + 2·q̇1)/T, whichever gives the lowest peak/limit ratio.
+        let cubic: Vec<f64> = (0..q.len())
+            .map(|i| -6.0 * (q[i] - start.q[i]) / (t_hit * t_hit) + 2.0 * (start.qd[i] + 2.0 * jv.qdot[i]) / t_hit)
+            .collect();
+        let mut best: Option<(f64, JointState)> = None;
+        for alpha in [0.0, 0.5, 1.0] {
+            let end = JointState {
+                q: q.clone(),
+                qd: jv.qdot.clone(),
+                qdd: cubic.iter().map(|a| alpha * a).collect(),
+            };
+            let ratio = quintic_limit_ratio(start, &end, t_hit, &self.limits);
+            if best.as_ref().is_none_or(|(r, _)| ratio < *r) {
+                best = Some((ratio, end));
+            }
+        }
+        let (ratio, end) = best.expect("three trials");
+        if !(ratio <= 1.0) {
+            return None;
+        }
+        let mut pos_margin = f64::INFINITY;
+        for (i, &qi) in q.iter().enumerate() {
+            let (lo, hi) = (self.limits.lower[i], self.limits.upper[i]);
+            if lo.is_finite() && hi.is_finite() {
+                pos_margin = pos_margin.min(2.0 * (qi - lo).min(hi - qi) / (hi - lo));
+            }
+        }
+        Some(Hit {
+            ball: *s,
+            v_out,
+            racket,
+            pose,
+            twist,
+            t_hit,
+            q_hit: q,
+            qd_hit: jv.qdot,
+            qdd_hit: end.qdd,
+            margin: pos_margin.min(1.0 - ratio),
+            landing,
+        })
+    }
+}
+
+/// Velocity v₀ (m/s) with which a ball at `p`, spinning with `spin(v₀)` (rad/s; a constant or the
+/// spin a racket gives it), is at `goal` after `tf` s of free flight (no contacts): Broyden's method
+/// from the drag-free solution, to 1e-5 m. `None` when `spin` has no answer or it does not converge.
+pub fn shoot<S>(f: &Flight, p: &Vector3<f64>, goal: &Vector3<f64>, tf: f64, spin: S) -> Option<Vector3<f64>>
+where
+    S: Fn(&Vector3<f64>) -> Option<Vector3<f64>>,
+{
+    let g = Vector3::new(0.0, 0.0, -f.model.gravity);
+    let mut v = (goal - p - 0.5 * g * tf * tf) / tf;
+    let end = |v: &Vector3<f64>| {
+        let Some(w) = spin(v) else {
+            return Vector3::repeat(f64::NAN);
+        };
+        let mut s = BallState {
+            t: 0.0,
+            p: *p,
+            v: *v,
+            w,
+        };
+        while s.t < tf - 1e-12 {
+            s = f.rk4(&s, f.step.min(tf - s.t));
+        }
+        s.p - goal
+    };
+    let mut jinv = Matrix3::identity() / tf; // inverse Jacobian (Broyden, "good" update on the inverse)
+    let mut r = end(&v);
+    if !r.norm().is_finite() {
+        return None;
+    }
+    for _ in 0..20 {
+        if r.norm() < 1e-5 {
+            return Some(v);
+        }
+        let dv = -(jinv * r);
+        let vn = v + dv;
+        let rn = end(&vn);
+        let dr = rn - r;
+        let denom = dv.dot(&(jinv * dr));
+        if denom.abs() > 1e-30 {
+            jinv += (dv - jinv * dr) * (dv.transpose() * jinv) / denom;
+        }
+        v = vn;
+        r = rn;
+        if !r.norm().is_finite() {
+            return None;
+        }
+    }
+    (r.norm() < 1e-4).then_some(v)
+}

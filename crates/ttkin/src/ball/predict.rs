@@ -1,0 +1,128 @@
+//! Prediction of a ball's flight from a state: positions at given times through bounces, and the
+//! crossing of a hitting plane; batches over many balls run in parallel (rayon).
+
+use super::flight::{BallState, Event, EventKind, Flight, Plane};
+use crate::error::{Error, Result};
+use rayon::prelude::*;
+
+/// Positions at the requested times and what happened on the way.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Prediction {
+    /// Ball centre (m, world) at each requested time; NaN after a terminal event.
+    pub positions: Vec<[f64; 3]>,
+    /// Every event met up to the last requested time (bounces, net, floor).
+    pub events: Vec<Event>,
+    /// The terminal event (net or floor) that ended the flight, if any.
+    pub end: Option<EventKind>,
+}
+
+/// Checks that `times` are finite, non-decreasing and not before `t0` (s).
+fn check_times(times: &[f64], t0: f64) -> Result<()> {
+    for (i, &t) in times.iter().enumerate() {
+        if !t.is_finite() {
+            return Err(Error::NonFinite {
+                what: "times".into(),
+                index: i,
+                value: t,
+            });
+        }
+        if t < t0 - 1e-12 {
+            return Err(Error::invalid(
+                "times",
+                format!("times[{i}] = {t} s lies before the state's time {t0} s (prediction runs forward)"),
+            ));
+        }
+        if i > 0 && t < times[i - 1] {
+            return Err(Error::invalid(
+                "times",
+                format!("must be non-decreasing; times[{i}] = {t} < times[{}]", i - 1),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Positions of the ball from `state` at `times` (s, non-decreasing, ≥ state.t), through bounces.
+pub fn predict(flight: &Flight, state: &BallState, times: &[f64]) -> Result<Prediction> {
+    flight.validate()?;
+    state.validate("state")?;
+    check_times(times, state.t)?;
+    let mut cur = *state;
+    let mut events = Vec::new();
+    let mut end = None;
+    let mut positions = Vec::with_capacity(times.len());
+    for &t in times {
+        while end.is_none() && cur.t < t {
+            let (next, ev) = flight.advance(&cur, t, None);
+            cur = next;
+            if let Some(e) = ev {
+                events.push(e);
+                if e.kind.terminal() {
+                    end = Some(e.kind);
+                }
+            }
+        }
+        positions.push(if end.is_some() { [f64::NAN; 3] } else { cur.p.into() });
+    }
+    Ok(Prediction { positions, events, end })
+}
+
+/// How a flight toward a plane ended.
+#[derive(Debug, Clone, PartialEq)]
+pub enum CrossingOutcome {
+    /// The ball crossed the plane; the state there and the bounces before.
+    Crossed {
+        /// State at the crossing (time, position, velocity, spin).
+        state: BallState,
+        /// Bounces (table, edge) before the crossing.
+        bounces: Vec<Event>,
+    },
+    /// The flight ended at the net or the floor before the crossing.
+    Ended(Event),
+    /// No crossing before `t_max`.
+    Timeout,
+}
+
+/// Where and when the ball from `state` crosses `plane` (from its positive to negative side),
+/// searching up to `t_max` (s).
+pub fn crossing(flight: &Flight, state: &BallState, plane: &Plane, t_max: f64) -> Result<CrossingOutcome> {
+    flight.validate()?;
+    state.validate("state")?;
+    if !t_max.is_finite() {
+        return Err(Error::NonFinite {
+            what: "t_max".into(),
+            index: 0,
+            value: t_max,
+        });
+    }
+    let (_, events) = flight.run(state, t_max, Some(plane));
+    let mut bounces = Vec::new();
+    for e in events {
+        match e.kind {
+            EventKind::Plane => {
+                return Ok(CrossingOutcome::Crossed {
+                    state: e.before,
+                    bounces,
+                })
+            }
+            EventKind::Net | EventKind::Floor => return Ok(CrossingOutcome::Ended(e)),
+            _ => bounces.push(e),
+        }
+    }
+    Ok(CrossingOutcome::Timeout)
+}
+
+/// [`predict`] for many balls in parallel, one result per state.
+pub fn predict_batch(flight: &Flight, states: &[BallState], times: &[f64]) -> Vec<Result<Prediction>> {
+    states.par_iter().map(|s| predict(flight, s, times)).collect()
+}
+
+/// [`crossing`] for many balls in parallel, one result per state.
+pub fn crossing_batch(
+    flight: &Flight,
+    states: &[BallState],
+    plane: &Plane,
+    t_max: f64,
+) -> Vec<Result<CrossingOutcome>> {
+    states.par_iter().map(|s| crossing(flight, s, plane, t_max)).collect()
+}

@@ -1,0 +1,184 @@
+"""Table-tennis ball: flight model, estimation from observations, prediction, hit planning.
+
+Thin layer over ``ttkin::ball`` (Rust). World frame: origin at the centre of the table's playing
+surface, x along the table toward the opponent (the robot stands behind the end line x = −1.37 m),
+z up, y = z × x; metres, m/s, rad/s, seconds. A ball state is the (10,) array
+``[t, px, py, pz, vx, vy, vz, wx, wy, wz]``. See ``docs/ball.md``.
+
+>>> import numpy as np
+>>> from ttmanip import ball
+>>> s = ball.state([1.6, 0.0, 0.3], [-5.0, 0.0, 1.0])
+>>> ball.predict(s, [0.1, 0.2]).shape
+(2, 3)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from . import _ttmanip as _t
+
+__all__ = [
+    "BallModel",
+    "Estimate",
+    "Table",
+    "crossing",
+    "estimate",
+    "plan_return",
+    "predict",
+    "predict_batch",
+    "state",
+]
+
+MODELS = ("default", "muelling", "mpi", "tt3d", "vacuum")
+
+
+@dataclass(frozen=True)
+class BallModel:
+    """A named flight model: a = g − k_d·|v|·v + k_m·(ω × v).
+
+    ``default``: ρ = 1.184 kg/m³, C_D = 0.5, C_L = rω/|v| → k_d = 0.1377 /m, k_m = 0.00551;
+    ``muelling`` (k_d 0.1414, k_m 0.001), ``mpi`` (0.129, 0.00807), ``tt3d`` (0.141, 0.0018),
+    ``vacuum`` (no air). Ball 2.7 g, 40 mm; table restitution 0.93, friction 0.25.
+    """
+
+    name: str = "default"
+
+    def __post_init__(self) -> None:
+        if self.name not in MODELS:
+            raise _t.TtmanipError(f"model: unknown ball model {self.name!r}; expected one of {MODELS}")
+
+
+@dataclass(frozen=True)
+class Table:
+    """ITTF table geometry (m) in the world frame: surface at z = 0, centred at the origin."""
+
+    length: float = 2.74
+    width: float = 1.525
+    height: float = 0.76
+    net_height: float = 0.1525
+    net_overhang: float = 0.1525
+
+    def on_opponent_half(self, x: float, y: float) -> bool:
+        """Whether (x, y) (m, world) lies on the opponent's half of the surface."""
+        return 0.0 < x <= self.length / 2 and abs(y) <= self.width / 2
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """A fitted ball state with its uncertainty (see ``ttkin::ball::estimate``)."""
+
+    state: NDArray[np.float64]  # (10,) at the last usable observation
+    covariance: NDArray[np.float64]  # (6, 6) of [p; v]
+    spin_std: float
+    spin_fitted: bool
+    sigma: float
+    used: int
+    outliers: int
+    nonfinite: int
+    bounce_time: float | None
+    segment: str
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def position(self) -> NDArray[np.float64]:
+        """Position (m, world) at ``state[0]``."""
+        return self.state[1:4]
+
+    @property
+    def velocity(self) -> NDArray[np.float64]:
+        """Velocity (m/s, world) at ``state[0]``."""
+        return self.state[4:7]
+
+    @property
+    def spin(self) -> NDArray[np.float64]:
+        """Spin (rad/s, world), the part perpendicular to the velocity."""
+        return self.state[7:10]
+
+
+def _model(model: BallModel | str) -> str:
+    return model.name if isinstance(model, BallModel) else BallModel(model).name
+
+
+def state(p: ArrayLike, v: ArrayLike, w: ArrayLike = (0.0, 0.0, 0.0), t: float = 0.0) -> NDArray[np.float64]:
+    """A ball state (10,) from position (m), velocity (m/s), spin (rad/s) and time (s)."""
+    return np.r_[
+        float(t), np.asarray(p, float).ravel(), np.asarray(v, float).ravel(), np.asarray(w, float).ravel()
+    ]
+
+
+def estimate(t: ArrayLike, p: ArrayLike, model: BallModel | str = "default") -> Estimate:
+    """Fits a ball state to observed positions ``p`` (N, 3) at times ``t`` (N,).
+
+    Robust to outliers (Huber weights, rejection beyond 6σ), NaN rows (dropped and counted) and a
+    bounce inside the window. Too few observations raise ``TtmanipError``.
+    """
+    d = _t.ball_estimate(t, p, _model(model))
+    return Estimate(**d)
+
+
+def predict(state: ArrayLike, times: ArrayLike, model: BallModel | str = "default", events: bool = False):
+    """Positions (len(times), 3) of the ball from ``state`` at ``times`` (s, non-decreasing), through
+    bounces; NaN after the net or the floor. With ``events=True`` also the list of events."""
+    d = _t.ball_predict(state, times, _model(model))
+    return (d["positions"], d["events"]) if events else d["positions"]
+
+
+def predict_batch(
+    states: ArrayLike, times: ArrayLike, model: BallModel | str = "default"
+) -> NDArray[np.float64]:
+    """Positions (N, K, 3) of N balls ``states`` (N, 10) at ``times`` (K,), in parallel."""
+    return _t.ball_predict_batch(states, times, _model(model))
+
+
+def crossing(
+    state: ArrayLike,
+    x: float | None = None,
+    *,
+    point: ArrayLike | None = None,
+    normal: ArrayLike | None = None,
+    t_max: float = 2.0,
+    model: BallModel | str = "default",
+) -> dict:
+    """Where, when and how fast the ball crosses a hitting plane.
+
+    ``x``: the plane x = const (crossed toward the robot, −x); or a general plane through ``point``
+    with ``normal`` (crossed from the normal's side). Returns ``{"outcome": "crossed", "state",
+    "bounces"}``, or outcome ``"net"``/``"floor"`` (flight ended first) or ``"timeout"``.
+    """
+    if x is not None:
+        point, normal = (float(x), 0.0, 0.0), (1.0, 0.0, 0.0)
+    if point is None or normal is None:
+        raise _t.TtmanipError("crossing: give x or both point and normal")
+    return _t.ball_crossing(state, point, normal, t_max, _model(model))
+
+
+def plan_return(
+    state: ArrayLike, now: float, target: ArrayLike = (0.9, 0.0), model: BallModel | str = "default"
+):
+    """Plans gantry6's return of the ball ``state`` for a stroke starting at rest at time ``now`` (s).
+
+    Returns a dict with ``status`` ("ok", "no_bounce", "out_of_reach", "no_return", "infeasible")
+    and, when ok, ``hit`` (a ``ttmanip.Hit`` when the pipeline module provides it, else the dict
+    with ``pose`` (4×4, racket frame in the base frame), ``twist`` (6,), ``t_hit`` (s from now)),
+    ``q_hit``, ``qd_hit``, ``v_out``, ``normal``, ``racket_velocity``, ``margin``, ``landing``.
+    A target off the opponent's half raises ``TtmanipError``.
+    """
+    d = _t.ball_plan_return(state, float(now), target, _model(model))
+    if d["status"] == "ok":
+        from . import pipeline
+
+        hit_cls = getattr(pipeline, "Hit", None)
+        d["hit"] = (
+            hit_cls(d["pose"], d["twist"], d["t_hit"])
+            if hit_cls is not None
+            else {
+                "pose": d["pose"],
+                "twist": d["twist"],
+                "t": d["t_hit"],
+            }
+        )
+    return d

@@ -1,0 +1,117 @@
+"""ttmanip.ball: flight, estimation, prediction, crossing and hit planning (issue 13)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import ttmanip
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from ttmanip import ball
+
+G = 9.81
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    st.tuples(st.floats(-5, 5), st.floats(-5, 5), st.floats(-2, 5)),  # stays above the floor for 0.3 s
+    st.lists(st.floats(-300, 300), min_size=3, max_size=3),
+)
+def test_vacuum_flight_is_the_parabola(v, w):
+    s = ball.state([0.0, 3.0, 1.0], v, w)  # beside the table: no contact for 0.3 s
+    t = np.linspace(0.0, 0.3, 7)
+    p = ball.predict(s, t, model="vacuum")
+    exact = np.array([0.0, 3.0, 1.0]) + np.outer(t, v) + np.outer(0.5 * t**2, [0.0, 0.0, -G])
+    np.testing.assert_allclose(p, exact, atol=1e-9)
+
+
+def test_bounce_reverses_normal_speed_with_restitution():
+    s = ball.state([-0.5, 0.0, 0.3], [-2.0, 0.0, 0.0])
+    _, events = ball.predict(s, [1.0], events=True)
+    bounce = next(e for e in events if e["kind"] == "table")
+    vz_before, vz_after = bounce["before"][6], bounce["after"][6]
+    assert vz_after == pytest.approx(-0.93 * vz_before, rel=1e-12)
+    m, r = 0.0027, 0.02
+    energy = lambda x: 0.5 * m * x[4:7] @ x[4:7] + 0.5 * (2 / 3 * m * r * r) * x[7:10] @ x[7:10]  # noqa: E731
+    assert energy(bounce["after"]) < energy(bounce["before"])
+
+
+def _observations(state, n=41, noise=0.002, seed=0):
+    t = 0.02 + 0.005 * np.arange(n)
+    p = ball.predict(state, t) + noise * np.random.default_rng(seed).standard_normal((n, 3))
+    return t, p
+
+
+def test_estimate_recovers_velocity_within_stated_error():
+    # Stated: σ = 2 mm, 41 observations at 200 Hz, one 10 cm outlier → |Δv| < 0.15 m/s.
+    s = ball.state([1.6, 0.1, 0.3], [-5.0, -0.3, 1.2], [0.0, -120.0, 40.0])
+    t, p = _observations(s)
+    p[7] += 0.1
+    e = ball.estimate(t, p)
+    v_true = _velocity_at(s, t[-1])
+    assert np.linalg.norm(e.velocity - v_true) < 0.15
+    assert e.outliers >= 1 and e.state[0] == t[-1]
+    assert e.covariance.shape == (6, 6)
+
+
+def _velocity_at(s, t):
+    h = 1e-4
+    p = ball.predict(s, [t - h, t + h])
+    return (p[1] - p[0]) / (2 * h)
+
+
+def test_estimate_bad_input_is_a_clear_error():
+    s = ball.state([1.6, 0.0, 0.3], [-5.0, 0.0, 1.0])
+    t, p = _observations(s, n=12)
+    with pytest.raises(ttmanip.TtmanipError, match="too few"):
+        ball.estimate(t[:3], p[:3])
+    q = p.copy()
+    q[:9, 1] = np.nan
+    with pytest.raises(ttmanip.TtmanipError, match="too few"):
+        ball.estimate(t, q)
+    with pytest.raises(ttmanip.TtmanipError, match="p"):
+        ball.estimate(t, p[:, :2])
+    q = p.copy()
+    q[2, 0] = np.nan
+    assert ball.estimate(t, q).nonfinite == 1
+
+
+def test_predict_batch_matches_single_predictions():
+    states = np.array([ball.state([1.6, y, 0.3], [-5.0, 0.2 * y, 1.0]) for y in (-0.3, 0.0, 0.4)])
+    t = np.linspace(0.0, 0.8, 9)
+    batch = ball.predict_batch(states, t)
+    assert batch.shape == (3, 9, 3)
+    for k, s in enumerate(states):
+        np.testing.assert_array_equal(batch[k], ball.predict(s, t))
+
+
+def test_crossing_of_the_hitting_plane():
+    s = ball.state([1.6, 0.1, 0.3], [-6.0, -0.2, 1.5], [0.0, 40.0, 0.0])
+    c = ball.crossing(s, x=-1.6)
+    assert c["outcome"] == "crossed" and c["bounces"] == ["table"]
+    assert c["state"][1] == pytest.approx(-1.6, abs=1e-9)
+    assert c["state"][4] < 0
+    assert ball.crossing(ball.state([0.8, 0.0, 0.05], [-3.0, 0.0, 0.0]), x=-1.6)["outcome"] == "net"
+
+
+def test_plan_return_gives_a_reachable_hit_and_rejects_targets_off_the_table():
+    s = ball.state([1.6, 0.1, 0.3], [-6.0, -0.2, 1.5], [0.0, 40.0, 0.0])
+    plan = ball.plan_return(s, 0.2, (0.9, 0.0))
+    assert plan["status"] == "ok"
+    robot = ttmanip.robots.gantry6()
+    np.testing.assert_allclose(robot.fk(plan["q_hit"]), plan["pose"], atol=1e-9)
+    assert plan["landing"][0] == pytest.approx(0.9, abs=1e-3)
+    for target in [(2.0, 0.0), (-0.5, 0.0), (0.9, 1.0)]:
+        with pytest.raises(ttmanip.TtmanipError, match="target"):
+            ball.plan_return(s, 0.2, target)
+    net = ball.state([0.8, 0.0, 0.05], [-3.0, 0.0, 0.0])
+    assert ball.plan_return(net, 0.0)["status"] == "no_bounce"
+
+
+def test_bad_state_and_model_are_errors():
+    with pytest.raises(ttmanip.TtmanipError):
+        ball.predict([np.nan] * 10, [0.1])
+    with pytest.raises(ttmanip.TtmanipError):
+        ball.predict(np.zeros(9), [0.1])
+    with pytest.raises(ttmanip.TtmanipError, match="model"):
+        ball.BallModel("unknown")

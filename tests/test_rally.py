@@ -1,0 +1,50 @@
+"""ttmanip.rally and the ``ttmanip rally`` command (issue 13)."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+import ttmanip
+from ttmanip import cli
+
+KEYS = (
+    "balls",
+    "in_reach",
+    "returned",
+    "return_rate",
+    "racket_error_m_median",
+    "plan_time_us_median",
+    "landing_error_m_median",
+)
+
+
+def test_rally_summary_and_determinism():
+    a = ttmanip.rally(40, seed=3)
+    for k in KEYS:
+        assert k in a
+    assert a["balls"] == 40 and a["in_reach"] + a["out_of_reach"] == 40
+    assert 0.0 <= a["return_rate"] <= 1.0
+    assert a["returned"] <= a["in_reach"]
+    b = ttmanip.rally(40, seed=3)
+    assert a["returned"] == b["returned"] and a["statuses"] == b["statuses"]
+
+
+def test_rally_bad_arguments():
+    with pytest.raises(ttmanip.TtmanipError, match="n"):
+        ttmanip.rally(0)
+    with pytest.raises(ttmanip.TtmanipError, match="seed"):
+        ttmanip.rally(5, seed=-1)
+    with pytest.raises(ttmanip.TtmanipError, match="target"):
+        ttmanip.rally(5, target=(3.0, 0.0))
+
+
+def test_rally_cli_writes_summary_and_figures(tmp_path, capsys):
+    out = tmp_path / "rally"
+    assert cli.main(["rally", "--n", "30", "--seed", "1", "--out", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    for k in KEYS:
+        assert k in summary
+    for f in summary["figures"]:
+        assert (tmp_path / f).exists() or __import__("pathlib").Path(f).exists()
+    assert cli.main(["rally", "--n", "0", "--out", str(out)]) == 2
