@@ -12,12 +12,16 @@
 #![warn(missing_docs)]
 
 pub mod axis;
+pub mod bus;
+pub mod canopen;
 pub mod error;
 pub mod loops;
 pub mod motor;
+pub mod runtime;
 pub mod sim;
 pub mod stepper;
 pub mod tuning;
+pub mod vdrive;
 
 pub use axis::{Axis, AxisConfig, AxisState, Fault, Mode};
 pub use error::{Error, Result};
