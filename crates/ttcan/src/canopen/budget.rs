@@ -133,6 +133,6 @@ mod tests {
         let msg = e3.to_string();
         assert!(msg.contains("can1") && msg.contains("71.") && msg.contains("86."), "{msg}");
         let e4 = check_channel("can2", &traffic(4)).unwrap_err();
-        assert!((0.93..0.95).contains(&e4.nominal) && (1.14..1.15).contains(&e4.worst), "{e4:?}");
+        assert!((0.93..0.95).contains(&e4.nominal) && (1.13..1.15).contains(&e4.worst), "{e4:?}");
     }
 }
