@@ -4,3 +4,7 @@
 pub mod master;
 
 pub use master::{AxisSetpoint, ChannelMaster, LinkConfig, Phase, StopReason, WatchdogConfig};
+pub mod rt;
+pub mod stats;
+pub mod trajectory;
+pub mod config;
