@@ -8,3 +8,4 @@ pub mod rt;
 pub mod stats;
 pub mod trajectory;
 pub mod config;
+pub mod channel;
