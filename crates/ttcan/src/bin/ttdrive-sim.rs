@@ -62,7 +62,7 @@ fn parse_channel(s: &str) -> (String, Vec<u8>) {
 }
 
 fn parse_fail(s: &str) -> Injection {
-    let bad = || fail(format!("--fail {s}: expected KIND:INTERFACE:NODE@SECONDS"));
+    let bad = || -> ! { fail(format!("--fail {s}: expected KIND:INTERFACE:NODE@SECONDS")) };
     let (spec, at) = s.split_once('@').unwrap_or_else(|| bad());
     let mut parts = spec.split(':');
     let (Some(kind), Some(iface), Some(node), None) = (parts.next(), parts.next(), parts.next(), parts.next()) else { bad() };
