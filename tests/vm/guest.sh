@@ -1,0 +1,103 @@
+#!/bin/sh
+# /init of the CAN test VM (scripts/vm/run.sh): loads the CAN modules, creates vcan0..3 and sets
+# the emulated Kvaser pair can0/can1 to 1 Mbit/s, runs the scenarios, prints one
+# "VMTEST <name> PASS|FAIL" line each, the statistics, and "VMTEST-EXIT <failures>", powers off.
+export PATH=/bin:/sbin:/usr/bin
+mount -t proc proc /proc
+mount -t sysfs sys /sys
+mount -t devtmpfs dev /dev
+mount -t tmpfs tmp /tmp
+TRACK_BOUND=0.02   # rad or m: largest |q − q_ref(2 cycles earlier)| accepted during the motion
+STOP_BOUND=60      # cycles from the fault decision to every axis stopped
+fails=0
+pass() { echo "VMTEST $1 PASS $2"; }
+failed() { echo "VMTEST $1 FAIL $2"; fails=$((fails + 1)); }
+val() { grep "^$1=" "$2" | cut -d= -f2-; }
+lt() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a + 0 < b + 0) }'; }
+
+for m in can can_raw can_dev vcan sja1000 kvaser_pci; do
+    modprobe "$m" || failed "modprobe-$m" ""
+done
+for i in 0 1 2 3; do
+    ip link add dev "vcan$i" type vcan && ip link set "vcan$i" txqueuelen 1000 up || failed "vcan$i" ""
+done
+for c in can0 can1; do
+    ip link set "$c" type can bitrate 1000000 && ip link set "$c" txqueuelen 1000 up || failed "$c-up" ""
+done
+ip -details link show can0 | grep -q "bitrate 1000000" && pass "kvaser-bitrate" "can0 1 Mbit/s" || failed "kvaser-bitrate" ""
+
+# run NAME EXPECTED_RC DRIVE_ARGS -- CTL_ARGS: runs drives and controller, checks the exit status
+run() {
+    name=$1; want=$2; shift 2
+    dargs=""
+    while [ "$1" != "--" ]; do dargs="$dargs $1"; shift; done
+    shift
+    ttdrive-sim $dargs --idle-exit 1.5 > "/tmp/$name.drives" 2>&1 &
+    dpid=$!
+    sleep 0.3
+    ttctl "$@" --stats "/tmp/$name.stats" --telemetry "/tmp/$name.csv" > "/tmp/$name.ctl" 2>&1
+    rc=$?
+    wait $dpid
+    sed "s/^/[$name] /" "/tmp/$name.ctl" "/tmp/$name.drives"
+    if [ "$rc" != "$want" ]; then
+        failed "$name" "exit status $rc, expected $want"
+        return 1
+    fi
+    return 0
+}
+
+VCAN_DRIVES="--channel vcan0:1,2 --channel vcan1:1,2 --channel vcan2:1,2 --channel vcan3:1,2"
+
+# 1. vcan: 8 axes (4 channels × 2) through the gantry6 stroke
+if run vcan-stroke 0 $VCAN_DRIVES -- --config /ttmanip/vcan.toml --trajectory /ttmanip/stroke.csv; then
+    s=/tmp/vcan-stroke.stats
+    e=$(val max_tracking_error $s); m=$(val missed_feedback $s); b=$(val bad_frames $s)
+    if [ "$(val completed $s)" = 1 ] && lt "$e" "$TRACK_BOUND" && [ "$m" = 0 ] && [ "$b" = 0 ]; then
+        pass vcan-stroke "8 axes, max tracking error $e (< $TRACK_BOUND), missed feedback $m, bad frames $b"
+    else
+        failed vcan-stroke "completed $(val completed $s), tracking error $e, missed feedback $m, bad frames $b"
+    fi
+    echo "VMSTATS vcan-stroke $(tr '\n' ' ' < $s)"
+fi
+
+# 2. vcan: a drive sends an EMCY mid-stroke → controlled stop of every axis
+if run vcan-emcy 2 $VCAN_DRIVES --fail emcy:vcan1:1@1.6 -- --config /ttmanip/vcan.toml --trajectory /ttmanip/stroke.csv; then
+    s=/tmp/vcan-emcy.stats; c=$(val stop_cycles $s)
+    if val fault $s | grep -q "EMCY" && lt "$c" "$STOP_BOUND"; then pass vcan-emcy "$(val fault $s), all axes stopped after $c cycles"
+    else failed vcan-emcy "fault $(val fault $s), stop cycles $c"; fi
+fi
+
+# 3. vcan: a drive leaves Operation Enabled
+if run vcan-leave 2 $VCAN_DRIVES --fail leave-enabled:vcan2:2@1.6 -- --config /ttmanip/vcan.toml --trajectory /ttmanip/stroke.csv; then
+    s=/tmp/vcan-leave.stats; c=$(val stop_cycles $s)
+    if val fault $s | grep -q "left Operation Enabled" && lt "$c" "$STOP_BOUND"; then pass vcan-leave "$(val fault $s), stopped after $c cycles"
+    else failed vcan-leave "fault $(val fault $s), stop cycles $c"; fi
+fi
+
+# 4. Kvaser pair at 1 Mbit/s: the stroke on one channel, 2 axes
+if run kvaser-stroke 0 --channel can1:1,2 -- --config /ttmanip/kvaser.toml --trajectory /ttmanip/stroke.csv; then
+    s=/tmp/kvaser-stroke.stats
+    e=$(val max_tracking_error $s); m=$(val missed_feedback $s); b=$(val bad_frames $s)
+    if [ "$(val completed $s)" = 1 ] && lt "$e" "$TRACK_BOUND" && [ "$b" = 0 ]; then
+        pass kvaser-stroke "max tracking error $e (< $TRACK_BOUND), missed feedback $m, bad frames $b"
+    else
+        failed kvaser-stroke "completed $(val completed $s), tracking error $e, missed $m, bad $b"
+    fi
+    echo "VMSTATS kvaser-stroke $(tr '\n' ' ' < $s)"
+fi
+
+# 5. Kvaser pair: a drive is unplugged mid-stroke (stops answering) → controlled stop
+if run kvaser-unplugged 2 --channel can1:1,2 --fail silent:can1:2@1.6 -- --config /ttmanip/kvaser.toml --trajectory /ttmanip/stroke.csv; then
+    s=/tmp/kvaser-unplugged.stats; c=$(val stop_cycles $s)
+    if val fault $s | grep -q "node 2: feedback" && lt "$c" "$STOP_BOUND"; then pass kvaser-unplugged "$(val fault $s), every answering axis stopped after $c cycles"
+    else failed kvaser-unplugged "fault $(val fault $s), stop cycles $c"; fi
+fi
+
+# 6. bad configuration: over the bus budget, and a misspelt key
+printf '[[channel]]\ninterface = "can0"\n[[channel.axis]]\nnode = 1\n[[channel.axis]]\nnode = 2\n[[channel.axis]]\nnode = 3\n' > /tmp/over.toml
+msg=$(ttctl --config /tmp/over.toml --check 2>&1); rc=$?
+echo "[budget] $msg"
+if [ $rc = 1 ] && echo "$msg" | grep -q "can0: 3 axes"; then pass budget-refused "rc 1"; else failed budget-refused "rc $rc"; fi
+
+echo "VMTEST-EXIT $fails"
+poweroff -f
