@@ -62,7 +62,14 @@ pub struct VirtualDrive {
 impl VirtualDrive {
     /// A drive with node id `node`, the drive layer configured by `config` on a plant of
     /// `plant_model`, cycle period `period` s, scaling `units`. Boot-up message into `out`.
-    pub fn new(node: u8, plant_model: &MotorModel, config: &AxisConfig, units: Units, period: f64, out: &mut Frames) -> Result<Self> {
+    pub fn new(
+        node: u8,
+        plant_model: &MotorModel,
+        config: &AxisConfig,
+        units: Units,
+        period: f64,
+        out: &mut Frames,
+    ) -> Result<Self> {
         let sim = Simulation::new(plant_model, config)?;
         let ticks = (period * config.rates.current_hz()).round().max(1.0) as u32;
         let node = DriveNode::new(node, out).map_err(|e| crate::Error::Stepper(e.to_string()))?;
@@ -156,8 +163,15 @@ impl VirtualDrive {
 
     fn period_step(&mut self, out: &mut Frames) {
         let q = self.sim.axis.position();
-        let extra = if self.node.cia402.state() == DriveState::OperationEnabled { SW_FOLLOWS_COMMAND | SW_TARGET_REACHED } else { 0 };
-        let position = self.units.position_to_increments(q).unwrap_or(if q > 0.0 { i32::MAX } else { i32::MIN });
+        let extra = if self.node.cia402.state() == DriveState::OperationEnabled {
+            SW_FOLLOWS_COMMAND | SW_TARGET_REACHED
+        } else {
+            0
+        };
+        let position = self
+            .units
+            .position_to_increments(q)
+            .unwrap_or(if q > 0.0 { i32::MAX } else { i32::MIN });
         let current = self.units.current_to_permille(self.sim.plant.current()).unwrap_or(0);
         let max_step = (self.sim.axis.config().max_speed * self.period * 2.0 * self.units.increments_per_unit) as i64;
         let mut local = Frames::new();
@@ -203,7 +217,9 @@ impl VirtualDrive {
                 self.prev_target = Some(q);
                 self.sim.apply(Setpoint::Position(q, qd, tau / joint_inertia));
             }
-            OpMode::Csv => self.sim.apply(Setpoint::Velocity(self.units.increments_to_velocity(target))),
+            OpMode::Csv => self
+                .sim
+                .apply(Setpoint::Velocity(self.units.increments_to_velocity(target))),
             OpMode::Cst => {
                 let t = self.units.permille_to_torque(target as i16) + tau;
                 let amps = t / (m.motor.torque_constant * m.gearbox.ratio * m.gearbox.efficiency);
@@ -219,15 +235,22 @@ impl VirtualDrive {
         if matches!(state, DriveState::QuickStopActive | DriveState::FaultReactionActive) {
             let a = self.sim.axis.config().quick_stop_deceleration;
             let dv = a * self.period;
-            self.stop_speed = if self.stop_speed.abs() <= dv { 0.0 } else { self.stop_speed - dv * self.stop_speed.signum() };
+            self.stop_speed = if self.stop_speed.abs() <= dv {
+                0.0
+            } else {
+                self.stop_speed - dv * self.stop_speed.signum()
+            };
             self.stop_reference += self.stop_speed * self.period;
             if self.sim.axis.state() == AxisState::Enabled {
                 if self.sim.axis.mode() != Mode::Position {
                     self.sim.axis.set_mode(Mode::Position);
                 }
-                self.sim.apply(Setpoint::Position(self.stop_reference, self.stop_speed, 0.0));
+                self.sim
+                    .apply(Setpoint::Position(self.stop_reference, self.stop_speed, 0.0));
             }
-            if self.stop_speed == 0.0 && self.sim.axis.speed().abs() < 0.05 || !matches!(self.sim.axis.state(), AxisState::Enabled) {
+            if self.stop_speed == 0.0 && self.sim.axis.speed().abs() < 0.05
+                || !matches!(self.sim.axis.state(), AxisState::Enabled)
+            {
                 self.sim.axis.disable();
                 self.node.cia402.stop_complete();
             }
@@ -238,7 +261,9 @@ impl VirtualDrive {
             self.sim.step();
         }
         if let AxisState::Stopping(f) | AxisState::Faulted(f) = self.sim.axis.state() {
-            if self.node.cia402.state() != DriveState::Fault && self.node.cia402.state() != DriveState::FaultReactionActive {
+            if self.node.cia402.state() != DriveState::Fault
+                && self.node.cia402.state() != DriveState::FaultReactionActive
+            {
                 let code = match f {
                     Fault::OverCurrent => emcy::OVER_CURRENT,
                     Fault::FollowingError => emcy::FOLLOWING_ERROR,
@@ -261,7 +286,12 @@ impl VirtualDrive {
         match self.failure {
             Some(Failure::Malformed) if is_tpdo => Frame::new(f.id(), &f.data()[..3]).unwrap_or(f),
             Some(Failure::OutOfRange) if is_tpdo => match Tpdo::decode(&f) {
-                Ok((n, t)) => Tpdo { statusword: 0x0001, ..t }.encode(n).unwrap_or(f),
+                Ok((n, t)) => Tpdo {
+                    statusword: 0x0001,
+                    ..t
+                }
+                .encode(n)
+                .unwrap_or(f),
                 Err(_) => f,
             },
             _ => f,

@@ -11,6 +11,9 @@ use ttcan::runtime::master::{AxisSetpoint, ChannelMaster, LinkConfig, Phase, Sto
 use ttcan::vdrive::{Failure, VirtualDrive};
 use ttcan::{AxisConfig, MotorModel};
 
+/// A fault injected at a cycle of the motion.
+type Injection<'a> = Option<(u64, &'a dyn Fn(&mut Rig))>;
+
 struct Rig {
     bus: MemoryBus,
     master_port: MemoryPort,
@@ -23,7 +26,12 @@ fn rig() -> Rig {
     let bus = MemoryBus::new();
     let master_port = bus.port();
     let links: Vec<LinkConfig> = (1..=2)
-        .map(|n| LinkConfig { node: n, units: Units::default(), following_error_limit: 0.05, max_current: 10.0 })
+        .map(|n| LinkConfig {
+            node: n,
+            units: Units::default(),
+            following_error_limit: 0.05,
+            max_current: 10.0,
+        })
         .collect();
     let master = ChannelMaster::new(&links, OpMode::Csp, WatchdogConfig::default()).unwrap();
     let model = MotorModel::maxon_re25_gp26();
@@ -39,7 +47,13 @@ fn rig() -> Rig {
             (port, d)
         })
         .collect();
-    Rig { bus, master_port, master, drives, cycle: 0 }
+    Rig {
+        bus,
+        master_port,
+        master,
+        drives,
+        cycle: 0,
+    }
 }
 
 impl Rig {
@@ -48,7 +62,14 @@ impl Rig {
             self.master.on_event(&ev);
         }
         let mut out = Frames::new();
-        let sp = [AxisSetpoint { q, qd: 0.0, tau: 0.0 }, AxisSetpoint { q: -q, qd: 0.0, tau: 0.0 }];
+        let sp = [
+            AxisSetpoint { q, qd: 0.0, tau: 0.0 },
+            AxisSetpoint {
+                q: -q,
+                qd: 0.0,
+                tau: 0.0,
+            },
+        ];
         self.master.cycle(&sp, &mut out);
         for f in out.as_slice() {
             let _ = self.master_port.send(f);
@@ -84,7 +105,7 @@ impl Rig {
     }
 
     /// Runs `cycles` of motion from the start of Run; returns the largest tracking error seen.
-    fn run(&mut self, cycles: u64, fault_at: Option<(u64, &dyn Fn(&mut Rig))>) -> f64 {
+    fn run(&mut self, cycles: u64, fault_at: Injection<'_>) -> f64 {
         let t0 = self.cycle;
         let mut worst: f64 = 0.0;
         for k in 0..cycles {
@@ -123,7 +144,12 @@ fn fault_case(inject: &dyn Fn(&mut Rig), expected: fn(StopReason) -> bool, withi
 }
 
 /// `unplugged`: a drive cut off the bus (its own state is not observable).
-fn fault_case_except(inject: &dyn Fn(&mut Rig), expected: fn(StopReason) -> bool, within: u32, unplugged: Option<usize>) {
+fn fault_case_except(
+    inject: &dyn Fn(&mut Rig),
+    expected: fn(StopReason) -> bool,
+    within: u32,
+    unplugged: Option<usize>,
+) {
     let mut r = rig();
     r.enable();
     r.run(300, Some((200, inject)));
@@ -131,14 +157,21 @@ fn fault_case_except(inject: &dyn Fn(&mut Rig), expected: fn(StopReason) -> bool
     assert!(expected(reason), "reason {reason:?}");
     assert_eq!(r.master.phase(), Phase::Stopped, "stopped, reason {reason:?}");
     let after = r.master.stopped_after().unwrap();
-    assert!(after <= within, "stopped after {after} cycles (> {within}) for {reason:?}");
+    assert!(
+        after <= within,
+        "stopped after {after} cycles (> {within}) for {reason:?}"
+    );
     // every answering drive has its power stage off; nothing moves afterwards
     let p: Vec<f64> = r.drives.iter().map(|d| d.1.position()).collect();
     for _ in 0..100 {
         r.step(0.0);
     }
     for (k, d) in r.drives.iter().enumerate().filter(|(k, _)| Some(*k) != unplugged) {
-        assert!(!d.1.node().cia402.state().torque_on(), "drive {k} state {:?}", d.1.node().cia402.state());
+        assert!(
+            !d.1.node().cia402.state().torque_on(),
+            "drive {k} state {:?}",
+            d.1.node().cia402.state()
+        );
         assert!((d.1.position() - p[k]).abs() < 1e-3, "drive {k} moved after the stop");
     }
 }
@@ -200,7 +233,12 @@ fn malformed_and_out_of_range_feedback_stop_every_axis() {
 #[test]
 fn corrupted_frames_on_the_bus_stop_every_axis() {
     fault_case(
-        &|r| r.bus.set_faults(Faults { corrupt_ids: vec![0x181], ..Faults::default() }),
+        &|r| {
+            r.bus.set_faults(Faults {
+                corrupt_ids: vec![0x181],
+                ..Faults::default()
+            })
+        },
         |s| matches!(s, StopReason::BadFrame(1)),
         400,
     );
@@ -211,18 +249,28 @@ fn stuck_sync_stops_the_drives_and_the_controller() {
     let mut r = rig();
     r.enable();
     r.run(100, None);
-    r.bus.set_faults(Faults { drop_ids: vec![0x080], ..Faults::default() });
+    r.bus.set_faults(Faults {
+        drop_ids: vec![0x080],
+        ..Faults::default()
+    });
     for _ in 0..100 {
         r.step(r.master.hold_position(0));
     }
-    assert!(matches!(r.master.stop_reason(), Some(StopReason::MissingFeedback(_))), "{:?}", r.master.stop_reason());
+    assert!(
+        matches!(r.master.stop_reason(), Some(StopReason::MissingFeedback(_))),
+        "{:?}",
+        r.master.stop_reason()
+    );
     for _ in 0..500 {
         r.step(0.0);
     }
     for (port, d) in &r.drives {
         let _ = port;
         let s = d.node().cia402.state();
-        assert!(matches!(s, DriveState::Fault | DriveState::SwitchOnDisabled), "drive-side SYNC watchdog: {s:?}");
+        assert!(
+            matches!(s, DriveState::Fault | DriveState::SwitchOnDisabled),
+            "drive-side SYNC watchdog: {s:?}"
+        );
     }
 }
 
@@ -231,7 +279,10 @@ fn bus_off_stops_the_channel() {
     let mut r = rig();
     r.enable();
     r.run(50, None);
-    r.bus.set_faults(Faults { bus_off: true, ..Faults::default() });
+    r.bus.set_faults(Faults {
+        bus_off: true,
+        ..Faults::default()
+    });
     r.step(0.0);
     r.step(0.0);
     assert_eq!(r.master.stop_reason(), Some(StopReason::BusOff));
@@ -241,7 +292,15 @@ fn bus_off_stops_the_channel() {
 fn delayed_feedback_is_not_used_as_fresh() {
     let mut r = rig();
     r.enable();
-    r.bus.set_faults(Faults { delay_ids: vec![0x182], delay_frames: 40, ..Faults::default() });
+    r.bus.set_faults(Faults {
+        delay_ids: vec![0x182],
+        delay_frames: 40,
+        ..Faults::default()
+    });
     r.run(20, None);
-    assert!(matches!(r.master.stop_reason(), Some(StopReason::MissingFeedback(2))), "{:?}", r.master.stop_reason());
+    assert!(
+        matches!(r.master.stop_reason(), Some(StopReason::MissingFeedback(2))),
+        "{:?}",
+        r.master.stop_reason()
+    );
 }

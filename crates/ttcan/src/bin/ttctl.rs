@@ -84,14 +84,24 @@ fn main() {
             Trajectory::parse(&text).unwrap_or_else(|e| fail(format!("{}: {e}", p.display())))
         }
         None if args.demo => {
-            let n = cfg.channel.iter().flat_map(|c| c.axis.iter()).filter_map(|a| a.joint).max().map_or(1, |j| j + 1);
+            let n = cfg
+                .channel
+                .iter()
+                .flat_map(|c| c.axis.iter())
+                .filter_map(|a| a.joint)
+                .max()
+                .map_or(1, |j| j + 1);
             Trajectory::demo(n, args.amplitude, 2.0)
         }
         None => fail("give --trajectory FILE or --demo"),
     };
     if let Some(n) = cfg.joints {
         if traj.joints() != n {
-            fail(format!("trajectory has {} joints, the configuration's robot {} has {n}", traj.joints(), cfg.robot.as_deref().unwrap_or("")));
+            fail(format!(
+                "trajectory has {} joints, the configuration's robot {} has {n}",
+                traj.joints(),
+                cfg.robot.as_deref().unwrap_or("")
+            ));
         }
     }
     let interrupt = Arc::new(AtomicBool::new(false));
@@ -105,7 +115,10 @@ fn main() {
     }
     let mut buses = Vec::new();
     for ch in &cfg.channel {
-        buses.push(SocketCanBus::open(&ch.interface).unwrap_or_else(|e| fail(format!("cannot open CAN interface {}: {e}", ch.interface))));
+        buses.push(
+            SocketCanBus::open(&ch.interface)
+                .unwrap_or_else(|e| fail(format!("cannot open CAN interface {}: {e}", ch.interface))),
+        );
     }
     let period_ns = (1e9 / cfg.cycle_hz).round() as u64;
     let shared = Shared::new(cfg.channel.len(), interrupt);
@@ -118,12 +131,19 @@ fn main() {
             .zip(buses.iter_mut())
             .map(|(ch, bus)| {
                 let links: Vec<_> = ch.axis.iter().map(|a| a.link()).collect();
-                let master = ChannelMaster::new(&links, cfg.mode, cfg.watchdog).unwrap_or_else(|e| fail(format!("{}: {e}", ch.interface)));
+                let master = ChannelMaster::new(&links, cfg.mode, cfg.watchdog)
+                    .unwrap_or_else(|e| fail(format!("{}: {e}", ch.interface)));
                 let mut joints = [None; MAX_AXES_PER_CHANNEL];
                 for (k, a) in ch.axis.iter().enumerate() {
                     joints[k] = a.joint;
                 }
-                let plan = ChannelPlan { joints, approach_s: cfg.approach_s, period_ns, t0_ns: t0, max_cycles };
+                let plan = ChannelPlan {
+                    joints,
+                    approach_s: cfg.approach_s,
+                    period_ns,
+                    t0_ns: t0,
+                    max_cycles,
+                };
                 let (traj, shared, prio) = (&traj, &shared, cfg.priority);
                 s.spawn(move || {
                     if let Err(w) = rt::make_thread_realtime(prio) {
@@ -133,7 +153,10 @@ fn main() {
                 })
             })
             .collect();
-        handles.into_iter().map(|h| h.join().unwrap_or_else(|_| fail("a channel thread panicked"))).collect()
+        handles
+            .into_iter()
+            .map(|h| h.join().unwrap_or_else(|_| fail("a channel thread panicked")))
+            .collect()
     });
     report(&args, &reports);
 }
@@ -159,7 +182,17 @@ fn report(args: &Args, reports: &[ChannelReport]) {
         println!(
             "ttctl: {}: {} cycles, stop: {reason} (all axes stopped after {} cycles), max tracking error {:.2e}, \
              latency p50 {:.0} µs p99 {:.0} µs max {:.0} µs, deadline misses {}, skipped {}, missed feedback {}, rx {}",
-            r.name, s.cycles, r.stopped_after.unwrap_or(0), e, s.p50_us, s.p99_us, s.max_us, s.deadline_misses, r.skipped, r.counters.missed_feedback, r.counters.rx
+            r.name,
+            s.cycles,
+            r.stopped_after.unwrap_or(0),
+            e,
+            s.p50_us,
+            s.p99_us,
+            s.max_us,
+            s.deadline_misses,
+            r.skipped,
+            r.counters.missed_feedback,
+            r.counters.rx
         );
         if let Some(x) = r.stop_reason {
             if !matches!(x, StopReason::Requested | StopReason::OtherChannel) && fault.is_none() {
@@ -172,7 +205,13 @@ fn report(args: &Args, reports: &[ChannelReport]) {
         println!("ttctl: controlled stop of every axis: {ch}: {x}");
     }
     lines.push(format!("completed={}", completed as u8));
-    lines.push(format!("fault={}", fault.as_ref().map(|(c, x)| format!("{c}: {x}")).unwrap_or_else(|| "none".into())));
+    lines.push(format!(
+        "fault={}",
+        fault
+            .as_ref()
+            .map(|(c, x)| format!("{c}: {x}"))
+            .unwrap_or_else(|| "none".into())
+    ));
     lines.push(format!("max_tracking_error={worst_err:.3e}"));
     lines.push(format!("stop_cycles={stop_cycles}"));
     lines.push(format!("missed_feedback={missed}"));
@@ -209,7 +248,11 @@ fn write_telemetry(p: &std::path::Path, reports: &[ChannelReport]) -> std::io::R
     writeln!(w)?;
     for r in reports {
         for row in &r.telemetry {
-            write!(w, "{},{},{:.4},{},{:.1}", r.name, row.cycle, row.t, row.phase, row.latency_us)?;
+            write!(
+                w,
+                "{},{},{:.4},{},{:.1}",
+                r.name, row.cycle, row.t, row.phase, row.latency_us
+            )?;
             for a in 0..MAX_AXES_PER_CHANNEL {
                 write!(w, ",{:.6},{:.6},{:.4}", row.q_ref[a], row.q[a], row.current[a])?;
             }

@@ -53,10 +53,18 @@ fn fail(msg: impl std::fmt::Display) -> ! {
 }
 
 fn parse_channel(s: &str) -> (String, Vec<u8>) {
-    let (iface, nodes) = s.split_once(':').unwrap_or_else(|| fail(format!("--channel {s}: expected INTERFACE:NODE[,NODE...]")));
+    let (iface, nodes) = s
+        .split_once(':')
+        .unwrap_or_else(|| fail(format!("--channel {s}: expected INTERFACE:NODE[,NODE...]")));
     let nodes: Vec<u8> = nodes
         .split(',')
-        .map(|n| n.trim().parse::<u8>().ok().filter(|n| (1..=127).contains(n)).unwrap_or_else(|| fail(format!("--channel {s}: node {n:?} is not 1..=127"))))
+        .map(|n| {
+            n.trim()
+                .parse::<u8>()
+                .ok()
+                .filter(|n| (1..=127).contains(n))
+                .unwrap_or_else(|| fail(format!("--channel {s}: node {n:?} is not 1..=127")))
+        })
         .collect();
     (iface.to_string(), nodes)
 }
@@ -65,18 +73,31 @@ fn parse_fail(s: &str) -> Injection {
     let bad = || -> ! { fail(format!("--fail {s}: expected KIND:INTERFACE:NODE@SECONDS")) };
     let (spec, at) = s.split_once('@').unwrap_or_else(|| bad());
     let mut parts = spec.split(':');
-    let (Some(kind), Some(iface), Some(node), None) = (parts.next(), parts.next(), parts.next(), parts.next()) else { bad() };
+    let (Some(kind), Some(iface), Some(node), None) = (parts.next(), parts.next(), parts.next(), parts.next()) else {
+        bad()
+    };
     let failure = match kind {
         "silent" => Failure::Silent,
         "emcy" => Failure::Emcy,
         "leave-enabled" => Failure::LeaveEnabled,
         "malformed" => Failure::Malformed,
         "out-of-range" => Failure::OutOfRange,
-        k => fail(format!("--fail {s}: unknown kind {k:?} (silent, emcy, leave-enabled, malformed, out-of-range)")),
+        k => fail(format!(
+            "--fail {s}: unknown kind {k:?} (silent, emcy, leave-enabled, malformed, out-of-range)"
+        )),
     };
     let node = node.parse::<u8>().unwrap_or_else(|_| bad());
-    let at = at.parse::<f64>().ok().filter(|x| x.is_finite() && *x >= 0.0).unwrap_or_else(|| bad());
-    Injection { interface: iface.to_string(), node, at, failure }
+    let at = at
+        .parse::<f64>()
+        .ok()
+        .filter(|x| x.is_finite() && *x >= 0.0)
+        .unwrap_or_else(|| bad());
+    Injection {
+        interface: iface.to_string(),
+        node,
+        at,
+        failure,
+    }
 }
 
 fn main() {
@@ -91,9 +112,15 @@ fn main() {
     if !(args.period.is_finite() && args.period > 0.0) {
         fail(format!("--period {}: must be > 0", args.period));
     }
-    let units = Units { increments_per_unit: args.increments_per_unit, ..Units::default() };
+    let units = Units {
+        increments_per_unit: args.increments_per_unit,
+        ..Units::default()
+    };
     if units.validate().is_err() {
-        fail(format!("--increments-per-unit {}: must be finite and > 0", args.increments_per_unit));
+        fail(format!(
+            "--increments-per-unit {}: must be finite and > 0",
+            args.increments_per_unit
+        ));
     }
     let model = MotorModel::maxon_re25_gp26();
     let config = AxisConfig::new(model);
@@ -106,7 +133,15 @@ fn main() {
     });
 }
 
-fn run(iface: &str, nodes: &[u8], mut inj: Vec<&Injection>, model: &MotorModel, config: &AxisConfig, units: Units, args: &Args) {
+fn run(
+    iface: &str,
+    nodes: &[u8],
+    mut inj: Vec<&Injection>,
+    model: &MotorModel,
+    config: &AxisConfig,
+    units: Units,
+    args: &Args,
+) {
     let mut bus = SocketCanBus::open(iface).unwrap_or_else(|e| fail(format!("cannot open CAN interface {iface}: {e}")));
     let mut out = Frames::new();
     let mut drives: Vec<VirtualDrive> = nodes
@@ -151,7 +186,10 @@ fn run(iface: &str, nodes: &[u8], mut inj: Vec<&Injection>, model: &MotorModel, 
             inj.retain(|i| {
                 if t >= i.at {
                     if let Some(d) = drives.iter_mut().find(|d| d.node().node() == i.node) {
-                        eprintln!("ttdrive-sim: {iface}: node {} fails: {:?} at {t:.3} s", i.node, i.failure);
+                        eprintln!(
+                            "ttdrive-sim: {iface}: node {} fails: {:?} at {t:.3} s",
+                            i.node, i.failure
+                        );
                         d.inject(i.failure, &mut out);
                     }
                     false

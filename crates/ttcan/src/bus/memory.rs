@@ -70,7 +70,10 @@ impl MemoryBus {
         let mut g = lock(&self.inner);
         g.queues.push(VecDeque::with_capacity(256));
         g.bus_off_reported.push(false);
-        MemoryPort { inner: self.inner.clone(), index: g.queues.len() - 1 }
+        MemoryPort {
+            inner: self.inner.clone(),
+            index: g.queues.len() - 1,
+        }
     }
 
     /// Replaces the fault configuration.
@@ -161,20 +164,33 @@ mod tests {
         a.send(&f).unwrap();
         assert!(a.poll().unwrap().is_none());
         assert!(matches!(b.poll().unwrap(), Some(BusEvent::Frame { frame, .. }) if frame == f));
-        bus.set_faults(Faults { corrupt_ids: vec![0x181], ..Faults::default() });
+        bus.set_faults(Faults {
+            corrupt_ids: vec![0x181],
+            ..Faults::default()
+        });
         a.send(&f).unwrap();
         assert!(matches!(b.poll().unwrap(), Some(BusEvent::Frame { frame, .. }) if frame.len() == 3));
-        bus.set_faults(Faults { drop_ids: vec![0x181], ..Faults::default() });
+        bus.set_faults(Faults {
+            drop_ids: vec![0x181],
+            ..Faults::default()
+        });
         a.send(&f).unwrap();
         assert!(b.poll().unwrap().is_none());
-        bus.set_faults(Faults { delay_ids: vec![0x181], delay_frames: 1, ..Faults::default() });
+        bus.set_faults(Faults {
+            delay_ids: vec![0x181],
+            delay_frames: 1,
+            ..Faults::default()
+        });
         a.send(&f).unwrap();
         let g = Frame::new(0x80, &[]).unwrap();
         a.send(&g).unwrap();
         assert!(matches!(b.poll().unwrap(), Some(BusEvent::Frame { frame, .. }) if frame == g));
         a.send(&g).unwrap();
         assert!(matches!(b.poll().unwrap(), Some(BusEvent::Frame { frame, .. }) if frame == f));
-        bus.set_faults(Faults { bus_off: true, ..Faults::default() });
+        bus.set_faults(Faults {
+            bus_off: true,
+            ..Faults::default()
+        });
         assert_eq!(a.send(&f), Err(BusError::Down));
         assert_eq!(b.poll().unwrap(), Some(BusEvent::Fault(BusFault::BusOff)));
     }

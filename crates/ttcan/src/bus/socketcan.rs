@@ -18,14 +18,16 @@ pub struct SocketCanBus {
 
 impl std::fmt::Debug for SocketCanBus {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("SocketCanBus").field("timestamps", &self.timestamps).finish()
+        f.debug_struct("SocketCanBus")
+            .field("timestamps", &self.timestamps)
+            .finish()
     }
 }
 
 fn io_error(e: &io::Error) -> BusError {
     match e.raw_os_error() {
-        Some(libc_enobufs) if libc_enobufs == 105 => BusError::Full, // ENOBUFS
-        Some(100) | Some(19) | Some(6) => BusError::Down,            // ENETDOWN, ENODEV, ENXIO
+        Some(105) => BusError::Full,                      // ENOBUFS
+        Some(100) | Some(19) | Some(6) => BusError::Down, // ENETDOWN, ENODEV, ENXIO
         _ if e.kind() == io::ErrorKind::WouldBlock => BusError::Full,
         _ => BusError::Io(e.kind()),
     }
@@ -76,7 +78,10 @@ impl CanBus for SocketCanBus {
     fn poll(&mut self) -> Result<Option<BusEvent>, BusError> {
         let r = if self.timestamps {
             self.socket.read_frame_with_timestamp().map(|(f, t)| {
-                (f, t.duration_since(UNIX_EPOCH).map(|d| d.as_nanos() as u64).unwrap_or(0))
+                (
+                    f,
+                    t.duration_since(UNIX_EPOCH).map(|d| d.as_nanos() as u64).unwrap_or(0),
+                )
             })
         } else {
             self.socket.read_frame().map(|f| (f, 0))
@@ -87,7 +92,10 @@ impl CanBus for SocketCanBus {
                     return Ok(None); // 29-bit identifiers are not ours
                 }
                 match Frame::new(d.raw_id() as u16, d.data()) {
-                    Ok(frame) => Ok(Some(BusEvent::Frame { frame, timestamp_ns: ts })),
+                    Ok(frame) => Ok(Some(BusEvent::Frame {
+                        frame,
+                        timestamp_ns: ts,
+                    })),
                     Err(_) => Ok(None),
                 }
             }

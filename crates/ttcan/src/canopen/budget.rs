@@ -129,10 +129,19 @@ mod tests {
         assert!((0.49..0.50).contains(&l2.nominal), "{l2:?}");
         assert!((0.59..0.60).contains(&l2.worst), "{l2:?}");
         let e3 = check_channel("can1", &traffic(3)).unwrap_err();
-        assert!((0.71..0.72).contains(&e3.nominal) && (0.86..0.87).contains(&e3.worst), "{e3:?}");
+        assert!(
+            (0.71..0.72).contains(&e3.nominal) && (0.86..0.87).contains(&e3.worst),
+            "{e3:?}"
+        );
         let msg = e3.to_string();
-        assert!(msg.contains("can1") && msg.contains("71.") && msg.contains("86."), "{msg}");
+        assert!(
+            msg.contains("can1") && msg.contains("71.") && msg.contains("86."),
+            "{msg}"
+        );
         let e4 = check_channel("can2", &traffic(4)).unwrap_err();
-        assert!((0.93..0.95).contains(&e4.nominal) && (1.13..1.15).contains(&e4.worst), "{e4:?}");
+        assert!(
+            (0.93..0.95).contains(&e4.nominal) && (1.13..1.15).contains(&e4.worst),
+            "{e4:?}"
+        );
     }
 }

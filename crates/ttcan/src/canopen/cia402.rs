@@ -222,7 +222,10 @@ impl Cia402 {
 
     /// The statusword: state bits, voltage enabled, remote, plus `extra` bits (10, 12, 13, 7).
     pub fn statusword(&self, extra: u16) -> u16 {
-        let voltage = if matches!(self.state, DriveState::SwitchOnDisabled | DriveState::NotReadyToSwitchOn) {
+        let voltage = if matches!(
+            self.state,
+            DriveState::SwitchOnDisabled | DriveState::NotReadyToSwitchOn
+        ) {
             0
         } else {
             SW_VOLTAGE_ENABLED

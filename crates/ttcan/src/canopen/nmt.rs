@@ -116,7 +116,11 @@ impl NmtState {
 /// Encodes the heartbeat (or boot-up) message of `node` in `state`.
 pub fn encode_heartbeat(node: u8, state: NmtState) -> Result<Frame, ProtocolError> {
     let n = check_node(node)?;
-    Ok(Frame::raw(Cob::Heartbeat(n).id(), 1, [state.code(), 0, 0, 0, 0, 0, 0, 0]))
+    Ok(Frame::raw(
+        Cob::Heartbeat(n).id(),
+        1,
+        [state.code(), 0, 0, 0, 0, 0, 0, 0],
+    ))
 }
 
 /// Decodes a heartbeat into (node, state); the toggle bit 7 (node guarding) must be clear.

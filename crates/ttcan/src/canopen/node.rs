@@ -76,7 +76,12 @@ impl DriveNode {
             od,
             heartbeat: HeartbeatProducer::new(node, hb_ms)?,
             pending: None,
-            command: DriveCommand { mode: OpMode::Csp, target: 0, torque_offset: 0, fresh: false },
+            command: DriveCommand {
+                mode: OpMode::Csp,
+                target: 0,
+                torque_offset: 0,
+                fresh: false,
+            },
             counters: NodeCounters::default(),
             missed_in_row: 0,
         };
@@ -126,7 +131,11 @@ impl DriveNode {
                     Ok((_, req)) => {
                         self.counters.sdo += 1;
                         let r = self.od.serve(&req);
-                        if let SdoRequest::Download { index: od::HEARTBEAT_TIME, .. } = req {
+                        if let SdoRequest::Download {
+                            index: od::HEARTBEAT_TIME,
+                            ..
+                        } = req
+                        {
                             let ms = self.od.get(od::HEARTBEAT_TIME, 0).unwrap_or(0) as u32;
                             self.heartbeat.set_period(ms);
                         }
@@ -135,8 +144,16 @@ impl DriveNode {
                     Err(_) => {
                         self.counters.malformed += 1;
                         let d = f.data();
-                        let (index, sub) = if d.len() >= 4 { (u16::from_le_bytes([d[1], d[2]]), d[3]) } else { (0, 0) };
-                        SdoResponse::Abort { index, sub, code: ABORT_COMMAND }
+                        let (index, sub) = if d.len() >= 4 {
+                            (u16::from_le_bytes([d[1], d[2]]), d[3])
+                        } else {
+                            (0, 0)
+                        };
+                        SdoResponse::Abort {
+                            index,
+                            sub,
+                            code: ABORT_COMMAND,
+                        }
                     }
                 };
                 if let Ok(fr) = resp.encode(self.node) {
@@ -177,7 +194,14 @@ impl DriveNode {
     pub fn emcy(&mut self, code: u16, out: &mut Frames) {
         let register = if code == emcy::NO_ERROR { 0 } else { 1 };
         self.od.set(od::ERROR_REGISTER, 0, register as i64);
-        if let Ok(f) = (Emcy { node: self.node, code, register, info: [0; 5] }).encode() {
+        if let Ok(f) = (Emcy {
+            node: self.node,
+            code,
+            register,
+            info: [0; 5],
+        })
+        .encode()
+        {
             out.push(f);
         }
     }
@@ -186,12 +210,25 @@ impl DriveNode {
     /// RPDO received since the last SYNC: the controlword drives the state machine, the target is
     /// checked against the software position limits and `max_step` (largest change of a CSP
     /// target per cycle, increments) and refused (EMCY, previous command held) when out of range.
-    pub fn on_sync(&mut self, position: i32, current: i16, extra_status: u16, max_step: i64, out: &mut Frames) -> DriveCommand {
+    pub fn on_sync(
+        &mut self,
+        position: i32,
+        current: i16,
+        extra_status: u16,
+        max_step: i64,
+        out: &mut Frames,
+    ) -> DriveCommand {
         self.od.set(od::POSITION_ACTUAL, 0, position as i64);
         if self.nmt == NmtState::Operational {
             let sw = self.cia402.statusword(extra_status);
             self.od.set(od::STATUSWORD, 0, sw as i64);
-            if let Ok(f) = (Tpdo { position, current, statusword: sw }).encode(self.node) {
+            if let Ok(f) = (Tpdo {
+                position,
+                current,
+                statusword: sw,
+            })
+            .encode(self.node)
+            {
                 out.push(f);
             }
         }
@@ -215,7 +252,12 @@ impl DriveNode {
                     OpMode::Cst => (r.target as i64).abs() <= max_torque,
                 } && (r.torque_offset as i64).abs() <= max_torque;
                 if in_range {
-                    self.command = DriveCommand { mode, target: r.target, torque_offset: r.torque_offset, fresh: true };
+                    self.command = DriveCommand {
+                        mode,
+                        target: r.target,
+                        torque_offset: r.torque_offset,
+                        fresh: true,
+                    };
                 } else {
                     self.counters.out_of_range += 1;
                     self.command.fresh = false;
@@ -253,19 +295,46 @@ mod tests {
         assert_eq!(out.as_slice()[0].id(), 0x703);
         out.clear();
         // RPDO before Start is ignored, no TPDO in Pre-operational
-        n.on_frame(&Rpdo { target: 0, torque_offset: 0, controlword: CW_SHUTDOWN }.encode(3).unwrap(), &mut out);
+        n.on_frame(
+            &Rpdo {
+                target: 0,
+                torque_offset: 0,
+                controlword: CW_SHUTDOWN,
+            }
+            .encode(3)
+            .unwrap(),
+            &mut out,
+        );
         assert_eq!(n.on_frame(&encode_sync(), &mut out), NodeEvent::Sync);
         n.on_sync(0, 0, 0, 100, &mut out);
         assert!(out.is_empty());
         n.on_frame(&encode_nmt(NmtCommand::Start, 0).unwrap(), &mut out);
         for cw in [CW_SHUTDOWN, CW_SWITCH_ON, CW_ENABLE_OPERATION] {
-            n.on_frame(&Rpdo { target: 10, torque_offset: 0, controlword: cw }.encode(3).unwrap(), &mut out);
+            n.on_frame(
+                &Rpdo {
+                    target: 10,
+                    torque_offset: 0,
+                    controlword: cw,
+                }
+                .encode(3)
+                .unwrap(),
+                &mut out,
+            );
             let c = n.on_sync(0, 0, 0, 100, &mut out);
             assert!(c.fresh);
         }
         assert_eq!(n.cia402.state(), DriveState::OperationEnabled);
         out.clear();
-        n.on_frame(&Rpdo { target: 1000, torque_offset: 0, controlword: CW_ENABLE_OPERATION }.encode(3).unwrap(), &mut out);
+        n.on_frame(
+            &Rpdo {
+                target: 1000,
+                torque_offset: 0,
+                controlword: CW_ENABLE_OPERATION,
+            }
+            .encode(3)
+            .unwrap(),
+            &mut out,
+        );
         let c = n.on_sync(0, 0, 0, 100, &mut out);
         assert!(!c.fresh && c.target == 10, "jump refused, previous target held");
         assert_eq!(n.counters().out_of_range, 1);

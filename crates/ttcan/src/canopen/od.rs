@@ -66,8 +66,18 @@ pub struct Entry {
     pub value: i64,
 }
 
+#[allow(clippy::too_many_arguments)] // one table row: the columns of the dictionary
 const fn e(index: u16, sub: u8, size: u8, signed: bool, access: Access, min: i64, max: i64, value: i64) -> Entry {
-    Entry { index, sub, size, signed, access, min, max, value }
+    Entry {
+        index,
+        sub,
+        size,
+        signed,
+        access,
+        min,
+        max,
+        value,
+    }
 }
 
 /// Number of entries of the drive dictionary.
@@ -154,8 +164,17 @@ impl ObjectDictionary {
         let en = &mut self.entries[k];
         match *req {
             SdoRequest::Upload { .. } => {
-                let mask = if en.size == 4 { u32::MAX as i64 } else { (1i64 << (8 * en.size)) - 1 };
-                SdoResponse::Uploaded { index, sub, size: en.size, value: (en.value & mask) as u32 }
+                let mask = if en.size == 4 {
+                    u32::MAX as i64
+                } else {
+                    (1i64 << (8 * en.size)) - 1
+                };
+                SdoResponse::Uploaded {
+                    index,
+                    sub,
+                    size: en.size,
+                    value: (en.value & mask) as u32,
+                }
             }
             SdoRequest::Download { size, value, .. } => {
                 if en.access == Access::Ro {
@@ -187,8 +206,16 @@ mod tests {
     #[test]
     fn server_checks_existence_access_size_and_range() {
         let mut od = ObjectDictionary::drive();
-        let w = |index, sub, size, value| SdoRequest::Download { index, sub, size, value };
-        assert_eq!(od.serve(&w(MODES_OF_OPERATION, 0, 1, 9)), SdoResponse::Downloaded { index: 0x6060, sub: 0 });
+        let w = |index, sub, size, value| SdoRequest::Download {
+            index,
+            sub,
+            size,
+            value,
+        };
+        assert_eq!(
+            od.serve(&w(MODES_OF_OPERATION, 0, 1, 9)),
+            SdoResponse::Downloaded { index: 0x6060, sub: 0 }
+        );
         assert_eq!(od.get(MODES_OF_OPERATION, 0), Some(9));
         let code = |r| match r {
             SdoResponse::Abort { code, .. } => code,
@@ -200,9 +227,23 @@ mod tests {
         assert_eq!(code(od.serve(&w(0x2000, 0, 2, 8))), ABORT_NO_OBJECT);
         assert_eq!(code(od.serve(&w(SOFTWARE_POSITION_LIMIT, 3, 4, 8))), ABORT_NO_SUBINDEX);
         // signed 4-byte value is sign-extended
-        assert!(matches!(od.serve(&w(SOFTWARE_POSITION_LIMIT, 1, 4, (-5i32) as u32)), SdoResponse::Downloaded { .. }));
+        assert!(matches!(
+            od.serve(&w(SOFTWARE_POSITION_LIMIT, 1, 4, (-5i32) as u32)),
+            SdoResponse::Downloaded { .. }
+        ));
         assert_eq!(od.get(SOFTWARE_POSITION_LIMIT, 1), Some(-5));
-        let r = od.serve(&SdoRequest::Upload { index: DEVICE_TYPE, sub: 0 });
-        assert_eq!(r, SdoResponse::Uploaded { index: 0x1000, sub: 0, size: 4, value: 0x0002_0192 });
+        let r = od.serve(&SdoRequest::Upload {
+            index: DEVICE_TYPE,
+            sub: 0,
+        });
+        assert_eq!(
+            r,
+            SdoResponse::Uploaded {
+                index: 0x1000,
+                sub: 0,
+                size: 4,
+                value: 0x0002_0192
+            }
+        );
     }
 }

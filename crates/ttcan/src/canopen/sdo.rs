@@ -50,9 +50,7 @@ impl SdoRequest {
     /// Object index and sub-index addressed.
     pub fn address(&self) -> (u16, u8) {
         match *self {
-            SdoRequest::Download { index, sub, .. } | SdoRequest::Upload { index, sub } => {
-                (index, sub)
-            }
+            SdoRequest::Download { index, sub, .. } | SdoRequest::Upload { index, sub } => (index, sub),
         }
     }
 
@@ -197,11 +195,7 @@ impl SdoResponse {
                     value: word & mask,
                 }
             }
-            0x80 => SdoResponse::Abort {
-                index,
-                sub,
-                code: word,
-            },
+            0x80 => SdoResponse::Abort { index, sub, code: word },
             c => return Err(ProtocolError::BadCommand(c)),
         };
         Ok((node, r))
@@ -350,7 +344,14 @@ mod tests {
             assert_eq!(SdoResponse::decode(&resp.encode(3).unwrap()).unwrap(), (3, resp));
         }
         // The well-known command bytes: 4-byte write 0x23, 1-byte write 0x2F, 2-byte upload 0x4B.
-        let f = SdoRequest::Download { index: 0x1017, sub: 0, size: 1, value: 5 }.encode(1).unwrap();
+        let f = SdoRequest::Download {
+            index: 0x1017,
+            sub: 0,
+            size: 1,
+            value: 5,
+        }
+        .encode(1)
+        .unwrap();
         assert_eq!(f.data()[..4], [0x2F, 0x17, 0x10, 0x00]);
     }
 

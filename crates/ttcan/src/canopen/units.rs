@@ -35,7 +35,11 @@ fn to_int(what: &'static str, x: f64, lo: f64, hi: f64) -> Result<i64, ProtocolE
     } else {
         Err(ProtocolError::OutOfRange {
             what,
-            value: if x.is_finite() { r.clamp(i64::MIN as f64, i64::MAX as f64) as i64 } else { i64::MAX },
+            value: if x.is_finite() {
+                r.clamp(i64::MIN as f64, i64::MAX as f64) as i64
+            } else {
+                i64::MAX
+            },
         })
     }
 }
@@ -57,7 +61,12 @@ impl Units {
 
     /// Joint position (rad or m) → increments.
     pub fn position_to_increments(&self, q: f64) -> Result<i32, ProtocolError> {
-        let v = to_int("position", q * self.increments_per_unit, i32::MIN as f64, i32::MAX as f64)?;
+        let v = to_int(
+            "position",
+            q * self.increments_per_unit,
+            i32::MIN as f64,
+            i32::MAX as f64,
+        )?;
         Ok(v as i32)
     }
 
@@ -68,7 +77,12 @@ impl Units {
 
     /// Joint velocity (rad/s or m/s) → increments/s.
     pub fn velocity_to_increments(&self, qd: f64) -> Result<i32, ProtocolError> {
-        let v = to_int("velocity", qd * self.increments_per_unit, i32::MIN as f64, i32::MAX as f64)?;
+        let v = to_int(
+            "velocity",
+            qd * self.increments_per_unit,
+            i32::MIN as f64,
+            i32::MAX as f64,
+        )?;
         Ok(v as i32)
     }
 
@@ -79,7 +93,12 @@ impl Units {
 
     /// Joint torque (N·m or N) → per-mille of the rated torque.
     pub fn torque_to_permille(&self, tau: f64) -> Result<i16, ProtocolError> {
-        let v = to_int("torque", tau / self.rated_torque * 1000.0, i16::MIN as f64, i16::MAX as f64)?;
+        let v = to_int(
+            "torque",
+            tau / self.rated_torque * 1000.0,
+            i16::MIN as f64,
+            i16::MAX as f64,
+        )?;
         Ok(v as i16)
     }
 
@@ -90,7 +109,12 @@ impl Units {
 
     /// Motor current (A) → per-mille of the rated current.
     pub fn current_to_permille(&self, i: f64) -> Result<i16, ProtocolError> {
-        let v = to_int("current", i / self.rated_current * 1000.0, i16::MIN as f64, i16::MAX as f64)?;
+        let v = to_int(
+            "current",
+            i / self.rated_current * 1000.0,
+            i16::MIN as f64,
+            i16::MAX as f64,
+        )?;
         Ok(v as i16)
     }
 
@@ -130,6 +154,11 @@ mod tests {
         assert!(u.position_to_increments(f64::NAN).is_err());
         assert!(u.torque_to_permille(40.0).is_err());
         assert!(u.current_to_permille(f64::INFINITY).is_err());
-        assert!(Units { rated_current: 0.0, ..u }.validate().is_err());
+        assert!(Units {
+            rated_current: 0.0,
+            ..u
+        }
+        .validate()
+        .is_err());
     }
 }

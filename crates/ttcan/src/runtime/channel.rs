@@ -28,7 +28,13 @@ pub struct Shared {
 impl Shared {
     /// Shared state for `channels` threads; `interrupt` is the signal flag.
     pub fn new(channels: usize, interrupt: std::sync::Arc<AtomicBool>) -> Self {
-        Shared { stop: AtomicBool::new(false), interrupt, running: AtomicUsize::new(0), channels, go_cycle: AtomicU64::new(u64::MAX) }
+        Shared {
+            stop: AtomicBool::new(false),
+            interrupt,
+            running: AtomicUsize::new(0),
+            channels,
+            go_cycle: AtomicU64::new(u64::MAX),
+        }
     }
 }
 
@@ -102,7 +108,14 @@ fn phase_code(p: Phase) -> u8 {
 }
 
 /// Runs one channel until its axes are stopped. No allocation inside the loop.
-pub fn run_channel<B: CanBus>(name: &str, bus: &mut B, mut master: ChannelMaster, traj: &Trajectory, plan: &ChannelPlan, shared: &Shared) -> ChannelReport {
+pub fn run_channel<B: CanBus>(
+    name: &str,
+    bus: &mut B,
+    mut master: ChannelMaster,
+    traj: &Trajectory,
+    plan: &ChannelPlan,
+    shared: &Shared,
+) -> ChannelReport {
     let n = master.len();
     let mut stats = CycleStats::new();
     let mut telemetry = Vec::with_capacity(plan.max_cycles as usize + 16);
@@ -147,20 +160,32 @@ pub fn run_channel<B: CanBus>(name: &str, bus: &mut B, mut master: ChannelMaster
             }
         }
         let go = shared.go_cycle.load(Ordering::SeqCst);
-        let t = if go == u64::MAX { -1.0 } else { (k as f64 - go as f64) * period };
-        for a in 0..n {
+        let t = if go == u64::MAX {
+            -1.0
+        } else {
+            (k as f64 - go as f64) * period
+        };
+        for (a, setpoint) in setpoints.iter_mut().enumerate().take(n) {
             let hold = master.hold_position(a);
-            setpoints[a] = match (plan.joints[a], t >= 0.0) {
+            *setpoint = match (plan.joints[a], t >= 0.0) {
                 (Some(j), true) if j < traj.joints() => {
                     if t < plan.approach_s {
                         let (q, qd) = approach(hold, traj.sample(j, 0.0).q, plan.approach_s, t);
                         AxisSetpoint { q, qd, tau: 0.0 }
                     } else {
                         let s = traj.sample(j, t - plan.approach_s);
-                        AxisSetpoint { q: s.q, qd: s.qd, tau: s.tau }
+                        AxisSetpoint {
+                            q: s.q,
+                            qd: s.qd,
+                            tau: s.tau,
+                        }
                     }
                 }
-                _ => AxisSetpoint { q: hold, qd: 0.0, tau: 0.0 },
+                _ => AxisSetpoint {
+                    q: hold,
+                    qd: 0.0,
+                    tau: 0.0,
+                },
             };
         }
         if t >= 0.0 && t > plan.approach_s + traj.duration() + 0.2 && phase == Phase::Run {
@@ -186,7 +211,13 @@ pub fn run_channel<B: CanBus>(name: &str, bus: &mut B, mut master: ChannelMaster
             }
         }
         // record
-        let mut row = TelemetryRow { cycle: k, t, phase: phase_code(master.phase()), latency_us: (latency as f64 / 1000.0) as f32, ..Default::default() };
+        let mut row = TelemetryRow {
+            cycle: k,
+            t,
+            phase: phase_code(master.phase()),
+            latency_us: (latency as f64 / 1000.0) as f32,
+            ..Default::default()
+        };
         for a in 0..n {
             row.q_ref[a] = setpoints[a].q;
             if let Some(fb) = master.feedback(a) {

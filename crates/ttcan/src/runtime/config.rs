@@ -37,7 +37,12 @@ fn mc() -> f64 {
 impl AxisEntry {
     /// The controller's view of the axis.
     pub fn link(&self) -> LinkConfig {
-        LinkConfig { node: self.node, units: self.units, following_error_limit: self.following_error_limit, max_current: self.max_current }
+        LinkConfig {
+            node: self.node,
+            units: self.units,
+            following_error_limit: self.following_error_limit,
+            max_current: self.max_current,
+        }
     }
 }
 
@@ -130,7 +135,13 @@ impl ControllerConfig {
             .map(|c| ChannelEntry {
                 interface: format!("vcan{c}"),
                 axis: (0..2)
-                    .map(|a| AxisEntry { node: a as u8 + 1, joint: Some(2 * c + a), units: Units::default(), following_error_limit: fe(), max_current: mc() })
+                    .map(|a| AxisEntry {
+                        node: a as u8 + 1,
+                        joint: Some(2 * c + a),
+                        units: Units::default(),
+                        following_error_limit: fe(),
+                        max_current: mc(),
+                    })
                     .collect(),
             })
             .collect();
@@ -149,20 +160,28 @@ impl ControllerConfig {
 
     /// Parses and checks a configuration; `source_name` names the file in messages.
     pub fn from_toml(text: &str, source_name: &str) -> Result<Self, ConfigError> {
-        let c: ControllerConfig = toml::from_str(text)
-            .map_err(|e| ConfigError::Parse { source_name: source_name.to_string(), message: e.to_string() })?;
+        let c: ControllerConfig = toml::from_str(text).map_err(|e| ConfigError::Parse {
+            source_name: source_name.to_string(),
+            message: e.to_string(),
+        })?;
         c.check(source_name)?;
         Ok(c)
     }
 
     /// Checks values and the bus budget; returns the load of every channel.
     pub fn check(&self, source_name: &str) -> Result<Vec<BusLoad>, ConfigError> {
-        let invalid = |message: String| ConfigError::Invalid { source_name: source_name.to_string(), message };
+        let invalid = |message: String| ConfigError::Invalid {
+            source_name: source_name.to_string(),
+            message,
+        };
         if !(self.cycle_hz.is_finite() && self.cycle_hz > 0.0 && self.cycle_hz <= 10_000.0) {
             return Err(invalid(format!("cycle_hz = {}: must be in (0, 10000]", self.cycle_hz)));
         }
         if !(self.bitrate.is_finite() && self.bitrate >= 10_000.0 && self.bitrate <= 1e6) {
-            return Err(invalid(format!("bitrate = {}: must be in [10000, 1000000] (classical CAN)", self.bitrate)));
+            return Err(invalid(format!(
+                "bitrate = {}: must be in [10000, 1000000] (classical CAN)",
+                self.bitrate
+            )));
         }
         if !(self.approach_s.is_finite() && self.approach_s >= 0.0) {
             return Err(invalid(format!("approach_s = {}: must be >= 0", self.approach_s)));
@@ -173,25 +192,41 @@ impl ControllerConfig {
         let mut loads = Vec::new();
         for (c, ch) in self.channel.iter().enumerate() {
             if ch.axis.is_empty() || ch.axis.len() > MAX_AXES_PER_CHANNEL {
-                return Err(invalid(format!("channel[{c}] ({}): {} axes, 1..={MAX_AXES_PER_CHANNEL} allowed", ch.interface, ch.axis.len())));
+                return Err(invalid(format!(
+                    "channel[{c}] ({}): {} axes, 1..={MAX_AXES_PER_CHANNEL} allowed",
+                    ch.interface,
+                    ch.axis.len()
+                )));
             }
             for (a, ax) in ch.axis.iter().enumerate() {
                 if !(1..=127).contains(&ax.node) {
-                    return Err(invalid(format!("channel[{c}].axis[{a}].node = {}: must be 1..=127", ax.node)));
+                    return Err(invalid(format!(
+                        "channel[{c}].axis[{a}].node = {}: must be 1..=127",
+                        ax.node
+                    )));
                 }
                 if ch.axis[..a].iter().any(|o| o.node == ax.node) {
-                    return Err(invalid(format!("channel[{c}].axis[{a}].node = {}: used twice on {}", ax.node, ch.interface)));
+                    return Err(invalid(format!(
+                        "channel[{c}].axis[{a}].node = {}: used twice on {}",
+                        ax.node, ch.interface
+                    )));
                 }
                 if let (Some(j), Some(n)) = (ax.joint, self.joints) {
                     if j >= n {
-                        return Err(invalid(format!("channel[{c}].axis[{a}].joint = {j}: the robot has {n} joints")));
+                        return Err(invalid(format!(
+                            "channel[{c}].axis[{a}].joint = {j}: the robot has {n} joints"
+                        )));
                     }
                 }
                 if ax.units.validate().is_err() {
-                    return Err(invalid(format!("channel[{c}].axis[{a}].units: every factor must be finite and > 0")));
+                    return Err(invalid(format!(
+                        "channel[{c}].axis[{a}].units: every factor must be finite and > 0"
+                    )));
                 }
                 if !(ax.following_error_limit.is_finite() && ax.following_error_limit > 0.0) {
-                    return Err(invalid(format!("channel[{c}].axis[{a}].following_error_limit must be > 0")));
+                    return Err(invalid(format!(
+                        "channel[{c}].axis[{a}].following_error_limit must be > 0"
+                    )));
                 }
             }
             let traffic = ChannelTraffic {
@@ -200,7 +235,9 @@ impl ControllerConfig {
                 bitrate: self.bitrate,
                 heartbeat_period: self.watchdog.heartbeat_period_ms as f64 / 1000.0,
             };
-            loads.push(check_channel(&ch.interface, &traffic).map_err(|e| ConfigError::Budget(e, source_name.to_string()))?);
+            loads.push(
+                check_channel(&ch.interface, &traffic).map_err(|e| ConfigError::Budget(e, source_name.to_string()))?,
+            );
         }
         Ok(loads)
     }
@@ -221,15 +258,24 @@ mod tests {
     fn unknown_key_is_named_with_its_line() {
         let text = "cycle_hz = 1000\n[[channel]]\ninterface = \"vcan0\"\n[[channel.axis]]\nnode = 1\nfollowing_eror_limit = 0.1\n";
         let e = ControllerConfig::from_toml(text, "ctl.toml").unwrap_err().to_string();
-        assert!(e.contains("ctl.toml") && e.contains("line 6") && e.contains("following_eror_limit"), "{e}");
+        assert!(
+            e.contains("ctl.toml") && e.contains("line 6") && e.contains("following_eror_limit"),
+            "{e}"
+        );
     }
 
     #[test]
     fn three_axes_per_channel_are_refused_with_the_numbers() {
         let text = "[[channel]]\ninterface = \"can0\"\n[[channel.axis]]\nnode = 1\n[[channel.axis]]\nnode = 2\n[[channel.axis]]\nnode = 3\n";
         let e = ControllerConfig::from_toml(text, "ctl.toml").unwrap_err().to_string();
-        assert!(e.contains("can0") && e.contains("3 axes") && e.contains("71.") && e.contains("86."), "{e}");
+        assert!(
+            e.contains("can0") && e.contains("3 axes") && e.contains("71.") && e.contains("86."),
+            "{e}"
+        );
         let dup = "[[channel]]\ninterface = \"can0\"\n[[channel.axis]]\nnode = 1\n[[channel.axis]]\nnode = 1\n";
-        assert!(ControllerConfig::from_toml(dup, "x").unwrap_err().to_string().contains("used twice"));
+        assert!(ControllerConfig::from_toml(dup, "x")
+            .unwrap_err()
+            .to_string()
+            .contains("used twice"));
     }
 }

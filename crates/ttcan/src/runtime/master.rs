@@ -243,7 +243,10 @@ impl ChannelMaster {
     /// A controller for `axes` (≤ [`MAX_AXES_PER_CHANNEL`]) in `mode`.
     pub fn new(axes: &[LinkConfig], mode: OpMode, wd: WatchdogConfig) -> Result<Self, ProtocolError> {
         if axes.len() > MAX_AXES_PER_CHANNEL || axes.is_empty() {
-            return Err(ProtocolError::OutOfRange { what: "axes per channel", value: axes.len() as i64 });
+            return Err(ProtocolError::OutOfRange {
+                what: "axes per channel",
+                value: axes.len() as i64,
+            });
         }
         let mut links = [None; MAX_AXES_PER_CHANNEL];
         for (k, a) in axes.iter().enumerate() {
@@ -353,7 +356,9 @@ impl ChannelMaster {
     }
 
     fn index_of(&self, node: u8) -> Option<usize> {
-        self.links[..self.n].iter().position(|l| l.map(|l| l.cfg.node) == Some(node))
+        self.links[..self.n]
+            .iter()
+            .position(|l| l.map(|l| l.cfg.node) == Some(node))
     }
 
     fn on_frame(&mut self, f: &Frame) {
@@ -405,13 +410,13 @@ impl ChannelMaster {
                         stop = Some(StopReason::BadFrame(node));
                     }
                 },
-                Cob::Heartbeat(_) => {
-                    if !l.heartbeat.on_frame(f) {
-                        self.counters.malformed += 1;
-                    }
-                }
+                Cob::Heartbeat(_) => self.counters.malformed += u64::from(!l.heartbeat.on_frame(f)),
                 Cob::SdoTx(_) => match l.sdo.on_frame(f) {
-                    Some(Ok(SdoResponse::Uploaded { index: od::DEVICE_TYPE, value, .. })) if value & 0xFFFF != 402 => {
+                    Some(Ok(SdoResponse::Uploaded {
+                        index: od::DEVICE_TYPE,
+                        value,
+                        ..
+                    })) if value & 0xFFFF != 402 => {
                         stop = Some(StopReason::ConfigurationFailed(node));
                     }
                     Some(Ok(_)) => l.config_step += 1,
@@ -432,12 +437,30 @@ impl ChannelMaster {
 
     fn config_request(&self, step: u8, l: &Link) -> SdoRequest {
         match step {
-            0 => SdoRequest::Upload { index: od::DEVICE_TYPE, sub: 0 },
-            1 => SdoRequest::Download { index: od::MODES_OF_OPERATION, sub: 0, size: 1, value: self.mode.code() as u8 as u32 },
-            2 => SdoRequest::Download { index: od::HEARTBEAT_TIME, sub: 0, size: 2, value: self.wd.heartbeat_period_ms as u32 },
+            0 => SdoRequest::Upload {
+                index: od::DEVICE_TYPE,
+                sub: 0,
+            },
+            1 => SdoRequest::Download {
+                index: od::MODES_OF_OPERATION,
+                sub: 0,
+                size: 1,
+                value: self.mode.code() as u8 as u32,
+            },
+            2 => SdoRequest::Download {
+                index: od::HEARTBEAT_TIME,
+                sub: 0,
+                size: 2,
+                value: self.wd.heartbeat_period_ms as u32,
+            },
             _ => {
                 let w = (l.cfg.following_error_limit * l.cfg.units.increments_per_unit).clamp(1.0, i32::MAX as f64);
-                SdoRequest::Download { index: od::FOLLOWING_ERROR_WINDOW, sub: 0, size: 4, value: w as u32 }
+                SdoRequest::Download {
+                    index: od::FOLLOWING_ERROR_WINDOW,
+                    sub: 0,
+                    size: 4,
+                    value: w as u32,
+                }
             }
         }
     }
@@ -500,10 +523,20 @@ impl ChannelMaster {
                 (_, OpMode::Csv) | (_, OpMode::Cst) => Ok(0),
                 _ => u.position_to_increments(target_q),
             };
-            let offset = if phase == Phase::Run && mode != OpMode::Cst { u.torque_to_permille(sp.tau) } else { Ok(0) };
+            let offset = if phase == Phase::Run && mode != OpMode::Cst {
+                u.torque_to_permille(sp.tau)
+            } else {
+                Ok(0)
+            };
             match (encoded, offset) {
                 (Ok(target), Ok(torque_offset)) => {
-                    if let Ok(f) = (Rpdo { target, torque_offset, controlword: cw }).encode(l.cfg.node) {
+                    if let Ok(f) = (Rpdo {
+                        target,
+                        torque_offset,
+                        controlword: cw,
+                    })
+                    .encode(l.cfg.node)
+                    {
                         out.push(f);
                     }
                     l.last_target = target_q;

@@ -4,8 +4,8 @@
 pub mod master;
 
 pub use master::{AxisSetpoint, ChannelMaster, LinkConfig, Phase, StopReason, WatchdogConfig};
+pub mod channel;
+pub mod config;
 pub mod rt;
 pub mod stats;
 pub mod trajectory;
-pub mod config;
-pub mod channel;

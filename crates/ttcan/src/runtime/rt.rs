@@ -34,7 +34,8 @@ pub fn make_thread_realtime(priority: u8) -> Result<(), String> {
         set_thread_priority_and_policy, thread_native_id, RealtimeThreadSchedulePolicy, ThreadSchedulePolicy,
     };
     use thread_priority::{ThreadPriority, ThreadPriorityValue};
-    let value = ThreadPriorityValue::try_from(priority.clamp(1, 99)).map_err(|e| format!("priority {priority}: {e}"))?;
+    let value =
+        ThreadPriorityValue::try_from(priority.clamp(1, 99)).map_err(|e| format!("priority {priority}: {e}"))?;
     set_thread_priority_and_policy(
         thread_native_id(),
         ThreadPriority::Crossplatform(value),

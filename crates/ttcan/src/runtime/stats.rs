@@ -102,7 +102,11 @@ impl CycleStats {
             p50_us: self.percentile_us(0.50),
             p99_us: self.percentile_us(0.99),
             max_us: self.max_ns as f64 / 1000.0,
-            mean_work_us: if self.count > 0 { self.sum_work_ns as f64 / self.count as f64 / 1000.0 } else { 0.0 },
+            mean_work_us: if self.count > 0 {
+                self.sum_work_ns as f64 / self.count as f64 / 1000.0
+            } else {
+                0.0
+            },
             max_work_us: self.max_work_ns as f64 / 1000.0,
             deadline_misses: self.deadline_misses,
         }

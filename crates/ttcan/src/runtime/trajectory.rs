@@ -32,7 +32,10 @@ impl fmt::Display for TrajectoryError {
 impl std::error::Error for TrajectoryError {}
 
 fn err(line: usize, message: impl Into<String>) -> TrajectoryError {
-    TrajectoryError { line, message: message.into() }
+    TrajectoryError {
+        line,
+        message: message.into(),
+    }
 }
 
 /// One sample: per joint (q, qd, qdd, tau).
@@ -51,10 +54,13 @@ pub struct JointSample {
 impl Trajectory {
     /// Parses the CSV text of a trajectory file (lines starting with `#` are comments).
     pub fn parse(text: &str) -> Result<Self, TrajectoryError> {
-        let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty() && !l.starts_with('#'));
+        let mut lines = text
+            .lines()
+            .enumerate()
+            .filter(|(_, l)| !l.trim().is_empty() && !l.starts_with('#'));
         let (hl, header) = lines.next().ok_or_else(|| err(0, "empty trajectory file"))?;
         let cols: Vec<&str> = header.split(',').map(str::trim).collect();
-        if cols.first() != Some(&"t") || cols.len() < 5 || (cols.len() - 1) % 4 != 0 {
+        if cols.first() != Some(&"t") || cols.len() < 5 || !(cols.len() - 1).is_multiple_of(4) {
             return Err(err(hl + 1, "header must be t,q1..qn,qd1..qdn,qdd1..qddn,tau1..taun"));
         }
         let n = (cols.len() - 1) / 4;
@@ -63,7 +69,10 @@ impl Trajectory {
             let vals: Result<Vec<f64>, _> = line.split(',').map(|s| s.trim().parse::<f64>()).collect();
             let vals = vals.map_err(|e| err(k + 1, format!("not a number: {e}")))?;
             if vals.len() != cols.len() {
-                return Err(err(k + 1, format!("{} values, the header has {}", vals.len(), cols.len())));
+                return Err(err(
+                    k + 1,
+                    format!("{} values, the header has {}", vals.len(), cols.len()),
+                ));
             }
             if let Some(bad) = vals.iter().position(|v| !v.is_finite()) {
                 return Err(err(k + 1, format!("column {} ({}) is not finite", bad + 1, cols[bad])));
@@ -84,7 +93,10 @@ impl Trajectory {
     /// sampled at 1 kHz; joint k has phase k/n of a period so the axes do not move in step.
     pub fn demo(n: usize, amplitude: f64, duration: f64) -> Self {
         let samples = (duration * 1000.0).round().max(2.0) as usize;
-        let (mut t, mut rows) = (Vec::with_capacity(samples + 1), Vec::with_capacity(4 * n * (samples + 1)));
+        let (mut t, mut rows) = (
+            Vec::with_capacity(samples + 1),
+            Vec::with_capacity(4 * n * (samples + 1)),
+        );
         let w = 2.0 * std::f64::consts::PI / duration;
         for s in 0..=samples {
             let tt = s as f64 * duration / samples as f64;
@@ -129,7 +141,12 @@ impl Trajectory {
             let b = self.rows[(k + 1) * w + c * self.n + j];
             a + s * (b - a)
         };
-        JointSample { q: at(0), qd: at(1), qdd: at(2), tau: at(3) }
+        JointSample {
+            q: at(0),
+            qd: at(1),
+            qdd: at(2),
+            tau: at(3),
+        }
     }
 }
 
