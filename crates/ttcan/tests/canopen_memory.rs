@@ -304,3 +304,104 @@ fn delayed_feedback_is_not_used_as_fresh() {
         r.master.stop_reason()
     );
 }
+
+/// The threaded runtime: `run_channel` at 1 kHz with absolute deadlines against two virtual drives
+/// served by a second thread, on the in-memory bus; the motion completes, or an interrupt (what
+/// SIGINT sets) brings both axes to a controlled stop.
+fn threaded(interrupt_after_ms: Option<u64>) -> ttcan::runtime::channel::ChannelReport {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+    use ttcan::runtime::channel::{run_channel, ChannelPlan, Shared};
+    use ttcan::runtime::rt;
+    use ttcan::runtime::trajectory::Trajectory;
+    let bus = MemoryBus::new();
+    let mut master_port = bus.port();
+    let mut drive_port = bus.port();
+    let links: Vec<LinkConfig> = (1..=2)
+        .map(|n| LinkConfig {
+            node: n,
+            units: Units::default(),
+            following_error_limit: 0.05,
+            max_current: 10.0,
+        })
+        .collect();
+    // the test machine is shared: generous feedback watchdog, the timing is not what is tested here
+    let wd = WatchdogConfig {
+        feedback_cycles: 200,
+        ..WatchdogConfig::default()
+    };
+    let master = ChannelMaster::new(&links, OpMode::Csp, wd).unwrap();
+    let traj = Trajectory::demo(2, 0.2, 0.5);
+    let interrupt = Arc::new(AtomicBool::new(false));
+    let shared = Shared::new(1, interrupt.clone());
+    let done = AtomicBool::new(false);
+    let period_ns = 1_000_000;
+    let plan = ChannelPlan {
+        joints: [Some(0), Some(1), None, None],
+        approach_s: 0.1,
+        period_ns,
+        t0_ns: rt::now_ns() + 5 * period_ns,
+        max_cycles: 20_000,
+    };
+    std::thread::scope(|s| {
+        s.spawn(|| {
+            let model = MotorModel::maxon_re25_gp26();
+            let cfg = AxisConfig::new(model);
+            let mut out = Frames::new();
+            let mut drives: Vec<VirtualDrive> = (1..=2)
+                .map(|n| VirtualDrive::new(n, &model, &cfg, Units::default(), 1e-3, &mut out).unwrap())
+                .collect();
+            let mut next = rt::now_ns();
+            while !done.load(Ordering::Relaxed) {
+                while let Ok(Some(ttcan::bus::BusEvent::Frame { frame, .. })) = drive_port.poll() {
+                    for d in drives.iter_mut() {
+                        d.on_frame(&frame, &mut out);
+                    }
+                }
+                if rt::now_ns() >= next {
+                    drives.iter_mut().for_each(|d| d.tick_ms(&mut out));
+                    next += 1_000_000;
+                }
+                for f in out.as_slice() {
+                    let _ = drive_port.send(f);
+                }
+                out.clear();
+                rt::sleep_until(rt::now_ns() + 50_000);
+            }
+        });
+        if let Some(ms) = interrupt_after_ms {
+            let i = interrupt.clone();
+            s.spawn(move || {
+                std::thread::sleep(std::time::Duration::from_millis(ms));
+                i.store(true, Ordering::Relaxed);
+            });
+        }
+        let r = run_channel("mem0", &mut master_port, master, &traj, &plan, &shared);
+        done.store(true, Ordering::Relaxed);
+        r
+    })
+}
+
+#[test]
+fn threaded_runtime_completes_the_motion() {
+    let r = threaded(None);
+    assert!(r.completed, "stop: {:?}", r.stop_reason);
+    assert_eq!(r.stop_reason, Some(StopReason::Requested));
+    assert!(r.stats.summary().cycles > 600);
+    assert!(
+        r.max_tracking_error[0] < 0.02 && r.max_tracking_error[1] < 0.02,
+        "{:?}",
+        r.max_tracking_error
+    );
+    assert!(r.telemetry.len() as u64 >= r.stats.summary().cycles);
+}
+
+#[test]
+fn interrupt_brings_the_axes_to_a_controlled_stop() {
+    let r = threaded(Some(400));
+    assert!(!r.completed);
+    assert_eq!(r.stop_reason, Some(StopReason::Requested));
+    assert!(r.stopped_after.is_some());
+    let last = r.telemetry.last().unwrap();
+    assert_eq!(last.phase, 4, "stopped");
+}

@@ -87,7 +87,7 @@ pub struct ChannelReport {
     pub stats: CycleStats,
     /// Telemetry rows.
     pub telemetry: Vec<TelemetryRow>,
-    /// Largest |feedback − reference two cycles earlier| during the motion, per axis.
+    /// Largest |feedback − the target sent two cycles earlier| during the motion, per axis.
     pub max_tracking_error: [f64; MAX_AXES_PER_CHANNEL],
     /// Frames that could not be sent (queue full).
     pub tx_full: u64,
@@ -121,7 +121,9 @@ pub fn run_channel<B: CanBus>(
     let mut telemetry = Vec::with_capacity(plan.max_cycles as usize + 16);
     let mut out = Frames::new();
     let mut setpoints = [AxisSetpoint::default(); MAX_AXES_PER_CHANNEL];
-    let mut refs = [[0.0f64; MAX_AXES_PER_CHANNEL]; 3];
+    // setpoints of the last two cycles: feedback sampled at SYNC k−1 is compared with the target
+    // in force before it, sent at cycle k−2
+    let mut refs = [[0.0f64; MAX_AXES_PER_CHANNEL]; 2];
     let mut max_err = [0.0f64; MAX_AXES_PER_CHANNEL];
     let (mut tx_full, mut skipped) = (0u64, 0u64);
     let mut counted = false;
@@ -224,11 +226,10 @@ pub fn run_channel<B: CanBus>(
                 row.q[a] = fb.q;
                 row.current[a] = fb.current;
                 if phase == Phase::Run && t >= 2.0 * period && master.stop_reason().is_none() {
-                    max_err[a] = max_err[a].max((fb.q - refs[2][a]).abs());
+                    max_err[a] = max_err[a].max((fb.q - refs[1][a]).abs());
                 }
             }
         }
-        refs[2] = refs[1];
         refs[1] = refs[0];
         for a in 0..n {
             refs[0][a] = setpoints[a].q;
