@@ -78,7 +78,7 @@ for app in sh mount mkdir cat echo sleep poweroff modprobe insmod grep sed awk k
 done
 copy_with_libs() {  # copy binary $1 to $2 and every library ldd names
     cp "$1" "$2"
-    ldd "$1" 2>/dev/null | awk '/=>/ {print $3} /^\s*\/lib/ {print $1}' | while read -r lib; do
+    ldd "$1" 2>/dev/null | awk '$2 == "=>" && $3 ~ /^\// {print $3} $1 ~ /^\// {print $1}' | while read -r lib; do
         [ -f "$lib" ] || continue
         mkdir -p "$IR$(dirname "$lib")"
         cp -L "$lib" "$IR$lib"

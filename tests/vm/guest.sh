@@ -3,6 +3,8 @@
 # the emulated Kvaser pair can0/can1 to 1 Mbit/s, runs the scenarios, prints one
 # "VMTEST <name> PASS|FAIL" line each, the statistics, and "VMTEST-EXIT <failures>", powers off.
 export PATH=/bin:/sbin:/usr/bin
+# busybox's sh prefers its own applets: call iproute2's ip by path (busybox ip cannot make vcan)
+IP=/sbin/ip
 mount -t proc proc /proc
 mount -t sysfs sys /sys
 mount -t devtmpfs dev /dev
@@ -19,12 +21,12 @@ for m in can can_raw can_dev vcan sja1000 kvaser_pci; do
     modprobe "$m" || failed "modprobe-$m" ""
 done
 for i in 0 1 2 3; do
-    ip link add dev "vcan$i" type vcan && ip link set "vcan$i" txqueuelen 1000 up || failed "vcan$i" ""
+    $IP link add dev "vcan$i" type vcan && $IP link set "vcan$i" txqueuelen 1000 up || failed "vcan$i" ""
 done
 for c in can0 can1; do
-    ip link set "$c" type can bitrate 1000000 && ip link set "$c" txqueuelen 1000 up || failed "$c-up" ""
+    $IP link set "$c" type can bitrate 1000000 && $IP link set "$c" txqueuelen 1000 up || failed "$c-up" ""
 done
-ip -details link show can0 | grep -q "bitrate 1000000" && pass "kvaser-bitrate" "can0 1 Mbit/s" || failed "kvaser-bitrate" ""
+$IP -details link show can0 | grep -q "bitrate 1000000" && pass "kvaser-bitrate" "can0 1 Mbit/s" || failed "kvaser-bitrate" ""
 
 # run NAME EXPECTED_RC DRIVE_ARGS -- CTL_ARGS: runs drives and controller, checks the exit status
 run() {
@@ -32,7 +34,7 @@ run() {
     dargs=""
     while [ "$1" != "--" ]; do dargs="$dargs $1"; shift; done
     shift
-    ttdrive-sim $dargs --idle-exit 1.5 > "/tmp/$name.drives" 2>&1 &
+    ttdrive-sim $dargs --idle-exit 1.5 --duration 30 > "/tmp/$name.drives" 2>&1 &
     dpid=$!
     sleep 0.3
     ttctl "$@" --stats "/tmp/$name.stats" --telemetry "/tmp/$name.csv" > "/tmp/$name.ctl" 2>&1

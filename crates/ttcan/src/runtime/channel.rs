@@ -3,7 +3,8 @@
 //! RPDOs and the SYNC), statistics and telemetry recorded into storage allocated before the loop.
 //! Channels share a [`Shared`] block: the motion starts when every channel runs, and a stop on
 //! one channel stops all. A thread woken more than a period late skips the missed deadlines
-//! (counted) rather than sending a burst of SYNCs.
+//! (counted) rather than sending a burst of SYNCs; the motion time counts executed cycles, so a
+//! stall pauses the motion instead of making the target jump.
 
 use super::master::{AxisSetpoint, ChannelCounters, ChannelMaster, Phase, StopReason, MAX_AXES_PER_CHANNEL};
 use super::rt::{now_ns, sleep_until};
@@ -130,6 +131,8 @@ pub fn run_channel<B: CanBus>(
     let mut completed = false;
     let period = plan.period_ns as f64 * 1e-9;
     let mut k: u64 = 0;
+    let mut executed: u64 = 0;
+    let mut go_executed: Option<u64> = None;
     loop {
         let deadline = plan.t0_ns + k * plan.period_ns;
         sleep_until(deadline);
@@ -161,11 +164,15 @@ pub fn run_channel<B: CanBus>(
                 shared.go_cycle.store(k + 2, Ordering::SeqCst);
             }
         }
+        // motion time counts executed cycles, not deadlines: after a stall the motion resumes
+        // where it was (the drives' physics advance per SYNC too), the target never jumps
         let go = shared.go_cycle.load(Ordering::SeqCst);
-        let t = if go == u64::MAX {
-            -1.0
-        } else {
-            (k as f64 - go as f64) * period
+        if go != u64::MAX && k >= go && go_executed.is_none() {
+            go_executed = Some(executed);
+        }
+        let t = match go_executed {
+            Some(g) => (executed - g) as f64 * period,
+            None => -1.0,
         };
         for (a, setpoint) in setpoints.iter_mut().enumerate().take(n) {
             let hold = master.hold_position(a);
@@ -243,6 +250,7 @@ pub fn run_channel<B: CanBus>(
             break;
         }
         k += 1;
+        executed += 1;
         let late = now_ns().saturating_sub(plan.t0_ns + k * plan.period_ns);
         if late > plan.period_ns {
             let skip = late / plan.period_ns;

@@ -588,7 +588,8 @@ impl ChannelMaster {
             } else if l.feedback.is_some() {
                 l.missed_in_row += 1;
                 missed += 1;
-                if l.missed_in_row > wd.feedback_cycles && !matches!(phase, Phase::Stopped) {
+                // in Configure the SDO and enable timeouts watch the drives (start-up is slow)
+                if l.missed_in_row > wd.feedback_cycles && !matches!(phase, Phase::Configure | Phase::Stopped) {
                     stop.get_or_insert(StopReason::MissingFeedback(l.cfg.node));
                 }
             }
