@@ -47,6 +47,9 @@ pub struct VirtualDrive {
     units: Units,
     period: f64,
     ticks_per_cycle: u32,
+    ticks_per_position: u32,
+    /// CSP setpoint interpolation over the SYNC period: (from, to, velocity, acceleration).
+    interpolation: Option<(f64, f64, f64, f64)>,
     /// RPDOs missing in a row before a fault.
     pub missed_rpdo_limit: u32,
     /// Milliseconds without SYNC (power stage on) before a fault.
@@ -79,6 +82,8 @@ impl VirtualDrive {
             units,
             period,
             ticks_per_cycle: ticks,
+            ticks_per_position: config.rates.position_ticks().max(1),
+            interpolation: None,
             missed_rpdo_limit: 3,
             sync_timeout_ms: 20,
             ms_since_sync: 0,
@@ -133,6 +138,7 @@ impl VirtualDrive {
             NodeEvent::Reset => {
                 self.sim.axis.disable();
                 self.prev_target = None;
+                self.interpolation = None;
             }
             NodeEvent::None => {}
         }
@@ -198,6 +204,7 @@ impl VirtualDrive {
             if self.sim.axis.state() == AxisState::Disabled {
                 self.sim.enable(mode);
                 self.prev_target = None;
+                self.interpolation = None;
             }
             if cmd.fresh {
                 self.apply(cmd.mode, cmd.target, cmd.torque_offset);
@@ -213,9 +220,12 @@ impl VirtualDrive {
         match mode {
             OpMode::Csp => {
                 let q = self.units.increments_to_position(target);
-                let qd = self.prev_target.map(|p| (q - p) / self.period).unwrap_or(0.0);
+                let from = self.prev_target.unwrap_or(q);
+                let qd = (q - from) / self.period;
                 self.prev_target = Some(q);
-                self.sim.apply(Setpoint::Position(q, qd, tau / joint_inertia));
+                // linear interpolation from the last target to this one at every position-loop
+                // step of the period (the SYNC period may be longer than the position loop's)
+                self.interpolation = Some((from, q, qd, tau / joint_inertia));
             }
             OpMode::Csv => self
                 .sim
@@ -257,8 +267,20 @@ impl VirtualDrive {
         } else if !state.torque_on() && self.sim.axis.state() == AxisState::Enabled {
             self.sim.axis.disable();
         }
-        for _ in 0..self.ticks_per_cycle {
+        let csp = self.node.cia402.state() == DriveState::OperationEnabled && self.sim.axis.mode() == Mode::Position;
+        let steps = (self.ticks_per_cycle / self.ticks_per_position).max(1);
+        for s in 0..self.ticks_per_cycle {
+            if let (true, Some((from, to, qd, qdd))) = (csp, self.interpolation) {
+                if s % self.ticks_per_position == 0 {
+                    let k = (s / self.ticks_per_position + 1) as f64 / steps as f64;
+                    self.sim.apply(Setpoint::Position(from + (to - from) * k.min(1.0), qd, qdd));
+                }
+            }
             self.sim.step();
+        }
+        if let Some((_, to, _, _)) = self.interpolation {
+            // hold the reached target until the next RPDO (no extrapolation on stale data)
+            self.interpolation = Some((to, to, 0.0, 0.0));
         }
         if let AxisState::Stopping(f) | AxisState::Faulted(f) = self.sim.axis.state() {
             if self.node.cia402.state() != DriveState::Fault

@@ -167,7 +167,7 @@ fn report(args: &Args, reports: &[ChannelReport]) {
     let mut fault: Option<(String, StopReason)> = None;
     let mut worst_err: f64 = 0.0;
     let mut stop_cycles = 0u32;
-    let (mut missed, mut bad, mut skipped) = (0u64, 0u64, 0u64);
+    let (mut missed, mut bad, mut skipped, mut lost) = (0u64, 0u64, 0u64, 0u64);
     let completed = reports.iter().all(|r| r.completed);
     for r in reports {
         all.merge(&r.stats);
@@ -176,12 +176,13 @@ fn report(args: &Args, reports: &[ChannelReport]) {
         worst_err = worst_err.max(e);
         stop_cycles = stop_cycles.max(r.stopped_after.unwrap_or(0));
         missed += r.counters.missed_feedback;
+        lost += r.counters.tpdo_lost(r.axes);
         bad += r.counters.malformed + r.counters.out_of_range;
         skipped += r.skipped;
         let reason = r.stop_reason.map(|x| x.to_string()).unwrap_or_else(|| "none".into());
         println!(
             "ttctl: {}: {} cycles, stop: {reason} (all axes stopped after {} cycles), max tracking error {:.2e}, \
-             latency p50 {:.0} µs p99 {:.0} µs max {:.0} µs, deadline misses {}, skipped {}, missed feedback {}, rx {}",
+             latency p50 {:.0} µs p99 {:.0} µs max {:.0} µs, deadline misses {}, skipped {}, late/missed feedback {}, TPDO lost {}, rx {}",
             r.name,
             s.cycles,
             r.stopped_after.unwrap_or(0),
@@ -192,6 +193,7 @@ fn report(args: &Args, reports: &[ChannelReport]) {
             s.deadline_misses,
             r.skipped,
             r.counters.missed_feedback,
+            r.counters.tpdo_lost(r.axes),
             r.counters.rx
         );
         if let Some(x) = r.stop_reason {
@@ -215,6 +217,7 @@ fn report(args: &Args, reports: &[ChannelReport]) {
     lines.push(format!("max_tracking_error={worst_err:.3e}"));
     lines.push(format!("stop_cycles={stop_cycles}"));
     lines.push(format!("missed_feedback={missed}"));
+    lines.push(format!("frames_lost={lost}"));
     lines.push(format!("bad_frames={bad}"));
     lines.push(format!("cycles={}", s.cycles));
     lines.push(format!("skipped={skipped}"));

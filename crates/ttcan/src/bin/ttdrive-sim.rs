@@ -29,6 +29,9 @@ struct Args {
     /// SYNC period the drives expect, s (sets the physics step).
     #[arg(long, default_value_t = 1e-3)]
     period: f64,
+    /// Milliseconds without SYNC (power stage on) before a drive faults and stops.
+    #[arg(long, default_value_t = 20)]
+    sync_timeout_ms: u32,
     /// Position increments per joint unit (CiA 402 scaling, must match the controller).
     #[arg(long, default_value_t = 1e5)]
     increments_per_unit: f64,
@@ -146,7 +149,11 @@ fn run(
     let mut out = Frames::new();
     let mut drives: Vec<VirtualDrive> = nodes
         .iter()
-        .map(|&n| VirtualDrive::new(n, model, config, units, args.period, &mut out).unwrap_or_else(|e| fail(e)))
+        .map(|&n| {
+            let mut d = VirtualDrive::new(n, model, config, units, args.period, &mut out).unwrap_or_else(|e| fail(e));
+            d.sync_timeout_ms = args.sync_timeout_ms;
+            d
+        })
         .collect();
     send(&mut bus, &mut out);
     let start = Instant::now();
@@ -213,7 +220,12 @@ fn run(
         if seen && last_rx.elapsed().as_secs_f64() > args.idle_exit || start.elapsed().as_secs_f64() > args.duration {
             break;
         }
-        rt::sleep_until(rt::now_ns() + 100_000);
+        // sleep in the kernel until a frame arrives or the 1 ms time base is due
+        // (poll has 1 ms resolution: the time base may run up to 1 ms late, which only delays
+        // a heartbeat or the SYNC watchdog)
+        if rt::now_ns() < next_ms {
+            bus.wait_readable(1);
+        }
     }
     for d in &drives {
         let c = d.node().counters();

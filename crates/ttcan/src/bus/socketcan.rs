@@ -42,6 +42,15 @@ impl SocketCanBus {
         let timestamps = socket.set_recv_timestamp(true).is_ok();
         Ok(SocketCanBus { socket, timestamps })
     }
+
+    /// Blocks until a frame is waiting or `timeout_ms` ms have passed (for the virtual drives,
+    /// which have nothing to do between frames); true when readable.
+    pub fn wait_readable(&self, timeout_ms: u16) -> bool {
+        use nix::poll::{poll, PollFd, PollFlags};
+        use std::os::fd::AsFd;
+        let mut fds = [PollFd::new(self.socket.as_fd(), PollFlags::POLLIN)];
+        matches!(poll(&mut fds, timeout_ms), Ok(n) if n > 0)
+    }
 }
 
 fn decode_error(e: CanError) -> BusFault {

@@ -78,6 +78,8 @@ pub struct TelemetryRow {
 pub struct ChannelReport {
     /// Interface name.
     pub name: String,
+    /// Number of axes.
+    pub axes: usize,
     /// Why it stopped.
     pub stop_reason: Option<StopReason>,
     /// Cycles from the stop decision to all axes stopped.
@@ -88,7 +90,8 @@ pub struct ChannelReport {
     pub stats: CycleStats,
     /// Telemetry rows.
     pub telemetry: Vec<TelemetryRow>,
-    /// Largest |feedback − the target sent two cycles earlier| during the motion, per axis.
+    /// Largest |feedback − the target sent two cycles earlier| during the motion, per axis
+    /// (fresh feedback only).
     pub max_tracking_error: [f64; MAX_AXES_PER_CHANNEL],
     /// Frames that could not be sent (queue full).
     pub tx_full: u64,
@@ -232,7 +235,8 @@ pub fn run_channel<B: CanBus>(
             if let Some(fb) = master.feedback(a) {
                 row.q[a] = fb.q;
                 row.current[a] = fb.current;
-                if phase == Phase::Run && t >= 2.0 * period && master.stop_reason().is_none() {
+                let fresh = fb.received_cycle + 1 == master.counters().cycles;
+                if fresh && phase == Phase::Run && t >= 2.0 * period && master.stop_reason().is_none() {
                     max_err[a] = max_err[a].max((fb.q - refs[1][a]).abs());
                 }
             }
@@ -260,6 +264,7 @@ pub fn run_channel<B: CanBus>(
     }
     ChannelReport {
         name: name.to_string(),
+        axes: n,
         stop_reason: master.stop_reason(),
         stopped_after: master.stopped_after(),
         counters: master.counters(),

@@ -194,6 +194,17 @@ pub struct ChannelCounters {
     pub bus_faults: u64,
     /// SDO timeouts and aborts.
     pub sdo_failures: u64,
+    /// Valid TPDOs received.
+    pub tpdo_rx: u64,
+    /// TPDOs due: one per SYNC sent per axis, counted from the axis' first TPDO.
+    pub tpdo_expected: u64,
+}
+
+impl ChannelCounters {
+    /// TPDOs lost on the way (due − received, less the ones still in flight for the last SYNC).
+    pub fn tpdo_lost(&self, axes: usize) -> u64 {
+        self.tpdo_expected.saturating_sub(self.tpdo_rx + axes as u64)
+    }
 }
 
 /// Last feedback of one axis.
@@ -205,6 +216,8 @@ pub struct Feedback {
     pub current: f64,
     /// Statusword.
     pub statusword: u16,
+    /// Cycles the channel had completed when this feedback arrived (fresh for the cycle after).
+    pub received_cycle: u64,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -384,11 +397,13 @@ impl ChannelMaster {
                                     self.counters.duplicate_feedback += 1;
                                 }
                                 l.fresh = true;
+                                self.counters.tpdo_rx += 1;
                                 l.state = Some(s);
                                 l.feedback = Some(Feedback {
                                     q: l.cfg.units.increments_to_position(t.position),
                                     current,
                                     statusword: t.statusword,
+                                    received_cycle: self.counters.cycles,
                                 });
                             }
                         }
@@ -548,6 +563,9 @@ impl ChannelMaster {
             }
             l.controlword = cw;
             l.fresh = false;
+            if l.feedback.is_some() {
+                self.counters.tpdo_expected += 1;
+            }
             self.links[k] = Some(l);
         }
         if let Some(r) = bad_setpoint {
