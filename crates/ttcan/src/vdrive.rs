@@ -60,6 +60,7 @@ pub struct VirtualDrive {
     stop_reference: f64,
     failure: Option<Failure>,
     cycles: u64,
+    max_tracking_error: f64,
 }
 
 impl VirtualDrive {
@@ -92,6 +93,7 @@ impl VirtualDrive {
             stop_reference: 0.0,
             failure: None,
             cycles: 0,
+            max_tracking_error: 0.0,
         })
     }
 
@@ -118,6 +120,12 @@ impl VirtualDrive {
     /// True output position of the simulated joint, joint units.
     pub fn position(&self) -> f64 {
         self.sim.plant.output_position()
+    }
+
+    /// Largest |interpolated CSP target − measured position| at the position-loop steps while in
+    /// Operation Enabled, joint units: the drive's own tracking, independent of bus timing.
+    pub fn max_tracking_error(&self) -> f64 {
+        self.max_tracking_error
     }
 
     /// SYNC periods simulated.
@@ -277,6 +285,10 @@ impl VirtualDrive {
                 }
             }
             self.sim.step();
+            if csp && (s + 1) % self.ticks_per_position == 0 {
+                let e = (self.sim.axis.position_reference() - self.sim.axis.position()).abs();
+                self.max_tracking_error = self.max_tracking_error.max(e);
+            }
         }
         if let Some((_, to, _, _)) = self.interpolation {
             // hold the reached target until the next RPDO (no extrapolation on stale data)

@@ -176,7 +176,7 @@ fn report(args: &Args, reports: &[ChannelReport]) {
         worst_err = worst_err.max(e);
         stop_cycles = stop_cycles.max(r.stopped_after.unwrap_or(0));
         missed += r.counters.missed_feedback;
-        lost += r.counters.tpdo_lost(r.axes);
+        lost += r.counters.tpdo_lost();
         bad += r.counters.malformed + r.counters.out_of_range;
         skipped += r.skipped;
         let reason = r.stop_reason.map(|x| x.to_string()).unwrap_or_else(|| "none".into());
@@ -193,7 +193,7 @@ fn report(args: &Args, reports: &[ChannelReport]) {
             s.deadline_misses,
             r.skipped,
             r.counters.missed_feedback,
-            r.counters.tpdo_lost(r.axes),
+            r.counters.tpdo_lost(),
             r.counters.rx
         );
         if let Some(x) = r.stop_reason {

@@ -230,10 +230,11 @@ fn run(
     for d in &drives {
         let c = d.node().counters();
         println!(
-            "ttdrive-sim: {iface} node {}: state {:?}, position {:.6}, SYNC periods {}, missed RPDO {}, refused {}, malformed {}",
+            "ttdrive-sim: {iface} node {}: state {:?}, position {:.6}, max tracking error {:.3e}, SYNC periods {}, missed RPDO {}, refused {}, malformed {}",
             d.node().node(),
             d.node().cia402.state(),
             d.position(),
+            d.max_tracking_error(),
             d.cycles(),
             c.missed_rpdo,
             c.out_of_range,

@@ -262,6 +262,14 @@ pub fn run_channel<B: CanBus>(
             k += skip;
         }
     }
+    // drain what is still in flight (late TPDOs of the last SYNCs), so that the loss count is exact
+    let drain_until = now_ns() + 100 * plan.period_ns.max(1_000_000);
+    while now_ns() < drain_until {
+        while let Ok(Some(ev)) = bus.poll() {
+            master.on_event(&ev);
+        }
+        sleep_until(now_ns() + plan.period_ns);
+    }
     ChannelReport {
         name: name.to_string(),
         axes: n,

@@ -201,9 +201,9 @@ pub struct ChannelCounters {
 }
 
 impl ChannelCounters {
-    /// TPDOs lost on the way (due − received, less the ones still in flight for the last SYNC).
-    pub fn tpdo_lost(&self, axes: usize) -> u64 {
-        self.tpdo_expected.saturating_sub(self.tpdo_rx + axes as u64)
+    /// TPDOs lost on the way (due − received; call after the late ones were drained).
+    pub fn tpdo_lost(&self) -> u64 {
+        self.tpdo_expected.saturating_sub(self.tpdo_rx)
     }
 }
 
