@@ -281,7 +281,8 @@ impl VirtualDrive {
             if let (true, Some((from, to, qd, qdd))) = (csp, self.interpolation) {
                 if s % self.ticks_per_position == 0 {
                     let k = (s / self.ticks_per_position + 1) as f64 / steps as f64;
-                    self.sim.apply(Setpoint::Position(from + (to - from) * k.min(1.0), qd, qdd));
+                    self.sim
+                        .apply(Setpoint::Position(from + (to - from) * k.min(1.0), qd, qdd));
                 }
             }
             self.sim.step();

@@ -405,3 +405,33 @@ fn interrupt_brings_the_axes_to_a_controlled_stop() {
     let last = r.telemetry.last().unwrap();
     assert_eq!(last.phase, 4, "stopped");
 }
+
+#[test]
+fn lost_sdo_response_is_retried_and_configuration_completes() {
+    let mut r = rig();
+    // drop node 2's SDO responses for a while: one timeout, then the retry goes through
+    r.bus.set_faults(Faults {
+        drop_ids: vec![0x582],
+        ..Faults::default()
+    });
+    for _ in 0..60 {
+        r.step(0.0);
+    }
+    r.bus.set_faults(Faults::default());
+    r.enable();
+    assert!(r.master.counters().sdo_failures >= 1);
+    assert_eq!(r.master.stop_reason(), None);
+}
+
+#[test]
+fn drive_that_never_answers_sdo_fails_configuration() {
+    let mut r = rig();
+    r.bus.set_faults(Faults {
+        drop_ids: vec![0x582],
+        ..Faults::default()
+    });
+    for _ in 0..400 {
+        r.step(0.0);
+    }
+    assert_eq!(r.master.stop_reason(), Some(StopReason::ConfigurationFailed(2)));
+}

@@ -167,7 +167,7 @@ fn report(args: &Args, reports: &[ChannelReport]) {
     let mut fault: Option<(String, StopReason)> = None;
     let mut worst_err: f64 = 0.0;
     let mut stop_cycles = 0u32;
-    let (mut missed, mut bad, mut skipped, mut lost) = (0u64, 0u64, 0u64, 0u64);
+    let (mut missed, mut bad, mut skipped, mut lost, mut tx_full) = (0u64, 0u64, 0u64, 0u64, 0u64);
     let completed = reports.iter().all(|r| r.completed);
     for r in reports {
         all.merge(&r.stats);
@@ -177,6 +177,7 @@ fn report(args: &Args, reports: &[ChannelReport]) {
         stop_cycles = stop_cycles.max(r.stopped_after.unwrap_or(0));
         missed += r.counters.missed_feedback;
         lost += r.counters.tpdo_lost();
+        tx_full += r.tx_full;
         bad += r.counters.malformed + r.counters.out_of_range;
         skipped += r.skipped;
         let reason = r.stop_reason.map(|x| x.to_string()).unwrap_or_else(|| "none".into());
@@ -218,6 +219,7 @@ fn report(args: &Args, reports: &[ChannelReport]) {
     lines.push(format!("stop_cycles={stop_cycles}"));
     lines.push(format!("missed_feedback={missed}"));
     lines.push(format!("frames_lost={lost}"));
+    lines.push(format!("tx_full={tx_full}"));
     lines.push(format!("bad_frames={bad}"));
     lines.push(format!("cycles={}", s.cycles));
     lines.push(format!("skipped={skipped}"));

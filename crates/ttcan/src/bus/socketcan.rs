@@ -10,6 +10,9 @@ use socketcan::{
 use std::io;
 use std::time::UNIX_EPOCH;
 
+/// Receive buffer asked for on every socket, bytes (≈ 1500 frames).
+pub const RECEIVE_BUFFER_BYTES: usize = 1 << 20;
+
 /// One SocketCAN interface (e.g. `vcan0`, `can0`).
 pub struct SocketCanBus {
     socket: CanSocket,
@@ -40,6 +43,9 @@ impl SocketCanBus {
         socket.set_nonblocking(true)?;
         socket.set_error_filter_accept_all()?;
         let timestamps = socket.set_recv_timestamp(true).is_ok();
+        // a larger receive buffer rides out scheduling stalls without dropping frames (the kernel
+        // caps it at net.core.rmem_max)
+        let _ = socket.as_raw_socket().set_recv_buffer_size(RECEIVE_BUFFER_BYTES);
         Ok(SocketCanBus { socket, timestamps })
     }
 

@@ -226,6 +226,7 @@ struct Link {
     heartbeat: HeartbeatConsumer,
     sdo: SdoClient,
     config_step: u8,
+    sdo_retries: u8,
     state: Option<DriveState>,
     feedback: Option<Feedback>,
     fresh: bool,
@@ -236,6 +237,9 @@ struct Link {
 }
 
 const CONFIG_STEPS: u8 = 4;
+
+/// SDO timeouts tolerated per drive during configuration (frames can be lost: retry).
+pub const SDO_RETRIES: u8 = 3;
 
 /// The sans-I/O controller of one channel.
 #[derive(Debug, Clone)]
@@ -269,6 +273,7 @@ impl ChannelMaster {
                 heartbeat: HeartbeatConsumer::new(a.node, wd.heartbeat_cycles)?,
                 sdo: SdoClient::new(a.node, wd.sdo_cycles)?,
                 config_step: 0,
+                sdo_retries: 0,
                 state: None,
                 feedback: None,
                 fresh: false,
@@ -509,8 +514,12 @@ impl ChannelMaster {
                 }
             }
             if l.sdo.tick().is_some() {
+                // a lost request or response: the next cycle sends the request again
                 self.counters.sdo_failures += 1;
-                bad_setpoint.get_or_insert(StopReason::ConfigurationFailed(l.cfg.node));
+                l.sdo_retries += 1;
+                if l.sdo_retries > SDO_RETRIES {
+                    bad_setpoint.get_or_insert(StopReason::ConfigurationFailed(l.cfg.node));
+                }
             }
             all_configured &= l.config_step >= CONFIG_STEPS && l.feedback.is_some();
             let state = l.state.unwrap_or(DriveState::NotReadyToSwitchOn);
