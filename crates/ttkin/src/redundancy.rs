@@ -656,7 +656,7 @@ impl<'a> WlsStep<'a> {
 
 /// Manipulability √det(J Jᵀ) of an m × n task Jacobian (column-major slice), 0 when rank-deficient.
 pub fn manipulability(jac: &[f64], m: usize) -> f64 {
-    if m == 0 || m > MAX_TASK_DIM || jac.len() % m != 0 {
+    if m == 0 || m > MAX_TASK_DIM || !jac.len().is_multiple_of(m) {
         return 0.0;
     }
     let n = jac.len() / m;

@@ -22,9 +22,9 @@ use ttcan::runtime::trajectory::Trajectory;
 #[derive(Parser, Debug)]
 #[command(name = "ttctl", version)]
 struct Args {
-    /// Controller configuration (TOML: cycle_hz, bitrate, mode, approach_s, priority, [watchdog],
-    /// [[channel]] interface + [[channel.axis]] node/joint/units/limits). Default: 4 channels
-    /// vcan0..vcan3 × 2 axes (nodes 1, 2), joints 0–7.
+    /// Controller configuration (TOML: cycle_hz, bitrate, mode, approach_s, priority, a watchdog
+    /// table, channel tables with an interface and axis tables of node, joint, units, limits; see
+    /// docs/can.md). Default: 4 channels vcan0..vcan3 × 2 axes (nodes 1, 2), joints 0–7.
     #[arg(long, short)]
     config: Option<PathBuf>,
     /// Joint trajectory CSV (t,q…,qd…,qdd…,tau…), as written by ttmanip.ctl.write_trajectory.
