@@ -10,7 +10,7 @@ VM=target/vm
 echo "vm: boots Debian $(ls $VM/kernel/lib/modules) under TCG and checks, on real Linux SocketCAN:"
 echo "vm:   vcan0..3: ttctl drives 8 ttdrive-sim axes (4 channels × 2) through the gantry6 stroke"
 echo "vm:     (tracking bound, no missed feedback, no bad frame, latency statistics);"
-echo "vm:   EMCY and a drive leaving Operation Enabled → controlled stop of every axis;"
+echo "vm:   EMCY, a drive leaving Operation Enabled, malformed TPDOs → controlled stop of every axis;"
 echo "vm:   emulated Kvaser pair at 1 Mbit/s: the stroke, and an unplugged drive → controlled stop;"
 echo "vm:   a configuration over the bus budget refused."
 log=$VM/serial.log

@@ -38,7 +38,7 @@ run() {
     dargs=""
     while [ "$1" != "--" ]; do dargs="$dargs $1"; shift; done
     shift
-    ttdrive-sim $dargs --period 0.004 --sync-timeout-ms 200 --idle-exit 1.5 --duration 30 > "/tmp/$name.drives" 2>&1 &
+    ttdrive-sim $dargs --period 0.004 --sync-timeout-ms 1000 --idle-exit 1.5 --duration 30 > "/tmp/$name.drives" 2>&1 &
     dpid=$!
     sleep 0.3
     ttctl "$@" --stats "/tmp/$name.stats" --telemetry "/tmp/$name.csv" > "/tmp/$name.ctl" 2>&1
@@ -79,6 +79,13 @@ if run vcan-leave 2 $VCAN_DRIVES --fail leave-enabled:vcan2:2@1.6 -- --config /t
     s=/tmp/vcan-leave.stats; c=$(val stop_cycles $s)
     if val fault $s | grep -q "node 2: left Operation Enabled" && lt "$c" "$STOP_BOUND"; then pass vcan-leave "$(val fault $s), stopped after $c cycles"
     else failed vcan-leave "fault $(val fault $s), stop cycles $c"; fi
+fi
+
+# 3b. vcan: a drive sends malformed (3-byte) TPDOs
+if run vcan-malformed 2 $VCAN_DRIVES --fail malformed:vcan0:2@1.6 -- --config /ttmanip/vcan.toml --trajectory /ttmanip/stroke.csv; then
+    s=/tmp/vcan-malformed.stats; c=$(val stop_cycles $s)
+    if val fault $s | grep -q "node 2: malformed" && lt "$c" "$STOP_BOUND"; then pass vcan-malformed "$(val fault $s), stopped after $c cycles"
+    else failed vcan-malformed "fault $(val fault $s), stop cycles $c"; fi
 fi
 
 # 4. Kvaser pair at 1 Mbit/s: the stroke on one channel, 2 axes
