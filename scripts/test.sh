@@ -23,3 +23,7 @@ cargo test --quiet
 
 echo "== pytest"
 .venv/bin/python -m pytest -q tests
+
+echo "== VM: CiA 402 over real Linux SocketCAN (QEMU/TCG; scripts/vm, tests/vm)"
+bash scripts/vm/build.sh
+bash scripts/vm/run.sh

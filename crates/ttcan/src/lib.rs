@@ -13,12 +13,15 @@
 
 pub mod axis;
 pub mod axis_config;
+pub mod bus;
+pub mod canopen;
 pub mod cases;
 pub mod coupled;
 pub mod error;
 pub mod loops;
 pub mod motor;
 pub mod observer;
+pub mod runtime;
 pub mod schedule;
 pub mod setpoint;
 pub mod sim;
@@ -26,6 +29,7 @@ pub mod sizing;
 pub mod stepper;
 pub mod thermal;
 pub mod tuning;
+pub mod vdrive;
 
 pub use axis::{Axis, AxisConfig, AxisState, Fault, HoldingBrake, Mode, Reaction};
 pub use coupled::{CoupledOptions, CoupledSim, CoupledTrace, EnergyBalance};

@@ -303,7 +303,7 @@ impl Chain {
     /// Validates a batch: `qs` is N × n finite values and `out_len` is N × `per_item`.
     fn batch_count(&self, qs: &[f64], out_len: usize, per_item: usize) -> Result<usize> {
         let n = self.dof();
-        if qs.len() % n != 0 {
+        if !qs.len().is_multiple_of(n) {
             return Err(Error::shape(
                 "q",
                 format!("N × {n} values"),

@@ -303,7 +303,7 @@ impl Analytic {
         counts: &mut [usize],
     ) -> Result<()> {
         let n = self.dof();
-        if targets.len() % 16 != 0 {
+        if !targets.len().is_multiple_of(16) {
             return Err(Error::shape("targets", "N × 16 values", targets.len()));
         }
         let count = targets.len() / 16;

@@ -1,0 +1,117 @@
+//! CANopen benches: encode + decode of one cycle's frames for 8 axes (8 RPDOs, a SYNC, 8 TPDOs),
+//! and the controller's per-cycle work for 8 axes (4 channels × 2: read the TPDOs, watchdog,
+//! update, write RPDOs + SYNC). Budget: each ≤ 2 µs.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use std::hint::black_box;
+use ttcan::bus::BusEvent;
+use ttcan::canopen::cia402::OpMode;
+use ttcan::canopen::nmt::{decode_sync, encode_sync};
+use ttcan::canopen::node::{DriveNode, NodeEvent};
+use ttcan::canopen::{Frame, Frames, Rpdo, Tpdo, Units};
+use ttcan::runtime::master::{AxisSetpoint, ChannelMaster, LinkConfig, Phase, WatchdogConfig};
+
+fn encode_decode(c: &mut Criterion) {
+    c.bench_function("canopen_encode_decode_cycle_8_axes", |b| {
+        let mut k = 0i32;
+        b.iter(|| {
+            k = k.wrapping_add(1);
+            let mut sum = 0i64;
+            let mut frames = [Frame::default(); 17];
+            for n in 0..8u8 {
+                frames[n as usize] = Rpdo {
+                    target: k + n as i32,
+                    torque_offset: 12,
+                    controlword: 0x0F,
+                }
+                .encode(n + 1)
+                .unwrap();
+                frames[8 + n as usize] = Tpdo {
+                    position: k - n as i32,
+                    current: -40,
+                    statusword: 0x1637,
+                }
+                .encode(n + 1)
+                .unwrap();
+            }
+            frames[16] = encode_sync();
+            for f in &frames[..8] {
+                let (n, r) = Rpdo::decode(black_box(f)).unwrap();
+                sum += r.target as i64 + n as i64;
+            }
+            for f in &frames[8..16] {
+                let (n, t) = Tpdo::decode(black_box(f)).unwrap();
+                sum += t.position as i64 + t.statusword as i64 + n as i64;
+            }
+            sum += decode_sync(&frames[16]).unwrap().unwrap_or(0) as i64;
+            black_box(sum)
+        })
+    });
+}
+
+/// A channel master brought to Run by two protocol-only drive nodes; returns it and the TPDOs the
+/// drives answer a steady-state SYNC with.
+fn running_channel() -> (ChannelMaster, Vec<BusEvent>) {
+    let links: Vec<LinkConfig> = (1..=2)
+        .map(|n| LinkConfig {
+            node: n,
+            units: Units::default(),
+            following_error_limit: 0.05,
+            max_current: 10.0,
+        })
+        .collect();
+    let mut m = ChannelMaster::new(&links, OpMode::Csp, WatchdogConfig::default()).unwrap();
+    let mut boot = Frames::new();
+    let mut nodes: Vec<DriveNode> = (1..=2).map(|n| DriveNode::new(n, &mut boot).unwrap()).collect();
+    let mut last = Vec::new();
+    for _ in 0..100 {
+        let mut out = Frames::new();
+        m.cycle(&[AxisSetpoint::default(); 2], &mut out);
+        last.clear();
+        for f in out.as_slice() {
+            for n in nodes.iter_mut() {
+                let mut back = Frames::new();
+                if n.on_frame(f, &mut back) == NodeEvent::Sync {
+                    n.on_sync(0, 0, 0, 1000, &mut back);
+                }
+                for g in back.as_slice() {
+                    let ev = BusEvent::Frame {
+                        frame: *g,
+                        timestamp_ns: 0,
+                    };
+                    m.on_event(&ev);
+                    last.push(ev);
+                }
+            }
+        }
+        if m.phase() == Phase::Run {
+            break;
+        }
+    }
+    assert_eq!(m.phase(), Phase::Run);
+    (m, last)
+}
+
+fn controller_cycle(c: &mut Criterion) {
+    let mut channels: Vec<(ChannelMaster, Vec<BusEvent>)> = (0..4).map(|_| running_channel()).collect();
+    let sp = [AxisSetpoint::default(); 2];
+    c.bench_function("controller_cycle_8_axes", |b| {
+        let mut out = Frames::new();
+        b.iter(|| {
+            for (m, tpdos) in channels.iter_mut() {
+                for ev in tpdos.iter() {
+                    m.on_event(black_box(ev));
+                }
+                out.clear();
+                m.cycle(black_box(&sp), &mut out);
+                black_box(out.len());
+            }
+        })
+    });
+    for (m, _) in &channels {
+        assert_eq!(m.stop_reason(), None, "the benchmarked channels stayed in Run");
+    }
+}
+
+criterion_group!(benches, encode_decode, controller_cycle);
+criterion_main!(benches);

@@ -1,0 +1,268 @@
+//! `ttctl`: the embedded controller. Loads the controller configuration (TOML), checks it (keys,
+//! values, bus budget), opens one SocketCAN interface per channel, and runs one real-time thread
+//! per channel that boots, configures and enables the CiA 402 drives and then follows a joint
+//! trajectory file (written by `ttmanip.ctl.write_trajectory`) or the built-in demo motion.
+//! SIGINT/SIGTERM bring every axis to a controlled stop. Prints and saves latency statistics,
+//! writes telemetry CSV. Exit status: 0 motion completed, 2 stopped by a fault, 1 bad input.
+
+use clap::Parser;
+use std::io::Write;
+use std::path::PathBuf;
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
+use ttcan::bus::socketcan::SocketCanBus;
+use ttcan::runtime::channel::{run_channel, ChannelPlan, ChannelReport, Shared};
+use ttcan::runtime::config::ControllerConfig;
+use ttcan::runtime::master::{ChannelMaster, StopReason, MAX_AXES_PER_CHANNEL};
+use ttcan::runtime::rt;
+use ttcan::runtime::stats::CycleStats;
+use ttcan::runtime::trajectory::Trajectory;
+
+/// Embedded controller: CiA 402 drives over SocketCAN, one real-time thread per channel.
+#[derive(Parser, Debug)]
+#[command(name = "ttctl", version)]
+struct Args {
+    /// Controller configuration (TOML: cycle_hz, bitrate, mode, approach_s, priority, a watchdog
+    /// table, channel tables with an interface and axis tables of node, joint, units, limits; see
+    /// docs/can.md). Default: 4 channels vcan0..vcan3 × 2 axes (nodes 1, 2), joints 0–7.
+    #[arg(long, short)]
+    config: Option<PathBuf>,
+    /// Joint trajectory CSV (t,q…,qd…,qdd…,tau…), as written by ttmanip.ctl.write_trajectory.
+    #[arg(long, short, conflicts_with = "demo")]
+    trajectory: Option<PathBuf>,
+    /// Run the built-in demo motion (every axis ±AMPLITUDE and back over 2 s) instead of a file.
+    #[arg(long)]
+    demo: bool,
+    /// Amplitude of the demo motion, joint units (rad or m).
+    #[arg(long, default_value_t = 0.3)]
+    amplitude: f64,
+    /// Write telemetry (one row per channel and cycle) to this CSV file.
+    #[arg(long)]
+    telemetry: Option<PathBuf>,
+    /// Write the latency statistics and the result (key=value lines) to this file.
+    #[arg(long)]
+    stats: Option<PathBuf>,
+    /// Stop (controlled) after this many seconds whatever happens.
+    #[arg(long, default_value_t = 60.0)]
+    max_seconds: f64,
+    /// Only check the configuration (syntax, values, bus budget), print the bus loads and exit.
+    #[arg(long)]
+    check: bool,
+}
+
+fn fail(msg: impl std::fmt::Display) -> ! {
+    eprintln!("ttctl: {msg}");
+    std::process::exit(1)
+}
+
+fn main() {
+    let args = Args::parse();
+    let cfg = match &args.config {
+        Some(p) => {
+            let text = std::fs::read_to_string(p).unwrap_or_else(|e| fail(format!("{}: {e}", p.display())));
+            ControllerConfig::from_toml(&text, &p.display().to_string()).unwrap_or_else(|e| fail(e))
+        }
+        None => ControllerConfig::default_layout(),
+    };
+    let loads = cfg.check("configuration").unwrap_or_else(|e| fail(e));
+    for (ch, l) in cfg.channel.iter().zip(&loads) {
+        println!(
+            "ttctl: channel {} {} axes, bus load {:.1}–{:.1} % (limit {:.0} %)",
+            ch.interface,
+            ch.axis.len(),
+            l.nominal * 100.0,
+            l.worst * 100.0,
+            ttcan::canopen::budget::MAX_BUS_LOAD * 100.0
+        );
+    }
+    if args.check {
+        return;
+    }
+    let traj = match &args.trajectory {
+        Some(p) => {
+            let text = std::fs::read_to_string(p).unwrap_or_else(|e| fail(format!("{}: {e}", p.display())));
+            Trajectory::parse(&text).unwrap_or_else(|e| fail(format!("{}: {e}", p.display())))
+        }
+        None if args.demo => {
+            let n = cfg
+                .channel
+                .iter()
+                .flat_map(|c| c.axis.iter())
+                .filter_map(|a| a.joint)
+                .max()
+                .map_or(1, |j| j + 1);
+            Trajectory::demo(n, args.amplitude, 2.0)
+        }
+        None => fail("give --trajectory FILE or --demo"),
+    };
+    if let Some(n) = cfg.joints {
+        if traj.joints() != n {
+            fail(format!(
+                "trajectory has {} joints, the configuration's robot {} has {n}",
+                traj.joints(),
+                cfg.robot.as_deref().unwrap_or("")
+            ));
+        }
+    }
+    let interrupt = Arc::new(AtomicBool::new(false));
+    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        if let Err(e) = signal_hook::flag::register(sig, interrupt.clone()) {
+            eprintln!("ttctl: warning: cannot handle signal {sig}: {e}");
+        }
+    }
+    if let Err(w) = rt::lock_memory() {
+        eprintln!("ttctl: warning: {w}");
+    }
+    let mut buses = Vec::new();
+    for ch in &cfg.channel {
+        buses.push(
+            SocketCanBus::open(&ch.interface)
+                .unwrap_or_else(|e| fail(format!("cannot open CAN interface {}: {e}", ch.interface))),
+        );
+    }
+    let period_ns = (1e9 / cfg.cycle_hz).round() as u64;
+    let shared = Shared::new(cfg.channel.len(), interrupt);
+    let t0 = rt::now_ns() + 20 * period_ns;
+    let max_cycles = (args.max_seconds * cfg.cycle_hz) as u64;
+    let reports: Vec<ChannelReport> = std::thread::scope(|s| {
+        let handles: Vec<_> = cfg
+            .channel
+            .iter()
+            .zip(buses.iter_mut())
+            .map(|(ch, bus)| {
+                let links: Vec<_> = ch.axis.iter().map(|a| a.link()).collect();
+                let master = ChannelMaster::new(&links, cfg.mode, cfg.watchdog)
+                    .unwrap_or_else(|e| fail(format!("{}: {e}", ch.interface)));
+                let mut joints = [None; MAX_AXES_PER_CHANNEL];
+                for (k, a) in ch.axis.iter().enumerate() {
+                    joints[k] = a.joint;
+                }
+                let plan = ChannelPlan {
+                    joints,
+                    approach_s: cfg.approach_s,
+                    period_ns,
+                    t0_ns: t0,
+                    max_cycles,
+                };
+                let (traj, shared, prio) = (&traj, &shared, cfg.priority);
+                s.spawn(move || {
+                    if let Err(w) = rt::make_thread_realtime(prio) {
+                        eprintln!("ttctl: warning: {}: {w}", ch.interface);
+                    }
+                    run_channel(&ch.interface, bus, master, traj, &plan, shared)
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().unwrap_or_else(|_| fail("a channel thread panicked")))
+            .collect()
+    });
+    report(&args, &reports);
+}
+
+fn report(args: &Args, reports: &[ChannelReport]) {
+    let mut all = CycleStats::new();
+    let mut lines = Vec::new();
+    let mut fault: Option<(String, StopReason)> = None;
+    let mut worst_err: f64 = 0.0;
+    let mut stop_cycles = 0u32;
+    let (mut missed, mut bad, mut skipped, mut lost, mut tx_full) = (0u64, 0u64, 0u64, 0u64, 0u64);
+    let completed = reports.iter().all(|r| r.completed);
+    for r in reports {
+        all.merge(&r.stats);
+        let s = r.stats.summary();
+        let e = r.max_tracking_error.iter().fold(0.0f64, |m, x| m.max(*x));
+        worst_err = worst_err.max(e);
+        stop_cycles = stop_cycles.max(r.stopped_after.unwrap_or(0));
+        missed += r.counters.missed_feedback;
+        lost += r.counters.tpdo_lost();
+        tx_full += r.tx_full;
+        bad += r.counters.malformed + r.counters.out_of_range;
+        skipped += r.skipped;
+        let reason = r.stop_reason.map(|x| x.to_string()).unwrap_or_else(|| "none".into());
+        println!(
+            "ttctl: {}: {} cycles, stop: {reason} (all axes stopped after {} cycles), max tracking error {:.2e}, \
+             latency p50 {:.0} µs p99 {:.0} µs max {:.0} µs, deadline misses {}, skipped {}, late/missed feedback {}, TPDO lost {}, rx {}",
+            r.name,
+            s.cycles,
+            r.stopped_after.unwrap_or(0),
+            e,
+            s.p50_us,
+            s.p99_us,
+            s.max_us,
+            s.deadline_misses,
+            r.skipped,
+            r.counters.missed_feedback,
+            r.counters.tpdo_lost(),
+            r.counters.rx
+        );
+        if let Some(x) = r.stop_reason {
+            if !matches!(x, StopReason::Requested | StopReason::OtherChannel) && fault.is_none() {
+                fault = Some((r.name.clone(), x));
+            }
+        }
+    }
+    let s = all.summary();
+    if let Some((ch, x)) = &fault {
+        println!("ttctl: controlled stop of every axis: {ch}: {x}");
+    }
+    lines.push(format!("completed={}", completed as u8));
+    lines.push(format!(
+        "fault={}",
+        fault
+            .as_ref()
+            .map(|(c, x)| format!("{c}: {x}"))
+            .unwrap_or_else(|| "none".into())
+    ));
+    lines.push(format!("max_tracking_error={worst_err:.3e}"));
+    lines.push(format!("stop_cycles={stop_cycles}"));
+    lines.push(format!("missed_feedback={missed}"));
+    lines.push(format!("frames_lost={lost}"));
+    lines.push(format!("tx_full={tx_full}"));
+    lines.push(format!("bad_frames={bad}"));
+    lines.push(format!("cycles={}", s.cycles));
+    lines.push(format!("skipped={skipped}"));
+    lines.push(format!("latency_p50_us={:.1}", s.p50_us));
+    lines.push(format!("latency_p99_us={:.1}", s.p99_us));
+    lines.push(format!("latency_max_us={:.1}", s.max_us));
+    lines.push(format!("deadline_misses={}", s.deadline_misses));
+    lines.push(format!("work_mean_us={:.1}", s.mean_work_us));
+    println!("ttctl: RESULT {}", lines.join(" "));
+    if let Some(p) = &args.stats {
+        if let Err(e) = std::fs::write(p, lines.join("\n") + "\n") {
+            eprintln!("ttctl: cannot write {}: {e}", p.display());
+        }
+    }
+    if let Some(p) = &args.telemetry {
+        if let Err(e) = write_telemetry(p, reports) {
+            eprintln!("ttctl: cannot write {}: {e}", p.display());
+        }
+    }
+    if fault.is_some() {
+        std::process::exit(2);
+    }
+}
+
+fn write_telemetry(p: &std::path::Path, reports: &[ChannelReport]) -> std::io::Result<()> {
+    let mut w = std::io::BufWriter::new(std::fs::File::create(p)?);
+    write!(w, "channel,cycle,t,phase,latency_us")?;
+    for a in 0..MAX_AXES_PER_CHANNEL {
+        write!(w, ",q_ref{a},q{a},current{a}")?;
+    }
+    writeln!(w)?;
+    for r in reports {
+        for row in &r.telemetry {
+            write!(
+                w,
+                "{},{},{:.4},{},{:.1}",
+                r.name, row.cycle, row.t, row.phase, row.latency_us
+            )?;
+            for a in 0..MAX_AXES_PER_CHANNEL {
+                write!(w, ",{:.6},{:.6},{:.4}", row.q_ref[a], row.q[a], row.current[a])?;
+            }
+            writeln!(w)?;
+        }
+    }
+    w.flush()
+}

@@ -1,0 +1,281 @@
+//! The controller's configuration file (TOML): cycle rate, bit rate, mode, watchdog, and the
+//! channels with their axes (node id, trajectory joint, scaling, limits). Checked once at load:
+//! syntax and unknown keys (the `toml` error names the line and the key), node ids, joint indices,
+//! and the bus budget of every channel ([`crate::canopen::budget`]).
+
+use super::master::{LinkConfig, WatchdogConfig, MAX_AXES_PER_CHANNEL};
+use crate::canopen::budget::{check_channel, BusLoad, ChannelTraffic};
+use crate::canopen::cia402::OpMode;
+use crate::canopen::Units;
+
+/// One axis of a channel.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AxisEntry {
+    /// CANopen node id (1–127).
+    pub node: u8,
+    /// Trajectory joint this axis follows (0-based); absent: the axis holds its position.
+    pub joint: Option<usize>,
+    /// SI ↔ CiA 402 scaling.
+    #[serde(default)]
+    pub units: Units,
+    /// Following-error limit, joint units.
+    #[serde(default = "fe")]
+    pub following_error_limit: f64,
+    /// Largest plausible |current| from the drive, A.
+    #[serde(default = "mc")]
+    pub max_current: f64,
+}
+
+fn fe() -> f64 {
+    0.05
+}
+fn mc() -> f64 {
+    10.0
+}
+
+impl AxisEntry {
+    /// The controller's view of the axis.
+    pub fn link(&self) -> LinkConfig {
+        LinkConfig {
+            node: self.node,
+            units: self.units,
+            following_error_limit: self.following_error_limit,
+            max_current: self.max_current,
+        }
+    }
+}
+
+/// One CAN channel (interface) with its axes.
+#[derive(Debug, Clone, PartialEq, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ChannelEntry {
+    /// Interface name (`vcan0`, `can0`, ...).
+    pub interface: String,
+    /// Axes on this channel.
+    pub axis: Vec<AxisEntry>,
+}
+
+/// The whole controller configuration.
+#[derive(Debug, Clone, PartialEq, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ControllerConfig {
+    /// Robot the trajectory is for (a label checked against the trajectory's joint count).
+    #[serde(default)]
+    pub robot: Option<String>,
+    /// Number of joints of the robot (checked against the trajectory).
+    #[serde(default)]
+    pub joints: Option<usize>,
+    /// SYNC / cycle rate, Hz.
+    #[serde(default = "hz")]
+    pub cycle_hz: f64,
+    /// Bit rate of every channel, bit/s.
+    #[serde(default = "br")]
+    pub bitrate: f64,
+    /// Mode of operation of every drive.
+    #[serde(default = "csp")]
+    pub mode: OpMode,
+    /// Duration of the approach from the present position to the trajectory's start, s.
+    #[serde(default = "ap")]
+    pub approach_s: f64,
+    /// SCHED_FIFO priority of the channel threads.
+    #[serde(default = "prio")]
+    pub priority: u8,
+    /// Watchdog timing.
+    #[serde(default)]
+    pub watchdog: WatchdogConfig,
+    /// The channels.
+    pub channel: Vec<ChannelEntry>,
+}
+
+fn hz() -> f64 {
+    1000.0
+}
+fn br() -> f64 {
+    1e6
+}
+fn csp() -> OpMode {
+    OpMode::Csp
+}
+fn ap() -> f64 {
+    1.0
+}
+fn prio() -> u8 {
+    80
+}
+
+/// A refused configuration.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ConfigError {
+    /// TOML syntax, an unknown key or a wrong type (the message names line and key).
+    #[error("{source_name}: {message}")]
+    Parse {
+        /// File name.
+        source_name: String,
+        /// The `toml` message with line, column and key.
+        message: String,
+    },
+    /// A value is not acceptable.
+    #[error("{source_name}: {message}")]
+    Invalid {
+        /// File name.
+        source_name: String,
+        /// What and where.
+        message: String,
+    },
+    /// A channel over the bus budget.
+    #[error("{source_name}: {0}", source_name = .1)]
+    Budget(crate::canopen::budget::OverBudget, String),
+}
+
+impl ControllerConfig {
+    /// The default layout: 4 channels `vcan0..3` × 2 axes (nodes 1, 2), joints 0–7, 1 kHz, CSP.
+    pub fn default_layout() -> Self {
+        let channel = (0..4)
+            .map(|c| ChannelEntry {
+                interface: format!("vcan{c}"),
+                axis: (0..2)
+                    .map(|a| AxisEntry {
+                        node: a as u8 + 1,
+                        joint: Some(2 * c + a),
+                        units: Units::default(),
+                        following_error_limit: fe(),
+                        max_current: mc(),
+                    })
+                    .collect(),
+            })
+            .collect();
+        ControllerConfig {
+            robot: None,
+            joints: None,
+            cycle_hz: hz(),
+            bitrate: br(),
+            mode: OpMode::Csp,
+            approach_s: ap(),
+            priority: prio(),
+            watchdog: WatchdogConfig::default(),
+            channel,
+        }
+    }
+
+    /// Parses and checks a configuration; `source_name` names the file in messages.
+    pub fn from_toml(text: &str, source_name: &str) -> Result<Self, ConfigError> {
+        let c: ControllerConfig = toml::from_str(text).map_err(|e| ConfigError::Parse {
+            source_name: source_name.to_string(),
+            message: e.to_string(),
+        })?;
+        c.check(source_name)?;
+        Ok(c)
+    }
+
+    /// Checks values and the bus budget; returns the load of every channel.
+    pub fn check(&self, source_name: &str) -> Result<Vec<BusLoad>, ConfigError> {
+        let invalid = |message: String| ConfigError::Invalid {
+            source_name: source_name.to_string(),
+            message,
+        };
+        if !(self.cycle_hz.is_finite() && self.cycle_hz > 0.0 && self.cycle_hz <= 10_000.0) {
+            return Err(invalid(format!("cycle_hz = {}: must be in (0, 10000]", self.cycle_hz)));
+        }
+        if !(self.bitrate.is_finite() && self.bitrate >= 10_000.0 && self.bitrate <= 1e6) {
+            return Err(invalid(format!(
+                "bitrate = {}: must be in [10000, 1000000] (classical CAN)",
+                self.bitrate
+            )));
+        }
+        if !(self.approach_s.is_finite() && self.approach_s >= 0.0) {
+            return Err(invalid(format!("approach_s = {}: must be >= 0", self.approach_s)));
+        }
+        if self.channel.is_empty() {
+            return Err(invalid("no [[channel]]".into()));
+        }
+        let mut loads = Vec::new();
+        for (c, ch) in self.channel.iter().enumerate() {
+            if ch.axis.is_empty() || ch.axis.len() > MAX_AXES_PER_CHANNEL {
+                return Err(invalid(format!(
+                    "channel[{c}] ({}): {} axes, 1..={MAX_AXES_PER_CHANNEL} allowed",
+                    ch.interface,
+                    ch.axis.len()
+                )));
+            }
+            for (a, ax) in ch.axis.iter().enumerate() {
+                if !(1..=127).contains(&ax.node) {
+                    return Err(invalid(format!(
+                        "channel[{c}].axis[{a}].node = {}: must be 1..=127",
+                        ax.node
+                    )));
+                }
+                if ch.axis[..a].iter().any(|o| o.node == ax.node) {
+                    return Err(invalid(format!(
+                        "channel[{c}].axis[{a}].node = {}: used twice on {}",
+                        ax.node, ch.interface
+                    )));
+                }
+                if let (Some(j), Some(n)) = (ax.joint, self.joints) {
+                    if j >= n {
+                        return Err(invalid(format!(
+                            "channel[{c}].axis[{a}].joint = {j}: the robot has {n} joints"
+                        )));
+                    }
+                }
+                if ax.units.validate().is_err() {
+                    return Err(invalid(format!(
+                        "channel[{c}].axis[{a}].units: every factor must be finite and > 0"
+                    )));
+                }
+                if !(ax.following_error_limit.is_finite() && ax.following_error_limit > 0.0) {
+                    return Err(invalid(format!(
+                        "channel[{c}].axis[{a}].following_error_limit must be > 0"
+                    )));
+                }
+            }
+            let traffic = ChannelTraffic {
+                axes: ch.axis.len() as u32,
+                cycle_hz: self.cycle_hz,
+                bitrate: self.bitrate,
+                heartbeat_period: self.watchdog.heartbeat_period_ms as f64 / 1000.0,
+            };
+            loads.push(
+                check_channel(&ch.interface, &traffic).map_err(|e| ConfigError::Budget(e, source_name.to_string()))?,
+            );
+        }
+        Ok(loads)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_layout_passes_the_budget() {
+        let loads = ControllerConfig::default_layout().check("default").unwrap();
+        assert_eq!(loads.len(), 4);
+        assert!(loads.iter().all(|l| l.worst < 0.6));
+    }
+
+    #[test]
+    fn unknown_key_is_named_with_its_line() {
+        let text = "cycle_hz = 1000\n[[channel]]\ninterface = \"vcan0\"\n[[channel.axis]]\nnode = 1\nfollowing_eror_limit = 0.1\n";
+        let e = ControllerConfig::from_toml(text, "ctl.toml").unwrap_err().to_string();
+        assert!(
+            e.contains("ctl.toml") && e.contains("line 6") && e.contains("following_eror_limit"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn three_axes_per_channel_are_refused_with_the_numbers() {
+        let text = "[[channel]]\ninterface = \"can0\"\n[[channel.axis]]\nnode = 1\n[[channel.axis]]\nnode = 2\n[[channel.axis]]\nnode = 3\n";
+        let e = ControllerConfig::from_toml(text, "ctl.toml").unwrap_err().to_string();
+        assert!(
+            e.contains("can0") && e.contains("3 axes") && e.contains("71.") && e.contains("86."),
+            "{e}"
+        );
+        let dup = "[[channel]]\ninterface = \"can0\"\n[[channel.axis]]\nnode = 1\n[[channel.axis]]\nnode = 1\n";
+        assert!(ControllerConfig::from_toml(dup, "x")
+            .unwrap_err()
+            .to_string()
+            .contains("used twice"));
+    }
+}

@@ -1,0 +1,638 @@
+//! The controller's side of one channel, sans-I/O (read → update → write once per cycle, after
+//! ros2_control): events in ([`ChannelMaster::on_event`]), then [`ChannelMaster::cycle`] with the
+//! joint setpoints writes the RPDOs and the SYNC. It boots the drives (NMT Start), configures them
+//! over SDO (mode 0x6060, heartbeat 0x1017, device type 0x1000 checked), enables them through the
+//! CiA 402 state machine holding their present position, and watches them: missing feedback for
+//! k cycles, an EMCY, bus-off, a following error, heartbeat loss, a drive leaving Operation
+//! Enabled, a malformed or out-of-range frame from a drive: each brings every axis to a controlled
+//! stop (controlword Quick Stop), with the reason kept. Fixed capacity, no allocation.
+
+use crate::bus::{BusEvent, BusFault};
+use crate::canopen::cia402::{controlword_towards_enabled, DriveState, OpMode, CW_QUICK_STOP};
+use crate::canopen::emcy::Emcy;
+use crate::canopen::frame::{Cob, Frame, Frames};
+use crate::canopen::nmt::{encode_nmt, encode_sync, HeartbeatConsumer, NmtCommand};
+use crate::canopen::od;
+use crate::canopen::pdo::{Rpdo, Tpdo};
+use crate::canopen::sdo::{SdoClient, SdoRequest, SdoResponse};
+use crate::canopen::{ProtocolError, Units};
+
+/// Most axes on one channel (the bus budget allows 2 at 1 kHz and 1 Mbit/s).
+pub const MAX_AXES_PER_CHANNEL: usize = 4;
+
+/// One axis as the controller sees it.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LinkConfig {
+    /// CANopen node id of the drive (1–127).
+    pub node: u8,
+    /// SI ↔ CiA 402 integer scaling.
+    #[serde(default)]
+    pub units: Units,
+    /// Largest |target − position| before the watchdog stops, joint units (rad or m).
+    #[serde(default = "default_following")]
+    pub following_error_limit: f64,
+    /// Largest |current| accepted from the drive, A (a larger value is an out-of-range frame).
+    #[serde(default = "default_current")]
+    pub max_current: f64,
+}
+
+fn default_following() -> f64 {
+    0.05
+}
+
+fn default_current() -> f64 {
+    10.0
+}
+
+/// Watchdog and protocol timing, in cycles.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WatchdogConfig {
+    /// Cycles in a row without feedback (TPDO) before a stop.
+    #[serde(default = "wd_feedback")]
+    pub feedback_cycles: u32,
+    /// Heartbeat consumer timeout, cycles.
+    #[serde(default = "wd_heartbeat")]
+    pub heartbeat_cycles: u32,
+    /// Heartbeat period the drives are configured with, ms.
+    #[serde(default = "wd_hb_period")]
+    pub heartbeat_period_ms: u16,
+    /// SDO response timeout, cycles.
+    #[serde(default = "wd_sdo")]
+    pub sdo_cycles: u32,
+    /// Cycles allowed from start to every axis in Operation Enabled.
+    #[serde(default = "wd_enable")]
+    pub enable_cycles: u32,
+    /// Cycles the controlled stop may take before the channel reports stopped anyway.
+    #[serde(default = "wd_stop")]
+    pub stop_cycles: u32,
+}
+
+fn wd_feedback() -> u32 {
+    3
+}
+fn wd_heartbeat() -> u32 {
+    250
+}
+fn wd_hb_period() -> u16 {
+    100
+}
+fn wd_sdo() -> u32 {
+    50
+}
+fn wd_enable() -> u32 {
+    2000
+}
+fn wd_stop() -> u32 {
+    1000
+}
+
+impl Default for WatchdogConfig {
+    fn default() -> Self {
+        WatchdogConfig {
+            feedback_cycles: wd_feedback(),
+            heartbeat_cycles: wd_heartbeat(),
+            heartbeat_period_ms: wd_hb_period(),
+            sdo_cycles: wd_sdo(),
+            enable_cycles: wd_enable(),
+            stop_cycles: wd_stop(),
+        }
+    }
+}
+
+/// Why the controller stopped the axes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StopReason {
+    /// Asked for (end of the motion, SIGINT/SIGTERM).
+    Requested,
+    /// Another channel stopped.
+    OtherChannel,
+    /// No TPDO from `node` for the configured number of cycles.
+    MissingFeedback(u8),
+    /// `node` sent an emergency with this error code.
+    Emcy(u8, u16),
+    /// The channel went bus-off or down.
+    BusOff,
+    /// The heartbeat of `node` expired.
+    HeartbeatLost(u8),
+    /// |target − position| of `node` exceeded its limit.
+    FollowingError(u8),
+    /// `node` left Operation Enabled while running.
+    LeftOperationEnabled(u8),
+    /// `node` sent a malformed or out-of-range frame.
+    BadFrame(u8),
+    /// Configuration of `node` over SDO failed.
+    ConfigurationFailed(u8),
+    /// The drives did not all reach Operation Enabled in time.
+    EnableTimeout,
+    /// A setpoint could not be encoded (NaN, or outside the integer range).
+    BadSetpoint(u8),
+}
+
+impl std::fmt::Display for StopReason {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            StopReason::Requested => write!(f, "stop requested"),
+            StopReason::OtherChannel => write!(f, "another channel stopped"),
+            StopReason::MissingFeedback(n) => write!(f, "node {n}: feedback (TPDO) missing"),
+            StopReason::Emcy(n, c) => write!(f, "node {n}: EMCY error code {c:#06x}"),
+            StopReason::BusOff => write!(f, "bus-off / interface down"),
+            StopReason::HeartbeatLost(n) => write!(f, "node {n}: heartbeat lost"),
+            StopReason::FollowingError(n) => write!(f, "node {n}: following error over the limit"),
+            StopReason::LeftOperationEnabled(n) => write!(f, "node {n}: left Operation Enabled"),
+            StopReason::BadFrame(n) => write!(f, "node {n}: malformed or out-of-range frame"),
+            StopReason::ConfigurationFailed(n) => write!(f, "node {n}: SDO configuration failed"),
+            StopReason::EnableTimeout => write!(f, "drives not enabled in time"),
+            StopReason::BadSetpoint(n) => write!(f, "node {n}: setpoint not encodable"),
+        }
+    }
+}
+
+/// Lifecycle of a channel.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Phase {
+    /// NMT Start sent, SDO configuration running.
+    Configure,
+    /// Stepping the drives to Operation Enabled.
+    Enable,
+    /// Every axis in Operation Enabled: following the setpoints.
+    Run,
+    /// Controlled stop in progress.
+    Stopping,
+    /// Every axis stopped (or the stop timed out).
+    Stopped,
+}
+
+/// Joint setpoint of one axis, SI (rad or m, rad/s or m/s, N·m or N).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct AxisSetpoint {
+    /// Position.
+    pub q: f64,
+    /// Velocity (CSV target).
+    pub qd: f64,
+    /// Torque feed-forward (CSP/CSV torque offset) or torque target (CST).
+    pub tau: f64,
+}
+
+/// Counters of one channel (all visible to the application).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct ChannelCounters {
+    /// Cycles run.
+    pub cycles: u64,
+    /// Frames received.
+    pub rx: u64,
+    /// Malformed frames from our drives.
+    pub malformed: u64,
+    /// Out-of-range values from our drives.
+    pub out_of_range: u64,
+    /// Cycles in which an axis had no fresh feedback.
+    pub missed_feedback: u64,
+    /// Second TPDO of a node within one cycle.
+    pub duplicate_feedback: u64,
+    /// Bus error frames.
+    pub bus_faults: u64,
+    /// SDO timeouts and aborts.
+    pub sdo_failures: u64,
+    /// Valid TPDOs received.
+    pub tpdo_rx: u64,
+    /// TPDOs due: one per SYNC sent per axis, counted from the axis' first TPDO.
+    pub tpdo_expected: u64,
+}
+
+impl ChannelCounters {
+    /// TPDOs lost on the way (due − received; call after the late ones were drained).
+    pub fn tpdo_lost(&self) -> u64 {
+        self.tpdo_expected.saturating_sub(self.tpdo_rx)
+    }
+}
+
+/// Last feedback of one axis.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Feedback {
+    /// Position, joint units.
+    pub q: f64,
+    /// Current, A.
+    pub current: f64,
+    /// Statusword.
+    pub statusword: u16,
+    /// Cycles the channel had completed when this feedback arrived (fresh for the cycle after).
+    pub received_cycle: u64,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Link {
+    cfg: LinkConfig,
+    heartbeat: HeartbeatConsumer,
+    sdo: SdoClient,
+    config_step: u8,
+    sdo_retries: u8,
+    state: Option<DriveState>,
+    feedback: Option<Feedback>,
+    fresh: bool,
+    missed_in_row: u32,
+    controlword: u16,
+    hold: f64,
+    last_target: f64,
+}
+
+const CONFIG_STEPS: u8 = 4;
+
+/// SDO timeouts tolerated per drive during configuration (frames can be lost: retry).
+pub const SDO_RETRIES: u8 = 3;
+
+/// The sans-I/O controller of one channel.
+#[derive(Debug, Clone)]
+pub struct ChannelMaster {
+    links: [Option<Link>; MAX_AXES_PER_CHANNEL],
+    n: usize,
+    mode: OpMode,
+    wd: WatchdogConfig,
+    phase: Phase,
+    phase_cycles: u32,
+    started: bool,
+    stop: Option<StopReason>,
+    stopped_after: Option<u32>,
+    counters: ChannelCounters,
+}
+
+impl ChannelMaster {
+    /// A controller for `axes` (≤ [`MAX_AXES_PER_CHANNEL`]) in `mode`.
+    pub fn new(axes: &[LinkConfig], mode: OpMode, wd: WatchdogConfig) -> Result<Self, ProtocolError> {
+        if axes.len() > MAX_AXES_PER_CHANNEL || axes.is_empty() {
+            return Err(ProtocolError::OutOfRange {
+                what: "axes per channel",
+                value: axes.len() as i64,
+            });
+        }
+        let mut links = [None; MAX_AXES_PER_CHANNEL];
+        for (k, a) in axes.iter().enumerate() {
+            a.units.validate()?;
+            links[k] = Some(Link {
+                cfg: *a,
+                heartbeat: HeartbeatConsumer::new(a.node, wd.heartbeat_cycles)?,
+                sdo: SdoClient::new(a.node, wd.sdo_cycles)?,
+                config_step: 0,
+                sdo_retries: 0,
+                state: None,
+                feedback: None,
+                fresh: false,
+                missed_in_row: 0,
+                controlword: 0,
+                hold: 0.0,
+                last_target: 0.0,
+            });
+        }
+        Ok(ChannelMaster {
+            links,
+            n: axes.len(),
+            mode,
+            wd,
+            phase: Phase::Configure,
+            phase_cycles: 0,
+            started: false,
+            stop: None,
+            stopped_after: None,
+            counters: ChannelCounters::default(),
+        })
+    }
+
+    fn links(&mut self) -> impl Iterator<Item = &mut Link> {
+        self.links[..self.n].iter_mut().flatten()
+    }
+
+    /// Present phase.
+    pub fn phase(&self) -> Phase {
+        self.phase
+    }
+
+    /// Why the channel is stopping (`None` while fine).
+    pub fn stop_reason(&self) -> Option<StopReason> {
+        self.stop
+    }
+
+    /// Cycles from the stop decision to every axis stopped (`None` before).
+    pub fn stopped_after(&self) -> Option<u32> {
+        self.stopped_after
+    }
+
+    /// Counters.
+    pub fn counters(&self) -> ChannelCounters {
+        self.counters
+    }
+
+    /// Number of axes.
+    pub fn len(&self) -> usize {
+        self.n
+    }
+
+    /// True without axes (never: [`ChannelMaster::new`] refuses that).
+    pub fn is_empty(&self) -> bool {
+        self.n == 0
+    }
+
+    /// Last feedback of axis `k` (`None` before the first TPDO).
+    pub fn feedback(&self, k: usize) -> Option<Feedback> {
+        self.links.get(k).copied().flatten().and_then(|l| l.feedback)
+    }
+
+    /// Drive state of axis `k` from its last statusword.
+    pub fn drive_state(&self, k: usize) -> Option<DriveState> {
+        self.links.get(k).copied().flatten().and_then(|l| l.state)
+    }
+
+    /// Position axis `k` held while enabling (the start of the motion), joint units.
+    pub fn hold_position(&self, k: usize) -> f64 {
+        self.links.get(k).copied().flatten().map(|l| l.hold).unwrap_or(0.0)
+    }
+
+    /// Starts a controlled stop of every axis (the first reason is kept).
+    pub fn request_stop(&mut self, reason: StopReason) {
+        if self.stop.is_none() {
+            self.stop = Some(reason);
+        }
+        if !matches!(self.phase, Phase::Stopping | Phase::Stopped) {
+            self.phase = Phase::Stopping;
+            self.phase_cycles = 0;
+        }
+    }
+
+    /// Feeds one bus event (read phase of the cycle).
+    pub fn on_event(&mut self, ev: &BusEvent) {
+        match ev {
+            BusEvent::Fault(f) => {
+                self.counters.bus_faults += 1;
+                if *f == BusFault::BusOff {
+                    self.request_stop(StopReason::BusOff);
+                }
+            }
+            BusEvent::Frame { frame, .. } => {
+                self.counters.rx += 1;
+                self.on_frame(frame);
+            }
+        }
+    }
+
+    fn index_of(&self, node: u8) -> Option<usize> {
+        self.links[..self.n]
+            .iter()
+            .position(|l| l.map(|l| l.cfg.node) == Some(node))
+    }
+
+    fn on_frame(&mut self, f: &Frame) {
+        let Some(cob) = Cob::classify(f.id()) else { return };
+        let node = match cob {
+            Cob::Tpdo1(n) | Cob::Emcy(n) | Cob::SdoTx(n) | Cob::Heartbeat(n) => n,
+            _ => return,
+        };
+        let Some(k) = self.index_of(node) else { return };
+        let mut stop = None;
+        {
+            let Some(l) = self.links[k].as_mut() else { return };
+            match cob {
+                Cob::Tpdo1(_) => match Tpdo::decode(f) {
+                    Ok((_, t)) => match DriveState::from_statusword(t.statusword) {
+                        Ok(s) => {
+                            let current = l.cfg.units.permille_to_current(t.current);
+                            if current.abs() > l.cfg.max_current {
+                                self.counters.out_of_range += 1;
+                                stop = Some(StopReason::BadFrame(node));
+                            } else {
+                                if l.fresh {
+                                    self.counters.duplicate_feedback += 1;
+                                }
+                                l.fresh = true;
+                                self.counters.tpdo_rx += 1;
+                                l.state = Some(s);
+                                l.feedback = Some(Feedback {
+                                    q: l.cfg.units.increments_to_position(t.position),
+                                    current,
+                                    statusword: t.statusword,
+                                    received_cycle: self.counters.cycles,
+                                });
+                            }
+                        }
+                        Err(_) => {
+                            self.counters.out_of_range += 1;
+                            stop = Some(StopReason::BadFrame(node));
+                        }
+                    },
+                    Err(_) => {
+                        self.counters.malformed += 1;
+                        stop = Some(StopReason::BadFrame(node));
+                    }
+                },
+                Cob::Emcy(_) => match Emcy::decode(f) {
+                    Ok(e) if !e.is_reset() => stop = Some(StopReason::Emcy(node, e.code)),
+                    Ok(_) => {}
+                    Err(_) => {
+                        self.counters.malformed += 1;
+                        stop = Some(StopReason::BadFrame(node));
+                    }
+                },
+                Cob::Heartbeat(_) => self.counters.malformed += u64::from(!l.heartbeat.on_frame(f)),
+                Cob::SdoTx(_) => match l.sdo.on_frame(f) {
+                    Some(Ok(SdoResponse::Uploaded {
+                        index: od::DEVICE_TYPE,
+                        value,
+                        ..
+                    })) if value & 0xFFFF != 402 => {
+                        stop = Some(StopReason::ConfigurationFailed(node));
+                    }
+                    Some(Ok(_)) => l.config_step += 1,
+                    Some(Err(_)) => {
+                        self.counters.sdo_failures += 1;
+                        stop = Some(StopReason::ConfigurationFailed(node));
+                    }
+                    None => {}
+                },
+                _ => {}
+            }
+        }
+        if let Some(r) = stop {
+            // before Run, a refused frame still stops: nothing may be enabled on bad data
+            self.request_stop(r);
+        }
+    }
+
+    fn config_request(&self, step: u8, l: &Link) -> SdoRequest {
+        match step {
+            0 => SdoRequest::Upload {
+                index: od::DEVICE_TYPE,
+                sub: 0,
+            },
+            1 => SdoRequest::Download {
+                index: od::MODES_OF_OPERATION,
+                sub: 0,
+                size: 1,
+                value: self.mode.code() as u8 as u32,
+            },
+            2 => SdoRequest::Download {
+                index: od::HEARTBEAT_TIME,
+                sub: 0,
+                size: 2,
+                value: self.wd.heartbeat_period_ms as u32,
+            },
+            _ => {
+                let w = (l.cfg.following_error_limit * l.cfg.units.increments_per_unit).clamp(1.0, i32::MAX as f64);
+                SdoRequest::Download {
+                    index: od::FOLLOWING_ERROR_WINDOW,
+                    sub: 0,
+                    size: 4,
+                    value: w as u32,
+                }
+            }
+        }
+    }
+
+    /// One cycle (update and write): watchdog checks on this cycle's feedback, phase logic, then
+    /// the RPDO of every axis and the SYNC into `out`. `setpoints[k]` is used in [`Phase::Run`].
+    pub fn cycle(&mut self, setpoints: &[AxisSetpoint], out: &mut Frames) {
+        self.counters.cycles += 1;
+        self.phase_cycles = self.phase_cycles.saturating_add(1);
+        if !self.started {
+            self.started = true;
+            if let Ok(f) = encode_nmt(NmtCommand::Start, 0) {
+                out.push(f);
+            }
+        }
+        self.watchdog();
+        let phase = self.phase;
+        let mode = self.mode;
+        let wd = self.wd;
+        let mut all_configured = true;
+        let mut all_enabled = true;
+        let mut all_stopped = true;
+        let mut bad_setpoint = None;
+        for k in 0..self.n {
+            let Some(mut l) = self.links[k] else { continue };
+            // SDO configuration, one transfer at a time per node
+            if phase == Phase::Configure && l.config_step < CONFIG_STEPS && !l.sdo.busy() {
+                let req = self.config_request(l.config_step, &l);
+                if let Some(f) = l.sdo.start(req) {
+                    out.push(f);
+                }
+            }
+            if l.sdo.tick().is_some() {
+                // a lost request or response: the next cycle sends the request again
+                self.counters.sdo_failures += 1;
+                l.sdo_retries += 1;
+                if l.sdo_retries > SDO_RETRIES {
+                    bad_setpoint.get_or_insert(StopReason::ConfigurationFailed(l.cfg.node));
+                }
+            }
+            all_configured &= l.config_step >= CONFIG_STEPS && l.feedback.is_some();
+            let state = l.state.unwrap_or(DriveState::NotReadyToSwitchOn);
+            let (cw, target_q) = match phase {
+                Phase::Configure => (0, l.feedback.map(|f| f.q).unwrap_or(0.0)),
+                Phase::Enable => {
+                    let q = l.feedback.map(|f| f.q).unwrap_or(0.0);
+                    if state != DriveState::OperationEnabled {
+                        l.hold = q;
+                    }
+                    all_enabled &= state == DriveState::OperationEnabled;
+                    (controlword_towards_enabled(state, true, l.controlword), l.hold)
+                }
+                Phase::Run => (l.controlword, setpoints.get(k).map(|s| s.q).unwrap_or(l.hold)),
+                Phase::Stopping | Phase::Stopped => {
+                    all_stopped &= !state.torque_on() || !l.fresh && l.missed_in_row > 0;
+                    (CW_QUICK_STOP, l.last_target)
+                }
+            };
+            let sp = setpoints.get(k).copied().unwrap_or_default();
+            let u = l.cfg.units;
+            let encoded = match (phase, mode) {
+                (Phase::Run, OpMode::Csv) => u.velocity_to_increments(sp.qd),
+                (Phase::Run, OpMode::Cst) => u.torque_to_permille(sp.tau).map(|t| t as i32),
+                (_, OpMode::Csv) | (_, OpMode::Cst) => Ok(0),
+                _ => u.position_to_increments(target_q),
+            };
+            let offset = if phase == Phase::Run && mode != OpMode::Cst {
+                u.torque_to_permille(sp.tau)
+            } else {
+                Ok(0)
+            };
+            match (encoded, offset) {
+                (Ok(target), Ok(torque_offset)) => {
+                    if let Ok(f) = (Rpdo {
+                        target,
+                        torque_offset,
+                        controlword: cw,
+                    })
+                    .encode(l.cfg.node)
+                    {
+                        out.push(f);
+                    }
+                    l.last_target = target_q;
+                }
+                _ => {
+                    bad_setpoint.get_or_insert(StopReason::BadSetpoint(l.cfg.node));
+                    // the drive holds its last command (RPDO missing) and the stop follows
+                }
+            }
+            l.controlword = cw;
+            l.fresh = false;
+            if l.feedback.is_some() {
+                self.counters.tpdo_expected += 1;
+            }
+            self.links[k] = Some(l);
+        }
+        if let Some(r) = bad_setpoint {
+            self.request_stop(r);
+        }
+        match self.phase {
+            Phase::Configure if all_configured => {
+                self.phase = Phase::Enable;
+                self.phase_cycles = 0;
+            }
+            Phase::Enable if all_enabled => {
+                self.phase = Phase::Run;
+                self.phase_cycles = 0;
+            }
+            Phase::Configure | Phase::Enable if self.phase_cycles > wd.enable_cycles => {
+                self.request_stop(StopReason::EnableTimeout)
+            }
+            Phase::Stopping if all_stopped || self.phase_cycles > wd.stop_cycles => {
+                self.stopped_after = Some(self.phase_cycles);
+                self.phase = Phase::Stopped;
+            }
+            _ => {}
+        }
+        out.push(encode_sync());
+    }
+
+    fn watchdog(&mut self) {
+        let phase = self.phase;
+        let wd = self.wd;
+        let mut stop = None;
+        let mut missed = 0;
+        for l in self.links() {
+            if l.heartbeat.received() > 0 && l.heartbeat.tick() && phase != Phase::Stopped {
+                stop.get_or_insert(StopReason::HeartbeatLost(l.cfg.node));
+            }
+            if l.fresh {
+                l.missed_in_row = 0;
+            } else if l.feedback.is_some() {
+                l.missed_in_row += 1;
+                missed += 1;
+                // in Configure the SDO and enable timeouts watch the drives (start-up is slow)
+                if l.missed_in_row > wd.feedback_cycles && !matches!(phase, Phase::Configure | Phase::Stopped) {
+                    stop.get_or_insert(StopReason::MissingFeedback(l.cfg.node));
+                }
+            }
+            if phase == Phase::Run {
+                if let (true, Some(fb)) = (l.fresh, l.feedback) {
+                    if l.state != Some(DriveState::OperationEnabled) {
+                        stop.get_or_insert(StopReason::LeftOperationEnabled(l.cfg.node));
+                    } else if (l.last_target - fb.q).abs() > l.cfg.following_error_limit {
+                        stop.get_or_insert(StopReason::FollowingError(l.cfg.node));
+                    }
+                }
+            }
+        }
+        self.counters.missed_feedback += missed;
+        if let Some(r) = stop {
+            self.request_stop(r);
+        }
+    }
+}

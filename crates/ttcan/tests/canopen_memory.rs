@@ -1,0 +1,437 @@
+//! The controller and two virtual drives on the in-memory bus, in lock step (one cycle = master
+//! read/update/write, then the drives): tracking of a motion, and every injected fault bringing
+//! both axes to a controlled stop with the right reason, without panics and without motion on
+//! stale data.
+
+use ttcan::bus::memory::{Faults, MemoryBus, MemoryPort};
+use ttcan::bus::CanBus;
+use ttcan::canopen::cia402::OpMode;
+use ttcan::canopen::{DriveState, Frames, Units};
+use ttcan::runtime::master::{AxisSetpoint, ChannelMaster, LinkConfig, Phase, StopReason, WatchdogConfig};
+use ttcan::vdrive::{Failure, VirtualDrive};
+use ttcan::{AxisConfig, MotorModel};
+
+/// A fault injected at a cycle of the motion.
+type Injection<'a> = Option<(u64, &'a dyn Fn(&mut Rig))>;
+
+struct Rig {
+    bus: MemoryBus,
+    master_port: MemoryPort,
+    master: ChannelMaster,
+    drives: Vec<(MemoryPort, VirtualDrive)>,
+    cycle: u64,
+}
+
+fn rig() -> Rig {
+    let bus = MemoryBus::new();
+    let master_port = bus.port();
+    let links: Vec<LinkConfig> = (1..=2)
+        .map(|n| LinkConfig {
+            node: n,
+            units: Units::default(),
+            following_error_limit: 0.05,
+            max_current: 10.0,
+        })
+        .collect();
+    let master = ChannelMaster::new(&links, OpMode::Csp, WatchdogConfig::default()).unwrap();
+    let model = MotorModel::maxon_re25_gp26();
+    let cfg = AxisConfig::new(model);
+    let drives = (1..=2)
+        .map(|n| {
+            let mut port = bus.port();
+            let mut out = Frames::new();
+            let d = VirtualDrive::new(n, &model, &cfg, Units::default(), 1e-3, &mut out).unwrap();
+            for f in out.as_slice() {
+                port.send(f).unwrap();
+            }
+            (port, d)
+        })
+        .collect();
+    Rig {
+        bus,
+        master_port,
+        master,
+        drives,
+        cycle: 0,
+    }
+}
+
+impl Rig {
+    fn step(&mut self, q: f64) {
+        while let Ok(Some(ev)) = self.master_port.poll() {
+            self.master.on_event(&ev);
+        }
+        let mut out = Frames::new();
+        let sp = [
+            AxisSetpoint { q, qd: 0.0, tau: 0.0 },
+            AxisSetpoint {
+                q: -q,
+                qd: 0.0,
+                tau: 0.0,
+            },
+        ];
+        self.master.cycle(&sp, &mut out);
+        for f in out.as_slice() {
+            let _ = self.master_port.send(f);
+        }
+        for (port, d) in self.drives.iter_mut() {
+            let mut out = Frames::new();
+            while let Ok(Some(ev)) = port.poll() {
+                if let ttcan::bus::BusEvent::Frame { frame, .. } = ev {
+                    d.on_frame(&frame, &mut out);
+                }
+            }
+            d.tick_ms(&mut out);
+            for f in out.as_slice() {
+                let _ = port.send(f);
+            }
+        }
+        self.cycle += 1;
+    }
+
+    /// Runs until Run phase; returns the cycle count.
+    fn enable(&mut self) -> u64 {
+        for _ in 0..200 {
+            self.step(0.0);
+            if self.master.phase() == Phase::Run {
+                return self.cycle;
+            }
+        }
+        panic!("not enabled: {:?} {:?}", self.master.phase(), self.master.stop_reason());
+    }
+
+    fn motion(t: f64) -> f64 {
+        0.5 * (1.0 - (2.0 * std::f64::consts::PI * t).cos())
+    }
+
+    /// Runs `cycles` of motion from the start of Run; returns the largest tracking error seen.
+    fn run(&mut self, cycles: u64, fault_at: Injection<'_>) -> f64 {
+        let t0 = self.cycle;
+        let mut worst: f64 = 0.0;
+        for k in 0..cycles {
+            if let Some((at, f)) = fault_at {
+                if k == at {
+                    f(self);
+                }
+            }
+            let q = Rig::motion((self.cycle - t0) as f64 * 1e-3);
+            self.step(q);
+            if self.master.phase() == Phase::Run {
+                if let Some(fb) = self.master.feedback(0) {
+                    worst = worst.max((fb.q - Rig::motion((self.cycle - t0) as f64 * 1e-3 - 2e-3)).abs());
+                }
+            }
+        }
+        worst
+    }
+}
+
+#[test]
+fn two_drives_boot_enable_and_track_a_motion() {
+    let mut r = rig();
+    let c = r.enable();
+    assert!(c < 50, "enabled after {c} cycles");
+    let worst = r.run(1000, None);
+    assert_eq!(r.master.stop_reason(), None);
+    assert!(worst < 0.02, "tracking error {worst} rad");
+    assert_eq!(r.master.counters().missed_feedback, 0);
+    let err = (r.drives[1].1.position() - (-Rig::motion(1.0))).abs();
+    assert!(err < 0.02, "final error {err}");
+}
+
+fn fault_case(inject: &dyn Fn(&mut Rig), expected: fn(StopReason) -> bool, within: u32) {
+    fault_case_except(inject, expected, within, None)
+}
+
+/// `unplugged`: a drive cut off the bus (its own state is not observable).
+fn fault_case_except(
+    inject: &dyn Fn(&mut Rig),
+    expected: fn(StopReason) -> bool,
+    within: u32,
+    unplugged: Option<usize>,
+) {
+    let mut r = rig();
+    r.enable();
+    r.run(300, Some((200, inject)));
+    let reason = r.master.stop_reason().expect("a stop");
+    assert!(expected(reason), "reason {reason:?}");
+    assert_eq!(r.master.phase(), Phase::Stopped, "stopped, reason {reason:?}");
+    let after = r.master.stopped_after().unwrap();
+    assert!(
+        after <= within,
+        "stopped after {after} cycles (> {within}) for {reason:?}"
+    );
+    // every answering drive has its power stage off; nothing moves afterwards
+    let p: Vec<f64> = r.drives.iter().map(|d| d.1.position()).collect();
+    for _ in 0..100 {
+        r.step(0.0);
+    }
+    for (k, d) in r.drives.iter().enumerate().filter(|(k, _)| Some(*k) != unplugged) {
+        assert!(
+            !d.1.node().cia402.state().torque_on(),
+            "drive {k} state {:?}",
+            d.1.node().cia402.state()
+        );
+        assert!((d.1.position() - p[k]).abs() < 1e-3, "drive {k} moved after the stop");
+    }
+}
+
+#[test]
+fn silent_drive_stops_every_axis() {
+    fault_case_except(
+        &|r| {
+            let mut out = Frames::new();
+            r.drives[0].1.inject(Failure::Silent, &mut out);
+        },
+        |s| matches!(s, StopReason::MissingFeedback(1)),
+        400,
+        Some(0),
+    );
+}
+
+#[test]
+fn emcy_stops_every_axis() {
+    fault_case(
+        &|r| {
+            let mut out = Frames::new();
+            r.drives[1].1.inject(Failure::Emcy, &mut out);
+            for f in out.as_slice() {
+                r.drives[1].0.send(f).unwrap();
+            }
+        },
+        |s| matches!(s, StopReason::Emcy(2, 0x2310)),
+        400,
+    );
+}
+
+#[test]
+fn drive_leaving_operation_enabled_stops_every_axis() {
+    fault_case(
+        &|r| {
+            let mut out = Frames::new();
+            r.drives[0].1.inject(Failure::LeaveEnabled, &mut out);
+        },
+        |s| matches!(s, StopReason::LeftOperationEnabled(1)),
+        400,
+    );
+}
+
+#[test]
+fn malformed_and_out_of_range_feedback_stop_every_axis() {
+    for f in [Failure::Malformed, Failure::OutOfRange] {
+        fault_case(
+            &move |r| {
+                let mut out = Frames::new();
+                r.drives[1].1.inject(f, &mut out);
+            },
+            |s| matches!(s, StopReason::BadFrame(2)),
+            400,
+        );
+    }
+}
+
+#[test]
+fn corrupted_frames_on_the_bus_stop_every_axis() {
+    fault_case(
+        &|r| {
+            r.bus.set_faults(Faults {
+                corrupt_ids: vec![0x181],
+                ..Faults::default()
+            })
+        },
+        |s| matches!(s, StopReason::BadFrame(1)),
+        400,
+    );
+}
+
+#[test]
+fn stuck_sync_stops_the_drives_and_the_controller() {
+    let mut r = rig();
+    r.enable();
+    r.run(100, None);
+    r.bus.set_faults(Faults {
+        drop_ids: vec![0x080],
+        ..Faults::default()
+    });
+    for _ in 0..100 {
+        r.step(r.master.hold_position(0));
+    }
+    assert!(
+        matches!(r.master.stop_reason(), Some(StopReason::MissingFeedback(_))),
+        "{:?}",
+        r.master.stop_reason()
+    );
+    for _ in 0..500 {
+        r.step(0.0);
+    }
+    for (port, d) in &r.drives {
+        let _ = port;
+        let s = d.node().cia402.state();
+        assert!(
+            matches!(s, DriveState::Fault | DriveState::SwitchOnDisabled),
+            "drive-side SYNC watchdog: {s:?}"
+        );
+    }
+}
+
+#[test]
+fn bus_off_stops_the_channel() {
+    let mut r = rig();
+    r.enable();
+    r.run(50, None);
+    r.bus.set_faults(Faults {
+        bus_off: true,
+        ..Faults::default()
+    });
+    r.step(0.0);
+    r.step(0.0);
+    assert_eq!(r.master.stop_reason(), Some(StopReason::BusOff));
+}
+
+#[test]
+fn delayed_feedback_is_not_used_as_fresh() {
+    let mut r = rig();
+    r.enable();
+    r.bus.set_faults(Faults {
+        delay_ids: vec![0x182],
+        delay_frames: 40,
+        ..Faults::default()
+    });
+    r.run(20, None);
+    assert!(
+        matches!(r.master.stop_reason(), Some(StopReason::MissingFeedback(2))),
+        "{:?}",
+        r.master.stop_reason()
+    );
+}
+
+/// The threaded runtime: `run_channel` at 1 kHz with absolute deadlines against two virtual drives
+/// served by a second thread, on the in-memory bus; the motion completes, or an interrupt (what
+/// SIGINT sets) brings both axes to a controlled stop.
+fn threaded(interrupt_after_ms: Option<u64>) -> ttcan::runtime::channel::ChannelReport {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+    use ttcan::runtime::channel::{run_channel, ChannelPlan, Shared};
+    use ttcan::runtime::rt;
+    use ttcan::runtime::trajectory::Trajectory;
+    let bus = MemoryBus::new();
+    let mut master_port = bus.port();
+    let mut drive_port = bus.port();
+    let links: Vec<LinkConfig> = (1..=2)
+        .map(|n| LinkConfig {
+            node: n,
+            units: Units::default(),
+            following_error_limit: 0.05,
+            max_current: 10.0,
+        })
+        .collect();
+    // the test machine is shared: generous feedback watchdog, the timing is not what is tested here
+    let wd = WatchdogConfig {
+        feedback_cycles: 200,
+        ..WatchdogConfig::default()
+    };
+    let master = ChannelMaster::new(&links, OpMode::Csp, wd).unwrap();
+    let traj = Trajectory::demo(2, 0.2, 0.5);
+    let interrupt = Arc::new(AtomicBool::new(false));
+    let shared = Shared::new(1, interrupt.clone());
+    let done = AtomicBool::new(false);
+    let period_ns = 1_000_000;
+    let plan = ChannelPlan {
+        joints: [Some(0), Some(1), None, None],
+        approach_s: 0.1,
+        period_ns,
+        t0_ns: rt::now_ns() + 5 * period_ns,
+        max_cycles: 20_000,
+    };
+    std::thread::scope(|s| {
+        s.spawn(|| {
+            let model = MotorModel::maxon_re25_gp26();
+            let cfg = AxisConfig::new(model);
+            let mut out = Frames::new();
+            let mut drives: Vec<VirtualDrive> = (1..=2)
+                .map(|n| VirtualDrive::new(n, &model, &cfg, Units::default(), 1e-3, &mut out).unwrap())
+                .collect();
+            let mut next = rt::now_ns();
+            while !done.load(Ordering::Relaxed) {
+                while let Ok(Some(ttcan::bus::BusEvent::Frame { frame, .. })) = drive_port.poll() {
+                    for d in drives.iter_mut() {
+                        d.on_frame(&frame, &mut out);
+                    }
+                }
+                if rt::now_ns() >= next {
+                    drives.iter_mut().for_each(|d| d.tick_ms(&mut out));
+                    next += 1_000_000;
+                }
+                for f in out.as_slice() {
+                    let _ = drive_port.send(f);
+                }
+                out.clear();
+                rt::sleep_until(rt::now_ns() + 50_000);
+            }
+        });
+        if let Some(ms) = interrupt_after_ms {
+            let i = interrupt.clone();
+            s.spawn(move || {
+                std::thread::sleep(std::time::Duration::from_millis(ms));
+                i.store(true, Ordering::Relaxed);
+            });
+        }
+        let r = run_channel("mem0", &mut master_port, master, &traj, &plan, &shared);
+        done.store(true, Ordering::Relaxed);
+        r
+    })
+}
+
+#[test]
+fn threaded_runtime_completes_the_motion() {
+    let r = threaded(None);
+    assert!(r.completed, "stop: {:?}", r.stop_reason);
+    assert_eq!(r.stop_reason, Some(StopReason::Requested));
+    assert!(r.stats.summary().cycles > 600);
+    assert!(
+        r.max_tracking_error[0] < 0.02 && r.max_tracking_error[1] < 0.02,
+        "{:?}",
+        r.max_tracking_error
+    );
+    assert!(r.telemetry.len() as u64 >= r.stats.summary().cycles);
+}
+
+#[test]
+fn interrupt_brings_the_axes_to_a_controlled_stop() {
+    let r = threaded(Some(400));
+    assert!(!r.completed);
+    assert_eq!(r.stop_reason, Some(StopReason::Requested));
+    assert!(r.stopped_after.is_some());
+    let last = r.telemetry.last().unwrap();
+    assert_eq!(last.phase, 4, "stopped");
+}
+
+#[test]
+fn lost_sdo_response_is_retried_and_configuration_completes() {
+    let mut r = rig();
+    // drop node 2's SDO responses for a while: one timeout, then the retry goes through
+    r.bus.set_faults(Faults {
+        drop_ids: vec![0x582],
+        ..Faults::default()
+    });
+    for _ in 0..60 {
+        r.step(0.0);
+    }
+    r.bus.set_faults(Faults::default());
+    r.enable();
+    assert!(r.master.counters().sdo_failures >= 1);
+    assert_eq!(r.master.stop_reason(), None);
+}
+
+#[test]
+fn drive_that_never_answers_sdo_fails_configuration() {
+    let mut r = rig();
+    r.bus.set_faults(Faults {
+        drop_ids: vec![0x582],
+        ..Faults::default()
+    });
+    for _ in 0..400 {
+        r.step(0.0);
+    }
+    assert_eq!(r.master.stop_reason(), Some(StopReason::ConfigurationFailed(2)));
+}

@@ -1,0 +1,92 @@
+"""Joint trajectory files for the embedded controller ``ttctl`` (crates/ttcan/src/bin/ttctl.rs).
+
+The file is CSV, SI units, one row per sample: ``t,q1..qn,qd1..qdn,qdd1..qddn,tau1..taun`` after a
+``# ttctl trajectory v1`` comment line; ``t`` strictly increasing. ``ttctl --trajectory FILE``
+follows it (CSP targets ``q``, torque offset 0x60B2 from ``tau``).
+
+``python -m ttmanip.ctl OUT.csv`` writes the gantry6 hitting stroke of ``ttmanip.pipeline``'s
+default hit request (the one the VM test runs).
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from . import TtmanipError
+
+__all__ = ["write_trajectory", "write_stroke"]
+
+
+class TrajectoryFileError(TtmanipError, ValueError):
+    """A trajectory handed to :func:`write_trajectory` is malformed."""
+
+
+def _matrix(name: str, a: ArrayLike, k: int, n: int | None) -> np.ndarray:
+    try:
+        m = np.asarray(a, dtype=float)
+    except (TypeError, ValueError) as e:
+        raise TrajectoryFileError(f"{name}: not an array of numbers ({e})") from None
+    if m.ndim == 1 and n in (None, 1) and m.shape[0] == k:
+        m = m[:, None]
+    if m.ndim != 2 or m.shape[0] != k or (n is not None and m.shape[1] != n):
+        want = f"({k}, {'n' if n is None else n})"
+        raise TrajectoryFileError(f"{name}: shape {m.shape}, expected {want}")
+    if not np.all(np.isfinite(m)):
+        raise TrajectoryFileError(f"{name}: contains NaN or infinite values")
+    return m
+
+
+def write_trajectory(
+    path: str | Path,
+    t: ArrayLike,
+    q: ArrayLike,
+    qd: ArrayLike,
+    qdd: ArrayLike,
+    tau_ff: ArrayLike | None = None,
+) -> Path:
+    """Writes a joint trajectory for ``ttctl``: times ``t`` (K,) s strictly increasing, positions
+    ``q``, velocities ``qd``, accelerations ``qdd`` and torque feed-forward ``tau_ff`` (K, n) in
+    SI (rad or m, N·m or N; ``tau_ff`` zero when omitted). Returns the path."""
+    try:
+        tt = np.asarray(t, dtype=float).reshape(-1)
+    except (TypeError, ValueError) as e:
+        raise TrajectoryFileError(f"t: not an array of numbers ({e})") from None
+    k = tt.shape[0]
+    if k < 2:
+        raise TrajectoryFileError(f"t: {k} samples, a trajectory needs at least 2")
+    if not np.all(np.isfinite(tt)) or np.any(np.diff(tt) <= 0.0):
+        raise TrajectoryFileError("t: must be finite and strictly increasing")
+    qm = _matrix("q", q, k, None)
+    n = qm.shape[1]
+    qdm = _matrix("qd", qd, k, n)
+    qddm = _matrix("qdd", qdd, k, n)
+    taum = np.zeros_like(qm) if tau_ff is None else _matrix("tau_ff", tau_ff, k, n)
+    head = ["t"] + [f"{c}{j + 1}" for c in ("q", "qd", "qdd", "tau") for j in range(n)]
+    data = np.column_stack([tt, qm, qdm, qddm, taum])
+    p = Path(path)
+    with p.open("w", encoding="ascii") as f:
+        f.write("# ttctl trajectory v1\n")
+        f.write(",".join(head) + "\n")
+        np.savetxt(f, data, delimiter=",", fmt="%.9g")
+    return p
+
+
+def write_stroke(path: str | Path, rate_hz: float = 1000.0) -> Path:
+    """Plans the gantry6 hitting stroke of ``ttmanip.pipeline.HitRequest()`` (ready → hit →
+    ready) and writes it with :func:`write_trajectory` (no torque feed-forward: the virtual
+    drives of ``ttdrive-sim`` carry their motor model's load, not the robot's)."""
+    from . import pipeline, robots
+
+    robot = robots.gantry6()
+    plan = pipeline.plan_hit(robot, pipeline.HitRequest(), rate_hz=rate_hz)
+    return write_trajectory(path, plan["t"], plan["q"], plan["qd"], plan["qdd"])
+
+
+if __name__ == "__main__":  # pragma: no cover - exercised by scripts/vm/build.sh
+    if len(sys.argv) != 2:
+        sys.exit("usage: python -m ttmanip.ctl OUT.csv")
+    print(write_stroke(sys.argv[1]))
