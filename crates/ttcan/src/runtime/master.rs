@@ -130,6 +130,7 @@ struct Link {
     fresh: bool,
     missed_in_row: u32,
     controlword: u16,
+    following_holdoff: u32,
     hold: f64,
     last_target: f64,
 }
@@ -177,6 +178,7 @@ impl ChannelMaster {
                 fresh: false,
                 missed_in_row: 0,
                 controlword: 0,
+                following_holdoff: 0,
                 hold: 0.0,
                 last_target: 0.0,
             });
@@ -242,6 +244,14 @@ impl ChannelMaster {
     /// Position axis `k` held while enabling (the start of the motion), joint units.
     pub fn hold_position(&self, k: usize) -> f64 {
         self.links.get(k).copied().flatten().map(|l| l.hold).unwrap_or(0.0)
+    }
+
+    /// The cycle timing was disturbed (deadlines skipped): the following-error check pauses for
+    /// `cycles` cycles, since feedback may then answer an older SYNC than the last one.
+    pub fn hold_off_following_check(&mut self, cycles: u32) {
+        for l in self.links() {
+            l.following_holdoff = l.following_holdoff.max(cycles);
+        }
     }
 
     /// Starts a controlled stop of every axis (the first reason is kept).
@@ -509,6 +519,11 @@ impl ChannelMaster {
                 stop.get_or_insert(StopReason::HeartbeatLost(l.cfg.node));
             }
             if l.fresh {
+                // feedback after a gap may answer an older SYNC than the last one: the
+                // following-error check waits until the stream is continuous again
+                if l.missed_in_row > 0 {
+                    l.following_holdoff = l.following_holdoff.max(2 * l.missed_in_row + 2);
+                }
                 l.missed_in_row = 0;
             } else if l.feedback.is_some() {
                 l.missed_in_row += 1;
@@ -522,6 +537,8 @@ impl ChannelMaster {
                 if let (true, Some(fb)) = (l.fresh, l.feedback) {
                     if l.state != Some(DriveState::OperationEnabled) {
                         stop.get_or_insert(StopReason::LeftOperationEnabled(l.cfg.node));
+                    } else if l.following_holdoff > 0 {
+                        l.following_holdoff -= 1;
                     } else if (l.last_target - fb.q).abs() > l.cfg.following_error_limit {
                         stop.get_or_insert(StopReason::FollowingError(l.cfg.node));
                     }
