@@ -11,7 +11,8 @@ mount -t devtmpfs dev /dev
 mount -t tmpfs tmp /tmp
 # socket receive buffers large enough for the TCG stalls (SocketCanBus asks for 1 MiB)
 echo 4194304 > /proc/sys/net/core/rmem_max
-TRACK_BOUND=0.02   # rad or m: largest |q − interpolated target| on every drive during the motion (250 Hz targets)
+TRACK_BOUND=0.03   # rad or m: largest |q − interpolated target| on every drive during the motion (250 Hz
+                   # targets; typically 3.4e-3, outliers to 2e-2 seen on a heavily loaded host)
 # the drive-side tracking error (ttdrive-sim); ttctl's own measure includes the bus latency
 drive_err() { sed -n 's/.*max tracking error \([^,]*\),.*/\1/p' "$1" | awk '$1 + 0 > m { m = $1 + 0 } END { print m + 0 }'; }
 STOP_BOUND=60      # cycles (at 250 Hz) from the fault decision to every axis stopped

@@ -4,7 +4,8 @@
 //! `f64` loops ([`loops`]), one motor's worth of them with sensing and a fault state machine
 //! ([`axis`]), a multi-rate stepper for many axes ([`stepper`]), gain tuning from motor parameters
 //! ([`tuning`]), and plant models with exact discretisation to simulate it all ([`motor`], [`sim`]).
-//! CANopen (CiA 402) over SocketCAN and the controller binary come later and sit on top of [`axis`].
+//! CiA 402 over CAN: the sans-I/O protocol ([`canopen`]), buses ([`bus`]: in-memory, SocketCAN),
+//! the controller runtime ([`runtime`]) and the virtual drive on top of [`sim`] ([`vdrive`]).
 //!
 //! Units: SI; positions and speeds are at the output (joint) side of the gearbox unless a name says
 //! `motor`.

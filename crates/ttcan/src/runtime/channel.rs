@@ -260,6 +260,7 @@ pub fn run_channel<B: CanBus>(
             let skip = late / plan.period_ns;
             skipped += skip;
             k += skip;
+            master.hold_off_following_check((2 * skip + 2).min(u32::MAX as u64) as u32);
         }
     }
     // drain what is still in flight (late TPDOs of the last SYNCs), so that the loss count is exact

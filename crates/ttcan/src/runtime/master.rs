@@ -17,6 +17,8 @@ use crate::canopen::pdo::{Rpdo, Tpdo};
 use crate::canopen::sdo::{SdoClient, SdoRequest, SdoResponse};
 use crate::canopen::{ProtocolError, Units};
 
+pub use super::watchdog::{StopReason, WatchdogConfig};
+
 /// Most axes on one channel (the bus budget allows 2 at 1 kHz and 1 Mbit/s).
 pub const MAX_AXES_PER_CHANNEL: usize = 4;
 
@@ -43,110 +45,6 @@ fn default_following() -> f64 {
 
 fn default_current() -> f64 {
     10.0
-}
-
-/// Watchdog and protocol timing, in cycles.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct WatchdogConfig {
-    /// Cycles in a row without feedback (TPDO) before a stop.
-    #[serde(default = "wd_feedback")]
-    pub feedback_cycles: u32,
-    /// Heartbeat consumer timeout, cycles.
-    #[serde(default = "wd_heartbeat")]
-    pub heartbeat_cycles: u32,
-    /// Heartbeat period the drives are configured with, ms.
-    #[serde(default = "wd_hb_period")]
-    pub heartbeat_period_ms: u16,
-    /// SDO response timeout, cycles.
-    #[serde(default = "wd_sdo")]
-    pub sdo_cycles: u32,
-    /// Cycles allowed from start to every axis in Operation Enabled.
-    #[serde(default = "wd_enable")]
-    pub enable_cycles: u32,
-    /// Cycles the controlled stop may take before the channel reports stopped anyway.
-    #[serde(default = "wd_stop")]
-    pub stop_cycles: u32,
-}
-
-fn wd_feedback() -> u32 {
-    3
-}
-fn wd_heartbeat() -> u32 {
-    250
-}
-fn wd_hb_period() -> u16 {
-    100
-}
-fn wd_sdo() -> u32 {
-    50
-}
-fn wd_enable() -> u32 {
-    2000
-}
-fn wd_stop() -> u32 {
-    1000
-}
-
-impl Default for WatchdogConfig {
-    fn default() -> Self {
-        WatchdogConfig {
-            feedback_cycles: wd_feedback(),
-            heartbeat_cycles: wd_heartbeat(),
-            heartbeat_period_ms: wd_hb_period(),
-            sdo_cycles: wd_sdo(),
-            enable_cycles: wd_enable(),
-            stop_cycles: wd_stop(),
-        }
-    }
-}
-
-/// Why the controller stopped the axes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum StopReason {
-    /// Asked for (end of the motion, SIGINT/SIGTERM).
-    Requested,
-    /// Another channel stopped.
-    OtherChannel,
-    /// No TPDO from `node` for the configured number of cycles.
-    MissingFeedback(u8),
-    /// `node` sent an emergency with this error code.
-    Emcy(u8, u16),
-    /// The channel went bus-off or down.
-    BusOff,
-    /// The heartbeat of `node` expired.
-    HeartbeatLost(u8),
-    /// |target − position| of `node` exceeded its limit.
-    FollowingError(u8),
-    /// `node` left Operation Enabled while running.
-    LeftOperationEnabled(u8),
-    /// `node` sent a malformed or out-of-range frame.
-    BadFrame(u8),
-    /// Configuration of `node` over SDO failed.
-    ConfigurationFailed(u8),
-    /// The drives did not all reach Operation Enabled in time.
-    EnableTimeout,
-    /// A setpoint could not be encoded (NaN, or outside the integer range).
-    BadSetpoint(u8),
-}
-
-impl std::fmt::Display for StopReason {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match *self {
-            StopReason::Requested => write!(f, "stop requested"),
-            StopReason::OtherChannel => write!(f, "another channel stopped"),
-            StopReason::MissingFeedback(n) => write!(f, "node {n}: feedback (TPDO) missing"),
-            StopReason::Emcy(n, c) => write!(f, "node {n}: EMCY error code {c:#06x}"),
-            StopReason::BusOff => write!(f, "bus-off / interface down"),
-            StopReason::HeartbeatLost(n) => write!(f, "node {n}: heartbeat lost"),
-            StopReason::FollowingError(n) => write!(f, "node {n}: following error over the limit"),
-            StopReason::LeftOperationEnabled(n) => write!(f, "node {n}: left Operation Enabled"),
-            StopReason::BadFrame(n) => write!(f, "node {n}: malformed or out-of-range frame"),
-            StopReason::ConfigurationFailed(n) => write!(f, "node {n}: SDO configuration failed"),
-            StopReason::EnableTimeout => write!(f, "drives not enabled in time"),
-            StopReason::BadSetpoint(n) => write!(f, "node {n}: setpoint not encodable"),
-        }
-    }
 }
 
 /// Lifecycle of a channel.
@@ -232,6 +130,7 @@ struct Link {
     fresh: bool,
     missed_in_row: u32,
     controlword: u16,
+    following_holdoff: u32,
     hold: f64,
     last_target: f64,
 }
@@ -279,6 +178,7 @@ impl ChannelMaster {
                 fresh: false,
                 missed_in_row: 0,
                 controlword: 0,
+                following_holdoff: 0,
                 hold: 0.0,
                 last_target: 0.0,
             });
@@ -344,6 +244,14 @@ impl ChannelMaster {
     /// Position axis `k` held while enabling (the start of the motion), joint units.
     pub fn hold_position(&self, k: usize) -> f64 {
         self.links.get(k).copied().flatten().map(|l| l.hold).unwrap_or(0.0)
+    }
+
+    /// The cycle timing was disturbed (deadlines skipped): the following-error check pauses for
+    /// `cycles` cycles, since feedback may then answer an older SYNC than the last one.
+    pub fn hold_off_following_check(&mut self, cycles: u32) {
+        for l in self.links() {
+            l.following_holdoff = l.following_holdoff.max(cycles);
+        }
     }
 
     /// Starts a controlled stop of every axis (the first reason is kept).
@@ -611,6 +519,11 @@ impl ChannelMaster {
                 stop.get_or_insert(StopReason::HeartbeatLost(l.cfg.node));
             }
             if l.fresh {
+                // feedback after a gap may answer an older SYNC than the last one: the
+                // following-error check waits until the stream is continuous again
+                if l.missed_in_row > 0 {
+                    l.following_holdoff = l.following_holdoff.max(2 * l.missed_in_row + 2);
+                }
                 l.missed_in_row = 0;
             } else if l.feedback.is_some() {
                 l.missed_in_row += 1;
@@ -624,6 +537,8 @@ impl ChannelMaster {
                 if let (true, Some(fb)) = (l.fresh, l.feedback) {
                     if l.state != Some(DriveState::OperationEnabled) {
                         stop.get_or_insert(StopReason::LeftOperationEnabled(l.cfg.node));
+                    } else if l.following_holdoff > 0 {
+                        l.following_holdoff -= 1;
                     } else if (l.last_target - fb.q).abs() > l.cfg.following_error_limit {
                         stop.get_or_insert(StopReason::FollowingError(l.cfg.node));
                     }

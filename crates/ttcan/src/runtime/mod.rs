@@ -1,11 +1,15 @@
-//! The controller runtime: the sans-I/O channel controller ([`master`]) and, on top of it, the
-//! real-time pieces (threads, clocks, statistics) that drive it over a [`crate::bus::CanBus`].
+//! The controller runtime: the sans-I/O channel controller ([`master`]) with its [`watchdog`],
+//! and on top of it the real-time pieces: clocks and scheduling ([`rt`]), statistics ([`stats`]),
+//! trajectories ([`trajectory`]), the configuration file ([`config`]) and the per-channel thread
+//! ([`channel`]) that drives a controller over a [`crate::bus::CanBus`].
 
-pub mod master;
-
-pub use master::{AxisSetpoint, ChannelMaster, LinkConfig, Phase, StopReason, WatchdogConfig};
 pub mod channel;
 pub mod config;
+pub mod master;
 pub mod rt;
 pub mod stats;
 pub mod trajectory;
+pub mod watchdog;
+
+pub use master::{AxisSetpoint, ChannelMaster, LinkConfig, Phase};
+pub use watchdog::{StopReason, WatchdogConfig};
