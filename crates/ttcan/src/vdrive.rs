@@ -305,6 +305,11 @@ impl VirtualDrive {
                     Fault::EncoderJump => emcy::SENSOR,
                     Fault::InvalidReference => emcy::COMMAND_RANGE,
                     Fault::InvalidMeasurement => emcy::SENSOR,
+                    Fault::SetpointsLost => emcy::RPDO_TIMEOUT,
+                    Fault::Overspeed => emcy::OVERSPEED,
+                    Fault::PositionLimit => emcy::POSITION_LIMIT,
+                    Fault::OverVoltage => emcy::OVER_VOLTAGE,
+                    Fault::UnderVoltage => emcy::UNDER_VOLTAGE,
                 };
                 self.node.emcy(code, out);
                 self.node.cia402.fault();

@@ -18,6 +18,16 @@ pub const SYNC_TIMEOUT: u16 = 0x8130;
 pub const PDO_LENGTH: u16 = 0x8210;
 /// CiA 402 error code: command value out of range (manufacturer specific group 0xFF00 used here).
 pub const COMMAND_RANGE: u16 = 0xFF01;
+/// CiA 301 error code: RPDO timeout (cyclic setpoints stopped arriving).
+pub const RPDO_TIMEOUT: u16 = 0x8250;
+/// CiA 402 error code: DC-link over-voltage.
+pub const OVER_VOLTAGE: u16 = 0x3210;
+/// CiA 402 error code: DC-link under-voltage.
+pub const UNDER_VOLTAGE: u16 = 0x3220;
+/// CiA 402 error code: velocity (speed controller) error, used for overspeed.
+pub const OVERSPEED: u16 = 0x8400;
+/// CiA 402 error code: reference limit (software position limit reached).
+pub const POSITION_LIMIT: u16 = 0x8612;
 
 /// A decoded emergency message.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
