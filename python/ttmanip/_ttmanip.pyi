@@ -565,7 +565,10 @@ class DriveSim:
         noise: float | None = None,
         seed: int = 0,
         ideal_current: bool = False,
-    ) -> None: ...
+    ) -> None:
+        """Drives from the robot file's drive section (``ttcan::coupled::axis_config_from_drive``);
+        ``noise``: current-sense noise (A RMS, None: 5 mA); ``setpoint_rate``: cyclic setpoint rate
+        (Hz) the drives interpolate; ``ideal_current``: winding current = reference. At q = 0."""
     def reset(self, q0: ArrayLike, qd0: ArrayLike | None = None) -> None:
         """Rebuilds the drives around (q0, qd0 or rest): time 0, every axis holding q0."""
     def set_setpoint(
