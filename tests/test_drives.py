@@ -80,3 +80,12 @@ def test_theta5_ripple_case_meets_issue_10():
     r = motor.theta5_ripple_case()
     assert r["drive_current_ripple_rms_a"] <= 0.03
     assert r["drive_current_ripple_250hz_rms_a"] <= 0.06
+
+
+def test_removed_loop_fields_warn_and_are_ignored():
+    with pytest.warns(DeprecationWarning, match="observer_bandwidth_hz"):
+        loops = motor.Loops(speed_window=4)
+    with pytest.warns(DeprecationWarning, match="thermal"):
+        motor.Loops(peak_duration=1.0)
+    r = motor.Servo(loops=loops).step_response("current", 1.0, 0.01)
+    assert abs(r.current[-1] - 1.0) < 0.02

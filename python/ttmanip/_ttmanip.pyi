@@ -589,7 +589,10 @@ class DriveSim:
         noise: float | None = None,
         seed: int = 0,
         ideal_current: bool = False,
-    ) -> None: ...
+    ) -> None:
+        """Drives from the robot file's drive section (``ttcan::coupled::axis_config_from_drive``);
+        ``noise``: current-sense noise (A RMS, None: 5 mA); ``setpoint_rate``: cyclic setpoint rate
+        (Hz) the drives interpolate; ``ideal_current``: winding current = reference. At q = 0."""
     def reset(self, q0: ArrayLike, qd0: ArrayLike | None = None) -> None:
         """Rebuilds the drives around (q0, qd0 or rest): time 0, every axis holding q0."""
     def set_setpoint(
@@ -635,6 +638,7 @@ class DriveSim:
 
 def drive_theta5_case(setpoint_rate: float = 1000.0) -> dict[str, Any]:
     """Issue 10's θ5 case (gantry6 demo stroke on θ5, RE 25 + 14:1, 4096 counts): RMS numbers and traces."""
+
 def step_metrics(t: ArrayLike, y: ArrayLike, target: float) -> tuple[float, float]:
     """(10–90 % rise time in s, overshoot as a fraction of ``target``) of ``y`` sampled at ``t``."""
 # -- hit pipeline (issue 12) ------------------------------------------------------------------

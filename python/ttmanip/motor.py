@@ -18,6 +18,7 @@ True
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import asdict, dataclass
 from os import PathLike
 from typing import TYPE_CHECKING, Any
@@ -110,6 +111,23 @@ class Loops:
     acceleration_feedforward: bool = _D["acceleration_feedforward"]
     emf_feedforward: bool = _D["emf_feedforward"]
     anti_windup: bool = _D["anti_windup"]
+    # Removed in issue 10 (kept one release, ignored with a DeprecationWarning): the speed is now
+    # estimated by a tracking observer (``observer_bandwidth_hz``), and the I²t fold-back is replaced
+    # by the thermal model.
+    speed_window: int | None = None
+    peak_duration: float | None = None
+
+    def __post_init__(self) -> None:
+        for name in ("speed_window", "peak_duration"):
+            if getattr(self, name) is not None:
+                warnings.warn(
+                    f"Loops.{name} is deprecated and ignored: "
+                    + (
+                        "use observer_bandwidth_hz" if name == "speed_window" else "the thermal model derates"
+                    ),
+                    DeprecationWarning,
+                    stacklevel=3,
+                )
 
 
 def _flat(motor: DcMotor, gearbox: Gearbox, load: Load, drive: Drive) -> dict[str, Any]:
@@ -195,7 +213,10 @@ class Servo:
     ) -> None:
         parts = (motor or DcMotor(), gearbox or Gearbox(), load or Load(), drive or Drive())
         params = _flat(*parts)
-        params.update(asdict(loops or Loops()))
+        loop_params = asdict(loops or Loops())
+        loop_params.pop("speed_window")
+        loop_params.pop("peak_duration")
+        params.update(loop_params)
         plant_params = None
         if isinstance(plant, dict):
             plant_params = dict(plant)

@@ -1,6 +1,7 @@
 //! What an axis is built from: the controller's model of its actuator, loop rates, tuning
-//! targets, ratings, limits, monitors and the holding brake. Plain data; the axis
-//! ([`crate::axis::Axis::new`]) checks it once when it is built.
+//! targets, ratings, limits, monitors and the holding brake. Plain data, serde-described (the
+//! same types read a controller's TOML file); the axis ([`crate::axis::Axis::new`]) checks it
+//! once when it is built.
 
 use serde::{Deserialize, Serialize};
 
@@ -11,7 +12,8 @@ use crate::tuning::TuningTargets;
 
 /// Everything an axis is built from. Start from [`AxisConfig::new`] and change fields; every
 /// field is checked when the axis is built ([`crate::axis::Axis::new`]), never in the loop.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct AxisConfig {
     /// The controller's model of the actuator (used for tuning and unit conversions).
     pub model: MotorModel,

@@ -142,7 +142,7 @@ impl CurrentLoop {
     /// the usable voltage scales with it (max voltage × measured / nominal).
     #[inline]
     pub fn set_bus_voltage(&mut self, volts: f64) {
-        if volts > 0.0 && volts.is_finite() {
+        if volts != self.bus_voltage && volts > 0.0 && volts.is_finite() {
             self.max_voltage *= volts / self.bus_voltage;
             self.bus_voltage = volts;
         }

@@ -22,10 +22,12 @@
 
 use crate::error::{in_range, non_negative, positive, Result};
 use nalgebra::{SMatrix, SVector};
+use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
 /// Brushed DC motor parameters, SI units, motor shaft.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct DcMotor {
     /// Terminal resistance, Ω.
     pub resistance: f64,
@@ -81,7 +83,8 @@ impl DcMotor {
 }
 
 /// Gearbox between the motor shaft and the joint (output), ω_motor = ratio · ω_output.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Gearbox {
     /// Reduction ratio N (motor turns per output turn), > 0; 1 for a direct drive.
     pub ratio: f64,
@@ -111,7 +114,8 @@ impl Gearbox {
 }
 
 /// Rigid load on the output shaft (a robot link about its joint axis).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Load {
     /// Load inertia about the output axis, kg·m².
     pub inertia: f64,
@@ -129,7 +133,8 @@ impl Load {
 }
 
 /// Everything the simulator and the controller need to know about one actuator.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct MotorModel {
     /// The motor.
     pub motor: DcMotor,

@@ -4,8 +4,10 @@
 
 use crate::error::{positive, Error, Result};
 
-/// Loop rates, Hz: current ≥ speed ≥ position, each an integer multiple of the next.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// Loop rates, Hz: current ≥ speed ≥ position, each an integer multiple of the next. Serialised
+/// as `{ current_hz, speed_hz, position_hz }`, checked by [`Rates::new`] when read.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(try_from = "RatesHz", into = "RatesHz")]
 pub struct Rates {
     current_hz: f64,
     speed_divider: u32,
@@ -148,5 +150,34 @@ impl Scheduler {
     /// Base ticks run so far.
     pub fn ticks(&self) -> u64 {
         self.ticks
+    }
+}
+
+/// The serialised form of [`Rates`].
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RatesHz {
+    /// Current-loop rate, Hz.
+    pub current_hz: f64,
+    /// Speed-loop rate, Hz.
+    pub speed_hz: f64,
+    /// Position-loop rate, Hz.
+    pub position_hz: f64,
+}
+
+impl TryFrom<RatesHz> for Rates {
+    type Error = Error;
+    fn try_from(r: RatesHz) -> Result<Self> {
+        Rates::new(r.current_hz, r.speed_hz, r.position_hz)
+    }
+}
+
+impl From<Rates> for RatesHz {
+    fn from(r: Rates) -> Self {
+        RatesHz {
+            current_hz: r.current_hz(),
+            speed_hz: r.speed_hz(),
+            position_hz: r.position_hz(),
+        }
     }
 }

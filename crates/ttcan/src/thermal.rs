@@ -97,6 +97,11 @@ pub const COPPER_ALPHA: f64 = 0.0039;
 pub struct ThermalState {
     model: ThermalModel,
     resistance_25: f64,
+    /// 1/R_wh, 1/R_ha (W/K), 1/C_w, 1/C_h (K/J): computed once.
+    g_wh: f64,
+    g_ha: f64,
+    inv_c_w: f64,
+    inv_c_h: f64,
     winding: f64,
     housing: f64,
 }
@@ -109,6 +114,10 @@ impl ThermalState {
         Ok(ThermalState {
             model: *model,
             resistance_25,
+            g_wh: 1.0 / model.winding_housing_resistance,
+            g_ha: 1.0 / model.housing_ambient_resistance,
+            inv_c_w: model.winding_housing_resistance / model.winding_time_constant,
+            inv_c_h: model.housing_ambient_resistance / model.housing_time_constant,
             winding: model.ambient_temperature,
             housing: model.ambient_temperature,
         })
@@ -117,15 +126,12 @@ impl ThermalState {
     /// Advances `dt` s with winding current `current` A (NaN counts as 0).
     #[inline]
     pub fn step(&mut self, current: f64, dt: f64) {
-        let m = &self.model;
         let i2 = if current.is_finite() { current * current } else { 0.0 };
         let r = self.resistance_25 * (1.0 + COPPER_ALPHA * (self.winding - 25.0));
-        let to_housing = (self.winding - self.housing) / m.winding_housing_resistance;
-        let to_ambient = (self.housing - m.ambient_temperature) / m.housing_ambient_resistance;
-        let c_w = m.winding_time_constant / m.winding_housing_resistance;
-        let c_h = m.housing_time_constant / m.housing_ambient_resistance;
-        self.winding += dt * (r * i2 - to_housing) / c_w;
-        self.housing += dt * (to_housing - to_ambient) / c_h;
+        let to_housing = (self.winding - self.housing) * self.g_wh;
+        let to_ambient = (self.housing - self.model.ambient_temperature) * self.g_ha;
+        self.winding += dt * (r * i2 - to_housing) * self.inv_c_w;
+        self.housing += dt * (to_housing - to_ambient) * self.inv_c_h;
     }
 
     /// Current limit at the present winding temperature, A, between `peak` and zero.

@@ -169,3 +169,26 @@ fn issue_10_bad_configurations_are_rejected_when_the_axis_is_built() {
         "observer bandwidth",
     );
 }
+
+#[test]
+fn the_axis_configuration_is_serde_described_and_round_trips_through_toml() {
+    let mut c = AxisConfig::new(model());
+    c.setpoint_period = Some(4e-3);
+    c.holding_brake = Some(ttcan::HoldingBrake {
+        release_delay: 0.02,
+        engage_delay: 0.03,
+    });
+    c.position_limits = Some((-1.0, 2.0));
+    let text = toml::to_string(&c).unwrap();
+    let back: AxisConfig = toml::from_str(&text).unwrap();
+    assert_eq!(back, c);
+    assert!(Axis::new(&back).is_ok());
+    // Rates are checked when read; unknown keys are refused.
+    let bad = text.replace("speed_hz = 5000.0", "speed_hz = 3000.0");
+    assert!(toml::from_str::<AxisConfig>(&bad)
+        .unwrap_err()
+        .to_string()
+        .contains("not an integer"));
+    let bad = text.replace("[model.motor]", "[model.motor]\nresistence = 1.0");
+    assert!(toml::from_str::<AxisConfig>(&bad).is_err());
+}

@@ -263,6 +263,6 @@ fn drive_theta5_case<'py>(py: Python<'py>, setpoint_rate: f64) -> PyResult<Bound
     d.set_item("current_ref", to_numpy(py, &[k], &c.trace.current_reference))?;
     d.set_item("current_needed", to_numpy(py, &[k], &c.current_needed))?;
     d.set_item("position", to_numpy(py, &[k], &c.trace.position))?;
-    d.set_item("position_ref", to_numpy(py, &[k], &c.trace.position_reference))?;
+    d.set_item("position_ref", to_numpy(py, &[k], &c.reference))?;
     Ok(d)
 }

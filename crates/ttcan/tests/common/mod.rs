@@ -32,6 +32,7 @@ pub fn quintic(h: f64, tf: f64, t: f64) -> (f64, f64, f64) {
     }
 }
 
+#[allow(unused_imports)]
 pub use ttcan::sim::{overshoot, rise_time};
 
 /// Mean of the samples of `y` whose time is in [t0, t1).

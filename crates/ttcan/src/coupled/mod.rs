@@ -37,9 +37,15 @@ use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 use ttkin::{Chain, Dynamics, DynamicsData, JointType};
 
 use crate::axis::{Axis, AxisConfig, Mode};
+
+mod drives;
+mod trace;
 use crate::error::{Error, Result};
-use crate::motor::{DcMotor, Gearbox, Load, Measurement, MotorModel};
+use crate::motor::Measurement;
 use crate::schedule::Scheduler;
+pub use drives::{axis_config_from_drive, axis_configs_from_chain};
+use trace::interpolate;
+pub use trace::CoupledTrace;
 
 /// The electrical side of one joint's actuator, as simulated.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -124,93 +130,8 @@ pub struct CoupledSim {
     spare_normal: Option<f64>,
 }
 
-fn model_error(e: ttkin::Error) -> Error {
+pub(crate) fn model_error(e: ttkin::Error) -> Error {
     Error::Model(e.to_string())
-}
-
-/// Axis configuration for a joint from its drive section, until robot files carry full motor
-/// data: a motor of the RE 25's class scaled to the drive's torque constant s = k_t/k_t,RE25 (R,
-/// L ∝ s, between a rewound frame, ∝ s², and a larger frame of the same winding), peak current
-/// the joint's effort limit through gear and k_t (3.6 A/s without one), continuous a third of the
-/// peak, over-current trip 5/3 of it, the drive's gear ratio (efficiency 1:
-/// the losses are the drive's friction), rotor inertia and `link_inertia` as the load, a 4096-count
-/// encoder, the tracking observer without acceleration input at 100 Hz (the joints are coupled),
-/// and the smallest of the 24 V, 48 V and 325 V (rectified 230 V AC) buses whose 80 %
-/// covers the back-EMF at `speed_limit` (joint rad/s or m/s).
-pub fn axis_config_from_drive(
-    drive: &ttkin::Drive,
-    link_inertia: f64,
-    speed_limit: f64,
-    effort_limit: Option<f64>,
-) -> AxisConfig {
-    let re25 = DcMotor::maxon_re25();
-    let kt = drive.torque_constant.unwrap_or(re25.torque_constant);
-    let s = kt / re25.torque_constant;
-    let emf = kt * drive.gear_ratio * speed_limit.abs();
-    let bus_voltage = [24.0, 48.0, 325.0]
-        .into_iter()
-        .find(|v| emf <= 0.8 * 0.95 * v)
-        .unwrap_or(325.0);
-    let model = MotorModel {
-        motor: DcMotor {
-            resistance: re25.resistance * s,
-            inductance: re25.inductance * s,
-            torque_constant: kt,
-            back_emf_constant: kt,
-            rotor_inertia: drive.rotor_inertia.max(1e-9),
-            viscous_friction: 0.0,
-            coulomb_friction: 0.0,
-        },
-        gearbox: Gearbox {
-            ratio: drive.gear_ratio,
-            efficiency: 1.0,
-            inertia: 0.0,
-        },
-        load: Load {
-            inertia: link_inertia.max(0.0),
-            viscous_friction: drive.viscous,
-        },
-        bus_voltage,
-        max_duty: 0.95,
-        encoder_counts_per_rev: 4096,
-        current_noise: 0.005,
-    };
-    let mut c = AxisConfig::new(model);
-    c.peak_current = effort_limit.map_or(3.6 / s, |e| e.abs() / (drive.gear_ratio * kt));
-    c.continuous_current = c.peak_current / 3.0;
-    c.overcurrent_trip = c.peak_current * 5.0 / 3.0;
-    c.max_speed = 0.9 * (model.max_voltage() - model.motor.resistance * c.continuous_current) / (kt * drive.gear_ratio);
-    c.following_error_limit = 0.01;
-    c.following_error_per_speed = 0.005;
-    c.overspeed_limit = 1.2 * c.max_speed;
-    c.bus_overvoltage = 1.25 * bus_voltage;
-    c.bus_undervoltage = 0.7 * bus_voltage;
-    // Coupled joints: the observer must not trust the axis' own acceleration model (see
-    // `TuningTargets::observer_acceleration_input`): PLL alone, 100 Hz.
-    c.tuning.observer_acceleration_input = false;
-    c.tuning.observer_bandwidth_hz = 100.0;
-    c
-}
-
-/// One [`axis_config_from_drive`] per joint of `chain`, each joint's link inertia at `q0` as its
-/// load, with the setpoint period and noise scale of `options`.
-pub fn axis_configs_from_chain(chain: &Chain, q0: &[f64], options: &CoupledOptions) -> Result<Vec<AxisConfig>> {
-    let dynamics = Dynamics::new(chain).map_err(model_error)?;
-    let mut data = DynamicsData::new(&dynamics);
-    let m = dynamics.mass_matrix(&mut data, q0).map_err(model_error)?;
-    crate::error::non_negative("noise scale", options.noise_scale)?;
-    let mut configs = Vec::with_capacity(dynamics.dof());
-    for (k, j) in chain.joints().iter().enumerate() {
-        let drive = j
-            .drive()
-            .ok_or_else(|| Error::Model(format!("joint '{}' has no drive", j.name())))?;
-        let v = j.limits().velocity.unwrap_or(10.0);
-        let mut c = axis_config_from_drive(drive, m[(k, k)] - dynamics.armature()[k], v, j.limits().effort);
-        c.setpoint_period = options.setpoint_period;
-        c.model.current_noise *= options.noise_scale;
-        configs.push(c);
-    }
-    Ok(configs)
 }
 
 impl CoupledSim {
@@ -673,44 +594,6 @@ fn open_winding_step(w: &Winding, i0: f64, emf: f64, t: f64) -> (f64, f64, f64, 
     (u, i1, mean, mean_sq)
 }
 
-#[allow(clippy::too_many_arguments)]
-fn interpolate(
-    times: &[f64],
-    t: f64,
-    n: usize,
-    q: &[f64],
-    qd: &[f64],
-    qdd: &[f64],
-    tau: Option<&[f64]>,
-    out: &mut [f64],
-) {
-    let k = times.len();
-    let (i, s) = if t <= times[0] {
-        (0, 0.0)
-    } else if t >= times[k - 1] {
-        (k - 2, 1.0)
-    } else {
-        let i = times.partition_point(|x| *x <= t).saturating_sub(1).min(k - 2);
-        (i, (t - times[i]) / (times[i + 1] - times[i]))
-    };
-    let at_end = t >= times[k - 1];
-    for (slot, src) in [q, qd, qdd].into_iter().enumerate() {
-        for j in 0..n {
-            let (a, b) = (src[i * n + j], src[(i + 1) * n + j]);
-            out[slot * n + j] = a + s * (b - a);
-            if at_end && slot > 0 {
-                out[slot * n + j] = b;
-            }
-        }
-    }
-    if let Some(src) = tau {
-        for j in 0..n {
-            let (a, b) = (src[i * n + j], src[(i + 1) * n + j]);
-            out[3 * n + j] = a + s * (b - a);
-        }
-    }
-}
-
 fn check_vector(what: &str, v: &[f64], n: usize) -> Result<()> {
     check_len(what, v, n)?;
     if let Some(i) = v.iter().position(|x| !x.is_finite()) {
@@ -731,64 +614,4 @@ fn check_len(what: &str, v: &[f64], n: usize) -> Result<()> {
         });
     }
     Ok(())
-}
-
-/// What [`CoupledSim::run`] records, one row per tick (K rows, n columns, row-major).
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct CoupledTrace {
-    /// Number of axes.
-    pub dof: usize,
-    /// Time of each row, s from the start of the run.
-    pub t: Vec<f64>,
-    /// True joint positions, rad or m.
-    pub q: Vec<f64>,
-    /// True joint speeds, rad/s or m/s.
-    pub qd: Vec<f64>,
-    /// Reference positions (the input trajectory at the row's time), rad or m.
-    pub q_ref: Vec<f64>,
-    /// Winding currents, A.
-    pub current: Vec<f64>,
-    /// Current references after limiting, A.
-    pub current_ref: Vec<f64>,
-    /// Joint-side motor torques, N·m or N.
-    pub torque: Vec<f64>,
-    /// Fault of each axis at the end ("" when none).
-    pub faults: Vec<String>,
-}
-
-impl CoupledTrace {
-    fn with_capacity(k: usize, n: usize) -> Self {
-        let v = || Vec::with_capacity(k * n);
-        CoupledTrace {
-            dof: n,
-            t: Vec::with_capacity(k),
-            q: v(),
-            qd: v(),
-            q_ref: v(),
-            current: v(),
-            current_ref: v(),
-            torque: v(),
-            faults: Vec::new(),
-        }
-    }
-
-    fn push(&mut self, s: &CoupledSim, q_ref: &[f64]) {
-        self.t.push(self.t.len() as f64 * s.period);
-        self.q.extend_from_slice(&s.q);
-        self.qd.extend_from_slice(&s.qd);
-        self.q_ref.extend_from_slice(q_ref);
-        self.current.extend_from_slice(&s.current);
-        self.current_ref.extend(s.axes.iter().map(|a| a.current_reference()));
-        self.torque.extend_from_slice(&s.torque);
-    }
-
-    /// Number of rows.
-    pub fn len(&self) -> usize {
-        self.t.len()
-    }
-
-    /// True if nothing was recorded.
-    pub fn is_empty(&self) -> bool {
-        self.t.is_empty()
-    }
 }
