@@ -11,6 +11,7 @@ seconds; poses are 4×4 homogeneous matrices in the robot's base frame.
 
 from . import dynamics, motor, robots, traj
 from ._ttmanip import (
+    DriveSim,
     IkResult,
     ModelError,
     NonFiniteError,
@@ -26,6 +27,7 @@ from .pipeline import DEMO_HIT, Hit, HitError, HitPlan, SimResult, plan_hit, pla
 
 __all__ = [
     "DiffDrive",
+    "DriveSim",
     "IkResult",
     "ModelError",
     "NonFiniteError",

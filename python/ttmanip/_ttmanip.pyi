@@ -658,3 +658,69 @@ def hit_plan_batch(
 ) -> list[HitPlan]: ...
 def racket_frame(normal: ArrayLike, handle: ArrayLike | None = None) -> _F: ...
 def racket_mount(robot: Robot) -> _F: ...
+# --- drives (issue 10): all axes of a robot through their cascades on its rigid-body dynamics ---
+
+class DriveSim:
+    """Every joint driven by its own current/speed/position cascade on the robot's shared
+    rigid-body mechanics (gravity included), one current-loop period per tick (SI units)."""
+
+    def __init__(
+        self,
+        robot: Robot,
+        *,
+        gravity: bool = True,
+        setpoint_rate: float = 1000.0,
+        noise: float | None = None,
+        seed: int = 0,
+        ideal_current: bool = False,
+    ) -> None:
+        """Drives from the robot file's drive section (``ttcan::coupled::axis_config_from_drive``);
+        ``noise``: current-sense noise (A RMS, None: 5 mA); ``setpoint_rate``: cyclic setpoint rate
+        (Hz) the drives interpolate; ``ideal_current``: winding current = reference. At q = 0."""
+    def reset(self, q0: ArrayLike, qd0: ArrayLike | None = None) -> None:
+        """Rebuilds the drives around (q0, qd0 or rest): time 0, every axis holding q0."""
+    def set_setpoint(
+        self,
+        q: ArrayLike,
+        qd: ArrayLike | None = None,
+        qdd: ArrayLike | None = None,
+        tau_ff: ArrayLike | None = None,
+    ) -> None:
+        """Joint-space setpoint (rad or m, per s, per s²) and joint-side torque feed-forward (N·m or N)."""
+    def tick(self, n: int = 1) -> None:
+        """Advances ``n`` current-loop periods."""
+    @property
+    def t(self) -> float:
+        """Simulated time since the last reset, s."""
+    @property
+    def q(self) -> NDArray[np.float64]:
+        """True joint positions, rad or m."""
+    @property
+    def qd(self) -> NDArray[np.float64]:
+        """True joint speeds, rad/s or m/s."""
+    @property
+    def current(self) -> NDArray[np.float64]:
+        """Winding currents, A."""
+    @property
+    def current_ref(self) -> NDArray[np.float64]:
+        """Current references after limiting, A."""
+    @property
+    def faults(self) -> list[str]:
+        """Fault of each axis ("" when none)."""
+    @property
+    def tick_rate(self) -> float:
+        """Current-loop (tick) rate, Hz."""
+    def run(
+        self,
+        t: ArrayLike,
+        q: ArrayLike,
+        qd: ArrayLike,
+        qdd: ArrayLike,
+        tau_ff: ArrayLike | None = None,
+    ) -> dict[str, Any]:
+        """Runs a reference trajectory: t (K,); q, qd, q_ref, current, current_ref, torque (K, n); faults."""
+
+def drive_theta5_case(setpoint_rate: float = 1000.0) -> dict[str, Any]:
+    """Issue 10's θ5 case (gantry6 demo stroke on θ5, RE 25 + 14:1, 4096 counts): RMS numbers and traces."""
+def step_metrics(t: ArrayLike, y: ArrayLike, target: float) -> tuple[float, float]:
+    """(10–90 % rise time in s, overshoot as a fraction of ``target``) of ``y`` sampled at ``t``."""

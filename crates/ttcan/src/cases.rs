@@ -118,6 +118,8 @@ pub struct Theta5Case {
     pub trace: Trace,
     /// The current the motion needs at each sample, A.
     pub current_needed: Vec<f64>,
+    /// The reference trajectory at each sample (in the axis' coordinates), rad.
+    pub reference: Vec<f64>,
 }
 
 /// Runs the θ5 case with setpoints arriving at `setpoint_hz` (a divisor of the speed-loop rate;
@@ -175,6 +177,7 @@ pub fn theta5_run(
     };
     let mut trace = Trace::default();
     let mut needed = Vec::with_capacity(total as usize);
+    let mut reference_at = Vec::with_capacity(total as usize);
     let mut max_fe = 0.0f64;
     let k_acc = model.acceleration_per_amp();
     let lead = if config.setpoint_period.is_some() {
@@ -191,6 +194,7 @@ pub fn theta5_run(
             sim.axis.set_position(a, b, c);
         }
         let (qr, qdr, qddr) = reference(t);
+        reference_at.push(qr);
         let m = &model.motor;
         let n_g = model.gearbox.ratio;
         let w_m = qdr * n_g;
@@ -218,5 +222,6 @@ pub fn theta5_run(
         max_following_error: max_fe,
         trace,
         current_needed: needed,
+        reference: reference_at,
     })
 }

@@ -36,10 +36,10 @@
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 use ttkin::{Chain, Dynamics, DynamicsData, JointType};
 
-use crate::axis::{Axis, AxisConfig, AxisState, Mode};
+use crate::axis::{Axis, AxisConfig, Mode};
 use crate::error::{Error, Result};
 use crate::motor::{DcMotor, Gearbox, Load, Measurement, MotorModel};
-use crate::stepper::Scheduler;
+use crate::schedule::Scheduler;
 
 /// The electrical side of one joint's actuator, as simulated.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -121,6 +121,7 @@ pub struct CoupledSim {
     rhs: DVector<f64>,
     energy: EnergyBalance,
     rng: u64,
+    spare_normal: Option<f64>,
 }
 
 fn model_error(e: ttkin::Error) -> Error {
@@ -179,12 +180,37 @@ pub fn axis_config_from_drive(
     c.continuous_current = c.peak_current / 3.0;
     c.overcurrent_trip = c.peak_current * 5.0 / 3.0;
     c.max_speed = 0.9 * (model.max_voltage() - model.motor.resistance * c.continuous_current) / (kt * drive.gear_ratio);
-    c.following_error_limit = 0.05;
+    c.following_error_limit = 0.01;
+    c.following_error_per_speed = 0.005;
+    c.overspeed_limit = 1.2 * c.max_speed;
+    c.bus_overvoltage = 1.25 * bus_voltage;
+    c.bus_undervoltage = 0.7 * bus_voltage;
     // Coupled joints: the observer must not trust the axis' own acceleration model (see
     // `TuningTargets::observer_acceleration_input`): PLL alone, 100 Hz.
     c.tuning.observer_acceleration_input = false;
     c.tuning.observer_bandwidth_hz = 100.0;
     c
+}
+
+/// One [`axis_config_from_drive`] per joint of `chain`, each joint's link inertia at `q0` as its
+/// load, with the setpoint period and noise scale of `options`.
+pub fn axis_configs_from_chain(chain: &Chain, q0: &[f64], options: &CoupledOptions) -> Result<Vec<AxisConfig>> {
+    let dynamics = Dynamics::new(chain).map_err(model_error)?;
+    let mut data = DynamicsData::new(&dynamics);
+    let m = dynamics.mass_matrix(&mut data, q0).map_err(model_error)?;
+    crate::error::non_negative("noise scale", options.noise_scale)?;
+    let mut configs = Vec::with_capacity(dynamics.dof());
+    for (k, j) in chain.joints().iter().enumerate() {
+        let drive = j
+            .drive()
+            .ok_or_else(|| Error::Model(format!("joint '{}' has no drive", j.name())))?;
+        let v = j.limits().velocity.unwrap_or(10.0);
+        let mut c = axis_config_from_drive(drive, m[(k, k)] - dynamics.armature()[k], v, j.limits().effort);
+        c.setpoint_period = options.setpoint_period;
+        c.model.current_noise *= options.noise_scale;
+        configs.push(c);
+    }
+    Ok(configs)
 }
 
 impl CoupledSim {
@@ -265,29 +291,16 @@ impl CoupledSim {
             rhs: DVector::zeros(n),
             energy: EnergyBalance::default(),
             rng: options.seed ^ 0x5eed_c0de,
+            spare_normal: None,
         };
         sim.reset(&vec![0.0; n], None)?;
         Ok(sim)
     }
 
-    /// One axis per joint built by [`axis_config_from_drive`] with each joint's link inertia at
-    /// `q0` as its load, then [`CoupledSim::reset`] to (`q0`, 0).
+    /// One axis per joint built by [`axis_configs_from_chain`] at `q0`, then
+    /// [`CoupledSim::reset`] to (`q0`, 0).
     pub fn from_chain(chain: &Chain, q0: &[f64], options: CoupledOptions) -> Result<Self> {
-        let dynamics = Dynamics::new(chain).map_err(model_error)?;
-        let mut data = DynamicsData::new(&dynamics);
-        let m = dynamics.mass_matrix(&mut data, q0).map_err(model_error)?;
-        let mut configs = Vec::with_capacity(dynamics.dof());
-        for (k, j) in chain.joints().iter().enumerate() {
-            let drive = j
-                .drive()
-                .ok_or_else(|| Error::Model(format!("joint '{}' has no drive", j.name())))?;
-            let v = j.limits().velocity.unwrap_or(10.0);
-            let mut c = axis_config_from_drive(drive, m[(k, k)] - dynamics.armature()[k], v, j.limits().effort);
-            c.setpoint_period = options.setpoint_period;
-            crate::error::non_negative("noise scale", options.noise_scale)?;
-            c.model.current_noise *= options.noise_scale;
-            configs.push(c);
-        }
+        let configs = axis_configs_from_chain(chain, q0, &options)?;
         let mut sim = CoupledSim::new(chain, &configs, options)?;
         sim.reset(q0, None)?;
         Ok(sim)
@@ -312,6 +325,7 @@ impl CoupledSim {
         self.ticks = 0;
         self.energy = EnergyBalance::default();
         self.rng = self.options.seed ^ 0x5eed_c0de;
+        self.spare_normal = None;
         let rates = *self.axes[0].rates();
         self.scheduler = Scheduler::new(&rates);
         for k in 0..n {
@@ -372,9 +386,10 @@ impl CoupledSim {
             let m = Measurement {
                 current: self.current[k] + noise,
                 encoder_counts: counts as i64,
+                bus_voltage: Some(w.bus_voltage),
             };
             let duty = self.axes[k].tick(m, due);
-            let bridge_on = matches!(self.axes[k].state(), AxisState::Enabled | AxisState::Stopping(_));
+            let bridge_on = self.axes[k].bridge_on();
             let omega_m = w.gear * self.qd[k];
             let emf = w.back_emf_constant * omega_m;
             let i0 = self.current[k];
@@ -424,8 +439,11 @@ impl CoupledSim {
         }
     }
 
+    /// Standard normal sample (SplitMix64 + Box–Muller, both values of each pair used).
     fn normal(&mut self) -> f64 {
-        // SplitMix64 + Box–Muller.
+        if let Some(v) = self.spare_normal.take() {
+            return v;
+        }
         let mut next = || {
             self.rng = self.rng.wrapping_add(0x9e37_79b9_7f4a_7c15);
             let mut z = self.rng;
@@ -434,7 +452,10 @@ impl CoupledSim {
             (((z ^ (z >> 31)) >> 11) as f64 + 1.0) / (1u64 << 53) as f64
         };
         let (a, b) = (next(), next());
-        (-2.0 * a.ln()).sqrt() * (2.0 * std::f64::consts::PI * b).cos()
+        let r = (-2.0 * a.ln()).sqrt();
+        let (sin, cos) = (2.0 * std::f64::consts::PI * b).sin_cos();
+        self.spare_normal = Some(r * sin);
+        r * cos
     }
 
     /// Hands every axis a position setpoint (joint space: rad or m, per s, per s²) and a
@@ -560,7 +581,7 @@ impl CoupledSim {
                 });
             }
         }
-        if let Some(i) = times.windows(2).position(|w| !(w[1] > w[0])) {
+        if let Some(i) = times.windows(2).position(|w| w[1] <= w[0]) {
             return Err(Error::InvalidParameter {
                 what: format!("t[{}]", i + 1),
                 value: times[i + 1],
@@ -652,6 +673,7 @@ fn open_winding_step(w: &Winding, i0: f64, emf: f64, t: f64) -> (f64, f64, f64, 
     (u, i1, mean, mean_sq)
 }
 
+#[allow(clippy::too_many_arguments)]
 fn interpolate(
     times: &[f64],
     t: f64,

@@ -4,7 +4,7 @@
 use crate::axis::{Axis, AxisConfig, AxisState, Mode};
 use crate::error::{Error, Result};
 use crate::motor::{MotorModel, Plant};
-use crate::stepper::Scheduler;
+use crate::schedule::Scheduler;
 
 /// Reference for one axis at one instant.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -69,6 +69,23 @@ impl Trace {
     }
 }
 
+/// 10 %–90 % rise time of `y` (sampled at times `t`, s) towards `target` (≠ 0): the time from the
+/// first sample at or beyond 10 % of the target to the first at or beyond 90 %, s; infinite if
+/// either is never reached. The one definition of rise time in ttmanip (Rust and Python).
+pub fn rise_time(t: &[f64], y: &[f64], target: f64) -> f64 {
+    let first = |level: f64| t.iter().zip(y).find(|(_, v)| **v / target >= level).map(|(t, _)| *t);
+    match (first(0.1), first(0.9)) {
+        (Some(a), Some(b)) => b - a,
+        _ => f64::INFINITY,
+    }
+}
+
+/// Largest excursion of `y` beyond `target` (≠ 0), as a fraction of `target` (0.05 = 5 %); NaN
+/// for an empty signal. The one definition of overshoot in ttmanip (Rust and Python).
+pub fn overshoot(y: &[f64], target: f64) -> f64 {
+    y.iter().map(|v| v / target).fold(f64::NAN, f64::max) - 1.0
+}
+
 /// One axis controlling one simulated actuator.
 #[derive(Debug, Clone)]
 pub struct Simulation {
@@ -100,7 +117,7 @@ impl Simulation {
     }
 
     /// Which loops run on the next [`Simulation::step`].
-    pub fn next_due(&self) -> crate::stepper::Due {
+    pub fn next_due(&self) -> crate::schedule::Due {
         self.scheduler.peek()
     }
 
@@ -126,7 +143,11 @@ impl Simulation {
         let m = self.plant.measure();
         let due = self.scheduler.next_tick();
         let duty = self.axis.tick(m, due);
-        self.plant.step(duty);
+        if self.axis.bridge_on() {
+            self.plant.step(duty);
+        } else {
+            self.plant.step_open();
+        }
         self.time += self.plant.dt();
     }
 

@@ -69,7 +69,8 @@ pub struct CascadeTuning {
 }
 
 /// Targets for [`tune_cascade`].
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct TuningTargets {
     /// Current-loop closed-loop bandwidth, Hz (at most a sixth of the current-loop rate).
     pub current_bandwidth_hz: f64,

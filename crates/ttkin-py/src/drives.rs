@@ -211,7 +211,58 @@ impl DriveSim {
     }
 }
 
-/// Adds `DriveSim` to the module.
+/// (10–90 % rise time in s, overshoot as a fraction) of `y` sampled at `t` towards `target`.
+#[pyfunction]
+fn step_metrics(t: &Bound<'_, PyAny>, y: &Bound<'_, PyAny>, target: f64) -> PyResult<(f64, f64)> {
+    let t = f64_array(t, "t")?;
+    let y = f64_array(y, "y")?;
+    if t.data().len() != y.data().len() {
+        return Err(crate::errors::ShapeError::new_err(format!(
+            "t and y: expected equal lengths, got {} and {}",
+            t.data().len(),
+            y.data().len()
+        )));
+    }
+    if !(target.is_finite() && target != 0.0) {
+        return Err(TtmanipError::new_err(format!(
+            "target: expected a finite value ≠ 0, got {target}"
+        )));
+    }
+    Ok((
+        ttcan::sim::rise_time(t.data(), y.data(), target),
+        ttcan::sim::overshoot(y.data(), target),
+    ))
+}
+
+/// Adds `DriveSim`, `drive_theta5_case` and `step_metrics` to the module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    m.add_class::<DriveSim>()
+    m.add_class::<DriveSim>()?;
+    m.add_function(wrap_pyfunction!(step_metrics, m)?)?;
+    m.add_function(wrap_pyfunction!(drive_theta5_case, m)?)
+}
+
+/// Issue 10's θ5 case (`ttcan::cases::theta5_case`): its RMS numbers and traces.
+#[pyfunction]
+#[pyo3(signature = (setpoint_rate=1000.0))]
+fn drive_theta5_case<'py>(py: Python<'py>, setpoint_rate: f64) -> PyResult<Bound<'py, PyDict>> {
+    if !(setpoint_rate.is_finite() && setpoint_rate > 0.0) {
+        return Err(TtmanipError::new_err(format!(
+            "setpoint_rate: expected a finite rate > 0 Hz, got {setpoint_rate}"
+        )));
+    }
+    let c = py.detach(|| ttcan::cases::theta5_case(setpoint_rate)).map_err(to_py)?;
+    let d = PyDict::new(py);
+    d.set_item("load_inertia", c.load_inertia)?;
+    d.set_item("setpoint_rate", c.setpoint_hz)?;
+    d.set_item("current_ripple_rms", c.current_ripple_rms)?;
+    d.set_item("current_error_rms", c.current_error_rms)?;
+    d.set_item("max_following_error", c.max_following_error)?;
+    let k = c.trace.len();
+    d.set_item("t", to_numpy(py, &[k], &c.trace.time))?;
+    d.set_item("current", to_numpy(py, &[k], &c.trace.current))?;
+    d.set_item("current_ref", to_numpy(py, &[k], &c.trace.current_reference))?;
+    d.set_item("current_needed", to_numpy(py, &[k], &c.current_needed))?;
+    d.set_item("position", to_numpy(py, &[k], &c.trace.position))?;
+    d.set_item("position_ref", to_numpy(py, &[k], &c.reference))?;
+    Ok(d)
 }

@@ -42,7 +42,7 @@ const MODEL_KEYS: [&str; 16] = [
     "current_noise",
 ];
 
-const LOOP_KEYS: [&str; 21] = [
+const LOOP_KEYS: [&str; 20] = [
     "current_hz",
     "speed_hz",
     "position_hz",
@@ -54,7 +54,6 @@ const LOOP_KEYS: [&str; 21] = [
     "speed_reference_filter_hz",
     "continuous_current",
     "peak_current",
-    "peak_duration",
     "overcurrent_trip",
     "max_speed",
     "following_error_limit",
@@ -100,7 +99,6 @@ fn config_dict<'py>(py: Python<'py>, c: &AxisConfig) -> PyResult<Bound<'py, PyDi
     d.set_item("speed_reference_filter_hz", c.speed_reference_filter_hz)?;
     d.set_item("continuous_current", c.continuous_current)?;
     d.set_item("peak_current", c.peak_current)?;
-    d.set_item("peak_duration", c.peak_duration)?;
     d.set_item("overcurrent_trip", c.overcurrent_trip)?;
     d.set_item("max_speed", c.max_speed)?;
     d.set_item("following_error_limit", c.following_error_limit)?;
@@ -186,7 +184,6 @@ fn apply_config(d: &Bound<'_, PyDict>, c: &mut AxisConfig) -> PyResult<()> {
     }
     float(d, "continuous_current", &mut c.continuous_current)?;
     float(d, "peak_current", &mut c.peak_current)?;
-    float(d, "peak_duration", &mut c.peak_duration)?;
     float(d, "overcurrent_trip", &mut c.overcurrent_trip)?;
     float(d, "max_speed", &mut c.max_speed)?;
     float(d, "following_error_limit", &mut c.following_error_limit)?;
