@@ -182,3 +182,21 @@ def test_mobile8_racket_task_hit_is_planned_and_simulated():
 def test_bad_input_is_a_ttmanip_error_naming_the_argument(make, match):
     with pytest.raises(ttmanip.TtmanipError, match=match):
         make()
+
+
+def test_pipeline_modules_export_only_their_api():
+    import inspect
+
+    from ttmanip import cli, demo, pipeline, plots
+    from ttmanip.experiments import seed002
+
+    for module in (pipeline, plots, demo, cli, seed002):
+        assert all(hasattr(module, name) for name in module.__all__), module.__name__
+        leaked = {"np", "json", "dataclass", "field", "Any", "Path", "plt", "matplotlib", "annotations"}
+        assert not leaked & set(module.__all__), module.__name__
+        own = {
+            n
+            for n, v in vars(module).items()
+            if inspect.isfunction(v) and v.__module__ == module.__name__ and not n.startswith("_")
+        }
+        assert own <= set(module.__all__), (module.__name__, own - set(module.__all__))

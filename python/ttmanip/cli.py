@@ -26,6 +26,8 @@ from pathlib import Path
 
 import numpy as np
 
+__all__ = ["CliError", "Progress", "build_parser", "main", "read_hit_file"]
+
 EXPERIMENTS = ("seed000", "seed001", "seed002")
 ROBOTS = ("mobile8", "gantry6", "arm4", "ur5")
 

@@ -38,6 +38,7 @@ __all__ = [
     "plan_hits",
     "racket_frame",
     "racket_mount",
+    "racket_states",
     "simulate",
 ]
 

@@ -27,6 +27,8 @@ from .. import plots, robots
 from ..demo import write_csv
 from ..pipeline import Hit, plan_hit, racket_states, simulate
 
+__all__ = ["HITS", "hits", "run"]
+
 
 def _along(normal, speed):
     n = np.asarray(normal, float)

@@ -6,8 +6,9 @@
 //! within the velocity, acceleration and jerk limits (one exact peak evaluation); otherwise the
 //! jerk-limited leg with the requested time as minimum duration, which is the time-optimal one
 //! (the earliest kinematically feasible hit time T*) when the request is earlier than T* (status
-//! too early). The return leg follows the hit leg's family: time-optimal jerk-limited after a
-//! jerk-limited hit leg, a quintic within 10 % of its minimal duration after a quintic one.
+//! too early). The return leg is a quintic of nearly minimal duration (one Ruckig solve
+//! less per plan; the return is not time-critical), replanned jerk-limited when it would leave
+//! the position limits or exceed an effort limit.
 //! T* is computed on demand ([`super::HitPlanner::earliest_t_hit`]) when planning did not need it.
 //! A leg that leaves the position limits is replanned jerk-limited with position limits.
 //! When the torques at the check points exceed an effort limit, the return leg is slowed, and
@@ -164,7 +165,7 @@ fn first_legs(
     } else {
         f64::NAN
     };
-    let back = jerk_limited(hit, rest, lim, None, PositionLimits::Ignore)?.trajectory;
+    let back = quick_quintic(hit, rest, lim);
     Ok((
         Legs {
             hit: leg.trajectory,
@@ -190,8 +191,9 @@ const QUICK_GROWTH: f64 = 1.1;
 
 /// A quintic from `from` to `to` within the velocity, acceleration and jerk limits, not minimal:
 /// the duration starts at the largest rest-to-rest quintic bound (15h/8v, √(10h/√3a), ∛(60h/j))
-/// and the time to cancel the start velocity and acceleration, and grows by [`QUICK_GROWTH`] until
-/// the exact peaks are within the limits (within 10 % of the minimal duration of that family).
+/// and the time to cancel the start velocity and acceleration, and grows by √(peak/limit) (at least
+/// [`QUICK_GROWTH`]) until the exact peaks are within the limits; not minimal, typically within a
+/// few tens of percent of the minimal duration of that family.
 fn quick_quintic(from: &JointState, to: &JointState, lim: &limits::KinematicLimits) -> JointTrajectory {
     let mut t: f64 = 1e-3;
     for j in 0..from.q.len() {
@@ -204,10 +206,12 @@ fn quick_quintic(from: &JointState, to: &JointState, lim: &limits::KinematicLimi
             .max((to.qdd[j] - from.qdd[j]).abs() / lim.jerk[j]);
     }
     for _ in 0..200 {
-        if limits::quintic_limit_ratio(from, to, t, lim) <= 1.0 + LIMIT_TOLERANCE {
+        let ratio = limits::quintic_limit_ratio(from, to, t, lim);
+        if ratio <= 1.0 + LIMIT_TOLERANCE {
             break;
         }
-        t *= QUICK_GROWTH;
+        // Peaks fall like T⁻¹ to T⁻³ as T grows: √ratio is a step that rarely overshoots by much.
+        t *= ratio.sqrt().clamp(QUICK_GROWTH, 4.0);
     }
     JointTrajectory::quintic_unchecked(from, to, t)
 }
