@@ -768,3 +768,4 @@ def ball_rally(
     target: tuple[float, float] = (0.9, 0.0),
     max_spin_rps: float = 40.0,
     paths: int = 5,
+) -> dict[str, Any]: ...
