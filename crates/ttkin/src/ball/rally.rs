@@ -438,7 +438,7 @@ pub fn play(planner: &HitPlanner, truth: &Flight, cfg: &RallyConfig, index: u64)
     let after = BallState { v, w, ..b };
     let (_, events) = truth.run(&after, b.t + 2.0, None);
     if keep_path {
-        let tail = sample_path(truth, &after, 1.0);
+        let tail = sample_path(truth, &after, after.t + 1.0);
         out.path.extend(tail);
     }
     match events.first() {
