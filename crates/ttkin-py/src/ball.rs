@@ -179,7 +179,7 @@ fn ball_crossing<'py>(
     let pt = vector(point, "point", 3)?;
     let n = vector(normal, "normal", 3)?;
     let nn = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-    if !(nn > 1e-12) {
+    if nn.is_nan() || nn <= 1e-12 {
         return Err(ttkin::Error::invalid("normal", "must be a non-zero vector")).py();
     }
     let plane = Plane {
