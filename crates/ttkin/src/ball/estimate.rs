@@ -15,7 +15,7 @@
 //! (c = 3σ on the 3-D residual, σ from the median residual: for Gaussian noise σ_axis = median|r| /
 //! 1.538, the median of a χ₃) and residuals beyond 6σ get weight 0 (outliers). The contraction
 //! factor of the iteration is about k_d·|v|·T (≈ 0.15 for a 0.2 s window), so it converges in a
-//! few iterations (it stops when an iteration moves the state by < 1 µm). Covariance: σ²·(BᵀWB + ridge)⁻¹.
+//! few iterations (it stops when an iteration moves the state by < 10 µm). Covariance: σ²·(BᵀWB + ridge)⁻¹.
 
 use super::flight::{BallState, Flight};
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
@@ -313,7 +313,7 @@ fn fit_arc(t: &[f64], p: &[[f64; 3]], arc: &[usize], opts: &EstimateOptions) -> 
                 1.0
             };
         }
-        if iter >= 2 && change < 1e-6 {
+        if iter >= 2 && change < 1e-5 {
             break;
         }
     }
