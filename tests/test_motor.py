@@ -104,7 +104,7 @@ def test_plot_writes_a_png(servo, tmp_path):
         ({"motor": motor.DcMotor(inductance=float("nan"))}, ttmanip.NonFiniteError),
         ({"loops": motor.Loops(speed_hz=6000.0)}, ttmanip.TtmanipError),
         ({"loops": motor.Loops(peak_current=0.5)}, ttmanip.ModelError),
-        ({"loops": motor.Loops(speed_window=0)}, ttmanip.ModelError),
+        ({"loops": motor.Loops(observer_bandwidth_hz=0.0)}, ttmanip.ModelError),
         ({"plant": {"resistance": 0.0}}, ttmanip.ModelError),
         ({"plant": {"no_such_parameter": 1.0}}, ttmanip.TtmanipError),
     ],

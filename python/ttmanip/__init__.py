@@ -17,6 +17,7 @@ from . import (
     traj,
 )
 from ._ttmanip import (
+    DriveSim,
     IkResult,
     ModelError,
     NonFiniteError,
@@ -28,10 +29,12 @@ from ._ttmanip import (
     UnreachableError,
 )
 from .mobile import DiffDrive, TrackResult, task_line, track, wls_step
+from .pipeline import DEMO_HIT, Hit, HitError, HitPlan, SimResult, plan_hit, plan_hits, simulate
 from .rally import rally  # issue 13
 
 __all__ = [
     "DiffDrive",
+    "DriveSim",
     "IkResult",
     "ModelError",
     "NonFiniteError",
@@ -51,6 +54,15 @@ __all__ = [
     "wls_step",
     "ball",
     "rally",
+    # hit pipeline (issue 12)
+    "DEMO_HIT",
+    "Hit",
+    "HitError",
+    "HitPlan",
+    "SimResult",
+    "plan_hit",
+    "plan_hits",
+    "simulate",
 ]
 
 __version__ = "0.1.0"

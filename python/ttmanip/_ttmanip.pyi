@@ -570,3 +570,180 @@ def ball_rally(
     max_spin_rps: float = 40.0,
     paths: int = 5,
 ) -> dict[str, Any]: ...
+
+# -- hit pipeline (issue 12) ------------------------------------------------------------------
+class HitPlan:
+    """One planned hit: every intermediate product of ``ttkin::hit`` (SI units, base frame)."""
+
+    @property
+    def ok(self) -> bool:
+        """True when the hit is on time and within every limit."""
+    @property
+    def status(self) -> str:
+        """ok, too_early, unreachable, singular, hit_speed_limit, position_limit, effort_limit, no_stroke."""
+    @property
+    def message(self) -> str:
+        """One line on what limited the plan ("" when ok)."""
+    @property
+    def q_hit(self) -> _F:
+        """(n,) hit configuration (m, rad)."""
+    @property
+    def qd_hit(self) -> _F:
+        """(n,) hit joint velocities."""
+    @property
+    def t_hit(self) -> float:
+        """Planned hit time (s)."""
+    @property
+    def requested_t_hit(self) -> float:
+        """Requested hit time (s)."""
+    @property
+    def earliest_t_hit(self) -> float:
+        """Earliest feasible hit time (s)."""
+    @property
+    def profile(self) -> str:
+        """Hit-leg profile: quintic or jerk."""
+    @property
+    def sigma_min(self) -> float:
+        """Smallest singular value of the (task) Jacobian at the hit."""
+    @property
+    def branches(self) -> int:
+        """IK branches within the limits."""
+    @property
+    def hit_pose(self) -> _F:
+        """(4, 4) requested racket pose."""
+    @property
+    def hit_twist(self) -> _F:
+        """(6,) requested racket-centre twist."""
+    @property
+    def tool_target(self) -> _F:
+        """(4, 4) tool pose putting the racket at the hit pose."""
+    @property
+    def start(self) -> _F:
+        """(n,) start configuration."""
+    @property
+    def ready(self) -> _F:
+        """(n,) ready configuration."""
+    @property
+    def return_duration(self) -> float:
+        """Return-leg duration (s)."""
+    @property
+    def duration(self) -> float:
+        """Stroke duration (s)."""
+    @property
+    def peak_effort(self) -> _F:
+        """(n,) largest |joint torque| at the effort check points."""
+    @property
+    def effort_ratio(self) -> float:
+        """Largest |τ| / effort limit."""
+    @property
+    def violations(self) -> list[dict[str, Any]]:
+        """Kinematic limit violations."""
+    @property
+    def trajectory(self) -> JointTrajectory | None:
+        """The stroke, None when none was planned."""
+    def sample(self, rate: float = 1000.0) -> tuple[_F, _F, _F, _F]:
+        """(t, q, qd, qdd) at ``rate`` Hz."""
+    def torques(self, rate: float = 1000.0) -> _F:
+        """(K, n) inverse-dynamics joint torques at ``rate`` Hz samples."""
+    @property
+    def tau(self) -> _F:
+        """(K, n) joint torques at the 1 kHz samples."""
+
+def hit_plan(
+    robot: Robot,
+    pose: ArrayLike,
+    twist: ArrayLike,
+    t: float,
+    q: ArrayLike | None = None,
+    qd: ArrayLike | None = None,
+    qdd: ArrayLike | None = None,
+    ready: ArrayLike | None = None,
+    profile: str = "auto",
+    task: str = "auto",
+    jerk: ArrayLike | None = None,
+    effort: bool = True,
+) -> HitPlan: ...
+def hit_plan_batch(
+    robot: Robot,
+    poses: ArrayLike,
+    twists: ArrayLike,
+    times: ArrayLike,
+    q: ArrayLike | None = None,
+    qd: ArrayLike | None = None,
+    qdd: ArrayLike | None = None,
+    ready: ArrayLike | None = None,
+    profile: str = "auto",
+    task: str = "auto",
+    jerk: ArrayLike | None = None,
+    effort: bool = True,
+) -> list[HitPlan]: ...
+def racket_frame(normal: ArrayLike, handle: ArrayLike | None = None) -> _F: ...
+def racket_mount(robot: Robot) -> _F: ...
+
+# --- drives (issue 10): all axes of a robot through their cascades on its rigid-body dynamics ---
+
+class DriveSim:
+    """Every joint driven by its own current/speed/position cascade on the robot's shared
+    rigid-body mechanics (gravity included), one current-loop period per tick (SI units)."""
+
+    def __init__(
+        self,
+        robot: Robot,
+        *,
+        gravity: bool = True,
+        setpoint_rate: float = 1000.0,
+        noise: float | None = None,
+        seed: int = 0,
+        ideal_current: bool = False,
+    ) -> None:
+        """Drives from the robot file's drive section (``ttcan::coupled::axis_config_from_drive``);
+        ``noise``: current-sense noise (A RMS, None: 5 mA); ``setpoint_rate``: cyclic setpoint rate
+        (Hz) the drives interpolate; ``ideal_current``: winding current = reference. At q = 0."""
+    def reset(self, q0: ArrayLike, qd0: ArrayLike | None = None) -> None:
+        """Rebuilds the drives around (q0, qd0 or rest): time 0, every axis holding q0."""
+    def set_setpoint(
+        self,
+        q: ArrayLike,
+        qd: ArrayLike | None = None,
+        qdd: ArrayLike | None = None,
+        tau_ff: ArrayLike | None = None,
+    ) -> None:
+        """Joint-space setpoint (rad or m, per s, per s²) and joint-side torque feed-forward (N·m or N)."""
+    def tick(self, n: int = 1) -> None:
+        """Advances ``n`` current-loop periods."""
+    @property
+    def t(self) -> float:
+        """Simulated time since the last reset, s."""
+    @property
+    def q(self) -> NDArray[np.float64]:
+        """True joint positions, rad or m."""
+    @property
+    def qd(self) -> NDArray[np.float64]:
+        """True joint speeds, rad/s or m/s."""
+    @property
+    def current(self) -> NDArray[np.float64]:
+        """Winding currents, A."""
+    @property
+    def current_ref(self) -> NDArray[np.float64]:
+        """Current references after limiting, A."""
+    @property
+    def faults(self) -> list[str]:
+        """Fault of each axis ("" when none)."""
+    @property
+    def tick_rate(self) -> float:
+        """Current-loop (tick) rate, Hz."""
+    def run(
+        self,
+        t: ArrayLike,
+        q: ArrayLike,
+        qd: ArrayLike,
+        qdd: ArrayLike,
+        tau_ff: ArrayLike | None = None,
+    ) -> dict[str, Any]:
+        """Runs a reference trajectory: t (K,); q, qd, q_ref, current, current_ref, torque (K, n); faults."""
+
+def drive_theta5_case(setpoint_rate: float = 1000.0) -> dict[str, Any]:
+    """Issue 10's θ5 case (gantry6 demo stroke on θ5, RE 25 + 14:1, 4096 counts): RMS numbers and traces."""
+
+def step_metrics(t: ArrayLike, y: ArrayLike, target: float) -> tuple[float, float]:
+    """(10–90 % rise time in s, overshoot as a fraction of ``target``) of ``y`` sampled at ``t``."""

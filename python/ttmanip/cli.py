@@ -1,87 +1,561 @@
-"""The ``ttmanip`` command line: demos and the seed experiments, each writing figures to a folder."""
+"""The ``ttmanip`` command line: the hit pipeline, the seed experiments, kinematics and robot files.
+
+Every subcommand takes ``--out DIR`` and writes its products there (PNG, CSV, JSON). User errors
+(bad file, unwritable folder, bad value, missing key, unreachable hit) end the command with exit
+status 2 (1 for a hit that cannot be planned) and one line ``ttmanip: error: KEY: problem``.
+
+examples:
+  ttmanip demo --out out/demo
+  ttmanip experiment seed002 --out out/seed002
+  ttmanip fk gantry6 --q 0.1,0,0.2,0.3,0.4,0.5
+  ttmanip ik gantry6 --centre 0.35,-0.55,0.05 --normal 0.3,-1,-0.2
+  ttmanip plan hit.json --out out/plan
+  ttmanip simulate hit.json --out out/sim --noise 0.01
+  ttmanip export gantry6 --out out/robots
+  ttmanip info mobile8
+"""
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import json
 import sys
+import time
 from pathlib import Path
 
-EXPERIMENTS = ("seed000", "seed001")
+import numpy as np
+
+__all__ = ["CliError", "Progress", "build_parser", "main", "read_hit_file"]
+
+EXPERIMENTS = ("seed000", "seed001", "seed002")
+ROBOTS = ("mobile8", "gantry6", "arm4", "ur5")
+
+HIT_FILE_HELP = """hit file (JSON):
+  {"robot": "gantry6", "hits": [{"centre": [x, y, z], "normal": [nx, ny, nz],
+                                 "velocity": [vx, vy, vz], "t": 0.35}]}
+in m, m/s, s (base frame). A hit may instead give "pose" (4x4) and "twist" (6); optional per
+hit: "omega" (rad/s), "handle"; optional top level: "units" ({"length": "m", "time": "s",
+"angle": "rad"}), "state" ({"q": [...], "qd": [...]}), "ready" ([...]), "profile" ("auto",
+"quintic", "jerk"). A single hit may stand at the top level instead of "hits"."""
+
+
+class CliError(Exception):
+    """A user error: printed as one line, no traceback."""
+
+
+class Progress:
+    """A small progress bar on stderr: ``[#####-----] 3/6 label  1.2 s``."""
+
+    def __init__(self, total: int, width: int = 24) -> None:
+        self.total, self.width, self.done, self.t0 = max(total, 1), width, 0, time.perf_counter()
+
+    def __call__(self, label: str) -> None:
+        self.done = min(self.done + 1, self.total)
+        filled = self.width * self.done // self.total
+        bar = "#" * filled + "-" * (self.width - filled)
+        elapsed = time.perf_counter() - self.t0
+        sys.stderr.write(f"\r[{bar}] {self.done}/{self.total} {label:<12s} {elapsed:5.1f} s")
+        sys.stderr.flush()
+
+    def close(self) -> None:
+        sys.stderr.write("\n")
+        sys.stderr.flush()
+
+
+def _out_dir(path: str) -> Path:
+    """``--out``: created if needed and checked to be writable."""
+    out = Path(path)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        probe = out / ".ttmanip-write-test"
+        probe.write_text("")
+        probe.unlink()
+    except OSError as e:
+        raise CliError(f"--out: cannot write to '{out}': {e.strerror or e}") from e
+    return out
+
+
+def _numbers(text: str, what: str, count: int | None = None) -> np.ndarray:
+    try:
+        values = np.array([float(v) for v in text.replace(" ", "").split(",") if v != ""])
+    except ValueError as e:
+        raise CliError(f"{what}: expected comma-separated numbers, got '{text}'") from e
+    if count is not None and values.size != count:
+        raise CliError(f"{what}: expected {count} numbers, got {values.size}")
+    if not np.isfinite(values).all():
+        raise CliError(f"{what}: every value must be finite, got '{text}'")
+    return values
+
+
+def _robot(name: str):
+    from . import Robot
+
+    try:
+        return Robot.builtin(name)
+    except Exception as e:  # noqa: BLE001 - the binding's message names the problem
+        raise CliError(f"robot: {e}") from e
+
+
+def _write_json(path: Path, data) -> Path:
+    path.write_text(json.dumps(data, indent=2, default=lambda o: np.asarray(o).tolist()))
+    return path
+
+
+def _print_summary(summary: dict, keys=None) -> None:
+    for key, value in summary.items():
+        if keys is None or key in keys:
+            print(f"{key}: {value}")
+
+
+# -- hit files ---------------------------------------------------------------------------------
+
+_UNITS = {"length": "m", "time": "s", "angle": "rad"}
+
+
+def _vector(entry: dict, key: str, where: str, count: int, required: bool = True):
+    if key not in entry:
+        if required:
+            raise CliError(f"{where}.{key}: missing key")
+        return None
+    value = entry[key]
+    try:
+        a = np.array(value, dtype=float)
+    except (TypeError, ValueError) as e:
+        raise CliError(f"{where}.{key}: expected {count} numbers, got {value!r}") from e
+    if a.size != count:
+        raise CliError(f"{where}.{key}: expected {count} numbers, got {a.size}")
+    if not np.isfinite(a).all():
+        raise CliError(f"{where}.{key}: every value must be finite, got {value!r}")
+    return a.reshape((4, 4) if count == 16 else (count,))
+
+
+def _hit(entry, where: str):
+    from . import Hit, TtmanipError
+
+    if not isinstance(entry, dict):
+        raise CliError(f"{where}: expected an object with centre/normal/velocity/t, got {entry!r}")
+    allowed = {"centre", "center", "normal", "velocity", "t", "omega", "handle", "pose", "twist"}
+    unknown = sorted(set(entry) - allowed)
+    if unknown:
+        raise CliError(f"{where}.{unknown[0]}: unknown key (expected one of {sorted(allowed)})")
+    if "t" not in entry:
+        raise CliError(f"{where}.t: missing key (hit time in s)")
+    t = entry["t"]
+    if isinstance(t, bool) or not isinstance(t, (int, float)) or not np.isfinite(t) or t <= 0:
+        raise CliError(f"{where}.t: expected a hit time > 0 s, got {t!r}")
+    try:
+        if "pose" in entry:
+            return Hit(_vector(entry, "pose", where, 16), _vector(entry, "twist", where, 6), float(t))
+        if "center" in entry and "centre" not in entry:
+            entry = {**entry, "centre": entry["center"]}
+        centre = _vector(entry, "centre", where, 3)
+        normal = _vector(entry, "normal", where, 3)
+        if np.linalg.norm(normal) < 1e-12:
+            raise CliError(f"{where}.normal: the face normal must be a nonzero vector")
+        return Hit.from_normal(
+            centre,
+            normal,
+            _vector(entry, "velocity", where, 3),
+            float(t),
+            omega=_vector(entry, "omega", where, 3, required=False),
+            handle=_vector(entry, "handle", where, 3, required=False),
+        )
+    except TtmanipError as e:
+        raise CliError(f"{where}: {e}") from e
+
+
+def read_hit_file(path: str) -> dict:
+    """Reads and checks a hit file (see ``--help``): ``{"robot", "hits", "state", "ready", "profile"}``."""
+    p = Path(path)
+    if p.suffix.lower() in (".yaml", ".yml"):
+        raise CliError(f"{path}: YAML hit files need PyYAML, which ttmanip does not depend on; use JSON")
+    try:
+        text = p.read_text()
+    except OSError as e:
+        raise CliError(f"{path}: cannot read the hit file: {e.strerror or e}") from e
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as e:
+        raise CliError(f"{path}: not valid JSON (line {e.lineno}, column {e.colno}: {e.msg})") from e
+    if not isinstance(data, dict):
+        raise CliError(f"{path}: expected a JSON object at the top level")
+    units = data.get("units", {})
+    if not isinstance(units, dict):
+        raise CliError(f"units: expected an object like {_UNITS}, got {units!r}")
+    for key, value in units.items():
+        if key not in _UNITS:
+            raise CliError(f"units.{key}: unknown unit kind (expected one of {sorted(_UNITS)})")
+        if value != _UNITS[key]:
+            raise CliError(f"units.{key}: only '{_UNITS[key]}' (SI) is accepted, got '{value}'")
+    robot_name = data.get("robot", "gantry6")
+    if robot_name not in ROBOTS:
+        raise CliError(f"robot: unknown robot '{robot_name}' (expected one of {list(ROBOTS)})")
+    if "hits" in data:
+        entries = data["hits"]
+        if not isinstance(entries, list) or not entries:
+            raise CliError("hits: expected a non-empty list of hits")
+        hits = [_hit(e, f"hits[{i}]") for i, e in enumerate(entries)]
+    else:
+        hits = [
+            _hit(
+                {k: v for k, v in data.items() if k not in ("robot", "units", "state", "ready", "profile")},
+                "hit",
+            )
+        ]
+    robot = _robot(robot_name)
+    state = None
+    if "state" in data:
+        s = data["state"]
+        if not isinstance(s, dict) or "q" not in s:
+            raise CliError("state.q: missing key (the start configuration)")
+        state = {k: _vector(s, k, "state", robot.n) for k in ("q", "qd", "qdd") if k in s}
+    ready = _vector(data, "ready", "file", robot.n, required=False)
+    profile = data.get("profile", "auto")
+    if profile not in ("auto", "quintic", "jerk"):
+        raise CliError(f"profile: expected 'auto', 'quintic' or 'jerk', got {profile!r}")
+    return {"robot": robot, "hits": hits, "state": state, "ready": ready, "profile": profile}
+
+
+def _plans(spec: dict):
+    from . import plan_hits
+
+    return plan_hits(spec["robot"], spec["hits"], spec["state"], ready=spec["ready"], profile=spec["profile"])
+
+
+def _fail_unplanned(plans) -> int:
+    bad = [(i, p) for i, p in enumerate(plans) if not p.ok]
+    if not bad:
+        return 0
+    i, p = bad[0]
+    more = f" (and {len(bad) - 1} more)" if len(bad) > 1 else ""
+    print(f"ttmanip: error: hits[{i}]: {p.status}: {p.message}{more}", file=sys.stderr)
+    return 1
+
+
+# -- subcommands -------------------------------------------------------------------------------
 
 
 def _demo(args: argparse.Namespace) -> int:
     from .demo import run
 
-    summary = run(Path(args.out))
-    for key, value in summary.items():
-        print(f"{key}: {value}")
+    out = _out_dir(args.out)
+    bar = Progress(8 if not args.no_workspace else 7)
+    try:
+        summary = run(out, progress=bar, workspace=not args.no_workspace)
+    finally:
+        bar.close()
+    _print_summary(
+        summary,
+        (
+            "status",
+            "t_hit",
+            "profile",
+            "racket_position_error_m",
+            "racket_normal_error_deg",
+            "racket_velocity_error_mps",
+            "racket_velocity_error_rel",
+            "faults",
+        ),
+    )
+    print(
+        f"mobile8: {summary['mobile8']['status']}, racket error "
+        f"{summary['mobile8'].get('racket_position_error_m', float('nan')):.2e} m"
+    )
+    print(f"wrote {out / 'summary.json'}")
     return 0
 
 
 def _experiment(args: argparse.Namespace) -> int:
+    out = _out_dir(args.out)
+    module = importlib.import_module(f"ttmanip.experiments.{args.name}")
+    bar = Progress(1)
     try:
-        module = importlib.import_module(f"ttmanip.experiments.{args.name}")
-    except ModuleNotFoundError:
-        print(f"ttmanip: experiment '{args.name}' is not available in this build", file=sys.stderr)
-        return 2
-    summary = module.run(Path(args.out))
+        summary = module.run(out)
+        bar(args.name)
+    finally:
+        bar.close()
     for key, value in summary.items():
-        print(f"{key}: {value}")
+        if not isinstance(value, (list, dict)):
+            print(f"{key}: {value}")
+    print(f"wrote {out}")
+    return 0
+
+
+def _fk(args: argparse.Namespace) -> int:
+    robot = _robot(args.robot)
+    q = _numbers(args.q, "--q", robot.n)
+    pose = robot.fk(q)
+    np.set_printoptions(precision=6, suppress=True)
+    print(pose)
+    if args.out:
+        out = _out_dir(args.out)
+        _write_json(out / "fk.json", {"robot": robot.name, "q": q, "pose": pose})
+        print(f"wrote {out / 'fk.json'}")
+    return 0
+
+
+def _ik(args: argparse.Namespace) -> int:
+    from . import Hit, TtmanipError
+
+    robot = _robot(args.robot)
+    centre = _numbers(args.centre, "--centre", 3)
+    normal = _numbers(args.normal, "--normal", 3)
+    if np.linalg.norm(normal) < 1e-12:
+        raise CliError("--normal: the face normal must be a nonzero vector")
+    try:
+        hit = Hit.from_normal(centre, normal, np.zeros(3), 1.0)
+        branches = robot.ik_all(hit.pose)
+    except TtmanipError as e:
+        raise CliError(f"--centre/--normal: {e}") from e
+    ok = np.isfinite(branches).all(axis=1)
+    if not ok.any():
+        raise CliError(f"--centre: the racket pose at {centre.tolist()} is outside {robot.name}'s reach")
+    np.set_printoptions(precision=6, suppress=True)
+    print(branches[ok])
+    if args.out:
+        out = _out_dir(args.out)
+        _write_json(out / "ik.json", {"robot": robot.name, "pose": hit.pose, "branches": branches[ok]})
+        np.savetxt(out / "ik.csv", branches[ok], delimiter=",", header=",".join(robot.joint_names))
+        print(f"wrote {out / 'ik.json'}")
+    return 0
+
+
+def _plan_summary(p) -> dict:
+    return {
+        "status": p.status,
+        "message": p.message,
+        "t_hit": p.t_hit,
+        "t_hit_requested": p.requested_t_hit,
+        "earliest_t_hit": p.earliest_t_hit,
+        "profile": p.profile,
+        "q_hit": p.q_hit,
+        "qd_hit": p.qd_hit,
+        "duration": p.duration,
+        "peak_effort": p.peak_effort,
+        "violations": p.violations,
+    }
+
+
+def _plan(args: argparse.Namespace) -> int:
+    from . import plots
+    from .demo import write_csv
+
+    spec = read_hit_file(args.file)
+    out = _out_dir(args.out)
+    robot = spec["robot"]
+    bar = Progress(len(spec["hits"]) + 1)
+    try:
+        plans = _plans(spec)
+        bar("plan")
+        for i, p in enumerate(plans):
+            if p.trajectory is not None:
+                t, q, qd, qdd = p.sample(1000.0)
+                tau = p.torques(1000.0)
+                write_csv(out / f"hit{i}_plan.csv", {"t": t, "q": q, "qd": qd, "qdd": qdd, "tau": tau})
+                plots.joint_figure(robot, t, q, qd, qdd, tau, out / f"hit{i}_joints.png", t_hit=p.t_hit)
+            bar(f"hit {i}")
+    finally:
+        bar.close()
+    _write_json(out / "plan.json", {"robot": robot.name, "plans": [_plan_summary(p) for p in plans]})
+    for i, p in enumerate(plans):
+        print(f"hits[{i}]: {p.status}, t_hit {p.t_hit:.4f} s ({p.profile})")
+    print(f"wrote {out / 'plan.json'}")
+    return _fail_unplanned(plans)
+
+
+def _simulate(args: argparse.Namespace) -> int:
+    from .demo import run_hit
+
+    spec = read_hit_file(args.file)
+    out = _out_dir(args.out)
+    if not args.setpoint_rate > 0:
+        raise CliError(f"--setpoint-rate: expected a rate > 0 Hz, got {args.setpoint_rate}")
+    if args.noise is not None and not args.noise >= 0:
+        raise CliError(f"--noise: expected a current-sense noise >= 0 A, got {args.noise}")
+    results = []
+    bar = Progress(4 * len(spec["hits"]))
+    try:
+        for i, hit in enumerate(spec["hits"]):
+            results.append(
+                run_hit(
+                    spec["robot"],
+                    hit,
+                    out,
+                    f"hit{i}",
+                    gif=args.gif,
+                    state=spec["state"],
+                    noise=args.noise,
+                    setpoint_rate=args.setpoint_rate,
+                    progress=bar,
+                )
+            )
+    finally:
+        bar.close()
+    _write_json(out / "summary.json", {"robot": spec["robot"].name, "hits": results})
+    for i, r in enumerate(results):
+        err = r.get("racket_position_error_m", float("nan"))
+        print(
+            f"hits[{i}]: {r['status']}, racket centre error {err:.3e} m, normal "
+            f"{r.get('racket_normal_error_deg', float('nan')):.3f}°, velocity "
+            f"{r.get('racket_velocity_error_mps', float('nan')):.4f} m/s"
+        )
+    print(f"wrote {out / 'summary.json'}")
+    bad = [(i, r) for i, r in enumerate(results) if not r["ok"]]
+    if bad:
+        i, r = bad[0]
+        print(f"ttmanip: error: hits[{i}]: {r['status']}: {r['message']}", file=sys.stderr)
+        return 1
     return 0
 
 
 def _info(args: argparse.Namespace) -> int:
-    from . import Robot
-
-    robot = Robot.builtin(args.robot)
+    robot = _robot(args.robot)
     print(robot)
-    for name, kind, (lo, hi) in zip(robot.joint_names, robot.joint_types, robot.limits):
-        print(f"  {name:14s} {kind:9s} [{lo: .4f}, {hi: .4f}]")
+    rows = []
+    for j, (name, kind, (lo, hi)) in enumerate(zip(robot.joint_names, robot.joint_types, robot.limits)):
+        v, a, e = robot.velocity_limits[j], robot.acceleration_limits[j], robot.effort_limits[j]
+        print(f"  {name:10s} {kind:9s} [{lo: .4f}, {hi: .4f}]  v {v:g}  a {a:g}  effort {e:g}")
+        rows.append(
+            {
+                "name": name,
+                "type": kind,
+                "lower": lo,
+                "upper": hi,
+                "velocity": v,
+                "acceleration": a,
+                "effort": e,
+            }
+        )
+    if args.out:
+        out = _out_dir(args.out)
+        _write_json(out / "info.json", {"robot": robot.name, "joints": rows})
+        print(f"wrote {out / 'info.json'}")
     return 0
 
 
 def _export(args: argparse.Namespace) -> int:
-    from . import Robot
-
-    robot = Robot.builtin(args.robot)
+    robot = _robot(args.robot)
     out = Path(args.out)
-    if out.suffix == ".urdf":
-        out.write_text(robot.to_urdf())
-    elif out.suffix == ".toml":
-        header = (
-            f"# Built-in robot {args.robot} of ttmanip, written by `ttmanip export {args.robot}`; SI units.\n"
-            "# tests/test_robot_files.py checks that this file and the built-in model agree.\n"
-        )
-        out.write_text(header + robot.to_toml())
+    header = (
+        f"# Built-in robot {args.robot} of ttmanip, written by `ttmanip export {args.robot}`; SI units.\n"
+        "# tests/test_robot_files.py checks that this file and the built-in model agree.\n"
+    )
+    if out.suffix and out.suffix not in (".urdf", ".toml"):
+        raise CliError(f"--out: expected a folder or a file ending in .urdf or .toml, got '{out}'")
+    if out.suffix in (".urdf", ".toml"):
+        _out_dir(str(out.parent) if str(out.parent) else ".")
+        targets = [out]
     else:
-        print("ttmanip: --out must end in .urdf or .toml", file=sys.stderr)
-        return 2
-    print(f"wrote {out}")
+        out = _out_dir(args.out)
+        targets = [out / f"{args.robot}.urdf", out / f"{args.robot}.toml"]
+    for path in targets:
+        try:
+            path.write_text(robot.to_urdf() if path.suffix == ".urdf" else header + robot.to_toml())
+        except OSError as e:
+            raise CliError(f"--out: cannot write '{path}': {e.strerror or e}") from e
+        print(f"wrote {path}")
     return 0
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``ttmanip`` command."""
-    parser = argparse.ArgumentParser(prog="ttmanip", description=__doc__)
+    fmt = argparse.RawDescriptionHelpFormatter
+    parser = argparse.ArgumentParser(prog="ttmanip", description=__doc__, formatter_class=fmt)
     sub = parser.add_subparsers(dest="command", required=True)
 
-    demo = sub.add_parser("demo", help="run the pipeline demo and write its figures")
+    demo = sub.add_parser(
+        "demo",
+        help="plan and simulate a gantry6 hit on every axis, write the figures",
+        description="Plans seed 002's demo hit on gantry6, simulates it through every "
+        "axis's drive with gravity, then a mobile8 racket hit; writes figures, CSV and "
+        "summary.json.\n\nexample:\n  ttmanip demo --out out/demo",
+        formatter_class=fmt,
+    )
     demo.add_argument("--out", default="out/demo", help="output folder (default: out/demo)")
+    demo.add_argument("--no-workspace", action="store_true", help="skip the workspace figures")
     demo.set_defaults(func=_demo)
 
-    exp = sub.add_parser("experiment", help="reproduce a seed document's experiment")
+    exp = sub.add_parser(
+        "experiment",
+        help="reproduce a seed document's experiment",
+        description="Runs a seed experiment and writes every product.\n\nexample:\n"
+        "  ttmanip experiment seed002 --out out/seed002",
+        formatter_class=fmt,
+    )
     exp.add_argument("name", choices=EXPERIMENTS)
     exp.add_argument("--out", required=True, help="output folder")
     exp.set_defaults(func=_experiment)
 
-    info = sub.add_parser("info", help="print a built-in robot's joints and limits")
-    info.add_argument("robot", choices=("mobile8", "gantry6", "arm4", "ur5"))
+    fk = sub.add_parser(
+        "fk",
+        help="tool pose of a built-in robot at a configuration",
+        description="Prints the 4x4 tool pose (base frame, m).\n\nexample:\n"
+        "  ttmanip fk gantry6 --q 0.1,0,0.2,0.3,0.4,0.5 --out out/fk",
+        formatter_class=fmt,
+    )
+    fk.add_argument("robot", choices=ROBOTS)
+    fk.add_argument("--q", required=True, help="joint values, comma-separated (m, rad)")
+    fk.add_argument("--out", help="output folder for fk.json")
+    fk.set_defaults(func=_fk)
+
+    ik = sub.add_parser(
+        "ik",
+        help="every IK branch for a racket centre and face normal",
+        description="Prints every analytic IK branch reaching the racket pose.\n\nexample:\n"
+        "  ttmanip ik gantry6 --centre 0.35,-0.55,0.05 --normal 0.3,-1,-0.2",
+        formatter_class=fmt,
+    )
+    ik.add_argument("robot", choices=ROBOTS)
+    ik.add_argument("--centre", required=True, help="racket centre x,y,z (m, base frame)")
+    ik.add_argument("--normal", required=True, help="face normal nx,ny,nz (base axes)")
+    ik.add_argument("--out", help="output folder for ik.json and ik.csv")
+    ik.set_defaults(func=_ik)
+
+    plan = sub.add_parser(
+        "plan",
+        help="plan the hits of a JSON hit file",
+        description=HIT_FILE_HELP + "\n\nexample:\n  ttmanip plan hit.json --out out/plan",
+        formatter_class=fmt,
+    )
+    plan.add_argument("file", help="hit file (.json)")
+    plan.add_argument("--out", default="out/plan", help="output folder (default: out/plan)")
+    plan.set_defaults(func=_plan)
+
+    sim = sub.add_parser(
+        "simulate",
+        help="plan and simulate the hits of a JSON hit file on the drives",
+        description=HIT_FILE_HELP + "\n\nexample:\n  ttmanip simulate hit.json --out out/sim",
+        formatter_class=fmt,
+    )
+    sim.add_argument("file", help="hit file (.json)")
+    sim.add_argument("--out", default="out/simulate", help="output folder (default: out/simulate)")
+    sim.add_argument(
+        "--noise", type=float, default=None, help="current-sense noise (A, DriveSim's default if unset)"
+    )
+    sim.add_argument("--setpoint-rate", type=float, default=1000.0, help="setpoint rate to the drives (Hz)")
+    sim.add_argument("--gif", action="store_true", help="also write a GIF of each stroke")
+    sim.set_defaults(func=_simulate)
+
+    info = sub.add_parser(
+        "info",
+        help="print a built-in robot's joints and limits",
+        description="example:\n  ttmanip info gantry6 --out out/info",
+        formatter_class=fmt,
+    )
+    info.add_argument("robot", choices=ROBOTS)
+    info.add_argument("--out", help="output folder for info.json")
     info.set_defaults(func=_info)
 
-    export = sub.add_parser("export", help="write a built-in robot as URDF or as a ttmanip robot file")
-    export.add_argument("robot", choices=("mobile8", "gantry6", "arm4", "ur5"))
-    export.add_argument("--out", required=True, help="file ending in .urdf or .toml")
+    export = sub.add_parser(
+        "export",
+        help="write a built-in robot as URDF and as a ttmanip robot file",
+        description="--out is a folder (both files) or a file ending in .urdf or .toml."
+        "\n\nexample:\n  ttmanip export gantry6 --out out/robots",
+        formatter_class=fmt,
+    )
+    export.add_argument("robot", choices=ROBOTS)
+    export.add_argument("--out", required=True, help="output folder, or a file ending in .urdf or .toml")
     export.set_defaults(func=_export)
 
     from . import rally_cli  # issue 13
@@ -91,9 +565,21 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the ``ttmanip`` command."""
+    """Entry point of the ``ttmanip`` command: user errors become one line on stderr."""
+    from . import TtmanipError
+
     args = build_parser().parse_args(argv)
-    return args.func(args)
+    try:
+        return args.func(args)
+    except CliError as e:
+        print(f"ttmanip: error: {e}", file=sys.stderr)
+        return 2
+    except TtmanipError as e:
+        print(f"ttmanip: error: {e}", file=sys.stderr)
+        return 2
+    except OSError as e:
+        print(f"ttmanip: error: {e.filename or ''}: {e.strerror or e}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

@@ -1,18 +1,21 @@
-"""The demo of the whole pipeline, with figures.
+"""``ttmanip demo``: the whole hit pipeline on gantry6, planned and executed by every axis's drive.
 
-Writes into the output folder:
-- ``kinematics/``: ``workspace_gantry6.png`` and ``workspace_mobile8.png``, reachable tool
-  positions from 200,000 random configurations within the joint limits (batch FK in Rust), top and
-  side views, with the robot drawn as a stick figure at a reference configuration;
-- ``pipeline/``: seed 002's hit pipeline on gantry6 (hit parameters → analytic IK → J⁻¹V →
-  quintic stroke → inverse dynamics → one joint driven by the cascaded motor loops), see
-  :mod:`ttmanip.pipeline`;
-- ``seed000/``, ``seed001/``: the seed documents' experiments (``ttmanip experiment NAME``);
-- ``summary.json``: what each part measured.
+Seed 002's pipeline (hit parameters → analytic IK → J⁻¹V → stroke → inverse dynamics → drives)
+for :data:`ttmanip.DEMO_HIT`, simulated with gravity through ``ttmanip.DriveSim`` (setpoints at
+1 kHz), then seed 000's mobile8 with a 5-D racket hit. Writes into the output folder:
+
+- ``summary.json``: the errors at the hit (``racket_position_error_m``,
+  ``racket_normal_error_deg``, ``racket_velocity_error_mps``), the plan and the drive faults;
+- ``gantry6_joints.png`` (q, q̇, q̈, τ, current per joint with limits), ``gantry6_racket.png``
+  (racket path in 3-D, table, robot at the hit), ``gantry6_errors.png``, ``gantry6_stroke.gif``;
+- ``gantry6_plan.csv`` (planned t, q, q̇, q̈, τ) and ``gantry6_sim.csv`` (executed t, q, q̇, current);
+- ``mobile8_joints.png``, ``mobile8_racket.png`` and ``mobile8_*.csv`` for the mobile manipulator;
+- ``kinematics/workspace_*.png``: sampled workspaces of both robots.
 """
 
 from __future__ import annotations
 
+import csv
 import json
 import time
 from pathlib import Path
@@ -23,8 +26,11 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from . import robots  # noqa: E402
+from . import plots, robots  # noqa: E402
 from ._ttmanip import Robot  # noqa: E402
+from .pipeline import DEMO_HIT, Hit, plan_hit, racket_states, simulate  # noqa: E402
+
+__all__ = ["mobile8_hit", "random_configurations", "run", "run_hit", "workspace_figure", "write_csv"]
 
 
 def random_configurations(robot: Robot, count: int, seed: int = 0) -> np.ndarray:
@@ -34,22 +40,14 @@ def random_configurations(robot: Robot, count: int, seed: int = 0) -> np.ndarray
     return lim[:, 0] + (lim[:, 1] - lim[:, 0]) * rng.random((count, robot.n))
 
 
-def _stick(robot: Robot, q: np.ndarray) -> np.ndarray:
-    """Origins of the base and of every link frame, shape (n + 2, 3), with the tool point last."""
-    frames = robot.fk_all(q)
-    tool = robot.fk(q)
-    return np.vstack([robot.base[:3, 3], frames[:, :3, 3], tool[:3, 3]])
-
-
-def workspace_figure(robot: Robot, q_ref: np.ndarray, path: Path, count: int = 200_000) -> dict:
+def workspace_figure(robot: Robot, q_ref: np.ndarray, path: Path, count: int = 100_000) -> dict:
     """Plots the sampled workspace of ``robot`` (top and side views) and returns its statistics."""
     qs = random_configurations(robot, count)
     t0 = time.perf_counter()
     poses = robot.fk(qs)
     rate = count / (time.perf_counter() - t0)
     p = poses[:, :3, 3]
-    stick = _stick(robot, q_ref)
-
+    stick = plots.robot_points(robot, q_ref)
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.8), constrained_layout=True)
     for ax, (i, j), title in zip(axes, [(0, 1), (0, 2)], ["top view (x–y)", "side view (x–z)"]):
         hb = ax.hexbin(p[:, i], p[:, j], gridsize=70, bins="log", cmap="viridis", mincnt=1)
@@ -61,50 +59,156 @@ def workspace_figure(robot: Robot, q_ref: np.ndarray, path: Path, count: int = 2
         ax.legend(loc="upper right")
         fig.colorbar(hb, ax=ax, label="configurations per cell")
     fig.suptitle(f"{robot.name}: tool positions of {count:,} random configurations within limits")
-    fig.savefig(path, dpi=120)
+    fig.savefig(path, dpi=100)
     plt.close(fig)
-
-    t_ref = robot.fk(q_ref)
-    sv = np.linalg.svd(robot.jacobian(q_ref), compute_uv=False)
     return {
-        "q_ref": q_ref.tolist(),
-        "tool_pose_ref": t_ref.tolist(),
-        "jacobian_singular_values_ref": sv.tolist(),
+        "q_ref": np.asarray(q_ref).tolist(),
         "workspace_min_m": p.min(axis=0).tolist(),
         "workspace_max_m": p.max(axis=0).tolist(),
         "batch_fk_per_second": rate,
     }
 
 
-def run(out: Path) -> dict:
-    """Runs the demo, writes the figures and ``summary.json`` into ``out``, returns a short summary."""
-    import importlib
+def write_csv(path: Path, columns: dict) -> Path:
+    """Writes equal-length columns (1-D arrays, or 2-D arrays split into ``name[j]``) as CSV."""
+    names, data = [], []
+    for name, arr in columns.items():
+        a = np.asarray(arr, float)
+        if a.ndim == 1:
+            names.append(name)
+            data.append(a)
+        else:
+            for j in range(a.shape[1]):
+                names.append(f"{name}[{j}]")
+                data.append(a[:, j])
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(names)
+        w.writerows(np.column_stack(data).tolist())
+    return Path(path)
 
-    from . import pipeline
 
+def run_hit(
+    robot: Robot,
+    hit: Hit,
+    out: Path,
+    prefix: str,
+    *,
+    gif: bool = True,
+    state=None,
+    noise=None,
+    setpoint_rate: float = 1000.0,
+    progress=None,
+) -> dict:
+    """Plans and simulates ``hit`` on ``robot``; writes figures and CSVs named ``prefix_*`` into
+    ``out``; returns the JSON-ready summary."""
+    step = progress or (lambda _msg: None)
+    step("plan")
+    plan = plan_hit(robot, hit, state)
+    summary = {
+        "robot": robot.name,
+        "status": plan.status,
+        "message": plan.message,
+        "ok": plan.ok,
+        "t_hit_requested": plan.requested_t_hit,
+        "t_hit": plan.t_hit,
+        "earliest_t_hit": plan.earliest_t_hit,
+        "profile": plan.profile,
+        "q_hit": plan.q_hit.tolist(),
+        "qd_hit": plan.qd_hit.tolist(),
+        "sigma_min": plan.sigma_min,
+        "ik_branches": plan.branches,
+        "hit_pose": plan.hit_pose.tolist(),
+        "hit_twist": plan.hit_twist.tolist(),
+    }
+    if plan.trajectory is None:
+        return summary
+    t, q, qd, qdd = plan.sample(1000.0)
+    tau = plan.torques(1000.0)
+    write_csv(out / f"{prefix}_plan.csv", {"t": t, "q": q, "qd": qd, "qdd": qdd, "tau": tau})
+    step("simulate")
+    sim = simulate(robot, plan, setpoint_rate=setpoint_rate, noise=noise)
+    ex = sim.arrays
+    write_csv(
+        out / f"{prefix}_sim.csv",
+        {"t": ex["t"], "q": ex["q"], "qd": ex["qd"], "current": ex["current"], "torque": ex["torque"]},
+    )
+    step("figures")
+    figures = [
+        plots.joint_figure(
+            robot,
+            t,
+            q,
+            qd,
+            qdd,
+            tau,
+            out / f"{prefix}_joints.png",
+            current=np.asarray(ex["current"]),
+            t_hit=plan.t_hit,
+            executed={"t": np.asarray(ex["t"]), "q": np.asarray(ex["q"]), "qd": np.asarray(ex["qd"])},
+        ),
+        plots.racket_figure(
+            robot,
+            sim.racket_centre,
+            sim.racket_normal,
+            plan.q_hit,
+            plan.hit_pose,
+            out / f"{prefix}_racket.png",
+            planned_centre=racket_states(robot, q, qd)[1],
+            velocity=plan.hit_twist[:3],
+        ),
+        plots.error_figure(sim.summary(), out / f"{prefix}_errors.png"),
+    ]
+    if gif:
+        figures.append(
+            plots.animation(
+                robot,
+                np.asarray(ex["t"]),
+                np.asarray(ex["q"]),
+                sim.racket_centre,
+                out / f"{prefix}_stroke.gif",
+            )
+        )
+    summary.update(sim.summary())
+    summary.update(
+        {
+            "peak_torques": np.abs(tau).max(axis=0).tolist(),
+            "effort_limits": np.asarray(robot.effort_limits).tolist(),
+            "stroke_duration": plan.duration,
+            "figures": [str(p) for p in figures],
+        }
+    )
+    return summary
+
+
+def mobile8_hit() -> Hit:
+    """Seed 000's robot: a 5-D racket hit 8.3 cm from the racket's start pose (centre offset
+    (0.02, −0.04, −0.07) m, same face normal), centre moving at (−0.29, 0.19, 0.25) m/s at 1.5 s; the
+    rotation about the normal is free."""
+    robot = robots.mobile8()
+    q0 = robots.mobile8_start()
+    _, c, n, _ = racket_states(robot, q0, np.zeros(robot.n))
+    return Hit.from_normal(c[0] + [0.02, -0.04, -0.07], n[0], [-0.29, 0.19, 0.25], 1.5)
+
+
+def run(out: Path, progress=None, workspace: bool = True) -> dict:
+    """Runs the demo, writes the figures, CSVs and ``summary.json`` into ``out``; returns the summary."""
+    out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    kin = out / "kinematics"
-    kin.mkdir(exist_ok=True)
-    q_gantry = np.array([0.1, -0.2, 0.3, 0.4, 0.6, 0.0])
-    results = {
-        "kinematics": {
-            "gantry6": workspace_figure(robots.gantry6(), q_gantry, kin / "workspace_gantry6.png"),
+    step = progress or (lambda _msg: None)
+    summary = run_hit(robots.gantry6(), DEMO_HIT, out, "gantry6", progress=step)
+    summary["mobile8"] = run_hit(robots.mobile8(), mobile8_hit(), out, "mobile8", gif=False, progress=step)
+    if workspace:
+        step("workspaces")
+        kin = out / "kinematics"
+        kin.mkdir(exist_ok=True)
+        summary["kinematics"] = {
+            "gantry6": workspace_figure(
+                robots.gantry6(), np.array([0.1, -0.2, 0.3, 0.4, 0.6, 0.0]), kin / "workspace_gantry6.png"
+            ),
             "mobile8": workspace_figure(
                 robots.mobile8(), robots.mobile8_start(), kin / "workspace_mobile8.png"
             ),
-        },
-        "pipeline": pipeline.run(out / "pipeline"),
-    }
-    for name in ("seed000", "seed001"):
-        results[name] = importlib.import_module(f"ttmanip.experiments.{name}").run(out / name)
-    (out / "summary.json").write_text(json.dumps(results, indent=2, default=str))
-    hit = results["pipeline"]
-    return {
-        "output": str(out),
-        "figures": sum(1 for _ in out.rglob("*.png")),
-        "batch_fk_per_second_mobile8": round(results["kinematics"]["mobile8"]["batch_fk_per_second"]),
-        "hit_pose_error_m": hit["hit_pose_error_m"],
-        "hit_twist_error": hit["hit_twist_error"],
-        "stroke_feasible": hit["stroke_feasible"],
-        "seed000_max_tracking_error": results["seed000"].get("max_tracking_error"),
-    }
+        }
+    (out / "summary.json").write_text(json.dumps(summary, indent=2, default=str))
+    return summary

@@ -24,12 +24,24 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ._ttmanip import ServoSim
+from ._ttmanip import ServoSim, drive_theta5_case, step_metrics
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["DcMotor", "Drive", "Gearbox", "Load", "Loops", "Response", "Servo", "plot", "quintic"]
+__all__ = [
+    "DcMotor",
+    "Drive",
+    "Gearbox",
+    "Load",
+    "Loops",
+    "Response",
+    "Servo",
+    "plot",
+    "quintic",
+    "theta5_figure",
+    "theta5_ripple_case",
+]
 
 _D = ServoSim.defaults()
 
@@ -85,11 +97,10 @@ class Loops:
     speed_symmetric_optimum: float = _D["speed_symmetric_optimum"]  # a ≥ 2
     speed_output_filter_hz: float = _D["speed_output_filter_hz"]
     position_ratio: float = _D["position_ratio"]  # speed crossover / position gain
-    speed_window: int = _D["speed_window"]  # speed periods of encoder differencing, 1..16
+    observer_bandwidth_hz: float = _D["observer_bandwidth_hz"]  # tracking observer (speed/position estimate)
     speed_reference_filter_hz: float | None = _D["speed_reference_filter_hz"]  # None: 1/(2π a T_σ)
     continuous_current: float = _D["continuous_current"]  # A
     peak_current: float = _D["peak_current"]  # A
-    peak_duration: float = _D["peak_duration"]  # s at peak current before the I²t fold-back
     overcurrent_trip: float = _D["overcurrent_trip"]  # A
     max_speed: float = _D["max_speed"]  # rad/s at the output
     following_error_limit: float = _D["following_error_limit"]  # rad
@@ -130,28 +141,26 @@ class Response:
         return cls(**d)
 
     def rise_time(self, signal: str, target: float) -> float:
-        """10 %–90 % rise time of ``signal`` (a field name) towards ``target``, s (inf if never)."""
-        y = getattr(self, signal) / target
-        above10, above90 = np.flatnonzero(y >= 0.1), np.flatnonzero(y >= 0.9)
-        if len(above10) == 0 or len(above90) == 0:
-            return float("inf")
-        return float(self.time[above90[0]] - self.time[above10[0]])
+        """10 %–90 % rise time of ``signal`` (a field name) towards ``target``, s (inf if never);
+        defined once, in Rust (``ttcan::sim::rise_time``)."""
+        return step_metrics(self.time, getattr(self, signal), target)[0]
 
     def overshoot(self, signal: str, target: float) -> float:
-        """Largest excursion of ``signal`` beyond ``target``, as a fraction of ``target``."""
-        return float(np.max(getattr(self, signal)) / target - 1.0)
+        """Largest excursion of ``signal`` beyond ``target``, as a fraction of ``target``; defined
+        once, in Rust (``ttcan::sim::overshoot``)."""
+        return step_metrics(self.time, getattr(self, signal), target)[1]
 
 
 def quintic(distance: float, duration: float, rate_hz: float, start: float = 0.0):
-    """Rest-to-rest quintic sampled at ``rate_hz``: arrays (t, q, qd, qdd) in s, rad, rad/s, rad/s²."""
+    """Rest-to-rest quintic sampled at ``rate_hz``: arrays (t, q, qd, qdd) in s, rad, rad/s, rad/s²
+    (``ttmanip.traj``'s quintic, the one in Rust)."""
     if not (duration > 0 and rate_hz > 0 and np.isfinite(distance) and np.isfinite(start)):
         raise ValueError("quintic: need finite distance and start, duration > 0 and rate_hz > 0")
+    from . import traj
+
     t = np.arange(int(round(duration * rate_hz)) + 1) / rate_hz
-    s = np.clip(t / duration, 0.0, 1.0)
-    q = start + distance * s**3 * (10 - 15 * s + 6 * s**2)
-    qd = distance / duration * 30 * s**2 * (1 - s) ** 2
-    qdd = distance / duration**2 * 60 * s * (1 - s) * (1 - 2 * s)
-    return t, q, qd, qdd
+    q, qd, qdd = traj.quintic([start], [start + distance], duration).sample(np.minimum(t, duration))
+    return t, q[:, 0], qd[:, 0], qdd[:, 0]
 
 
 class Servo:
@@ -249,6 +258,55 @@ def plot(response: Response, path: str | PathLike[str] | None = None, title: str
             for a in ax:
                 a.axvline(t[stop[0]], color="k", lw=0.8, ls=":")
     fig.suptitle(title or (f"fault: {response.fault}" if response.fault else "servo response"))
+    if path is not None:
+        fig.savefig(path, dpi=120)
+    return fig
+
+
+def theta5_ripple_case() -> dict[str, float]:
+    """Issue 10's θ5 case (gantry6's demo stroke on θ5: maxon RE 25 + GP 26 A 14:1, 4096-count
+    encoder, load 0.0148 kg·m²) computed in Rust (``ttcan::cases``), as the demo's ``summary.json``
+    keys: ``drive_current_ripple_rms_a`` = RMS(i − i_ref) with 1 kHz setpoints and
+    ``drive_current_ripple_250hz_rms_a`` = RMS(i − i_needed) with 250 Hz setpoints, both A, plus
+    the largest following errors (rad)."""
+    fast, slow = drive_theta5_case(1000.0), drive_theta5_case(250.0)
+    return {
+        "drive_current_ripple_rms_a": float(fast["current_ripple_rms"]),
+        "drive_current_ripple_250hz_rms_a": float(slow["current_error_rms"]),
+        "drive_theta5_following_error_rad": float(fast["max_following_error"]),
+        "drive_theta5_following_error_250hz_rad": float(slow["max_following_error"]),
+    }
+
+
+def theta5_figure(path: str | PathLike[str] | None = None) -> Figure:
+    """The θ5 case as a figure: current, its reference and the current the motion needs, with 1 kHz
+    and 250 Hz setpoints, and the following error; writes a PNG when ``path`` is given."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(9, 7), layout="constrained")
+    FigureCanvasAgg(fig)
+    ax = fig.subplots(3, 1, sharex=True)
+    for a, rate in zip(ax[:2], (1000.0, 250.0)):
+        c = drive_theta5_case(rate)
+        t = c["t"] * 1e3
+        a.plot(t, c["current_ref"], "--", lw=0.8, label="reference")
+        a.plot(t, c["current"], lw=0.8, label="current")
+        a.plot(t, c["current_needed"], ":", color="k", lw=1, label="needed by the motion")
+        a.set_ylabel("current (A)")
+        a.set_title(
+            f"setpoints at {rate:.0f} Hz: RMS(i − i_ref) = {c['current_ripple_rms']:.4f} A, "
+            f"RMS(i − i_needed) = {c['current_error_rms']:.4f} A",
+            fontsize="small",
+        )
+        a.legend(loc="best", fontsize="small")
+        ax[2].plot(t, (c["position_ref"] - c["position"]) * 1e3, lw=0.8, label=f"{rate:.0f} Hz setpoints")
+    ax[2].set_ylabel("q_ref − q (mrad)")
+    ax[2].set_xlabel("time (ms)")
+    ax[2].legend(loc="best", fontsize="small")
+    for a in ax:
+        a.grid(True, alpha=0.3)
+    fig.suptitle("gantry6 θ5 (RE 25 + 14:1, 4096 counts, 0.0148 kg·m²) with the tracking observer")
     if path is not None:
         fig.savefig(path, dpi=120)
     return fig

@@ -1,196 +1,344 @@
-"""The hit pipeline of seed 002 (the gantry patent), end to end on ``robots.gantry6()``.
+"""The hit pipeline: hit parameters → IK → joint velocities → stroke → torques → drives.
 
-S101 hit parameters: racket pose (tool frame, base frame, m) and racket twist at the hit time;
-S102 analytic IK: every branch, then the one nearest the ready pose within the joint limits;
-S103 joint velocities q̇ = J⁻¹V (singularity-checked);
-S104 a quintic hitting stroke from the ready pose to (q, q̇) at t_hit and back to rest;
-S105 joint torques by inverse dynamics, motor torques and currents through the drives;
-S106 one joint driven by the cascaded motor loops of ``ttmanip.motor`` along its planned motion.
+The maths is Rust (``ttkin::hit``); this module is the user-facing layer:
 
-:func:`run` writes the figures and a ``summary.json`` with the checks that matter: the planned
-racket pose and velocity at t_hit against the request, limits, torques, following error.
+- :class:`Hit`: racket pose (4×4, racket frame in the robot's base frame, m), racket-centre twist
+  ``[v; ω]`` (base axes, m/s, rad/s) and hit time (s from now). The racket frame has its origin at
+  the racket centre and its z axis along the face normal (:func:`Hit.from_normal`);
+- :func:`plan_hit` / :func:`plan_hits`: a :class:`HitPlan` per hit (status instead of an
+  exception for an infeasible request, unless ``raise_on_failure``);
+- :func:`simulate`: the plan executed by every axis's drive cascade and motor model on the
+  robot's rigid-body dynamics with gravity (``ttmanip.DriveSim``), with the racket's pose and
+  velocity over time and its errors at the hit.
+
+>>> import numpy as np, ttmanip
+>>> robot = ttmanip.robots.gantry6()
+>>> plan = ttmanip.plan_hit(robot, ttmanip.DEMO_HIT)
+>>> plan.ok, plan.status, round(plan.t_hit, 3)
+(True, 'ok', 0.35)
 """
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
-from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from . import robots
-from ._ttmanip import Robot
+from . import _ttmanip
+from ._ttmanip import HitPlan, Robot, ShapeError, TtmanipError
 
-__all__ = ["HitRequest", "plan_hit", "run"]
+__all__ = [
+    "DEMO_HIT",
+    "Hit",
+    "HitError",
+    "HitPlan",
+    "SimResult",
+    "plan_hit",
+    "plan_hits",
+    "racket_frame",
+    "racket_mount",
+    "racket_states",
+    "simulate",
+]
 
 
-def racket_frame(normal: np.ndarray, up_hint: np.ndarray) -> np.ndarray:
-    """Rotation (3×3) whose z axis is the racket-face ``normal`` and whose x axis is as close as
-    possible to ``up_hint`` (the handle direction)."""
-    z = np.asarray(normal, float) / np.linalg.norm(normal)
-    x = np.asarray(up_hint, float) - z * np.dot(up_hint, z)
-    x /= np.linalg.norm(x)
-    return np.column_stack([x, np.cross(z, x), z])
+class HitError(TtmanipError):
+    """A hit plan did not come out on time within every limit (``raise_on_failure=True``)."""
+
+
+def racket_frame(normal, handle=None) -> np.ndarray:
+    """(3, 3) racket orientation (base axes): z along the face ``normal``, x (the handle) as close
+    as possible to ``handle`` (base +z by default)."""
+    return _ttmanip.racket_frame(normal, handle)
+
+
+def racket_mount(robot: Robot) -> np.ndarray:
+    """(4, 4) racket frame in ``robot``'s tool frame (m): identity for gantry6, centre 0.15 m along
+    tool z with the face normal along tool x for mobile8."""
+    return _ttmanip.racket_mount(robot)
+
+
+def _array(value: Any, shape: tuple[int, ...], what: str) -> np.ndarray:
+    try:
+        a = np.array(value, dtype=float)
+    except (TypeError, ValueError) as e:
+        raise ShapeError(f"{what}: expected numbers of shape {shape}, got {value!r}") from e
+    if a.shape != shape:
+        raise ShapeError(f"{what}: expected shape {shape}, got {a.shape}")
+    if not np.isfinite(a).all():
+        raise _ttmanip.NonFiniteError(f"{what}: every value must be finite, got {a.tolist()}")
+    a.setflags(write=False)
+    return a
 
 
 @dataclass(frozen=True)
-class HitRequest:
-    """Hit parameters (S101): where the racket is, how it faces, how fast it moves, and when."""
+class Hit:
+    """Hit parameters: ``pose`` (4×4 racket pose, base frame, m), ``twist`` (6,) racket-centre
+    ``[v (m/s); ω (rad/s)]`` in base axes, ``t`` hit time (s from now, > 0)."""
 
-    position: tuple[float, float, float] = (0.35, -0.55, 0.05)  # tool origin, base frame, m
-    normal: tuple[float, float, float] = (0.3, -1.0, -0.2)  # racket-face normal (tool z), base axes
-    speed: float = 3.0  # racket speed along the normal at the hit, m/s
-    t_hit: float = 0.30  # s from now
-    ready: tuple[float, ...] = (0.0, 0.0, 0.0, 0.6, 0.6, 0.0)  # rest configuration (m, rad)
-    handle_hint: tuple[float, float, float] = field(default=(0.0, 0.0, 1.0))
+    pose: np.ndarray
+    twist: np.ndarray
+    t: float
 
-    def pose(self) -> np.ndarray:
-        """The hit pose (4×4, base frame)."""
-        t = np.eye(4)
-        t[:3, :3] = racket_frame(np.array(self.normal), np.array(self.handle_hint))
-        t[:3, 3] = self.position
-        return t
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "pose", _array(self.pose, (4, 4), "hit.pose"))
+        object.__setattr__(self, "twist", _array(self.twist, (6,), "hit.twist"))
+        try:
+            t = float(self.t)
+        except (TypeError, ValueError) as e:
+            raise TtmanipError(f"hit.t: expected a time in s, got {self.t!r}") from e
+        if not (np.isfinite(t) and t > 0.0):
+            raise TtmanipError(f"hit.t: the hit time must be finite and > 0 s, got {t}")
+        object.__setattr__(self, "t", t)
 
-    def twist(self) -> np.ndarray:
-        """The racket twist at the hit [v (m/s); ω (rad/s)], base axes: pure translation along the normal."""
-        z = np.asarray(self.normal, float) / np.linalg.norm(self.normal)
-        return np.r_[self.speed * z, 0.0, 0.0, 0.0]
+    @classmethod
+    def from_normal(cls, centre, normal, velocity, t, omega=None, handle=None) -> Hit:
+        """A hit from the racket ``centre`` (m), face ``normal`` (any length), centre ``velocity``
+        (m/s), hit time ``t`` (s) and angular velocity ``omega`` (rad/s, zero by default), all in
+        base axes; the handle points as close as possible to ``handle`` (base +z by default)."""
+        c = _array(centre, (3,), "centre")
+        v = _array(velocity, (3,), "velocity")
+        w = np.zeros(3) if omega is None else _array(omega, (3,), "omega")
+        pose = np.eye(4)
+        pose[:3, :3] = racket_frame(_array(normal, (3,), "normal"), handle)
+        pose[:3, 3] = c
+        return cls(pose, np.r_[v, w], t)
 
+    @property
+    def centre(self) -> np.ndarray:
+        """Racket centre (3,), m, base frame."""
+        return self.pose[:3, 3]
 
-def plan_hit(robot: Robot, request: HitRequest, rate_hz: float = 1000.0) -> dict:
-    """Runs S102–S105 and returns every intermediate result (arrays in SI units)."""
-    from . import traj
+    @property
+    def normal(self) -> np.ndarray:
+        """Unit face normal (3,), base axes."""
+        return self.pose[:3, 2]
 
-    target = request.pose()
-    ready = np.asarray(request.ready, float)
-    branches = robot.ik_all(target)  # S102: every mathematical branch
-    q_hit = robot.ik_nearest(target, ready)  # nearest branch within the limits
-    qd_hit, info = robot.joint_velocity(q_hit, request.twist(), info=True)  # S103
-    if info["singular"]:
-        raise RuntimeError(f"hit configuration is singular (σ_min = {info['sigma_min']:.2e})")
-    stroke = traj.stroke(robot, ready, q_hit, qd_hit, request.t_hit, ready)  # S104
-    t, q, qd, qdd = stroke.trajectory.sample_rate(rate_hz)
-    profile = robot.torques(q, qd, qdd)  # S105
-    return {
-        "target": target,
-        "branches": branches,
-        "q_hit": q_hit,
-        "qd_hit": qd_hit,
-        "sigma_min": info["sigma_min"],
-        "stroke": stroke,
-        "t": t,
-        "q": q,
-        "qd": qd,
-        "qdd": qdd,
-        "profile": profile,
-    }
+    @property
+    def velocity(self) -> np.ndarray:
+        """Racket-centre velocity (3,), m/s, base axes."""
+        return self.twist[:3]
 
 
-def _drive_joint(robot: Robot, plan: dict, joint: int):
-    """S106: the motor cascade of ``ttmanip.motor`` drives ``joint`` along its planned motion, with
-    the joint's mean reflected inertia from the mass matrix as its load."""
-    from . import motor
-
-    servo0 = motor.Servo()
-    rate = servo0.rates[2]
-    t = np.arange(0.0, plan["stroke"].trajectory.duration, 1.0 / rate)
-    q, qd, qdd = plan["stroke"].trajectory.sample(t)
-    inertia = float(np.mean(robot.mass_matrix(q[:: max(1, len(t) // 50)])[:, joint, joint]))
-    servo = motor.Servo(load=motor.Load(inertia=inertia))
-    response = servo.track(q[:, joint] - q[0, joint], qd[:, joint], qdd[:, joint], settle=0.05)
-    return servo, response, inertia
+#: Seed 002's demo hit on gantry6: centre (0.35, −0.55, 0.05) m, face normal (0.3, −1, −0.2),
+#: 3 m/s along the normal, at 0.35 s (the earliest feasible is 0.323 s jerk-limited).
+DEMO_HIT = Hit.from_normal(
+    [0.35, -0.55, 0.05],
+    [0.3, -1.0, -0.2],
+    3.0 * np.array([0.3, -1.0, -0.2]) / np.linalg.norm([0.3, -1.0, -0.2]),
+    0.35,
+)
 
 
-def _figures(robot: Robot, plan: dict, response, joint: int, out: Path) -> list[str]:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from . import motor
-    from .dynamics import torque_figure
-
-    t, q, qd = plan["t"], plan["q"], plan["qd"]
-    t_hit = plan["stroke"].t_hit
-    names = robot.joint_names
-    units = ["m" if k == "prismatic" else "rad" for k in robot.joint_types]
-    paths = []
-
-    fig, axes = plt.subplots(2, 1, figsize=(9, 6.5), sharex=True, constrained_layout=True)
-    for i, name in enumerate(names):
-        axes[0].plot(t, q[:, i], label=f"{name} [{units[i]}]")
-        axes[1].plot(t, qd[:, i], label=f"{name} [{units[i]}/s]")
-    for ax in axes:
-        ax.axvline(t_hit, color="k", ls=":", lw=1)
-        ax.grid(alpha=0.3)
-        ax.legend(ncol=3, fontsize=8)
-    axes[0].set_ylabel("position")
-    axes[1].set_ylabel("velocity")
-    axes[1].set_xlabel("t [s]  (dotted: hit)")
-    axes[0].set_title("gantry6 hitting stroke (S104): ready → hit (q, q̇) → ready")
-    paths.append(out / "stroke_joints.png")
-    fig.savefig(paths[-1], dpi=110)
-    plt.close(fig)
-
-    poses = robot.fk(q)
-    p = poses[:, :3, 3]
-    k = int(np.argmin(np.abs(t - t_hit)))
-    v = robot.jacobian(q[k])[:3] @ qd[k]
-    fig = plt.figure(figsize=(7, 6), constrained_layout=True)
-    ax = fig.add_subplot(projection="3d")
-    ax.plot(p[:, 0], p[:, 1], p[:, 2], color="C0", label="racket path")
-    ax.scatter(*plan["target"][:3, 3], color="C3", s=40, label="hit point")
-    ax.quiver(*p[k], *(0.1 * v), color="C3", label="racket velocity ×0.1 s")
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
-    ax.set_zlabel("z [m]")
-    ax.legend()
-    ax.set_title("racket (tool) path in the base frame")
-    paths.append(out / "stroke_racket.png")
-    fig.savefig(paths[-1], dpi=110)
-    plt.close(fig)
-
-    paths.append(out / "stroke_torques.png")
-    torque_figure(robot, t, plan["profile"], paths[-1])
-
-    paths.append(out / f"drive_{names[joint]}.png")
-    motor.plot(response, paths[-1], title=f"S106: {names[joint]} driven by the cascaded loops")
-    return [str(p) for p in paths]
+def _state(robot: Robot, state) -> dict:
+    """Keyword arguments q, qd, qdd for the bindings from ``state``: None, q (n,), a tuple
+    (q, qd[, qdd]) or a dict with keys q, qd, qdd."""
+    if state is None:
+        return {}
+    if isinstance(state, dict):
+        unknown = set(state) - {"q", "qd", "qdd"}
+        if unknown:
+            raise TtmanipError(f"state: unknown keys {sorted(unknown)}; use 'q', 'qd', 'qdd'")
+        if "q" not in state:
+            raise TtmanipError("state: missing key 'q'")
+        return {k: state[k] for k in ("q", "qd", "qdd") if k in state}
+    if isinstance(state, tuple):
+        if not 1 <= len(state) <= 3:
+            raise TtmanipError(f"state: expected (q,), (q, qd) or (q, qd, qdd), got {len(state)} items")
+        return dict(zip(("q", "qd", "qdd"), state))
+    return {"q": state}
 
 
-def run(out: Path, request: HitRequest | None = None, joint: int = 4) -> dict:
-    """Runs the whole pipeline on gantry6, writes figures and ``summary.json`` into ``out``."""
-    out.mkdir(parents=True, exist_ok=True)
-    request = request or HitRequest()
-    robot = robots.gantry6()
-    plan = plan_hit(robot, request)
-    stroke = plan["stroke"]
-    q_at, qd_at, _ = stroke.trajectory.sample(stroke.t_hit)
-    pose_at = robot.fk(q_at)
-    twist_at = robot.jacobian(q_at) @ qd_at
-    servo, response, inertia = _drive_joint(robot, plan, joint)
-    figures = _figures(robot, plan, response, joint, out)
-    following = np.abs(response.following_error)
-    summary = {
-        "hit_pose": plan["target"].tolist(),
-        "ik_branches": int(np.isfinite(plan["branches"]).all(axis=1).sum()),
-        "q_hit": plan["q_hit"].tolist(),
-        "qd_hit": plan["qd_hit"].tolist(),
-        "sigma_min_at_hit": plan["sigma_min"],
-        "t_hit_requested": stroke.requested_t_hit,
-        "t_hit": stroke.t_hit,
-        "stroke_duration": stroke.trajectory.duration,
-        "stroke_feasible": stroke.feasible,
-        "hit_pose_error_m": float(np.abs(pose_at - plan["target"]).max()),
-        "hit_twist_error": float(np.abs(twist_at - request.twist()).max()),
-        "peak_torques": plan["profile"].peak.tolist(),
-        "torques_within_limits": plan["profile"].within_limits,
-        "driven_joint": robot.joint_names[joint],
-        "driven_joint_load_inertia": inertia,
-        "driven_joint_max_following_error_rad": float(following.max()),
-        "driven_joint_fault": response.fault,
-        "figures": figures,
-    }
-    (out / "summary.json").write_text(json.dumps(summary, indent=2))
-    return summary
+def _check_hit(hit) -> Hit:
+    if not isinstance(hit, Hit):
+        raise TtmanipError(f"hit: expected a ttmanip.Hit, got {type(hit).__name__}")
+    return hit
+
+
+def plan_hit(
+    robot: Robot,
+    hit: Hit,
+    state=None,
+    *,
+    ready=None,
+    profile: str = "auto",
+    task: str = "auto",
+    jerk=None,
+    effort: bool = True,
+    raise_on_failure: bool = False,
+) -> HitPlan:
+    """Plans ``hit`` from ``state`` (at rest at ``ready`` when None; q, (q, qd[, qdd]) or a dict)
+    back to rest at ``ready`` (default: the start, or the robot's ready pose).
+
+    ``profile``: ``"auto"`` (quintic when on time within the limits, else jerk-limited),
+    ``"quintic"`` or ``"jerk"``; ``task``: ``"auto"`` (6-D pose, or the 5-D racket task for a
+    redundant robot), ``"pose"`` or ``"racket5"``; ``jerk``: jerk limits (n,), default 200 × the
+    acceleration limits; ``effort``: check the torques (inverse dynamics with friction and gravity
+    at 12 instants per leg) against the effort limits and move the hit later until they hold.
+    An infeasible hit gives a plan with ``ok`` False and a ``status``; with ``raise_on_failure``
+    it raises :class:`HitError` instead.
+    """
+    hit = _check_hit(hit)
+    plan = _ttmanip.hit_plan(
+        robot,
+        hit.pose,
+        hit.twist,
+        hit.t,
+        ready=ready,
+        profile=profile,
+        task=task,
+        jerk=jerk,
+        effort=effort,
+        **_state(robot, state),
+    )
+    if raise_on_failure and not plan.ok:
+        raise HitError(f"hit: {plan.status}: {plan.message}")
+    return plan
+
+
+def plan_hits(
+    robot: Robot,
+    hits,
+    state=None,
+    *,
+    ready=None,
+    profile: str = "auto",
+    task: str = "auto",
+    jerk=None,
+    effort: bool = True,
+    raise_on_failure: bool = False,
+) -> list[HitPlan]:
+    """:func:`plan_hit` for a sequence of hits from the same state, planned in parallel in Rust."""
+    hits = [_check_hit(h) for h in hits]
+    if not hits:
+        return []
+    poses = np.stack([h.pose for h in hits])
+    twists = np.stack([h.twist for h in hits])
+    times = np.array([h.t for h in hits])
+    plans = _ttmanip.hit_plan_batch(
+        robot,
+        poses,
+        twists,
+        times,
+        ready=ready,
+        profile=profile,
+        task=task,
+        jerk=jerk,
+        effort=effort,
+        **_state(robot, state),
+    )
+    if raise_on_failure:
+        for i, p in enumerate(plans):
+            if not p.ok:
+                raise HitError(f"hits[{i}]: {p.status}: {p.message}")
+    return plans
+
+
+def racket_states(robot: Robot, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Racket poses (K, 4, 4), centres (K, 3), normals (K, 3) and centre velocities (K, 3), base
+    frame, for joint states ``q``, ``qd`` (K, n)."""
+    q = np.atleast_2d(np.asarray(q, float))
+    qd = np.atleast_2d(np.asarray(qd, float))
+    mount = racket_mount(robot)
+    tool = robot.fk(q)
+    poses = tool @ mount
+    jac = robot.jacobian(q)
+    twist = np.einsum("kij,kj->ki", jac, qd)
+    lever = np.einsum("kij,j->ki", tool[:, :3, :3], mount[:3, 3])
+    v = twist[:, :3] + np.cross(twist[:, 3:], lever)
+    return poses, poses[:, :3, 3], poses[:, :3, 2], v
+
+
+@dataclass
+class SimResult:
+    """A plan executed by the drives: ``DriveSim.run`` arrays, the racket over time and its errors
+    at the hit (racket centre m, face normal degrees, centre velocity m/s and relative)."""
+
+    plan: HitPlan
+    arrays: dict
+    racket_pose: np.ndarray
+    racket_centre: np.ndarray
+    racket_normal: np.ndarray
+    racket_velocity: np.ndarray
+    racket_position_error_m: float
+    racket_normal_error_deg: float
+    racket_velocity_error_mps: float
+    racket_velocity_error_rel: float
+    hit_index: int
+    faults: list = field(default_factory=list)
+
+    def __getitem__(self, key: str) -> np.ndarray:
+        return self.arrays[key]
+
+    @property
+    def t(self) -> np.ndarray:
+        """Sample times (K,), s."""
+        return self.arrays["t"]
+
+    def summary(self) -> dict:
+        """The errors at the hit and the drive faults, JSON-ready."""
+        return {
+            "racket_position_error_m": self.racket_position_error_m,
+            "racket_normal_error_deg": self.racket_normal_error_deg,
+            "racket_velocity_error_mps": self.racket_velocity_error_mps,
+            "racket_velocity_error_rel": self.racket_velocity_error_rel,
+            "faults": self.faults,
+        }
+
+
+def _angle_deg(a: np.ndarray, b: np.ndarray) -> float:
+    c = np.dot(a, b) / (np.linalg.norm(a) * np.linalg.norm(b))
+    s = np.linalg.norm(np.cross(a, b)) / (np.linalg.norm(a) * np.linalg.norm(b))
+    return float(np.degrees(np.arctan2(s, c)))
+
+
+def simulate(
+    robot: Robot,
+    plan: HitPlan,
+    *,
+    setpoint_rate: float = 1000.0,
+    noise=None,
+    seed: int = 0,
+    rate: float = 1000.0,
+    gravity: bool = True,
+) -> SimResult:
+    """Executes ``plan`` on ``ttmanip.DriveSim``: the stroke sampled at ``rate`` Hz with its
+    inverse-dynamics torques as feed-forward, setpoints handed to every axis's drive at
+    ``setpoint_rate`` Hz, optional sensor ``noise`` (see ``DriveSim``), gravity on. Returns the
+    executed states, currents, the racket over time and its errors at the hit."""
+    from ._ttmanip import DriveSim
+
+    if not isinstance(plan, HitPlan):
+        raise TtmanipError(f"plan: expected a ttmanip.HitPlan, got {type(plan).__name__}")
+    if plan.trajectory is None:
+        raise HitError(f"plan: nothing to simulate (status '{plan.status}': {plan.message})")
+    t, q, qd, qdd = plan.sample(rate)
+    tau = plan.torques(rate)
+    sim = DriveSim(robot, gravity=gravity, setpoint_rate=setpoint_rate, noise=noise, seed=seed)
+    sim.reset(q[0], qd[0])
+    arrays = sim.run(t, q, qd, qdd, tau_ff=tau)
+    te = np.asarray(arrays["t"])
+    qe = np.asarray(arrays["q"])
+    qde = np.asarray(arrays["qd"])
+    poses, centre, normal, vel = racket_states(robot, qe, qde)
+    # The executed state at the hit time, interpolated between the two samples around it.
+    q_hit = np.array([np.interp(plan.t_hit, te, qe[:, j]) for j in range(qe.shape[1])])
+    qd_hit = np.array([np.interp(plan.t_hit, te, qde[:, j]) for j in range(qde.shape[1])])
+    _, c_hit, n_hit, v_hit = racket_states(robot, q_hit, qd_hit)
+    v_want = np.asarray(plan.hit_twist[:3])
+    dv = float(np.linalg.norm(v_hit[0] - v_want))
+    return SimResult(
+        plan=plan,
+        arrays=arrays,
+        racket_pose=poses,
+        racket_centre=centre,
+        racket_normal=normal,
+        racket_velocity=vel,
+        racket_position_error_m=float(np.linalg.norm(c_hit[0] - plan.hit_pose[:3, 3])),
+        racket_normal_error_deg=_angle_deg(n_hit[0], plan.hit_pose[:3, 2]),
+        racket_velocity_error_mps=dv,
+        racket_velocity_error_rel=dv / max(float(np.linalg.norm(v_want)), 1e-12),
+        hit_index=int(np.argmin(np.abs(te - plan.t_hit))),
+        faults=list(arrays.get("faults", [])),
+    )

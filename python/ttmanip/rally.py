@@ -47,10 +47,10 @@ def rally(
 
     Summary keys: ``balls``, ``in_reach``, ``out_of_reach``, ``returned``, ``return_rate``
     (returned / in_reach), ``in_box`` and ``return_rate_in_box`` (over every ball passing the
-    reach box, whether or not the robot is fast enough for it), ``racket_error_m_median``, ``plan_time_us_median``,
+    reach box, whether or not the robot is fast enough for it), ``racket_error_m_median``,
     ``landing_error_m_median``, ``velocity_error_mps_median``, ``plan_time_us_median`` (per-ball
-    planning in thread CPU time, from the parallel batch) and ``plan_wall_time_us_median``, ``statuses`` (counts of every
-    outcome, in reach or not) and the stated simulation settings.
+    planning in thread CPU time, from the parallel batch), ``plan_wall_time_us_median``,
+    ``statuses`` (counts of every outcome, in reach or not) and the stated simulation settings.
     """
     if not isinstance(n, (int, np.integer)) or isinstance(n, bool) or n < 1:
         raise _t.TtmanipError(f"n: must be a positive integer, got {n!r}")

@@ -27,6 +27,7 @@ fn stepper(rates: Rates) -> (Stepper<AXES>, Vec<[Measurement; AXES]>) {
             std::array::from_fn(|j| Measurement {
                 current: 0.01 * (((k * 7 + j * 3) % 11) as f64 - 5.0),
                 encoder_counts: ((k + j) % 3) as i64 - 1,
+                bus_voltage: Some(24.0),
             })
         })
         .collect();
@@ -77,16 +78,7 @@ fn control_cycle(c: &mut Criterion) {
 }
 
 fn current_loop_step(c: &mut Criterion) {
-    let mut l = CurrentLoop::new(
-        Pi::new(1.62, 1.25e4, 5e-5, true),
-        5e-5,
-        24.0,
-        22.8,
-        0.61,
-        3.6,
-        1.2,
-        11.52,
-    );
+    let mut l = CurrentLoop::new(Pi::new(1.62, 1.25e4, 5e-5, true), 24.0, 22.8, 0.61, 3.6);
     let mut k = 0u32;
     c.bench_function("current_loop_step", |b| {
         b.iter(|| {

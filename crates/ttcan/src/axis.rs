@@ -1,5 +1,6 @@
-//! One axis: the cascade of [`crate::loops`] for one motor, its sensing (position from encoder
-//! counts, speed by differencing), its operating mode and its fault state machine.
+//! One axis: the cascade of [`crate::loops`] for one motor, its sensing (position and speed from
+//! the tracking observer of [`crate::observer`] on the encoder and the measured current), its
+//! operating mode and its fault state machine.
 //!
 //! States: `Disabled` (duty 0) → `enable(mode)` → `Enabled` → on a fault → `Stopping` (speed loop
 //! ramps the speed to zero at the quick-stop deceleration, current limited to the continuous
@@ -10,11 +11,15 @@
 //! Everything that can be wrong with the configuration is checked by [`Axis::new`]; [`Axis::tick`]
 //! never fails and never allocates.
 
-use crate::error::{finite, positive, Error, Result};
+pub use crate::axis_config::{AxisConfig, HoldingBrake};
+use crate::error::{finite, non_negative, positive, Error, Result};
 use crate::loops::{CurrentLoop, LowPass, Pi, PositionLoop, PositionOutput, SpeedLoop};
-use crate::motor::{Measurement, MotorModel};
-use crate::stepper::{Due, Rates};
-use crate::tuning::{tune_cascade, CascadeTuning, TuningTargets, SPEED_WINDOW_MAX};
+use crate::motor::Measurement;
+use crate::observer::TrackingObserver;
+use crate::schedule::{Due, Rates};
+use crate::setpoint::SetpointInterpolator;
+use crate::thermal::ThermalState;
+use crate::tuning::{tune_cascade, CascadeTuning};
 
 /// Operating mode (the CiA 402 cyclic synchronous modes: torque, velocity, position).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -40,85 +45,57 @@ pub enum Fault {
     InvalidReference,
     /// The current reading was NaN or infinite.
     InvalidMeasurement,
+    /// `setpoint_max_missed` cyclic position setpoints in a row did not arrive.
+    SetpointsLost,
+    /// The estimated speed exceeded the overspeed limit (checked in every mode).
+    Overspeed,
+    /// The position (or a position reference) left the software position limits.
+    PositionLimit,
+    /// The measured DC-bus voltage exceeded the over-voltage limit (regeneration).
+    OverVoltage,
+    /// The measured DC-bus voltage fell below the under-voltage limit.
+    UnderVoltage,
+}
+
+/// What the axis does about a fault: each fault has exactly one reaction.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Reaction {
+    /// Duty 0 and the bridge off at once (open winding: the joint coasts); used when the current
+    /// cannot be controlled or a sensor the loops need has failed.
+    BridgeOff,
+    /// Controlled stop at the quick-stop deceleration, then (brake engaged) bridge off.
+    QuickStop,
+}
+
+impl Fault {
+    /// The one reaction to this fault. A fault while stopping always escalates to
+    /// [`Reaction::BridgeOff`].
+    pub fn reaction(self) -> Reaction {
+        match self {
+            Fault::OverCurrent | Fault::EncoderJump | Fault::InvalidMeasurement | Fault::OverVoltage => {
+                Reaction::BridgeOff
+            }
+            Fault::FollowingError
+            | Fault::InvalidReference
+            | Fault::SetpointsLost
+            | Fault::Overspeed
+            | Fault::PositionLimit
+            | Fault::UnderVoltage => Reaction::QuickStop,
+        }
+    }
 }
 
 /// State of the axis' power stage and fault machine.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum AxisState {
-    /// Bridge off (duty 0).
+    /// Bridge off (duty 0, open winding).
     Disabled,
     /// Loops running in the present mode.
     Enabled,
     /// Controlled stop after a fault.
     Stopping(Fault),
-    /// Stopped after a fault, bridge off, waiting for `clear_fault`.
+    /// Stopped after a fault, bridge off (open winding), waiting for `clear_fault`.
     Faulted(Fault),
-}
-
-/// Everything an axis is built from. Start from [`AxisConfig::new`] and change fields.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct AxisConfig {
-    /// The controller's model of the actuator (used for tuning and unit conversions).
-    pub model: MotorModel,
-    /// Loop rates.
-    pub rates: Rates,
-    /// Tuning targets.
-    pub tuning: TuningTargets,
-    /// Speed reference filter cut-off, Hz; `None`: 1/(2π a T_σ) from the tuning.
-    pub speed_reference_filter_hz: Option<f64>,
-    /// Continuous current rating, A.
-    pub continuous_current: f64,
-    /// Peak current, A (≥ continuous).
-    pub peak_current: f64,
-    /// How long the peak current may flow from cold before the I²t limit folds back, s.
-    pub peak_duration: f64,
-    /// Measured current that trips an over-current fault, A (> peak).
-    pub overcurrent_trip: f64,
-    /// Largest output speed, rad/s (the bus must be able to overcome its back-EMF).
-    pub max_speed: f64,
-    /// Largest allowed |position reference − position|, rad.
-    pub following_error_limit: f64,
-    /// Deceleration of the controlled stop, rad/s² at the output.
-    pub quick_stop_deceleration: f64,
-    /// Velocity feedforward in position mode.
-    pub velocity_feedforward: bool,
-    /// Acceleration feedforward (through inertia and torque constant to current) in position mode.
-    pub acceleration_feedforward: bool,
-    /// Back-EMF feedforward in the current loop (from the estimated speed).
-    pub emf_feedforward: bool,
-    /// Anti-windup in the current and speed PIs.
-    pub anti_windup: bool,
-    /// Cut-off of the low-pass on the speed estimate used by the back-EMF feedforward, Hz: the
-    /// estimate moves in whole encoder counts per speed period, and unfiltered those steps would
-    /// kick the current.
-    pub emf_filter_hz: f64,
-}
-
-impl AxisConfig {
-    /// Defaults for `model`: 20/5/1 kHz, 1 kHz current bandwidth, symmetric optimum a = 3, currents
-    /// 1.2 A continuous / 3.6 A peak for 1 s / 6 A trip, 30 rad/s, 0.1 rad following-error limit,
-    /// 200 rad/s² quick stop, all feedforwards and anti-windup on. The current and speed values
-    /// fit the maxon RE 25 + GP 26 A 14:1 of [`MotorModel::maxon_re25_gp26`].
-    pub fn new(model: MotorModel) -> Self {
-        AxisConfig {
-            model,
-            rates: Rates::default(),
-            tuning: TuningTargets::default(),
-            speed_reference_filter_hz: None,
-            continuous_current: 1.2,
-            peak_current: 3.6,
-            peak_duration: 1.0,
-            overcurrent_trip: 6.0,
-            max_speed: 30.0,
-            following_error_limit: 0.1,
-            quick_stop_deceleration: 200.0,
-            velocity_feedforward: true,
-            acceleration_feedforward: true,
-            emf_feedforward: true,
-            anti_windup: true,
-            emf_filter_hz: 100.0,
-        }
-    }
 }
 
 /// One axis: configuration-derived constants, the three loops, sensing and state.
@@ -128,25 +105,37 @@ pub struct Axis {
     tuning: CascadeTuning,
     // Constants.
     rad_per_count: f64,
-    speed_rate: f64,
     speed_period: f64,
+    current_period: f64,
     jump_limit: u64,
     standstill: f64,
     stop_timeout: f64,
+    bus_nominal: f64,
+    // Holding brake: engaged (true) or released, and the time left until a commanded change is done.
+    brake_engaged: bool,
+    brake_timer: f64,
+    /// Disable requested with a brake: hold until it has engaged, then switch the bridge off.
+    disable_pending: bool,
+    /// Position held while the brake releases or engages, rad.
+    q_hold: f64,
     // Loops.
     current_loop: CurrentLoop,
+    thermal: ThermalState,
     emf_speed: LowPass,
     speed_loop: SpeedLoop,
     position_loop: PositionLoop,
+    interpolator: SetpointInterpolator,
+    interpolating: bool,
+    amps_per_joint_torque: f64,
     // Sensing.
     primed: bool,
     count_offset: i64,
     last_counts: i64,
+    /// Encoder position (mid-count), rad.
+    encoder_position: f64,
+    observer: TrackingObserver,
+    /// Observer position and speed, sampled at the speed-loop rate, rad and rad/s.
     position: f64,
-    /// Positions at the last `SPEED_WINDOW_MAX` speed ticks (ring buffer), rad.
-    speed_ring: [f64; SPEED_WINDOW_MAX],
-    speed_ring_index: usize,
-    speed_window: usize,
     speed: f64,
     // References and outputs.
     state: AxisState,
@@ -156,6 +145,10 @@ pub struct Axis {
     q_ref: f64,
     qd_ref: f64,
     qdd_ref: f64,
+    torque_feedforward: f64,
+    /// Torque feed-forward before and after the latest cyclic setpoint (interpolated between).
+    torque_segment: [f64; 2],
+    host_torque: bool,
     position_output: PositionOutput,
     current_reference: f64,
     duty: f64,
@@ -170,7 +163,6 @@ impl Axis {
         c.model.validate()?;
         positive("continuous current (A)", c.continuous_current)?;
         positive("peak current (A)", c.peak_current)?;
-        positive("peak duration (s)", c.peak_duration)?;
         positive("over-current trip (A)", c.overcurrent_trip)?;
         positive("max speed (rad/s)", c.max_speed)?;
         positive("following error limit (rad)", c.following_error_limit)?;
@@ -221,11 +213,33 @@ impl Axis {
         let [tc, ts, tp] = c.rates.periods();
         let tuning = tune_cascade(m, [tc, ts, tp], &c.tuning)?;
         finite("tuned speed gain", tuning.speed.kp)?;
+        positive("max quantisation ripple share", c.max_quantisation_ripple_share)?;
+        let ripple = tuning.quantisation_ripple_rms;
+        if ripple > c.max_quantisation_ripple_share * c.continuous_current {
+            return Err(invalid(
+                "observer bandwidth (Hz)",
+                c.tuning.observer_bandwidth_hz,
+                &format!(
+                    "encoder quantisation puts {ripple:.3} A RMS on the current reference (Kp·Δω), above {:.0} % of the \
+                     continuous current {:.2} A: lower the observer bandwidth or use a finer encoder",
+                    100.0 * c.max_quantisation_ripple_share,
+                    c.continuous_current
+                ),
+            ));
+        }
+        let observer = TrackingObserver::new(
+            c.tuning.observer_bandwidth_hz,
+            tc,
+            if c.tuning.observer_acceleration_input {
+                m.acceleration_per_amp()
+            } else {
+                0.0
+            },
+        )?;
 
         let rad_per_count = m.radians_per_count();
         let current_loop = CurrentLoop::new(
             Pi::new(tuning.current.kp, tuning.current.ki, tc, c.anti_windup),
-            tc,
             m.bus_voltage,
             m.max_voltage(),
             if c.emf_feedforward {
@@ -234,9 +248,8 @@ impl Axis {
                 0.0
             },
             c.peak_current,
-            c.continuous_current,
-            (c.peak_current * c.peak_current - c.continuous_current * c.continuous_current) * c.peak_duration,
         );
+        let thermal = ThermalState::new(&c.thermal, m.motor.resistance)?;
         let ref_filter_hz = c.speed_reference_filter_hz.unwrap_or(tuning.speed_reference_filter_hz);
         let speed_loop = SpeedLoop::new(
             Pi::new(tuning.speed.kp, tuning.speed.ki, ts, c.anti_windup),
@@ -250,28 +263,96 @@ impl Axis {
             c.velocity_feedforward,
             c.acceleration_feedforward,
         );
+        if let Some(p) = c.setpoint_period {
+            positive("setpoint period (s)", p)?;
+            if p < ts * (1.0 - 1e-9) {
+                return Err(invalid(
+                    "setpoint period (s)",
+                    p,
+                    "must be at least one speed-loop period",
+                ));
+            }
+        }
+        if c.setpoint_max_missed == 0 {
+            return Err(invalid("setpoint max missed", 0.0, "must be >= 1"));
+        }
+        non_negative("following error per speed (s)", c.following_error_per_speed)?;
+        if c.overspeed_limit.is_nan() || c.overspeed_limit <= c.max_speed {
+            return Err(invalid(
+                "overspeed limit (rad/s)",
+                c.overspeed_limit,
+                "must be > the max speed",
+            ));
+        }
+        if let Some((lo, hi)) = c.position_limits {
+            finite("position limit lower (rad)", lo)?;
+            finite("position limit upper (rad)", hi)?;
+            if lo >= hi {
+                return Err(invalid("position limit lower (rad)", lo, "must be < the upper limit"));
+            }
+        }
+        positive("bus under-voltage (V)", c.bus_undervoltage)?;
+        if c.bus_overvoltage.is_nan() || c.bus_overvoltage <= m.bus_voltage {
+            return Err(invalid(
+                "bus over-voltage (V)",
+                c.bus_overvoltage,
+                "must be > the nominal bus voltage",
+            ));
+        }
+        if c.bus_undervoltage >= m.bus_voltage {
+            return Err(invalid(
+                "bus under-voltage (V)",
+                c.bus_undervoltage,
+                "must be < the nominal bus voltage",
+            ));
+        }
+        let stop_timeout = 2.0 * c.max_speed / c.quick_stop_deceleration + 0.2;
+        if let Some(b) = c.holding_brake {
+            for (what, v) in [
+                ("brake release delay (s)", b.release_delay),
+                ("brake engage delay (s)", b.engage_delay),
+            ] {
+                non_negative(what, v)?;
+                if v > stop_timeout {
+                    return Err(invalid(
+                        what,
+                        v,
+                        &format!("must not exceed the stop time {stop_timeout:.3} s (the axis could not hold until the brake acts)"),
+                    ));
+                }
+            }
+        }
         // An encoder may move at most twice the largest speed's worth of counts per current period.
         let jump_limit = (2.0 * c.max_speed * tc / rad_per_count).ceil() as u64 + 2;
         Ok(Axis {
             config: *c,
             tuning,
             rad_per_count,
-            speed_rate: 1.0 / (ts * c.tuning.speed_window as f64),
             speed_period: ts,
+            current_period: tc,
             jump_limit,
-            standstill: 0.05 * c.max_speed,
-            stop_timeout: 2.0 * c.max_speed / c.quick_stop_deceleration + 0.2,
+            // "Stopped": 1 % of the largest speed, or three encoder counts per speed period.
+            standstill: (0.01 * c.max_speed).max(3.0 * rad_per_count / ts),
+            stop_timeout,
+            bus_nominal: m.bus_voltage,
+            brake_engaged: c.holding_brake.is_some(),
+            brake_timer: 0.0,
+            disable_pending: false,
+            q_hold: 0.0,
             current_loop,
+            thermal,
             emf_speed: LowPass::new(c.emf_filter_hz, ts),
             speed_loop,
             position_loop,
+            interpolator: SetpointInterpolator::new(c.setpoint_period.unwrap_or(tp), c.setpoint_max_missed),
+            interpolating: c.setpoint_period.is_some(),
+            amps_per_joint_torque: 1.0 / (m.motor.torque_constant * n),
             primed: false,
             count_offset: 0,
             last_counts: 0,
+            encoder_position: 0.0,
+            observer,
             position: 0.0,
-            speed_ring: [0.0; SPEED_WINDOW_MAX],
-            speed_ring_index: 0,
-            speed_window: c.tuning.speed_window as usize,
             speed: 0.0,
             state: AxisState::Disabled,
             mode: Mode::Current,
@@ -280,6 +361,9 @@ impl Axis {
             q_ref: 0.0,
             qd_ref: 0.0,
             qdd_ref: 0.0,
+            torque_feedforward: 0.0,
+            torque_segment: [0.0; 2],
+            host_torque: false,
             position_output: PositionOutput::default(),
             current_reference: 0.0,
             duty: 0.0,
@@ -292,16 +376,52 @@ impl Axis {
     /// bridge duty cycle in [−1, 1]. Never fails, never allocates.
     #[inline]
     pub fn tick(&mut self, m: Measurement, due: Due) -> f64 {
-        self.sense(m.encoder_counts, due.speed);
+        let duty = self.control(m, due);
+        if self.interpolating {
+            self.interpolator.advance(self.current_period);
+        }
+        duty
+    }
+
+    #[inline]
+    fn control(&mut self, m: Measurement, due: Due) -> f64 {
         let current = if m.current.is_finite() {
             m.current
         } else {
             self.trip(Fault::InvalidMeasurement);
             0.0
         };
+        self.sense(m.encoder_counts, current, due.speed);
+        self.thermal.step(current, self.current_period);
+        self.current_loop.set_limit(
+            self.thermal
+                .limit(self.config.peak_current, self.config.continuous_current),
+        );
         if current.abs() > self.config.overcurrent_trip {
             self.trip(Fault::OverCurrent);
         }
+        if let Some(v) = m.bus_voltage {
+            if v.is_nan() || v > self.config.bus_overvoltage {
+                self.trip(Fault::OverVoltage);
+            } else if v < self.config.bus_undervoltage {
+                self.trip(Fault::UnderVoltage);
+            }
+            // The duty that gives the commanded voltage on the bus as it is now.
+            self.current_loop.set_bus_voltage(v.max(self.config.bus_undervoltage));
+        } else {
+            self.current_loop.set_bus_voltage(self.bus_nominal);
+        }
+        if due.speed && self.bridge_on() {
+            if self.speed.abs() > self.config.overspeed_limit {
+                self.trip(Fault::Overspeed);
+            }
+            if let Some((lo, hi)) = self.config.position_limits {
+                if self.state == AxisState::Enabled && (self.position < lo || self.position > hi) {
+                    self.trip(Fault::PositionLimit);
+                }
+            }
+        }
+        self.run_brake();
         match self.state {
             AxisState::Disabled | AxisState::Faulted(_) => {
                 self.current_reference = 0.0;
@@ -311,7 +431,7 @@ impl Axis {
             AxisState::Enabled => self.run_enabled(due),
             AxisState::Stopping(_) => self.run_stopping(due),
         }
-        if let AxisState::Faulted(_) = self.state {
+        if !self.bridge_on() {
             self.duty = 0.0;
             return 0.0;
         }
@@ -321,7 +441,34 @@ impl Axis {
         self.duty
     }
 
-    fn sense(&mut self, raw_counts: i64, speed_due: bool) {
+    /// Brake timing and the disable sequence: engage, hold until it holds, then bridge off.
+    fn run_brake(&mut self) {
+        if self.brake_timer > 0.0 {
+            self.brake_timer -= self.current_period;
+        }
+        if self.disable_pending && self.brake_timer <= 0.0 {
+            self.disable_pending = false;
+            self.state = AxisState::Disabled;
+            self.current_reference = 0.0;
+            self.current_loop.reset();
+        }
+    }
+
+    /// True while the brake is being released (the axis holds its position meanwhile).
+    fn brake_releasing(&self) -> bool {
+        !self.brake_engaged && self.brake_timer > 0.0 && self.config.holding_brake.is_some()
+    }
+
+    fn engage_brake(&mut self) {
+        if let Some(b) = self.config.holding_brake {
+            if !self.brake_engaged {
+                self.brake_engaged = true;
+                self.brake_timer = b.engage_delay;
+            }
+        }
+    }
+
+    fn sense(&mut self, raw_counts: i64, current: f64, speed_due: bool) {
         let mut counts = raw_counts.wrapping_add(self.count_offset);
         if self.primed {
             let delta = counts.wrapping_sub(self.last_counts);
@@ -333,20 +480,18 @@ impl Axis {
             }
         } else {
             self.primed = true;
-            let p = counts as f64 * self.rad_per_count;
-            self.speed_ring = [p; SPEED_WINDOW_MAX];
+            let p = (counts as f64 + 0.5) * self.rad_per_count;
+            self.observer.reset(p, 0.0);
+            self.interpolator.reset(p);
             self.q_ref = p;
         }
         self.last_counts = counts;
-        self.position = counts as f64 * self.rad_per_count;
+        // The encoder reads floor(θ/Δ): the middle of the count is the unbiased position.
+        self.encoder_position = (counts as f64 + 0.5) * self.rad_per_count;
+        self.observer.step(self.encoder_position, current);
         if speed_due {
-            // Difference over the last `speed_window` speed periods: the ring holds the positions
-            // of the last SPEED_WINDOW_MAX speed ticks, the oldest needed one `speed_window` back.
-            let i = self.speed_ring_index;
-            let old = (i + SPEED_WINDOW_MAX - self.speed_window) % SPEED_WINDOW_MAX;
-            self.speed = (self.position - self.speed_ring[old]) * self.speed_rate;
-            self.speed_ring[i] = self.position;
-            self.speed_ring_index = (i + 1) % SPEED_WINDOW_MAX;
+            self.position = self.observer.position();
+            self.speed = self.observer.speed();
             self.emf_speed.step(self.speed);
         }
     }
@@ -356,16 +501,37 @@ impl Axis {
             Mode::Current => self.current_reference = self.current_command,
             Mode::Velocity => {
                 if due.speed {
-                    self.current_reference = self.speed_step(self.speed_command, 0.0, 0.0);
+                    let ff = self.torque_feedforward * self.amps_per_joint_torque;
+                    self.current_reference = self.speed_step(self.speed_command, 0.0, ff);
                 }
             }
             Mode::Position => {
-                if due.position {
+                if self.brake_releasing() || self.disable_pending {
+                    // Hold still until the brake is free (or while it engages before a disable).
+                    self.q_ref = self.q_hold;
+                    self.interpolator.reset(self.q_hold);
+                    (self.qd_ref, self.qdd_ref) = (0.0, 0.0);
+                } else if self.interpolating && due.speed {
+                    let mid = self.interpolator.age() + 0.5 * self.speed_period;
+                    let s = (mid / self.interpolator.period()).min(1.0);
+                    let [t0, t1] = self.torque_segment;
+                    self.torque_feedforward = t0 + s * (t1 - t0);
+                    let [q, qd, qdd] = self.interpolator.sample(self.speed_period);
+                    (self.q_ref, self.qd_ref, self.qdd_ref) = (q, qd, qdd);
+                    if self.interpolator.lost() {
+                        self.trip(Fault::SetpointsLost);
+                        self.run_stopping(due);
+                        return;
+                    }
+                }
+                if due.position || (self.interpolating && due.speed) {
                     let o = self
                         .position_loop
                         .step(self.q_ref, self.qd_ref, self.qdd_ref, self.position);
                     self.position_output = o;
-                    if o.following_error.abs() > self.config.following_error_limit {
+                    let limit =
+                        self.config.following_error_limit + self.config.following_error_per_speed * self.qd_ref.abs();
+                    if o.following_error.abs() > limit {
                         self.trip(Fault::FollowingError);
                         self.run_stopping(due);
                         return;
@@ -373,8 +539,10 @@ impl Axis {
                 }
                 if due.speed {
                     let o = self.position_output;
-                    self.current_reference =
-                        self.speed_step(o.speed_command, o.speed_feedforward, o.current_feedforward);
+                    // A host torque feed-forward holds the inertia torque already: not twice.
+                    let own = if self.host_torque { 0.0 } else { o.current_feedforward };
+                    let ff = own + self.torque_feedforward * self.amps_per_joint_torque;
+                    self.current_reference = self.speed_step(o.speed_command, o.speed_feedforward, ff);
                 }
             }
         }
@@ -410,26 +578,49 @@ impl Axis {
         self.stop_time += self.speed_period;
         let stopped = self.stop_reference == 0.0 && self.speed.abs() <= self.standstill;
         if stopped || self.stop_time > self.stop_timeout {
-            self.state = AxisState::Faulted(fault);
-            self.current_reference = 0.0;
-            self.current_loop.reset();
+            if self.config.holding_brake.is_some() && !self.brake_engaged {
+                // Engage the brake and keep holding (zero speed) until it holds.
+                self.engage_brake();
+            }
+            if self.brake_timer <= 0.0 {
+                self.bridge_off(fault);
+            }
+        }
+    }
+
+    /// Bridge off at once (duty 0, open winding) and the brake (if any) engaged.
+    fn bridge_off(&mut self, fault: Fault) {
+        self.state = AxisState::Faulted(fault);
+        self.current_reference = 0.0;
+        self.duty = 0.0;
+        self.current_loop.reset();
+        self.disable_pending = false;
+        if let Some(b) = self.config.holding_brake {
+            if !self.brake_engaged {
+                self.brake_engaged = true;
+                self.brake_timer = b.engage_delay;
+            }
         }
     }
 
     fn trip(&mut self, fault: Fault) {
         match self.state {
-            AxisState::Enabled if fault != Fault::InvalidMeasurement => {
-                self.state = AxisState::Stopping(fault);
-                self.stop_reference = self.speed.max(-self.config.max_speed).min(self.config.max_speed);
-                self.stop_time = 0.0;
-                self.speed_loop.reset(self.speed, self.current_reference);
-            }
-            AxisState::Enabled | AxisState::Disabled | AxisState::Stopping(_) if fault == Fault::InvalidMeasurement => {
-                self.state = AxisState::Faulted(fault);
-                self.current_loop.reset();
-            }
+            AxisState::Enabled => match fault.reaction() {
+                Reaction::BridgeOff => self.bridge_off(fault),
+                Reaction::QuickStop => {
+                    self.state = AxisState::Stopping(fault);
+                    self.disable_pending = false;
+                    self.stop_reference = self.speed.max(-self.config.max_speed).min(self.config.max_speed);
+                    self.stop_time = 0.0;
+                    self.speed_loop.reset(self.speed, self.current_reference);
+                }
+            },
+            // The condition being handled, still present: the stop goes on.
+            AxisState::Stopping(f) if f == fault => {}
+            // Another fault while stopping: the stop itself is in doubt, escalate.
+            AxisState::Stopping(_) => self.bridge_off(fault),
             AxisState::Disabled => self.state = AxisState::Faulted(fault),
-            _ => {}
+            AxisState::Faulted(_) => {}
         }
     }
 
@@ -442,6 +633,12 @@ impl Axis {
         self.current_loop.reset();
         self.state = AxisState::Enabled;
         self.set_mode(mode);
+        if let Some(b) = self.config.holding_brake {
+            // Bridge on and holding first, then release the brake; motion after its delay.
+            self.brake_engaged = false;
+            self.brake_timer = b.release_delay;
+            self.q_hold = self.position;
+        }
         true
     }
 
@@ -453,17 +650,43 @@ impl Axis {
         self.q_ref = self.position;
         self.qd_ref = 0.0;
         self.qdd_ref = 0.0;
+        self.torque_feedforward = 0.0;
+        self.torque_segment = [0.0; 2];
+        self.host_torque = false;
+        self.interpolator.reset(self.position);
         self.position_output = PositionOutput::default();
         self.speed_loop.reset(self.speed, self.current_reference);
     }
 
     /// Switches the bridge off (from any state but `Faulted`).
     pub fn disable(&mut self) {
+        if self.state == AxisState::Enabled && self.config.holding_brake.is_some() {
+            // Engage the brake first; the bridge stays on, holding, until it holds.
+            self.engage_brake();
+            self.disable_pending = true;
+            self.q_hold = self.position;
+            return;
+        }
         if !matches!(self.state, AxisState::Faulted(_)) {
             self.state = AxisState::Disabled;
             self.current_reference = 0.0;
             self.current_loop.reset();
         }
+    }
+
+    /// True while the bridge drives the winding (enabled or stopping); false: open winding.
+    pub fn bridge_on(&self) -> bool {
+        matches!(self.state, AxisState::Enabled | AxisState::Stopping(_))
+    }
+
+    /// True when the holding brake is commanded engaged (always false without a brake).
+    pub fn brake_engaged(&self) -> bool {
+        self.brake_engaged
+    }
+
+    /// True when the brake is engaged and its engage delay has passed (it holds).
+    pub fn brake_holding(&self) -> bool {
+        self.brake_engaged && self.brake_timer <= 0.0
     }
 
     /// Acknowledges a fault after the stop: `Faulted` → `Disabled`. Returns whether it did.
@@ -496,10 +719,33 @@ impl Axis {
 
     /// Position reference for position mode: rad, rad/s, rad/s² at the output (NaN trips a fault).
     pub fn set_position(&mut self, q: f64, qd: f64, qdd: f64) {
-        if q.is_finite() && qd.is_finite() && qdd.is_finite() {
+        if !(q.is_finite() && qd.is_finite() && qdd.is_finite()) {
+            self.trip(Fault::InvalidReference);
+        } else if self.interpolating {
+            self.interpolator.push(q, qd, qdd);
+        } else {
             self.q_ref = q;
             self.qd_ref = qd;
             self.qdd_ref = qdd;
+        }
+    }
+
+    /// Joint-side torque feed-forward, N·m (N for a linear axis): the host's inverse dynamics,
+    /// turned into a current through the gear ratio and k_t and added after the speed PI in
+    /// velocity and position mode (the analogue of CiA 402 0x60B2); with cyclic setpoints it is
+    /// interpolated like them (it belongs to the setpoint that came with it). From the first call until the
+    /// next mode change it replaces the axis' own acceleration feed-forward (the host's inverse
+    /// dynamics holds the inertia torque, with the coupling the axis cannot know). NaN trips a fault.
+    pub fn set_torque_feedforward(&mut self, torque: f64) {
+        if torque.is_finite() {
+            if self.interpolating && self.mode == Mode::Position {
+                // Ramp from where the torque is now to the new value over one setpoint period,
+                // in step with the position segment.
+                self.torque_segment = [self.torque_feedforward, torque];
+            } else {
+                self.torque_feedforward = torque;
+            }
+            self.host_torque = true;
         } else {
             self.trip(Fault::InvalidReference);
         }
@@ -538,12 +784,12 @@ impl Axis {
         self.mode
     }
 
-    /// Measured output position, rad.
+    /// Estimated output position (tracking observer, sampled at the speed-loop rate), rad.
     pub fn position(&self) -> f64 {
         self.position
     }
 
-    /// Estimated output speed, rad/s (encoder difference over `speed_window` speed periods).
+    /// Estimated output speed (tracking observer, sampled at the speed-loop rate), rad/s.
     pub fn speed(&self) -> f64 {
         self.speed
     }
@@ -573,14 +819,24 @@ impl Axis {
         self.position_output.following_error
     }
 
-    /// Present current limit (peak, or continuous after the I²t budget is spent), A.
+    /// Present current limit (the peak current, derated with the winding temperature), A.
     pub fn current_limit(&self) -> f64 {
         self.current_loop.limit()
     }
 
-    /// Fraction of the I²t budget in use.
-    pub fn i2t_used(&self) -> f64 {
-        self.current_loop.i2t_used()
+    /// True while the thermal derating holds the current limit below the peak current.
+    pub fn thermal_limit_active(&self) -> bool {
+        self.current_loop.limit() < self.config.peak_current
+    }
+
+    /// Winding and housing temperatures, °C (for a planner: how much peak current is left).
+    pub fn thermal_state(&self) -> &ThermalState {
+        &self.thermal
+    }
+
+    /// Mutable thermal state (to start from a warm motor).
+    pub fn thermal_state_mut(&mut self) -> &mut ThermalState {
+        &mut self.thermal
     }
 }
 

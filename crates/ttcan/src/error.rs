@@ -35,6 +35,10 @@ pub enum Error {
     /// Several axes given to one stepper disagree (different loop rates, ...).
     #[error("stepper: {0}")]
     Stepper(String),
+    /// The robot model (`ttkin`) rejected something: a chain without inertias or drives, a bad
+    /// trajectory, a configuration it cannot reach.
+    #[error("robot model: {0}")]
+    Model(String),
 }
 
 /// Checks that `value` is finite and strictly positive.

@@ -12,16 +12,26 @@
 #![warn(missing_docs)]
 
 pub mod axis;
+pub mod axis_config;
+pub mod cases;
+pub mod coupled;
 pub mod error;
 pub mod loops;
 pub mod motor;
+pub mod observer;
+pub mod schedule;
+pub mod setpoint;
 pub mod sim;
+pub mod sizing;
 pub mod stepper;
+pub mod thermal;
 pub mod tuning;
 
-pub use axis::{Axis, AxisConfig, AxisState, Fault, Mode};
+pub use axis::{Axis, AxisConfig, AxisState, Fault, HoldingBrake, Mode, Reaction};
+pub use coupled::{CoupledOptions, CoupledSim, CoupledTrace, EnergyBalance};
 pub use error::{Error, Result};
 pub use motor::{DcMotor, Gearbox, Load, Measurement, MotorModel, Plant};
+pub use schedule::{Due, Rates, Scheduler};
 pub use sim::{Setpoint, Simulation, Trace};
-pub use stepper::{Due, Rates, Scheduler, Stepper};
+pub use stepper::Stepper;
 pub use tuning::{CascadeTuning, LoopReport, TuningTargets};

@@ -1,8 +1,8 @@
 //! The three nested loops of seed 000 §2.1 (its Figs 2–4), each one step at its own rate, allocation
 //! free, with all coefficients computed when the loop is built.
 //!
-//! - [`CurrentLoop`]: reference limited to the peak current and, through an I²t budget, to the
-//!   continuous current; PI against the measured current (anti-windup by conditional integration),
+//! - [`CurrentLoop`]: reference limited to the present current limit (peak, derated by the
+//!   axis' thermal model, [`crate::thermal`]); PI against the measured current (anti-windup by conditional integration),
 //!   optional back-EMF feedforward; output as a duty cycle, saturated to the bridge voltage.
 //! - [`SpeedLoop`]: reference limited and low-pass filtered; PI; output low-pass filtered (the seed's
 //!   two filters); gives the current reference. Feedforward enters after the reference filter.
@@ -108,78 +108,68 @@ impl Pi {
     }
 }
 
-/// Current loop: limit (peak, I²t → continuous) → PI (+ back-EMF feedforward) → duty cycle.
+/// Current loop: limit (set by the axis from the thermal model) → PI (+ back-EMF feedforward) →
+/// duty cycle.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CurrentLoop {
     pi: Pi,
-    period: f64,
     bus_voltage: f64,
     max_voltage: f64,
     emf_per_output_speed: f64,
     peak: f64,
-    continuous: f64,
-    i2t_budget: f64,
-    i2t: f64,
-    foldback: bool,
+    limit: f64,
     reference: f64,
     voltage: f64,
 }
 
 impl CurrentLoop {
     /// Builds the loop; `emf_per_output_speed` (V per output rad/s) is 0 to switch the back-EMF
-    /// feedforward off. `i2t_budget` (A²·s) is how much (i² − i_cont²) may be integrated before the
-    /// limit folds back from `peak` to `continuous`.
-    #[allow(clippy::too_many_arguments)]
-    pub fn new(
-        pi: Pi,
-        period: f64,
-        bus_voltage: f64,
-        max_voltage: f64,
-        emf_per_output_speed: f64,
-        peak: f64,
-        continuous: f64,
-        i2t_budget: f64,
-    ) -> Self {
+    /// feedforward off; the current limit starts at `peak` (A).
+    pub fn new(pi: Pi, bus_voltage: f64, max_voltage: f64, emf_per_output_speed: f64, peak: f64) -> Self {
         CurrentLoop {
             pi,
-            period,
             bus_voltage,
             max_voltage,
             emf_per_output_speed,
             peak,
-            continuous,
-            i2t_budget,
-            i2t: 0.0,
-            foldback: false,
+            limit: peak,
             reference: 0.0,
             voltage: 0.0,
         }
     }
 
-    /// Present current limit, A: the peak current, or the continuous current while folded back.
+    /// Sets the measured bus voltage (V, > 0): the duty is the commanded voltage divided by it, and
+    /// the usable voltage scales with it (max voltage × measured / nominal).
+    #[inline]
+    pub fn set_bus_voltage(&mut self, volts: f64) {
+        if volts > 0.0 && volts.is_finite() {
+            self.max_voltage *= volts / self.bus_voltage;
+            self.bus_voltage = volts;
+        }
+    }
+
+    /// Sets the current limit (A), at most the peak current (the thermal derating of the axis).
+    #[inline]
+    pub fn set_limit(&mut self, limit: f64) {
+        self.limit = if limit.is_finite() {
+            limit.clamp(0.0, self.peak)
+        } else {
+            0.0
+        };
+    }
+
+    /// Present current limit, A.
     #[inline]
     pub fn limit(&self) -> f64 {
-        if self.foldback {
-            self.continuous
-        } else {
-            self.peak
-        }
+        self.limit
     }
 
     /// One step: reference (A), measured current (A), estimated output speed (rad/s) → duty in [−1, 1].
     #[inline]
     pub fn step(&mut self, reference: f64, measured: f64, output_speed: f64) -> f64 {
-        let lim = self.limit();
+        let lim = self.limit;
         let r = reference.max(-lim).min(lim);
         self.reference = r;
-        // I²t: the winding heats with the square of the real current above the continuous rating.
-        self.i2t += (measured * measured - self.continuous * self.continuous) * self.period;
-        if self.i2t <= 0.0 {
-            self.i2t = 0.0;
-            self.foldback = false;
-        } else if self.i2t >= self.i2t_budget {
-            self.foldback = true;
-        }
         let ff = self.emf_per_output_speed * output_speed;
         let v = ff
             + self
@@ -189,7 +179,7 @@ impl CurrentLoop {
         v / self.bus_voltage
     }
 
-    /// Zeroes the integrator and the held values (the I²t budget keeps its heat).
+    /// Zeroes the integrator and the held values.
     pub fn reset(&mut self) {
         self.pi.reset(0.0);
         self.reference = 0.0;
@@ -204,15 +194,6 @@ impl CurrentLoop {
     /// Last commanded voltage, V.
     pub fn voltage(&self) -> f64 {
         self.voltage
-    }
-
-    /// Fraction of the I²t budget used, in [0, 1+].
-    pub fn i2t_used(&self) -> f64 {
-        if self.i2t_budget > 0.0 {
-            self.i2t / self.i2t_budget
-        } else {
-            0.0
-        }
     }
 
     /// The PI controller.

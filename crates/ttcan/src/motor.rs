@@ -22,10 +22,12 @@
 
 use crate::error::{in_range, non_negative, positive, Result};
 use nalgebra::{SMatrix, SVector};
+use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
 /// Brushed DC motor parameters, SI units, motor shaft.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct DcMotor {
     /// Terminal resistance, Ω.
     pub resistance: f64,
@@ -81,7 +83,8 @@ impl DcMotor {
 }
 
 /// Gearbox between the motor shaft and the joint (output), ω_motor = ratio · ω_output.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Gearbox {
     /// Reduction ratio N (motor turns per output turn), > 0; 1 for a direct drive.
     pub ratio: f64,
@@ -111,7 +114,8 @@ impl Gearbox {
 }
 
 /// Rigid load on the output shaft (a robot link about its joint axis).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Load {
     /// Load inertia about the output axis, kg·m².
     pub inertia: f64,
@@ -129,7 +133,8 @@ impl Load {
 }
 
 /// Everything the simulator and the controller need to know about one actuator.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct MotorModel {
     /// The motor.
     pub motor: DcMotor,
@@ -217,6 +222,9 @@ pub struct Measurement {
     pub current: f64,
     /// Encoder position, counts (motor shaft, after quadrature), any origin.
     pub encoder_counts: i64,
+    /// Measured DC-bus voltage, V; `None` when the drive does not measure it (the nominal bus
+    /// voltage is then assumed and the bus monitors are off).
+    pub bus_voltage: Option<f64>,
 }
 
 /// Simulated actuator: state plus the exact discretisation for one step of `dt` seconds.
@@ -232,6 +240,7 @@ pub struct Plant {
     external_torque: f64,
     encoder_offset: i64,
     current_offset: f64,
+    bus_voltage: f64,
     rng: SplitMix64,
 }
 
@@ -251,6 +260,7 @@ impl Plant {
             external_torque: 0.0,
             encoder_offset: 0,
             current_offset: 0.0,
+            bus_voltage: model.bus_voltage,
             rng: SplitMix64(0x5eed_0007),
         })
     }
@@ -340,17 +350,48 @@ impl Plant {
         Measurement {
             current: self.state[0] + noise + self.current_offset,
             encoder_counts: (counts as i64).saturating_add(self.encoder_offset),
+            bus_voltage: Some(self.bus_voltage),
         }
     }
 
-    /// Advances one step with the bridge duty `duty` (clamped to ±max_duty; NaN counts as 0).
+    /// Fault injection: the DC-bus voltage from now on, V (a sagging supply, regeneration).
+    pub fn set_bus_voltage(&mut self, volts: f64) {
+        if volts.is_finite() && volts >= 0.0 {
+            self.bus_voltage = volts;
+        }
+    }
+
+    /// Advances one step with the bridge switched off: an open winding. The free-wheeling diodes
+    /// apply −V_bus·sign(i) while current flows (or while the back-EMF exceeds the bus); when the
+    /// current reaches zero it stays there and the motor coasts.
+    pub fn step_open(&mut self) {
+        let i = self.state[0];
+        let emf = self.model.motor.back_emf_constant * self.state[1];
+        if i == 0.0 && emf.abs() <= self.bus_voltage {
+            // No current: the voltage across the open winding balances the back-EMF.
+            self.step_voltage(emf);
+            self.state[0] = 0.0;
+            return;
+        }
+        let dir = if i != 0.0 { i.signum() } else { -emf.signum() };
+        self.step_voltage(-dir * self.bus_voltage);
+        if self.state[0] * dir < 0.0 {
+            self.state[0] = 0.0;
+        }
+    }
+
+    /// Advances one step with the bridge duty `duty` (clamped to ±max_duty; NaN counts as 0),
+    /// applied to the present bus voltage.
     pub fn step(&mut self, duty: f64) {
         let d = if duty.is_finite() {
             duty.clamp(-self.model.max_duty, self.model.max_duty)
         } else {
             0.0
         };
-        let u = d * self.model.bus_voltage;
+        self.step_voltage(d * self.bus_voltage);
+    }
+
+    fn step_voltage(&mut self, u: f64) {
         let m = &self.model.motor;
         let n = self.model.gearbox.ratio;
         let eta = self.model.gearbox.efficiency;

@@ -4,7 +4,7 @@
 use crate::axis::{Axis, AxisConfig, AxisState, Mode};
 use crate::error::{Error, Result};
 use crate::motor::{MotorModel, Plant};
-use crate::stepper::Scheduler;
+use crate::schedule::Scheduler;
 
 /// Reference for one axis at one instant.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -69,6 +69,23 @@ impl Trace {
     }
 }
 
+/// 10 %–90 % rise time of `y` (sampled at times `t`, s) towards `target` (≠ 0): the time from the
+/// first sample at or beyond 10 % of the target to the first at or beyond 90 %, s; infinite if
+/// either is never reached. The one definition of rise time in ttmanip (Rust and Python).
+pub fn rise_time(t: &[f64], y: &[f64], target: f64) -> f64 {
+    let first = |level: f64| t.iter().zip(y).find(|(_, v)| **v / target >= level).map(|(t, _)| *t);
+    match (first(0.1), first(0.9)) {
+        (Some(a), Some(b)) => b - a,
+        _ => f64::INFINITY,
+    }
+}
+
+/// Largest excursion of `y` beyond `target` (≠ 0), as a fraction of `target` (0.05 = 5 %); NaN
+/// for an empty signal. The one definition of overshoot in ttmanip (Rust and Python).
+pub fn overshoot(y: &[f64], target: f64) -> f64 {
+    y.iter().map(|v| v / target).fold(f64::NAN, f64::max) - 1.0
+}
+
 /// One axis controlling one simulated actuator.
 #[derive(Debug, Clone)]
 pub struct Simulation {
@@ -99,6 +116,11 @@ impl Simulation {
         self.time
     }
 
+    /// Which loops run on the next [`Simulation::step`].
+    pub fn next_due(&self) -> crate::schedule::Due {
+        self.scheduler.peek()
+    }
+
     /// Enables the axis in `mode` (after one disabled tick so that the encoder origin is known).
     pub fn enable(&mut self, mode: Mode) -> bool {
         if self.scheduler.ticks() == 0 {
@@ -121,7 +143,11 @@ impl Simulation {
         let m = self.plant.measure();
         let due = self.scheduler.next_tick();
         let duty = self.axis.tick(m, due);
-        self.plant.step(duty);
+        if self.axis.bridge_on() {
+            self.plant.step(duty);
+        } else {
+            self.plant.step_open();
+        }
         self.time += self.plant.dt();
     }
 
@@ -132,7 +158,7 @@ impl Simulation {
         let mut trace = Trace::with_capacity(n);
         for _ in 0..n {
             self.apply(reference(self.time));
-            self.record(&mut trace);
+            self.record_into(&mut trace);
             self.step();
         }
         Ok(trace)
@@ -171,7 +197,7 @@ impl Simulation {
                 self.axis.set_position(q[k], qd[k], qdd[k]);
                 k += 1;
             }
-            self.record(&mut trace);
+            self.record_into(&mut trace);
             self.step();
         }
         Ok(trace)
@@ -188,7 +214,8 @@ impl Simulation {
         Ok((duration / self.plant.dt()).round() as usize)
     }
 
-    fn record(&self, t: &mut Trace) {
+    /// Appends the present signals to `t` (what [`Simulation::run`] records every period).
+    pub fn record_into(&self, t: &mut Trace) {
         let a = &self.axis;
         t.time.push(self.time);
         t.current.push(self.plant.current());

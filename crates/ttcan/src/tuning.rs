@@ -9,18 +9,28 @@
 //!   Kp = R (1 − e^{−ω_c T})/(1 − a) and Ki = Kp (1 − a)/T (→ L ω_c and R ω_c as T → 0).
 //! - Speed loop, **symmetric optimum** (Kessler). The plant seen by the speed PI is
 //!   K_acc/s · 1/(1 + T_σ s), where T_σ lumps the small lags: the closed current loop 1/ω_c,i, the
-//!   output filter T_f, the hold of the current reference T_s/2, the speed estimate by differencing
-//!   over w speed periods w·T_s/2 and the current loop's hold T_c/2. With a ≥ 2: Kp = 1/(a K_acc T_σ), T_i = a² T_σ,
+//!   output filter T_f, the hold of the current reference T_s/2, the speed estimate and the current
+//!   loop's hold T_c/2. The speed estimate is the tracking observer of [`crate::observer`]: with its
+//!   acceleration input the current-to-estimate path is k_acc/s exactly, so it adds only its own
+//!   period T_c; without it the PLL's low-frequency group delay 2/ω_o is added (ω_o its bandwidth).
+//!   With a ≥ 2: Kp = 1/(a K_acc T_σ), T_i = a² T_σ,
 //!   crossover 1/(a T_σ), phase margin atan((a² − 1)/(2a)) (36.9° for a = 2, 53.1° for a = 3).
 //!   The reference low-pass 1/(1 + a T_σ s) takes the edge off the PI zero's overshoot.
 //! - Position loop: P gain Kp = ω_c,speed / r (r = 4 by default), velocity and acceleration
 //!   feedforward make the tracking independent of this gain to first order.
+//!
+//! - Quantisation ripple: the encoder's resolution Δ (rad per count) is a white position error of
+//!   RMS Δ/√12 on every reading; through the observer it becomes a speed-estimate error of RMS
+//!   Δω ([`crate::observer::TrackingObserver::speed_noise_rms`]) and through the speed gain a
+//!   current-reference ripple Kp·Δω, reported as [`CascadeTuning::quantisation_ripple_rms`]. The
+//!   axis refuses a configuration whose ripple exceeds a stated share of the continuous current.
 //!
 //! The reported margins are evaluated on the full loop models (discrete current loop; speed and
 //! position loops with their filters and delays), by a logarithmic frequency sweep.
 
 use crate::error::{positive, Error, Result};
 use crate::motor::MotorModel;
+use crate::observer::TrackingObserver;
 use nalgebra::Complex;
 use std::f64::consts::PI;
 
@@ -52,10 +62,15 @@ pub struct CascadeTuning {
     pub t_sigma: f64,
     /// Default speed reference filter cut-off 1/(2π a T_σ), Hz.
     pub speed_reference_filter_hz: f64,
+    /// RMS of the speed estimate's error from encoder quantisation, output rad/s.
+    pub speed_noise_rms: f64,
+    /// RMS ripple that encoder quantisation puts on the current reference, Kp·Δω, A.
+    pub quantisation_ripple_rms: f64,
 }
 
 /// Targets for [`tune_cascade`].
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct TuningTargets {
     /// Current-loop closed-loop bandwidth, Hz (at most a sixth of the current-loop rate).
     pub current_bandwidth_hz: f64,
@@ -65,14 +80,18 @@ pub struct TuningTargets {
     pub speed_output_filter_hz: f64,
     /// Ratio of the speed-loop crossover to the position gain (≥ 2).
     pub position_ratio: f64,
-    /// Speed periods over which the speed is estimated by differencing encoder positions
-    /// (1..=`SPEED_WINDOW_MAX`): a longer window divides the quantisation noise of the estimate by
-    /// the window and adds half a window of delay to T_σ.
-    pub speed_window: u32,
+    /// Bandwidth of the tracking observer that estimates position and speed, Hz (at most a sixth
+    /// of the current-loop rate): higher follows unmodelled torques faster and lets more encoder
+    /// quantisation through.
+    pub observer_bandwidth_hz: f64,
+    /// Feed the measured current × k_acc to the observer as its acceleration input (default on:
+    /// a single axis with a matched model gets an estimate without lag, so the speed loop keeps
+    /// its gain and a 30 Hz observer suffices). It trusts the axis' own model of its
+    /// acceleration, which a joint inertially coupled to others does not have (their torques reach
+    /// it through M⁻¹'s off-diagonal terms): on gantry6 with it on, θ4 and θ5 limit-cycle against
+    /// each other at the current limit, so [`crate::coupled`] switches it off (PLL alone, 100 Hz).
+    pub observer_acceleration_input: bool,
 }
-
-/// Longest speed-estimate window, speed periods.
-pub const SPEED_WINDOW_MAX: usize = 16;
 
 impl Default for TuningTargets {
     fn default() -> Self {
@@ -81,7 +100,8 @@ impl Default for TuningTargets {
             speed_symmetric_optimum: 3.0,
             speed_output_filter_hz: 1000.0,
             position_ratio: 4.0,
-            speed_window: 4,
+            observer_bandwidth_hz: 30.0,
+            observer_acceleration_input: true,
         }
     }
 }
@@ -128,14 +148,16 @@ pub fn tune_cascade(model: &MotorModel, periods: [f64; 3], targets: &TuningTarge
             reason: "must be > 0 (infinite: no filter)".into(),
         });
     }
-    let window = targets.speed_window;
-    if window == 0 || window as usize > SPEED_WINDOW_MAX {
-        return Err(Error::InvalidParameter {
-            what: "speed window (speed periods)".into(),
-            value: window as f64,
-            reason: format!("must be between 1 and {SPEED_WINDOW_MAX}"),
-        });
-    }
+    let k_acc = model.acceleration_per_amp();
+    let observer = TrackingObserver::new(
+        targets.observer_bandwidth_hz,
+        tc,
+        if targets.observer_acceleration_input {
+            k_acc
+        } else {
+            0.0
+        },
+    )?;
     let r_pos = targets.position_ratio;
     crate::error::finite("position ratio", r_pos)?;
     if r_pos < 2.0 {
@@ -164,9 +186,13 @@ pub fn tune_cascade(model: &MotorModel, periods: [f64; 3], targets: &TuningTarge
     } else {
         1.0 / (2.0 * PI * f_out)
     };
-    let t_d = 0.5 * ts * (1.0 + window as f64) + 0.5 * tc;
+    let t_observer = if targets.observer_acceleration_input {
+        tc
+    } else {
+        tc + 2.0 / (2.0 * PI * targets.observer_bandwidth_hz)
+    };
+    let t_d = 0.5 * ts + t_observer + 0.5 * tc;
     let t_sigma = 1.0 / w_ci + t_f + t_d;
-    let k_acc = model.acceleration_per_amp();
     let kps = 1.0 / (a_so * k_acc * t_sigma);
     let ti = a_so * a_so * t_sigma;
     let kis = kps / ti;
@@ -190,6 +216,7 @@ pub fn tune_cascade(model: &MotorModel, periods: [f64; 3], targets: &TuningTarge
         kpp / s * closed_speed * Complex::from_polar(1.0, -w * 0.5 * tp)
     };
     let position_margins = margins(&position_open, 0.01, PI / tc);
+    let speed_noise_rms = observer.speed_noise_rms(model.radians_per_count() / 12f64.sqrt());
 
     Ok(CascadeTuning {
         current: current_margins.report(kpc, kic),
@@ -197,6 +224,8 @@ pub fn tune_cascade(model: &MotorModel, periods: [f64; 3], targets: &TuningTarge
         position: position_margins.report(kpp, 0.0),
         t_sigma,
         speed_reference_filter_hz: 1.0 / (2.0 * PI * t_r),
+        speed_noise_rms,
+        quantisation_ripple_rms: kps * speed_noise_rms,
     })
 }
 

@@ -80,8 +80,14 @@ fn unreachable_tuning_targets_are_rejected() {
         &axis_error(|c| c.tuning.speed_output_filter_hz = 0.0),
         "speed output filter",
     );
-    assert_names(&axis_error(|c| c.tuning.speed_window = 0), "speed window");
-    assert_names(&axis_error(|c| c.tuning.speed_window = 17), "speed window");
+    assert_names(
+        &axis_error(|c| c.tuning.observer_bandwidth_hz = 0.0),
+        "observer bandwidth",
+    );
+    assert_names(
+        &axis_error(|c| c.tuning.observer_bandwidth_hz = 5000.0),
+        "observer bandwidth",
+    );
 }
 
 #[test]
@@ -132,4 +138,57 @@ fn bad_trajectories_are_rejected_before_anything_runs() {
     assert!(s.run(f64::NAN, |_| ttcan::Setpoint::Current(0.0)).is_err());
     assert!(s.run(-1.0, |_| ttcan::Setpoint::Current(0.0)).is_err());
     assert_eq!(s.time(), t, "nothing ran");
+}
+
+#[test]
+fn issue_10_bad_configurations_are_rejected_when_the_axis_is_built() {
+    // Non-positive inductance, an encoder with zero counts, brake delays longer than the stop
+    // time, thermal constants missing (see also tests/thermal.rs), bad monitors.
+    assert_names(&axis_error(|c| c.model.motor.inductance = -1e-4), "motor inductance");
+    assert_names(&axis_error(|c| c.model.encoder_counts_per_rev = 0), "encoder counts");
+    let long = ttcan::HoldingBrake {
+        release_delay: 0.01,
+        engage_delay: 5.0,
+    };
+    assert_names(&axis_error(|c| c.holding_brake = Some(long)), "brake engage delay");
+    let long = ttcan::HoldingBrake {
+        release_delay: 5.0,
+        engage_delay: 0.01,
+    };
+    assert_names(&axis_error(|c| c.holding_brake = Some(long)), "brake release delay");
+    assert_names(
+        &axis_error(|c| c.thermal.winding_time_constant = 0.0),
+        "thermal time constant winding",
+    );
+    assert_names(&axis_error(|c| c.overspeed_limit = 10.0), "overspeed limit");
+    assert_names(&axis_error(|c| c.bus_overvoltage = 20.0), "bus over-voltage");
+    assert_names(&axis_error(|c| c.position_limits = Some((1.0, -1.0))), "position limit");
+    assert_names(&axis_error(|c| c.setpoint_period = Some(0.0)), "setpoint period");
+    assert_names(
+        &axis_error(|c| c.tuning.observer_bandwidth_hz = 1000.0),
+        "observer bandwidth",
+    );
+}
+
+#[test]
+fn the_axis_configuration_is_serde_described_and_round_trips_through_toml() {
+    let mut c = AxisConfig::new(model());
+    c.setpoint_period = Some(4e-3);
+    c.holding_brake = Some(ttcan::HoldingBrake {
+        release_delay: 0.02,
+        engage_delay: 0.03,
+    });
+    c.position_limits = Some((-1.0, 2.0));
+    let text = toml::to_string(&c).unwrap();
+    let back: AxisConfig = toml::from_str(&text).unwrap();
+    assert_eq!(back, c);
+    assert!(Axis::new(&back).is_ok());
+    // Rates are checked when read; unknown keys are refused.
+    let bad = text.replace("speed_hz = 5000.0", "speed_hz = 3000.0");
+    assert!(toml::from_str::<AxisConfig>(&bad)
+        .unwrap_err()
+        .to_string()
+        .contains("not an integer"));
+    let bad = text.replace("[model.motor]", "[model.motor]\nresistence = 1.0");
+    assert!(toml::from_str::<AxisConfig>(&bad).is_err());
 }

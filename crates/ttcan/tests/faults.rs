@@ -1,17 +1,21 @@
-//! Each fault trips the axis and brings it to a controlled stop (issue 7 acceptance): over-current,
-//! following error, encoder jump, NaN reference, NaN measurement.
+//! Faults whose reaction is a controlled stop (issue 7, kept for issue 10): following error and
+//! NaN references. The bridge-off faults and the monitors of issue 10 are in `reactions.rs`.
 
 mod common;
 use common::*;
 use ttcan::{AxisState, Fault, Mode, Setpoint, Simulation};
 
-/// Runs at 15 rad/s for 50 ms in velocity mode.
+/// Runs at 15 rad/s for 200 ms in velocity mode.
 fn running() -> Simulation {
     let mut s = sim();
     assert!(s.enable(Mode::Velocity));
-    s.run(0.05, |_| Setpoint::Velocity(15.0)).unwrap();
+    s.run(0.2, |_| Setpoint::Velocity(15.0)).unwrap();
     assert_eq!(s.axis.state(), AxisState::Enabled);
-    assert!((s.plant.output_speed() - 15.0).abs() < 0.5);
+    assert!(
+        (s.plant.output_speed() - 15.0).abs() < 0.5,
+        "speed {}",
+        s.plant.output_speed()
+    );
     s
 }
 
@@ -56,20 +60,6 @@ fn assert_at_rest(s: &mut Simulation, fault: Fault) {
 }
 
 #[test]
-fn over_current_trips_and_stops_the_axis() {
-    let mut s = running();
-    // One sample of a shorted winding as the current sense sees it.
-    s.plant.set_current_sense_offset(8.0);
-    s.step();
-    s.plant.set_current_sense_offset(0.0);
-    assert_eq!(s.axis.state(), AxisState::Stopping(Fault::OverCurrent));
-    let t = run_until_stopped(&mut s, Fault::OverCurrent);
-    // 15 rad/s at 200 rad/s² is 75 ms, plus the settling of the speed estimate.
-    assert!(t > 0.05 && t < 0.2, "stop took {t} s");
-    assert_at_rest(&mut s, Fault::OverCurrent);
-}
-
-#[test]
 fn following_error_trips_and_stops_the_axis() {
     let mut s = sim();
     assert!(s.enable(Mode::Position));
@@ -90,19 +80,6 @@ fn following_error_trips_and_stops_the_axis() {
 }
 
 #[test]
-fn encoder_jump_trips_and_stops_the_axis() {
-    let mut s = running();
-    let before = s.axis.position();
-    s.plant.inject_encoder_jump(5000);
-    s.step();
-    assert_eq!(s.axis.state(), AxisState::Stopping(Fault::EncoderJump));
-    // The jump is not taken for motion: the position stays continuous.
-    assert!((s.axis.position() - before).abs() < 0.01);
-    run_until_stopped(&mut s, Fault::EncoderJump);
-    assert_at_rest(&mut s, Fault::EncoderJump);
-}
-
-#[test]
 fn nan_references_trip_and_stop_the_axis() {
     for bad in [
         Setpoint::Velocity(f64::NAN),
@@ -115,21 +92,6 @@ fn nan_references_trip_and_stop_the_axis() {
         run_until_stopped(&mut s, Fault::InvalidReference);
         assert_at_rest(&mut s, Fault::InvalidReference);
     }
-}
-
-#[test]
-fn nan_current_reading_switches_the_bridge_off_at_once() {
-    let mut s = running();
-    let m = ttcan::Measurement {
-        current: f64::NAN,
-        encoder_counts: s.plant.measure().encoder_counts,
-    };
-    let duty = s.axis.tick(m, ttcan::Due::default());
-    assert_eq!(duty, 0.0);
-    assert_eq!(s.axis.state(), AxisState::Faulted(Fault::InvalidMeasurement));
-    // The shorted winding brakes the motor to rest.
-    s.run(0.5, |_| Setpoint::Velocity(15.0)).unwrap();
-    assert!(s.plant.output_speed().abs() < 0.5);
 }
 
 #[test]

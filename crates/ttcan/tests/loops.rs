@@ -122,28 +122,41 @@ fn anti_windup_keeps_a_saturating_speed_step_from_overshooting() {
 }
 
 #[test]
-fn i2t_budget_folds_the_current_limit_back_to_the_continuous_rating() {
-    // A plant with a huge load inertia barely turns, so the current can be held at 3 A.
+fn a_warm_winding_derates_the_current_limit_gradually_and_says_so() {
+    // A plant with a huge load inertia barely turns, so the current can be held at 3 A. The motor
+    // starts warm (112 °C winding, 60 °C housing): inside the 20 K derating band below 125 °C.
     let mut plant_model = model();
     plant_model.load.inertia = 1.0e4;
     let mut s = ttcan::Simulation::new(&plant_model, &ttcan::AxisConfig::new(model())).unwrap();
+    s.axis.thermal_state_mut().set_temperatures(112.0, 60.0);
     assert!(s.enable(Mode::Current));
     let t0 = s.time();
-    let tr = s.run(2.5, |_| Setpoint::Current(3.0)).unwrap();
-    // Budget (3.6² − 1.2²)·1 s spent at (3² − 1.2²) A²: after 11.52 / 7.56 = 1.52 s.
-    let early = mean_between(&tr.time, &tr.current, t0 + 1.0, t0 + 1.4);
-    let late = mean_between(&tr.time, &tr.current, t0 + 1.7, t0 + 2.5);
-    let fold = tr
-        .time
-        .iter()
-        .zip(&tr.current_reference)
-        .find(|(t, i)| **t > t0 + 0.1 && **i < 2.0)
-        .map(|(t, _)| t - t0);
-    println!("3 A held: {early:.3} A before, {late:.3} A after fold-back at {fold:?} s");
-    assert!((early - 3.0).abs() < 0.01);
-    assert!((late - 1.2).abs() < 0.01);
-    let fold = fold.expect("the limit must fold back");
-    assert!((fold - 1.524).abs() < 0.01, "fold-back at {fold} s");
+    let tr = s.run(3.0, |_| Setpoint::Current(3.0)).unwrap();
+    let limits: Vec<f64> = tr.current_reference.clone();
+    let early = mean_between(&tr.time, &tr.current, t0 + 0.05, t0 + 0.1);
+    let late = mean_between(&tr.time, &tr.current, t0 + 2.9, t0 + 3.0);
+    println!(
+        "3 A asked from a warm motor: {early:.3} A at first, {late:.3} A after 3 s, winding {:.1} °C",
+        s.axis.thermal_state().winding_temperature()
+    );
+    // Gradual: the delivered current falls without a step larger than 1 mA per period.
+    let steps = limits
+        .windows(2)
+        .skip(200)
+        .map(|w| (w[1] - w[0]).abs())
+        .fold(0.0, f64::max);
+    assert!(steps < 1e-3, "largest step of the limited reference {steps} A");
+    assert!(early > 2.5 && early <= 3.0 + 1e-3, "{early}");
+    assert!(
+        late < early - 0.2,
+        "the limit must come down as the winding heats: {late}"
+    );
+    assert!(
+        late >= 1.2 - 1e-3,
+        "not below the continuous rating inside the band: {late}"
+    );
+    assert!(s.axis.thermal_limit_active());
+    assert!(s.axis.current_limit() < s.axis.config().peak_current);
 }
 
 /// Current loop on a 6 V bus with the rotor held: 3.6 A needs 8.4 V, so the voltage saturates for
@@ -157,6 +170,9 @@ fn current_recovery(anti_windup: bool) -> (f64, f64) {
     let mut c = ttcan::AxisConfig::new(m);
     c.anti_windup = anti_windup;
     c.max_speed = 2.0;
+    // The plant's rotor is held (inertia 10⁴ against the controller's 10⁻³): the observer's
+    // acceleration input would trust the controller's model; this test is about the current PI.
+    c.tuning.observer_acceleration_input = false;
     let mut s = ttcan::Simulation::new(&plant, &c).unwrap();
     assert!(s.enable(Mode::Current));
     let t0 = s.time();

@@ -5,8 +5,10 @@
 use pyo3::prelude::*;
 
 mod convert;
+mod drives;
 mod dynamics;
 mod errors;
+mod hit;
 mod ik;
 mod mobile;
 mod motor;
@@ -26,5 +28,7 @@ fn _ttmanip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     ik::register(m)?;
     traj::register(m)?;
     ball::register(m)?;
+    hit::register(m)?;
+    drives::register(m)?;
     Ok(())
 }

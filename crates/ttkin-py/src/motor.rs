@@ -42,7 +42,7 @@ const MODEL_KEYS: [&str; 16] = [
     "current_noise",
 ];
 
-const LOOP_KEYS: [&str; 21] = [
+const LOOP_KEYS: [&str; 20] = [
     "current_hz",
     "speed_hz",
     "position_hz",
@@ -50,11 +50,10 @@ const LOOP_KEYS: [&str; 21] = [
     "speed_symmetric_optimum",
     "speed_output_filter_hz",
     "position_ratio",
-    "speed_window",
+    "observer_bandwidth_hz",
     "speed_reference_filter_hz",
     "continuous_current",
     "peak_current",
-    "peak_duration",
     "overcurrent_trip",
     "max_speed",
     "following_error_limit",
@@ -96,11 +95,10 @@ fn config_dict<'py>(py: Python<'py>, c: &AxisConfig) -> PyResult<Bound<'py, PyDi
     d.set_item("speed_symmetric_optimum", c.tuning.speed_symmetric_optimum)?;
     d.set_item("speed_output_filter_hz", c.tuning.speed_output_filter_hz)?;
     d.set_item("position_ratio", c.tuning.position_ratio)?;
-    d.set_item("speed_window", c.tuning.speed_window)?;
+    d.set_item("observer_bandwidth_hz", c.tuning.observer_bandwidth_hz)?;
     d.set_item("speed_reference_filter_hz", c.speed_reference_filter_hz)?;
     d.set_item("continuous_current", c.continuous_current)?;
     d.set_item("peak_current", c.peak_current)?;
-    d.set_item("peak_duration", c.peak_duration)?;
     d.set_item("overcurrent_trip", c.overcurrent_trip)?;
     d.set_item("max_speed", c.max_speed)?;
     d.set_item("following_error_limit", c.following_error_limit)?;
@@ -178,11 +176,7 @@ fn apply_config(d: &Bound<'_, PyDict>, c: &mut AxisConfig) -> PyResult<()> {
     float(d, "speed_symmetric_optimum", &mut c.tuning.speed_symmetric_optimum)?;
     float(d, "speed_output_filter_hz", &mut c.tuning.speed_output_filter_hz)?;
     float(d, "position_ratio", &mut c.tuning.position_ratio)?;
-    if let Some(v) = d.get_item("speed_window")? {
-        c.tuning.speed_window = v
-            .extract::<u32>()
-            .map_err(|_| ModelError::new_err("speed_window: expected a positive integer (speed periods)"))?;
-    }
+    float(d, "observer_bandwidth_hz", &mut c.tuning.observer_bandwidth_hz)?;
     if let Some(v) = d.get_item("speed_reference_filter_hz")? {
         c.speed_reference_filter_hz = v
             .extract::<Option<f64>>()
@@ -190,7 +184,6 @@ fn apply_config(d: &Bound<'_, PyDict>, c: &mut AxisConfig) -> PyResult<()> {
     }
     float(d, "continuous_current", &mut c.continuous_current)?;
     float(d, "peak_current", &mut c.peak_current)?;
-    float(d, "peak_duration", &mut c.peak_duration)?;
     float(d, "overcurrent_trip", &mut c.overcurrent_trip)?;
     float(d, "max_speed", &mut c.max_speed)?;
     float(d, "following_error_limit", &mut c.following_error_limit)?;

@@ -68,7 +68,7 @@ fn joint_types(types: Option<&Bound<'_, PyAny>>, n: usize) -> PyResult<Vec<Joint
         return Ok(vec![JointType::Revolute; n]);
     };
     let items: Vec<String> = if let Ok(s) = types.cast::<PyString>() {
-        s.to_str()?.chars().map(String::from).collect()
+        s.to_cow()?.chars().map(String::from).collect()
     } else {
         types.extract().map_err(|_| {
             TtmanipError::new_err("types: expected a string such as 'PRRRRR' or a list of 'revolute'/'prismatic'")

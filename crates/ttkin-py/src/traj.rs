@@ -79,7 +79,7 @@ fn robot_limits(robot: &PyRobot, jerk: Option<&Bound<'_, PyAny>>) -> PyResult<Ki
 /// A joint-space trajectory: piecewise polynomials of degree ≤ 5 per joint (rad or m, s).
 #[pyclass(name = "JointTrajectory", module = "ttmanip", frozen)]
 pub struct PyJointTrajectory {
-    inner: JointTrajectory,
+    pub(crate) inner: JointTrajectory,
 }
 
 #[pymethods]

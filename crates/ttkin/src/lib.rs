@@ -15,6 +15,7 @@ pub mod description;
 pub mod diffdrive;
 pub mod dynamics;
 pub mod error;
+pub mod hit;
 pub mod ik;
 pub mod inertial;
 pub mod joint;

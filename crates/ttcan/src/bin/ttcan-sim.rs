@@ -42,38 +42,27 @@ fn main() -> Result<(), ttcan::Error> {
 }
 
 fn quintic(s: &mut Simulation, h: f64, tf: f64) -> Result<Trace, ttcan::Error> {
+    // The rest-to-rest quintic of ttkin's trajectory module (the one quintic of ttmanip).
+    let c = ttkin::traj::poly::quintic(0.0, 0.0, 0.0, h, 0.0, 0.0, tf);
     let dt = 1.0 / s.axis.rates().position_hz();
     let n = (1.5 * tf / dt) as usize;
     let (mut q, mut qd, mut qdd) = (vec![], vec![], vec![]);
     for k in 0..n {
-        let tau = (k as f64 * dt / tf).min(1.0);
-        q.push(h * tau.powi(3) * (10.0 - 15.0 * tau + 6.0 * tau * tau));
-        qd.push(h / tf * 30.0 * tau * tau * (1.0 - tau).powi(2));
-        qdd.push(h / (tf * tf) * 60.0 * tau * (1.0 - tau) * (1.0 - 2.0 * tau));
+        let [a, b, d] = ttkin::traj::poly::eval3(&c, (k as f64 * dt).min(tf));
+        q.push(a);
+        qd.push(if k as f64 * dt >= tf { 0.0 } else { b });
+        qdd.push(if k as f64 * dt >= tf { 0.0 } else { d });
     }
     s.run_position(&q, &qd, &qdd)
 }
 
 fn summary(name: &str, t: &[f64], y: &[f64], target: f64) {
-    let t10 = t
-        .iter()
-        .zip(y)
-        .find(|(_, v)| **v >= 0.1 * target)
-        .map(|(t, _)| *t)
-        .unwrap_or(f64::NAN);
-    let t90 = t
-        .iter()
-        .zip(y)
-        .find(|(_, v)| **v >= 0.9 * target)
-        .map(|(t, _)| *t)
-        .unwrap_or(f64::NAN);
-    let peak = y.iter().cloned().fold(f64::MIN, f64::max);
     let tail = &y[y.len() * 4 / 5..];
     let mean = tail.iter().sum::<f64>() / tail.len() as f64;
     println!(
         "{name}: rise (10-90 %) {:.3} ms, overshoot {:.2} %, final mean {:.5}",
-        (t90 - t10) * 1e3,
-        (peak / target - 1.0) * 100.0,
+        ttcan::sim::rise_time(t, y, target) * 1e3,
+        ttcan::sim::overshoot(y, target) * 100.0,
         mean
     );
 }

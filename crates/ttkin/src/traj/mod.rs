@@ -12,6 +12,7 @@
 //! s², s³. Time runs from 0 to [`JointTrajectory::duration`].
 
 pub mod cartesian;
+pub mod jerk;
 pub mod limits;
 pub mod poly;
 pub mod stroke;
@@ -310,7 +311,7 @@ impl JointTrajectory {
     }
 
     #[inline]
-    fn sample_unchecked(&self, t: f64, q: &mut [f64], qd: &mut [f64], qdd: &mut [f64]) {
+    pub(crate) fn sample_unchecked(&self, t: f64, q: &mut [f64], qd: &mut [f64], qdd: &mut [f64]) {
         let (k, tau) = self.locate(t);
         let n = self.dof;
         let rows = self.rows(k);

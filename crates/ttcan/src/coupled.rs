@@ -1,0 +1,794 @@
+//! All axes of a robot together: N [`Axis`] cascades, each on its own motor winding, driving the
+//! robot's shared rigid-body mechanics from `ttkin`.
+//!
+//! Per current-loop period T (one tick):
+//!
+//! ```text
+//! drive k:   i_k⁺ = a_k i_k + (1 − a_k)(u_k − K_e,k G_k q̇_k)/R_k,  a_k = e^{−R_k T/L_k}   (u_k = d_k V_bus)
+//! joints:    q̈ = M(q)⁻¹ (τ − h(q, q̇) − τ_f(q̇)),   τ_k = G_k K_t,k ī_k
+//! integrate: q̇ ← q̇ + T q̈,  q ← q + T q̇           (semi-implicit Euler)
+//! ```
+//!
+//! The winding is integrated exactly for the duty held over the period and the back-EMF of the
+//! speed at its start (L/R = 0.1 ms is of the order of T, an explicit step would be wrong); ī is
+//! the period's mean current of that exact solution. M(q) (with the drives' armature G²J_rotor on
+//! its diagonal, counted there and only there: the axis controllers are given the link inertia
+//! M_kk − G_k²J_k as their load and the rotor inertia as their motor's) and h(q, q̇) (Coriolis,
+//! centrifugal, gravity) come from [`ttkin::Dynamics`] and are refreshed every `refresh_ticks`
+//! periods (default: every speed-loop period, 5 kHz): the robot's configuration moves by at most
+//! q̇_max·4T ≈ 2 mrad between refreshes at 10 rad/s, which changes M and h by parts in 10³ of
+//! what the drives' torques change in one period; the Cholesky factor of M is kept between
+//! refreshes, so a tick costs one triangular solve.
+//!
+//! Friction is the drives' joint-side b q̇ + f_c sign(q̇), the Coulomb part saturated linearly
+//! below the speed f_c T / M_kk it removes in one period (it stops a joint rather than reversing
+//! it: no chatter at rest).
+//!
+//! Bridge off (axis disabled or faulted) is an open winding: the free-wheeling diodes apply
+//! −V_bus·sign(i) until the current reaches zero, then no current flows while |K_e ω_m| < V_bus
+//! (the joint coasts; a gravity-loaded joint falls).
+//!
+//! Energy: every tick adds the electrical input Σ u ī T, the copper loss Σ R ī² T (mean-square of
+//! the exact exponential solution) and the friction work Σ τ_f q̇ T; with the kinetic and
+//! potential energies of [`ttkin::Dynamics`] and the magnetic ½ L i², input = copper + friction +
+//! Δ(kinetic + potential + magnetic) closes to the integration error.
+
+use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
+use ttkin::{Chain, Dynamics, DynamicsData, JointType};
+
+use crate::axis::{Axis, AxisConfig, Mode};
+use crate::error::{Error, Result};
+use crate::motor::{DcMotor, Gearbox, Load, Measurement, MotorModel};
+use crate::schedule::Scheduler;
+
+/// The electrical side of one joint's actuator, as simulated.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Winding {
+    resistance: f64,
+    inductance: f64,
+    torque_constant: f64,
+    back_emf_constant: f64,
+    gear: f64,
+    bus_voltage: f64,
+    counts_per_rev: f64,
+    current_noise: f64,
+    decay: f64,
+}
+
+/// Options of a [`CoupledSim`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CoupledOptions {
+    /// Gravity in the base frame, m/s² (zero to switch it off).
+    pub gravity: [f64; 3],
+    /// Ideal current loops: the winding current equals the current reference every period.
+    pub ideal_current: bool,
+    /// Periods between refreshes of M(q), its factor and h(q, q̇) (≥ 1).
+    pub refresh_ticks: u32,
+    /// Seed of the current-sense noise.
+    pub seed: u64,
+    /// Cyclic setpoint period given to the axes [`CoupledSim::from_chain`] builds, s (`None`:
+    /// setpoints used as they come).
+    pub setpoint_period: Option<f64>,
+    /// Scale of the current-sense noise of those axes (1: the configured 5 mA; 0: none).
+    pub noise_scale: f64,
+}
+
+impl Default for CoupledOptions {
+    fn default() -> Self {
+        CoupledOptions {
+            gravity: ttkin::dynamics::EARTH_GRAVITY,
+            ideal_current: false,
+            refresh_ticks: 4,
+            seed: 0,
+            setpoint_period: Some(1e-3),
+            noise_scale: 1.0,
+        }
+    }
+}
+
+/// Energy flows accumulated since the last [`CoupledSim::reset`], J.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct EnergyBalance {
+    /// Electrical energy delivered by the bridges, Σ∫u i dt.
+    pub electrical_input: f64,
+    /// Heat in the windings, Σ∫R i² dt.
+    pub copper_loss: f64,
+    /// Work done against joint friction, Σ∫τ_f q̇ dt.
+    pub friction_loss: f64,
+}
+
+/// N axes on one rigid-body robot, stepped one current-loop period at a time.
+#[derive(Debug, Clone)]
+pub struct CoupledSim {
+    dynamics: Dynamics,
+    data: DynamicsData,
+    axes: Vec<Axis>,
+    windings: Vec<Winding>,
+    coulomb: Vec<f64>,
+    viscous: Vec<f64>,
+    scheduler: Scheduler,
+    options: CoupledOptions,
+    period: f64,
+    time: f64,
+    ticks: u64,
+    q: Vec<f64>,
+    qd: Vec<f64>,
+    current: Vec<f64>,
+    torque: Vec<f64>,
+    h: DVector<f64>,
+    diag: Vec<f64>,
+    chol: Option<Cholesky<f64, Dyn>>,
+    rhs: DVector<f64>,
+    energy: EnergyBalance,
+    rng: u64,
+    spare_normal: Option<f64>,
+}
+
+fn model_error(e: ttkin::Error) -> Error {
+    Error::Model(e.to_string())
+}
+
+/// Axis configuration for a joint from its drive section, until robot files carry full motor
+/// data: a motor of the RE 25's class scaled to the drive's torque constant s = k_t/k_t,RE25 (R,
+/// L ∝ s, between a rewound frame, ∝ s², and a larger frame of the same winding), peak current
+/// the joint's effort limit through gear and k_t (3.6 A/s without one), continuous a third of the
+/// peak, over-current trip 5/3 of it, the drive's gear ratio (efficiency 1:
+/// the losses are the drive's friction), rotor inertia and `link_inertia` as the load, a 4096-count
+/// encoder, the tracking observer without acceleration input at 100 Hz (the joints are coupled),
+/// and the smallest of the 24 V, 48 V and 325 V (rectified 230 V AC) buses whose 80 %
+/// covers the back-EMF at `speed_limit` (joint rad/s or m/s).
+pub fn axis_config_from_drive(
+    drive: &ttkin::Drive,
+    link_inertia: f64,
+    speed_limit: f64,
+    effort_limit: Option<f64>,
+) -> AxisConfig {
+    let re25 = DcMotor::maxon_re25();
+    let kt = drive.torque_constant.unwrap_or(re25.torque_constant);
+    let s = kt / re25.torque_constant;
+    let emf = kt * drive.gear_ratio * speed_limit.abs();
+    let bus_voltage = [24.0, 48.0, 325.0]
+        .into_iter()
+        .find(|v| emf <= 0.8 * 0.95 * v)
+        .unwrap_or(325.0);
+    let model = MotorModel {
+        motor: DcMotor {
+            resistance: re25.resistance * s,
+            inductance: re25.inductance * s,
+            torque_constant: kt,
+            back_emf_constant: kt,
+            rotor_inertia: drive.rotor_inertia.max(1e-9),
+            viscous_friction: 0.0,
+            coulomb_friction: 0.0,
+        },
+        gearbox: Gearbox {
+            ratio: drive.gear_ratio,
+            efficiency: 1.0,
+            inertia: 0.0,
+        },
+        load: Load {
+            inertia: link_inertia.max(0.0),
+            viscous_friction: drive.viscous,
+        },
+        bus_voltage,
+        max_duty: 0.95,
+        encoder_counts_per_rev: 4096,
+        current_noise: 0.005,
+    };
+    let mut c = AxisConfig::new(model);
+    c.peak_current = effort_limit.map_or(3.6 / s, |e| e.abs() / (drive.gear_ratio * kt));
+    c.continuous_current = c.peak_current / 3.0;
+    c.overcurrent_trip = c.peak_current * 5.0 / 3.0;
+    c.max_speed = 0.9 * (model.max_voltage() - model.motor.resistance * c.continuous_current) / (kt * drive.gear_ratio);
+    c.following_error_limit = 0.01;
+    c.following_error_per_speed = 0.005;
+    c.overspeed_limit = 1.2 * c.max_speed;
+    c.bus_overvoltage = 1.25 * bus_voltage;
+    c.bus_undervoltage = 0.7 * bus_voltage;
+    // Coupled joints: the observer must not trust the axis' own acceleration model (see
+    // `TuningTargets::observer_acceleration_input`): PLL alone, 100 Hz.
+    c.tuning.observer_acceleration_input = false;
+    c.tuning.observer_bandwidth_hz = 100.0;
+    c
+}
+
+/// One [`axis_config_from_drive`] per joint of `chain`, each joint's link inertia at `q0` as its
+/// load, with the setpoint period and noise scale of `options`.
+pub fn axis_configs_from_chain(chain: &Chain, q0: &[f64], options: &CoupledOptions) -> Result<Vec<AxisConfig>> {
+    let dynamics = Dynamics::new(chain).map_err(model_error)?;
+    let mut data = DynamicsData::new(&dynamics);
+    let m = dynamics.mass_matrix(&mut data, q0).map_err(model_error)?;
+    crate::error::non_negative("noise scale", options.noise_scale)?;
+    let mut configs = Vec::with_capacity(dynamics.dof());
+    for (k, j) in chain.joints().iter().enumerate() {
+        let drive = j
+            .drive()
+            .ok_or_else(|| Error::Model(format!("joint '{}' has no drive", j.name())))?;
+        let v = j.limits().velocity.unwrap_or(10.0);
+        let mut c = axis_config_from_drive(drive, m[(k, k)] - dynamics.armature()[k], v, j.limits().effort);
+        c.setpoint_period = options.setpoint_period;
+        c.model.current_noise *= options.noise_scale;
+        configs.push(c);
+    }
+    Ok(configs)
+}
+
+impl CoupledSim {
+    /// One axis per joint of `chain` (which needs inertias and drives), axis `k` built from
+    /// `configs[k]`, all on the loop rates of `configs[0]`, at rest at q = 0.
+    pub fn new(chain: &Chain, configs: &[AxisConfig], options: CoupledOptions) -> Result<Self> {
+        let dynamics = Dynamics::new(chain).map_err(model_error)?;
+        let n = dynamics.dof();
+        if configs.len() != n {
+            return Err(Error::Stepper(format!(
+                "{} axis configurations for {n} joints",
+                configs.len()
+            )));
+        }
+        if options.refresh_ticks == 0 {
+            return Err(Error::InvalidParameter {
+                what: "refresh ticks".into(),
+                value: 0.0,
+                reason: "must be >= 1".into(),
+            });
+        }
+        crate::error::finite("gravity", options.gravity.iter().map(|g| g.abs()).sum())?;
+        let rates = configs[0].rates;
+        let mut axes = Vec::with_capacity(n);
+        let mut windings = Vec::with_capacity(n);
+        let (mut coulomb, mut viscous) = (vec![0.0; n], vec![0.0; n]);
+        let period = rates.periods()[0];
+        for (k, (c, j)) in configs.iter().zip(chain.joints()).enumerate() {
+            if c.rates != rates {
+                return Err(Error::Stepper(format!("axis {k} has loop rates different from axis 0")));
+            }
+            let drive = j
+                .drive()
+                .ok_or_else(|| Error::Model(format!("joint '{}' has no drive", j.name())))?;
+            axes.push(Axis::new(c)?);
+            let m = &c.model.motor;
+            if (c.model.gearbox.ratio - drive.gear_ratio).abs() > 1e-9 * drive.gear_ratio {
+                return Err(Error::InvalidParameter {
+                    what: format!("axis {k} gear ratio"),
+                    value: c.model.gearbox.ratio,
+                    reason: format!("must equal the robot file's drive gear ratio {}", drive.gear_ratio),
+                });
+            }
+            windings.push(Winding {
+                resistance: m.resistance,
+                inductance: m.inductance,
+                torque_constant: m.torque_constant,
+                back_emf_constant: m.back_emf_constant,
+                gear: drive.gear_ratio,
+                bus_voltage: c.model.bus_voltage,
+                counts_per_rev: c.model.encoder_counts_per_rev as f64,
+                current_noise: c.model.current_noise,
+                decay: (-m.resistance * period / m.inductance).exp(),
+            });
+            coulomb[k] = drive.coulomb;
+            viscous[k] = drive.viscous;
+        }
+        let data = DynamicsData::new(&dynamics);
+        let mut sim = CoupledSim {
+            dynamics,
+            data,
+            axes,
+            windings,
+            coulomb,
+            viscous,
+            scheduler: Scheduler::new(&rates),
+            options,
+            period,
+            time: 0.0,
+            ticks: 0,
+            q: vec![0.0; n],
+            qd: vec![0.0; n],
+            current: vec![0.0; n],
+            torque: vec![0.0; n],
+            h: DVector::zeros(n),
+            diag: vec![1.0; n],
+            chol: None,
+            rhs: DVector::zeros(n),
+            energy: EnergyBalance::default(),
+            rng: options.seed ^ 0x5eed_c0de,
+            spare_normal: None,
+        };
+        sim.reset(&vec![0.0; n], None)?;
+        Ok(sim)
+    }
+
+    /// One axis per joint built by [`axis_configs_from_chain`] at `q0`, then
+    /// [`CoupledSim::reset`] to (`q0`, 0).
+    pub fn from_chain(chain: &Chain, q0: &[f64], options: CoupledOptions) -> Result<Self> {
+        let configs = axis_configs_from_chain(chain, q0, &options)?;
+        let mut sim = CoupledSim::new(chain, &configs, options)?;
+        sim.reset(q0, None)?;
+        Ok(sim)
+    }
+
+    /// Puts the robot at (`q0`, `qd0` or rest) with zero currents, every axis enabled in position
+    /// mode holding `q0`, time 0, energy counters 0.
+    pub fn reset(&mut self, q0: &[f64], qd0: Option<&[f64]>) -> Result<()> {
+        let n = self.dof();
+        check_vector("q0", q0, n)?;
+        if let Some(v) = qd0 {
+            check_vector("qd0", v, n)?;
+        }
+        self.q.copy_from_slice(q0);
+        match qd0 {
+            Some(v) => self.qd.copy_from_slice(v),
+            None => self.qd.iter_mut().for_each(|v| *v = 0.0),
+        }
+        self.current.iter_mut().for_each(|i| *i = 0.0);
+        self.torque.iter_mut().for_each(|t| *t = 0.0);
+        self.time = 0.0;
+        self.ticks = 0;
+        self.energy = EnergyBalance::default();
+        self.rng = self.options.seed ^ 0x5eed_c0de;
+        self.spare_normal = None;
+        let rates = *self.axes[0].rates();
+        self.scheduler = Scheduler::new(&rates);
+        for k in 0..n {
+            let config = *self.axes[k].config();
+            self.axes[k] = Axis::new(&config)?;
+        }
+        self.refresh()?;
+        // One tick with the bridges off lets every axis read its encoder, then hold where it is.
+        self.tick();
+        for a in &mut self.axes {
+            a.enable(Mode::Position);
+        }
+        Ok(())
+    }
+
+    fn refresh(&mut self) -> Result<()> {
+        let n = self.dof();
+        let h = self
+            .dynamics
+            .nonlinear_effects(&mut self.data, &self.q, &self.qd, &self.options.gravity)
+            .map_err(model_error)?;
+        self.h.copy_from(h);
+        let m = self
+            .dynamics
+            .mass_matrix(&mut self.data, &self.q)
+            .map_err(model_error)?;
+        for k in 0..n {
+            self.diag[k] = m[(k, k)];
+        }
+        let m: DMatrix<f64> = m.clone();
+        self.chol = Some(Cholesky::new(m).ok_or_else(|| Error::Model("mass matrix is not positive definite".into()))?);
+        Ok(())
+    }
+
+    /// Number of axes (joints).
+    pub fn dof(&self) -> usize {
+        self.q.len()
+    }
+
+    /// One current-loop period: measure, run every axis, step the windings and the mechanics.
+    pub fn tick(&mut self) {
+        let n = self.dof();
+        let t = self.period;
+        if self.ticks % self.options.refresh_ticks as u64 == 0 && self.ticks > 0 {
+            // A configuration the model rejects (non-finite after a divergence) keeps the old factor.
+            let _ = self.refresh();
+        }
+        let due = self.scheduler.next_tick();
+        for k in 0..n {
+            let w = self.windings[k];
+            let noise = if w.current_noise > 0.0 {
+                w.current_noise * self.normal()
+            } else {
+                0.0
+            };
+            let motor_angle = self.q[k] * w.gear;
+            let counts = (motor_angle * w.counts_per_rev / (2.0 * std::f64::consts::PI)).floor();
+            let m = Measurement {
+                current: self.current[k] + noise,
+                encoder_counts: counts as i64,
+                bus_voltage: Some(w.bus_voltage),
+            };
+            let duty = self.axes[k].tick(m, due);
+            let bridge_on = self.axes[k].bridge_on();
+            let omega_m = w.gear * self.qd[k];
+            let emf = w.back_emf_constant * omega_m;
+            let i0 = self.current[k];
+            let (u, i1, mean, mean_sq) = if self.options.ideal_current && bridge_on {
+                let i = self.axes[k].current_reference();
+                (w.resistance * i + emf, i, i, i * i)
+            } else if bridge_on {
+                let u = duty.clamp(-1.0, 1.0) * w.bus_voltage;
+                let (i1, mean, mean_sq) = winding_step(&w, i0, u - emf, t);
+                (u, i1, mean, mean_sq)
+            } else {
+                open_winding_step(&w, i0, emf, t)
+            };
+            self.current[k] = i1;
+            self.torque[k] = w.gear * w.torque_constant * mean;
+            self.energy.electrical_input += u * mean * t;
+            self.energy.copper_loss += w.resistance * mean_sq * t;
+        }
+        // Mechanics: q̈ = M⁻¹(τ − h − τ_f).
+        for k in 0..n {
+            let v = self.qd[k];
+            let v_stick = self.coulomb[k] * t / self.diag[k].max(1e-12);
+            let coulomb = if v_stick > 0.0 {
+                self.coulomb[k] * (v / v_stick).clamp(-1.0, 1.0)
+            } else {
+                0.0
+            };
+            let friction = self.viscous[k] * v + coulomb;
+            self.energy.friction_loss += friction * v * t;
+            self.rhs[k] = self.torque[k] - self.h[k] - friction;
+        }
+        if let Some(c) = &self.chol {
+            c.solve_mut(&mut self.rhs);
+        }
+        for k in 0..n {
+            self.qd[k] += t * self.rhs[k];
+            self.q[k] += t * self.qd[k];
+        }
+        self.time += t;
+        self.ticks += 1;
+    }
+
+    /// Runs `n` ticks.
+    pub fn tick_n(&mut self, n: u64) {
+        for _ in 0..n {
+            self.tick();
+        }
+    }
+
+    /// Standard normal sample (SplitMix64 + Box–Muller, both values of each pair used).
+    fn normal(&mut self) -> f64 {
+        if let Some(v) = self.spare_normal.take() {
+            return v;
+        }
+        let mut next = || {
+            self.rng = self.rng.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut z = self.rng;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            (((z ^ (z >> 31)) >> 11) as f64 + 1.0) / (1u64 << 53) as f64
+        };
+        let (a, b) = (next(), next());
+        let r = (-2.0 * a.ln()).sqrt();
+        let (sin, cos) = (2.0 * std::f64::consts::PI * b).sin_cos();
+        self.spare_normal = Some(r * sin);
+        r * cos
+    }
+
+    /// Hands every axis a position setpoint (joint space: rad or m, per s, per s²) and a
+    /// joint-side torque feed-forward (N·m or N; `None`: zero). Non-finite values fault the axis.
+    pub fn set_setpoint(&mut self, q: &[f64], qd: &[f64], qdd: &[f64], tau_ff: Option<&[f64]>) -> Result<()> {
+        let n = self.dof();
+        check_len("q", q, n)?;
+        check_len("qd", qd, n)?;
+        check_len("qdd", qdd, n)?;
+        if let Some(t) = tau_ff {
+            check_len("tau_ff", t, n)?;
+        }
+        for k in 0..n {
+            self.axes[k].set_position(q[k], qd[k], qdd[k]);
+            if let Some(t) = tau_ff {
+                self.axes[k].set_torque_feedforward(t[k]);
+            }
+        }
+        Ok(())
+    }
+
+    /// Simulated time since the last reset, s.
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// Current-loop (tick) rate, Hz.
+    pub fn tick_rate(&self) -> f64 {
+        1.0 / self.period
+    }
+
+    /// True joint positions, rad or m.
+    pub fn q(&self) -> &[f64] {
+        &self.q
+    }
+
+    /// True joint speeds, rad/s or m/s.
+    pub fn qd(&self) -> &[f64] {
+        &self.qd
+    }
+
+    /// True winding currents, A.
+    pub fn current(&self) -> &[f64] {
+        &self.current
+    }
+
+    /// Joint-side motor torques of the last period (G k_t ī), N·m or N.
+    pub fn torque(&self) -> &[f64] {
+        &self.torque
+    }
+
+    /// The axes (their references, states, faults).
+    pub fn axes(&self) -> &[Axis] {
+        &self.axes
+    }
+
+    /// The axes (to enable, disable, clear faults).
+    pub fn axes_mut(&mut self) -> &mut [Axis] {
+        &mut self.axes
+    }
+
+    /// The robot's dynamic model.
+    pub fn dynamics(&self) -> &Dynamics {
+        &self.dynamics
+    }
+
+    /// Energy flows since the last reset.
+    pub fn energy(&self) -> EnergyBalance {
+        self.energy
+    }
+
+    /// Stored energy now, J: kinetic + potential of the robot + magnetic ½ L i² of the windings.
+    pub fn stored_energy(&mut self) -> Result<f64> {
+        let kinetic = self
+            .dynamics
+            .kinetic_energy(&mut self.data, &self.q, &self.qd)
+            .map_err(model_error)?;
+        let potential = self
+            .dynamics
+            .potential_energy(&self.q, &self.options.gravity)
+            .map_err(model_error)?;
+        let magnetic: f64 = self
+            .windings
+            .iter()
+            .zip(&self.current)
+            .map(|(w, i)| 0.5 * w.inductance * i * i)
+            .sum();
+        Ok(kinetic + potential + magnetic)
+    }
+
+    /// Joint kinds, chain order.
+    pub fn joint_types(&self) -> Vec<JointType> {
+        self.dynamics.chain().joints().iter().map(|j| j.kind()).collect()
+    }
+
+    /// Runs a reference trajectory sampled at `times` (s from now, increasing, at any rate; q, qd,
+    /// qdd and the optional torque feed-forward K × n row-major), handing setpoints to the drives
+    /// every `setpoint_period` s (linear interpolation between the samples, each sent one period
+    /// ahead, see [`crate::setpoint`]) until the last sample's time; records every tick.
+    pub fn run(
+        &mut self,
+        times: &[f64],
+        q: &[f64],
+        qd: &[f64],
+        qdd: &[f64],
+        tau_ff: Option<&[f64]>,
+        setpoint_period: f64,
+    ) -> Result<CoupledTrace> {
+        let n = self.dof();
+        let k = times.len();
+        if k < 2 {
+            return Err(Error::InvalidParameter {
+                what: "t".into(),
+                value: k as f64,
+                reason: "needs at least two samples".into(),
+            });
+        }
+        for (name, v) in [("t", times), ("q", q), ("qd", qd), ("qdd", qdd)] {
+            if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+                return Err(Error::NonFinite {
+                    what: format!("{name}[{i}]"),
+                    value: v[i],
+                });
+            }
+        }
+        if let Some(i) = times.windows(2).position(|w| w[1] <= w[0]) {
+            return Err(Error::InvalidParameter {
+                what: format!("t[{}]", i + 1),
+                value: times[i + 1],
+                reason: "times must increase".into(),
+            });
+        }
+        for (name, v) in [("q", q), ("qd", qd), ("qdd", qdd)] {
+            check_len(name, v, k * n)?;
+        }
+        if let Some(t) = tau_ff {
+            check_len("tau_ff", t, k * n)?;
+            if let Some(i) = t.iter().position(|x| !x.is_finite()) {
+                return Err(Error::NonFinite {
+                    what: format!("tau_ff[{i}]"),
+                    value: t[i],
+                });
+            }
+        }
+        crate::error::positive("setpoint period (s)", setpoint_period)?;
+        let ticks_per_setpoint = (setpoint_period / self.period).round().max(1.0) as u64;
+        let t0 = times[0];
+        let duration = times[k - 1] - t0;
+        let total = (duration / self.period).round() as u64 + 1;
+        let mut trace = CoupledTrace::with_capacity(total as usize, n);
+        let mut buf = vec![0.0; 4 * n];
+        let lead = if self.axes[0].config().setpoint_period.is_some() {
+            ticks_per_setpoint as f64 * self.period
+        } else {
+            0.0
+        };
+        let start_tick = self.ticks;
+        for tick in 0..total {
+            let t_rel = tick as f64 * self.period;
+            if tick % ticks_per_setpoint == 0 {
+                interpolate(times, t0 + t_rel + lead, n, q, qd, qdd, tau_ff, &mut buf);
+                let (a, rest) = buf.split_at(n);
+                let (b, rest) = rest.split_at(n);
+                let (c, d) = rest.split_at(n);
+                self.set_setpoint(a, b, c, if tau_ff.is_some() { Some(d) } else { None })?;
+            }
+            interpolate(times, t0 + t_rel, n, q, qd, qdd, None, &mut buf);
+            trace.push(self, &buf[..n]);
+            self.tick();
+        }
+        let _ = start_tick;
+        trace.faults = self.fault_names();
+        Ok(trace)
+    }
+
+    /// Fault of each axis as text ("" when none).
+    pub fn fault_names(&self) -> Vec<String> {
+        self.axes
+            .iter()
+            .map(|a| a.fault().map_or(String::new(), |f| format!("{f:?}")))
+            .collect()
+    }
+}
+
+/// Exact winding step with net voltage `v` (u − back-EMF) held over `t`: (end current, mean
+/// current, mean square current).
+#[inline]
+fn winding_step(w: &Winding, i0: f64, v: f64, t: f64) -> (f64, f64, f64) {
+    let inf = v / w.resistance;
+    let a = w.decay;
+    let i1 = inf + (i0 - inf) * a;
+    let tau = w.inductance / w.resistance;
+    let d = i0 - inf;
+    // i(s) = inf + d e^{−s/τ}: mean and mean square over [0, t].
+    let e1 = (1.0 - a) * tau / t;
+    let e2 = (1.0 - a * a) * tau / (2.0 * t);
+    (i1, inf + d * e1, inf * inf + 2.0 * inf * d * e1 + d * d * e2)
+}
+
+/// Bridge off: diodes conduct while current flows (applied voltage −V_bus·sign(i)), or when the
+/// back-EMF exceeds the bus; otherwise the winding is open. Returns (u, i1, mean, mean square).
+fn open_winding_step(w: &Winding, i0: f64, emf: f64, t: f64) -> (f64, f64, f64, f64) {
+    if i0 == 0.0 && emf.abs() <= w.bus_voltage {
+        return (0.0, 0.0, 0.0, 0.0);
+    }
+    let dir = if i0 != 0.0 { i0.signum() } else { -emf.signum() };
+    let u = -dir * w.bus_voltage;
+    let (i1, mean, mean_sq) = winding_step(w, i0, u - emf, t);
+    if i1 * dir < 0.0 {
+        // The current reached zero inside the period: the diodes block from then on.
+        let frac = (i0 / (i0 - i1)).clamp(0.0, 1.0);
+        let m = 0.5 * i0 * frac;
+        return (u, 0.0, m, i0 * i0 * frac / 3.0);
+    }
+    (u, i1, mean, mean_sq)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn interpolate(
+    times: &[f64],
+    t: f64,
+    n: usize,
+    q: &[f64],
+    qd: &[f64],
+    qdd: &[f64],
+    tau: Option<&[f64]>,
+    out: &mut [f64],
+) {
+    let k = times.len();
+    let (i, s) = if t <= times[0] {
+        (0, 0.0)
+    } else if t >= times[k - 1] {
+        (k - 2, 1.0)
+    } else {
+        let i = times.partition_point(|x| *x <= t).saturating_sub(1).min(k - 2);
+        (i, (t - times[i]) / (times[i + 1] - times[i]))
+    };
+    let at_end = t >= times[k - 1];
+    for (slot, src) in [q, qd, qdd].into_iter().enumerate() {
+        for j in 0..n {
+            let (a, b) = (src[i * n + j], src[(i + 1) * n + j]);
+            out[slot * n + j] = a + s * (b - a);
+            if at_end && slot > 0 {
+                out[slot * n + j] = b;
+            }
+        }
+    }
+    if let Some(src) = tau {
+        for j in 0..n {
+            let (a, b) = (src[i * n + j], src[(i + 1) * n + j]);
+            out[3 * n + j] = a + s * (b - a);
+        }
+    }
+}
+
+fn check_vector(what: &str, v: &[f64], n: usize) -> Result<()> {
+    check_len(what, v, n)?;
+    if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+        return Err(Error::NonFinite {
+            what: format!("{what}[{i}]"),
+            value: v[i],
+        });
+    }
+    Ok(())
+}
+
+fn check_len(what: &str, v: &[f64], n: usize) -> Result<()> {
+    if v.len() != n {
+        return Err(Error::InvalidParameter {
+            what: format!("{what} length"),
+            value: v.len() as f64,
+            reason: format!("expected {n} values"),
+        });
+    }
+    Ok(())
+}
+
+/// What [`CoupledSim::run`] records, one row per tick (K rows, n columns, row-major).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct CoupledTrace {
+    /// Number of axes.
+    pub dof: usize,
+    /// Time of each row, s from the start of the run.
+    pub t: Vec<f64>,
+    /// True joint positions, rad or m.
+    pub q: Vec<f64>,
+    /// True joint speeds, rad/s or m/s.
+    pub qd: Vec<f64>,
+    /// Reference positions (the input trajectory at the row's time), rad or m.
+    pub q_ref: Vec<f64>,
+    /// Winding currents, A.
+    pub current: Vec<f64>,
+    /// Current references after limiting, A.
+    pub current_ref: Vec<f64>,
+    /// Joint-side motor torques, N·m or N.
+    pub torque: Vec<f64>,
+    /// Fault of each axis at the end ("" when none).
+    pub faults: Vec<String>,
+}
+
+impl CoupledTrace {
+    fn with_capacity(k: usize, n: usize) -> Self {
+        let v = || Vec::with_capacity(k * n);
+        CoupledTrace {
+            dof: n,
+            t: Vec::with_capacity(k),
+            q: v(),
+            qd: v(),
+            q_ref: v(),
+            current: v(),
+            current_ref: v(),
+            torque: v(),
+            faults: Vec::new(),
+        }
+    }
+
+    fn push(&mut self, s: &CoupledSim, q_ref: &[f64]) {
+        self.t.push(self.t.len() as f64 * s.period);
+        self.q.extend_from_slice(&s.q);
+        self.qd.extend_from_slice(&s.qd);
+        self.q_ref.extend_from_slice(q_ref);
+        self.current.extend_from_slice(&s.current);
+        self.current_ref.extend(s.axes.iter().map(|a| a.current_reference()));
+        self.torque.extend_from_slice(&s.torque);
+    }
+
+    /// Number of rows.
+    pub fn len(&self) -> usize {
+        self.t.len()
+    }
+
+    /// True if nothing was recorded.
+    pub fn is_empty(&self) -> bool {
+        self.t.is_empty()
+    }
+}

@@ -1,0 +1,268 @@
+//! `ttmanip.DriveSim`: all axes of a robot through their drive cascades on its rigid-body dynamics
+//! (`ttcan::coupled::CoupledSim`). Conversion only: arrays in, arrays out, errors mapped.
+
+use numpy::PyArray1;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use ttcan::{CoupledOptions, CoupledSim};
+
+use crate::convert::{f64_array, to_numpy, vector};
+use crate::errors::{ModelError, NonFiniteError, TtmanipError};
+use crate::robot::PyRobot as Robot;
+
+/// The current-sense noise of the drives `CoupledSim::from_chain` builds, A.
+const DEFAULT_NOISE: f64 = 0.005;
+
+fn to_py(e: ttcan::Error) -> PyErr {
+    let msg = e.to_string();
+    match e {
+        ttcan::Error::NonFinite { .. } => NonFiniteError::new_err(msg),
+        ttcan::Error::InvalidParameter { .. } | ttcan::Error::Model(_) => ModelError::new_err(msg),
+        _ => TtmanipError::new_err(msg),
+    }
+}
+
+/// Every joint of a robot driven by its own current/speed/position cascade, on the robot's shared
+/// rigid-body mechanics (gravity included), stepped one current-loop period at a time.
+#[pyclass(module = "ttmanip._ttmanip")]
+pub struct DriveSim {
+    chain: std::sync::Arc<ttkin::Chain>,
+    options: CoupledOptions,
+    sim: CoupledSim,
+}
+
+#[pymethods]
+impl DriveSim {
+    #[new]
+    #[pyo3(signature = (robot, *, gravity=true, setpoint_rate=1000.0, noise=None, seed=0, ideal_current=false))]
+    fn new(
+        robot: &Robot,
+        gravity: bool,
+        setpoint_rate: f64,
+        noise: Option<f64>,
+        seed: u64,
+        ideal_current: bool,
+    ) -> PyResult<Self> {
+        if !(setpoint_rate.is_finite() && setpoint_rate > 0.0) {
+            return Err(TtmanipError::new_err(format!(
+                "setpoint_rate: expected a finite rate > 0 Hz, got {setpoint_rate}"
+            )));
+        }
+        let noise = noise.unwrap_or(DEFAULT_NOISE);
+        if !(noise.is_finite() && noise >= 0.0) {
+            return Err(TtmanipError::new_err(format!(
+                "noise: expected a current-sense noise >= 0 A, got {noise}"
+            )));
+        }
+        let options = CoupledOptions {
+            gravity: if gravity {
+                ttkin::dynamics::EARTH_GRAVITY
+            } else {
+                [0.0; 3]
+            },
+            ideal_current,
+            seed,
+            setpoint_period: Some(1.0 / setpoint_rate),
+            noise_scale: noise / DEFAULT_NOISE,
+            ..CoupledOptions::default()
+        };
+        let q0 = vec![0.0; robot.chain.dof()];
+        let sim = CoupledSim::from_chain(&robot.chain, &q0, options).map_err(to_py)?;
+        Ok(DriveSim {
+            chain: robot.chain.clone(),
+            options,
+            sim,
+        })
+    }
+
+    /// Rebuilds the drives around (q0, qd0 or rest): time 0, every axis holding q0.
+    #[pyo3(signature = (q0, qd0=None))]
+    fn reset(&mut self, q0: &Bound<'_, PyAny>, qd0: Option<&Bound<'_, PyAny>>) -> PyResult<()> {
+        let n = self.sim.dof();
+        let q0 = vector(q0, "q0", n)?;
+        let qd0 = qd0.map(|v| vector(v, "qd0", n)).transpose()?;
+        let mut sim = CoupledSim::from_chain(&self.chain, &q0, self.options).map_err(to_py)?;
+        sim.reset(&q0, qd0.as_deref()).map_err(to_py)?;
+        self.sim = sim;
+        Ok(())
+    }
+
+    /// Hands every axis a setpoint (joint space, SI) and a joint-side torque feed-forward.
+    #[pyo3(signature = (q, qd=None, qdd=None, tau_ff=None))]
+    fn set_setpoint(
+        &mut self,
+        q: &Bound<'_, PyAny>,
+        qd: Option<&Bound<'_, PyAny>>,
+        qdd: Option<&Bound<'_, PyAny>>,
+        tau_ff: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<()> {
+        let n = self.sim.dof();
+        let q = vector(q, "q", n)?;
+        let zeros = vec![0.0; n];
+        let qd = qd
+            .map(|v| vector(v, "qd", n))
+            .transpose()?
+            .unwrap_or_else(|| zeros.clone());
+        let qdd = qdd
+            .map(|v| vector(v, "qdd", n))
+            .transpose()?
+            .unwrap_or_else(|| zeros.clone());
+        let tau = tau_ff.map(|v| vector(v, "tau_ff", n)).transpose()?;
+        self.sim.set_setpoint(&q, &qd, &qdd, tau.as_deref()).map_err(to_py)
+    }
+
+    /// Advances `n` current-loop periods.
+    #[pyo3(signature = (n=1))]
+    fn tick(&mut self, py: Python<'_>, n: u64) {
+        let sim = &mut self.sim;
+        py.detach(|| sim.tick_n(n));
+    }
+
+    /// Simulated time since the last reset, s.
+    #[getter]
+    fn t(&self) -> f64 {
+        self.sim.time()
+    }
+
+    /// True joint positions, rad or m.
+    #[getter]
+    fn q<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, self.sim.q())
+    }
+
+    /// True joint speeds, rad/s or m/s.
+    #[getter]
+    fn qd<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, self.sim.qd())
+    }
+
+    /// Winding currents, A.
+    #[getter]
+    fn current<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, self.sim.current())
+    }
+
+    /// Current references after limiting, A.
+    #[getter]
+    fn current_ref<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        let v: Vec<f64> = self.sim.axes().iter().map(|a| a.current_reference()).collect();
+        PyArray1::from_vec(py, v)
+    }
+
+    /// Fault of each axis ("" when none).
+    #[getter]
+    fn faults(&self) -> Vec<String> {
+        self.sim.fault_names()
+    }
+
+    /// Current-loop (tick) rate, Hz.
+    #[getter]
+    fn tick_rate(&self) -> f64 {
+        self.sim.tick_rate()
+    }
+
+    /// Runs the reference (t (K,), q, qd, qdd and optional tau_ff (K, n)); returns the recorded arrays.
+    #[pyo3(signature = (t, q, qd, qdd, tau_ff=None))]
+    fn run<'py>(
+        &mut self,
+        py: Python<'py>,
+        t: &Bound<'py, PyAny>,
+        q: &Bound<'py, PyAny>,
+        qd: &Bound<'py, PyAny>,
+        qdd: &Bound<'py, PyAny>,
+        tau_ff: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let n = self.sim.dof();
+        let t = f64_array(t, "t")?;
+        let k = t.data().len();
+        let arr = |a: &Bound<'py, PyAny>, what: &str| -> PyResult<Vec<f64>> {
+            let a = f64_array(a, what)?;
+            if a.shape() != [k, n] {
+                return Err(crate::errors::ShapeError::new_err(format!(
+                    "{what}: expected shape ({k}, {n}), got {}",
+                    a.shape_str()
+                )));
+            }
+            Ok(a.data().to_vec())
+        };
+        let (q, qd, qdd) = (arr(q, "q")?, arr(qd, "qd")?, arr(qdd, "qdd")?);
+        let tau = tau_ff.map(|a| arr(a, "tau_ff")).transpose()?;
+        let times = t.data().to_vec();
+        let period = self.options.setpoint_period.unwrap_or(1e-3);
+        let sim = &mut self.sim;
+        let tr = py
+            .detach(|| sim.run(&times, &q, &qd, &qdd, tau.as_deref(), period))
+            .map_err(to_py)?;
+        let rows = tr.len();
+        let d = PyDict::new(py);
+        d.set_item("t", to_numpy(py, &[rows], &tr.t))?;
+        d.set_item("q", to_numpy(py, &[rows, n], &tr.q))?;
+        d.set_item("qd", to_numpy(py, &[rows, n], &tr.qd))?;
+        d.set_item("q_ref", to_numpy(py, &[rows, n], &tr.q_ref))?;
+        d.set_item("current", to_numpy(py, &[rows, n], &tr.current))?;
+        d.set_item("current_ref", to_numpy(py, &[rows, n], &tr.current_ref))?;
+        d.set_item("torque", to_numpy(py, &[rows, n], &tr.torque))?;
+        d.set_item("faults", tr.faults)?;
+        Ok(d)
+    }
+
+    fn __repr__(&self) -> String {
+        format!("DriveSim({} axes, {} Hz)", self.sim.dof(), self.sim.tick_rate())
+    }
+}
+
+/// (10–90 % rise time in s, overshoot as a fraction) of `y` sampled at `t` towards `target`.
+#[pyfunction]
+fn step_metrics(t: &Bound<'_, PyAny>, y: &Bound<'_, PyAny>, target: f64) -> PyResult<(f64, f64)> {
+    let t = f64_array(t, "t")?;
+    let y = f64_array(y, "y")?;
+    if t.data().len() != y.data().len() {
+        return Err(crate::errors::ShapeError::new_err(format!(
+            "t and y: expected equal lengths, got {} and {}",
+            t.data().len(),
+            y.data().len()
+        )));
+    }
+    if !(target.is_finite() && target != 0.0) {
+        return Err(TtmanipError::new_err(format!(
+            "target: expected a finite value ≠ 0, got {target}"
+        )));
+    }
+    Ok((
+        ttcan::sim::rise_time(t.data(), y.data(), target),
+        ttcan::sim::overshoot(y.data(), target),
+    ))
+}
+
+/// Adds `DriveSim`, `drive_theta5_case` and `step_metrics` to the module.
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<DriveSim>()?;
+    m.add_function(wrap_pyfunction!(step_metrics, m)?)?;
+    m.add_function(wrap_pyfunction!(drive_theta5_case, m)?)
+}
+
+/// Issue 10's θ5 case (`ttcan::cases::theta5_case`): its RMS numbers and traces.
+#[pyfunction]
+#[pyo3(signature = (setpoint_rate=1000.0))]
+fn drive_theta5_case<'py>(py: Python<'py>, setpoint_rate: f64) -> PyResult<Bound<'py, PyDict>> {
+    if !(setpoint_rate.is_finite() && setpoint_rate > 0.0) {
+        return Err(TtmanipError::new_err(format!(
+            "setpoint_rate: expected a finite rate > 0 Hz, got {setpoint_rate}"
+        )));
+    }
+    let c = py.detach(|| ttcan::cases::theta5_case(setpoint_rate)).map_err(to_py)?;
+    let d = PyDict::new(py);
+    d.set_item("load_inertia", c.load_inertia)?;
+    d.set_item("setpoint_rate", c.setpoint_hz)?;
+    d.set_item("current_ripple_rms", c.current_ripple_rms)?;
+    d.set_item("current_error_rms", c.current_error_rms)?;
+    d.set_item("max_following_error", c.max_following_error)?;
+    let k = c.trace.len();
+    d.set_item("t", to_numpy(py, &[k], &c.trace.time))?;
+    d.set_item("current", to_numpy(py, &[k], &c.trace.current))?;
+    d.set_item("current_ref", to_numpy(py, &[k], &c.trace.current_reference))?;
+    d.set_item("current_needed", to_numpy(py, &[k], &c.current_needed))?;
+    d.set_item("position", to_numpy(py, &[k], &c.trace.position))?;
+    d.set_item("position_ref", to_numpy(py, &[k], &c.reference))?;
+    Ok(d)
+}

@@ -1,0 +1,413 @@
+//! Hit-pipeline bindings: `HitPlan` and the functions behind `ttmanip.plan_hit`, `plan_hits`
+//! and `Hit.from_normal` (conversion only; the maths is `ttkin::hit`).
+
+use std::sync::Arc;
+
+use nalgebra::Vector3;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use ttkin::hit::{self, Hit, HitOptions, HitPlan, HitPlanner, HitTask, StrokeProfile};
+use ttkin::traj::JointState;
+use ttkin::Dynamics;
+
+use crate::convert::{f64_array, pose_to_numpy, to_numpy, transform, vector};
+use crate::errors::{PyResultExt, ShapeError, TtmanipError};
+use crate::robot::PyRobot;
+use crate::traj::PyJointTrajectory;
+
+/// One planned hit: every intermediate product of `ttkin::hit` (SI units, base frame).
+#[pyclass(name = "HitPlan", module = "ttmanip", frozen)]
+pub struct PyHitPlan {
+    plan: HitPlan,
+    planner: Arc<HitPlanner>,
+}
+
+fn vec_py<'py>(py: Python<'py>, v: &[f64]) -> Bound<'py, PyAny> {
+    to_numpy(py, &[v.len()], v).into_any()
+}
+
+impl PyHitPlan {
+    fn stroke(&self) -> PyResult<&ttkin::traj::JointTrajectory> {
+        self.plan.trajectory.as_ref().ok_or_else(|| {
+            TtmanipError::new_err(format!(
+                "plan: no stroke was planned (status '{}': {})",
+                self.plan.status.name(),
+                self.plan.message
+            ))
+        })
+    }
+}
+
+#[pymethods]
+impl PyHitPlan {
+    /// True when the hit is on time and within every limit.
+    #[getter]
+    fn ok(&self) -> bool {
+        self.plan.ok()
+    }
+
+    /// "ok", "too_early", "unreachable", "singular", "hit_speed_limit", "position_limit",
+    /// "effort_limit" or "no_stroke".
+    #[getter]
+    fn status(&self) -> &'static str {
+        self.plan.status.name()
+    }
+
+    /// One line on what limited the plan ("" when ok).
+    #[getter]
+    fn message(&self) -> &str {
+        &self.plan.message
+    }
+
+    /// (n,) hit configuration (m, rad); NaN when unreachable.
+    #[getter]
+    fn q_hit<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        vec_py(py, &self.plan.q_hit)
+    }
+
+    /// (n,) hit joint velocities (m/s, rad/s); NaN when unreachable.
+    #[getter]
+    fn qd_hit<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        vec_py(py, &self.plan.qd_hit)
+    }
+
+    /// Planned hit time (s from now); NaN when no stroke.
+    #[getter]
+    fn t_hit(&self) -> f64 {
+        self.plan.t_hit
+    }
+
+    /// Requested hit time (s from now).
+    #[getter]
+    fn requested_t_hit(&self) -> f64 {
+        self.plan.hit.t
+    }
+
+    /// Earliest feasible hit time (s), computed on first need when planning did not find it;
+    /// NaN when there is no hit state.
+    #[getter]
+    fn earliest_t_hit(&self) -> f64 {
+        self.planner.earliest_t_hit(&self.plan)
+    }
+
+    /// Profile of the hit leg: "quintic" or "jerk" ("auto" when no stroke).
+    #[getter]
+    fn profile(&self) -> &'static str {
+        self.plan.profile.name()
+    }
+
+    /// Smallest singular value of the (task) Jacobian at the hit.
+    #[getter]
+    fn sigma_min(&self) -> f64 {
+        self.plan.sigma_min
+    }
+
+    /// Number of IK branches within the limits.
+    #[getter]
+    fn branches(&self) -> usize {
+        self.plan.branches
+    }
+
+    /// (4, 4) requested racket pose (racket frame in the base frame, m).
+    #[getter]
+    fn hit_pose<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        pose_to_numpy(py, &self.plan.hit.pose).into_any()
+    }
+
+    /// (6,) requested racket-centre twist [v; ω] (m/s, rad/s, base axes).
+    #[getter]
+    fn hit_twist<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        vec_py(py, &self.plan.hit.twist)
+    }
+
+    /// (4, 4) tool pose that puts the racket at the hit pose (base frame, m).
+    #[getter]
+    fn tool_target<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        pose_to_numpy(py, &self.plan.tool_target).into_any()
+    }
+
+    /// (n,) start configuration (m, rad).
+    #[getter]
+    fn start<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        vec_py(py, &self.plan.start.q)
+    }
+
+    /// (n,) ready (rest) configuration the stroke returns to (m, rad).
+    #[getter]
+    fn ready<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        vec_py(py, &self.plan.ready)
+    }
+
+    /// Duration of the return leg (s); NaN when no stroke.
+    #[getter]
+    fn return_duration(&self) -> f64 {
+        self.plan.return_duration
+    }
+
+    /// Total stroke duration (s); NaN when no stroke.
+    #[getter]
+    fn duration(&self) -> f64 {
+        self.plan.trajectory.as_ref().map_or(f64::NAN, |t| t.duration())
+    }
+
+    /// (n,) largest |joint torque| (N·m or N, friction included) at the effort check points.
+    #[getter]
+    fn peak_effort<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        vec_py(py, &self.plan.peak_effort)
+    }
+
+    /// Largest |τ|/effort limit over joints and check points.
+    #[getter]
+    fn effort_ratio(&self) -> f64 {
+        self.plan.effort_ratio
+    }
+
+    /// Kinematic limit violations (exact peaks): list of dicts (joint, quantity, time, value, limit).
+    #[getter]
+    fn violations<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
+        let list = PyList::empty(py);
+        for x in &self.plan.violations {
+            let d = PyDict::new(py);
+            d.set_item("joint", x.joint)?;
+            d.set_item("quantity", x.quantity.name())?;
+            d.set_item("time", x.time)?;
+            d.set_item("value", x.value)?;
+            d.set_item("limit", x.limit)?;
+            list.append(d)?;
+        }
+        Ok(list)
+    }
+
+    /// The stroke as a `JointTrajectory` (None when no stroke was planned).
+    #[getter]
+    fn trajectory(&self) -> Option<PyJointTrajectory> {
+        self.plan.trajectory.clone().map(|inner| PyJointTrajectory { inner })
+    }
+
+    /// Samples the stroke at `rate` Hz: (t (K,), q, qd, qdd (K, n)). TtmanipError when no stroke.
+    #[pyo3(signature = (rate=1000.0))]
+    fn sample<'py>(&self, py: Python<'py>, rate: f64) -> PyResult<Bound<'py, PyAny>> {
+        let s = self.stroke()?.sample_rate(rate).py()?;
+        let m = s.t.len();
+        let t = to_numpy(py, &[m], &s.t);
+        let q = to_numpy(py, &[m, s.dof], &s.q);
+        let qd = to_numpy(py, &[m, s.dof], &s.qd);
+        let qdd = to_numpy(py, &[m, s.dof], &s.qdd);
+        Ok((t, q, qd, qdd).into_pyobject(py)?.into_any())
+    }
+
+    /// (K, n) joint torques (N·m or N, inverse dynamics with friction and gravity: the drives'
+    /// feed-forward) at `rate` Hz samples of the stroke.
+    #[pyo3(signature = (rate=1000.0))]
+    fn torques<'py>(&self, py: Python<'py>, rate: f64) -> PyResult<Bound<'py, PyAny>> {
+        let s = self.stroke()?.sample_rate(rate).py()?;
+        let dy = Dynamics::new(self.planner.chain()).py()?;
+        let profile = py
+            .detach(|| dy.torque_profile(&s.q, &s.qd, &s.qdd, &hit::GRAVITY, None))
+            .py()?;
+        Ok(to_numpy(py, &[s.t.len(), s.dof], &profile.joint).into_any())
+    }
+
+    /// (K, n) joint torques at the 1 kHz samples of `sample()`.
+    #[getter]
+    fn tau<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        self.torques(py, 1000.0)
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "HitPlan(status='{}', t_hit={:.4}, earliest_t_hit={:.4}, profile='{}')",
+            self.plan.status.name(),
+            self.plan.t_hit,
+            self.plan.earliest_t_hit,
+            self.plan.profile.name()
+        )
+    }
+}
+
+/// Options from the Python keywords.
+fn options(
+    robot: &PyRobot,
+    profile: &str,
+    task: &str,
+    jerk: Option<&Bound<'_, PyAny>>,
+    effort: bool,
+) -> PyResult<HitOptions> {
+    let task = match task {
+        "auto" => HitTask::Auto,
+        "pose" => HitTask::Pose,
+        "racket5" => HitTask::Racket5,
+        other => {
+            return Err(TtmanipError::new_err(format!(
+                "task: expected 'auto', 'pose' or 'racket5', got '{other}'"
+            )))
+        }
+    };
+    let jerk = jerk.map(|j| vector(j, "jerk", robot.chain.dof())).transpose()?;
+    Ok(HitOptions {
+        profile: StrokeProfile::from_name(profile).py()?,
+        task,
+        jerk,
+        check_effort: effort,
+        ..Default::default()
+    })
+}
+
+/// The start state from optional q, qd, qdd.
+fn start_state(
+    n: usize,
+    q: Option<&Bound<'_, PyAny>>,
+    qd: Option<&Bound<'_, PyAny>>,
+    qdd: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Option<JointState>> {
+    let Some(q) = q else { return Ok(None) };
+    let q = vector(q, "state.q", n)?;
+    let qd = qd
+        .map(|v| vector(v, "state.qd", n))
+        .transpose()?
+        .unwrap_or(vec![0.0; n]);
+    let qdd = qdd
+        .map(|v| vector(v, "state.qdd", n))
+        .transpose()?
+        .unwrap_or(vec![0.0; n]);
+    Ok(Some(JointState { q, qd, qdd }))
+}
+
+/// Plans one hit: racket pose (4, 4), racket-centre twist (6,), hit time (s); optional start
+/// state (q, qd, qdd), ready configuration, profile ("auto", "quintic", "jerk"), task ("auto",
+/// "pose", "racket5"), jerk limits (n,), effort (check the effort limits).
+#[pyfunction]
+#[pyo3(signature = (robot, pose, twist, t, q=None, qd=None, qdd=None, ready=None, profile="auto", task="auto", jerk=None, effort=true))]
+#[allow(clippy::too_many_arguments)]
+fn hit_plan(
+    py: Python<'_>,
+    robot: &PyRobot,
+    pose: &Bound<'_, PyAny>,
+    twist: &Bound<'_, PyAny>,
+    t: f64,
+    q: Option<&Bound<'_, PyAny>>,
+    qd: Option<&Bound<'_, PyAny>>,
+    qdd: Option<&Bound<'_, PyAny>>,
+    ready: Option<&Bound<'_, PyAny>>,
+    profile: &str,
+    task: &str,
+    jerk: Option<&Bound<'_, PyAny>>,
+    effort: bool,
+) -> PyResult<PyHitPlan> {
+    let n = robot.chain.dof();
+    let pose = transform(pose, "hit.pose")?;
+    let tw = vector(twist, "hit.twist", 6)?;
+    let hit = Hit::new(pose, [tw[0], tw[1], tw[2], tw[3], tw[4], tw[5]], t)
+        .map_err(|e| TtmanipError::new_err(format!("hit.{e}")))?;
+    let state = start_state(n, q, qd, qdd)?;
+    let ready = ready.map(|r| vector(r, "ready", n)).transpose()?;
+    let planner = Arc::new(HitPlanner::new(&robot.chain, options(robot, profile, task, jerk, effort)?).py()?);
+    let plan = py
+        .detach(|| planner.plan(&hit, state.as_ref(), ready.as_deref()))
+        .py()?;
+    Ok(PyHitPlan { plan, planner })
+}
+
+/// Plans N hits in parallel (GIL released): poses (N, 4, 4), twists (N, 6), times (N,); the
+/// other arguments as for `hit_plan`. Returns a list of N `HitPlan`s.
+#[pyfunction]
+#[pyo3(signature = (robot, poses, twists, times, q=None, qd=None, qdd=None, ready=None, profile="auto", task="auto", jerk=None, effort=true))]
+#[allow(clippy::too_many_arguments)]
+fn hit_plan_batch(
+    py: Python<'_>,
+    robot: &PyRobot,
+    poses: &Bound<'_, PyAny>,
+    twists: &Bound<'_, PyAny>,
+    times: &Bound<'_, PyAny>,
+    q: Option<&Bound<'_, PyAny>>,
+    qd: Option<&Bound<'_, PyAny>>,
+    qdd: Option<&Bound<'_, PyAny>>,
+    ready: Option<&Bound<'_, PyAny>>,
+    profile: &str,
+    task: &str,
+    jerk: Option<&Bound<'_, PyAny>>,
+    effort: bool,
+) -> PyResult<Vec<PyHitPlan>> {
+    let n = robot.chain.dof();
+    let p = f64_array(poses, "poses")?;
+    let k = match p.shape() {
+        [k, 4, 4] => *k,
+        _ => {
+            return Err(ShapeError::new_err(format!(
+                "poses: expected shape (N, 4, 4), got {}",
+                p.shape_str()
+            )))
+        }
+    };
+    let tw = f64_array(twists, "twists")?;
+    if tw.shape() != [k, 6] {
+        return Err(ShapeError::new_err(format!(
+            "twists: expected shape ({k}, 6), got {}",
+            tw.shape_str()
+        )));
+    }
+    let ts = vector(times, "times", k)?;
+    let mut hits = Vec::with_capacity(k);
+    for (i, ((m, w), &t)) in p
+        .data()
+        .chunks_exact(16)
+        .zip(tw.data().chunks_exact(6))
+        .zip(&ts)
+        .enumerate()
+    {
+        let m = nalgebra::Matrix4::from_row_slice(m);
+        let pose = ttkin::transform::isometry_from_matrix(&format!("poses[{i}]"), &m).py()?;
+        let hit = Hit::new(pose, [w[0], w[1], w[2], w[3], w[4], w[5]], t)
+            .map_err(|e| TtmanipError::new_err(format!("hits[{i}].{e}")))?;
+        hits.push(hit);
+    }
+    let state = start_state(n, q, qd, qdd)?;
+    let ready = ready.map(|r| vector(r, "ready", n)).transpose()?;
+    let planner = Arc::new(HitPlanner::new(&robot.chain, options(robot, profile, task, jerk, effort)?).py()?);
+    let plans = py
+        .detach(|| planner.plan_batch(&hits, state.as_ref(), ready.as_deref()))
+        .py()?;
+    Ok(plans
+        .into_iter()
+        .map(|plan| PyHitPlan {
+            plan,
+            planner: planner.clone(),
+        })
+        .collect())
+}
+
+/// (3, 3) racket orientation (base axes) with z along the face `normal` and x (the handle) as
+/// close as possible to `handle`: the one racket-frame convention of `ttkin::hit::racket`.
+#[pyfunction]
+#[pyo3(signature = (normal, handle=None))]
+fn racket_frame<'py>(
+    py: Python<'py>,
+    normal: &Bound<'py, PyAny>,
+    handle: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let n = vector(normal, "normal", 3)?;
+    let h = handle
+        .map(|h| vector(h, "handle", 3))
+        .transpose()?
+        .unwrap_or(vec![0.0, 0.0, 1.0]);
+    let r = hit::racket_frame(&Vector3::from_column_slice(&n), &Vector3::from_column_slice(&h)).py()?;
+    let m = r.matrix();
+    let rows: Vec<f64> = (0..3).flat_map(|i| (0..3).map(move |j| m[(i, j)])).collect();
+    Ok(to_numpy(py, &[3, 3], &rows).into_any())
+}
+
+/// (4, 4) racket frame in the tool frame for `robot` (m): where its racket is mounted.
+#[pyfunction]
+fn racket_mount<'py>(py: Python<'py>, robot: &PyRobot) -> Bound<'py, PyAny> {
+    pose_to_numpy(py, &hit::Racket::for_chain(&robot.chain).in_tool).into_any()
+}
+
+/// Adds `HitPlan` and the hit functions to the module.
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyHitPlan>()?;
+    m.add_function(wrap_pyfunction!(hit_plan, m)?)?;
+    m.add_function(wrap_pyfunction!(hit_plan_batch, m)?)?;
+    m.add_function(wrap_pyfunction!(racket_frame, m)?)?;
+    m.add_function(wrap_pyfunction!(racket_mount, m)?)?;
+    Ok(())
+}

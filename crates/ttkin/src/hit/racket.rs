@@ -1,0 +1,155 @@
+//! The racket frame: where the racket sits on a robot's tool flange, and the racket pose of a hit.
+//!
+//! Racket frame (one convention for every robot): origin at the racket centre, z axis along the
+//! face normal (the hitting side), x axis along the handle (from the grip towards the centre),
+//! y = z × x. A robot's tool frame carries the racket at a fixed pose
+//! [`Racket::in_tool`] (the racket frame in the tool frame):
+//! - `gantry6` (seed 002): the tool frame *is* the racket frame (identity);
+//! - `mobile8` (seed 000): the centre is 0.15 m along tool z and the face normal is tool x
+//!   ([`crate::task::SEED_RACKET_OFFSET`], the 5-D task of seed 000), so racket x = tool z,
+//!   racket z = tool x, racket y = −tool y;
+//! - any other chain: the tool frame is the racket frame.
+
+use nalgebra::{IsometryMatrix3, Matrix3, Rotation3, Translation3, Vector3};
+
+use crate::chain::Chain;
+use crate::error::{check_finite, Error, Result};
+use crate::task::SEED_RACKET_OFFSET;
+
+/// Where the racket is mounted: the racket frame's pose in the tool frame (m).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Racket {
+    /// Racket frame in the tool frame (m).
+    pub in_tool: IsometryMatrix3<f64>,
+}
+
+impl Racket {
+    /// The racket of a built-in robot, found by chain name (see the module doc); the tool frame
+    /// for any other chain.
+    pub fn for_chain(chain: &Chain) -> Racket {
+        match chain.name() {
+            "mobile8" => Racket::seed000(),
+            _ => Racket::at_tool(),
+        }
+    }
+
+    /// The racket frame is the tool frame.
+    pub fn at_tool() -> Racket {
+        Racket {
+            in_tool: IsometryMatrix3::identity(),
+        }
+    }
+
+    /// Seed 000's racket: centre 0.15 m along tool z, face normal tool x.
+    pub fn seed000() -> Racket {
+        let r = Matrix3::from_columns(&[Vector3::z(), -Vector3::y(), Vector3::x()]);
+        Racket {
+            in_tool: IsometryMatrix3::from_parts(
+                Translation3::new(0.0, 0.0, SEED_RACKET_OFFSET),
+                Rotation3::from_matrix_unchecked(r),
+            ),
+        }
+    }
+
+    /// Racket pose (base frame, m) for a tool pose (base frame, m).
+    pub fn racket_pose(&self, tool: &IsometryMatrix3<f64>) -> IsometryMatrix3<f64> {
+        tool * self.in_tool
+    }
+
+    /// Tool pose (base frame, m) that puts the racket at `racket` (base frame, m).
+    pub fn tool_pose(&self, racket: &IsometryMatrix3<f64>) -> IsometryMatrix3<f64> {
+        racket * self.in_tool.inverse()
+    }
+
+    /// Distance-vector from the tool origin to the racket centre (m, base axes) at tool pose `tool`.
+    pub fn lever(&self, tool: &IsometryMatrix3<f64>) -> Vector3<f64> {
+        tool.rotation * self.in_tool.translation.vector
+    }
+
+    /// Tool-point twist [v; ω] (base axes, m/s, rad/s) for a racket-centre twist `racket`
+    /// (base axes) at tool pose `tool`: v_tool = v_centre − ω × (c − p_tool).
+    pub fn tool_twist(&self, tool: &IsometryMatrix3<f64>, racket: &[f64; 6]) -> [f64; 6] {
+        let w = Vector3::new(racket[3], racket[4], racket[5]);
+        let v = Vector3::new(racket[0], racket[1], racket[2]) - w.cross(&self.lever(tool));
+        [v.x, v.y, v.z, w.x, w.y, w.z]
+    }
+
+    /// Racket-centre twist (base axes) from a tool-point twist `tool_twist` at tool pose `tool`.
+    pub fn racket_twist(&self, tool: &IsometryMatrix3<f64>, tool_twist: &[f64]) -> [f64; 6] {
+        let w = Vector3::new(tool_twist[3], tool_twist[4], tool_twist[5]);
+        let v = Vector3::new(tool_twist[0], tool_twist[1], tool_twist[2]) + w.cross(&self.lever(tool));
+        [v.x, v.y, v.z, w.x, w.y, w.z]
+    }
+}
+
+/// The racket orientation (base axes) whose z axis is the face `normal` and whose x axis (the
+/// handle) is as close as possible to `handle` (base axes; any vector not parallel to the
+/// normal). When `handle` is (nearly) parallel to the normal, base +z, then base +x, is used.
+pub fn racket_frame(normal: &Vector3<f64>, handle: &Vector3<f64>) -> Result<Rotation3<f64>> {
+    check_finite("normal", normal.as_slice())?;
+    check_finite("handle", handle.as_slice())?;
+    let nn = normal.norm();
+    if !(nn > 1e-12) {
+        return Err(Error::invalid("normal", "the face normal must be a nonzero vector"));
+    }
+    let z = normal / nn;
+    let mut x = Vector3::zeros();
+    for h in [*handle, Vector3::z(), Vector3::x()] {
+        let c = h - z * z.dot(&h);
+        if c.norm() > 1e-6 * h.norm().max(1e-300) {
+            x = c.normalize();
+            break;
+        }
+    }
+    Ok(Rotation3::from_matrix_unchecked(Matrix3::from_columns(&[
+        x,
+        z.cross(&x),
+        z,
+    ])))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn racket_frame_is_a_rotation_with_z_along_the_normal() {
+        let n = Vector3::new(0.3, -1.0, -0.2);
+        let r = racket_frame(&n, &Vector3::z()).unwrap();
+        let m = r.matrix();
+        assert!((m.determinant() - 1.0).abs() < 1e-12);
+        assert!((m.transpose() * m - Matrix3::identity()).norm() < 1e-12);
+        assert!((m.column(2) - n.normalize()).norm() < 1e-12);
+        // Handle parallel to the normal falls back to base z.
+        let r = racket_frame(&Vector3::z(), &Vector3::z()).unwrap();
+        assert!((r.matrix().column(0) - Vector3::x()).norm() < 1e-12);
+    }
+
+    #[test]
+    fn seed000_racket_matches_the_five_d_task() {
+        let tool = IsometryMatrix3::from_parts(
+            Translation3::new(0.2, 0.3, 0.4),
+            Rotation3::from_euler_angles(0.3, -0.2, 1.1),
+        );
+        let racket = Racket::seed000().racket_pose(&tool);
+        let c = crate::task::racket_centre(&tool, SEED_RACKET_OFFSET);
+        let n = crate::task::racket_normal(&tool);
+        assert!((racket.translation.vector - c).norm() < 1e-12);
+        assert!((racket.rotation.matrix().column(2) - n).norm() < 1e-12);
+        assert!((racket.rotation.matrix().determinant() - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn tool_and_racket_twists_are_inverse() {
+        let tool = IsometryMatrix3::from_parts(
+            Translation3::new(0.2, 0.3, 0.4),
+            Rotation3::from_euler_angles(0.3, -0.2, 1.1),
+        );
+        let r = Racket::seed000();
+        let t = [1.0, -2.0, 0.5, 3.0, -1.0, 2.0];
+        let back = r.racket_twist(&tool, &r.tool_twist(&tool, &t));
+        for k in 0..6 {
+            assert!((back[k] - t[k]).abs() < 1e-12);
+        }
+    }
+}

@@ -1,0 +1,374 @@
+//! Steps S104–S105 of the hit pipeline: the hitting stroke (start → hit state at the hit time →
+//! rest at the ready pose), its kinematic limits, its torques against the effort limits, and
+//! the earliest feasible hit time.
+//!
+//! Profile choice ([`StrokeProfile::Auto`]): the quintic when it meets the requested hit time
+//! within the velocity, acceleration and jerk limits (one exact peak evaluation); otherwise the
+//! jerk-limited leg with the requested time as minimum duration, which is the time-optimal one
+//! (the earliest kinematically feasible hit time T*) when the request is earlier than T* (status
+//! too early). The return leg is a quintic of nearly minimal duration (one Ruckig solve
+//! less per plan; the return is not time-critical), replanned jerk-limited when it would leave
+//! the position limits or exceed an effort limit.
+//! T* is computed on demand ([`super::HitPlanner::earliest_t_hit`]) when planning did not need it.
+//! A leg that leaves the position limits is replanned jerk-limited with position limits.
+//! When the torques at the check points exceed an effort limit, the return leg is slowed, and
+//! the hit time is moved later (growth by 10 %, then bisection to 0.1 %) until they do not.
+
+use super::{HitPlan, HitPlanner, HitStatus, StrokeProfile};
+use crate::dynamics::DynamicsData;
+use crate::error::Result;
+use crate::traj::jerk::{jerk_limited, PositionLimits};
+use crate::traj::limits::{self, Quantity, Violation, LIMIT_TOLERANCE};
+use crate::traj::{JointState, JointTrajectory};
+
+/// Relative precision of the earliest hit time under effort limits.
+const EFFORT_SEARCH_PRECISION: f64 = 1e-3;
+
+/// The two legs and their hit-leg profile.
+struct Legs {
+    hit: JointTrajectory,
+    back: JointTrajectory,
+    profile: StrokeProfile,
+}
+
+impl Legs {
+    fn t_hit(&self) -> f64 {
+        self.hit.duration()
+    }
+}
+
+/// Plans the stroke of `plan` (hit state already solved), filling status, times, trajectory,
+/// violations and efforts.
+pub(super) fn plan_stroke(p: &HitPlanner, plan: &mut HitPlan, mut data: Option<&mut DynamicsData>) -> Result<()> {
+    let lim = &p.limits;
+    let n = p.chain.dof();
+    for j in 0..n {
+        if plan.qd_hit[j].abs() > lim.velocity[j] * (1.0 + LIMIT_TOLERANCE) {
+            plan.status = HitStatus::HitSpeedLimit;
+            plan.message = format!(
+                "joint '{}' must move at {:.3} at the hit, beyond its speed limit {:.3}",
+                p.chain.joints()[j].name(),
+                plan.qd_hit[j],
+                lim.velocity[j]
+            );
+            return Ok(());
+        }
+    }
+    let hit = JointState {
+        q: plan.q_hit.clone(),
+        qd: plan.qd_hit.clone(),
+        qdd: vec![0.0; n],
+    };
+    let rest = JointState::rest(&plan.ready);
+    let t_req = plan.hit.t;
+    let profile = p.options.profile;
+
+    let legs = match first_legs(p, &plan.start, &hit, &rest, t_req, profile) {
+        Ok((legs, earliest)) => {
+            plan.earliest_t_hit = earliest;
+            legs
+        }
+        Err(e) => {
+            plan.status = HitStatus::NoStroke;
+            plan.message = e.to_string();
+            return Ok(());
+        }
+    };
+    let mut legs = match within_position_limits(p, &plan.start, &hit, &rest, legs) {
+        Ok(l) => l,
+        Err(message) => {
+            plan.status = HitStatus::PositionLimit;
+            plan.message = message;
+            return Ok(());
+        }
+    };
+
+    if let Some(d) = data.as_deref_mut() {
+        if let Err(message) = within_effort_limits(p, d, &plan.start, &hit, &rest, &mut legs) {
+            plan.status = HitStatus::EffortLimit;
+            plan.message = message;
+        }
+    }
+    let t_hit = legs.t_hit();
+    if let Some(d) = data {
+        let m = p.options.effort_points;
+        let (r1, p1) = effort(p, d, &legs.hit, 0.0, t_hit, m);
+        let (r2, p2) = effort(p, d, &legs.back, 0.0, legs.back.duration(), m);
+        plan.effort_ratio = r1.max(r2);
+        plan.peak_effort = p1.iter().zip(&p2).map(|(a, b)| a.max(*b)).collect();
+    }
+    if t_hit > t_req * (1.0 + 1e-12) {
+        if plan.status == HitStatus::Ok {
+            plan.status = HitStatus::TooEarly;
+            plan.message = format!(
+                "hit at {t_req:.4} s is not feasible within the limits; planned for the earliest feasible {t_hit:.4} s"
+            );
+        }
+        plan.earliest_t_hit = plan.earliest_t_hit.max(t_hit);
+    }
+    plan.t_hit = t_hit;
+    plan.profile = legs.profile;
+    plan.return_duration = legs.back.duration();
+    // Speed, acceleration and jerk hold by construction (Ruckig's profiles; quintics accepted only
+    // when their exact peaks are within the limits): only the position limits are left to check.
+    plan.violations = position_violations(p, &legs.hit, 0.0);
+    plan.violations.extend(position_violations(p, &legs.back, t_hit));
+    let trajectory = legs.hit.append(legs.back);
+    plan.trajectory = Some(trajectory);
+    if matches!(plan.status, HitStatus::Ok | HitStatus::TooEarly) && !plan.violations.is_empty() {
+        let v = &plan.violations[0];
+        plan.status = HitStatus::PositionLimit;
+        plan.message = format!(
+            "joint '{}' {} {:.4} beyond its limit {:.4} at {:.4} s",
+            p.chain.joints()[v.joint].name(),
+            v.quantity.name(),
+            v.value,
+            v.limit,
+            v.time
+        );
+    }
+    Ok(())
+}
+
+/// The legs before position and effort checks, and the earliest kinematically feasible hit time
+/// when it came out of the planning for free (NaN otherwise: [`earliest_kinematic`] on demand).
+fn first_legs(
+    p: &HitPlanner,
+    start: &JointState,
+    hit: &JointState,
+    rest: &JointState,
+    t_req: f64,
+    profile: StrokeProfile,
+) -> Result<(Legs, f64)> {
+    let lim = &p.limits;
+    if profile == StrokeProfile::Quintic {
+        let t = limits::earliest_quintic_duration(start, hit, lim, t_req)?;
+        let legs = Legs {
+            hit: JointTrajectory::quintic_unchecked(start, hit, t),
+            back: quick_quintic(hit, rest, lim),
+            profile,
+        };
+        return Ok((legs, if t > t_req { t } else { f64::NAN }));
+    }
+    if profile == StrokeProfile::Auto && limits::quintic_limit_ratio(start, hit, t_req, lim) <= 1.0 + LIMIT_TOLERANCE {
+        let legs = Legs {
+            hit: JointTrajectory::quintic_unchecked(start, hit, t_req),
+            back: quick_quintic(hit, rest, lim),
+            profile: StrokeProfile::Quintic,
+        };
+        return Ok((legs, f64::NAN));
+    }
+    // Ruckig with a minimum duration returns the time-optimal trajectory when that is later.
+    let leg = jerk_limited(start, hit, lim, Some(t_req), PositionLimits::Ignore)?;
+    let earliest = if leg.duration > t_req * (1.0 + 1e-12) {
+        leg.duration
+    } else {
+        f64::NAN
+    };
+    let back = quick_quintic(hit, rest, lim);
+    Ok((
+        Legs {
+            hit: leg.trajectory,
+            back,
+            profile: StrokeProfile::Jerk,
+        },
+        earliest,
+    ))
+}
+
+/// The earliest hit time (s) at which the planner's profile meets the velocity, acceleration and
+/// jerk limits from `start` to `hit`: the time-optimal jerk-limited duration (`Auto`, `Jerk`) or
+/// the minimal quintic duration (`Quintic`).
+pub(super) fn earliest_kinematic(p: &HitPlanner, start: &JointState, hit: &JointState) -> Result<f64> {
+    match p.options.profile {
+        StrokeProfile::Quintic => limits::minimal_quintic_duration(start, hit, &p.limits),
+        _ => Ok(jerk_limited(start, hit, &p.limits, None, PositionLimits::Ignore)?.duration),
+    }
+}
+
+/// Factor by which [`quick_quintic`] grows the return leg until it respects the limits.
+const QUICK_GROWTH: f64 = 1.1;
+
+/// A quintic from `from` to `to` within the velocity, acceleration and jerk limits, not minimal:
+/// the duration starts at the largest rest-to-rest quintic bound (15h/8v, √(10h/√3a), ∛(60h/j))
+/// and the time to cancel the start velocity and acceleration, and grows by √(peak/limit) (at least
+/// [`QUICK_GROWTH`]) until the exact peaks are within the limits; not minimal, typically within a
+/// few tens of percent of the minimal duration of that family.
+fn quick_quintic(from: &JointState, to: &JointState, lim: &limits::KinematicLimits) -> JointTrajectory {
+    let mut t: f64 = 1e-3;
+    for j in 0..from.q.len() {
+        let h = (to.q[j] - from.q[j]).abs();
+        t = t
+            .max(15.0 * h / (8.0 * lim.velocity[j]))
+            .max((10.0 * h / (3f64.sqrt() * lim.acceleration[j])).sqrt())
+            .max((60.0 * h / lim.jerk[j]).cbrt())
+            .max((to.qd[j] - from.qd[j]).abs() / lim.acceleration[j])
+            .max((to.qdd[j] - from.qdd[j]).abs() / lim.jerk[j]);
+    }
+    for _ in 0..200 {
+        let ratio = limits::quintic_limit_ratio(from, to, t, lim);
+        if ratio <= 1.0 + LIMIT_TOLERANCE {
+            break;
+        }
+        // Peaks fall like T⁻¹ to T⁻³ as T grows: √ratio is a step that rarely overshoots by much.
+        t *= ratio.sqrt().clamp(QUICK_GROWTH, 4.0);
+    }
+    JointTrajectory::quintic_unchecked(from, to, t)
+}
+
+/// Position-limit violations of `traj` (exact extrema per segment), times shifted by `t0` s.
+fn position_violations(p: &HitPlanner, traj: &JointTrajectory, t0: f64) -> Vec<Violation> {
+    let lim = &p.limits;
+    let slack = |b: f64| LIMIT_TOLERANCE * b.abs().max(1.0);
+    let mut out = Vec::new();
+    for (j, (lo, hi)) in traj.position_range().into_iter().enumerate() {
+        for (peak, limit, bad) in [
+            (lo, lim.lower[j], lo.value < lim.lower[j] - slack(lim.lower[j])),
+            (hi, lim.upper[j], hi.value > lim.upper[j] + slack(lim.upper[j])),
+        ] {
+            if bad {
+                out.push(Violation {
+                    joint: j,
+                    quantity: Quantity::Position,
+                    time: t0 + peak.time,
+                    value: peak.value,
+                    limit,
+                });
+            }
+        }
+    }
+    out
+}
+
+/// True when `traj` stays inside the position limits (exact extrema).
+fn inside(p: &HitPlanner, traj: &JointTrajectory) -> bool {
+    position_violations(p, traj, 0.0).is_empty()
+}
+
+/// Replans a leg that leaves the position limits jerk-limited with position limits (the hit leg
+/// at its hit time); an error message when that is impossible.
+fn within_position_limits(
+    p: &HitPlanner,
+    start: &JointState,
+    hit: &JointState,
+    rest: &JointState,
+    mut legs: Legs,
+) -> std::result::Result<Legs, String> {
+    let lim = &p.limits;
+    let why = |leg: &str, e: crate::Error| format!("the {leg} leg cannot stay inside the position limits: {e}");
+    if !inside(p, &legs.hit) {
+        let t = legs.t_hit();
+        legs.hit = jerk_limited(start, hit, lim, Some(t), PositionLimits::Respect)
+            .map_err(|e| why("hit", e))?
+            .trajectory;
+        legs.profile = StrokeProfile::Jerk;
+    }
+    if !inside(p, &legs.back) {
+        legs.back = jerk_limited(hit, rest, lim, None, PositionLimits::Respect)
+            .map_err(|e| why("return", e))?
+            .trajectory;
+    }
+    Ok(legs)
+}
+
+/// Largest |τ|/effort over `points` evenly spaced instants of [t0, t1] and the peak |τ| per joint
+/// (inverse dynamics with friction, gravity of the options).
+fn effort(
+    p: &HitPlanner,
+    data: &mut DynamicsData,
+    traj: &JointTrajectory,
+    t0: f64,
+    t1: f64,
+    points: usize,
+) -> (f64, Vec<f64>) {
+    let n = p.chain.dof();
+    let dynamics = p.dynamics.as_ref().expect("effort data exists only with dynamics");
+    let (mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let mut peak = vec![0.0f64; n];
+    let mut ratio: f64 = 0.0;
+    for k in 0..points {
+        let t = t0 + (t1 - t0) * k as f64 / (points - 1) as f64;
+        traj.sample_unchecked(t.min(traj.duration()), &mut q, &mut qd, &mut qdd);
+        let Ok(tau) = dynamics.inverse_dynamics(data, &q, &qd, &qdd, &p.options.gravity, None) else {
+            return (f64::INFINITY, peak);
+        };
+        for j in 0..n {
+            peak[j] = peak[j].max(tau[j].abs());
+            ratio = ratio.max(tau[j].abs() / p.effort[j]);
+        }
+    }
+    (ratio, peak)
+}
+
+/// Makes both legs respect the effort limits at their check points: the return leg slowed by
+/// factors of 1.25 (up to 10 times), the hit leg moved later (growth, then bisection). An error
+/// message when no hit time up to `max_t_hit` is enough.
+fn within_effort_limits(
+    p: &HitPlanner,
+    data: &mut DynamicsData,
+    start: &JointState,
+    hit: &JointState,
+    rest: &JointState,
+    legs: &mut Legs,
+) -> std::result::Result<(), String> {
+    let lim = &p.limits;
+    let m = p.options.effort_points;
+    let name = |ratio: f64, leg: &str| {
+        format!("the {leg} leg needs {ratio:.2}× the effort limit of some joint at every duration tried")
+    };
+    let mut r_back = effort(p, data, &legs.back, 0.0, legs.back.duration(), m).0;
+    let mut d = legs.back.duration();
+    for _ in 0..10 {
+        if r_back <= 1.0 {
+            break;
+        }
+        d *= 1.25;
+        let Ok(b) = jerk_limited(hit, rest, lim, Some(d), PositionLimits::Respect) else {
+            break;
+        };
+        legs.back = b.trajectory;
+        r_back = effort(p, data, &legs.back, 0.0, legs.back.duration(), m).0;
+    }
+    if r_back > 1.0 {
+        return Err(name(r_back, "return"));
+    }
+
+    let r_hit = effort(p, data, &legs.hit, 0.0, legs.t_hit(), m).0;
+    if r_hit <= 1.0 {
+        return Ok(());
+    }
+    // The hit leg at hit time t (jerk-limited, position limits respected).
+    let leg_at = |t: f64, data: &mut DynamicsData| -> Option<(JointTrajectory, f64)> {
+        let j = jerk_limited(start, hit, lim, Some(t), PositionLimits::Respect).ok()?;
+        let r = effort(p, data, &j.trajectory, 0.0, j.duration, m).0;
+        Some((j.trajectory, r))
+    };
+    let (mut lo, mut hi) = (legs.t_hit(), legs.t_hit() * 1.1);
+    let mut good = None;
+    while hi <= p.options.max_t_hit {
+        if let Some((traj, r)) = leg_at(hi, data) {
+            if r <= 1.0 {
+                good = Some(traj);
+                break;
+            }
+        }
+        lo = hi;
+        hi *= 1.1;
+    }
+    let Some(mut best) = good else {
+        return Err(name(r_hit, "hit"));
+    };
+    while hi - lo > EFFORT_SEARCH_PRECISION * hi {
+        let mid = 0.5 * (lo + hi);
+        match leg_at(mid, data) {
+            Some((traj, r)) if r <= 1.0 => {
+                best = traj;
+                hi = mid;
+            }
+            _ => lo = mid,
+        }
+    }
+    legs.hit = best;
+    legs.profile = StrokeProfile::Jerk;
+    Ok(())
+}

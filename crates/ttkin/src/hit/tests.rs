@@ -1,0 +1,210 @@
+//! Tests of the hit pipeline: the plan meets the hit (pose, twist, time) exactly, stays within
+//! every limit, reports infeasible requests with a status, and the batch equals single calls.
+
+use nalgebra::Vector3;
+use proptest::prelude::*;
+
+use super::*;
+use crate::robots;
+
+/// The pipeline demo's hit: centre (0.35, −0.55, 0.05) m, normal (0.3, −1, −0.2), 3 m/s along
+/// the normal (earliest feasible: 0.323 s jerk-limited, 0.503 s quintic).
+fn demo_hit(t: f64) -> Hit {
+    let n = Vector3::new(0.3, -1.0, -0.2).normalize() * 3.0;
+    Hit::from_normal([0.35, -0.55, 0.05], [0.3, -1.0, -0.2], [n.x, n.y, n.z], t, None, None).unwrap()
+}
+
+fn planner() -> HitPlanner {
+    HitPlanner::new(&robots::gantry6(), HitOptions::default()).unwrap()
+}
+
+/// Racket pose and twist reached by the plan at its hit time, against the request.
+fn hit_errors(p: &HitPlanner, plan: &HitPlan) -> (f64, f64) {
+    let traj = plan.trajectory.as_ref().unwrap();
+    let s = traj.state(plan.t_hit).unwrap();
+    let chain = p.chain();
+    let tool = chain.fk(&s.q).unwrap();
+    let racket = p.racket().racket_pose(&tool);
+    let pose_err = (racket.to_homogeneous() - plan.hit.pose.to_homogeneous()).abs().max();
+    let jac = chain.jacobian(&s.q, crate::JacobianFrame::Base).unwrap();
+    let tw = jac * nalgebra::DVector::from_column_slice(&s.qd);
+    let tw = p.racket().racket_twist(&tool, tw.as_slice());
+    let twist_err = (0..6).map(|k| (tw[k] - plan.hit.twist[k]).abs()).fold(0.0, f64::max);
+    (pose_err, twist_err)
+}
+
+#[test]
+fn demo_hit_is_met_on_time_within_every_limit() {
+    let p = planner();
+    let plan = p.plan(&demo_hit(0.35), None, None).unwrap();
+    assert!(plan.ok(), "{:?}: {}", plan.status, plan.message);
+    assert_eq!(plan.t_hit, 0.35);
+    assert!(plan.earliest_t_hit.is_nan());
+    let earliest = p.earliest_t_hit(&plan);
+    assert!(earliest > 0.25 && earliest < 0.35, "{earliest}");
+    let (pe, te) = hit_errors(&p, &plan);
+    assert!(pe < 1e-9 && te < 1e-8, "pose {pe}, twist {te}");
+    assert!(plan.violations.is_empty());
+    assert!(plan.effort_ratio <= 1.0);
+    let traj = plan.trajectory.as_ref().unwrap();
+    let end = traj.state(traj.duration()).unwrap();
+    for j in 0..6 {
+        assert!((end.q[j] - plan.ready[j]).abs() < 1e-8 && end.qd[j].abs() < 1e-8);
+    }
+}
+
+#[test]
+fn too_early_hit_is_planned_at_the_earliest_feasible_time() {
+    let p = planner();
+    let plan = p.plan(&demo_hit(0.02), None, None).unwrap();
+    assert_eq!(plan.status, HitStatus::TooEarly, "{}", plan.message);
+    assert!(plan.t_hit > 0.02 && (plan.t_hit - plan.earliest_t_hit).abs() < 1e-9);
+    let (pe, te) = hit_errors(&p, &plan);
+    assert!(pe < 1e-9 && te < 1e-8, "pose {pe}, twist {te}");
+    assert!(plan.violations.is_empty());
+    // Asking for the earliest time itself is on time.
+    let again = p
+        .plan(&demo_hit(plan.earliest_t_hit * (1.0 + 1e-9)), None, None)
+        .unwrap();
+    assert!(again.ok(), "{:?} {}", again.status, again.message);
+}
+
+#[test]
+fn auto_profile_prefers_the_quintic_when_it_is_on_time() {
+    let p = planner();
+    let slow = p.plan(&demo_hit(1.0), None, None).unwrap();
+    assert!(slow.ok());
+    assert_eq!(slow.profile, StrokeProfile::Quintic);
+    let fast = p.plan(&demo_hit(p.earliest_t_hit(&slow) * 1.01), None, None).unwrap();
+    assert!(fast.ok(), "{}", fast.message);
+    assert_eq!(fast.profile, StrokeProfile::Jerk);
+}
+
+#[test]
+fn unreachable_and_overspeed_hits_get_a_status() {
+    let p = planner();
+    let far = Hit::from_normal([0.3, -0.5, 2.0], [0.0, -1.0, 0.0], [0.0, -3.0, 0.0], 0.5, None, None).unwrap();
+    let plan = p.plan(&far, None, None).unwrap();
+    assert_eq!(plan.status, HitStatus::Unreachable);
+    assert!(plan.trajectory.is_none() && !plan.message.is_empty());
+    let n = Vector3::new(0.3, -1.0, -0.2).normalize() * 40.0;
+    let fast = Hit::from_normal([0.35, -0.55, 0.05], [0.3, -1.0, -0.2], [n.x, n.y, n.z], 0.5, None, None).unwrap();
+    let plan = p.plan(&fast, None, None).unwrap();
+    assert_eq!(plan.status, HitStatus::HitSpeedLimit, "{}", plan.message);
+}
+
+#[test]
+fn bad_hits_are_errors_naming_the_argument() {
+    let e = Hit::from_normal([0.0; 3], [0.0; 3], [0.0; 3], 0.3, None, None).unwrap_err();
+    assert!(e.to_string().contains("normal"), "{e}");
+    let e = Hit::from_normal([0.0; 3], [0.0, 0.0, 1.0], [0.0; 3], -1.0, None, None).unwrap_err();
+    assert!(e.to_string().starts_with("t:"), "{e}");
+    let e = Hit::from_normal([f64::NAN, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0; 3], 1.0, None, None).unwrap_err();
+    assert!(e.to_string().contains("centre"), "{e}");
+}
+
+#[test]
+fn quintic_profile_without_jerk_limit_keeps_the_patent_stroke() {
+    let opts = HitOptions {
+        profile: StrokeProfile::Quintic,
+        jerk: Some(vec![1e9; 6]),
+        ..Default::default()
+    };
+    let p = HitPlanner::new(&robots::gantry6(), opts).unwrap();
+    // The quintic needs 0.503 s for this hit (the jerk-limited stroke 0.323 s).
+    let plan = p.plan(&demo_hit(0.6), None, None).unwrap();
+    assert!(plan.ok(), "{}", plan.message);
+    assert_eq!(plan.profile, StrokeProfile::Quintic);
+    let (pe, te) = hit_errors(&p, &plan);
+    assert!(pe < 1e-9 && te < 1e-8);
+}
+
+#[test]
+fn mobile8_racket_task_hit_meets_centre_and_normal() {
+    let chain = robots::mobile8();
+    let p = HitPlanner::new(&chain, HitOptions::default()).unwrap();
+    let q0 = p.default_ready().to_vec();
+    let now = p.racket().racket_pose(&chain.fk(&q0).unwrap());
+    // The demo's mobile8 hit (python/ttmanip/demo.py: mobile8_hit).
+    let c = now.translation.vector + Vector3::new(0.02, -0.04, -0.07);
+    let n = now.rotation.matrix().column(2).into_owned();
+    let hit = Hit::from_normal([c.x, c.y, c.z], [n.x, n.y, n.z], [-0.29, 0.19, 0.25], 1.5, None, None).unwrap();
+    let plan = p.plan(&hit, None, None).unwrap();
+    assert!(
+        matches!(plan.status, HitStatus::Ok | HitStatus::TooEarly),
+        "{:?} {}",
+        plan.status,
+        plan.message
+    );
+    let traj = plan.trajectory.as_ref().unwrap();
+    let s = traj.state(plan.t_hit).unwrap();
+    let racket = p.racket().racket_pose(&chain.fk(&s.q).unwrap());
+    assert!((racket.translation.vector - hit.centre()).norm() < 1e-6);
+    let normal = racket.rotation.matrix().column(2).into_owned();
+    assert!(normal.angle(&hit.normal()) < 1e-6);
+    // Centre velocity as requested.
+    let jac = chain.jacobian(&s.q, crate::JacobianFrame::Base).unwrap();
+    let tw = jac * nalgebra::DVector::from_column_slice(&s.qd);
+    let tw = p.racket().racket_twist(&chain.fk(&s.q).unwrap(), tw.as_slice());
+    for k in 0..3 {
+        assert!((tw[k] - hit.twist[k]).abs() < 1e-6, "{tw:?}");
+    }
+}
+
+#[test]
+fn batch_equals_single_calls() {
+    let p = planner();
+    let hits: Vec<Hit> = [0.02, 0.3, 0.5, 1.0].iter().map(|&t| demo_hit(t)).collect();
+    let batch = p.plan_batch(&hits, None, None).unwrap();
+    for (h, b) in hits.iter().zip(&batch) {
+        let single = p.plan(h, None, None).unwrap();
+        assert_eq!(single.status, b.status);
+        assert_eq!(single.t_hit, b.t_hit, "{:?}", b.status);
+        assert_eq!(single.q_hit, b.q_hit);
+        assert_eq!(single.trajectory, b.trajectory);
+    }
+}
+
+/// A random reachable gantry6 hit: centre in the box x ∈ [−0.3, 0.3], y ∈ [−0.6, −0.2],
+/// z ∈ [−0.15, 0.15] m, face normal within 45° of −y, racket speed 1–4 m/s along the normal, hit
+/// time 0.15–0.6 s.
+fn random_hit() -> impl Strategy<Value = Hit> {
+    (
+        -0.3..0.3f64,
+        -0.6..-0.2f64,
+        -0.15..0.15f64,
+        -0.7..0.7f64,
+        -0.7..0.7f64,
+        1.0..4.0f64,
+        0.15..0.6f64,
+    )
+        .prop_map(|(x, y, z, a, b, s, t)| {
+            let n = Vector3::new(a.sin(), -a.cos() * b.cos(), b.sin()).normalize();
+            let v = n * s;
+            Hit::from_normal([x, y, z], [n.x, n.y, n.z], [v.x, v.y, v.z], t, None, None).unwrap()
+        })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+    #[test]
+    fn every_planned_stroke_meets_its_hit_and_limits(hit in random_hit()) {
+        let p = planner();
+        let plan = p.plan(&hit, None, None).unwrap();
+        if plan.trajectory.is_some() {
+            let (pe, te) = hit_errors(&p, &plan);
+            prop_assert!(pe < 1e-8 && te < 1e-6, "pose {} twist {}", pe, te);
+            if matches!(plan.status, HitStatus::Ok | HitStatus::TooEarly) {
+                prop_assert!(plan.violations.is_empty(), "{:?}", plan.violations);
+                // Independent exact check of every kinematic limit (position, speed, acceleration, jerk).
+                let all = plan.trajectory.as_ref().unwrap().check_limits(p.limits()).unwrap();
+                prop_assert!(all.is_empty(), "{:?}", all);
+                prop_assert!(plan.t_hit >= hit.t * (1.0 - 1e-12));
+                prop_assert!(plan.t_hit >= p.earliest_t_hit(&plan) * (1.0 - 1e-9));
+            }
+            if plan.status == HitStatus::Ok {
+                prop_assert_eq!(plan.t_hit, hit.t);
+            }
+        }
+    }
+}
