@@ -48,3 +48,9 @@ def test_rally_cli_writes_summary_and_figures(tmp_path, capsys):
     for f in summary["figures"]:
         assert (tmp_path / f).exists() or __import__("pathlib").Path(f).exists()
     assert cli.main(["rally", "--n", "0", "--out", str(out)]) == 2
+
+
+def test_planned_hits_executed_through_the_drives_stay_on_the_plan():
+    s = ttmanip.rally(30, seed=3, drives=3)
+    assert s["drive_balls"] >= 1
+    assert s["drive_racket_position_error_m_max"] < 0.005  # the racket is 7.5 cm in radius

@@ -12,6 +12,12 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--n", type=int, default=1000, help="number of balls (default 1000)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument("--out", default="out/rally", help="output folder (default: out/rally)")
+    p.add_argument(
+        "--drives",
+        type=int,
+        default=20,
+        help="in-reach balls also executed through the drive simulation (default 20)",
+    )
     p.set_defaults(func=run)
     return p
 
@@ -24,7 +30,7 @@ def run(args: argparse.Namespace) -> int:
     from .rally import rally
 
     try:
-        summary = rally(args.n, args.seed, out=args.out, progress=True)
+        summary = rally(args.n, args.seed, out=args.out, progress=True, drives=args.drives)
     except TtmanipError as e:
         print(f"ttmanip rally: {e}", file=sys.stderr)
         return 2

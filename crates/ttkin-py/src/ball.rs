@@ -179,7 +179,7 @@ fn ball_crossing<'py>(
     let pt = vector(point, "point", 3)?;
     let n = vector(normal, "normal", 3)?;
     let nn = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-    if !(nn > 1e-12) {
+    if nn.is_nan() || nn <= 1e-12 {
         return Err(ttkin::Error::invalid("normal", "must be a non-zero vector")).py();
     }
     let plane = Plane {
@@ -296,6 +296,7 @@ fn ball_rally<'py>(
     d.set_item("status", out.iter().map(|o| o.status.clone()).collect::<Vec<_>>())?;
     d.set_item("racket_error", to_numpy(py, &[n], &col(&|o| o.racket_error)))?;
     d.set_item("plan_time_us", to_numpy(py, &[n], &col(&|o| o.plan_time_us)))?;
+    d.set_item("plan_wall_time_us", to_numpy(py, &[n], &col(&|o| o.plan_wall_time_us)))?;
     d.set_item("landing_error", to_numpy(py, &[n], &col(&|o| o.landing_error)))?;
     d.set_item("velocity_error", to_numpy(py, &[n], &col(&|o| o.velocity_error)))?;
     d.set_item(

@@ -15,7 +15,7 @@
 //! (c = 3σ on the 3-D residual, σ from the median residual: for Gaussian noise σ_axis = median|r| /
 //! 1.538, the median of a χ₃) and residuals beyond 6σ get weight 0 (outliers). The contraction
 //! factor of the iteration is about k_d·|v|·T (≈ 0.15 for a 0.2 s window), so it converges in a
-//! few iterations (it stops when an iteration moves the state by < 1 µm). Covariance: σ²·(BᵀWB + ridge)⁻¹.
+//! few iterations (it stops when an iteration moves the state by < 10 µm). Covariance: σ²·(BᵀWB + ridge)⁻¹.
 
 use super::flight::{BallState, Flight};
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
@@ -240,21 +240,41 @@ fn fit_arc(t: &[f64], p: &[[f64; 3]], arc: &[usize], opts: &EstimateOptions) -> 
     for iter in 0..opts.iterations.max(2) {
         // Weighted linear least squares in (p0, v0, ω): rows [I, τ·I, −k_m·[V2(τ)]×].
         let acc = Vector3::new(0.0, 0.0, -m.gravity) - m.k_drag * v0.norm() * v0;
-        let mut ata = SMatrix::<f64, 9, 9>::zeros();
-        let mut atb = SVector::<f64, 9>::zeros();
+        // BᵀWB and BᵀWy from sums, B_k = [I, τ·I, C_k] with C_k = −k_m·[V2(τ_k)]×.
+        let (mut s0, mut s1, mut s2) = (0.0, 0.0, 0.0);
+        let (mut sc, mut stc, mut sctc) = (Matrix3::zeros(), Matrix3::zeros(), Matrix3::zeros());
+        let (mut y0, mut y1, mut yc) = (Vector3::zeros(), Vector3::zeros(), Vector3::zeros());
         for k in 0..n {
-            let mut b = SMatrix::<f64, 3, 9>::zeros();
-            b.fixed_view_mut::<3, 3>(0, 0).copy_from(&Matrix3::identity());
-            b.fixed_view_mut::<3, 3>(0, 3)
-                .copy_from(&(Matrix3::identity() * tau[k]));
-            if with_spin {
-                b.fixed_view_mut::<3, 3>(0, 6)
-                    .copy_from(&(-km * v2(&v0, &acc, tau[k]).cross_matrix()));
-            }
+            let (wk, tk) = (weights[k], tau[k]);
             let y = obs[k] - model_path[k];
-            ata += weights[k] * b.transpose() * b;
-            atb += weights[k] * b.transpose() * y;
+            s0 += wk;
+            s1 += wk * tk;
+            s2 += wk * tk * tk;
+            y0 += wk * y;
+            y1 += (wk * tk) * y;
+            if with_spin {
+                let c = -km * v2(&v0, &acc, tk).cross_matrix();
+                sc += wk * c;
+                stc += (wk * tk) * c;
+                sctc += wk * c.transpose() * c;
+                yc += wk * c.transpose() * y;
+            }
         }
+        let eye = Matrix3::identity();
+        let mut ata = SMatrix::<f64, 9, 9>::zeros();
+        ata.fixed_view_mut::<3, 3>(0, 0).copy_from(&(eye * s0));
+        ata.fixed_view_mut::<3, 3>(0, 3).copy_from(&(eye * s1));
+        ata.fixed_view_mut::<3, 3>(3, 0).copy_from(&(eye * s1));
+        ata.fixed_view_mut::<3, 3>(3, 3).copy_from(&(eye * s2));
+        ata.fixed_view_mut::<3, 3>(0, 6).copy_from(&sc);
+        ata.fixed_view_mut::<3, 3>(6, 0).copy_from(&sc.transpose());
+        ata.fixed_view_mut::<3, 3>(3, 6).copy_from(&stc);
+        ata.fixed_view_mut::<3, 3>(6, 3).copy_from(&stc.transpose());
+        ata.fixed_view_mut::<3, 3>(6, 6).copy_from(&sctc);
+        let mut atb = SVector::<f64, 9>::zeros();
+        atb.fixed_rows_mut::<3>(0).copy_from(&y0);
+        atb.fixed_rows_mut::<3>(3).copy_from(&y1);
+        atb.fixed_rows_mut::<3>(6).copy_from(&yc);
         let ridge = if with_spin { (sigma / SPIN_PRIOR).powi(2) } else { 1.0 };
         for r in 6..9 {
             ata[(r, r)] += ridge;
@@ -293,7 +313,7 @@ fn fit_arc(t: &[f64], p: &[[f64; 3]], arc: &[usize], opts: &EstimateOptions) -> 
                 1.0
             };
         }
-        if iter >= 2 && change < 1e-6 {
+        if iter >= 2 && change < 1e-5 {
             break;
         }
     }

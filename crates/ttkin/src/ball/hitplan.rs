@@ -399,7 +399,20 @@ impl HitPlanner {
     fn outgoing(&self, s: &BallState, target: [f64; 2], tf: f64) -> Option<(Vector3<f64>, RacketHit, Vector3<f64>)> {
         let f = &self.flight;
         let goal = Vector3::new(target[0], target[1], f.model.radius);
-        let racket = |v: &Vector3<f64>| self.racket.solve(&f.model, &s.v, &s.w, v).ok();
+        // Each solve starts from the previous one (the shooting iterates move v₀ a little).
+        let last: std::cell::Cell<Option<RacketHit>> = std::cell::Cell::new(None);
+        let racket = |v: &Vector3<f64>| {
+            let guess = last.get();
+            let hit = self
+                .racket
+                .solve_from(&f.model, &s.v, &s.w, v, guess.as_ref())
+                .or_else(|_| self.racket.solve(&f.model, &s.v, &s.w, v))
+                .ok();
+            if hit.is_some() {
+                last.set(hit);
+            }
+            hit
+        };
         // The outgoing spin follows the racket, which follows v₀: solved together.
         let v_out = shoot(f, &s.p, &goal, tf, |v| racket(v).map(|r| r.spin_out))?;
         let hit = racket(&v_out)?;

@@ -75,6 +75,19 @@ impl Racket {
         w_in: &Vector3<f64>,
         v_out: &Vector3<f64>,
     ) -> Result<RacketHit> {
+        self.solve_from(model, v_in, w_in, v_out, None)
+    }
+
+    /// [`Racket::solve`] started from a nearby solution `guess` (e.g. that of a slightly different
+    /// `v_out`) instead of the frictionless one.
+    pub fn solve_from(
+        &self,
+        model: &BallModel,
+        v_in: &Vector3<f64>,
+        w_in: &Vector3<f64>,
+        v_out: &Vector3<f64>,
+        guess: Option<&RacketHit>,
+    ) -> Result<RacketHit> {
         let e = self.restitution;
         let dv = v_out - v_in;
         if !(dv.norm() > 1e-6) {
@@ -87,6 +100,10 @@ impl Racket {
         let s0 = (v_out.dot(&n0) + e * v_in.dot(&n0)) / (1.0 + e);
         // Parameters: azimuth, elevation of n, speed s.
         let to_n = |x: &Vector3<f64>| Vector3::new(x[1].cos() * x[0].cos(), x[1].cos() * x[0].sin(), x[1].sin());
+        let (n0, s0) = match guess {
+            Some(g) => (g.normal, g.velocity.dot(&g.normal)),
+            None => (n0, s0),
+        };
         let mut x = Vector3::new(n0.y.atan2(n0.x), n0.z.clamp(-1.0, 1.0).asin(), s0);
         let f = |x: &Vector3<f64>| {
             let n = to_n(x);

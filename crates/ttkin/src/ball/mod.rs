@@ -8,7 +8,7 @@
 //! [`hitplan::Placement`] says how the robot's base frame sits in it.
 //!
 //! One concept per file: [`model`] (ball and table constants), [`flight`] (integration with events),
-//! [`contact`] (table, edge, net contacts and the bounce impulse), [`estimate`] (state from
+//! [`contact`] (table, edge, net contacts and the bounce impulse), [`estimate`](mod@estimate) (state from
 //! observations), [`predict`] (positions, crossings), [`impact`] (racket impact and its inverse),
 //! [`hitplan`] (where, when and how to hit), [`rally`] (the closed loop in simulation).
 

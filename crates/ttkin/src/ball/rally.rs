@@ -128,8 +128,10 @@ pub struct BallOutcome {
     pub returned: bool,
     /// Distance (m) of the contact point from the racket centre (NaN without contact).
     pub racket_error: f64,
-    /// Planning time (µs): estimate, predict, choose hit, IK, stroke.
+    /// Planning time (µs of this thread's CPU time): estimate, predict, choose hit, IK, stroke.
     pub plan_time_us: f64,
+    /// The same planning step in wall-clock time (µs; includes preemption on a loaded machine).
+    pub plan_wall_time_us: f64,
     /// Landing point (m, world) of the return (NaN when it did not touch the table).
     pub landing: [f64; 3],
     /// Distance (m) from the landing point to the target (NaN without landing).
@@ -261,6 +263,7 @@ pub fn play(planner: &HitPlanner, truth: &Flight, cfg: &RallyConfig, index: u64)
         returned: false,
         racket_error: f64::NAN,
         plan_time_us: f64::NAN,
+        plan_wall_time_us: f64::NAN,
         landing: [f64::NAN; 3],
         landing_error: f64::NAN,
         velocity_error: f64::NAN,
@@ -273,6 +276,7 @@ pub fn play(planner: &HitPlanner, truth: &Flight, cfg: &RallyConfig, index: u64)
         ..EstimateOptions::default()
     };
     let clock = Instant::now();
+    let cpu = cpu_time::ThreadTime::now();
     let est = match estimate(&times[..first], &obs[..first], &opts) {
         Ok(e) => e,
         Err(e) => {
@@ -281,7 +285,8 @@ pub fn play(planner: &HitPlanner, truth: &Flight, cfg: &RallyConfig, index: u64)
         }
     };
     let plan = planner.plan(&est.state, now, cfg.target);
-    out.plan_time_us = clock.elapsed().as_secs_f64() * 1e6;
+    out.plan_time_us = cpu.elapsed().as_secs_f64() * 1e6;
+    out.plan_wall_time_us = clock.elapsed().as_secs_f64() * 1e6;
     out.velocity_error = (est.state.v - truth_at_last.v).norm();
     let plan = match plan {
         Ok(p) => p,
@@ -438,7 +443,7 @@ pub fn play(planner: &HitPlanner, truth: &Flight, cfg: &RallyConfig, index: u64)
     let after = BallState { v, w, ..b };
     let (_, events) = truth.run(&after, b.t + 2.0, None);
     if keep_path {
-        let tail = sample_path(truth, &after, 1.0);
+        let tail = sample_path(truth, &after, after.t + 1.0);
         out.path.extend(tail);
     }
     match events.first() {
