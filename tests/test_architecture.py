@@ -166,19 +166,7 @@ def _cycle(graph: dict[tuple[str, ...], set[tuple[str, ...]]]) -> list[tuple[str
     return None
 
 
-# ttcan's axis.rs ↔ stepper.rs cycle (Rates, Due, Scheduler live beside the multi-axis stepper) is
-# issue 16's ttcan part, owned by branch i10: strict, so the test fails once the fix lands and this
-# mark must go.
-CRATES = [
-    "ttkin",
-    "ttkin-py",
-    pytest.param(
-        "ttcan",
-        marks=pytest.mark.xfail(
-            strict=True, reason="axis.rs <-> stepper.rs: scheduling moves out on branch i10"
-        ),
-    ),
-]
+CRATES = ["ttkin", "ttkin-py", "ttcan"]
 
 
 @pytest.mark.parametrize("crate", CRATES)
