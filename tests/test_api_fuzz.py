@@ -144,7 +144,7 @@ def robot(name: str) -> ttmanip.Robot:
 def pose_of(d: Draw, r: ttmanip.Robot):
     """A reachable pose of `r` (FK of a configuration within limits), in a random layout."""
     lim = np.clip(r.limits, -3.0, 3.0)
-    u = np.array(d(st.lists(st.floats(0.0, 1.0), min_size=r.n, max_size=r.n)))
+    u = np.array(d(st.lists(st.floats(0.0, 1.0), min_size=r.dof, max_size=r.dof)))
     return r.fk(lim[:, 0] + (lim[:, 1] - lim[:, 0]) * u)
 
 
@@ -166,7 +166,7 @@ def sample_objects() -> dict[str, object]:
     x0 = m8.task_coordinates(q0)
     x, xd = ttmanip.task_line(x0, x0 + 0.01, 0.05, rate_hz=200.0)
     tr = ttmanip.track(m8, q0, x, rate_hz=200.0, velocities=xd)
-    n = g6.n
+    n = g6.dof
     qg = np.full(n, 0.1)
     prof = g6.torques(np.zeros((3, n)), np.zeros((3, n)), np.zeros((3, n)))
     servo = ttmanip.motor.Servo()

@@ -209,8 +209,8 @@ def read_hit_file(path: str) -> dict:
         s = data["state"]
         if not isinstance(s, dict) or "q" not in s:
             raise CliError("state.q: missing key (the start configuration)")
-        state = {k: _vector(s, k, "state", robot.n) for k in ("q", "qd", "qdd") if k in s}
-    ready = _vector(data, "ready", "file", robot.n, required=False)
+        state = {k: _vector(s, k, "state", robot.dof) for k in ("q", "qd", "qdd") if k in s}
+    ready = _vector(data, "ready", "file", robot.dof, required=False)
     profile = data.get("profile", "auto")
     if profile not in ("auto", "quintic", "jerk"):
         raise CliError(f"profile: expected 'auto', 'quintic' or 'jerk', got {profile!r}")
@@ -284,7 +284,7 @@ def _experiment(args: argparse.Namespace) -> int:
 
 def _fk(args: argparse.Namespace) -> int:
     robot = _robot(args.robot)
-    q = _numbers(args.q, "--q", robot.n)
+    q = _numbers(args.q, "--q", robot.dof)
     pose = robot.fk(q)
     np.set_printoptions(precision=6, suppress=True)
     print(pose)

@@ -76,14 +76,15 @@ def write_trajectory(
 
 
 def write_stroke(path: str | Path, rate_hz: float = 1000.0) -> Path:
-    """Plans the gantry6 hitting stroke of ``ttmanip.pipeline.HitRequest()`` (ready → hit →
+    """Plans the gantry6 hitting stroke of the demo hit ``ttmanip.DEMO_HIT`` (start → hit →
     ready) and writes it with :func:`write_trajectory` (no torque feed-forward: the virtual
     drives of ``ttdrive-sim`` carry their motor model's load, not the robot's)."""
     from . import pipeline, robots
 
     robot = robots.gantry6()
-    plan = pipeline.plan_hit(robot, pipeline.HitRequest(), rate_hz=rate_hz)
-    return write_trajectory(path, plan["t"], plan["q"], plan["qd"], plan["qdd"])
+    plan = pipeline.plan_hit(robot, pipeline.DEMO_HIT, raise_on_failure=True)
+    t, q, qd, qdd = plan.sample(rate_hz)
+    return write_trajectory(path, t, q, qd, qdd)
 
 
 if __name__ == "__main__":  # pragma: no cover - exercised by scripts/vm/build.sh

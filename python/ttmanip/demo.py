@@ -37,7 +37,7 @@ def random_configurations(robot: Robot, count: int, seed: int = 0) -> np.ndarray
     """``count`` configurations drawn uniformly within the joint limits, shape (count, n)."""
     lim = robot.limits
     rng = np.random.default_rng(seed)
-    return lim[:, 0] + (lim[:, 1] - lim[:, 0]) * rng.random((count, robot.n))
+    return lim[:, 0] + (lim[:, 1] - lim[:, 0]) * rng.random((count, robot.dof))
 
 
 def workspace_figure(robot: Robot, q_ref: np.ndarray, path: Path, count: int = 100_000) -> dict:
@@ -187,7 +187,7 @@ def mobile8_hit() -> Hit:
     rotation about the normal is free."""
     robot = robots.mobile8()
     q0 = robots.mobile8_start()
-    _, c, n, _ = racket_states(robot, q0, np.zeros(robot.n))
+    _, c, n, _ = racket_states(robot, q0, np.zeros(robot.dof))
     return Hit.from_normal(c[0] + [0.02, -0.04, -0.07], n[0], [-0.29, 0.19, 0.25], 1.5)
 
 

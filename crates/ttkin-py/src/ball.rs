@@ -12,7 +12,7 @@ use ttkin::ball::model::BallModel;
 use ttkin::ball::predict::{crossing, predict, CrossingOutcome};
 use ttkin::ball::rally::{self, RallyConfig};
 
-use crate::convert::{f64_array, filled_without_gil, pose_to_numpy, to_numpy, vector};
+use crate::convert::{f64_array, filled_without_gil_nan_allowed, pose_to_numpy, to_numpy, vector};
 use crate::errors::{PyResultExt, ShapeError};
 
 fn flight(model: &str) -> PyResult<Flight> {
@@ -32,6 +32,7 @@ fn state_arg(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<BallState> {
 }
 
 /// Fits a ball state to observed positions `p` (N, 3) at times `t` (N,); see `ttkin::ball::estimate`.
+#[ttkin_py_guard::guarded]
 #[pyfunction]
 #[pyo3(signature = (t, p, model = "default"))]
 fn ball_estimate<'py>(
@@ -85,6 +86,7 @@ fn ball_estimate<'py>(
 }
 
 /// Positions (K, 3) of the ball from `state` at `times` (K,), the events met and the terminal event.
+#[ttkin_py_guard::guarded]
 #[pyfunction]
 #[pyo3(signature = (state, times, model = "default"))]
 fn ball_predict<'py>(
@@ -122,6 +124,7 @@ fn ball_predict<'py>(
 
 /// Positions (N, K, 3) of N balls (`states` (N, 10)) at `times` (K,), in parallel; NaN after a
 /// terminal event.
+#[ttkin_py_guard::guarded]
 #[pyfunction]
 #[pyo3(signature = (states, times, model = "default"))]
 fn ball_predict_batch<'py>(
@@ -148,7 +151,7 @@ fn ball_predict_batch<'py>(
     let ts = ta.data().to_vec();
     let f = flight(model)?;
     let k = ts.len();
-    filled_without_gil(py, &[list.len(), k, 3], |out| {
+    filled_without_gil_nan_allowed(py, &[list.len(), k, 3], |out| {
         out.par_chunks_mut((3 * k).max(1))
             .zip(list.par_iter())
             .enumerate()
@@ -165,6 +168,7 @@ fn ball_predict_batch<'py>(
 
 /// Where and when the ball from `state` crosses the plane through `point` with normal `normal`
 /// (from its positive side), searching until `t_max` (s).
+#[ttkin_py_guard::guarded]
 #[pyfunction]
 #[pyo3(signature = (state, point, normal, t_max = 2.0, model = "default"))]
 fn ball_crossing<'py>(
@@ -206,6 +210,7 @@ fn ball_crossing<'py>(
 
 /// Plans gantry6's return of the ball `state` for a stroke starting at time `now` (s), landing at
 /// `target` (x, y, m, world).
+#[ttkin_py_guard::guarded]
 #[pyfunction]
 #[pyo3(signature = (state, now, target, model = "default"))]
 fn ball_plan_return<'py>(
@@ -242,6 +247,7 @@ fn ball_plan_return<'py>(
 }
 
 /// Plays balls `start`..`start + n` of a simulated rally (see `ttkin::ball::rally`) in parallel.
+#[ttkin_py_guard::guarded]
 #[pyfunction]
 #[pyo3(signature = (n, seed = 0, start = 0, target = (0.9, 0.0), max_spin_rps = 40.0, paths = 5))]
 fn ball_rally<'py>(

@@ -31,6 +31,7 @@ pub struct DriveSim {
     sim: CoupledSim,
 }
 
+#[ttkin_py_guard::guarded]
 #[pymethods]
 impl DriveSim {
     #[new]
@@ -212,6 +213,7 @@ impl DriveSim {
 }
 
 /// (10–90 % rise time in s, overshoot as a fraction) of `y` sampled at `t` towards `target`.
+#[ttkin_py_guard::guarded]
 #[pyfunction]
 fn step_metrics(t: &Bound<'_, PyAny>, y: &Bound<'_, PyAny>, target: f64) -> PyResult<(f64, f64)> {
     let t = f64_array(t, "t")?;
@@ -242,6 +244,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 }
 
 /// Issue 10's θ5 case (`ttcan::cases::theta5_case`): its RMS numbers and traces.
+#[ttkin_py_guard::guarded]
 #[pyfunction]
 #[pyo3(signature = (setpoint_rate=1000.0))]
 fn drive_theta5_case<'py>(py: Python<'py>, setpoint_rate: f64) -> PyResult<Bound<'py, PyDict>> {

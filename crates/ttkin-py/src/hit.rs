@@ -38,6 +38,7 @@ impl PyHitPlan {
     }
 }
 
+#[ttkin_py_guard::guarded]
 #[pymethods]
 impl PyHitPlan {
     /// True when the hit is on time and within every limit.
@@ -56,7 +57,7 @@ impl PyHitPlan {
     /// One line on what limited the plan ("" when ok).
     #[getter]
     fn message(&self) -> &str {
-        &self.plan.message
+        self.plan.message.as_str()
     }
 
     /// (n,) hit configuration (m, rad); NaN when unreachable.
@@ -276,6 +277,7 @@ fn start_state(
 /// Plans one hit: racket pose (4, 4), racket-centre twist (6,), hit time (s); optional start
 /// state (q, qd, qdd), ready configuration, profile ("auto", "quintic", "jerk"), task ("auto",
 /// "pose", "racket5"), jerk limits (n,), effort (check the effort limits).
+#[ttkin_py_guard::guarded]
 #[pyfunction]
 #[pyo3(signature = (robot, pose, twist, t, q=None, qd=None, qdd=None, ready=None, profile="auto", task="auto", jerk=None, effort=true))]
 #[allow(clippy::too_many_arguments)]
@@ -310,6 +312,7 @@ fn hit_plan(
 
 /// Plans N hits in parallel (GIL released): poses (N, 4, 4), twists (N, 6), times (N,); the
 /// other arguments as for `hit_plan`. Returns a list of N `HitPlan`s.
+#[ttkin_py_guard::guarded]
 #[pyfunction]
 #[pyo3(signature = (robot, poses, twists, times, q=None, qd=None, qdd=None, ready=None, profile="auto", task="auto", jerk=None, effort=true))]
 #[allow(clippy::too_many_arguments)]
@@ -378,6 +381,7 @@ fn hit_plan_batch(
 
 /// (3, 3) racket orientation (base axes) with z along the face `normal` and x (the handle) as
 /// close as possible to `handle`: the one racket-frame convention of `ttkin::hit::racket`.
+#[ttkin_py_guard::guarded]
 #[pyfunction]
 #[pyo3(signature = (normal, handle=None))]
 fn racket_frame<'py>(
@@ -397,6 +401,7 @@ fn racket_frame<'py>(
 }
 
 /// (4, 4) racket frame in the tool frame for `robot` (m): where its racket is mounted.
+#[ttkin_py_guard::guarded]
 #[pyfunction]
 fn racket_mount<'py>(py: Python<'py>, robot: &PyRobot) -> Bound<'py, PyAny> {
     pose_to_numpy(py, &hit::Racket::for_chain(&robot.chain).in_tool).into_any()
