@@ -458,3 +458,31 @@ fn drive_that_never_answers_sdo_fails_configuration() {
     }
     assert_eq!(r.master.stop_reason(), Some(StopReason::ConfigurationFailed(2)));
 }
+
+/// The controller's setpoints to drive 1 stop arriving mid-motion: nothing moves on the stale
+/// target (the drive's interpolator holds the last one at zero speed), the drive layer's
+/// setpoint watchdog quick-stops the axis and the drive reports it (EMCY 0x8250, RPDO timeout).
+#[test]
+fn lost_setpoints_stop_the_drive_on_its_last_target() {
+    let mut r = rig();
+    r.enable();
+    r.run(200, None);
+    let last_target = Rig::motion(199e-3);
+    r.bus.set_faults(Faults {
+        drop_ids: vec![0x201],
+        ..Faults::default()
+    });
+    for k in 200..300 {
+        r.step(Rig::motion(k as f64 * 1e-3));
+    }
+    assert!(
+        matches!(r.master.stop_reason(), Some(StopReason::Emcy(1, 0x8250))),
+        "{:?}",
+        r.master.stop_reason()
+    );
+    let d = &r.drives[0].1;
+    assert_eq!(d.node().cia402.state(), DriveState::Fault);
+    let overrun = (d.position() - last_target).abs();
+    // at 3 rad/s one period is 3 mrad; the motion, had it continued, would be 0.25 rad further
+    assert!(overrun < 0.01, "drive 1 ended {overrun} rad from its last target");
+}
