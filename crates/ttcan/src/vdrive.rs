@@ -23,7 +23,7 @@
 //!   the power stage is on, is a fault (EMCY 0x8130) and brings the axis to a stop.
 //! - [`Failure`] injects the faults of `ttdrive-sim --fail`.
 
-use crate::axis::{AxisConfig, AxisState, Fault, Mode};
+use crate::axis::{Axis, AxisConfig, AxisState, Fault, Mode};
 use crate::canopen::cia402::{DriveState, OpMode, SW_FOLLOWS_COMMAND, SW_TARGET_REACHED};
 use crate::canopen::emcy;
 use crate::canopen::frame::{Frame, Frames};
@@ -145,6 +145,11 @@ impl VirtualDrive {
     /// The protocol node (state, counters, dictionary).
     pub fn node(&self) -> &DriveNode {
         &self.node
+    }
+
+    /// The drive layer's axis (state, brake, references).
+    pub fn axis(&self) -> &Axis {
+        &self.sim.axis
     }
 
     /// True output position of the simulated joint, joint units.

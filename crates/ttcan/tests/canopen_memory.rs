@@ -23,6 +23,10 @@ struct Rig {
 }
 
 fn rig() -> Rig {
+    rig_with(AxisConfig::new(MotorModel::maxon_re25_gp26()))
+}
+
+fn rig_with(cfg: AxisConfig) -> Rig {
     let bus = MemoryBus::new();
     let master_port = bus.port();
     let links: Vec<LinkConfig> = (1..=2)
@@ -35,7 +39,6 @@ fn rig() -> Rig {
         .collect();
     let master = ChannelMaster::new(&links, OpMode::Csp, WatchdogConfig::default()).unwrap();
     let model = MotorModel::maxon_re25_gp26();
-    let cfg = AxisConfig::new(model);
     let drives = (1..=2)
         .map(|n| {
             let mut port = bus.port();
@@ -483,6 +486,36 @@ fn lost_setpoints_stop_the_drive_on_its_last_target() {
     let d = &r.drives[0].1;
     assert_eq!(d.node().cia402.state(), DriveState::Fault);
     let overrun = (d.position() - last_target).abs();
-    // at 3 rad/s one period is 3 mrad; the motion, had it continued, would be 0.25 rad further
+    // at 3 rad/s one period is 3 mrad; the motion, had it continued, would be 0.3 rad further
     assert!(overrun < 0.01, "drive 1 ended {overrun} rad from its last target");
+}
+
+/// With a holding brake the controlled stop ends with the brake holding before the bridge goes
+/// off: the drive that left Operation Enabled and the one the controller stopped both stand still.
+#[test]
+fn controlled_stop_engages_the_holding_brake_before_bridge_off() {
+    let mut cfg = AxisConfig::new(MotorModel::maxon_re25_gp26());
+    cfg.holding_brake = Some(ttcan::HoldingBrake {
+        release_delay: 0.01,
+        engage_delay: 0.02,
+    });
+    let mut r = rig_with(cfg);
+    r.enable();
+    r.run(
+        300,
+        Some((200, &|r: &mut Rig| {
+            let mut out = Frames::new();
+            r.drives[0].1.inject(Failure::LeaveEnabled, &mut out);
+        })),
+    );
+    assert_eq!(r.master.stop_reason(), Some(StopReason::LeftOperationEnabled(1)));
+    let p: Vec<f64> = r.drives.iter().map(|d| d.1.position()).collect();
+    for _ in 0..100 {
+        r.step(0.0);
+    }
+    for (k, (_, d)) in r.drives.iter().enumerate() {
+        assert!(d.axis().brake_holding() && !d.axis().bridge_on(), "drive {k}: {:?}", d.axis().state());
+        assert!(!d.node().cia402.state().torque_on(), "drive {k}");
+        assert!((d.position() - p[k]).abs() < 1e-3, "drive {k} moved after the stop");
+    }
 }
