@@ -302,7 +302,10 @@ impl VirtualDrive {
         let (speed, accel) = if self.stop_speed.abs() <= dv {
             (0.0, 0.0)
         } else {
-            (self.stop_speed - dv * self.stop_speed.signum(), -a * self.stop_speed.signum())
+            (
+                self.stop_speed - dv * self.stop_speed.signum(),
+                -a * self.stop_speed.signum(),
+            )
         };
         self.stop_reference += 0.5 * (self.stop_speed + speed) * self.period;
         self.stop_speed = speed;

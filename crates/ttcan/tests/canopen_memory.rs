@@ -514,7 +514,11 @@ fn controlled_stop_engages_the_holding_brake_before_bridge_off() {
         r.step(0.0);
     }
     for (k, (_, d)) in r.drives.iter().enumerate() {
-        assert!(d.axis().brake_holding() && !d.axis().bridge_on(), "drive {k}: {:?}", d.axis().state());
+        assert!(
+            d.axis().brake_holding() && !d.axis().bridge_on(),
+            "drive {k}: {:?}",
+            d.axis().state()
+        );
         assert!(!d.node().cia402.state().torque_on(), "drive {k}");
         assert!((d.position() - p[k]).abs() < 1e-3, "drive {k} moved after the stop");
     }
