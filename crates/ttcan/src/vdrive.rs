@@ -126,19 +126,14 @@ impl VirtualDrive {
     /// Injects `failure` from now on.
     pub fn inject(&mut self, failure: Failure, _out: &mut Frames) {
         self.failure = Some(failure);
-        match failure {
-            Failure::Emcy => {
-                // Through the drive layer: the sensed current is beyond the trip level.
-                let trip = self.sim.axis.config().overcurrent_trip;
-                self.sim.plant.set_current_sense_offset(2.0 * trip);
-            }
-            Failure::LeaveEnabled => {
-                // Enable voltage and switch on, quick stop (active low) requested: transition 11.
-                if self.node.cia402.on_controlword(0x0003) == DriveState::QuickStopActive {
-                    self.begin_stop();
-                }
-            }
-            _ => {}
+        if failure == Failure::Emcy {
+            // Through the drive layer: the sensed current is beyond the trip level.
+            let trip = self.sim.axis.config().overcurrent_trip;
+            self.sim.plant.set_current_sense_offset(2.0 * trip);
+        }
+        // Enable voltage and switch on, quick stop (active low) requested: transition 11.
+        if failure == Failure::LeaveEnabled && self.node.cia402.on_controlword(0x0003) == DriveState::QuickStopActive {
+            self.begin_stop();
         }
     }
 
