@@ -64,6 +64,8 @@ CARGO_PROFILE_RELEASE_LTO=false CARGO_PROFILE_RELEASE_CODEGEN_UNITS=16 \
 # 4. the stroke, planned by the Python package
 if [ -x "$ROOT/.venv/bin/python" ] && "$ROOT/.venv/bin/python" -c "import ttmanip.ctl" 2>/dev/null; then
     "$ROOT/.venv/bin/python" -m ttmanip.ctl "$VM/stroke.csv" >/dev/null
+elif [ -s "$VM/stroke.csv" ]; then
+    echo "vm/build: ttmanip not installed in .venv: reusing the stroke planned before ($VM/stroke.csv)"
 else
     echo "vm/build: ttmanip not installed in .venv (scripts/setup.sh): cannot plan the stroke"; exit 1
 fi

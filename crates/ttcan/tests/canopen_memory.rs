@@ -23,6 +23,10 @@ struct Rig {
 }
 
 fn rig() -> Rig {
+    rig_with(AxisConfig::new(MotorModel::maxon_re25_gp26()))
+}
+
+fn rig_with(cfg: AxisConfig) -> Rig {
     let bus = MemoryBus::new();
     let master_port = bus.port();
     let links: Vec<LinkConfig> = (1..=2)
@@ -35,7 +39,6 @@ fn rig() -> Rig {
         .collect();
     let master = ChannelMaster::new(&links, OpMode::Csp, WatchdogConfig::default()).unwrap();
     let model = MotorModel::maxon_re25_gp26();
-    let cfg = AxisConfig::new(model);
     let drives = (1..=2)
         .map(|n| {
             let mut port = bus.port();
@@ -150,6 +153,19 @@ fn fault_case_except(
     within: u32,
     unplugged: Option<usize>,
 ) {
+    fault_case_coasting(inject, expected, within, unplugged, None)
+}
+
+/// `coasting`: a drive whose fault reaction switches the bridge off at once (open winding): its
+/// joint coasts down under friction, as the hardware's does, so it is checked for its power stage
+/// being off, not for standing still.
+fn fault_case_coasting(
+    inject: &dyn Fn(&mut Rig),
+    expected: fn(StopReason) -> bool,
+    within: u32,
+    unplugged: Option<usize>,
+    coasting: Option<usize>,
+) {
     let mut r = rig();
     r.enable();
     r.run(300, Some((200, inject)));
@@ -172,6 +188,10 @@ fn fault_case_except(
             "drive {k} state {:?}",
             d.1.node().cia402.state()
         );
+        if Some(k) == coasting {
+            assert_eq!(d.1.node().cia402.state(), DriveState::Fault, "drive {k}");
+            continue;
+        }
         assert!((d.1.position() - p[k]).abs() < 1e-3, "drive {k} moved after the stop");
     }
 }
@@ -189,9 +209,13 @@ fn silent_drive_stops_every_axis() {
     );
 }
 
+/// The over-current is raised by the drive layer itself (its current sensing); its reaction is
+/// bridge off at once, so drive 2's joint coasts (open winding: correct hardware behaviour, a
+/// controlled stop with an uncontrollable current is impossible) while drive 1 makes the
+/// controlled stop and stands still.
 #[test]
 fn emcy_stops_every_axis() {
-    fault_case(
+    fault_case_coasting(
         &|r| {
             let mut out = Frames::new();
             r.drives[1].1.inject(Failure::Emcy, &mut out);
@@ -201,6 +225,8 @@ fn emcy_stops_every_axis() {
         },
         |s| matches!(s, StopReason::Emcy(2, 0x2310)),
         400,
+        None,
+        Some(1),
     );
 }
 
@@ -434,4 +460,66 @@ fn drive_that_never_answers_sdo_fails_configuration() {
         r.step(0.0);
     }
     assert_eq!(r.master.stop_reason(), Some(StopReason::ConfigurationFailed(2)));
+}
+
+/// The controller's setpoints to drive 1 stop arriving mid-motion: nothing moves on the stale
+/// target (the drive's interpolator holds the last one at zero speed), the drive layer's
+/// setpoint watchdog quick-stops the axis and the drive reports it (EMCY 0x8250, RPDO timeout).
+#[test]
+fn lost_setpoints_stop_the_drive_on_its_last_target() {
+    let mut r = rig();
+    r.enable();
+    r.run(200, None);
+    let last_target = Rig::motion(199e-3);
+    r.bus.set_faults(Faults {
+        drop_ids: vec![0x201],
+        ..Faults::default()
+    });
+    for k in 200..300 {
+        r.step(Rig::motion(k as f64 * 1e-3));
+    }
+    assert!(
+        matches!(r.master.stop_reason(), Some(StopReason::Emcy(1, 0x8250))),
+        "{:?}",
+        r.master.stop_reason()
+    );
+    let d = &r.drives[0].1;
+    assert_eq!(d.node().cia402.state(), DriveState::Fault);
+    let overrun = (d.position() - last_target).abs();
+    // at 3 rad/s one period is 3 mrad; the motion, had it continued, would be 0.3 rad further
+    assert!(overrun < 0.01, "drive 1 ended {overrun} rad from its last target");
+}
+
+/// With a holding brake the controlled stop ends with the brake holding before the bridge goes
+/// off: the drive that left Operation Enabled and the one the controller stopped both stand still.
+#[test]
+fn controlled_stop_engages_the_holding_brake_before_bridge_off() {
+    let mut cfg = AxisConfig::new(MotorModel::maxon_re25_gp26());
+    cfg.holding_brake = Some(ttcan::HoldingBrake {
+        release_delay: 0.01,
+        engage_delay: 0.02,
+    });
+    let mut r = rig_with(cfg);
+    r.enable();
+    r.run(
+        300,
+        Some((200, &|r: &mut Rig| {
+            let mut out = Frames::new();
+            r.drives[0].1.inject(Failure::LeaveEnabled, &mut out);
+        })),
+    );
+    assert_eq!(r.master.stop_reason(), Some(StopReason::LeftOperationEnabled(1)));
+    let p: Vec<f64> = r.drives.iter().map(|d| d.1.position()).collect();
+    for _ in 0..100 {
+        r.step(0.0);
+    }
+    for (k, (_, d)) in r.drives.iter().enumerate() {
+        assert!(
+            d.axis().brake_holding() && !d.axis().bridge_on(),
+            "drive {k}: {:?}",
+            d.axis().state()
+        );
+        assert!(!d.node().cia402.state().torque_on(), "drive {k}");
+        assert!((d.position() - p[k]).abs() < 1e-3, "drive {k} moved after the stop");
+    }
 }
