@@ -56,7 +56,7 @@ pub fn size_drives(
             configs.len()
         )));
     }
-    if q.is_empty() || q.len() % n != 0 || qd.len() != q.len() || qdd.len() != q.len() {
+    if q.is_empty() || !q.len().is_multiple_of(n) || qd.len() != q.len() || qdd.len() != q.len() {
         return Err(Error::InvalidParameter {
             what: "motion samples".into(),
             value: q.len() as f64,

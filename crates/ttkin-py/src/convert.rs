@@ -297,7 +297,11 @@ where
 
 /// [`filled_without_gil`] for results in which NaN is a documented value (a ball's positions after
 /// its flight ended at the net or the floor): nothing is refused.
-pub fn filled_without_gil_nan_allowed<'py, F>(py: Python<'py>, shape: &[usize], fill: F) -> PyResult<Bound<'py, PyArrayDyn<f64>>>
+pub fn filled_without_gil_nan_allowed<'py, F>(
+    py: Python<'py>,
+    shape: &[usize],
+    fill: F,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>>
 where
     F: FnOnce(&mut [f64]) -> ttkin::Result<()> + Send,
 {

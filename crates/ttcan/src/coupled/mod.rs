@@ -290,7 +290,7 @@ impl CoupledSim {
     pub fn tick(&mut self) {
         let n = self.dof();
         let t = self.period;
-        if self.ticks % self.options.refresh_ticks as u64 == 0 && self.ticks > 0 {
+        if self.ticks.is_multiple_of(self.options.refresh_ticks as u64) && self.ticks > 0 {
             // A configuration the model rejects (non-finite after a divergence) keeps the old factor.
             let _ = self.refresh();
         }

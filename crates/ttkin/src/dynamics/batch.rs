@@ -142,7 +142,7 @@ impl Dynamics {
 
 /// Checks that `values` holds N × n finite values and returns N.
 pub(super) fn batch_count(what: &str, values: &[f64], n: usize) -> Result<usize> {
-    if values.len() % n != 0 {
+    if !values.len().is_multiple_of(n) {
         return Err(Error::shape(
             what,
             format!("N × {n} values"),

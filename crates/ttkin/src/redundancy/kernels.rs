@@ -56,7 +56,7 @@ fn gram<const M: usize>(jac: &[f64], winv: &[f64], free: &[bool], g: &mut [f64; 
 
 /// Manipulability √det(J Jᵀ) of an m × n task Jacobian (column-major slice), 0 when rank-deficient.
 pub fn manipulability(jac: &[f64], m: usize) -> f64 {
-    if m == 0 || m > MAX_TASK_DIM || jac.len() % m != 0 {
+    if m == 0 || m > MAX_TASK_DIM || !jac.len().is_multiple_of(m) {
         return 0.0;
     }
     let n = jac.len() / m;
