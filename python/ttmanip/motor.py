@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ._ttmanip import ServoSim, TtmanipError
+from ._ttmanip import NumericalError, ServoSim, TtmanipError
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -164,9 +164,14 @@ def quintic(distance: float, duration: float, rate_hz: float, start: float = 0.0
         raise TtmanipError(f"quintic: duration × rate_hz = {duration * rate_hz:.3g} samples, at most 1e8")
     t = np.arange(int(round(duration * rate_hz)) + 1) / rate_hz
     s = np.clip(t / duration, 0.0, 1.0)
-    q = start + distance * s**3 * (10 - 15 * s + 6 * s**2)
-    qd = distance / duration * 30 * s**2 * (1 - s) ** 2
-    qdd = distance / duration**2 * 60 * s * (1 - s) * (1 - 2 * s)
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        q = start + distance * s**3 * (10 - 15 * s + 6 * s**2)
+        qd = distance / duration * 30 * s**2 * (1 - s) ** 2
+        qdd = distance / duration / duration * 60 * s * (1 - s) * (1 - 2 * s)
+    if not all(np.isfinite(a).all() for a in (q, qd, qdd)):
+        raise NumericalError(
+            f"quintic: distance {distance} over {duration} s overflows float64 (speed or acceleration)"
+        )
     return t, q, qd, qdd
 
 
