@@ -4,12 +4,14 @@
 
 use pyo3::prelude::*;
 
+mod cartesian;
 mod convert;
 mod dynamics;
 mod errors;
 mod ik;
 mod mobile;
 mod motor;
+mod profile;
 mod robot;
 mod traj;
 
@@ -19,9 +21,10 @@ fn _ttmanip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     errors::register(m)?;
     robot::register(m)?;
     mobile::register(m)?;
-    dynamics::register(m)?;
+    profile::register(m)?;
     motor::register(m)?;
     ik::register(m)?;
     traj::register(m)?;
+    cartesian::register(m)?;
     Ok(())
 }

@@ -24,6 +24,9 @@
 //! flipped normal n = −n*, a false minimum a descent method can fall into.
 //!
 //! Hot loops allocate nothing: all buffers live in an [`IkScratch`] (Pinocchio's model/data split).
+//!
+//! Length (about 560 lines): one solver, its settings, scratch and restart loop, read top to
+//! bottom; the front end that chooses it is [`super::batch`].
 
 // Index loops over joints read like the maths here (several arrays per index): keep them.
 #![allow(clippy::needless_range_loop)]
