@@ -141,6 +141,16 @@ impl TaskTrajectory {
         &self.x[k * d..(k + 1) * d]
     }
 
+    /// Every sample's task coordinates, N × dim row-major.
+    pub fn positions(&self) -> &[f64] {
+        &self.x
+    }
+
+    /// Every sample's task rates, N × dim row-major.
+    pub fn rates(&self) -> &[f64] {
+        &self.xdot
+    }
+
     /// Task rates of sample k.
     pub fn xdot(&self, k: usize) -> &[f64] {
         let d = self.task.dim();
