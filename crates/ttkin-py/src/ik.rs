@@ -174,7 +174,7 @@ impl PyRobot {
                 orientation_error: any(r.orientation_error.into_pyobject(py)?.into_any()),
                 iterations: any(r.iterations.into_pyobject(py)?.into_any()),
                 restarts: any(r.restarts.into_pyobject(py)?.into_any()),
-                status: any(status[0].into_pyobject(py)?.into_any()),
+                status: any(status_str(py, outcomes[0].status).clone().into_any()),
             });
         }
         let count = results.len();
@@ -313,6 +313,15 @@ impl PyRobot {
         dict.set_item("damping", r.damping)?;
         dict.set_item("residual", r.residual)?;
         Ok((qdot, dict).into_pyobject(py)?.into_any())
+    }
+}
+
+/// The status as an interned Python string (no allocation per call).
+fn status_str(py: Python<'_>, status: IkStatus) -> &Bound<'_, pyo3::types::PyString> {
+    match status {
+        IkStatus::Solved => pyo3::intern!(py, "solved"),
+        IkStatus::Unreachable => pyo3::intern!(py, "unreachable"),
+        IkStatus::NotConverged => pyo3::intern!(py, "not_converged"),
     }
 }
 

@@ -77,12 +77,7 @@ impl Dynamics {
         self.check_state(data, q, qd)?;
         check_vector("tau", tau, self.dof())?;
         let g = vec3("gravity", gravity)?;
-        if !(dt > 0.0 && dt.is_finite()) {
-            return Err(Error::invalid(
-                "dt",
-                format!("time step must be finite and > 0 s, got {dt}"),
-            ));
-        }
+        check_dt(dt)?;
         self.step_unchecked(data, q, qd, tau, dt, &g, friction)
     }
 
@@ -123,12 +118,7 @@ impl Dynamics {
         self.check_state(&data, q0, qd0)?;
         let steps = batch_count("tau", taus, n)?;
         let g = vec3("gravity", gravity)?;
-        if !(dt > 0.0 && dt.is_finite()) {
-            return Err(Error::invalid(
-                "dt",
-                format!("time step must be finite and > 0 s, got {dt}"),
-            ));
-        }
+        check_dt(dt)?;
         let (mut q, mut qd) = (q0.to_vec(), qd0.to_vec());
         let mut qs = Vec::with_capacity((steps + 1) * n);
         let mut qds = Vec::with_capacity((steps + 1) * n);
@@ -147,4 +137,15 @@ impl Dynamics {
         }
         Ok((qs, qds))
     }
+}
+
+/// Checks an integration step: finite and > 0 s.
+fn check_dt(dt: f64) -> Result<()> {
+    if !(dt > 0.0 && dt.is_finite()) {
+        return Err(Error::invalid(
+            "dt",
+            format!("time step must be finite and > 0 s, got {dt}"),
+        ));
+    }
+    Ok(())
 }
