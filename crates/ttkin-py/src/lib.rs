@@ -4,12 +4,14 @@
 
 use pyo3::prelude::*;
 
+mod cartesian;
 mod convert;
 mod dynamics;
 mod errors;
 mod ik;
 mod mobile;
 mod motor;
+mod profile;
 mod robot;
 mod traj;
 // issue 14: argument validation and the boundary panic guard
@@ -22,10 +24,11 @@ fn _ttmanip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     errors::register(m)?;
     robot::register(m)?;
     mobile::register(m)?;
-    dynamics::register(m)?;
+    profile::register(m)?;
     motor::register(m)?;
     ik::register(m)?;
     traj::register(m)?;
+    cartesian::register(m)?;
     guard::register(m)?;
     Ok(())
 }
