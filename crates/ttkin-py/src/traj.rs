@@ -140,7 +140,12 @@ impl PyJointTrajectory {
             let (q, qd, qdd) = (zeros(py, &[n]), zeros(py, &[n]), zeros(py, &[n]));
             crate::convert::fill_fresh(&q, |a| {
                 crate::convert::fill_fresh(&qd, |b| {
-                    crate::convert::fill_fresh(&qdd, |c| self.inner.sample(t, a, b, c).py())
+                    crate::convert::fill_fresh(&qdd, |c| {
+                        self.inner.sample(t, a, b, c).py()?;
+                        [&*a, &*b, &*c]
+                            .iter()
+                            .try_for_each(|v| crate::convert::check_finite_output(v))
+                    })
                 })
             })?;
             return Ok((q, qd, qdd).into_pyobject(py)?.into_any());
@@ -149,9 +154,9 @@ impl PyJointTrajectory {
         let s = self.inner.sample_times(&times).py()?;
         let m = times.len();
         Ok((
-            to_numpy(py, &[m, n], &s.q),
-            to_numpy(py, &[m, n], &s.qd),
-            to_numpy(py, &[m, n], &s.qdd),
+            crate::convert::finite_to_numpy(py, &[m, n], &s.q)?,
+            crate::convert::finite_to_numpy(py, &[m, n], &s.qd)?,
+            crate::convert::finite_to_numpy(py, &[m, n], &s.qdd)?,
         )
             .into_pyobject(py)?
             .into_any())
@@ -160,7 +165,10 @@ impl PyJointTrajectory {
     /// Jerk (rad/s³ or m/s³) at time `t` (s), (dof,).
     fn jerk<'py>(&self, py: Python<'py>, t: f64) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let out = zeros(py, &[self.inner.dof()]);
-        crate::convert::fill_fresh(&out, |o| self.inner.jerk(t, o).py())?;
+        crate::convert::fill_fresh(&out, |o| {
+            self.inner.jerk(t, o).py()?;
+            crate::convert::check_finite_output(o)
+        })?;
         Ok(out)
     }
 
@@ -221,6 +229,9 @@ fn sample_uniform<'py>(py: Python<'py>, traj: &JointTrajectory, n: usize) -> PyR
     let (mut t, mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; n * dof], vec![0.0; n * dof], vec![0.0; n * dof]);
     traj.sample_uniform_columns_into(&mut t, &mut q, &mut qd, &mut qdd)
         .py()?;
+    for v in [&t, &q, &qd, &qdd] {
+        crate::convert::check_finite_output(v)?; // e.g. a duration of 1e-200: 1/T³ overflows
+    }
     let matrix = |v: Vec<f64>| -> PyResult<_> {
         let a = Array2::from_shape_vec((n, dof).f(), v)
             .map_err(|e| crate::errors::InternalError::new_err(format!("sample_uniform: {e}")))?;
