@@ -187,8 +187,8 @@ impl PyJointTrajectory {
 
     /// Exact peaks of velocity (order 1), acceleration (2) or jerk (3): (values, times), each
     /// (dof,), values signed.
-    fn peaks<'py>(&self, py: Python<'py>, order: usize) -> PyResult<Bound<'py, PyAny>> {
-        let p = self.inner.peaks(order).py()?;
+    fn peaks<'py>(&self, py: Python<'py>, order: i128) -> PyResult<Bound<'py, PyAny>> {
+        let p = self.inner.peaks(crate::args::unsigned(order, "order")?).py()?;
         let values: Vec<f64> = p.iter().map(|x| x.value).collect();
         let times: Vec<f64> = p.iter().map(|x| x.time).collect();
         let n = p.len();
