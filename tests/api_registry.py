@@ -9,6 +9,7 @@ default. :data:`API` lists every name once, with what the fuzzer needs beyond th
 - ``shape``: the documented result shape, from the drawn arguments (``n`` = joints of the robot,
   ``N`` = batch size of the first array argument, ``None`` for one item);
 - ``may_be_inf``: the result may hold ±inf by definition (e.g. "inf where no limit");
+- ``finite_part``: the part of the result that must be finite, when the rest is NaN by definition;
 - ``receiver``: for methods, how to make the object (default: by class name, see the fuzzer);
 - ``args``: per-parameter strategy names overriding the by-name choice;
 - ``type_error``: messages of TypeErrors the call documents for a wrong *set* of arguments;
@@ -23,6 +24,7 @@ from __future__ import annotations
 import inspect
 import types
 
+import numpy as np
 import ttmanip
 
 #: Submodules of ttmanip whose public names are part of the API.
@@ -77,7 +79,11 @@ API: dict[str, dict] = {
     "Robot.kinetic_energy": {},
     "Robot.potential_energy": {},
     "Robot.ik": {},
-    "Robot.ik_all": {"args": {"limits": "flag"}},
+    # the batch form pads q (N, 4, n) with NaN past each pose's branch count (documented)
+    "Robot.ik_all": {
+        "args": {"limits": "flag"},
+        "finite_part": lambda r: r[0][np.arange(4) < r[1][:, None]] if isinstance(r, tuple) else r,
+    },
     "Robot.ik_nearest": {"args": {"limits": "flag"}},
     "Robot.joint_velocity": {"shape": _batched("n")},
     "Robot.joint_names": {},

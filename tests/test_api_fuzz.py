@@ -397,6 +397,8 @@ def make_call(d: Draw, key: str, static):
 
 def check(key: str, result, d: Draw, kwargs: dict, ctx: dict):
     spec = API.get(key, {})
+    if "finite_part" in spec:
+        result = spec["finite_part"](result)
     for a in arrays_in(result):
         if a.dtype.kind == "f":
             assert a.dtype == np.float64, f"{key}: float result of dtype {a.dtype}, documented float64"

@@ -48,25 +48,11 @@ def test_ik_status_tells_unreachable_from_not_converged():
     batch = robot.ik(np.stack([reachable, far, reachable]), time_budget=None, max_restarts=20)
     assert batch.status == ["solved", "unreachable", "solved"]
     assert list(batch.success) == [True, False, True]
-    starved = robot.ik(
-        reachable,
-        q0=[-2.0, 1.0, -1.0, 2.0, -2.0, 2.0],
-        method="numeric",
-        max_iterations=1,
-        max_restarts=0,
-        time_budget=None,
-    )
-    assert starved.status == "not_converged" and not starved.success
+    starved = dict(q0=[-2.0, 1.0, -1.0, 2.0, -2.0, 2.0], method="numeric", max_iterations=1, max_restarts=0)
+    result = robot.ik(reachable, time_budget=None, **starved)
+    assert result.status == "not_converged" and not result.success
     with pytest.raises(ttmanip.NotConvergedError):
-        robot.ik(
-            reachable,
-            q0=[-2.0, 1.0, -1.0, 2.0, -2.0, 2.0],
-            method="numeric",
-            max_iterations=1,
-            max_restarts=0,
-            time_budget=None,
-            raise_on_failure=True,
-        )
+        robot.ik(reachable, time_budget=None, raise_on_failure=True, **starved)
     with pytest.raises(ttmanip.UnreachableError):
         robot.ik(far, time_budget=None, max_restarts=3, raise_on_failure=True)
     assert not issubclass(ttmanip.NotConvergedError, ttmanip.UnreachableError)

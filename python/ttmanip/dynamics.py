@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._ttmanip import ShapeError, TorqueProfile
+from ._ttmanip import ShapeError, TorqueProfile, TtmanipError
 
 __all__ = ["EARTH_GRAVITY", "MOBILE8_GRAVITY", "TorqueProfile", "gantry6_example", "torque_figure"]
 
@@ -78,6 +78,8 @@ def gantry6_example(duration: float = 0.5, samples: int = 201):
     [0.3 m, −0.2 m, 1.0, 0.5, −0.8, 1.5 rad] in ``duration`` s; returns (robot, t, profile)."""
     from . import robots, traj
 
+    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or not 2 <= samples <= 10**8:
+        raise TtmanipError(f"samples: expected an integer in 2..=100000000, got {samples!r}")
     robot = robots.gantry6()
     t = np.linspace(0.0, duration, samples)
     q1 = np.array([0.3, -0.2, 1.0, 0.5, -0.8, 1.5])

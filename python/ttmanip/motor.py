@@ -266,6 +266,8 @@ def plot(response: Response, path: str | PathLike[str] | None = None, title: str
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
+    if title is not None and not isinstance(title, str):
+        raise TypeError(f"title: expected a str or None, got {type(title).__name__}")
     fig = Figure(figsize=(8, 9), layout="constrained")
     FigureCanvasAgg(fig)
     ax = fig.subplots(4, 1, sharex=True)

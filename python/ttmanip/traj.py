@@ -28,6 +28,7 @@ from ._ttmanip import (
     CartesianTrajectory,
     JointTrajectory,
     Robot,
+    ShapeError,
     traj_cubic,
     traj_minimal_duration,
     traj_quintic,
@@ -177,23 +178,33 @@ class Stroke:
         return not self.violations
 
 
+def _float_array(x: Any, what: str) -> np.ndarray:
+    """``x`` as a float array; ragged or non-numeric data is a ShapeError naming ``what``."""
+    try:
+        return np.asarray(x, dtype=float)
+    except (TypeError, ValueError) as e:
+        raise ShapeError(f"{what}: expected an array of real numbers ({e})") from None
+
+
 def _state(state: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(q, qd, qdd) from a tuple, a mapping, an object with q/qd/qdd, or q alone (at rest)."""
     if isinstance(state, Mapping):
-        q = np.asarray(state["q"], dtype=float)
+        q = _float_array(state["q"], "state.q")
         qd, qdd = state.get("qd"), state.get("qdd")
     elif hasattr(state, "q"):
-        q = np.asarray(state.q, dtype=float)
+        q = _float_array(state.q, "state.q")
         qd, qdd = getattr(state, "qd", None), getattr(state, "qdd", None)
     elif isinstance(state, Sequence) and len(state) in (1, 2, 3) and np.ndim(state[0]) == 1:
-        q = np.asarray(state[0], dtype=float)
+        q = _float_array(state[0], "state.q")
         qd = state[1] if len(state) > 1 else None
         qdd = state[2] if len(state) > 2 else None
     else:
-        q, qd, qdd = np.asarray(state, dtype=float), None, None
+        q, qd, qdd = _float_array(state, "state"), None, None
+    if q.ndim != 1:
+        raise ShapeError(f"state: expected q of shape (n,), got shape {q.shape}")
     zero = np.zeros_like(q)
-    qd = zero if qd is None else np.asarray(qd, dtype=float)
-    qdd = zero if qdd is None else np.asarray(qdd, dtype=float)
+    qd = zero if qd is None else _float_array(qd, "state.qd")
+    qdd = zero if qdd is None else _float_array(qdd, "state.qdd")
     return q, qd, qdd
 
 

@@ -240,8 +240,8 @@ pub fn check_finite_output(data: &[f64]) -> PyResult<()> {
     match data.iter().position(|v| !v.is_finite()) {
         None => Ok(()),
         Some(i) => Err(NumericalError::new_err(format!(
-            "the result is not finite (element {i} is {}) although the inputs are: they are too \
-             large for float64 arithmetic (overflow); scale them down",
+            "the result is not finite (element {i} is {}) although the inputs are: they overflow \
+             float64 arithmetic here (e.g. speeds of 1e150 or more, a duration of 1e-150 or less)",
             data[i]
         ))),
     }

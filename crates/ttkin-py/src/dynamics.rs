@@ -11,11 +11,11 @@ use std::sync::Arc;
 use nalgebra::Vector3;
 use numpy::PyArrayDyn;
 use pyo3::prelude::*;
-use ttkin::dynamics::{TorqueProfile, EARTH_GRAVITY};
+use ttkin::dynamics::EARTH_GRAVITY;
 use ttkin::{Drive, Dynamics, DynamicsData, Wrench};
 
 use crate::convert::{f64_array, filled_without_gil, finite_to_numpy, to_numpy, vector, F64Array};
-use crate::errors::{PyResultExt, ShapeError, TtmanipError};
+use crate::errors::{PyResultExt, ShapeError};
 use crate::robot::PyRobot;
 
 /// A numpy float64 array returned to Python.
@@ -23,7 +23,7 @@ type Array<'py> = Bound<'py, PyArrayDyn<f64>>;
 
 impl PyRobot {
     /// The dynamic model (an error names the first link without inertia).
-    fn dynamics(&self) -> PyResult<&Arc<Dynamics>> {
+    pub(crate) fn dynamics(&self) -> PyResult<&Arc<Dynamics>> {
         self.dynamics.model(&self.chain).py()
     }
 
@@ -59,7 +59,7 @@ impl PyRobot {
     }
 
     /// Reads several per-configuration arrays that must all be (n,) or all (N, n) with the same N.
-    fn states<'py, const K: usize>(
+    pub(crate) fn states<'py, const K: usize>(
         &self,
         arrays: [(&Bound<'py, PyAny>, &str); K],
     ) -> PyResult<(Vec<F64Array<'py>>, Option<usize>)> {
@@ -90,7 +90,7 @@ fn shape_of(batch: Option<usize>, n: usize) -> String {
 }
 
 /// Gravity argument: None → (0, 0, −9.81) m/s², else a 3-vector in the base frame.
-fn gravity_arg(g: Option<&Bound<'_, PyAny>>) -> PyResult<[f64; 3]> {
+pub(crate) fn gravity_arg(g: Option<&Bound<'_, PyAny>>) -> PyResult<[f64; 3]> {
     match g {
         None => Ok(EARTH_GRAVITY),
         Some(g) => {
@@ -101,7 +101,7 @@ fn gravity_arg(g: Option<&Bound<'_, PyAny>>) -> PyResult<[f64; 3]> {
 }
 
 /// Wrench argument: None, or [fx, fy, fz, mx, my, mz] (N, N·m) on the tool, tool-frame axes.
-fn wrench_arg(w: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Wrench>> {
+pub(crate) fn wrench_arg(w: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Wrench>> {
     w.map(|w| {
         let v = vector(w, "wrench", 6)?;
         Ok(Wrench {
@@ -116,101 +116,6 @@ fn out_shape(batch: Option<usize>, item: &[usize]) -> (usize, Vec<usize>) {
     match batch {
         None => (1, item.to_vec()),
         Some(c) => (c, std::iter::once(c).chain(item.iter().copied()).collect()),
-    }
-}
-
-/// The result of `Robot.torques`: joint, motor-side and current profiles and the effort check.
-#[pyclass(name = "TorqueProfile", module = "ttmanip", frozen)]
-pub struct PyTorqueProfile {
-    profile: TorqueProfile,
-}
-
-#[ttkin_py_guard::guarded]
-#[pymethods]
-impl PyTorqueProfile {
-    /// (N, n) joint torques (N·m) / forces (N): rigid body + armature + friction.
-    #[getter]
-    fn joint<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
-        let p = &self.profile;
-        to_numpy(py, &[p.joint.len() / p.dof, p.dof], &p.joint)
-    }
-
-    /// (N, n) motor torques τ/G (N·m).
-    #[getter]
-    fn motor<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
-        let p = &self.profile;
-        to_numpy(py, &[p.motor.len() / p.dof, p.dof], &p.motor)
-    }
-
-    /// (N, n) motor currents τ_motor/k_t (A); NaN for joints without a torque constant.
-    #[getter]
-    fn current<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
-        let p = &self.profile;
-        to_numpy(py, &[p.current.len() / p.dof, p.dof], &p.current)
-    }
-
-    /// (n,) largest |joint torque| over the profile (N·m or N).
-    #[getter]
-    fn peak<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
-        to_numpy(py, &[self.profile.dof], &self.profile.peak)
-    }
-
-    /// True when no sample exceeds any joint's effort limit.
-    #[getter]
-    fn within_limits(&self) -> bool {
-        self.profile.within_limits()
-    }
-
-    /// Every (sample, joint, torque, limit) whose |torque| exceeds the effort limit.
-    #[getter]
-    fn violations(&self) -> Vec<(usize, usize, f64, f64)> {
-        self.profile
-            .violations
-            .iter()
-            .map(|v| (v.sample, v.joint, v.torque, v.limit))
-            .collect()
-    }
-
-    fn __repr__(&self) -> String {
-        let p = &self.profile;
-        format!(
-            "TorqueProfile({} samples × {} joints, within_limits={}, {} violations)",
-            p.joint.len() / p.dof,
-            p.dof,
-            if p.within_limits() { "True" } else { "False" },
-            p.violations.len()
-        )
-    }
-}
-
-/// (q, qd, qdd) from `torques`' arguments: three arrays, a (q, qd, qdd) tuple, or an object with
-/// attributes q, qd, qdd (or position, velocity, acceleration).
-fn trajectory_arrays<'py>(
-    trajectory: &Bound<'py, PyAny>,
-    qd: Option<&Bound<'py, PyAny>>,
-    qdd: Option<&Bound<'py, PyAny>>,
-) -> PyResult<[Bound<'py, PyAny>; 3]> {
-    match (qd, qdd) {
-        (Some(qd), Some(qdd)) => Ok([trajectory.clone(), qd.clone(), qdd.clone()]),
-        (None, None) => {
-            if let Ok((q, qd, qdd)) = trajectory.extract::<(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>)>()
-            {
-                return Ok([q, qd, qdd]);
-            }
-            for names in [["q", "qd", "qdd"], ["position", "velocity", "acceleration"]] {
-                let got: PyResult<Vec<Bound<'py, PyAny>>> = names.iter().map(|n| trajectory.getattr(*n)).collect();
-                if let Ok(v) = got {
-                    if let Ok([q, qd, qdd]) = <[Bound<'py, PyAny>; 3]>::try_from(v) {
-                        return Ok([q, qd, qdd]);
-                    }
-                }
-            }
-            Err(TtmanipError::new_err(
-                "torques: expected (q, qd, qdd) arrays, a (q, qd, qdd) tuple, or an object with attributes \
-                 q, qd, qdd (or position, velocity, acceleration)",
-            ))
-        }
-        _ => Err(TtmanipError::new_err("torques: give both qd and qdd, or neither")),
     }
 }
 
@@ -424,30 +329,6 @@ impl PyRobot {
         Ok((to_numpy(py, &[rows, n], &qs), to_numpy(py, &[rows, n], &qds)))
     }
 
-    /// Torque profile of a planned motion (patent step S105): `torques(q, qd, qdd)` with (N, n)
-    /// arrays, `torques((q, qd, qdd))` or `torques(traj)` for an object with attributes q, qd, qdd
-    /// (or position, velocity, acceleration), each (N, n).
-    /// Joint torques include friction; motor side through the gear ratio and torque constant.
-    #[pyo3(signature = (trajectory, qd=None, qdd=None, gravity=None, wrench=None))]
-    fn torques<'py>(
-        &self,
-        py: Python<'py>,
-        trajectory: &Bound<'py, PyAny>,
-        qd: Option<&Bound<'py, PyAny>>,
-        qdd: Option<&Bound<'py, PyAny>>,
-        gravity: Option<&Bound<'py, PyAny>>,
-        wrench: Option<&Bound<'py, PyAny>>,
-    ) -> PyResult<PyTorqueProfile> {
-        let g = gravity_arg(gravity)?;
-        let w = wrench_arg(wrench)?;
-        let [q, qd, qdd] = trajectory_arrays(trajectory, qd, qdd)?;
-        let (arrays, _) = self.states([(&q, "q"), (&qd, "qd"), (&qdd, "qdd")])?;
-        let dy = self.dynamics()?;
-        let (q, qd, qdd) = (arrays[0].data(), arrays[1].data(), arrays[2].data());
-        let profile = py.detach(|| dy.torque_profile(q, qd, qdd, &g, w.as_ref())).py()?;
-        Ok(PyTorqueProfile { profile })
-    }
-
     /// (n,) rotor inertia reflected to each joint, G²·J (kg·m² or kg); Pinocchio's model.armature.
     #[getter]
     fn armature<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
@@ -599,10 +480,4 @@ impl PyRobot {
             },
         )
     }
-}
-
-/// Adds `TorqueProfile` to the module (the dynamics methods live on `Robot`).
-pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    m.add_class::<PyTorqueProfile>()?;
-    Ok(())
 }

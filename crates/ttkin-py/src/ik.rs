@@ -151,46 +151,36 @@ impl PyRobot {
             }
         }
         let results: Vec<&IkResult> = outcomes.iter().map(|o| &o.result).collect();
+        let status: Vec<&str> = outcomes.iter().map(|o| o.status.as_str()).collect();
+        let any = |o: Bound<'_, PyAny>| o.unbind();
         if !batch {
             let r = results[0];
             return Ok(PyIkResult {
-                q: to_numpy(py, &[n], &r.q).into_any().unbind(),
-                success: r.success.into_pyobject(py)?.to_owned().into_any().unbind(),
-                position_error: r.position_error.into_pyobject(py)?.into_any().unbind(),
-                orientation_error: r.orientation_error.into_pyobject(py)?.into_any().unbind(),
-                iterations: r.iterations.into_pyobject(py)?.into_any().unbind(),
-                restarts: r.restarts.into_pyobject(py)?.into_any().unbind(),
-                status: outcomes[0].status.as_str().into_pyobject(py)?.into_any().unbind(),
+                q: any(to_numpy(py, &[n], &r.q).into_any()),
+                success: any(r.success.into_pyobject(py)?.to_owned().into_any()),
+                position_error: any(r.position_error.into_pyobject(py)?.into_any()),
+                orientation_error: any(r.orientation_error.into_pyobject(py)?.into_any()),
+                iterations: any(r.iterations.into_pyobject(py)?.into_any()),
+                restarts: any(r.restarts.into_pyobject(py)?.into_any()),
+                status: any(status_str(py, outcomes[0].status).clone().into_any()),
             });
         }
-
         let count = results.len();
         let q: Vec<f64> = results.iter().flat_map(|r| r.q.iter().copied()).collect();
-        let column = |f: &dyn Fn(&IkResult) -> f64| -> Vec<f64> { results.iter().map(|r| f(r)).collect() };
+        let floats = |f: fn(&IkResult) -> f64| {
+            any(to_numpy(py, &[count], &results.iter().map(|r| f(r)).collect::<Vec<_>>()).into_any())
+        };
+        let ints = |f: fn(&IkResult) -> usize| {
+            any(PyArray1::from_vec(py, results.iter().map(|r| f(r) as i64).collect()).into_any())
+        };
         Ok(PyIkResult {
-            q: to_numpy(py, &[count, n], &q).into_any().unbind(),
-            success: PyArray1::from_vec(py, results.iter().map(|r| r.success).collect())
-                .into_any()
-                .unbind(),
-            position_error: to_numpy(py, &[count], &column(&|r| r.position_error))
-                .into_any()
-                .unbind(),
-            orientation_error: to_numpy(py, &[count], &column(&|r| r.orientation_error))
-                .into_any()
-                .unbind(),
-            iterations: PyArray1::from_vec(py, results.iter().map(|r| r.iterations as i64).collect())
-                .into_any()
-                .unbind(),
-            restarts: PyArray1::from_vec(py, results.iter().map(|r| r.restarts as i64).collect())
-                .into_any()
-                .unbind(),
-            status: outcomes
-                .iter()
-                .map(|o| o.status.as_str())
-                .collect::<Vec<_>>()
-                .into_pyobject(py)?
-                .into_any()
-                .unbind(),
+            q: any(to_numpy(py, &[count, n], &q).into_any()),
+            success: any(PyArray1::from_vec(py, results.iter().map(|r| r.success).collect()).into_any()),
+            position_error: floats(|r| r.position_error),
+            orientation_error: floats(|r| r.orientation_error),
+            iterations: ints(|r| r.iterations),
+            restarts: ints(|r| r.restarts),
+            status: any(status.into_pyobject(py)?.into_any()),
         })
     }
 
@@ -318,6 +308,15 @@ impl PyRobot {
         dict.set_item("damping", r.damping)?;
         dict.set_item("residual", r.residual)?;
         Ok((qdot, dict).into_pyobject(py)?.into_any())
+    }
+}
+
+/// The status as an interned Python string (no allocation per call).
+fn status_str(py: Python<'_>, status: IkStatus) -> &Bound<'_, pyo3::types::PyString> {
+    match status {
+        IkStatus::Solved => pyo3::intern!(py, "solved"),
+        IkStatus::Unreachable => pyo3::intern!(py, "unreachable"),
+        IkStatus::NotConverged => pyo3::intern!(py, "not_converged"),
     }
 }
 

@@ -4,6 +4,7 @@
 
 use pyo3::prelude::*;
 
+mod cartesian;
 mod convert;
 mod drives;
 mod dynamics;
@@ -12,6 +13,7 @@ mod hit;
 mod ik;
 mod mobile;
 mod motor;
+mod profile;
 mod robot;
 mod traj;
 // issue 14: argument validation and the boundary panic guard
@@ -26,10 +28,11 @@ fn _ttmanip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     errors::register(m)?;
     robot::register(m)?;
     mobile::register(m)?;
-    dynamics::register(m)?;
+    profile::register(m)?;
     motor::register(m)?;
     ik::register(m)?;
     traj::register(m)?;
+    cartesian::register(m)?;
     guard::register(m)?;
     hit::register(m)?;
     drives::register(m)?;

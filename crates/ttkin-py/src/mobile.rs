@@ -285,13 +285,10 @@ fn task_line<'py>(
     let (a, b) = (vector(x0, "x0", d)?, vector(x1, "x1", d)?);
     let traj = TaskTrajectory::line(task, &a, &b, duration, rate_hz).py()?;
     let n = traj.len();
-    let mut x = Vec::with_capacity(n * d);
-    let mut xd = Vec::with_capacity(n * d);
-    for k in 0..n {
-        x.extend_from_slice(traj.x(k));
-        xd.extend_from_slice(traj.xdot(k));
-    }
-    Ok((finite_to_numpy(py, &[n, d], &x)?, finite_to_numpy(py, &[n, d], &xd)?))
+    Ok((
+        finite_to_numpy(py, &[n, d], traj.positions())?,
+        finite_to_numpy(py, &[n, d], traj.rates())?,
+    ))
 }
 
 /// The arrays of a tracked motion (one row per control sample) and how it ended.

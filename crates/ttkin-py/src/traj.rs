@@ -1,22 +1,21 @@
 //! Trajectory bindings: `JointTrajectory`, `CartesianTrajectory` and the constructor functions
 //! behind `ttmanip.traj` (conversion only; the maths is `ttkin::traj`).
 
-use nalgebra::Vector3;
 use numpy::ndarray::{Array2, ShapeBuilder};
 use numpy::{PyArray1, PyArray2, PyArrayDyn};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use ttkin::traj::cartesian::{CartesianState, CartesianTrajectory, TimeLaw};
+
 use ttkin::traj::limits::{self, KinematicLimits, SegmentKind, Violation};
 use ttkin::traj::via::{self, ViaKind};
 use ttkin::traj::{JointState, JointTrajectory, Samples};
 
-use crate::convert::{f64_array, pose_to_numpy, to_numpy, transform, vector, zeros};
-use crate::errors::{Callback, PyResultExt, ShapeError, TtmanipError};
+use crate::convert::{f64_array, to_numpy, vector, zeros};
+use crate::errors::{PyResultExt, ShapeError};
 use crate::robot::PyRobot;
 
 /// Reads a vector of any length ≥ 1 (finite values).
-fn any_vector(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f64>> {
+pub(crate) fn any_vector(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f64>> {
     let a = f64_array(obj, what)?;
     match a.shape() {
         [n] if *n > 0 => {
@@ -62,7 +61,7 @@ fn matrix(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<(Vec<f64>, usize, usiz
     }
 }
 
-fn samples_to_py<'py>(py: Python<'py>, s: &Samples) -> PyResult<Bound<'py, PyAny>> {
+pub(crate) fn samples_to_py<'py>(py: Python<'py>, s: &Samples) -> PyResult<Bound<'py, PyAny>> {
     let m = s.t.len();
     let t = to_numpy(py, &[m], &s.t);
     let q = to_numpy(py, &[m, s.dof], &s.q);
@@ -71,7 +70,7 @@ fn samples_to_py<'py>(py: Python<'py>, s: &Samples) -> PyResult<Bound<'py, PyAny
     Ok((t, q, qd, qdd).into_pyobject(py)?.into_any())
 }
 
-fn violations_to_py<'py>(py: Python<'py>, v: &[Violation]) -> PyResult<Bound<'py, PyList>> {
+pub(crate) fn violations_to_py<'py>(py: Python<'py>, v: &[Violation]) -> PyResult<Bound<'py, PyList>> {
     let list = PyList::empty(py);
     for x in v {
         let d = PyDict::new(py);
@@ -85,7 +84,7 @@ fn violations_to_py<'py>(py: Python<'py>, v: &[Violation]) -> PyResult<Bound<'py
     Ok(list)
 }
 
-fn robot_limits(robot: &PyRobot, jerk: Option<&Bound<'_, PyAny>>) -> PyResult<KinematicLimits> {
+pub(crate) fn robot_limits(robot: &PyRobot, jerk: Option<&Bound<'_, PyAny>>) -> PyResult<KinematicLimits> {
     let n = robot.chain.dof();
     let jerk = opt_vector(jerk, "jerk", n)?;
     KinematicLimits::from_chain(&robot.chain, jerk.as_deref()).py()
@@ -141,7 +140,12 @@ impl PyJointTrajectory {
             let (q, qd, qdd) = (zeros(py, &[n]), zeros(py, &[n]), zeros(py, &[n]));
             crate::convert::fill_fresh(&q, |a| {
                 crate::convert::fill_fresh(&qd, |b| {
-                    crate::convert::fill_fresh(&qdd, |c| self.inner.sample(t, a, b, c).py())
+                    crate::convert::fill_fresh(&qdd, |c| {
+                        self.inner.sample(t, a, b, c).py()?;
+                        [&*a, &*b, &*c]
+                            .iter()
+                            .try_for_each(|v| crate::convert::check_finite_output(v))
+                    })
                 })
             })?;
             return Ok((q, qd, qdd).into_pyobject(py)?.into_any());
@@ -150,9 +154,9 @@ impl PyJointTrajectory {
         let s = self.inner.sample_times(&times).py()?;
         let m = times.len();
         Ok((
-            to_numpy(py, &[m, n], &s.q),
-            to_numpy(py, &[m, n], &s.qd),
-            to_numpy(py, &[m, n], &s.qdd),
+            crate::convert::finite_to_numpy(py, &[m, n], &s.q)?,
+            crate::convert::finite_to_numpy(py, &[m, n], &s.qd)?,
+            crate::convert::finite_to_numpy(py, &[m, n], &s.qdd)?,
         )
             .into_pyobject(py)?
             .into_any())
@@ -161,7 +165,10 @@ impl PyJointTrajectory {
     /// Jerk (rad/s³ or m/s³) at time `t` (s), (dof,).
     fn jerk<'py>(&self, py: Python<'py>, t: f64) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let out = zeros(py, &[self.inner.dof()]);
-        crate::convert::fill_fresh(&out, |o| self.inner.jerk(t, o).py())?;
+        crate::convert::fill_fresh(&out, |o| {
+            self.inner.jerk(t, o).py()?;
+            crate::convert::check_finite_output(o)
+        })?;
         Ok(out)
     }
 
@@ -180,8 +187,8 @@ impl PyJointTrajectory {
 
     /// Exact peaks of velocity (order 1), acceleration (2) or jerk (3): (values, times), each
     /// (dof,), values signed.
-    fn peaks<'py>(&self, py: Python<'py>, order: usize) -> PyResult<Bound<'py, PyAny>> {
-        let p = self.inner.peaks(order).py()?;
+    fn peaks<'py>(&self, py: Python<'py>, order: i128) -> PyResult<Bound<'py, PyAny>> {
+        let p = self.inner.peaks(crate::args::unsigned(order, "order")?).py()?;
         let values: Vec<f64> = p.iter().map(|x| x.value).collect();
         let times: Vec<f64> = p.iter().map(|x| x.time).collect();
         let n = p.len();
@@ -222,6 +229,9 @@ fn sample_uniform<'py>(py: Python<'py>, traj: &JointTrajectory, n: usize) -> PyR
     let (mut t, mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; n * dof], vec![0.0; n * dof], vec![0.0; n * dof]);
     traj.sample_uniform_columns_into(&mut t, &mut q, &mut qd, &mut qdd)
         .py()?;
+    for v in [&t, &q, &qd, &qdd] {
+        crate::convert::check_finite_output(v)?; // e.g. a duration of 1e-200: 1/T³ overflows
+    }
     let matrix = |v: Vec<f64>| -> PyResult<_> {
         let a = Array2::from_shape_vec((n, dof).f(), v)
             .map_err(|e| crate::errors::InternalError::new_err(format!("sample_uniform: {e}")))?;
@@ -405,15 +415,7 @@ fn traj_minimal_duration(
 ) -> PyResult<f64> {
     let n = robot.chain.dof();
     let (q0, q1) = (vector(q0, "q0", n)?, vector(q1, "q1", n)?);
-    let kind = match kind {
-        "cubic" => SegmentKind::Cubic,
-        "quintic" => SegmentKind::Quintic,
-        other => {
-            return Err(TtmanipError::new_err(format!(
-                "kind: expected cubic or quintic, got '{other}'"
-            )))
-        }
-    };
+    let kind = kind.parse::<SegmentKind>().py()?;
     limits::minimal_duration_rest(&q0, &q1, &robot_limits(robot, jerk)?, kind).py()
 }
 
@@ -482,194 +484,9 @@ fn traj_stroke<'py>(
         .into_any())
 }
 
-/// A task-space trajectory: tool pose (4×4, base frame, m) along a line or arc under a time law.
-#[pyclass(name = "CartesianTrajectory", module = "ttmanip", frozen)]
-pub struct PyCartesianTrajectory {
-    inner: CartesianTrajectory,
-}
-
-fn law(name: &str, blend: f64) -> PyResult<TimeLaw> {
-    Ok(match TimeLaw::from_name(name).py()? {
-        TimeLaw::Trapezoid { .. } => TimeLaw::Trapezoid { blend },
-        other => other,
-    })
-}
-
-fn point(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vector3<f64>> {
-    let v = vector(obj, what, 3)?;
-    Ok(Vector3::new(v[0], v[1], v[2]))
-}
-
-fn state_to_py<'py>(py: Python<'py>, s: &CartesianState) -> PyResult<Bound<'py, PyAny>> {
-    Ok((
-        pose_to_numpy(py, &s.pose),
-        to_numpy(py, &[6], &s.twist()),
-        to_numpy(py, &[6], &s.twist_derivative()),
-    )
-        .into_pyobject(py)?
-        .into_any())
-}
-
-#[ttkin_py_guard::guarded]
-#[pymethods]
-impl PyCartesianTrajectory {
-    /// Straight line from pose T0 to pose T1 (4×4) in `duration` s, slerp orientation.
-    #[staticmethod]
-    #[pyo3(signature = (t0, t1, duration, law="quintic", blend=0.25))]
-    fn line(t0: &Bound<'_, PyAny>, t1: &Bound<'_, PyAny>, duration: f64, law: &str, blend: f64) -> PyResult<Self> {
-        let (a, b) = (transform(t0, "T0")?, transform(t1, "T1")?);
-        let inner = CartesianTrajectory::line(&a, &b, duration, self::law(law, blend)?).py()?;
-        Ok(PyCartesianTrajectory { inner })
-    }
-
-    /// Circular arc from pose T0 through point `via` (3,) to pose T1, slerp orientation.
-    #[staticmethod]
-    #[pyo3(signature = (t0, via, t1, duration, law="quintic", blend=0.25))]
-    fn arc_through(
-        t0: &Bound<'_, PyAny>,
-        via: &Bound<'_, PyAny>,
-        t1: &Bound<'_, PyAny>,
-        duration: f64,
-        law: &str,
-        blend: f64,
-    ) -> PyResult<Self> {
-        let (a, b) = (transform(t0, "T0")?, transform(t1, "T1")?);
-        let inner =
-            CartesianTrajectory::arc_through(&a, &point(via, "via")?, &b, duration, self::law(law, blend)?).py()?;
-        Ok(PyCartesianTrajectory { inner })
-    }
-
-    /// Circular arc from pose T0 about the axis line (centre (3,), axis (3,)) by `angle` rad; the
-    /// tool turns with the arc.
-    #[staticmethod]
-    #[pyo3(signature = (t0, centre, axis, angle, duration, law="quintic", blend=0.25))]
-    fn arc_about(
-        t0: &Bound<'_, PyAny>,
-        centre: &Bound<'_, PyAny>,
-        axis: &Bound<'_, PyAny>,
-        angle: f64,
-        duration: f64,
-        law: &str,
-        blend: f64,
-    ) -> PyResult<Self> {
-        let a = transform(t0, "T0")?;
-        let inner = CartesianTrajectory::arc_about(
-            &a,
-            &point(centre, "centre")?,
-            &point(axis, "axis")?,
-            angle,
-            duration,
-            self::law(law, blend)?,
-        )
-        .py()?;
-        Ok(PyCartesianTrajectory { inner })
-    }
-
-    /// Duration (s).
-    #[getter]
-    fn duration(&self) -> f64 {
-        self.inner.duration()
-    }
-
-    /// (pose (4, 4), twist [v; ω] (6,), twist derivative (6,)) at time `t` (s); base frame.
-    fn sample<'py>(&self, py: Python<'py>, t: f64) -> PyResult<Bound<'py, PyAny>> {
-        state_to_py(py, &self.inner.sample(t).py()?)
-    }
-
-    /// (t (N,), poses (N, 4, 4), twists (N, 6), twist derivatives (N, 6)) at `hz`.
-    fn sample_rate<'py>(&self, py: Python<'py>, hz: f64) -> PyResult<Bound<'py, PyAny>> {
-        let states = self.inner.sample_rate(hz).py()?;
-        let m = states.len();
-        let (mut t, mut poses, mut tw, mut dtw) = (
-            Vec::with_capacity(m),
-            vec![0.0; 16 * m],
-            Vec::with_capacity(6 * m),
-            Vec::with_capacity(6 * m),
-        );
-        for (i, s) in states.iter().enumerate() {
-            t.push(s.t);
-            ttkin::transform::write_row_major(&s.pose, &mut poses[16 * i..16 * (i + 1)]);
-            tw.extend_from_slice(&s.twist());
-            dtw.extend_from_slice(&s.twist_derivative());
-        }
-        Ok((
-            to_numpy(py, &[m], &t),
-            to_numpy(py, &[m, 4, 4], &poses),
-            to_numpy(py, &[m, 6], &tw),
-            to_numpy(py, &[m, 6], &dtw),
-        )
-            .into_pyobject(py)?
-            .into_any())
-    }
-
-    /// Joint samples (t, q, qd, qdd) at `hz` from `ik(pose (4, 4), seed (n,)) -> q (n,)`, seeded
-    /// with `q_start` then the previous solution; qd, qdd by finite differences. The first sample
-    /// the IK cannot solve raises, naming its index and time.
-    fn to_joint<'py>(
-        &self,
-        py: Python<'py>,
-        hz: f64,
-        q_start: &Bound<'py, PyAny>,
-        ik: &Bound<'py, PyAny>,
-    ) -> PyResult<Bound<'py, PyAny>> {
-        samples_to_py(py, &self.joint_samples(py, hz, q_start, ik)?)
-    }
-
-    /// Sampled limit check through IK (see `to_joint`) against the robot's position, velocity and
-    /// acceleration limits: the worst violation per joint and quantity, as dicts.
-    #[pyo3(signature = (robot, ik, q_start, hz=1000.0))]
-    fn check_limits<'py>(
-        &self,
-        py: Python<'py>,
-        robot: &PyRobot,
-        ik: &Bound<'py, PyAny>,
-        q_start: &Bound<'py, PyAny>,
-        hz: f64,
-    ) -> PyResult<Bound<'py, PyList>> {
-        let limits = robot_limits(robot, None)?;
-        let samples = self.joint_samples(py, hz, q_start, ik)?;
-        violations_to_py(py, &samples.check_limits(&limits).py()?)
-    }
-
-    fn __repr__(&self) -> String {
-        let kind = match self.inner.path() {
-            ttkin::traj::Path::Line { .. } => "line",
-            ttkin::traj::Path::Arc { .. } => "arc",
-        };
-        format!(
-            "CartesianTrajectory({kind}, {:.4} m, duration={} s, law={:?})",
-            self.inner.path().length(),
-            self.inner.duration(),
-            self.inner.law()
-        )
-    }
-}
-
-impl PyCartesianTrajectory {
-    /// Joint samples through the Python callable `ik` (see `to_joint`).
-    fn joint_samples<'py>(
-        &self,
-        py: Python<'py>,
-        hz: f64,
-        q_start: &Bound<'py, PyAny>,
-        ik: &Bound<'py, PyAny>,
-    ) -> PyResult<Samples> {
-        let q0 = any_vector(q_start, "q_start")?;
-        let n = q0.len();
-        let callback = Callback::default();
-        let result = self.inner.to_joint(hz, &q0, |pose, seed| {
-            let call = ik.call1((pose_to_numpy(py, pose), to_numpy(py, &[n], seed)));
-            call.and_then(|r| any_vector(&r, "ik result"))
-                .map_err(|e| callback.error(py, e))
-        });
-        callback.finish(py, result)
-    }
-}
-
 /// Adds the trajectory classes and functions to the module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyJointTrajectory>()?;
-    m.add_class::<PyCartesianTrajectory>()?;
     m.add_function(wrap_pyfunction!(traj_cubic, m)?)?;
     m.add_function(wrap_pyfunction!(traj_quintic, m)?)?;
     m.add_function(wrap_pyfunction!(traj_quintic_samples, m)?)?;

@@ -22,9 +22,27 @@ impl Dynamics {
         wrench: Option<&Wrench>,
         out: &mut [f64],
     ) -> Result<()> {
+        self.inverse_batch(q, qd, qdd, gravity, wrench, false, out)
+    }
+
+    /// [`Dynamics::rnea_batch`], plus joint friction when `friction` is true.
+    #[allow(clippy::too_many_arguments)]
+    fn inverse_batch(
+        &self,
+        q: &[f64],
+        qd: &[f64],
+        qdd: &[f64],
+        gravity: &[f64; 3],
+        wrench: Option<&Wrench>,
+        friction: bool,
+        out: &mut [f64],
+    ) -> Result<()> {
         let g = vec3("gravity", gravity)?;
         self.batch3(["qd", "qdd"], q, qd, qdd, out, |data, q, qd, qdd| {
             self.rnea_unchecked(data, q, qd, qdd, &g, wrench);
+            if friction {
+                self.add_friction(&mut data.tau, qd);
+            }
             Ok(data.tau.as_slice())
         })
     }
@@ -66,7 +84,7 @@ impl Dynamics {
     ) -> Result<()> {
         let g = vec3("gravity", gravity)?;
         self.batch3(["qd", "tau"], q, qd, tau, out, |data, q, qd, tau| {
-            self.forward_unchecked(data, q, qd, tau, &g, wrench)?;
+            self.forward_unchecked(data, q, qd, tau, &g, wrench, false)?;
             Ok(data.qdd.as_slice())
         })
     }
@@ -81,12 +99,7 @@ impl Dynamics {
         wrench: Option<&Wrench>,
         out: &mut [f64],
     ) -> Result<()> {
-        let g = vec3("gravity", gravity)?;
-        self.batch3(["qd", "qdd"], q, qd, qdd, out, |data, q, qd, qdd| {
-            self.rnea_unchecked(data, q, qd, qdd, &g, wrench);
-            self.add_friction(&mut data.tau, qd);
-            Ok(data.tau.as_slice())
-        })
+        self.inverse_batch(q, qd, qdd, gravity, wrench, true, out)
     }
 
     /// Batch [`Dynamics::coriolis`]: `q`, `qd` N × n, `out` receives N × n torques.

@@ -24,6 +24,7 @@ impl DynamicsCache {
 
     /// The dynamic model of `chain`, built on the first call (an error names the first link without
     /// inertia, and is returned again on every later call). Always pass the same chain.
+    #[inline]
     pub fn model(&self, chain: &Chain) -> Result<&Arc<Dynamics>> {
         self.model
             .get_or_init(|| Dynamics::new(chain).map(Arc::new))

@@ -12,9 +12,7 @@ impl Dynamics {
     /// Kinetic energy ½·q̇ᵀ·M(q)·q̇ (J), armature included.
     pub fn kinetic_energy(&self, data: &mut DynamicsData, q: &[f64], qd: &[f64]) -> Result<f64> {
         self.check_state(data, q, qd)?;
-        let zeros = std::mem::take(&mut data.zeros);
-        self.rnea_unchecked(data, q, qd, zeros.as_slice(), &Vector3::zeros(), None);
-        data.zeros = zeros;
+        self.bias_unchecked(data, q, qd, &Vector3::zeros(), None);
         let mut e = 0.0;
         for i in 0..self.dof() {
             let (m, f) = self.bodies[i].apply(&data.w[i], &data.v[i]);

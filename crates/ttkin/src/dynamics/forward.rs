@@ -13,7 +13,9 @@ use super::Wrench;
 use crate::error::{check_finite, check_vector, Error, Result};
 
 impl Dynamics {
-    /// Forward dynamics without checks: q̈ = M⁻¹(τ − h) in `data.qdd`.
+    /// Forward dynamics without checks: q̈ = M⁻¹(τ − τ_f − h) in `data.qdd`, the friction τ_f
+    /// only when `friction` is true.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn forward_unchecked(
         &self,
         data: &mut DynamicsData,
@@ -22,17 +24,19 @@ impl Dynamics {
         tau: &[f64],
         gravity: &Vector3<f64>,
         wrench: Option<&Wrench>,
+        friction: bool,
     ) -> Result<()> {
-        let n = self.dof();
-        let zeros = std::mem::take(&mut data.zeros);
-        self.rnea_unchecked(data, q, qd, zeros.as_slice(), gravity, wrench);
-        data.zeros = zeros;
-        for i in 0..n {
-            data.qdd[i] = tau[i] - data.tau[i];
+        self.bias_unchecked(data, q, qd, gravity, wrench);
+        for i in 0..self.dof() {
+            let tf = if friction {
+                self.drives[i].map_or(0.0, |d| d.friction(qd[i]))
+            } else {
+                0.0
+            };
+            data.qdd[i] = tau[i] - tf - data.tau[i];
         }
         self.crba_unchecked(data, q);
-        data.solve_mass_matrix()?;
-        Ok(())
+        data.solve_mass_matrix()
     }
 
     /// Forward dynamics: joint accelerations q̈ = M(q)⁻¹(τ − h(q, q̇) + Jᵀw) (rad/s², m/s²) under
@@ -51,7 +55,7 @@ impl Dynamics {
         self.check_state(data, q, qd)?;
         check_vector("tau", tau, self.dof())?;
         let g = vec3("gravity", gravity)?;
-        self.forward_unchecked(data, q, qd, tau, &g, wrench)?;
+        self.forward_unchecked(data, q, qd, tau, &g, wrench, false)?;
         Ok(&data.qdd)
     }
 
@@ -73,12 +77,7 @@ impl Dynamics {
         self.check_state(data, q, qd)?;
         check_vector("tau", tau, self.dof())?;
         let g = vec3("gravity", gravity)?;
-        if !(dt > 0.0 && dt.is_finite()) {
-            return Err(Error::invalid(
-                "dt",
-                format!("time step must be finite and > 0 s, got {dt}"),
-            ));
-        }
+        check_dt(dt)?;
         self.step_unchecked(data, q, qd, tau, dt, &g, friction)
     }
 
@@ -94,19 +93,7 @@ impl Dynamics {
         friction: bool,
     ) -> Result<()> {
         let n = self.dof();
-        let zeros = std::mem::take(&mut data.zeros);
-        self.rnea_unchecked(data, q, qd, zeros.as_slice(), gravity, None);
-        data.zeros = zeros;
-        for i in 0..n {
-            let tf = if friction {
-                self.drives[i].map_or(0.0, |d| d.friction(qd[i]))
-            } else {
-                0.0
-            };
-            data.qdd[i] = tau[i] - tf - data.tau[i];
-        }
-        self.crba_unchecked(data, q);
-        data.solve_mass_matrix()?;
+        self.forward_unchecked(data, q, qd, tau, gravity, None, friction)?;
         for i in 0..n {
             qd[i] += dt * data.qdd[i];
             q[i] += dt * qd[i];
@@ -131,12 +118,7 @@ impl Dynamics {
         self.check_state(&data, q0, qd0)?;
         let steps = batch_count("tau", taus, n)?;
         let g = vec3("gravity", gravity)?;
-        if !(dt > 0.0 && dt.is_finite()) {
-            return Err(Error::invalid(
-                "dt",
-                format!("time step must be finite and > 0 s, got {dt}"),
-            ));
-        }
+        check_dt(dt)?;
         let (mut q, mut qd) = (q0.to_vec(), qd0.to_vec());
         let mut qs = Vec::with_capacity((steps + 1) * n);
         let mut qds = Vec::with_capacity((steps + 1) * n);
@@ -155,4 +137,15 @@ impl Dynamics {
         }
         Ok((qs, qds))
     }
+}
+
+/// Checks an integration step: finite and > 0 s.
+fn check_dt(dt: f64) -> Result<()> {
+    if !(dt > 0.0 && dt.is_finite()) {
+        return Err(Error::invalid(
+            "dt",
+            format!("time step must be finite and > 0 s, got {dt}"),
+        ));
+    }
+    Ok(())
 }

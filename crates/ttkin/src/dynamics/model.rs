@@ -149,6 +149,7 @@ impl DynamicsData {
 }
 
 /// Checks a 3-vector argument and turns it into a `Vector3`.
+#[inline]
 pub(super) fn vec3(what: &str, v: &[f64; 3]) -> Result<Vector3<f64>> {
     check_finite(what, v)?;
     Ok(Vector3::from(*v))
@@ -202,6 +203,7 @@ impl Dynamics {
     }
 
     /// Number of joints n.
+    #[inline]
     pub fn dof(&self) -> usize {
         self.kinds.len()
     }
@@ -221,6 +223,7 @@ impl Dynamics {
         self.bodies.iter().map(|b| b.mass).sum()
     }
 
+    #[inline]
     pub(super) fn check_data(&self, data: &DynamicsData) -> Result<()> {
         if data.dof() != self.dof() {
             return Err(Error::shape(
@@ -256,6 +259,7 @@ impl Dynamics {
         }
     }
 
+    #[inline]
     pub(super) fn check_state(&self, data: &DynamicsData, q: &[f64], qd: &[f64]) -> Result<()> {
         self.check_data(data)?;
         check_vector("q", q, self.dof())?;
@@ -275,6 +279,7 @@ impl Dynamics {
         ))
     }
 
+    #[inline]
     pub(super) fn add_friction(&self, tau: &mut DVector<f64>, qd: &[f64]) {
         for ((t, d), &v) in tau.iter_mut().zip(&self.drives).zip(qd) {
             if let Some(d) = d {

@@ -83,6 +83,20 @@ impl Dynamics {
         }
     }
 
+    /// The bias torques h = C(q, q̇)·q̇ + g(q) − Jᵀw without checks (RNEA at q̈ = 0) in `data.tau`.
+    pub(super) fn bias_unchecked(
+        &self,
+        data: &mut DynamicsData,
+        q: &[f64],
+        qd: &[f64],
+        gravity: &Vector3<f64>,
+        wrench: Option<&Wrench>,
+    ) {
+        let zeros = std::mem::take(&mut data.zeros);
+        self.rnea_unchecked(data, q, qd, zeros.as_slice(), gravity, wrench);
+        data.zeros = zeros;
+    }
+
     /// Inverse dynamics (recursive Newton–Euler): joint torques (N·m) / forces (N) that produce
     /// `qdd` at (`q`, `qd`) under `gravity` (m/s², base frame) with an optional `wrench` on the
     /// tool; rigid bodies plus armature, no friction (Pinocchio's `rnea`).
@@ -137,9 +151,7 @@ impl Dynamics {
     /// Coriolis and centrifugal torques C(q, q̇)·q̇ (N·m or N), gravity excluded.
     pub fn coriolis<'d>(&self, data: &'d mut DynamicsData, q: &[f64], qd: &[f64]) -> Result<&'d DVector<f64>> {
         self.check_state(data, q, qd)?;
-        let zeros = std::mem::take(&mut data.zeros);
-        self.rnea_unchecked(data, q, qd, zeros.as_slice(), &Vector3::zeros(), None);
-        data.zeros = zeros;
+        self.bias_unchecked(data, q, qd, &Vector3::zeros(), None);
         Ok(&data.tau)
     }
 
@@ -153,9 +165,7 @@ impl Dynamics {
     ) -> Result<&'d DVector<f64>> {
         self.check_state(data, q, qd)?;
         let g = vec3("gravity", gravity)?;
-        let zeros = std::mem::take(&mut data.zeros);
-        self.rnea_unchecked(data, q, qd, zeros.as_slice(), &g, None);
-        data.zeros = zeros;
+        self.bias_unchecked(data, q, qd, &g, None);
         Ok(&data.tau)
     }
 }

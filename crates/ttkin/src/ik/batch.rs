@@ -15,10 +15,10 @@ use std::str::FromStr;
 use nalgebra::IsometryMatrix3;
 use rayon::prelude::*;
 
-use super::numeric::{measure, residual_dim};
+use super::numeric::{check_batch, measure, residual_dim};
 use super::{Analytic, IkResult, IkScratch, IkSolver, LimitFilter};
 use crate::chain::Chain;
-use crate::error::{check_finite, check_vector, Error, Result};
+use crate::error::{Error, Result};
 use crate::task::Task;
 
 thread_local! {
@@ -140,20 +140,7 @@ impl IkBatchSolver {
         } else {
             q0s
         };
-        if q0s.len() != 1 && q0s.len() != targets.len() {
-            return Err(Error::shape(
-                "q0",
-                format!("1 or {} start configurations", targets.len()),
-                q0s.len(),
-            ));
-        }
-        for q0 in q0s {
-            check_vector("q0", q0, chain.dof())?;
-        }
-        for t in targets {
-            check_finite("target pose", t.rotation.matrix().as_slice())?;
-            check_finite("target pose", t.translation.vector.as_slice())?;
-        }
+        check_batch(chain, targets, q0s)?;
         let one = |i: usize, t: &IsometryMatrix3<f64>| {
             let q0 = if q0s.len() == 1 { &q0s[0] } else { &q0s[i] };
             self.solve_one(chain, i, t, q0)

@@ -24,6 +24,9 @@
 //! flipped normal n = −n*, a false minimum a descent method can fall into.
 //!
 //! Hot loops allocate nothing: all buffers live in an [`IkScratch`] (Pinocchio's model/data split).
+//!
+//! Length (about 560 lines): one solver, its settings, scratch and restart loop, read top to
+//! bottom; the front end that chooses it is [`super::batch`].
 
 // Index loops over joints read like the maths here (several arrays per index): keep them.
 #![allow(clippy::needless_range_loop)]
@@ -216,20 +219,7 @@ impl IkSolver {
         q0s: &[Vec<f64>],
     ) -> Result<Vec<IkResult>> {
         self.validate()?;
-        if q0s.len() != 1 && q0s.len() != targets.len() {
-            return Err(Error::shape(
-                "q0",
-                format!("1 or {} start configurations", targets.len()),
-                q0s.len(),
-            ));
-        }
-        for q0 in q0s {
-            check_vector("q0", q0, chain.dof())?;
-        }
-        for t in targets {
-            check_finite("target pose", t.rotation.matrix().as_slice())?;
-            check_finite("target pose", t.translation.vector.as_slice())?;
-        }
+        check_batch(chain, targets, q0s)?;
         Ok(targets
             .par_iter()
             .enumerate()
@@ -406,6 +396,26 @@ impl IkSolver {
             Attempt::Stalled
         }
     }
+}
+
+/// Checks a batch: one start for all targets or one per target, each of the chain's length and
+/// finite, and finite target poses.
+pub(crate) fn check_batch(chain: &Chain, targets: &[IsometryMatrix3<f64>], q0s: &[Vec<f64>]) -> Result<()> {
+    if q0s.len() != 1 && q0s.len() != targets.len() {
+        return Err(Error::shape(
+            "q0",
+            format!("1 or {} start configurations", targets.len()),
+            q0s.len(),
+        ));
+    }
+    for q0 in q0s {
+        check_vector("q0", q0, chain.dof())?;
+    }
+    for t in targets {
+        check_finite("target pose", t.rotation.matrix().as_slice())?;
+        check_finite("target pose", t.translation.vector.as_slice())?;
+    }
+    Ok(())
 }
 
 /// Rows of the solver's residual for `task`: 6 for the pose and the racket, 3 for the position.

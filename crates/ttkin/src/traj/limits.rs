@@ -4,6 +4,10 @@
 //! Peaks are exact up to rounding: on each polynomial piece the extrema of a derivative lie at the
 //! piece's ends or at roots of the next derivative, which [`poly::roots_in`] isolates (closed form up to degree 2, safeguarded Newton above).
 //! Nothing is sampled, so a violation between two control ticks is still found.
+//!
+//! Length (about 600 lines): one concept, the exact checks of one trajectory type, read top to
+//! bottom (peaks, violations, minimal durations share the per-piece root isolation); its tests
+//! live in `crates/ttkin/tests`.
 
 use super::{poly, JointState, JointTrajectory};
 use crate::chain::Chain;
@@ -295,6 +299,22 @@ pub enum SegmentKind {
     Cubic,
     /// Quintic (boundary positions, velocities and accelerations).
     Quintic,
+}
+
+impl std::str::FromStr for SegmentKind {
+    type Err = Error;
+
+    /// Parses `"cubic"` or `"quintic"`.
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "cubic" => Ok(SegmentKind::Cubic),
+            "quintic" => Ok(SegmentKind::Quintic),
+            other => Err(Error::invalid(
+                "kind",
+                format!("expected cubic or quintic, got '{other}'"),
+            )),
+        }
+    }
 }
 
 /// Minimal duration (s) of a rest-to-rest segment from `q0` to `q1` under velocity, acceleration

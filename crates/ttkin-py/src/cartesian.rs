@@ -1,0 +1,203 @@
+//! `ttmanip.CartesianTrajectory`: tool-pose lines and arcs under a time law, sampled, mapped
+//! through a Python IK callable into joint space, and checked against a robot's limits
+//! (conversion only; the maths is `ttkin::traj::cartesian`).
+
+use nalgebra::Vector3;
+use pyo3::prelude::*;
+use pyo3::types::PyList;
+use ttkin::traj::cartesian::{CartesianState, CartesianTrajectory, TimeLaw};
+use ttkin::traj::Samples;
+
+use crate::convert::{pose_to_numpy, to_numpy, transform, vector};
+use crate::errors::{Callback, PyResultExt};
+use crate::robot::PyRobot;
+use crate::traj::{any_vector, robot_limits, samples_to_py, violations_to_py};
+
+/// A task-space trajectory: tool pose (4×4, base frame, m) along a line or arc under a time law.
+#[pyclass(name = "CartesianTrajectory", module = "ttmanip", frozen)]
+pub struct PyCartesianTrajectory {
+    inner: CartesianTrajectory,
+}
+
+fn law(name: &str, blend: f64) -> PyResult<TimeLaw> {
+    Ok(match TimeLaw::from_name(name).py()? {
+        TimeLaw::Trapezoid { .. } => TimeLaw::Trapezoid { blend },
+        other => other,
+    })
+}
+
+fn point(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vector3<f64>> {
+    let v = vector(obj, what, 3)?;
+    Ok(Vector3::new(v[0], v[1], v[2]))
+}
+
+fn state_to_py<'py>(py: Python<'py>, s: &CartesianState) -> PyResult<Bound<'py, PyAny>> {
+    Ok((
+        pose_to_numpy(py, &s.pose),
+        to_numpy(py, &[6], &s.twist()),
+        to_numpy(py, &[6], &s.twist_derivative()),
+    )
+        .into_pyobject(py)?
+        .into_any())
+}
+
+#[ttkin_py_guard::guarded]
+#[pymethods]
+impl PyCartesianTrajectory {
+    /// Straight line from pose T0 to pose T1 (4×4) in `duration` s, slerp orientation.
+    #[staticmethod]
+    #[pyo3(signature = (t0, t1, duration, law="quintic", blend=0.25))]
+    fn line(t0: &Bound<'_, PyAny>, t1: &Bound<'_, PyAny>, duration: f64, law: &str, blend: f64) -> PyResult<Self> {
+        let (a, b) = (transform(t0, "T0")?, transform(t1, "T1")?);
+        let inner = CartesianTrajectory::line(&a, &b, duration, self::law(law, blend)?).py()?;
+        Ok(PyCartesianTrajectory { inner })
+    }
+
+    /// Circular arc from pose T0 through point `via` (3,) to pose T1, slerp orientation.
+    #[staticmethod]
+    #[pyo3(signature = (t0, via, t1, duration, law="quintic", blend=0.25))]
+    fn arc_through(
+        t0: &Bound<'_, PyAny>,
+        via: &Bound<'_, PyAny>,
+        t1: &Bound<'_, PyAny>,
+        duration: f64,
+        law: &str,
+        blend: f64,
+    ) -> PyResult<Self> {
+        let (a, b) = (transform(t0, "T0")?, transform(t1, "T1")?);
+        let inner =
+            CartesianTrajectory::arc_through(&a, &point(via, "via")?, &b, duration, self::law(law, blend)?).py()?;
+        Ok(PyCartesianTrajectory { inner })
+    }
+
+    /// Circular arc from pose T0 about the axis line (centre (3,), axis (3,)) by `angle` rad; the
+    /// tool turns with the arc.
+    #[staticmethod]
+    #[pyo3(signature = (t0, centre, axis, angle, duration, law="quintic", blend=0.25))]
+    fn arc_about(
+        t0: &Bound<'_, PyAny>,
+        centre: &Bound<'_, PyAny>,
+        axis: &Bound<'_, PyAny>,
+        angle: f64,
+        duration: f64,
+        law: &str,
+        blend: f64,
+    ) -> PyResult<Self> {
+        let a = transform(t0, "T0")?;
+        let inner = CartesianTrajectory::arc_about(
+            &a,
+            &point(centre, "centre")?,
+            &point(axis, "axis")?,
+            angle,
+            duration,
+            self::law(law, blend)?,
+        )
+        .py()?;
+        Ok(PyCartesianTrajectory { inner })
+    }
+
+    /// Duration (s).
+    #[getter]
+    fn duration(&self) -> f64 {
+        self.inner.duration()
+    }
+
+    /// (pose (4, 4), twist [v; ω] (6,), twist derivative (6,)) at time `t` (s); base frame.
+    fn sample<'py>(&self, py: Python<'py>, t: f64) -> PyResult<Bound<'py, PyAny>> {
+        state_to_py(py, &self.inner.sample(t).py()?)
+    }
+
+    /// (t (N,), poses (N, 4, 4), twists (N, 6), twist derivatives (N, 6)) at `hz`.
+    fn sample_rate<'py>(&self, py: Python<'py>, hz: f64) -> PyResult<Bound<'py, PyAny>> {
+        let states = self.inner.sample_rate(hz).py()?;
+        let m = states.len();
+        let (mut t, mut poses, mut tw, mut dtw) = (
+            Vec::with_capacity(m),
+            vec![0.0; 16 * m],
+            Vec::with_capacity(6 * m),
+            Vec::with_capacity(6 * m),
+        );
+        for (i, s) in states.iter().enumerate() {
+            t.push(s.t);
+            ttkin::transform::write_row_major(&s.pose, &mut poses[16 * i..16 * (i + 1)]);
+            tw.extend_from_slice(&s.twist());
+            dtw.extend_from_slice(&s.twist_derivative());
+        }
+        Ok((
+            to_numpy(py, &[m], &t),
+            to_numpy(py, &[m, 4, 4], &poses),
+            to_numpy(py, &[m, 6], &tw),
+            to_numpy(py, &[m, 6], &dtw),
+        )
+            .into_pyobject(py)?
+            .into_any())
+    }
+
+    /// Joint samples (t, q, qd, qdd) at `hz` from `ik(pose (4, 4), seed (n,)) -> q (n,)`, seeded
+    /// with `q_start` then the previous solution; qd, qdd by finite differences. The first sample
+    /// the IK cannot solve raises, naming its index and time.
+    fn to_joint<'py>(
+        &self,
+        py: Python<'py>,
+        hz: f64,
+        q_start: &Bound<'py, PyAny>,
+        ik: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        samples_to_py(py, &self.joint_samples(py, hz, q_start, ik)?)
+    }
+
+    /// Sampled limit check through IK (see `to_joint`) against the robot's position, velocity and
+    /// acceleration limits: the worst violation per joint and quantity, as dicts.
+    #[pyo3(signature = (robot, ik, q_start, hz=1000.0))]
+    fn check_limits<'py>(
+        &self,
+        py: Python<'py>,
+        robot: &PyRobot,
+        ik: &Bound<'py, PyAny>,
+        q_start: &Bound<'py, PyAny>,
+        hz: f64,
+    ) -> PyResult<Bound<'py, PyList>> {
+        let limits = robot_limits(robot, None)?;
+        let samples = self.joint_samples(py, hz, q_start, ik)?;
+        violations_to_py(py, &samples.check_limits(&limits).py()?)
+    }
+
+    fn __repr__(&self) -> String {
+        let kind = match self.inner.path() {
+            ttkin::traj::Path::Line { .. } => "line",
+            ttkin::traj::Path::Arc { .. } => "arc",
+        };
+        format!(
+            "CartesianTrajectory({kind}, {:.4} m, duration={} s, law={:?})",
+            self.inner.path().length(),
+            self.inner.duration(),
+            self.inner.law()
+        )
+    }
+}
+
+impl PyCartesianTrajectory {
+    /// Joint samples through the Python callable `ik` (see `to_joint`).
+    fn joint_samples<'py>(
+        &self,
+        py: Python<'py>,
+        hz: f64,
+        q_start: &Bound<'py, PyAny>,
+        ik: &Bound<'py, PyAny>,
+    ) -> PyResult<Samples> {
+        let q0 = any_vector(q_start, "q_start")?;
+        let n = q0.len();
+        let callback = Callback::default();
+        let result = self.inner.to_joint(hz, &q0, |pose, seed| {
+            let call = ik.call1((pose_to_numpy(py, pose), to_numpy(py, &[n], seed)));
+            call.and_then(|r| any_vector(&r, "ik result"))
+                .map_err(|e| callback.error(py, e))
+        });
+        callback.finish(py, result)
+    }
+}
+
+/// Adds `CartesianTrajectory` to the module.
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyCartesianTrajectory>()
+}

@@ -1,0 +1,147 @@
+//! `Robot.torques` and its result `ttmanip.TorqueProfile`: joint, motor-side and current profiles
+//! of a planned motion with the effort check (patent step S105). Conversion only: the maths is
+//! `ttkin::dynamics::profile`.
+
+use numpy::PyArrayDyn;
+use pyo3::prelude::*;
+use ttkin::dynamics::TorqueProfile;
+
+use crate::convert::to_numpy;
+use crate::dynamics::{gravity_arg, wrench_arg};
+use crate::errors::{PyResultExt, TtmanipError};
+use crate::robot::PyRobot;
+
+/// A numpy float64 array returned to Python.
+type Array<'py> = Bound<'py, PyArrayDyn<f64>>;
+
+/// The result of `Robot.torques`: joint, motor-side and current profiles and the effort check.
+#[pyclass(name = "TorqueProfile", module = "ttmanip", frozen)]
+pub struct PyTorqueProfile {
+    profile: TorqueProfile,
+}
+
+impl PyTorqueProfile {
+    /// An N × n row-major profile as an (N, n) array.
+    fn rows<'py>(&self, py: Python<'py>, v: &[f64]) -> Array<'py> {
+        to_numpy(py, &[v.len() / self.profile.dof, self.profile.dof], v)
+    }
+}
+
+#[ttkin_py_guard::guarded]
+#[pymethods]
+impl PyTorqueProfile {
+    /// (N, n) joint torques (N·m) / forces (N): rigid body + armature + friction.
+    #[getter]
+    fn joint<'py>(&self, py: Python<'py>) -> Array<'py> {
+        self.rows(py, &self.profile.joint)
+    }
+
+    /// (N, n) motor torques τ/G (N·m).
+    #[getter]
+    fn motor<'py>(&self, py: Python<'py>) -> Array<'py> {
+        self.rows(py, &self.profile.motor)
+    }
+
+    /// (N, n) motor currents τ_motor/k_t (A); NaN for joints without a torque constant.
+    #[getter]
+    fn current<'py>(&self, py: Python<'py>) -> Array<'py> {
+        self.rows(py, &self.profile.current)
+    }
+
+    /// (n,) largest |joint torque| over the profile (N·m or N).
+    #[getter]
+    fn peak<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        to_numpy(py, &[self.profile.dof], &self.profile.peak)
+    }
+
+    /// True when no sample exceeds any joint's effort limit.
+    #[getter]
+    fn within_limits(&self) -> bool {
+        self.profile.within_limits()
+    }
+
+    /// Every (sample, joint, torque, limit) whose |torque| exceeds the effort limit.
+    #[getter]
+    fn violations(&self) -> Vec<(usize, usize, f64, f64)> {
+        self.profile
+            .violations
+            .iter()
+            .map(|v| (v.sample, v.joint, v.torque, v.limit))
+            .collect()
+    }
+
+    fn __repr__(&self) -> String {
+        let p = &self.profile;
+        format!(
+            "TorqueProfile({} samples × {} joints, within_limits={}, {} violations)",
+            p.joint.len() / p.dof,
+            p.dof,
+            if p.within_limits() { "True" } else { "False" },
+            p.violations.len()
+        )
+    }
+}
+
+/// (q, qd, qdd) from `torques`' arguments: three arrays, a (q, qd, qdd) tuple, or an object with
+/// attributes q, qd, qdd (or position, velocity, acceleration).
+fn trajectory_arrays<'py>(
+    trajectory: &Bound<'py, PyAny>,
+    qd: Option<&Bound<'py, PyAny>>,
+    qdd: Option<&Bound<'py, PyAny>>,
+) -> PyResult<[Bound<'py, PyAny>; 3]> {
+    match (qd, qdd) {
+        (Some(qd), Some(qdd)) => Ok([trajectory.clone(), qd.clone(), qdd.clone()]),
+        (None, None) => {
+            if let Ok((q, qd, qdd)) = trajectory.extract::<(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>)>()
+            {
+                return Ok([q, qd, qdd]);
+            }
+            for names in [["q", "qd", "qdd"], ["position", "velocity", "acceleration"]] {
+                let got: PyResult<Vec<Bound<'py, PyAny>>> = names.iter().map(|n| trajectory.getattr(*n)).collect();
+                if let Ok(v) = got {
+                    if let Ok([q, qd, qdd]) = <[Bound<'py, PyAny>; 3]>::try_from(v) {
+                        return Ok([q, qd, qdd]);
+                    }
+                }
+            }
+            Err(TtmanipError::new_err(
+                "torques: expected (q, qd, qdd) arrays, a (q, qd, qdd) tuple, or an object with attributes \
+                 q, qd, qdd (or position, velocity, acceleration)",
+            ))
+        }
+        _ => Err(TtmanipError::new_err("torques: give both qd and qdd, or neither")),
+    }
+}
+
+#[ttkin_py_guard::guarded]
+#[pymethods]
+impl PyRobot {
+    /// Torque profile of a planned motion (patent step S105): `torques(q, qd, qdd)` with (N, n)
+    /// arrays, `torques((q, qd, qdd))` or `torques(traj)` for an object with attributes q, qd, qdd
+    /// (or position, velocity, acceleration), each (N, n).
+    /// Joint torques include friction; motor side through the gear ratio and torque constant.
+    #[pyo3(signature = (trajectory, qd=None, qdd=None, gravity=None, wrench=None))]
+    fn torques<'py>(
+        &self,
+        py: Python<'py>,
+        trajectory: &Bound<'py, PyAny>,
+        qd: Option<&Bound<'py, PyAny>>,
+        qdd: Option<&Bound<'py, PyAny>>,
+        gravity: Option<&Bound<'py, PyAny>>,
+        wrench: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<PyTorqueProfile> {
+        let g = gravity_arg(gravity)?;
+        let w = wrench_arg(wrench)?;
+        let [q, qd, qdd] = trajectory_arrays(trajectory, qd, qdd)?;
+        let (arrays, _) = self.states([(&q, "q"), (&qd, "qd"), (&qdd, "qdd")])?;
+        let dy = self.dynamics()?;
+        let (q, qd, qdd) = (arrays[0].data(), arrays[1].data(), arrays[2].data());
+        let profile = py.detach(|| dy.torque_profile(q, qd, qdd, &g, w.as_ref())).py()?;
+        Ok(PyTorqueProfile { profile })
+    }
+}
+
+/// Adds `TorqueProfile` to the module (`Robot.torques` lives on `Robot`).
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyTorqueProfile>()
+}

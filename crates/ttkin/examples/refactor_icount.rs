@@ -1,0 +1,68 @@
+//! Fixed-count loops of the operations the issue-16 refactor moved (fk, jacobian, rnea, ik), for
+//! instruction counts under valgrind: `refactor_icount OP N`.
+use std::hint::black_box;
+use ttkin::ik::{Analytic, IkSolver, LimitFilter};
+use ttkin::{Dynamics, DynamicsData, JacobianFrame};
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let n: usize = args[2].parse().unwrap();
+    let m8 = ttkin::robots::mobile8();
+    let ur5 = ttkin::robots::ur5();
+    let g6 = ttkin::robots::gantry6();
+    let q8 = ttkin::robots::mobile8_start();
+    let q6 = [0.3, -0.9, 1.1, -0.4, 0.8, 0.2];
+    match args[1].as_str() {
+        "fk" => (0..n).for_each(|_| {
+            black_box(m8.fk(black_box(&q8)).unwrap());
+        }),
+        "jacobian" => {
+            let mut j = nalgebra::Matrix6xX::zeros(m8.dof());
+            (0..n).for_each(|_| {
+                black_box(m8.jacobian_into(black_box(&q8), JacobianFrame::Base, &mut j));
+            });
+            black_box(j);
+        }
+        "rnea" => {
+            let dy = Dynamics::new(&ur5).unwrap();
+            let mut d = DynamicsData::new(&dy);
+            let (qd, qdd) = ([0.3; 6], [1.0; 6]);
+            (0..n).for_each(|_| {
+                black_box(
+                    dy.rnea(&mut d, black_box(&q6), &qd, &qdd, &[0.0, 0.0, -9.81], None)
+                        .unwrap()[0],
+                );
+            });
+        }
+        "forward_dynamics" => {
+            let dy = Dynamics::new(&ur5).unwrap();
+            let mut d = DynamicsData::new(&dy);
+            let (qd, tau) = ([0.3; 6], [1.0; 6]);
+            (0..n).for_each(|_| {
+                black_box(
+                    dy.forward_dynamics(&mut d, black_box(&q6), &qd, &tau, &[0.0, 0.0, -9.81], None)
+                        .unwrap()[0],
+                );
+            });
+        }
+        "ik_numeric" => {
+            let t = ur5.fk(&q6).unwrap();
+            let s = IkSolver {
+                time_budget: None,
+                ..IkSolver::default()
+            };
+            let q0 = [0.0, -1.5, 1.5, 0.0, 1.5, 0.0];
+            (0..n).for_each(|_| {
+                black_box(s.solve(&ur5, black_box(&t), &q0).unwrap());
+            });
+        }
+        "ik_analytic" => {
+            let ik = Analytic::for_chain(&g6).unwrap();
+            let t = g6.fk(&[0.1, -0.1, 0.5, 0.4, -0.6, 0.9]).unwrap();
+            (0..n).for_each(|_| {
+                black_box(ik.solve(black_box(&t), None, LimitFilter::Off).unwrap());
+            });
+        }
+        other => panic!("unknown op {other}"),
+    }
+}
