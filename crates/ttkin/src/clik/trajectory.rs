@@ -20,7 +20,7 @@ impl TaskTrajectory {
     pub fn new(task: Task, rate_hz: f64, x: Vec<f64>, xdot: Vec<f64>) -> Result<Self> {
         check_rate(rate_hz)?;
         let d = task.dim();
-        if x.is_empty() || x.len() % d != 0 {
+        if x.is_empty() || !x.len().is_multiple_of(d) {
             return Err(Error::shape(
                 "task_trajectory",
                 format!("N × {d} values, N ≥ 2"),
@@ -45,7 +45,7 @@ impl TaskTrajectory {
         check_rate(rate_hz)?;
         let d = task.dim();
         let count = x.len() / d;
-        if x.len() % d != 0 || count < 2 {
+        if !x.len().is_multiple_of(d) || count < 2 {
             return Err(Error::shape(
                 "task_trajectory",
                 format!("N × {d} values, N ≥ 2"),
