@@ -159,6 +159,16 @@ def poses(d: Draw, r: ttmanip.Robot):
 
 
 @functools.cache
+@functools.cache
+def _demo_plan():
+    return ttmanip.plan_hit(robot("gantry6"), ttmanip.DEMO_HIT)
+
+
+@functools.cache
+def _demo_sim():
+    return ttmanip.simulate(robot("gantry6"), _demo_plan())
+
+
 def sample_objects() -> dict[str, object]:
     """One object of each public class that the API makes (receivers of methods)."""
     m8, g6 = robot("mobile8"), robot("gantry6")
@@ -184,6 +194,10 @@ def sample_objects() -> dict[str, object]:
         "motor.Response": servo.step_response("position", 0.01, 0.05),
         "traj.JointTrajectory": ttmanip.traj.cubic(np.zeros(n), qg, 0.5),
         "traj.CartesianTrajectory": ttmanip.traj.line(g6.fk(np.zeros(n)), g6.fk(qg), 0.5),
+        "DriveSim": ttmanip.DriveSim(g6),
+        "Hit": ttmanip.DEMO_HIT,
+        "HitPlan": _demo_plan(),
+        "SimResult": _demo_sim(),
         "traj.Stroke": ttmanip.traj.stroke(
             None, (qg, np.zeros(n), np.zeros(n)), qg + 0.1, np.zeros(n), 0.6, qg
         ),
@@ -271,7 +285,70 @@ def state(d: Draw, ctx):
     return tuple(d.array([(ctx["n"],)]) for _ in range(k))
 
 
+def tiny_count(d: Draw, _ctx):
+    return d(st.integers(-1, 3))
+
+
+def rate(d: Draw, _ctx):
+    return d(
+        st.one_of(
+            st.sampled_from([1000.0, 250.0, 0.0, -1.0, float("nan"), float("inf"), 1e-300]),
+            st.floats(1.0, 5e3),
+        )
+    )
+
+
+def noise(d: Draw, _ctx):
+    return d(st.sampled_from([None, 0.0, 0.005, -1.0, float("nan"), float("inf")]))
+
+
+def short_times(d: Draw, ctx):
+    """Reference sample times: a short increasing grid, or random arrays (huge or non-finite)."""
+    if d(st.booleans()):
+        return np.linspace(0.0, d(st.floats(0.001, 0.05)), 3)
+    return d.array([(3,), (0,), (2, 2)])
+
+
+def out_dir(d: Draw, _ctx):
+    return d(st.sampled_from([None, "/nonexistent-dir/rally"]))
+
+
+def hit(d: Draw, ctx):
+    return d(st.sampled_from([ttmanip.DEMO_HIT, None, 1.0]))
+
+
+def hits(d: Draw, ctx):
+    return d(st.sampled_from([[ttmanip.DEMO_HIT] * 2, [], [None], ttmanip.DEMO_HIT]))
+
+
+def hit_plan(d: Draw, ctx):
+    return d(st.sampled_from([_demo_plan(), None]))
+
+
+def jerk_or_none(d: Draw, ctx):
+    return None if d(st.booleans()) else d.array([(ctx["n"],), (3,)])
+
+
+def array6(d: Draw, ctx):
+    return d.array([(6,), (3,), (2, 6)])
+
+
+def pose_or_junk(d: Draw, ctx):
+    return poses(d, ctx["robot"]) if d(st.booleans()) else d.array([(4, 4), (3, 3)])
+
+
 SPECIAL_STRATEGIES = {
+    "tiny_count": tiny_count,
+    "rate": rate,
+    "noise": noise,
+    "short_times": short_times,
+    "out_dir": out_dir,
+    "hit": hit,
+    "hits": hits,
+    "hit_plan": hit_plan,
+    "jerk_or_none": jerk_or_none,
+    "array6": array6,
+    "pose_or_junk": pose_or_junk,
     "flag": flag,
     "time": lambda d, _ctx: d.value(),
     "diffdrive_or_none": diffdrive_or_none,

@@ -210,6 +210,10 @@ def plan_hits(
     raise_on_failure: bool = False,
 ) -> list[HitPlan]:
     """:func:`plan_hit` for a sequence of hits from the same state, planned in parallel in Rust."""
+    if isinstance(hits, Hit) or not isinstance(hits, (list, tuple)):
+        raise TtmanipError(
+            f"hits: expected a list or tuple of ttmanip.Hit, got {type(hits).__name__} (one hit: plan_hit)"
+        )
     hits = [_check_hit(h) for h in hits]
     if not hits:
         return []

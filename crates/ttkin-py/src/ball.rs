@@ -12,8 +12,9 @@ use ttkin::ball::model::BallModel;
 use ttkin::ball::predict::{crossing, predict, CrossingOutcome};
 use ttkin::ball::rally::{self, RallyConfig};
 
+use crate::args;
 use crate::convert::{f64_array, filled_without_gil_nan_allowed, pose_to_numpy, to_numpy, vector};
-use crate::errors::{PyResultExt, ShapeError};
+use crate::errors::{PyResultExt, ShapeError, TtmanipError};
 
 fn flight(model: &str) -> PyResult<Flight> {
     Ok(Flight::new(BallModel::by_name(model).py()?))
@@ -252,13 +253,22 @@ fn ball_plan_return<'py>(
 #[pyo3(signature = (n, seed = 0, start = 0, target = (0.9, 0.0), max_spin_rps = 40.0, paths = 5))]
 fn ball_rally<'py>(
     py: Python<'py>,
-    n: usize,
-    seed: u64,
-    start: u64,
+    n: i128,
+    seed: i128,
+    start: i128,
     target: (f64, f64),
     max_spin_rps: f64,
-    paths: usize,
+    paths: i128,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let n: usize = args::sample_count(n, "n")?;
+    let seed: u64 = args::unsigned(seed, "seed")?;
+    let start: u64 = args::unsigned(start, "start")?;
+    let paths: usize = args::unsigned(paths, "paths")?;
+    if start.checked_add(n as u64).is_none() {
+        return Err(TtmanipError::new_err(format!(
+            "start: {start} + n ({n}) overflows the ball index"
+        )));
+    }
     let planner = HitPlanner::new(ttkin::robots::gantry6(), Flight::default()).py()?;
     planner.check_target([target.0, target.1]).py()?;
     if !(max_spin_rps >= 0.0 && max_spin_rps.is_finite()) {

@@ -6,6 +6,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use ttcan::{CoupledOptions, CoupledSim};
 
+use crate::args;
 use crate::convert::{f64_array, to_numpy, vector};
 use crate::errors::{ModelError, NonFiniteError, TtmanipError};
 use crate::robot::PyRobot as Robot;
@@ -41,7 +42,7 @@ impl DriveSim {
         gravity: bool,
         setpoint_rate: f64,
         noise: Option<f64>,
-        seed: u64,
+        seed: i128,
         ideal_current: bool,
     ) -> PyResult<Self> {
         if !(setpoint_rate.is_finite() && setpoint_rate > 0.0) {
@@ -62,7 +63,7 @@ impl DriveSim {
                 [0.0; 3]
             },
             ideal_current,
-            seed,
+            seed: args::unsigned(seed, "seed")?,
             setpoint_period: Some(1.0 / setpoint_rate),
             noise_scale: noise / DEFAULT_NOISE,
             ..CoupledOptions::default()
@@ -114,9 +115,17 @@ impl DriveSim {
 
     /// Advances `n` current-loop periods.
     #[pyo3(signature = (n=1))]
-    fn tick(&mut self, py: Python<'_>, n: u64) {
+    fn tick(&mut self, py: Python<'_>, n: i128) -> PyResult<()> {
+        let n: u64 = args::unsigned(n, "n")?;
+        if n > ttcan::coupled::MAX_RUN_TICKS {
+            return Err(TtmanipError::new_err(format!(
+                "n: at most {} ticks per call, got {n}",
+                ttcan::coupled::MAX_RUN_TICKS
+            )));
+        }
         let sim = &mut self.sim;
         py.detach(|| sim.tick_n(n));
+        Ok(())
     }
 
     /// Simulated time since the last reset, s.

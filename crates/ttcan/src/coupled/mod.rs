@@ -47,6 +47,9 @@ pub use drives::{axis_config_from_drive, axis_configs_from_chain};
 use trace::interpolate;
 pub use trace::CoupledTrace;
 
+/// The longest whole-trajectory run [`CoupledSim::run`] accepts, in current-loop ticks (50 s at
+/// 20 kHz): its trace keeps every tick (about 100 bytes per tick and axis).
+pub const MAX_RUN_TICKS: u64 = 1_000_000;
 /// The electrical side of one joint's actuator, as simulated.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Winding {
@@ -526,6 +529,17 @@ impl CoupledSim {
         let t0 = times[0];
         let duration = times[k - 1] - t0;
         let total = (duration / self.period).round() as u64 + 1;
+        if total > MAX_RUN_TICKS {
+            return Err(Error::InvalidParameter {
+                what: "t".into(),
+                value: duration,
+                reason: format!(
+                    "a run of {duration} s is {total} ticks at {} Hz; at most {MAX_RUN_TICKS} ticks \
+                     (the trace keeps every tick): run it in pieces",
+                    1.0 / self.period
+                ),
+            });
+        }
         let mut trace = CoupledTrace::with_capacity(total as usize, n);
         let mut buf = vec![0.0; 4 * n];
         let lead = if self.axes[0].config().setpoint_period.is_some() {
