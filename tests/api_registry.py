@@ -28,7 +28,7 @@ import numpy as np
 import ttmanip
 
 #: Submodules of ttmanip whose public names are part of the API.
-MODULES = ("dynamics", "motor", "robots", "traj")
+MODULES = ("ball", "dynamics", "motor", "robots", "traj")
 
 
 def _batched(*item):
@@ -170,6 +170,20 @@ API: dict[str, dict] = {
         "os_error": True,
         "args": {"n": "tiny_count", "drives": "tiny_count", "out": "out_dir", "chunk": "small_count"},
     },
+    # --- ball (issue 13); positions after a flight ends at the net or the floor are NaN (documented)
+    "ball.BallModel": {"args": {"name": "ball_model_name"}},
+    "ball.BallModel.name": {},
+    "ball.Estimate": {"skip_call": "a record made by ball.estimate"},
+    **{f"ball.Estimate.{a}": {} for a in ("position", "spin", "velocity")},
+    "ball.Table": {},
+    **{f"ball.Table.{a}": {} for a in ("height", "length", "net_height", "net_overhang", "width")},
+    "ball.Table.on_opponent_half": {},
+    "ball.crossing": {"may_be_inf": True, "args": {"model": "ball_model_name"}},
+    "ball.estimate": {"args": {"model": "ball_model_name"}},
+    "ball.plan_return": {"args": {"model": "ball_model_name"}},
+    "ball.predict": {"may_be_inf": True, "args": {"model": "ball_model_name"}},
+    "ball.predict_batch": {"may_be_inf": True, "args": {"model": "ball_model_name"}},
+    "ball.state": {},
     # --- IkResult (made by Robot.ik)
     "IkResult": {"skip_call": "made by Robot.ik only"},
     "IkResult.q": {},

@@ -159,6 +159,12 @@ def poses(d: Draw, r: ttmanip.Robot):
 
 
 @functools.cache
+def _demo_estimate():
+    t = np.linspace(0.0, 0.2, 21)
+    p = np.column_stack([-1.0 - 4.0 * t, 0.1 * t, 0.3 + 1.0 * t - 4.905 * t**2])
+    return ttmanip.ball.estimate(t, p)
+
+
 @functools.cache
 def _demo_plan():
     return ttmanip.plan_hit(robot("gantry6"), ttmanip.DEMO_HIT)
@@ -196,6 +202,9 @@ def sample_objects() -> dict[str, object]:
         "traj.CartesianTrajectory": ttmanip.traj.line(g6.fk(np.zeros(n)), g6.fk(qg), 0.5),
         "DriveSim": ttmanip.DriveSim(g6),
         "Hit": ttmanip.DEMO_HIT,
+        "ball.BallModel": ttmanip.ball.BallModel(),
+        "ball.Table": ttmanip.ball.Table(),
+        "ball.Estimate": _demo_estimate(),
         "HitPlan": _demo_plan(),
         "SimResult": _demo_sim(),
         "traj.Stroke": ttmanip.traj.stroke(
@@ -338,6 +347,9 @@ def pose_or_junk(d: Draw, ctx):
 
 
 SPECIAL_STRATEGIES = {
+    "ball_model_name": lambda d, _ctx: d(
+        st.sampled_from(["default", "muelling", "mpi", "tt3d", "vacuum", "bogus"])
+    ),
     "tiny_count": tiny_count,
     "rate": rate,
     "noise": noise,

@@ -62,9 +62,25 @@ class Table:
     net_height: float = 0.1525
     net_overhang: float = 0.1525
 
+    def __post_init__(self):
+        for name in ("length", "width", "height", "net_height", "net_overhang"):
+            _finite_scalar(getattr(self, name), name, positive=True)
+
     def on_opponent_half(self, x: float, y: float) -> bool:
         """Whether (x, y) (m, world) lies on the opponent's half of the surface."""
+        x, y = _finite_scalar(x, "x"), _finite_scalar(y, "y")
         return 0.0 < x <= self.length / 2 and abs(y) <= self.width / 2
+
+
+def _finite_scalar(v, what: str, positive: bool = False) -> float:
+    """A finite real number (> 0 when ``positive``), else a TtmanipError naming ``what``."""
+    try:
+        f = float(v)
+    except (TypeError, ValueError):
+        raise _t.TtmanipError(f"{what}: expected a real number, got {type(v).__name__}") from None
+    if not np.isfinite(f) or (positive and not f > 0.0):
+        raise _t.TtmanipError(f"{what}: expected a finite{' positive' if positive else ''} number, got {v!r}")
+    return f
 
 
 @dataclass(frozen=True)

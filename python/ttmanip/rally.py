@@ -63,6 +63,22 @@ def rally(
         raise _t.TtmanipError(f"n: must be a positive integer, got {n!r}")
     if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
         raise _t.TtmanipError(f"seed: must be a non-negative integer, got {seed!r}")
+    if not isinstance(chunk, (int, np.integer)) or isinstance(chunk, bool) or chunk < 1:
+        raise _t.TtmanipError(f"chunk: must be a positive integer, got {chunk!r}")
+    if not isinstance(drives, (int, np.integer)) or isinstance(drives, bool) or drives < 0:
+        raise _t.TtmanipError(f"drives: must be a non-negative integer, got {drives!r}")
+    try:
+        target = tuple(float(v) for v in np.asarray(target, dtype=float).reshape(-1))
+        max_spin_rps = float(np.asarray(max_spin_rps, dtype=float))
+    except (TypeError, ValueError):
+        raise _t.TtmanipError(
+            f"target, max_spin_rps: expected (x, y) in m and a number in rev/s, got {target!r}, "
+            f"{max_spin_rps!r}"
+        ) from None
+    if len(target) != 2:
+        raise _t.TtmanipError(
+            f"target: expected (x, y) on the opponent's half in m, got {len(target)} values"
+        )
     parts = []
     for start in range(0, n, chunk):
         m = min(chunk, n - start)
