@@ -28,3 +28,7 @@ def test_demo_writes_figures_and_summary(tmp_path):
     assert summary["racket_normal_error_deg"] <= 0.5
     assert summary["racket_velocity_error_rel"] <= 0.02
     assert summary["mobile8"]["status"] == "ok"
+    # issue 10: the θ5 case (RE 25 + 14:1, 4096 counts) without current chatter
+    assert summary["drive_current_ripple_rms_a"] <= 0.03
+    assert summary["drive_current_ripple_250hz_rms_a"] <= 0.06
+    assert (tmp_path / "drive_theta5.png").is_file()

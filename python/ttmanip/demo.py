@@ -26,7 +26,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from . import plots, robots  # noqa: E402
+from . import motor, plots, robots  # noqa: E402
 from ._ttmanip import Robot  # noqa: E402
 from .pipeline import DEMO_HIT, Hit, plan_hit, racket_states, simulate  # noqa: E402
 
@@ -198,6 +198,9 @@ def run(out: Path, progress=None, workspace: bool = True) -> dict:
     step = progress or (lambda _msg: None)
     summary = run_hit(robots.gantry6(), DEMO_HIT, out, "gantry6", progress=step)
     summary["mobile8"] = run_hit(robots.mobile8(), mobile8_hit(), out, "mobile8", gif=False, progress=step)
+    step("drive: θ5 case")
+    summary.update(motor.theta5_ripple_case())  # issue 10's current-chatter case
+    motor.theta5_figure(out / "drive_theta5.png")
     if workspace:
         step("workspaces")
         kin = out / "kinematics"
