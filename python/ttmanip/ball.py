@@ -121,9 +121,16 @@ def _model(model: BallModel | str) -> str:
 
 def state(p: ArrayLike, v: ArrayLike, w: ArrayLike = (0.0, 0.0, 0.0), t: float = 0.0) -> NDArray[np.float64]:
     """A ball state (10,) from position (m), velocity (m/s), spin (rad/s) and time (s)."""
-    return np.r_[
-        float(t), np.asarray(p, float).ravel(), np.asarray(v, float).ravel(), np.asarray(w, float).ravel()
-    ]
+    parts = [np.array([_finite_scalar(t, "t")])]
+    for name, value in (("p", p), ("v", v), ("w", w)):
+        try:
+            a = np.asarray(value, dtype=float)
+        except (TypeError, ValueError):
+            raise _t.TtmanipError(f"{name}: expected 3 real numbers, got {type(value).__name__}") from None
+        if a.shape != (3,) or not np.isfinite(a).all():
+            raise _t.TtmanipError(f"{name}: expected 3 finite numbers, got shape {a.shape}: {value!r}")
+        parts.append(a)
+    return np.concatenate(parts)
 
 
 def estimate(t: ArrayLike, p: ArrayLike, model: BallModel | str = "default") -> Estimate:
