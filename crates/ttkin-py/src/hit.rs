@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use nalgebra::Vector3;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList};
+use pyo3::types::PyList;
 use ttkin::hit::{self, Hit, HitOptions, HitPlan, HitPlanner, HitTask, StrokeProfile};
 use ttkin::traj::JointState;
 use ttkin::Dynamics;
@@ -13,7 +13,7 @@ use ttkin::Dynamics;
 use crate::convert::{f64_array, pose_to_numpy, to_numpy, transform, vector};
 use crate::errors::{PyResultExt, ShapeError, TtmanipError};
 use crate::robot::PyRobot;
-use crate::traj::PyJointTrajectory;
+use crate::traj::{samples_to_py, violations_to_py, PyJointTrajectory};
 
 /// One planned hit: every intermediate product of `ttkin::hit` (SI units, base frame).
 #[pyclass(name = "HitPlan", module = "ttmanip", frozen)]
@@ -166,17 +166,7 @@ impl PyHitPlan {
     /// Kinematic limit violations (exact peaks): list of dicts (joint, quantity, time, value, limit).
     #[getter]
     fn violations<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
-        let list = PyList::empty(py);
-        for x in &self.plan.violations {
-            let d = PyDict::new(py);
-            d.set_item("joint", x.joint)?;
-            d.set_item("quantity", x.quantity.name())?;
-            d.set_item("time", x.time)?;
-            d.set_item("value", x.value)?;
-            d.set_item("limit", x.limit)?;
-            list.append(d)?;
-        }
-        Ok(list)
+        violations_to_py(py, &self.plan.violations)
     }
 
     /// The stroke as a `JointTrajectory` (None when no stroke was planned).
@@ -188,13 +178,7 @@ impl PyHitPlan {
     /// Samples the stroke at `rate` Hz: (t (K,), q, qd, qdd (K, n)). TtmanipError when no stroke.
     #[pyo3(signature = (rate=1000.0))]
     fn sample<'py>(&self, py: Python<'py>, rate: f64) -> PyResult<Bound<'py, PyAny>> {
-        let s = self.stroke()?.sample_rate(rate).py()?;
-        let m = s.t.len();
-        let t = to_numpy(py, &[m], &s.t);
-        let q = to_numpy(py, &[m, s.dof], &s.q);
-        let qd = to_numpy(py, &[m, s.dof], &s.qd);
-        let qdd = to_numpy(py, &[m, s.dof], &s.qdd);
-        Ok((t, q, qd, qdd).into_pyobject(py)?.into_any())
+        samples_to_py(py, &self.stroke()?.sample_rate(rate).py()?)
     }
 
     /// (K, n) joint torques (N·m or N, inverse dynamics with friction and gravity: the drives'
