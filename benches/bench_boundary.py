@@ -6,7 +6,11 @@ Compare two builds in one run: ``--baseline DIR`` names a directory holding anot
 ``ttmanip`` package (e.g. a copy of ``python/ttmanip`` with its ``.so`` from the commit before);
 the two are measured in alternating subprocesses, several rounds, and the best of each compared.
 
-Run: ``.venv/bin/python benches/bench_boundary.py [--baseline DIR] [--rounds 6]``
+``--icount`` adds what load cannot disturb: instructions per aligned ``fk`` and ``jacobian`` call,
+counted by valgrind (callgrind) as the difference between a run of 20,000 calls and a run of none
+(start-up cancels), with OpenBLAS on one thread (its idle worker threads would count too).
+
+Run: ``.venv/bin/python benches/bench_boundary.py [--baseline DIR] [--rounds 6] [--icount]``
 """
 
 from __future__ import annotations
@@ -64,10 +68,40 @@ def run_child(pythonpath: str | None) -> dict[str, float]:
     return json.loads(res.stdout.strip().splitlines()[-1])
 
 
+ICOUNT_CHILD = """
+import sys
+import numpy as np
+import ttmanip
+robot = ttmanip.Robot.builtin("mobile8")
+q = np.array([0.26, *np.deg2rad([200.0, 90.0, 80.0, 250.0, 105.0, 180.0, 135.0])])
+f = getattr(robot, sys.argv[1])
+f(q)
+for _ in range(int(sys.argv[2])):
+    f(q)
+"""
+
+
+def instructions_per_call(pythonpath: str | None, method: str, calls: int = 20000) -> float:
+    """Instructions of one aligned ``robot.<method>(q)`` call of mobile8, counted by callgrind."""
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
+    if pythonpath:
+        env["PYTHONPATH"] = pythonpath
+
+    def total(n: int) -> int:
+        cmd = ["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null", sys.executable]
+        res = subprocess.run(
+            [*cmd, "-c", ICOUNT_CHILD, method, str(n)], env=env, capture_output=True, text=True, check=True
+        )
+        return int(res.stderr.split("Collected :")[1].split()[0])
+
+    return (total(calls) - total(0)) / calls
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--baseline", help="directory holding another ttmanip package build")
     ap.add_argument("--rounds", type=int, default=6)
+    ap.add_argument("--icount", action="store_true", help="also count instructions per call (valgrind)")
     args = ap.parse_args()
     builds = {"this build": None}
     if args.baseline:
@@ -85,6 +119,14 @@ def main() -> None:
         if args.baseline:
             row += f"  {med['this build'][k] / med['baseline'][k]:>8.3f}"
         print(row)
+    if args.icount:
+        print(f"{'instructions per call':<22}" + "".join(f"{b:>14}" for b in builds))
+        for method in ("fk", "jacobian"):
+            counts = {b: instructions_per_call(path, method) for b, path in builds.items()}
+            row = f"{method + ' aligned':<22}" + "".join(f"{counts[b]:>14.0f}" for b in builds)
+            if args.baseline:
+                row += f"  {counts['this build'] / counts['baseline']:>8.3f}"
+            print(row)
 
 
 if __name__ == "__main__":

@@ -94,7 +94,7 @@ CALLS = {
 def same(a, b):
     if isinstance(a, tuple):
         assert isinstance(b, tuple) and len(a) == len(b)
-        for x, y in zip(a, b):
+        for x, y in zip(a, b, strict=False):
             same(x, y)
     else:
         np.testing.assert_array_equal(np.asarray(a), np.asarray(b))

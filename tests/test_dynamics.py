@@ -134,7 +134,8 @@ def test_simulation_conserves_energy_without_torque_or_friction():
         steps = int(round(0.5 / dt))
         qs, qds = robot.simulate(q0, qd0, np.zeros((steps, robot.dof)), dt, friction=False)
         assert qs.shape == (steps + 1, robot.dof)
-        e = [robot.kinetic_energy(a, b) + robot.potential_energy(a) for a, b in zip(qs[::50], qds[::50])]
+        pairs = zip(qs[::50], qds[::50], strict=True)
+        e = [robot.kinetic_energy(a, b) + robot.potential_energy(a) for a, b in pairs]
         drifts.append(np.abs(np.array(e) - energy0).max())
     # first-order integrator: halving the step halves the energy error, which stays small
     assert 0.4 < drifts[1] / drifts[0] < 0.6, drifts

@@ -68,7 +68,7 @@ def test_too_early_hit_is_a_status_and_raises_only_on_request():
 def test_batch_equals_single_calls():
     hits = random_hits(20, seed=3, t=0.4)
     batch = ttmanip.plan_hits(GANTRY, hits)
-    for h, b in zip(hits, batch):
+    for h, b in zip(hits, batch, strict=False):
         s = ttmanip.plan_hit(GANTRY, h)
         assert (s.status, s.profile) == (b.status, b.profile)
         np.testing.assert_array_equal([s.t_hit, *s.q_hit], [b.t_hit, *b.q_hit])

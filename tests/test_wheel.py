@@ -30,7 +30,7 @@ def test_wheel_is_abi3_and_runs_the_demo_in_a_clean_venv(tmp_path):
     if wheel is None:
         pytest.skip("no wheel built: run scripts/setup.sh or `maturin build --release --out dist` first")
     assert wheel.exists(), wheel
-    assert "-cp39-abi3-" in wheel.name, f"{wheel.name} is not a single abi3 wheel for CPython ≥ 3.9"
+    assert "-cp310-abi3-" in wheel.name, f"{wheel.name} is not a single abi3 wheel for CPython ≥ 3.10"
     env_dir = tmp_path / "venv"
     venv.create(env_dir, with_pip=True)
     py = env_dir / "bin" / "python"

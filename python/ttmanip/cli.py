@@ -413,7 +413,8 @@ def _info(args: argparse.Namespace) -> int:
     robot = _robot(args.robot)
     print(robot)
     rows = []
-    for j, (name, kind, (lo, hi)) in enumerate(zip(robot.joint_names, robot.joint_types, robot.limits)):
+    columns = zip(robot.joint_names, robot.joint_types, robot.limits, strict=True)
+    for j, (name, kind, (lo, hi)) in enumerate(columns):
         v, a, e = robot.velocity_limits[j], robot.acceleration_limits[j], robot.effort_limits[j]
         print(f"  {name:10s} {kind:9s} [{lo: .4f}, {hi: .4f}]  v {v:g}  a {a:g}  effort {e:g}")
         rows.append(

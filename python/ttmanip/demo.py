@@ -49,7 +49,7 @@ def workspace_figure(robot: Robot, q_ref: np.ndarray, path: Path, count: int = 1
     p = poses[:, :3, 3]
     stick = plots.robot_points(robot, q_ref)
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.8), constrained_layout=True)
-    for ax, (i, j), title in zip(axes, [(0, 1), (0, 2)], ["top view (x–y)", "side view (x–z)"]):
+    for ax, (i, j), title in zip(axes, [(0, 1), (0, 2)], ["top view (x–y)", "side view (x–z)"], strict=False):
         hb = ax.hexbin(p[:, i], p[:, j], gridsize=70, bins="log", cmap="viridis", mincnt=1)
         ax.plot(stick[:, i], stick[:, j], "o-", color="tab:red", lw=2, ms=4, label="robot at q_ref")
         ax.set_xlabel(f"{'xyz'[i]} [m]")

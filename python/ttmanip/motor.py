@@ -326,7 +326,7 @@ def theta5_figure(path: str | PathLike[str] | None = None) -> Figure:
     fig = Figure(figsize=(9, 7), layout="constrained")
     FigureCanvasAgg(fig)
     ax = fig.subplots(3, 1, sharex=True)
-    for a, rate in zip(ax[:2], (1000.0, 250.0)):
+    for a, rate in zip(ax[:2], (1000.0, 250.0), strict=False):
         c = drive_theta5_case(rate)
         t = c["t"] * 1e3
         a.plot(t, c["current_ref"], "--", lw=0.8, label="reference")

@@ -146,7 +146,7 @@ def _state(robot: Robot, state) -> dict:
     if isinstance(state, tuple):
         if not 1 <= len(state) <= 3:
             raise TtmanipError(f"state: expected (q,), (q, qd) or (q, qd, qdd), got {len(state)} items")
-        return dict(zip(("q", "qd", "qdd"), state))
+        return dict(zip(("q", "qd", "qdd"), state, strict=False))
     return {"q": state}
 
 

@@ -193,7 +193,8 @@ def error_figure(errors: dict, path, thresholds: dict | None = None) -> Path:
     vals = [errors[k] * scale[k] for k in keys]
     lims = [thresholds[k] * scale[k] for k in keys]
     x = np.arange(len(keys))
-    ax.bar(x, vals, color=["C0" if v <= m else "C3" for v, m in zip(vals, lims)], label="simulated")
+    colors = ["C0" if v <= m else "C3" for v, m in zip(vals, lims, strict=True)]
+    ax.bar(x, vals, color=colors, label="simulated")
     ax.scatter(x, lims, marker="_", s=900, color="k", label="acceptance limit")
     ax.set_xticks(x, [labels[k] for k in keys])
     ax.set_yscale("log")

@@ -100,7 +100,7 @@ def rally(
     in_box = res["in_box"].astype(bool)
     returned = res["returned"].astype(bool) & in_reach
     statuses: dict[str, int] = {}
-    for s, r in zip(res["status"], in_reach):
+    for s, r in zip(res["status"], in_reach, strict=False):
         key = ("in_reach/" if r else "out_of_reach/") + str(s).split(":")[0]
         statuses[key] = statuses.get(key, 0) + 1
     summary = {

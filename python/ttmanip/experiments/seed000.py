@@ -399,7 +399,9 @@ def _unweighted_summary(robot: Robot, u: TrackResult, seconds: float) -> dict:
         "min_limit_margin": float(margin.min()),
         "min_limit_margin_joint": robot.joint_names[int(np.argmin(margin.min(axis=0)))],
         "min_limit_margin_per_joint": margin.min(axis=0).tolist(),
-        "joints_crossing_limits": [n for n, m in zip(robot.joint_names, margin.min(axis=0)) if m < 0.0],
+        "joints_crossing_limits": [
+            n for n, m in zip(robot.joint_names, margin.min(axis=0), strict=True) if m < 0.0
+        ],
         "track_call_seconds": seconds,
     }
 

@@ -66,10 +66,10 @@ def _figure(path: Path) -> None:
     fig, axes = plt.subplots(1, 3, figsize=(14, 4.2), constrained_layout=True)
     for name, style in (("cubic", "-"), ("quintic", "--")):
         t, q, qd, qdd = curves[name].sample_rate(200.0)
-        for ax, y in zip(axes, (q, qd, qdd)):
+        for ax, y in zip(axes, (q, qd, qdd), strict=False):
             ax.plot(t, y[:, 0], style, color="tab:blue", label=f"joint 2, {name}")
             ax.plot(t, y[:, 1], style, color="tab:orange", label=f"joint 4, {name}")
-    for ax, key in zip(axes, ("position", "velocity", "acceleration")):
+    for ax, key in zip(axes, ("position", "velocity", "acceleration"), strict=False):
         paper = np.array(PAPER[key])
         ax.plot(TIMES, paper, "o", color="tab:blue", mfc="none", ms=8, label="paper, joint 2")
         ax.plot(TIMES, -paper, "s", color="tab:orange", mfc="none", ms=8, label="paper, joint 4")
