@@ -24,6 +24,12 @@ use pyo3::types::PyDict;
 
 use crate::errors::{InternalError, NumericalError, PyResultExt, ShapeError};
 
+/// Any Python object a binding receives, before conversion.
+pub type Any<'py> = Bound<'py, PyAny>;
+
+/// A numpy float64 array of any shape handed back to Python.
+pub type Array<'py> = Bound<'py, PyArrayDyn<f64>>;
+
 /// An aligned, C-contiguous, native float64 view of a Python array-like.
 pub struct F64Array<'py> {
     /// Aligned and C-contiguous: checked where it is made (`f64_array`).

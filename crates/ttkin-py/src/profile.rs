@@ -2,17 +2,13 @@
 //! of a planned motion with the effort check (patent step S105). Conversion only: the maths is
 //! `ttkin::dynamics::profile`.
 
-use numpy::PyArrayDyn;
 use pyo3::prelude::*;
 use ttkin::dynamics::TorqueProfile;
 
-use crate::convert::to_numpy;
+use crate::convert::{to_numpy, Any, Array};
 use crate::dynamics::{gravity_arg, wrench_arg};
 use crate::errors::{PyResultExt, TtmanipError};
 use crate::robot::PyRobot;
-
-/// A numpy float64 array returned to Python.
-type Array<'py> = Bound<'py, PyArrayDyn<f64>>;
 
 /// The result of `Robot.torques`: joint, motor-side and current profiles and the effort check.
 #[pyclass(name = "TorqueProfile", module = "ttmanip", frozen)]
@@ -50,7 +46,7 @@ impl PyTorqueProfile {
 
     /// (n,) largest |joint torque| over the profile (N·m or N).
     #[getter]
-    fn peak<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+    fn peak<'py>(&self, py: Python<'py>) -> Array<'py> {
         to_numpy(py, &[self.profile.dof], &self.profile.peak)
     }
 
@@ -85,9 +81,9 @@ impl PyTorqueProfile {
 /// (q, qd, qdd) from `torques`' arguments: three arrays, a (q, qd, qdd) tuple, or an object with
 /// attributes q, qd, qdd (or position, velocity, acceleration).
 fn trajectory_arrays<'py>(
-    trajectory: &Bound<'py, PyAny>,
-    qd: Option<&Bound<'py, PyAny>>,
-    qdd: Option<&Bound<'py, PyAny>>,
+    trajectory: &Any<'py>,
+    qd: Option<&Any<'py>>,
+    qdd: Option<&Any<'py>>,
 ) -> PyResult<[Bound<'py, PyAny>; 3]> {
     match (qd, qdd) {
         (Some(qd), Some(qdd)) => Ok([trajectory.clone(), qd.clone(), qdd.clone()]),
@@ -124,11 +120,11 @@ impl PyRobot {
     fn torques<'py>(
         &self,
         py: Python<'py>,
-        trajectory: &Bound<'py, PyAny>,
-        qd: Option<&Bound<'py, PyAny>>,
-        qdd: Option<&Bound<'py, PyAny>>,
-        gravity: Option<&Bound<'py, PyAny>>,
-        wrench: Option<&Bound<'py, PyAny>>,
+        trajectory: &Any<'py>,
+        qd: Option<&Any<'py>>,
+        qdd: Option<&Any<'py>>,
+        gravity: Option<&Any<'py>>,
+        wrench: Option<&Any<'py>>,
     ) -> PyResult<PyTorqueProfile> {
         let g = gravity_arg(gravity)?;
         let w = wrench_arg(wrench)?;
