@@ -11,9 +11,9 @@ use std::sync::Arc;
 use nalgebra::Vector3;
 use pyo3::prelude::*;
 use ttkin::dynamics::EARTH_GRAVITY;
-use ttkin::{Drive, Dynamics, DynamicsData, Wrench};
+use ttkin::{Dynamics, DynamicsData, Wrench};
 
-use crate::convert::{f64_array, filled_without_gil, finite_to_numpy, to_numpy, vector, Any, Array, F64Array};
+use crate::convert::{filled_without_gil, finite_to_numpy, table, to_numpy, vector, Any, Array, F64Array};
 use crate::errors::{PyResultExt, ShapeError};
 use crate::robot::PyRobot;
 
@@ -113,25 +113,6 @@ fn out_shape(batch: Option<usize>, item: &[usize]) -> (usize, Vec<usize>) {
         None => (1, item.to_vec()),
         Some(c) => (c, std::iter::once(c).chain(item.iter().copied()).collect()),
     }
-}
-
-/// Reads an (n, k) per-joint table (or (n,) when k = 1).
-fn per_joint(obj: &Any<'_>, what: &str, n: usize, k: usize) -> PyResult<Vec<f64>> {
-    let a = f64_array(obj, what)?;
-    let ok = if k == 1 { a.shape() == [n] } else { a.shape() == [n, k] };
-    if !ok {
-        let expected = if k == 1 {
-            format!("({n},)")
-        } else {
-            format!("({n}, {k})")
-        };
-        return Err(ShapeError::new_err(format!(
-            "{what}: expected shape {expected}, got {}",
-            a.shape_str()
-        )));
-    }
-    ttkin::error::check_finite(what, a.data()).py()?;
-    Ok(a.data().to_vec())
 }
 
 #[ttkin_py_guard::guarded]
@@ -318,24 +299,14 @@ impl PyRobot {
     /// (n,) rotor inertia reflected to each joint, G²·J (kg·m² or kg); Pinocchio's model.armature.
     #[getter]
     fn armature<'py>(&self, py: Python<'py>) -> Array<'py> {
-        let a: Vec<f64> = self
-            .chain
-            .joints()
-            .iter()
-            .map(|j| j.drive().map_or(0.0, Drive::armature))
-            .collect();
+        let a = self.chain.armatures();
         to_numpy(py, &[a.len()], &a)
     }
 
     /// (n,) link masses (kg; NaN where a link has no inertial).
     #[getter]
     fn masses<'py>(&self, py: Python<'py>) -> Array<'py> {
-        let m: Vec<f64> = self
-            .chain
-            .joints()
-            .iter()
-            .map(|j| j.inertial().map_or(f64::NAN, |i| i.mass))
-            .collect();
+        let m = self.chain.masses();
         to_numpy(py, &[m.len()], &m)
     }
 
@@ -364,19 +335,11 @@ impl PyRobot {
     /// (n, 3, 3) kg·m² about the centre of mass, all in each link's frame (DH frame i / URDF link i).
     fn with_inertials(&self, mass: &Any<'_>, com: &Any<'_>, inertia: &Any<'_>) -> PyResult<PyRobot> {
         let n = self.chain.dof();
-        let m = per_joint(mass, "mass", n, 1)?;
-        let c = per_joint(com, "com", n, 3)?;
-        let i = per_joint(inertia, "inertia", n, 9).or_else(|_| {
-            let a = f64_array(inertia, "inertia")?;
-            if a.shape() != [n, 3, 3] {
-                return Err(ShapeError::new_err(format!(
-                    "inertia: expected shape ({n}, 3, 3), got {}",
-                    a.shape_str()
-                )));
-            }
-            ttkin::error::check_finite("inertia", a.data()).py()?;
-            Ok(a.data().to_vec())
-        })?;
+        let (m, c, i) = (
+            table(mass, "mass", n, 1)?,
+            table(com, "com", n, 3)?,
+            table(inertia, "inertia", n, 9)?,
+        );
         let inertials = ttkin::tables::inertials_from_columns(&m, &c, &i).py()?;
         Ok(PyRobot::new(self.chain.with_inertials(&inertials).py()?))
     }

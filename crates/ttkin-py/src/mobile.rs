@@ -8,7 +8,7 @@ use ttkin::redundancy::{Damping, Weighting, WlsStep};
 use ttkin::task::Task;
 use ttkin::wholebody::WholeBody;
 
-use crate::convert::{f64_array, finite_to_numpy, to_numpy, transform, vector, Any, Array};
+use crate::convert::{array_getters, f64_array, finite_to_numpy, to_numpy, transform, vector, Any, Array};
 use crate::errors::{PyResultExt, ShapeError, TtmanipError};
 use crate::robot::PyRobot;
 
@@ -285,64 +285,37 @@ pub struct PyTrackResult {
     joint_names: Vec<String>,
 }
 
+array_getters!(PyTrackResult, |t| {
+    /// Sample times (N,), s.
+    time => t.r.time, [t.r.len()];
+    /// Configurations (N, nq): m for prismatic, rad for revolute joints (base x, y, θ first).
+    q => t.r.q, [t.r.len(), t.r.nq];
+    /// Commanded inputs (N, nu): joint rates (m/s, rad/s), base (v, ω) first.
+    qd => t.r.qdot, [t.r.len(), t.r.nu];
+    /// Task coordinates reached (N, dim).
+    x => t.r.x, [t.r.len(), t.r.dim];
+    /// Norm of the task residual (N,), task units.
+    error => t.r.error, [t.r.len()];
+    /// Position residual (N,), m.
+    position_error => t.r.position_error, [t.r.len()];
+    /// Orientation residual (N,), rad.
+    orientation_error => t.r.orientation_error, [t.r.len()];
+    /// Distance of each arm joint to its nearer limit (N, n), m or rad; negative beyond a limit.
+    margin => t.r.margin, [t.r.len(), t.r.n_margin];
+    /// Fraction of the task velocity achieved at each sample (N,), 1 = full.
+    scale => t.r.scale, [t.r.len()];
+    /// Smallest singular value estimate of the weighted task Jacobian (N,).
+    sigma_min => t.r.sigma_min, [t.r.len()];
+});
+
 #[ttkin_py_guard::guarded]
 #[pymethods]
 impl PyTrackResult {
-    /// Sample times (N,), s.
-    #[getter]
-    fn time<'py>(&self, py: Python<'py>) -> Array<'py> {
-        to_numpy(py, &[self.r.len()], &self.r.time)
-    }
-    /// Configurations (N, nq): m for prismatic, rad for revolute joints (base x, y, θ first).
-    #[getter]
-    fn q<'py>(&self, py: Python<'py>) -> Array<'py> {
-        to_numpy(py, &[self.r.len(), self.r.nq], &self.r.q)
-    }
-    /// Commanded inputs (N, nu): joint rates (m/s, rad/s), base (v, ω) first.
-    #[getter]
-    fn qd<'py>(&self, py: Python<'py>) -> Array<'py> {
-        to_numpy(py, &[self.r.len(), self.r.nu], &self.r.qdot)
-    }
     /// Deprecated name of `qd`.
     #[getter]
     fn qdot<'py>(&self, py: Python<'py>) -> PyResult<Array<'py>> {
         crate::errors::deprecated(py, "TrackResult.qdot", "TrackResult.qd")?;
-        self.qd(py) // (a PyResult: #[guarded] makes every method return one)
-    }
-    /// Task coordinates reached (N, dim).
-    #[getter]
-    fn x<'py>(&self, py: Python<'py>) -> Array<'py> {
-        to_numpy(py, &[self.r.len(), self.r.dim], &self.r.x)
-    }
-    /// Norm of the task residual (N,), task units.
-    #[getter]
-    fn error<'py>(&self, py: Python<'py>) -> Array<'py> {
-        to_numpy(py, &[self.r.len()], &self.r.error)
-    }
-    /// Position residual (N,), m.
-    #[getter]
-    fn position_error<'py>(&self, py: Python<'py>) -> Array<'py> {
-        to_numpy(py, &[self.r.len()], &self.r.position_error)
-    }
-    /// Orientation residual (N,), rad.
-    #[getter]
-    fn orientation_error<'py>(&self, py: Python<'py>) -> Array<'py> {
-        to_numpy(py, &[self.r.len()], &self.r.orientation_error)
-    }
-    /// Distance of each arm joint to its nearer limit (N, n), m or rad; negative beyond a limit.
-    #[getter]
-    fn margin<'py>(&self, py: Python<'py>) -> Array<'py> {
-        to_numpy(py, &[self.r.len(), self.r.n_margin], &self.r.margin)
-    }
-    /// Fraction of the task velocity achieved at each sample (N,), 1 = full.
-    #[getter]
-    fn scale<'py>(&self, py: Python<'py>) -> Array<'py> {
-        to_numpy(py, &[self.r.len()], &self.r.scale)
-    }
-    /// Smallest singular value estimate of the weighted task Jacobian (N,).
-    #[getter]
-    fn sigma_min<'py>(&self, py: Python<'py>) -> Array<'py> {
-        to_numpy(py, &[self.r.len()], &self.r.sigma_min)
+        Ok(to_numpy(py, &[self.r.len(), self.r.nu], &self.r.qdot))
     }
     /// "completed", "saturated" (finished, task velocity scaled at some samples) or "failed".
     #[getter]

@@ -5,7 +5,7 @@
 use pyo3::prelude::*;
 use ttkin::dynamics::TorqueProfile;
 
-use crate::convert::{to_numpy, Any, Array};
+use crate::convert::{array_getters, Any};
 use crate::dynamics::{gravity_arg, wrench_arg};
 use crate::errors::{PyResultExt, TtmanipError};
 use crate::robot::PyRobot;
@@ -17,39 +17,26 @@ pub struct PyTorqueProfile {
 }
 
 impl PyTorqueProfile {
-    /// An N × n row-major profile as an (N, n) array.
-    fn rows<'py>(&self, py: Python<'py>, v: &[f64]) -> Array<'py> {
-        to_numpy(py, &[v.len() / self.profile.dof, self.profile.dof], v)
+    /// Number of samples N of the profile.
+    fn len(&self) -> usize {
+        self.profile.joint.len() / self.profile.dof
     }
 }
+
+array_getters!(PyTorqueProfile, |t| {
+    /// (N, n) joint torques (N·m) / forces (N): rigid body + armature + friction.
+    joint => t.profile.joint, [t.len(), t.profile.dof];
+    /// (N, n) motor torques τ/G (N·m).
+    motor => t.profile.motor, [t.len(), t.profile.dof];
+    /// (N, n) motor currents τ_motor/k_t (A); NaN for joints without a torque constant.
+    current => t.profile.current, [t.len(), t.profile.dof];
+    /// (n,) largest |joint torque| over the profile (N·m or N).
+    peak => t.profile.peak, [t.profile.dof];
+});
 
 #[ttkin_py_guard::guarded]
 #[pymethods]
 impl PyTorqueProfile {
-    /// (N, n) joint torques (N·m) / forces (N): rigid body + armature + friction.
-    #[getter]
-    fn joint<'py>(&self, py: Python<'py>) -> Array<'py> {
-        self.rows(py, &self.profile.joint)
-    }
-
-    /// (N, n) motor torques τ/G (N·m).
-    #[getter]
-    fn motor<'py>(&self, py: Python<'py>) -> Array<'py> {
-        self.rows(py, &self.profile.motor)
-    }
-
-    /// (N, n) motor currents τ_motor/k_t (A); NaN for joints without a torque constant.
-    #[getter]
-    fn current<'py>(&self, py: Python<'py>) -> Array<'py> {
-        self.rows(py, &self.profile.current)
-    }
-
-    /// (n,) largest |joint torque| over the profile (N·m or N).
-    #[getter]
-    fn peak<'py>(&self, py: Python<'py>) -> Array<'py> {
-        to_numpy(py, &[self.profile.dof], &self.profile.peak)
-    }
-
     /// True when no sample exceeds any joint's effort limit.
     #[getter]
     fn within_limits(&self) -> bool {
@@ -70,7 +57,7 @@ impl PyTorqueProfile {
         let p = &self.profile;
         format!(
             "TorqueProfile({} samples × {} joints, within_limits={}, {} violations)",
-            p.joint.len() / p.dof,
+            self.len(),
             p.dof,
             if p.within_limits() { "True" } else { "False" },
             p.violations.len()
