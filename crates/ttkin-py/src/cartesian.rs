@@ -8,7 +8,7 @@ use pyo3::types::PyList;
 use ttkin::traj::cartesian::{CartesianState, CartesianTrajectory, TimeLaw};
 use ttkin::traj::Samples;
 
-use crate::convert::{pose_to_numpy, to_numpy, transform, vector};
+use crate::convert::{pose_to_numpy, to_numpy, transform, vector, Any};
 use crate::errors::{Callback, PyResultExt};
 use crate::robot::PyRobot;
 use crate::traj::{any_vector, robot_limits, samples_to_py, violations_to_py};
@@ -26,7 +26,7 @@ fn law(name: &str, blend: f64) -> PyResult<TimeLaw> {
     })
 }
 
-fn point(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vector3<f64>> {
+fn point(obj: &Any<'_>, what: &str) -> PyResult<Vector3<f64>> {
     let v = vector(obj, what, 3)?;
     Ok(Vector3::new(v[0], v[1], v[2]))
 }
@@ -47,7 +47,7 @@ impl PyCartesianTrajectory {
     /// Straight line from pose T0 to pose T1 (4×4) in `duration` s, slerp orientation.
     #[staticmethod]
     #[pyo3(signature = (t0, t1, duration, law="quintic", blend=0.25))]
-    fn line(t0: &Bound<'_, PyAny>, t1: &Bound<'_, PyAny>, duration: f64, law: &str, blend: f64) -> PyResult<Self> {
+    fn line(t0: &Any<'_>, t1: &Any<'_>, duration: f64, law: &str, blend: f64) -> PyResult<Self> {
         let (a, b) = (transform(t0, "T0")?, transform(t1, "T1")?);
         let inner = CartesianTrajectory::line(&a, &b, duration, self::law(law, blend)?).py()?;
         Ok(PyCartesianTrajectory { inner })
@@ -56,14 +56,7 @@ impl PyCartesianTrajectory {
     /// Circular arc from pose T0 through point `via` (3,) to pose T1, slerp orientation.
     #[staticmethod]
     #[pyo3(signature = (t0, via, t1, duration, law="quintic", blend=0.25))]
-    fn arc_through(
-        t0: &Bound<'_, PyAny>,
-        via: &Bound<'_, PyAny>,
-        t1: &Bound<'_, PyAny>,
-        duration: f64,
-        law: &str,
-        blend: f64,
-    ) -> PyResult<Self> {
+    fn arc_through(t0: &Any<'_>, via: &Any<'_>, t1: &Any<'_>, duration: f64, law: &str, blend: f64) -> PyResult<Self> {
         let (a, b) = (transform(t0, "T0")?, transform(t1, "T1")?);
         let inner =
             CartesianTrajectory::arc_through(&a, &point(via, "via")?, &b, duration, self::law(law, blend)?).py()?;
@@ -75,9 +68,9 @@ impl PyCartesianTrajectory {
     #[staticmethod]
     #[pyo3(signature = (t0, centre, axis, angle, duration, law="quintic", blend=0.25))]
     fn arc_about(
-        t0: &Bound<'_, PyAny>,
-        centre: &Bound<'_, PyAny>,
-        axis: &Bound<'_, PyAny>,
+        t0: &Any<'_>,
+        centre: &Any<'_>,
+        axis: &Any<'_>,
         angle: f64,
         duration: f64,
         law: &str,
@@ -140,8 +133,8 @@ impl PyCartesianTrajectory {
         &self,
         py: Python<'py>,
         hz: f64,
-        q_start: &Bound<'py, PyAny>,
-        ik: &Bound<'py, PyAny>,
+        q_start: &Any<'py>,
+        ik: &Any<'py>,
     ) -> PyResult<Bound<'py, PyAny>> {
         samples_to_py(py, &self.joint_samples(py, hz, q_start, ik)?)
     }
@@ -153,8 +146,8 @@ impl PyCartesianTrajectory {
         &self,
         py: Python<'py>,
         robot: &PyRobot,
-        ik: &Bound<'py, PyAny>,
-        q_start: &Bound<'py, PyAny>,
+        ik: &Any<'py>,
+        q_start: &Any<'py>,
         hz: f64,
     ) -> PyResult<Bound<'py, PyList>> {
         let limits = robot_limits(robot, None)?;
@@ -178,13 +171,7 @@ impl PyCartesianTrajectory {
 
 impl PyCartesianTrajectory {
     /// Joint samples through the Python callable `ik` (see `to_joint`).
-    fn joint_samples<'py>(
-        &self,
-        py: Python<'py>,
-        hz: f64,
-        q_start: &Bound<'py, PyAny>,
-        ik: &Bound<'py, PyAny>,
-    ) -> PyResult<Samples> {
+    fn joint_samples<'py>(&self, py: Python<'py>, hz: f64, q_start: &Any<'py>, ik: &Any<'py>) -> PyResult<Samples> {
         let q0 = any_vector(q_start, "q_start")?;
         let n = q0.len();
         let callback = Callback::default();

@@ -24,6 +24,12 @@ use pyo3::types::PyDict;
 
 use crate::errors::{InternalError, NumericalError, PyResultExt, ShapeError};
 
+/// Any Python object a binding receives, before conversion.
+pub type Any<'py> = Bound<'py, PyAny>;
+
+/// A numpy float64 array of any shape handed back to Python.
+pub type Array<'py> = Bound<'py, PyArrayDyn<f64>>;
+
 /// An aligned, C-contiguous, native float64 view of a Python array-like.
 pub struct F64Array<'py> {
     /// Aligned and C-contiguous: checked where it is made (`f64_array`).
@@ -309,3 +315,47 @@ where
     fill_fresh(&out, |o| py.detach(|| fill(o)).py())?;
     Ok(out)
 }
+
+/// Reads a per-row table of `rows` × `cols` values as row-major data: shape (rows, cols), or
+/// (rows,) when `cols` is 1, or (rows, 3, 3) when `cols` is 9 (a 3 × 3 matrix per row).
+pub fn table(obj: &Any<'_>, what: &str, rows: usize, cols: usize) -> PyResult<Vec<f64>> {
+    let a = f64_array(obj, what)?;
+    let ok = match *a.shape() {
+        [r] => cols == 1 && r == rows,
+        [r, c] => cols > 1 && r == rows && c == cols,
+        [r, 3, 3] => cols == 9 && r == rows,
+        _ => false,
+    };
+    if !ok {
+        let expected = if cols == 1 {
+            format!("({rows},)")
+        } else {
+            format!("({rows}, {cols})")
+        };
+        return Err(ShapeError::new_err(format!(
+            "{what}: expected shape {expected}, got {}",
+            a.shape_str()
+        )));
+    }
+    Ok(a.data().to_vec())
+}
+
+/// A `#[pymethods]` block of read-only numpy properties of a result class, one line each:
+/// `/// doc` then `name => data, [dims];`, where `data` and `dims` read the object as `$r`.
+macro_rules! array_getters {
+    ($ty:ty, |$r:ident| { $( $(#[$doc:meta])* $name:ident => $data:expr, [$($dim:expr),+]; )* }) => {
+        #[ttkin_py_guard::guarded]
+        #[pyo3::pymethods]
+        impl $ty {
+            $(
+                $(#[$doc])*
+                #[getter]
+                fn $name<'py>(&self, py: pyo3::Python<'py>) -> $crate::convert::Array<'py> {
+                    let $r = self;
+                    $crate::convert::to_numpy(py, &[$($dim),+], &$data)
+                }
+            )*
+        }
+    };
+}
+pub(crate) use array_getters;

@@ -9,17 +9,13 @@
 use std::sync::Arc;
 
 use nalgebra::Vector3;
-use numpy::PyArrayDyn;
 use pyo3::prelude::*;
 use ttkin::dynamics::EARTH_GRAVITY;
-use ttkin::{Drive, Dynamics, DynamicsData, Wrench};
+use ttkin::{Dynamics, DynamicsData, Wrench};
 
-use crate::convert::{f64_array, filled_without_gil, finite_to_numpy, to_numpy, vector, F64Array};
+use crate::convert::{filled_without_gil, finite_to_numpy, table, to_numpy, vector, Any, Array, F64Array};
 use crate::errors::{PyResultExt, ShapeError};
 use crate::robot::PyRobot;
-
-/// A numpy float64 array returned to Python.
-type Array<'py> = Bound<'py, PyArrayDyn<f64>>;
 
 impl PyRobot {
     /// The dynamic model (an error names the first link without inertia).
@@ -61,7 +57,7 @@ impl PyRobot {
     /// Reads several per-configuration arrays that must all be (n,) or all (N, n) with the same N.
     pub(crate) fn states<'py, const K: usize>(
         &self,
-        arrays: [(&Bound<'py, PyAny>, &str); K],
+        arrays: [(&Any<'py>, &str); K],
     ) -> PyResult<(Vec<F64Array<'py>>, Option<usize>)> {
         let mut out = Vec::with_capacity(K);
         let mut batch = None;
@@ -90,7 +86,7 @@ fn shape_of(batch: Option<usize>, n: usize) -> String {
 }
 
 /// Gravity argument: None → (0, 0, −9.81) m/s², else a 3-vector in the base frame.
-pub(crate) fn gravity_arg(g: Option<&Bound<'_, PyAny>>) -> PyResult<[f64; 3]> {
+pub(crate) fn gravity_arg(g: Option<&Any<'_>>) -> PyResult<[f64; 3]> {
     match g {
         None => Ok(EARTH_GRAVITY),
         Some(g) => {
@@ -101,7 +97,7 @@ pub(crate) fn gravity_arg(g: Option<&Bound<'_, PyAny>>) -> PyResult<[f64; 3]> {
 }
 
 /// Wrench argument: None, or [fx, fy, fz, mx, my, mz] (N, N·m) on the tool, tool-frame axes.
-pub(crate) fn wrench_arg(w: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Wrench>> {
+pub(crate) fn wrench_arg(w: Option<&Any<'_>>) -> PyResult<Option<Wrench>> {
     w.map(|w| {
         let v = vector(w, "wrench", 6)?;
         Ok(Wrench {
@@ -119,25 +115,6 @@ fn out_shape(batch: Option<usize>, item: &[usize]) -> (usize, Vec<usize>) {
     }
 }
 
-/// Reads an (n, k) per-joint table (or (n,) when k = 1).
-fn per_joint(obj: &Bound<'_, PyAny>, what: &str, n: usize, k: usize) -> PyResult<Vec<f64>> {
-    let a = f64_array(obj, what)?;
-    let ok = if k == 1 { a.shape() == [n] } else { a.shape() == [n, k] };
-    if !ok {
-        let expected = if k == 1 {
-            format!("({n},)")
-        } else {
-            format!("({n}, {k})")
-        };
-        return Err(ShapeError::new_err(format!(
-            "{what}: expected shape {expected}, got {}",
-            a.shape_str()
-        )));
-    }
-    ttkin::error::check_finite(what, a.data()).py()?;
-    Ok(a.data().to_vec())
-}
-
 #[ttkin_py_guard::guarded]
 #[pymethods]
 impl PyRobot {
@@ -150,12 +127,12 @@ impl PyRobot {
     fn rnea<'py>(
         &self,
         py: Python<'py>,
-        q: &Bound<'py, PyAny>,
-        qd: &Bound<'py, PyAny>,
-        qdd: &Bound<'py, PyAny>,
-        gravity: Option<&Bound<'py, PyAny>>,
-        wrench: Option<&Bound<'py, PyAny>>,
-    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        q: &Any<'py>,
+        qd: &Any<'py>,
+        qdd: &Any<'py>,
+        gravity: Option<&Any<'py>>,
+        wrench: Option<&Any<'py>>,
+    ) -> PyResult<Array<'py>> {
         self.inverse(py, q, qd, qdd, gravity, wrench, false)
     }
 
@@ -164,17 +141,17 @@ impl PyRobot {
     fn inverse_dynamics<'py>(
         &self,
         py: Python<'py>,
-        q: &Bound<'py, PyAny>,
-        qd: &Bound<'py, PyAny>,
-        qdd: &Bound<'py, PyAny>,
-        gravity: Option<&Bound<'py, PyAny>>,
-        wrench: Option<&Bound<'py, PyAny>>,
-    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        q: &Any<'py>,
+        qd: &Any<'py>,
+        qdd: &Any<'py>,
+        gravity: Option<&Any<'py>>,
+        wrench: Option<&Any<'py>>,
+    ) -> PyResult<Array<'py>> {
         self.inverse(py, q, qd, qdd, gravity, wrench, true)
     }
 
     /// Joint-space mass matrix M(q), armature included: (n, n) or (N, n, n).
-    fn mass_matrix<'py>(&self, py: Python<'py>, q: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    fn mass_matrix<'py>(&self, py: Python<'py>, q: &Any<'py>) -> PyResult<Array<'py>> {
         let (a, batch) = self.configs(q, "q")?;
         let n = self.chain.dof();
         let q = a.data();
@@ -189,12 +166,7 @@ impl PyRobot {
 
     /// Gravity torques g(q) (N·m or N) that hold the robot still: (n,) or (N, n).
     #[pyo3(signature = (q, gravity=None))]
-    fn gravity<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Bound<'py, PyAny>,
-        gravity: Option<&Bound<'py, PyAny>>,
-    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    fn gravity<'py>(&self, py: Python<'py>, q: &Any<'py>, gravity: Option<&Any<'py>>) -> PyResult<Array<'py>> {
         let g = gravity_arg(gravity)?;
         let (a, batch) = self.configs(q, "q")?;
         let n = self.chain.dof();
@@ -209,12 +181,7 @@ impl PyRobot {
     }
 
     /// Coriolis and centrifugal torques C(q, q̇)·q̇ (N·m or N), gravity excluded: (n,) or (N, n).
-    fn coriolis<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Bound<'py, PyAny>,
-        qd: &Bound<'py, PyAny>,
-    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    fn coriolis<'py>(&self, py: Python<'py>, q: &Any<'py>, qd: &Any<'py>) -> PyResult<Array<'py>> {
         let (arrays, batch) = self.states([(q, "q"), (qd, "qd")])?;
         let (q, qd, n) = (arrays[0].data(), arrays[1].data(), self.chain.dof());
         self.one_or_many(
@@ -231,10 +198,10 @@ impl PyRobot {
     fn nonlinear_effects<'py>(
         &self,
         py: Python<'py>,
-        q: &Bound<'py, PyAny>,
-        qd: &Bound<'py, PyAny>,
-        gravity: Option<&Bound<'py, PyAny>>,
-    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        q: &Any<'py>,
+        qd: &Any<'py>,
+        gravity: Option<&Any<'py>>,
+    ) -> PyResult<Array<'py>> {
         let g = gravity_arg(gravity)?;
         let (arrays, batch) = self.states([(q, "q"), (qd, "qd")])?;
         let (q, qd, n) = (arrays[0].data(), arrays[1].data(), self.chain.dof());
@@ -253,12 +220,12 @@ impl PyRobot {
     fn forward_dynamics<'py>(
         &self,
         py: Python<'py>,
-        q: &Bound<'py, PyAny>,
-        qd: &Bound<'py, PyAny>,
-        tau: &Bound<'py, PyAny>,
-        gravity: Option<&Bound<'py, PyAny>>,
-        wrench: Option<&Bound<'py, PyAny>>,
-    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        q: &Any<'py>,
+        qd: &Any<'py>,
+        tau: &Any<'py>,
+        gravity: Option<&Any<'py>>,
+        wrench: Option<&Any<'py>>,
+    ) -> PyResult<Array<'py>> {
         let g = gravity_arg(gravity)?;
         let w = wrench_arg(wrench)?;
         let (arrays, batch) = self.states([(q, "q"), (qd, "qd"), (tau, "tau")])?;
@@ -274,7 +241,7 @@ impl PyRobot {
     }
 
     /// Joint friction b·q̇ + f_c·sign(q̇) (N·m or N) at speeds qd: (n,) or (N, n).
-    fn friction<'py>(&self, py: Python<'py>, qd: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    fn friction<'py>(&self, py: Python<'py>, qd: &Any<'py>) -> PyResult<Array<'py>> {
         let (a, batch) = self.configs(qd, "qd")?;
         let dy = self.dynamics()?;
         let (_, shape) = out_shape(batch, &[self.chain.dof()]);
@@ -283,7 +250,7 @@ impl PyRobot {
     }
 
     /// Kinetic energy ½ q̇ᵀ M q̇ (J) at one state (n,).
-    fn kinetic_energy(&self, q: &Bound<'_, PyAny>, qd: &Bound<'_, PyAny>) -> PyResult<f64> {
+    fn kinetic_energy(&self, q: &Any<'_>, qd: &Any<'_>) -> PyResult<f64> {
         let n = self.chain.dof();
         let (q, qd) = (vector(q, "q", n)?, vector(qd, "qd", n)?);
         crate::convert::finite_scalar(self.with_data(|dy, d| dy.kinetic_energy(d, &q, &qd))?.py()?)
@@ -291,7 +258,7 @@ impl PyRobot {
 
     /// Potential energy −Σ m_i g·c_i (J) at one configuration (n,).
     #[pyo3(signature = (q, gravity=None))]
-    fn potential_energy(&self, q: &Bound<'_, PyAny>, gravity: Option<&Bound<'_, PyAny>>) -> PyResult<f64> {
+    fn potential_energy(&self, q: &Any<'_>, gravity: Option<&Any<'_>>) -> PyResult<f64> {
         let g = gravity_arg(gravity)?;
         let q = vector(q, "q", self.chain.dof())?;
         crate::convert::finite_scalar(self.dynamics()?.potential_energy(&q, &g).py()?)
@@ -305,11 +272,11 @@ impl PyRobot {
     fn simulate<'py>(
         &self,
         py: Python<'py>,
-        q0: &Bound<'py, PyAny>,
-        qd0: &Bound<'py, PyAny>,
-        tau: &Bound<'py, PyAny>,
+        q0: &Any<'py>,
+        qd0: &Any<'py>,
+        tau: &Any<'py>,
         dt: f64,
-        gravity: Option<&Bound<'py, PyAny>>,
+        gravity: Option<&Any<'py>>,
         friction: bool,
     ) -> PyResult<(Array<'py>, Array<'py>)> {
         let n = self.chain.dof();
@@ -331,25 +298,15 @@ impl PyRobot {
 
     /// (n,) rotor inertia reflected to each joint, G²·J (kg·m² or kg); Pinocchio's model.armature.
     #[getter]
-    fn armature<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
-        let a: Vec<f64> = self
-            .chain
-            .joints()
-            .iter()
-            .map(|j| j.drive().map_or(0.0, Drive::armature))
-            .collect();
+    fn armature<'py>(&self, py: Python<'py>) -> Array<'py> {
+        let a = self.chain.armatures();
         to_numpy(py, &[a.len()], &a)
     }
 
     /// (n,) link masses (kg; NaN where a link has no inertial).
     #[getter]
-    fn masses<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
-        let m: Vec<f64> = self
-            .chain
-            .joints()
-            .iter()
-            .map(|j| j.inertial().map_or(f64::NAN, |i| i.mass))
-            .collect();
+    fn masses<'py>(&self, py: Python<'py>) -> Array<'py> {
+        let m = self.chain.masses();
         to_numpy(py, &[m.len()], &m)
     }
 
@@ -376,26 +333,13 @@ impl PyRobot {
 
     /// The same robot with new link inertias: `mass` (n,) kg, `com` (n, 3) m and `inertia`
     /// (n, 3, 3) kg·m² about the centre of mass, all in each link's frame (DH frame i / URDF link i).
-    fn with_inertials(
-        &self,
-        mass: &Bound<'_, PyAny>,
-        com: &Bound<'_, PyAny>,
-        inertia: &Bound<'_, PyAny>,
-    ) -> PyResult<PyRobot> {
+    fn with_inertials(&self, mass: &Any<'_>, com: &Any<'_>, inertia: &Any<'_>) -> PyResult<PyRobot> {
         let n = self.chain.dof();
-        let m = per_joint(mass, "mass", n, 1)?;
-        let c = per_joint(com, "com", n, 3)?;
-        let i = per_joint(inertia, "inertia", n, 9).or_else(|_| {
-            let a = f64_array(inertia, "inertia")?;
-            if a.shape() != [n, 3, 3] {
-                return Err(ShapeError::new_err(format!(
-                    "inertia: expected shape ({n}, 3, 3), got {}",
-                    a.shape_str()
-                )));
-            }
-            ttkin::error::check_finite("inertia", a.data()).py()?;
-            Ok(a.data().to_vec())
-        })?;
+        let (m, c, i) = (
+            table(mass, "mass", n, 1)?,
+            table(com, "com", n, 3)?,
+            table(inertia, "inertia", n, 9)?,
+        );
         let inertials = ttkin::tables::inertials_from_columns(&m, &c, &i).py()?;
         Ok(PyRobot::new(self.chain.with_inertials(&inertials).py()?))
     }
@@ -406,14 +350,14 @@ impl PyRobot {
     #[pyo3(signature = (gear_ratio, rotor_inertia=None, viscous=None, coulomb=None, torque_constant=None))]
     fn with_drives(
         &self,
-        gear_ratio: &Bound<'_, PyAny>,
-        rotor_inertia: Option<&Bound<'_, PyAny>>,
-        viscous: Option<&Bound<'_, PyAny>>,
-        coulomb: Option<&Bound<'_, PyAny>>,
-        torque_constant: Option<&Bound<'_, PyAny>>,
+        gear_ratio: &Any<'_>,
+        rotor_inertia: Option<&Any<'_>>,
+        viscous: Option<&Any<'_>>,
+        coulomb: Option<&Any<'_>>,
+        torque_constant: Option<&Any<'_>>,
     ) -> PyResult<PyRobot> {
         let n = self.chain.dof();
-        let column = |obj: Option<&Bound<'_, PyAny>>, what: &str| -> PyResult<Option<Vec<f64>>> {
+        let column = |obj: Option<&Any<'_>>, what: &str| -> PyResult<Option<Vec<f64>>> {
             obj.map(|o| vector(o, what, n)).transpose()
         };
         let g = vector(gear_ratio, "gear_ratio", n)?;
@@ -446,13 +390,13 @@ impl PyRobot {
     fn inverse<'py>(
         &self,
         py: Python<'py>,
-        q: &Bound<'py, PyAny>,
-        qd: &Bound<'py, PyAny>,
-        qdd: &Bound<'py, PyAny>,
-        gravity: Option<&Bound<'py, PyAny>>,
-        wrench: Option<&Bound<'py, PyAny>>,
+        q: &Any<'py>,
+        qd: &Any<'py>,
+        qdd: &Any<'py>,
+        gravity: Option<&Any<'py>>,
+        wrench: Option<&Any<'py>>,
         friction: bool,
-    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    ) -> PyResult<Array<'py>> {
         let g = gravity_arg(gravity)?;
         let w = wrench_arg(wrench)?;
         let (arrays, batch) = self.states([(q, "q"), (qd, "qd"), (qdd, "qdd")])?;

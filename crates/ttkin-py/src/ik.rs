@@ -3,7 +3,7 @@
 //! Conversion only: the maths is `ttkin::ik`. Batches over (N, 4, 4) run without the GIL.
 
 use nalgebra::IsometryMatrix3;
-use numpy::{PyArray1, PyArrayDyn};
+use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use ttkin::ik::batch::{analytic_for, time_budget as time_budget_from};
@@ -14,7 +14,7 @@ use ttkin::task::Task;
 use ttkin::JacobianFrame;
 
 use crate::args;
-use crate::convert::{f64_array, to_numpy, transform, vector, zeros};
+use crate::convert::{f64_array, to_numpy, transform, vector, zeros, Any, Array};
 use crate::errors::{PyResultExt, ShapeError};
 use crate::robot::PyRobot;
 
@@ -59,7 +59,7 @@ impl PyIkResult {
 
 /// Reads T as one pose (4, 4) or a batch (N, 4, 4) of rigid transforms (to the precision of
 /// its dtype: see `convert::rigid_tolerance`).
-fn poses(t: &Bound<'_, PyAny>) -> PyResult<(Vec<IsometryMatrix3<f64>>, bool)> {
+fn poses(t: &Any<'_>) -> PyResult<(Vec<IsometryMatrix3<f64>>, bool)> {
     crate::convert::transforms(t, "T")
 }
 
@@ -87,8 +87,8 @@ impl PyRobot {
     fn ik(
         &self,
         py: Python<'_>,
-        T: &Bound<'_, PyAny>,
-        q0: Option<&Bound<'_, PyAny>>,
+        T: &Any<'_>,
+        q0: Option<&Any<'_>>,
         task: &str,
         method: &str,
         position_tolerance: f64,
@@ -196,9 +196,9 @@ impl PyRobot {
     fn ik_all<'py>(
         &self,
         py: Python<'py>,
-        T: &Bound<'py, PyAny>,
+        T: &Any<'py>,
         limits: bool,
-        hint: Option<&Bound<'py, PyAny>>,
+        hint: Option<&Any<'py>>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let ik = self.analytic()?;
         let n = self.chain.dof();
@@ -243,13 +243,7 @@ impl PyRobot {
     /// joint limits. Raises UnreachableError when no branch exists.
     #[pyo3(signature = (T, q, limits=true))]
     #[allow(non_snake_case)]
-    fn ik_nearest<'py>(
-        &self,
-        py: Python<'py>,
-        T: &Bound<'py, PyAny>,
-        q: &Bound<'py, PyAny>,
-        limits: bool,
-    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    fn ik_nearest<'py>(&self, py: Python<'py>, T: &Any<'py>, q: &Any<'py>, limits: bool) -> PyResult<Array<'py>> {
         let ik = self.analytic()?;
         let q = vector(q, "q", self.chain.dof())?;
         let filter = if limits { LimitFilter::Enforce } else { LimitFilter::Off };
@@ -278,10 +272,10 @@ impl PyRobot {
     fn joint_velocity<'py>(
         &self,
         py: Python<'py>,
-        q: &Bound<'py, PyAny>,
-        twist: &Bound<'py, PyAny>,
+        q: &Any<'py>,
+        twist: &Any<'py>,
         frame: &str,
-        weights: Option<&Bound<'py, PyAny>>,
+        weights: Option<&Any<'py>>,
         threshold: f64,
         max_damping: f64,
         info: bool,

@@ -1,7 +1,6 @@
 //! Mobile manipulation bindings: `DiffDrive`, `Robot.task_jacobian` / `Robot.task_coordinates`,
 //! `wls_step`, `task_line` and `track` (one call per motion, the loop in Rust without the GIL).
 
-use numpy::PyArrayDyn;
 use pyo3::prelude::*;
 use ttkin::clik::{ClikOptions, ClikResult, ClikStatus, TaskTrajectory};
 use ttkin::diffdrive::DiffDrive;
@@ -9,12 +8,9 @@ use ttkin::redundancy::{Damping, Weighting, WlsStep};
 use ttkin::task::Task;
 use ttkin::wholebody::WholeBody;
 
-use crate::convert::{f64_array, finite_to_numpy, to_numpy, transform, vector};
+use crate::convert::{array_getters, f64_array, finite_to_numpy, to_numpy, transform, vector, Any, Array};
 use crate::errors::{PyResultExt, ShapeError, TtmanipError};
 use crate::robot::PyRobot;
-
-/// A float64 numpy array handed to Python.
-type Array<'py> = Bound<'py, PyArrayDyn<f64>>;
 
 /// A differential-drive base: wheel speeds (left, right) in rad/s, body velocity (v m/s, ω rad/s),
 /// poses (x m, y m, θ rad) of the axle midpoint in the world frame.
@@ -24,7 +20,7 @@ pub struct PyDiffDrive {
     drive: DiffDrive,
 }
 
-fn wheel_pair(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<[f64; 2]> {
+fn wheel_pair(obj: &Any<'_>, what: &str) -> PyResult<[f64; 2]> {
     let v = vector(obj, what, 2)?;
     Ok([v[0], v[1]])
 }
@@ -101,12 +97,12 @@ impl PyDiffDrive {
     }
 
     /// Body velocity (v m/s, ω rad/s) from wheel speeds (left, right) rad/s.
-    fn body_velocity(&self, wheel_speeds: &Bound<'_, PyAny>) -> PyResult<(f64, f64)> {
+    fn body_velocity(&self, wheel_speeds: &Any<'_>) -> PyResult<(f64, f64)> {
         Ok(self.drive.body_velocity(wheel_pair(wheel_speeds, "wheel_speeds")?))
     }
 
     /// Wheel speeds (left, right) in rad/s for a body velocity (v m/s, ω rad/s), shape (2,).
-    fn wheel_speeds<'py>(&self, py: Python<'py>, v: f64, omega: f64) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    fn wheel_speeds<'py>(&self, py: Python<'py>, v: f64, omega: f64) -> PyResult<Array<'py>> {
         let w = self.drive.wheel_speeds(finite("v", v)?, finite("omega", omega)?);
         finite_to_numpy(py, &[2], &w)
     }
@@ -116,10 +112,10 @@ impl PyDiffDrive {
     fn integrate<'py>(
         &self,
         py: Python<'py>,
-        pose: &Bound<'py, PyAny>,
-        wheel_speeds: &Bound<'py, PyAny>,
+        pose: &Any<'py>,
+        wheel_speeds: &Any<'py>,
         duration: f64,
-    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    ) -> PyResult<Array<'py>> {
         let p = vector(pose, "pose", 3)?;
         let w = wheel_pair(wheel_speeds, "wheel_speeds")?;
         let out = self.drive.try_integrate([p[0], p[1], p[2]], w, duration).py()?;
@@ -127,11 +123,7 @@ impl PyDiffDrive {
     }
 
     /// Wheel speeds scaled together to the speed limit (curvature kept), shape (2,).
-    fn saturate<'py>(
-        &self,
-        py: Python<'py>,
-        wheel_speeds: &Bound<'py, PyAny>,
-    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    fn saturate<'py>(&self, py: Python<'py>, wheel_speeds: &Any<'py>) -> PyResult<Array<'py>> {
         let (w, _) = self.drive.saturate_speeds(wheel_pair(wheel_speeds, "wheel_speeds")?);
         finite_to_numpy(py, &[2], &w)
     }
@@ -140,10 +132,10 @@ impl PyDiffDrive {
     fn limit_step<'py>(
         &self,
         py: Python<'py>,
-        previous: &Bound<'py, PyAny>,
-        command: &Bound<'py, PyAny>,
+        previous: &Any<'py>,
+        command: &Any<'py>,
         dt: f64,
-    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    ) -> PyResult<Array<'py>> {
         let w = self
             .drive
             .limit_step_checked(wheel_pair(previous, "previous")?, wheel_pair(command, "command")?, dt)
@@ -163,7 +155,7 @@ impl PyDiffDrive {
 }
 
 /// The whole-body model of a robot, optionally on a diff-drive base with a mount transform.
-fn model(robot: &PyRobot, base: Option<&PyDiffDrive>, mount: Option<&Bound<'_, PyAny>>) -> PyResult<WholeBody> {
+fn model(robot: &PyRobot, base: Option<&PyDiffDrive>, mount: Option<&Any<'_>>) -> PyResult<WholeBody> {
     match base {
         None => {
             if mount.is_some() {
@@ -199,10 +191,10 @@ impl PyRobot {
     fn task_jacobian<'py>(
         &self,
         py: Python<'py>,
-        q: &Bound<'py, PyAny>,
+        q: &Any<'py>,
         task: &str,
-        target: Option<&Bound<'py, PyAny>>,
-    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        target: Option<&Any<'py>>,
+    ) -> PyResult<Array<'py>> {
         let task = Task::from_name(task).py()?;
         let n = self.chain.dof();
         let q = vector(q, "q", n)?;
@@ -219,12 +211,7 @@ impl PyRobot {
     /// Task coordinates of the tool pose at `q`: position (3,); position and rotation vector (6,);
     /// or seed 000's racket 5-vector [centre x, y, z (m), polar, azimuth (rad)].
     #[pyo3(signature = (q, task="racket5"))]
-    fn task_coordinates<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Bound<'py, PyAny>,
-        task: &str,
-    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    fn task_coordinates<'py>(&self, py: Python<'py>, q: &Any<'py>, task: &str) -> PyResult<Array<'py>> {
         let task = Task::from_name(task).py()?;
         let q = vector(q, "q", self.chain.dof())?;
         let mut x = [0.0; 6];
@@ -243,16 +230,16 @@ impl PyRobot {
 fn wls_step<'py>(
     py: Python<'py>,
     robot: &PyRobot,
-    q: &Bound<'py, PyAny>,
-    xdot: &Bound<'py, PyAny>,
+    q: &Any<'py>,
+    xdot: &Any<'py>,
     task: &str,
     weights: &str,
     damping: f64,
     epsilon: f64,
-    qdot_prev: Option<&Bound<'py, PyAny>>,
+    qdot_prev: Option<&Any<'py>>,
     base: Option<PyRef<'py, PyDiffDrive>>,
-    mount: Option<&Bound<'py, PyAny>>,
-) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    mount: Option<&Any<'py>>,
+) -> PyResult<Array<'py>> {
     let task = Task::from_name(task).py()?;
     let weighting = Weighting::from_name(weights).py()?;
     let model = model(robot, base.as_deref(), mount)?;
@@ -274,8 +261,8 @@ fn wls_step<'py>(
 #[pyo3(signature = (x0, x1, duration, rate_hz=1000.0, task="racket5"))]
 fn task_line<'py>(
     py: Python<'py>,
-    x0: &Bound<'py, PyAny>,
-    x1: &Bound<'py, PyAny>,
+    x0: &Any<'py>,
+    x1: &Any<'py>,
     duration: f64,
     rate_hz: f64,
     task: &str,
@@ -298,64 +285,37 @@ pub struct PyTrackResult {
     joint_names: Vec<String>,
 }
 
+array_getters!(PyTrackResult, |t| {
+    /// Sample times (N,), s.
+    time => t.r.time, [t.r.len()];
+    /// Configurations (N, nq): m for prismatic, rad for revolute joints (base x, y, θ first).
+    q => t.r.q, [t.r.len(), t.r.nq];
+    /// Commanded inputs (N, nu): joint rates (m/s, rad/s), base (v, ω) first.
+    qd => t.r.qdot, [t.r.len(), t.r.nu];
+    /// Task coordinates reached (N, dim).
+    x => t.r.x, [t.r.len(), t.r.dim];
+    /// Norm of the task residual (N,), task units.
+    error => t.r.error, [t.r.len()];
+    /// Position residual (N,), m.
+    position_error => t.r.position_error, [t.r.len()];
+    /// Orientation residual (N,), rad.
+    orientation_error => t.r.orientation_error, [t.r.len()];
+    /// Distance of each arm joint to its nearer limit (N, n), m or rad; negative beyond a limit.
+    margin => t.r.margin, [t.r.len(), t.r.n_margin];
+    /// Fraction of the task velocity achieved at each sample (N,), 1 = full.
+    scale => t.r.scale, [t.r.len()];
+    /// Smallest singular value estimate of the weighted task Jacobian (N,).
+    sigma_min => t.r.sigma_min, [t.r.len()];
+});
+
 #[ttkin_py_guard::guarded]
 #[pymethods]
 impl PyTrackResult {
-    /// Sample times (N,), s.
-    #[getter]
-    fn time<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
-        to_numpy(py, &[self.r.len()], &self.r.time)
-    }
-    /// Configurations (N, nq): m for prismatic, rad for revolute joints (base x, y, θ first).
-    #[getter]
-    fn q<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
-        to_numpy(py, &[self.r.len(), self.r.nq], &self.r.q)
-    }
-    /// Commanded inputs (N, nu): joint rates (m/s, rad/s), base (v, ω) first.
-    #[getter]
-    fn qd<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
-        to_numpy(py, &[self.r.len(), self.r.nu], &self.r.qdot)
-    }
     /// Deprecated name of `qd`.
     #[getter]
-    fn qdot<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    fn qdot<'py>(&self, py: Python<'py>) -> PyResult<Array<'py>> {
         crate::errors::deprecated(py, "TrackResult.qdot", "TrackResult.qd")?;
-        self.qd(py) // (a PyResult: #[guarded] makes every method return one)
-    }
-    /// Task coordinates reached (N, dim).
-    #[getter]
-    fn x<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
-        to_numpy(py, &[self.r.len(), self.r.dim], &self.r.x)
-    }
-    /// Norm of the task residual (N,), task units.
-    #[getter]
-    fn error<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
-        to_numpy(py, &[self.r.len()], &self.r.error)
-    }
-    /// Position residual (N,), m.
-    #[getter]
-    fn position_error<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
-        to_numpy(py, &[self.r.len()], &self.r.position_error)
-    }
-    /// Orientation residual (N,), rad.
-    #[getter]
-    fn orientation_error<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
-        to_numpy(py, &[self.r.len()], &self.r.orientation_error)
-    }
-    /// Distance of each arm joint to its nearer limit (N, n), m or rad; negative beyond a limit.
-    #[getter]
-    fn margin<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
-        to_numpy(py, &[self.r.len(), self.r.n_margin], &self.r.margin)
-    }
-    /// Fraction of the task velocity achieved at each sample (N,), 1 = full.
-    #[getter]
-    fn scale<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
-        to_numpy(py, &[self.r.len()], &self.r.scale)
-    }
-    /// Smallest singular value estimate of the weighted task Jacobian (N,).
-    #[getter]
-    fn sigma_min<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
-        to_numpy(py, &[self.r.len()], &self.r.sigma_min)
+        Ok(to_numpy(py, &[self.r.len(), self.r.nu], &self.r.qdot))
     }
     /// "completed", "saturated" (finished, task velocity scaled at some samples) or "failed".
     #[getter]
@@ -399,29 +359,29 @@ impl PyTrackResult {
 fn track<'py>(
     py: Python<'py>,
     robot: &PyRobot,
-    q0: &Bound<'py, PyAny>,
-    task_trajectory: &Bound<'py, PyAny>,
+    q0: &Any<'py>,
+    task_trajectory: &Any<'py>,
     rate_hz: f64,
     task: &str,
-    velocities: Option<&Bound<'py, PyAny>>,
+    velocities: Option<&Any<'py>>,
     weights: &str,
     gain: Option<f64>,
     damping: f64,
     epsilon: f64,
-    input_weights: Option<&Bound<'py, PyAny>>,
+    input_weights: Option<&Any<'py>>,
     limit_gain: f64,
     manipulability_gain: f64,
     respect_limits: bool,
     max_error: f64,
     corrector: bool,
     base: Option<PyRef<'py, PyDiffDrive>>,
-    mount: Option<&Bound<'py, PyAny>>,
+    mount: Option<&Any<'py>>,
 ) -> PyResult<PyTrackResult> {
     let task = Task::from_name(task).py()?;
     let model = model(robot, base.as_deref(), mount)?;
     let q0 = vector(q0, "q0", model.nq())?;
     let d = task.dim();
-    let samples = |obj: &Bound<'py, PyAny>, what: &str| -> PyResult<Vec<f64>> {
+    let samples = |obj: &Any<'py>, what: &str| -> PyResult<Vec<f64>> {
         let a = f64_array(obj, what)?;
         match a.shape() {
             [_, c] if *c == d => Ok(a.data().to_vec()),

@@ -2,17 +2,13 @@
 //! of a planned motion with the effort check (patent step S105). Conversion only: the maths is
 //! `ttkin::dynamics::profile`.
 
-use numpy::PyArrayDyn;
 use pyo3::prelude::*;
 use ttkin::dynamics::TorqueProfile;
 
-use crate::convert::to_numpy;
+use crate::convert::{array_getters, Any};
 use crate::dynamics::{gravity_arg, wrench_arg};
 use crate::errors::{PyResultExt, TtmanipError};
 use crate::robot::PyRobot;
-
-/// A numpy float64 array returned to Python.
-type Array<'py> = Bound<'py, PyArrayDyn<f64>>;
 
 /// The result of `Robot.torques`: joint, motor-side and current profiles and the effort check.
 #[pyclass(name = "TorqueProfile", module = "ttmanip", frozen)]
@@ -21,39 +17,26 @@ pub struct PyTorqueProfile {
 }
 
 impl PyTorqueProfile {
-    /// An N × n row-major profile as an (N, n) array.
-    fn rows<'py>(&self, py: Python<'py>, v: &[f64]) -> Array<'py> {
-        to_numpy(py, &[v.len() / self.profile.dof, self.profile.dof], v)
+    /// Number of samples N of the profile.
+    fn len(&self) -> usize {
+        self.profile.joint.len() / self.profile.dof
     }
 }
+
+array_getters!(PyTorqueProfile, |t| {
+    /// (N, n) joint torques (N·m) / forces (N): rigid body + armature + friction.
+    joint => t.profile.joint, [t.len(), t.profile.dof];
+    /// (N, n) motor torques τ/G (N·m).
+    motor => t.profile.motor, [t.len(), t.profile.dof];
+    /// (N, n) motor currents τ_motor/k_t (A); NaN for joints without a torque constant.
+    current => t.profile.current, [t.len(), t.profile.dof];
+    /// (n,) largest |joint torque| over the profile (N·m or N).
+    peak => t.profile.peak, [t.profile.dof];
+});
 
 #[ttkin_py_guard::guarded]
 #[pymethods]
 impl PyTorqueProfile {
-    /// (N, n) joint torques (N·m) / forces (N): rigid body + armature + friction.
-    #[getter]
-    fn joint<'py>(&self, py: Python<'py>) -> Array<'py> {
-        self.rows(py, &self.profile.joint)
-    }
-
-    /// (N, n) motor torques τ/G (N·m).
-    #[getter]
-    fn motor<'py>(&self, py: Python<'py>) -> Array<'py> {
-        self.rows(py, &self.profile.motor)
-    }
-
-    /// (N, n) motor currents τ_motor/k_t (A); NaN for joints without a torque constant.
-    #[getter]
-    fn current<'py>(&self, py: Python<'py>) -> Array<'py> {
-        self.rows(py, &self.profile.current)
-    }
-
-    /// (n,) largest |joint torque| over the profile (N·m or N).
-    #[getter]
-    fn peak<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
-        to_numpy(py, &[self.profile.dof], &self.profile.peak)
-    }
-
     /// True when no sample exceeds any joint's effort limit.
     #[getter]
     fn within_limits(&self) -> bool {
@@ -74,7 +57,7 @@ impl PyTorqueProfile {
         let p = &self.profile;
         format!(
             "TorqueProfile({} samples × {} joints, within_limits={}, {} violations)",
-            p.joint.len() / p.dof,
+            self.len(),
             p.dof,
             if p.within_limits() { "True" } else { "False" },
             p.violations.len()
@@ -85,9 +68,9 @@ impl PyTorqueProfile {
 /// (q, qd, qdd) from `torques`' arguments: three arrays, a (q, qd, qdd) tuple, or an object with
 /// attributes q, qd, qdd (or position, velocity, acceleration).
 fn trajectory_arrays<'py>(
-    trajectory: &Bound<'py, PyAny>,
-    qd: Option<&Bound<'py, PyAny>>,
-    qdd: Option<&Bound<'py, PyAny>>,
+    trajectory: &Any<'py>,
+    qd: Option<&Any<'py>>,
+    qdd: Option<&Any<'py>>,
 ) -> PyResult<[Bound<'py, PyAny>; 3]> {
     match (qd, qdd) {
         (Some(qd), Some(qdd)) => Ok([trajectory.clone(), qd.clone(), qdd.clone()]),
@@ -124,11 +107,11 @@ impl PyRobot {
     fn torques<'py>(
         &self,
         py: Python<'py>,
-        trajectory: &Bound<'py, PyAny>,
-        qd: Option<&Bound<'py, PyAny>>,
-        qdd: Option<&Bound<'py, PyAny>>,
-        gravity: Option<&Bound<'py, PyAny>>,
-        wrench: Option<&Bound<'py, PyAny>>,
+        trajectory: &Any<'py>,
+        qd: Option<&Any<'py>>,
+        qdd: Option<&Any<'py>>,
+        gravity: Option<&Any<'py>>,
+        wrench: Option<&Any<'py>>,
     ) -> PyResult<PyTorqueProfile> {
         let g = gravity_arg(gravity)?;
         let w = wrench_arg(wrench)?;

@@ -5,13 +5,14 @@
 
 use std::sync::Arc;
 
-use nalgebra::IsometryMatrix3;
-use numpy::PyArrayDyn;
 use pyo3::prelude::*;
 use pyo3::types::PyString;
-use ttkin::{Chain, Dh, DhConvention, JacobianFrame, JointType, Limits};
+use ttkin::dh::DhColumns;
+use ttkin::{Chain, DhConvention, JacobianFrame, JointType};
 
-use crate::convert::{f64_array, filled_without_gil, pose_to_numpy, shape_str, to_numpy, transform, vector, zeros};
+use crate::convert::{
+    f64_array, filled_without_gil, pose_to_numpy, shape_str, to_numpy, transform, vector, zeros, Any, Array,
+};
 use crate::errors::{PyResultExt, ShapeError, TtmanipError};
 
 /// A serial robot arm: joints from base to tool (m, rad, s). Immutable; share it freely.
@@ -33,11 +34,7 @@ impl PyRobot {
     }
 
     /// Reads `q` as one configuration (n,) or a batch (N, n); returns the batch size (None for one).
-    pub fn configs<'py>(
-        &self,
-        q: &Bound<'py, PyAny>,
-        what: &str,
-    ) -> PyResult<(crate::convert::F64Array<'py>, Option<usize>)> {
+    pub fn configs<'py>(&self, q: &Any<'py>, what: &str) -> PyResult<(crate::convert::F64Array<'py>, Option<usize>)> {
         let a = f64_array(q, what)?;
         let n = self.chain.dof();
         let batch = match a.shape() {
@@ -54,35 +51,19 @@ impl PyRobot {
     }
 }
 
-/// Joint types from a string such as "PRRRRR" or a list of "revolute"/"prismatic" (default: all
-/// revolute).
-fn joint_types(types: Option<&Bound<'_, PyAny>>, n: usize) -> PyResult<Vec<JointType>> {
-    let Some(types) = types else {
-        return Ok(vec![JointType::Revolute; n]);
-    };
-    let kinds: Vec<JointType> = if let Ok(s) = types.cast::<PyString>() {
-        JointType::from_letters(&s.to_cow()?).py()?
-    } else {
-        let items: Vec<String> = types.extract().map_err(|_| {
-            TtmanipError::new_err("types: expected a string such as 'PRRRRR' or a list of 'revolute'/'prismatic'")
-        })?;
-        items
-            .iter()
-            .map(|s| s.parse::<JointType>())
-            .collect::<ttkin::Result<Vec<_>>>()
-            .py()?
-    };
-    if kinds.len() != n {
-        return Err(ShapeError::new_err(format!(
-            "types: expected {n} joint types, got {}",
-            kinds.len()
-        )));
+/// Joint types from a string such as "PRRRRR" or a list of "revolute"/"prismatic".
+fn joint_types(types: &Any<'_>) -> PyResult<Vec<JointType>> {
+    if let Ok(s) = types.cast::<PyString>() {
+        return JointType::from_letters(&s.to_cow()?).py();
     }
-    Ok(kinds)
-}
-
-fn limits_column(chain: &Chain, f: impl Fn(&Limits) -> Option<f64>) -> Vec<f64> {
-    chain.limits().iter().map(|l| f(l).unwrap_or(f64::INFINITY)).collect()
+    let items: Vec<String> = types.extract().map_err(|_| {
+        TtmanipError::new_err("types: expected a string such as 'PRRRRR' or a list of 'revolute'/'prismatic'")
+    })?;
+    items
+        .iter()
+        .map(|s| s.parse::<JointType>())
+        .collect::<ttkin::Result<Vec<_>>>()
+        .py()
 }
 
 #[ttkin_py_guard::guarded]
@@ -97,67 +78,40 @@ impl PyRobot {
     #[pyo3(signature = (a, alpha, d, theta, types=None, convention="standard", limits=None, base=None, tool=None, name="robot", names=None))]
     #[allow(clippy::too_many_arguments)]
     fn from_dh(
-        a: &Bound<'_, PyAny>,
-        alpha: &Bound<'_, PyAny>,
-        d: &Bound<'_, PyAny>,
-        theta: &Bound<'_, PyAny>,
-        types: Option<&Bound<'_, PyAny>>,
+        a: &Any<'_>,
+        alpha: &Any<'_>,
+        d: &Any<'_>,
+        theta: &Any<'_>,
+        types: Option<&Any<'_>>,
         convention: &str,
-        limits: Option<&Bound<'_, PyAny>>,
-        base: Option<&Bound<'_, PyAny>>,
-        tool: Option<&Bound<'_, PyAny>>,
+        limits: Option<&Any<'_>>,
+        base: Option<&Any<'_>>,
+        tool: Option<&Any<'_>>,
         name: &str,
         names: Option<Vec<String>>,
     ) -> PyResult<Self> {
-        let av = f64_array(a, "a")?;
-        let n = match av.shape() {
-            [n] if *n > 0 => *n,
-            _ => {
-                return Err(ShapeError::new_err(format!(
-                    "a: expected shape (n,) with n ≥ 1, got {}",
-                    av.shape_str()
-                )))
-            }
-        };
-        let a = vector(a, "a", n)?;
-        let alpha = vector(alpha, "alpha", n)?;
-        let d = vector(d, "d", n)?;
-        let theta = vector(theta, "theta", n)?;
-        let kinds = joint_types(types, n)?;
-        let conv: DhConvention = convention.parse::<DhConvention>().py()?;
-        let lims: Option<Vec<(f64, f64)>> = match limits {
-            None => None,
-            Some(l) => {
-                let la = f64_array(l, "limits")?;
-                if la.shape() != [n, 2] {
-                    return Err(ShapeError::new_err(format!(
-                        "limits: expected shape ({n}, 2), got {}",
-                        la.shape_str()
-                    )));
-                }
-                Some(la.data().chunks_exact(2).map(|r| (r[0], r[1])).collect())
-            }
-        };
-        let rows: Vec<(JointType, Dh)> = (0..n)
-            .map(|i| {
-                let dh = Dh {
-                    a: a[i],
-                    alpha: alpha[i],
-                    d: d[i],
-                    theta: theta[i],
-                };
-                (kinds[i], dh)
-            })
-            .collect();
-        let base = base
-            .map(|b| transform(b, "base"))
-            .transpose()?
-            .unwrap_or_else(IsometryMatrix3::identity);
-        let tool = tool
-            .map(|t| transform(t, "tool"))
-            .transpose()?
-            .unwrap_or_else(IsometryMatrix3::identity);
-        let chain = Chain::from_dh(name, conv, &rows, lims.as_deref(), names, base, tool).py()?;
+        let n = f64_array(a, "a")?.shape().first().copied().unwrap_or(0);
+        let column = |obj: &Any<'_>, what: &str| vector(obj, what, n);
+        let (a, alpha, d, theta) = (
+            column(a, "a")?,
+            column(alpha, "alpha")?,
+            column(d, "d")?,
+            column(theta, "theta")?,
+        );
+        let types = types.map(joint_types).transpose()?;
+        let limits = limits.map(|l| crate::convert::table(l, "limits", n, 2)).transpose()?;
+        let chain = DhColumns {
+            a: &a,
+            alpha: &alpha,
+            d: &d,
+            theta: &theta,
+            types: types.as_deref(),
+            limits: limits.as_deref(),
+            base: base.map(|b| transform(b, "base")).transpose()?,
+            tool: tool.map(|t| transform(t, "tool")).transpose()?,
+        }
+        .chain(name, convention.parse::<DhConvention>().py()?, names)
+        .py()?;
         Ok(PyRobot::new(chain))
     }
 
@@ -210,12 +164,12 @@ impl PyRobot {
     }
 
     /// The same robot with another tool transform (last link frame → tool frame, 4×4).
-    fn with_tool(&self, tool: &Bound<'_, PyAny>) -> PyResult<Self> {
+    fn with_tool(&self, tool: &Any<'_>) -> PyResult<Self> {
         Ok(PyRobot::new(self.chain.with_tool(transform(tool, "tool")?).py()?))
     }
 
     /// The same robot with another base transform (base frame → frame 0, 4×4).
-    fn with_base(&self, base: &Bound<'_, PyAny>) -> PyResult<Self> {
+    fn with_base(&self, base: &Any<'_>) -> PyResult<Self> {
         Ok(PyRobot::new(self.chain.with_base(transform(base, "base")?).py()?))
     }
 
@@ -247,56 +201,49 @@ impl PyRobot {
     /// Joint types, "revolute" or "prismatic".
     #[getter]
     fn joint_types(&self) -> Vec<&'static str> {
-        self.chain
-            .joints()
-            .iter()
-            .map(|j| match j.kind() {
-                JointType::Revolute => "revolute",
-                JointType::Prismatic => "prismatic",
-            })
-            .collect()
+        self.chain.joints().iter().map(|j| j.kind().name()).collect()
     }
 
     /// (n, 2) lower and upper position limits (m or rad; ±inf where unbounded).
     #[getter]
-    fn limits<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+    fn limits<'py>(&self, py: Python<'py>) -> Array<'py> {
         let flat: Vec<f64> = self.chain.limits().iter().flat_map(|l| [l.lower, l.upper]).collect();
         to_numpy(py, &[self.chain.dof(), 2], &flat)
     }
 
     /// (n,) speed limits (m/s or rad/s; inf where none).
     #[getter]
-    fn velocity_limits<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
-        to_numpy(py, &[self.chain.dof()], &limits_column(&self.chain, |l| l.velocity))
+    fn velocity_limits<'py>(&self, py: Python<'py>) -> Array<'py> {
+        to_numpy(py, &[self.chain.dof()], &self.chain.limit_column(|l| l.velocity))
     }
 
     /// (n,) acceleration limits (m/s² or rad/s²; inf where none).
     #[getter]
-    fn acceleration_limits<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
-        to_numpy(py, &[self.chain.dof()], &limits_column(&self.chain, |l| l.acceleration))
+    fn acceleration_limits<'py>(&self, py: Python<'py>) -> Array<'py> {
+        to_numpy(py, &[self.chain.dof()], &self.chain.limit_column(|l| l.acceleration))
     }
 
     /// (n,) effort limits (N or N·m; inf where none).
     #[getter]
-    fn effort_limits<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
-        to_numpy(py, &[self.chain.dof()], &limits_column(&self.chain, |l| l.effort))
+    fn effort_limits<'py>(&self, py: Python<'py>) -> Array<'py> {
+        to_numpy(py, &[self.chain.dof()], &self.chain.limit_column(|l| l.effort))
     }
 
     /// Base frame → frame 0 (4×4).
     #[getter]
-    fn base<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+    fn base<'py>(&self, py: Python<'py>) -> Array<'py> {
         pose_to_numpy(py, self.chain.base())
     }
 
     /// Last link frame → tool frame (4×4).
     #[getter]
-    fn tool<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+    fn tool<'py>(&self, py: Python<'py>) -> Array<'py> {
         pose_to_numpy(py, self.chain.tool())
     }
 
     /// Tool pose in the base frame: (4, 4) for q of shape (n,), (N, 4, 4) for (N, n).
     /// q in m (prismatic) and rad (revolute); limits are not enforced.
-    fn fk<'py>(&self, py: Python<'py>, q: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    fn fk<'py>(&self, py: Python<'py>, q: &Any<'py>) -> PyResult<Array<'py>> {
         let (a, batch) = self.configs(q, "q")?;
         match batch {
             None => Ok(pose_to_numpy(py, &self.chain.fk(a.data()).py()?)),
@@ -308,7 +255,7 @@ impl PyRobot {
     }
 
     /// Every link frame in the base frame (tool transform not applied): (n, 4, 4) or (N, n, 4, 4).
-    fn fk_all<'py>(&self, py: Python<'py>, q: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    fn fk_all<'py>(&self, py: Python<'py>, q: &Any<'py>) -> PyResult<Array<'py>> {
         let (a, batch) = self.configs(q, "q")?;
         let n = self.chain.dof();
         let (count, shape) = match batch {
@@ -327,12 +274,7 @@ impl PyRobot {
     /// Geometric Jacobian [v; ω] (v of the tool point), rows in the axes of `frame` ("base" or
     /// "tool"): (6, n) for q of shape (n,), (N, 6, n) for (N, n). Units m/s and rad/s per joint unit.
     #[pyo3(signature = (q, frame="base"))]
-    fn jacobian<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Bound<'py, PyAny>,
-        frame: &str,
-    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    fn jacobian<'py>(&self, py: Python<'py>, q: &Any<'py>, frame: &str) -> PyResult<Array<'py>> {
         let frame: JacobianFrame = frame.parse::<JacobianFrame>().py()?;
         let (a, batch) = self.configs(q, "q")?;
         let n = self.chain.dof();
@@ -349,15 +291,7 @@ impl PyRobot {
     }
 
     fn __repr__(&self) -> String {
-        let types: String = self
-            .chain
-            .joints()
-            .iter()
-            .map(|j| match j.kind() {
-                JointType::Revolute => 'R',
-                JointType::Prismatic => 'P',
-            })
-            .collect();
+        let types: String = self.chain.joints().iter().map(|j| j.kind().letter()).collect();
         format!(
             "Robot('{}', n={}, joints='{}')",
             self.chain.name(),

@@ -2,7 +2,7 @@
 //! behind `ttmanip.traj` (conversion only; the maths is `ttkin::traj`).
 
 use numpy::ndarray::{Array2, ShapeBuilder};
-use numpy::{PyArray1, PyArray2, PyArrayDyn};
+use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
@@ -10,12 +10,12 @@ use ttkin::traj::limits::{self, KinematicLimits, SegmentKind, Violation};
 use ttkin::traj::via::{self, ViaKind};
 use ttkin::traj::{JointState, JointTrajectory, Samples};
 
-use crate::convert::{f64_array, to_numpy, vector, zeros};
+use crate::convert::{f64_array, to_numpy, vector, zeros, Any, Array};
 use crate::errors::{PyResultExt, ShapeError};
 use crate::robot::PyRobot;
 
 /// Reads a vector of any length ≥ 1 (finite values).
-pub(crate) fn any_vector(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f64>> {
+pub(crate) fn any_vector(obj: &Any<'_>, what: &str) -> PyResult<Vec<f64>> {
     let a = f64_array(obj, what)?;
     match a.shape() {
         [n] if *n > 0 => {
@@ -30,7 +30,7 @@ pub(crate) fn any_vector(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f64
 }
 
 /// Reads a batch of N ≥ 0 finite values (N = 0: an empty batch, an empty result).
-fn batch_vector(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f64>> {
+fn batch_vector(obj: &Any<'_>, what: &str) -> PyResult<Vec<f64>> {
     let a = f64_array(obj, what)?;
     match a.shape() {
         [_] => {
@@ -44,12 +44,12 @@ fn batch_vector(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f64>> {
     }
 }
 
-fn opt_vector(obj: Option<&Bound<'_, PyAny>>, what: &str, n: usize) -> PyResult<Option<Vec<f64>>> {
+fn opt_vector(obj: Option<&Any<'_>>, what: &str, n: usize) -> PyResult<Option<Vec<f64>>> {
     obj.map(|o| vector(o, what, n)).transpose()
 }
 
 /// Reads an (m, n) array; returns (data, m, n).
-fn matrix(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<(Vec<f64>, usize, usize)> {
+fn matrix(obj: &Any<'_>, what: &str) -> PyResult<(Vec<f64>, usize, usize)> {
     let a = f64_array(obj, what)?;
     match a.shape() {
         [m, n] => Ok((a.data().to_vec(), *m, *n)),
@@ -84,7 +84,7 @@ pub(crate) fn violations_to_py<'py>(py: Python<'py>, v: &[Violation]) -> PyResul
     Ok(list)
 }
 
-pub(crate) fn robot_limits(robot: &PyRobot, jerk: Option<&Bound<'_, PyAny>>) -> PyResult<KinematicLimits> {
+pub(crate) fn robot_limits(robot: &PyRobot, jerk: Option<&Any<'_>>) -> PyResult<KinematicLimits> {
     let n = robot.chain.dof();
     let jerk = opt_vector(jerk, "jerk", n)?;
     KinematicLimits::from_chain(&robot.chain, jerk.as_deref()).py()
@@ -113,13 +113,13 @@ impl PyJointTrajectory {
 
     /// Segment boundaries (s), from 0 to the duration.
     #[getter]
-    fn knots<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+    fn knots<'py>(&self, py: Python<'py>) -> Array<'py> {
         to_numpy(py, &[self.inner.knots().len()], self.inner.knots())
     }
 
     /// (segments, dof, 6) coefficients in ascending powers of the local time τ = t − knot (s).
     #[getter]
-    fn coefficients<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    fn coefficients<'py>(&self, py: Python<'py>) -> PyResult<Array<'py>> {
         let (k, n) = (self.inner.segments(), self.inner.dof());
         let mut flat = Vec::with_capacity(k * n * 6);
         for s in 0..k {
@@ -134,7 +134,7 @@ impl PyJointTrajectory {
     }
 
     /// (q, qd, qdd) at time `t` (s): each (dof,) for a scalar t, (N, dof) for an array of N times.
-    fn sample<'py>(&self, py: Python<'py>, t: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+    fn sample<'py>(&self, py: Python<'py>, t: &Any<'py>) -> PyResult<Bound<'py, PyAny>> {
         let n = self.inner.dof();
         if let Ok(t) = t.extract::<f64>() {
             let (q, qd, qdd) = (zeros(py, &[n]), zeros(py, &[n]), zeros(py, &[n]));
@@ -163,7 +163,7 @@ impl PyJointTrajectory {
     }
 
     /// Jerk (rad/s³ or m/s³) at time `t` (s), (dof,).
-    fn jerk<'py>(&self, py: Python<'py>, t: f64) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    fn jerk<'py>(&self, py: Python<'py>, t: f64) -> PyResult<Array<'py>> {
         let out = zeros(py, &[self.inner.dof()]);
         crate::convert::fill_fresh(&out, |o| {
             self.inner.jerk(t, o).py()?;
@@ -205,7 +205,7 @@ impl PyJointTrajectory {
         &self,
         py: Python<'py>,
         robot: &PyRobot,
-        jerk: Option<&Bound<'py, PyAny>>,
+        jerk: Option<&Any<'py>>,
     ) -> PyResult<Bound<'py, PyList>> {
         let limits = robot_limits(robot, jerk)?;
         violations_to_py(py, &self.inner.check_limits(&limits).py()?)
@@ -247,11 +247,11 @@ fn sample_uniform<'py>(py: Python<'py>, traj: &JointTrajectory, n: usize) -> PyR
 #[pyfunction]
 #[pyo3(signature = (q0, q1, duration, v0=None, v1=None))]
 fn traj_cubic(
-    q0: &Bound<'_, PyAny>,
-    q1: &Bound<'_, PyAny>,
+    q0: &Any<'_>,
+    q1: &Any<'_>,
     duration: f64,
-    v0: Option<&Bound<'_, PyAny>>,
-    v1: Option<&Bound<'_, PyAny>>,
+    v0: Option<&Any<'_>>,
+    v1: Option<&Any<'_>>,
 ) -> PyResult<PyJointTrajectory> {
     let q0 = any_vector(q0, "q0")?;
     let n = q0.len();
@@ -269,12 +269,7 @@ struct QuinticArgs<'a, 'py> {
 }
 
 /// Reads a boundary vector without copying when it is a contiguous float64 array.
-fn build_quintic(
-    q0: &Bound<'_, PyAny>,
-    q1: &Bound<'_, PyAny>,
-    duration: f64,
-    o: QuinticArgs<'_, '_>,
-) -> PyResult<JointTrajectory> {
+fn build_quintic(q0: &Any<'_>, q1: &Any<'_>, duration: f64, o: QuinticArgs<'_, '_>) -> PyResult<JointTrajectory> {
     let q0 = f64_array(q0, "q0")?;
     let n = match q0.shape() {
         [n] if *n > 0 => *n,
@@ -292,7 +287,7 @@ fn build_quintic(
             q1.shape_str()
         )));
     }
-    let read = |x: Option<&Bound<'_, PyAny>>, what: &str| -> PyResult<Option<Vec<f64>>> { opt_vector(x, what, n) };
+    let read = |x: Option<&Any<'_>>, what: &str| -> PyResult<Option<Vec<f64>>> { opt_vector(x, what, n) };
     let (v0, v1, a0, a1) = (
         read(o.v0, "v0")?,
         read(o.v1, "v1")?,
@@ -317,13 +312,13 @@ fn build_quintic(
 #[pyo3(signature = (q0, q1, duration, v0=None, v1=None, a0=None, a1=None))]
 #[allow(clippy::too_many_arguments)]
 fn traj_quintic(
-    q0: &Bound<'_, PyAny>,
-    q1: &Bound<'_, PyAny>,
+    q0: &Any<'_>,
+    q1: &Any<'_>,
     duration: f64,
-    v0: Option<&Bound<'_, PyAny>>,
-    v1: Option<&Bound<'_, PyAny>>,
-    a0: Option<&Bound<'_, PyAny>>,
-    a1: Option<&Bound<'_, PyAny>>,
+    v0: Option<&Any<'_>>,
+    v1: Option<&Any<'_>>,
+    a0: Option<&Any<'_>>,
+    a1: Option<&Any<'_>>,
 ) -> PyResult<PyJointTrajectory> {
     let inner = build_quintic(q0, q1, duration, QuinticArgs { v0, v1, a0, a1 })?;
     Ok(PyJointTrajectory { inner })
@@ -337,14 +332,14 @@ fn traj_quintic(
 #[allow(clippy::too_many_arguments)]
 fn traj_quintic_samples<'py>(
     py: Python<'py>,
-    q0: &Bound<'py, PyAny>,
-    q1: &Bound<'py, PyAny>,
+    q0: &Any<'py>,
+    q1: &Any<'py>,
     duration: f64,
     n: i128,
-    v0: Option<&Bound<'py, PyAny>>,
-    v1: Option<&Bound<'py, PyAny>>,
-    a0: Option<&Bound<'py, PyAny>>,
-    a1: Option<&Bound<'py, PyAny>>,
+    v0: Option<&Any<'py>>,
+    v1: Option<&Any<'py>>,
+    a0: Option<&Any<'py>>,
+    a1: Option<&Any<'py>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let traj = build_quintic(q0, q1, duration, QuinticArgs { v0, v1, a0, a1 })?;
     sample_uniform(py, &traj, crate::args::sample_count(n, "n")?)
@@ -357,13 +352,13 @@ fn traj_quintic_samples<'py>(
 #[pyo3(signature = (points, times, kind="cubic", velocities=None, accelerations=None, v_start=None, v_end=None))]
 #[allow(clippy::too_many_arguments)]
 fn traj_via(
-    points: &Bound<'_, PyAny>,
-    times: &Bound<'_, PyAny>,
+    points: &Any<'_>,
+    times: &Any<'_>,
     kind: &str,
-    velocities: Option<&Bound<'_, PyAny>>,
-    accelerations: Option<&Bound<'_, PyAny>>,
-    v_start: Option<&Bound<'_, PyAny>>,
-    v_end: Option<&Bound<'_, PyAny>>,
+    velocities: Option<&Any<'_>>,
+    accelerations: Option<&Any<'_>>,
+    v_start: Option<&Any<'_>>,
+    v_end: Option<&Any<'_>>,
 ) -> PyResult<PyJointTrajectory> {
     let (p, m, n) = matrix(points, "points")?;
     let t = any_vector(times, "times")?;
@@ -373,7 +368,7 @@ fn traj_via(
             t.len()
         )));
     }
-    let read_m = |x: Option<&Bound<'_, PyAny>>, what: &str| -> PyResult<Option<Vec<f64>>> {
+    let read_m = |x: Option<&Any<'_>>, what: &str| -> PyResult<Option<Vec<f64>>> {
         x.map(|o| {
             let (d, rm, rn) = matrix(o, what)?;
             if (rm, rn) != (m, n) {
@@ -408,10 +403,10 @@ fn traj_via(
 #[pyo3(signature = (robot, q0, q1, kind="quintic", jerk=None))]
 fn traj_minimal_duration(
     robot: &PyRobot,
-    q0: &Bound<'_, PyAny>,
-    q1: &Bound<'_, PyAny>,
+    q0: &Any<'_>,
+    q1: &Any<'_>,
     kind: &str,
-    jerk: Option<&Bound<'_, PyAny>>,
+    jerk: Option<&Any<'_>>,
 ) -> PyResult<f64> {
     let n = robot.chain.dof();
     let (q0, q1) = (vector(q0, "q0", n)?, vector(q1, "q1", n)?);
@@ -431,12 +426,12 @@ fn traj_stroke<'py>(
     start: (Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>),
     hit: (Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>),
     t_hit: f64,
-    ready: &Bound<'py, PyAny>,
-    velocity: &Bound<'py, PyAny>,
-    acceleration: &Bound<'py, PyAny>,
-    jerk: &Bound<'py, PyAny>,
-    lower: Option<&Bound<'py, PyAny>>,
-    upper: Option<&Bound<'py, PyAny>>,
+    ready: &Any<'py>,
+    velocity: &Any<'py>,
+    acceleration: &Any<'py>,
+    jerk: &Any<'py>,
+    lower: Option<&Any<'py>>,
+    upper: Option<&Any<'py>>,
     return_duration: Option<f64>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let q = any_vector(&start.0, "state.q")?;
@@ -451,7 +446,7 @@ fn traj_stroke<'py>(
     let (s0, s1) = (state(&start, "state")?, state(&hit, "hit")?);
     let ready = vector(ready, "ready", n)?;
     // Infinite limits are allowed here, so read them without the finiteness check.
-    let raw = |x: &Bound<'py, PyAny>, w: &str| -> PyResult<Vec<f64>> {
+    let raw = |x: &Any<'py>, w: &str| -> PyResult<Vec<f64>> {
         let a = f64_array(x, w)?;
         if a.shape() != [n] {
             return Err(ShapeError::new_err(format!(

@@ -102,6 +102,87 @@ impl Chain {
     }
 }
 
+/// A DH table as users hold it: one column per parameter, one entry per joint, with the defaults
+/// of what is left out (all joints revolute, no position limits, `joint1`… names, identity base
+/// and tool).
+#[derive(Clone, Debug, Default)]
+pub struct DhColumns<'a> {
+    /// Link lengths a (m), one per joint; the table has as many joints as this column.
+    pub a: &'a [f64],
+    /// Link twists α (rad).
+    pub alpha: &'a [f64],
+    /// Link offsets d (m).
+    pub d: &'a [f64],
+    /// Joint angles θ (rad).
+    pub theta: &'a [f64],
+    /// Joint types (`None`: all revolute).
+    pub types: Option<&'a [JointType]>,
+    /// Lower and upper position limits, n × 2 row-major (m, rad; `None`: unbounded).
+    pub limits: Option<&'a [f64]>,
+    /// Base frame → frame 0 (`None`: identity).
+    pub base: Option<IsometryMatrix3<f64>>,
+    /// Last link frame → tool frame (`None`: identity).
+    pub tool: Option<IsometryMatrix3<f64>>,
+}
+
+impl DhColumns<'_> {
+    /// The chain `name` of this table in `convention`; `names` as in [`Chain::from_dh`].
+    pub fn chain(&self, name: &str, convention: DhConvention, names: Option<Vec<String>>) -> Result<Chain> {
+        let n = self.a.len();
+        if n == 0 {
+            return Err(Error::shape("a", "(n,) with n ≥ 1", "(0,)"));
+        }
+        for (what, col) in [("alpha", self.alpha), ("d", self.d), ("theta", self.theta)] {
+            if col.len() != n {
+                return Err(Error::shape(what, format!("({n},)"), format!("({},)", col.len())));
+            }
+        }
+        let types = match self.types {
+            Some(t) if t.len() != n => return Err(Error::shape("types", format!("{n} joint types"), t.len())),
+            Some(t) => t.to_vec(),
+            None => vec![JointType::Revolute; n],
+        };
+        let limits: Option<Vec<(f64, f64)>> = match self.limits {
+            Some(l) if l.len() != 2 * n => {
+                return Err(Error::shape(
+                    "limits",
+                    format!("({n}, 2)"),
+                    format!("{} values", l.len()),
+                ))
+            }
+            Some(l) => Some(l.chunks_exact(2).map(|r| (r[0], r[1])).collect()),
+            None => None,
+        };
+        let rows: Vec<(JointType, Dh)> = (0..n)
+            .map(|i| {
+                let (a, alpha, d, theta) = (self.a[i], self.alpha[i], self.d[i], self.theta[i]);
+                (types[i], Dh { a, alpha, d, theta })
+            })
+            .collect();
+        let identity = IsometryMatrix3::identity;
+        let (base, tool) = (self.base.unwrap_or_else(identity), self.tool.unwrap_or_else(identity));
+        Chain::from_dh(name, convention, &rows, limits.as_deref(), names, base, tool)
+    }
+}
+
+impl JointType {
+    /// The word users read: "revolute" or "prismatic".
+    pub fn name(self) -> &'static str {
+        match self {
+            JointType::Revolute => "revolute",
+            JointType::Prismatic => "prismatic",
+        }
+    }
+
+    /// The one-letter form of [`JointType::from_letters`]: 'R' or 'P'.
+    pub fn letter(self) -> char {
+        match self {
+            JointType::Revolute => 'R',
+            JointType::Prismatic => 'P',
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -127,6 +208,34 @@ mod tests {
         let q = [0.3, -0.2, 0.9, 1.1, -0.7, 0.4];
         assert!((c.fk(&q).unwrap().to_homogeneous() - ur5.fk(&q).unwrap().to_homogeneous()).norm() < 1e-14);
         assert_eq!(c.joints()[2].name(), "joint3");
+        let col = |f: fn(&Dh) -> f64| rows.iter().map(|(_, r)| f(r)).collect::<Vec<f64>>();
+        let (a, alpha, d, theta) = (col(|r| r.a), col(|r| r.alpha), col(|r| r.d), col(|r| r.theta));
+        let flat: Vec<f64> = lims.iter().flat_map(|l| [l.0, l.1]).collect();
+        let table = DhColumns {
+            a: &a,
+            alpha: &alpha,
+            d: &d,
+            theta: &theta,
+            limits: Some(&flat),
+            ..Default::default()
+        };
+        let bounds = |c: &Chain| c.limits().iter().map(|l| (l.lower, l.upper)).collect::<Vec<_>>();
+        assert_eq!(bounds(&table.chain("ur5", conv, None).unwrap()), lims);
+        let with_frames = DhColumns {
+            base: Some(*ur5.base()),
+            tool: Some(*ur5.tool()),
+            ..table.clone()
+        };
+        let t = with_frames.chain("ur5", conv, None).unwrap();
+        assert!((t.fk(&q).unwrap().to_homogeneous() - ur5.fk(&q).unwrap().to_homogeneous()).norm() < 1e-14);
+        let short = DhColumns {
+            d: &d[..5],
+            ..table.clone()
+        };
+        assert!(short.chain("x", conv, None).unwrap_err().to_string().starts_with("d:"));
+        assert!(DhColumns::default().chain("x", conv, None).is_err());
+        assert_eq!(t.joints()[0].kind().name(), "revolute");
+        assert_eq!(JointType::Prismatic.letter(), 'P');
     }
 
     /// Text forms parse, and a bad one names the argument.

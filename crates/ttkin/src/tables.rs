@@ -7,7 +7,7 @@ use nalgebra::{Matrix3, Vector3};
 use crate::chain::Chain;
 use crate::error::{check_finite, check_vector, Error, Result};
 use crate::inertial::Inertial;
-use crate::joint::{Drive, Joint};
+use crate::joint::{Drive, Joint, Limits};
 
 /// Link inertias of n links from columns: `mass` (n) kg, `com` (n × 3 row-major) m and
 /// `inertia` (n × 9, row-major 3 × 3 per link) kg·m² about the centre of mass, link frames.
@@ -95,6 +95,27 @@ impl Chain {
         self.rebuilt(drives, |j, d| j.with_drive(*d))
     }
 
+    /// Rotor inertia reflected to each joint, G²·J (kg·m² or kg; 0 for a joint without a drive).
+    pub fn armatures(&self) -> Vec<f64> {
+        self.joints()
+            .iter()
+            .map(|j| j.drive().map_or(0.0, Drive::armature))
+            .collect()
+    }
+
+    /// Link masses (kg; NaN where a link has no inertial).
+    pub fn masses(&self) -> Vec<f64> {
+        self.joints()
+            .iter()
+            .map(|j| j.inertial().map_or(f64::NAN, |i| i.mass))
+            .collect()
+    }
+
+    /// One optional limit of every joint, `f` picking it (infinity where a joint has none).
+    pub fn limit_column(&self, f: impl Fn(&Limits) -> Option<f64>) -> Vec<f64> {
+        self.limits().iter().map(|l| f(l).unwrap_or(f64::INFINITY)).collect()
+    }
+
     fn rebuilt<T>(&self, items: &[T], f: impl Fn(Joint, &T) -> Result<Joint>) -> Result<Chain> {
         if items.len() != self.dof() {
             return Err(Error::shape("per-joint table", self.dof(), items.len()));
@@ -143,5 +164,12 @@ mod tests {
         assert_eq!(d[1].torque_constant, None);
         assert_eq!(d[0].viscous, 0.0);
         assert!(ur5.with_drives(&d[..5]).is_err());
+        assert_eq!(ur5.masses(), mass);
+        assert!(ur5.armatures().iter().all(|a| a.is_finite() && *a >= 0.0));
+        assert_eq!(ur5.limit_column(|_| None), vec![f64::INFINITY; 6]);
+        assert_eq!(
+            ur5.limit_column(|l| Some(l.lower)),
+            ur5.limits().iter().map(|l| l.lower).collect::<Vec<_>>()
+        );
     }
 }
