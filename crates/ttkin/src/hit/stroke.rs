@@ -190,7 +190,9 @@ fn first_legs(
         );
         return Ok((legs, if t > t_req { t } else { f64::NAN }));
     }
-    if profile == StrokeProfile::Auto && limits::quintic_limit_ratio(start, hit, t_req, lim) <= 1.0 + LIMIT_TOLERANCE {
+    let fits =
+        |t: f64| limits::quintic_limit_ratio_above(start, hit, t, lim, 1.0 + LIMIT_TOLERANCE) <= 1.0 + LIMIT_TOLERANCE;
+    if profile == StrokeProfile::Auto && fits(t_req) {
         let legs = Legs::new(
             JointTrajectory::quintic_unchecked(start, hit, t_req),
             quick_quintic(hit, rest, lim),
@@ -239,7 +241,7 @@ fn quick_quintic(from: &JointState, to: &JointState, lim: &limits::KinematicLimi
             .max((to.qdd[j] - from.qdd[j]).abs() / lim.jerk[j]);
     }
     for _ in 0..200 {
-        let ratio = limits::quintic_limit_ratio(from, to, t, lim);
+        let ratio = limits::quintic_limit_ratio_above(from, to, t, lim, 1.0 + LIMIT_TOLERANCE);
         if ratio <= 1.0 + LIMIT_TOLERANCE {
             break;
         }
@@ -249,12 +251,18 @@ fn quick_quintic(from: &JointState, to: &JointState, lim: &limits::KinematicLimi
     JointTrajectory::quintic_unchecked(from, to, t)
 }
 
-/// Position-limit violations of `traj` (exact extrema per segment), times shifted by `t0` s.
+/// Position-limit violations of `traj` (exact extrema per segment, computed only for the joints
+/// whose cheap bounds leave the limits), times shifted by `t0` s.
 fn position_violations(p: &HitPlanner, traj: &JointTrajectory, t0: f64) -> Vec<Violation> {
     let lim = &p.limits;
     let slack = |b: f64| LIMIT_TOLERANCE * b.abs().max(1.0);
     let mut out = Vec::new();
-    for (j, (lo, hi)) in traj.position_range().into_iter().enumerate() {
+    for j in 0..traj.dof() {
+        let (lo_bound, hi_bound) = traj.joint_position_bounds(j);
+        if lo_bound >= lim.lower[j] - slack(lim.lower[j]) && hi_bound <= lim.upper[j] + slack(lim.upper[j]) {
+            continue;
+        }
+        let (lo, hi) = traj.joint_position_range(j);
         for (peak, limit, bad) in [
             (lo, lim.lower[j], lo.value < lim.lower[j] - slack(lim.lower[j])),
             (hi, lim.upper[j], hi.value > lim.upper[j] + slack(lim.upper[j])),
