@@ -137,6 +137,22 @@ impl Dynamics {
         Ok(&data.tau)
     }
 
+    /// [`Dynamics::inverse_dynamics`] with no wrench and without argument checks, for callers that
+    /// validated `data`, the shapes, finiteness and `gravity` (m/s², base frame) themselves: the
+    /// same numbers.
+    pub(crate) fn inverse_dynamics_unchecked<'d>(
+        &self,
+        data: &'d mut DynamicsData,
+        q: &[f64],
+        qd: &[f64],
+        qdd: &[f64],
+        gravity: &Vector3<f64>,
+    ) -> &'d DVector<f64> {
+        self.rnea_unchecked(data, q, qd, qdd, gravity, None);
+        self.add_friction(&mut data.tau, qd);
+        &data.tau
+    }
+
     /// Gravity torques g(q) (N·m or N): what holds the robot still at `q` under `gravity`.
     pub fn gravity<'d>(&self, data: &'d mut DynamicsData, q: &[f64], gravity: &[f64; 3]) -> Result<&'d DVector<f64>> {
         self.check_data(data)?;

@@ -335,12 +335,15 @@ fn effort(
     let (mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     let mut peak = vec![0.0f64; n];
     let mut ratio: f64 = 0.0;
+    let gravity = nalgebra::Vector3::from(p.options.gravity);
     for k in 0..points {
         let t = t0 + (t1 - t0) * k as f64 / (points - 1) as f64;
         traj.sample_unchecked(t.min(traj.duration()), &mut q, &mut qd, &mut qdd);
-        let Ok(tau) = dynamics.inverse_dynamics(data, &q, &qd, &qdd, &p.options.gravity, None) else {
+        // What `Dynamics::inverse_dynamics` would reject (data, shapes and gravity are right here).
+        if !q.iter().chain(&qd).chain(&qdd).all(|v| v.is_finite()) {
             return (f64::INFINITY, peak);
-        };
+        }
+        let tau = dynamics.inverse_dynamics_unchecked(data, &q, &qd, &qdd, &gravity);
         for j in 0..n {
             peak[j] = peak[j].max(tau[j].abs());
             ratio = ratio.max(tau[j].abs() / p.effort[j]);
