@@ -2,26 +2,11 @@
 //! plans bit for bit: `hit_icount plan N` plans N on-time hits (single thread),
 //! `hit_icount dump SET` prints every product of 1,000 plans of set `ontime`, `early` or `moving`
 //! with round-trip floats.
-use nalgebra::Vector3;
 use std::hint::black_box;
-use ttkin::hit::{Hit, HitOptions, HitPlan, HitPlanner};
-use ttkin::traj::JointState;
+use ttkin::hit::{HitOptions, HitPlan, HitPlanner};
 
-/// The bench distribution (see `benches/hit.rs`): centre x ∈ [−0.3, 0.3], y ∈ [−0.6, −0.2],
-/// z ∈ [−0.15, 0.15] m, normal within 0.7 rad of −y, 1–4 m/s along the normal, at `t` s.
-fn hits(count: usize, t: f64, seed: u64) -> Vec<Hit> {
-    let mut rng = fastrand::Rng::with_seed(seed);
-    let mut u = |lo: f64, hi: f64| lo + (hi - lo) * rng.f64();
-    (0..count)
-        .map(|_| {
-            let (x, y, z) = (u(-0.3, 0.3), u(-0.6, -0.2), u(-0.15, 0.15));
-            let (a, b, s) = (u(-0.7, 0.7), u(-0.7, 0.7), u(1.0, 4.0));
-            let n = Vector3::new(a.sin(), -a.cos() * b.cos(), b.sin()).normalize();
-            let v = n * s;
-            Hit::from_normal([x, y, z], [n.x, n.y, n.z], [v.x, v.y, v.z], t, None, None).unwrap()
-        })
-        .collect()
-}
+#[path = "../tests/support/gantry_hits.rs"]
+mod gantry_hits;
 
 fn dump(p: &HitPlan) {
     print!(
@@ -58,25 +43,14 @@ fn main() {
     match args[1].as_str() {
         "plan" => {
             let n: usize = args[2].parse().unwrap();
-            let hs = hits(256, 0.6, 7);
+            let hs = gantry_hits::hits(256, 0.6, 7);
             for i in 0..n {
                 black_box(planner.plan(black_box(&hs[i % hs.len()]), None, None).unwrap());
             }
         }
         "dump" => {
-            let (t, state) = match args[2].as_str() {
-                "ontime" => (0.6, None),
-                "early" => (0.01, None),
-                _ => (
-                    0.35,
-                    Some(JointState {
-                        q: vec![0.05, -0.1, 0.2, 0.5, 0.7, -0.3],
-                        qd: vec![0.2, -0.1, 0.5, -0.3, 0.4, 0.6],
-                        qdd: vec![0.5, 0.3, -1.0, 0.8, -0.6, 1.2],
-                    }),
-                ),
-            };
-            for h in hits(1000, t, 11) {
+            let state = gantry_hits::set(&args[2]).1;
+            for h in gantry_hits::set_hits(&args[2]) {
                 dump(&planner.plan(&h, state.as_ref(), None).unwrap());
             }
         }
