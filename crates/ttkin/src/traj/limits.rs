@@ -380,25 +380,31 @@ fn fine_scan(g: &impl Fn(f64) -> f64, from: f64) -> Option<(f64, f64, f64, f64)>
     None
 }
 
+/// Velocity, acceleration and jerk polynomials of joint `j`'s quintic from `start` to `end` in
+/// `duration` s, each with its limit, finite limits only.
+fn limited_derivatives(
+    start: &JointState,
+    end: &JointState,
+    j: usize,
+    duration: f64,
+    limits: &KinematicLimits,
+) -> impl Iterator<Item = (poly::Coeffs, f64)> {
+    let mut d = start.quintic_to(end, j, duration);
+    [limits.velocity[j], limits.acceleration[j], limits.jerk[j]]
+        .into_iter()
+        .filter_map(move |bound| {
+            d = poly::derivative(&d);
+            bound.is_finite().then_some((d, bound))
+        })
+}
+
 /// Largest ratio peak/limit of velocity, acceleration and jerk over the joints of the quintic from
 /// `start` to `end` in `duration` s (exact peaks); the quintic respects the limits iff it is ≤ 1.
 pub fn quintic_limit_ratio(start: &JointState, end: &JointState, duration: f64, limits: &KinematicLimits) -> f64 {
     let mut worst: f64 = 0.0;
     for j in 0..start.q.len() {
-        let mut d = poly::quintic(
-            start.q[j],
-            start.qd[j],
-            start.qdd[j],
-            end.q[j],
-            end.qd[j],
-            end.qdd[j],
-            duration,
-        );
-        for bound in [limits.velocity[j], limits.acceleration[j], limits.jerk[j]] {
-            d = poly::derivative(&d);
-            if bound.is_finite() {
-                worst = worst.max(poly::max_abs(&d, duration).1.abs() / bound);
-            }
+        for (d, bound) in limited_derivatives(start, end, j, duration, limits) {
+            worst = worst.max(poly::max_abs(&d, duration).1.abs() / bound);
         }
     }
     worst
@@ -424,23 +430,11 @@ pub fn quintic_limit_ratio_above(
     }
     let mut count = 0;
     for j in 0..n {
-        let mut d = poly::quintic(
-            start.q[j],
-            start.qd[j],
-            start.qdd[j],
-            end.q[j],
-            end.qd[j],
-            end.qdd[j],
-            duration,
-        );
-        for bound in [limits.velocity[j], limits.acceleration[j], limits.jerk[j]] {
-            d = poly::derivative(&d);
-            if bound.is_finite() {
-                let ub = poly::bound_abs(&d, duration) / bound;
-                if ub > floor {
-                    items[count] = (ub, d, bound);
-                    count += 1;
-                }
+        for (d, bound) in limited_derivatives(start, end, j, duration, limits) {
+            let ub = poly::bound_abs(&d, duration) / bound;
+            if ub > floor {
+                items[count] = (ub, d, bound);
+                count += 1;
             }
         }
     }
