@@ -3,26 +3,17 @@
 //! jerk-limited leg alone.
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use nalgebra::Vector3;
 use std::hint::black_box;
-use ttkin::hit::{Hit, HitOptions, HitPlanner};
+use ttkin::hit::{HitOptions, HitPlanner};
 use ttkin::traj::jerk::{jerk_limited, PositionLimits};
 use ttkin::traj::JointState;
 
-/// Random gantry6 hits: centre x ∈ [−0.3, 0.3], y ∈ [−0.6, −0.2], z ∈ [−0.15, 0.15] m, normal
-/// within 0.7 rad of −y about x and z, 1–4 m/s along the normal, at `t` s.
-fn hits(count: usize, t: f64) -> Vec<Hit> {
-    let mut rng = fastrand::Rng::with_seed(7);
-    let mut u = |lo: f64, hi: f64| lo + (hi - lo) * rng.f64();
-    (0..count)
-        .map(|_| {
-            let (x, y, z) = (u(-0.3, 0.3), u(-0.6, -0.2), u(-0.15, 0.15));
-            let (a, b, s) = (u(-0.7, 0.7), u(-0.7, 0.7), u(1.0, 4.0));
-            let n = Vector3::new(a.sin(), -a.cos() * b.cos(), b.sin()).normalize();
-            let v = n * s;
-            Hit::from_normal([x, y, z], [n.x, n.y, n.z], [v.x, v.y, v.z], t, None, None).unwrap()
-        })
-        .collect()
+#[path = "../tests/support/gantry_hits.rs"]
+mod gantry_hits;
+
+/// The hits of the bench: see [`gantry_hits::hits`] (seed 7).
+fn hits(count: usize, t: f64) -> Vec<ttkin::hit::Hit> {
+    gantry_hits::hits(count, t, 7)
 }
 
 fn plan(c: &mut Criterion) {

@@ -4,7 +4,7 @@
 // The recursions index several per-joint arrays at once: index loops read like the textbook.
 #![allow(clippy::needless_range_loop)]
 
-use nalgebra::{DVector, Vector3};
+use nalgebra::{DVector, Matrix3, Vector3};
 
 use super::model::{vec3, Dynamics, DynamicsData};
 use super::Wrench;
@@ -25,40 +25,13 @@ impl Dynamics {
         let n = self.dof();
         self.place(data, q);
         // The base is fixed; gravity enters as an upward acceleration of the base, a_0 = −g.
-        let (mut w, mut v, mut dw, mut dv) = (Vector3::zeros(), Vector3::zeros(), Vector3::zeros(), -gravity);
+        let mut m = Motion::base(gravity);
         for i in 0..n {
-            let rt = data.rot[i].transpose();
-            let p = &data.pos[i];
-            let dv_parent = dv + dw.cross(p);
-            let v_parent = v + w.cross(p);
-            w = rt * w;
-            v = rt * v_parent;
-            dw = rt * dw;
-            dv = rt * dv_parent;
-            let z = Vector3::z();
-            match self.kinds[i] {
-                JointType::Revolute => {
-                    w.z += qd[i];
-                    // a_i += S·q̈ + v_i ×ₘ S·q̇, S = (ẑ; 0).
-                    dw += w.cross(&z) * qd[i];
-                    dw.z += qdd[i];
-                    dv += v.cross(&z) * qd[i];
-                }
-                JointType::Prismatic => {
-                    v.z += qd[i];
-                    // a_i += S·q̈ + v_i ×ₘ S·q̇, S = (0; ẑ).
-                    dv += w.cross(&z) * qd[i];
-                    dv.z += qdd[i];
-                }
-            }
-            // f_i = I·a + v ×* (I·v).
-            let body = &self.bodies[i];
-            let (ia_n, ia_f) = body.apply(&dw, &dv);
-            let (iv_n, iv_f) = body.apply(&w, &v);
-            data.moment[i] = ia_n + w.cross(&iv_n) + v.cross(&iv_f);
-            data.force[i] = ia_f + w.cross(&iv_f);
-            data.w[i] = w;
-            data.v[i] = v;
+            let (moment, force) = self.forward_step(i, &data.rot[i], &data.pos[i], &mut m, qd[i], qdd[i]);
+            data.moment[i] = moment;
+            data.force[i] = force;
+            data.w[i] = m.w;
+            data.v[i] = m.v;
         }
         if let Some(ext) = wrench {
             // The environment pushes on the tool: the joints need that much less.
@@ -69,18 +42,106 @@ impl Dynamics {
             data.moment[n - 1] -= m;
         }
         for i in (0..n).rev() {
-            data.tau[i] = match self.kinds[i] {
-                JointType::Revolute => data.moment[i].z,
-                JointType::Prismatic => data.force[i].z,
-            } + self.armature[i] * qdd[i];
+            data.tau[i] = self.joint_torque(i, &data.moment[i], &data.force[i], qdd[i]);
             if i > 0 {
-                let r = &data.rot[i];
-                let f = r * data.force[i];
-                let m = r * data.moment[i] + data.pos[i].cross(&f);
+                let (f, m) = to_parent(&data.rot[i], &data.pos[i], &data.force[i], &data.moment[i]);
                 data.force[i - 1] += f;
                 data.moment[i - 1] += m;
             }
         }
+    }
+
+    /// [`Self::inverse_dynamics_unchecked`] for a chain of exactly `N` joints, the wrenches of the
+    /// recursion on the stack: the same numbers, fewer memory round trips. `None` when the chain
+    /// has not `N` joints.
+    pub(crate) fn inverse_dynamics_fixed<const N: usize>(
+        &self,
+        data: &mut DynamicsData,
+        q: &[f64; N],
+        qd: &[f64; N],
+        qdd: &[f64; N],
+        gravity: &Vector3<f64>,
+    ) -> Option<[f64; N]> {
+        if self.dof() != N {
+            return None;
+        }
+        self.place(data, q);
+        let rot: &[Matrix3<f64>; N] = data.rot[..N].try_into().ok()?;
+        let pos: &[Vector3<f64>; N] = data.pos[..N].try_into().ok()?;
+        let mut m = Motion::base(gravity);
+        let mut moment = [Vector3::zeros(); N];
+        let mut force = [Vector3::zeros(); N];
+        for i in 0..N {
+            (moment[i], force[i]) = self.forward_step(i, &rot[i], &pos[i], &mut m, qd[i], qdd[i]);
+        }
+        let mut tau = [0.0; N];
+        for i in (0..N).rev() {
+            tau[i] = self.joint_torque(i, &moment[i], &force[i], qdd[i]);
+            if i > 0 {
+                let (f, mm) = to_parent(&rot[i], &pos[i], &force[i], &moment[i]);
+                force[i - 1] += f;
+                moment[i - 1] += mm;
+            }
+        }
+        for ((t, d), &v) in tau.iter_mut().zip(&self.drives).zip(qd) {
+            if let Some(d) = d {
+                *t += d.friction(v);
+            }
+        }
+        Some(tau)
+    }
+
+    /// One joint of the outward pass: the motion `m` of the parent carried into joint frame `i`
+    /// (rotation `r`, origin `p` in the parent) plus the joint's own, and the net body wrench
+    /// (moment, force) that motion needs.
+    #[inline(always)]
+    fn forward_step(
+        &self,
+        i: usize,
+        r: &Matrix3<f64>,
+        p: &Vector3<f64>,
+        m: &mut Motion,
+        qd: f64,
+        qdd: f64,
+    ) -> (Vector3<f64>, Vector3<f64>) {
+        let rt = r.transpose();
+        let dv_parent = m.dv + m.dw.cross(p);
+        let v_parent = m.v + m.w.cross(p);
+        m.w = rt * m.w;
+        m.v = rt * v_parent;
+        m.dw = rt * m.dw;
+        m.dv = rt * dv_parent;
+        let z = Vector3::z();
+        match self.kinds[i] {
+            JointType::Revolute => {
+                m.w.z += qd;
+                // a_i += S·q̈ + v_i ×ₘ S·q̇, S = (ẑ; 0).
+                m.dw += m.w.cross(&z) * qd;
+                m.dw.z += qdd;
+                m.dv += m.v.cross(&z) * qd;
+            }
+            JointType::Prismatic => {
+                m.v.z += qd;
+                // a_i += S·q̈ + v_i ×ₘ S·q̇, S = (0; ẑ).
+                m.dv += m.w.cross(&z) * qd;
+                m.dv.z += qdd;
+            }
+        }
+        // f_i = I·a + v ×* (I·v).
+        let body = &self.bodies[i];
+        let (ia_n, ia_f) = body.apply(&m.dw, &m.dv);
+        let (iv_n, iv_f) = body.apply(&m.w, &m.v);
+        (ia_n + m.w.cross(&iv_n) + m.v.cross(&iv_f), ia_f + m.w.cross(&iv_f))
+    }
+
+    /// Joint `i`'s torque (or force) from its body wrench, with armature.
+    #[inline(always)]
+    fn joint_torque(&self, i: usize, moment: &Vector3<f64>, force: &Vector3<f64>, qdd: f64) -> f64 {
+        let own = match self.kinds[i] {
+            JointType::Revolute => moment.z,
+            JointType::Prismatic => force.z,
+        };
+        own + self.armature[i] * qdd
     }
 
     /// The bias torques h = C(q, q̇)·q̇ + g(q) − Jᵀw without checks (RNEA at q̈ = 0) in `data.tau`.
@@ -137,6 +198,22 @@ impl Dynamics {
         Ok(&data.tau)
     }
 
+    /// [`Dynamics::inverse_dynamics`] with no wrench and without argument checks, for callers that
+    /// validated `data`, the shapes, finiteness and `gravity` (m/s², base frame) themselves: the
+    /// same numbers.
+    pub(crate) fn inverse_dynamics_unchecked<'d>(
+        &self,
+        data: &'d mut DynamicsData,
+        q: &[f64],
+        qd: &[f64],
+        qdd: &[f64],
+        gravity: &Vector3<f64>,
+    ) -> &'d DVector<f64> {
+        self.rnea_unchecked(data, q, qd, qdd, gravity, None);
+        self.add_friction(&mut data.tau, qd);
+        &data.tau
+    }
+
     /// Gravity torques g(q) (N·m or N): what holds the robot still at `q` under `gravity`.
     pub fn gravity<'d>(&self, data: &'d mut DynamicsData, q: &[f64], gravity: &[f64; 3]) -> Result<&'d DVector<f64>> {
         self.check_data(data)?;
@@ -168,4 +245,38 @@ impl Dynamics {
         self.bias_unchecked(data, q, qd, &g, None);
         Ok(&data.tau)
     }
+}
+
+/// Angular and linear velocity and acceleration of a joint frame, its own axes.
+struct Motion {
+    w: Vector3<f64>,
+    v: Vector3<f64>,
+    dw: Vector3<f64>,
+    dv: Vector3<f64>,
+}
+
+impl Motion {
+    /// The fixed base under `gravity`: at rest, accelerating upwards by −g.
+    #[inline(always)]
+    fn base(gravity: &Vector3<f64>) -> Motion {
+        Motion {
+            w: Vector3::zeros(),
+            v: Vector3::zeros(),
+            dw: Vector3::zeros(),
+            dv: -gravity,
+        }
+    }
+}
+
+/// A body wrench (force, moment) of a frame with rotation `r` and origin `p` in its parent, in
+/// the parent's axes about its origin.
+#[inline(always)]
+fn to_parent(
+    r: &Matrix3<f64>,
+    p: &Vector3<f64>,
+    force: &Vector3<f64>,
+    moment: &Vector3<f64>,
+) -> (Vector3<f64>, Vector3<f64>) {
+    let f = r * force;
+    (f, r * moment + p.cross(&f))
 }

@@ -7,7 +7,7 @@ use super::{Hit, HitPlanner, HitStatus, HitTask};
 use crate::chain::JacobianFrame;
 use crate::clik::{self, ClikOptions, ClikStatus, TaskTrajectory};
 use crate::error::Error;
-use crate::ik::{wrap, DifferentialIk, IkSolver, LimitFilter};
+use crate::ik::{wrap, Analytic, DifferentialIk, IkSolver, LimitFilter};
 use crate::joint::JointType;
 use crate::redundancy::limit_gradient;
 use crate::task::{racket_coordinates, tangent_basis, Task};
@@ -57,6 +57,7 @@ fn unreachable(e: Error) -> (HitStatus, String) {
 fn pose(p: &HitPlanner, hit: &Hit, tool_target: &IsometryMatrix3<f64>, current: &[f64]) -> Outcome {
     let chain = &p.chain;
     let (q, branches) = match &p.analytic {
+        Some(Analytic::Gantry6(g)) => g.nearest_within_limits(tool_target, current).map_err(unreachable)?,
         Some(a) => {
             let sols = a
                 .solve(tool_target, Some(current), LimitFilter::Enforce)

@@ -23,7 +23,7 @@ use std::f64::consts::PI;
 
 use nalgebra::{IsometryMatrix3, Matrix3, Vector3};
 
-use super::{dh_rows, same, wrap, ChainInfo, LimitFilter, Solutions};
+use super::{dh_rows, fit_to_limits, same, wrap, ChainInfo, LimitFilter, Solutions};
 use crate::chain::Chain;
 use crate::error::{Error, Result};
 use crate::joint::{DhConvention, JointType};
@@ -106,6 +106,43 @@ impl GantryIk {
         self.solve_into(target, hint.map(|h| h.get(2).copied().unwrap_or(0.0)), &mut sols)?;
         sols.apply(filter, &self.info)?;
         Ok(sols)
+    }
+
+    /// The branch within the limits nearest to `current` (m, rad; as [`super::Analytic::nearest`]
+    /// with [`LimitFilter::Enforce`]) and the number of branches within the limits, from one
+    /// solve; the reasons branches were dropped are written only when none is left.
+    pub(crate) fn nearest_within_limits(
+        &self,
+        target: &IsometryMatrix3<f64>,
+        current: &[f64],
+    ) -> Result<(Vec<f64>, usize)> {
+        crate::error::check_vector("current configuration", current, 6)?;
+        let mut sols = Solutions::empty(6);
+        self.solve_into(target, Some(current[2]), &mut sols)?;
+        let all = sols;
+        let mut kept = 0;
+        for b in 0..sols.count {
+            let mut q = sols.q[b];
+            let fits = (0..6).all(
+                |i| match fit_to_limits(q[i], self.info.kinds[i], &self.info.limits[i]) {
+                    Some(v) => {
+                        q[i] = v;
+                        true
+                    }
+                    None => false,
+                },
+            );
+            if fits {
+                sols.q[kept] = q;
+                kept += 1;
+            }
+        }
+        sols.count = kept;
+        if kept == 0 {
+            let mut all = all;
+            all.apply(LimitFilter::Enforce, &self.info)?;
+        }
+        Ok((sols.nearest(current, &self.info, LimitFilter::Enforce), kept))
     }
 
     /// The mathematical branches (no limit filter) into `sols`; `q3_hint` is θ3's joint value on

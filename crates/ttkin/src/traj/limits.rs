@@ -212,37 +212,51 @@ impl JointTrajectory {
 
     /// Exact lowest and highest position of every joint: (time s, value) pairs.
     pub fn position_range(&self) -> Vec<(Peak, Peak)> {
-        let n = self.dof();
-        let mut out = Vec::with_capacity(n);
-        for j in 0..n {
-            let mut lo = Peak {
-                time: 0.0,
-                value: f64::INFINITY,
-            };
-            let mut hi = Peak {
-                time: 0.0,
-                value: f64::NEG_INFINITY,
-            };
-            for k in 0..self.segments() {
-                let (t0, h) = (self.knots()[k], self.knots()[k + 1] - self.knots()[k]);
-                let c = self.coefficients(k, j).expect("segment and joint in range");
-                let ((tl, vl), (th, vh)) = poly::min_max(&c, h);
-                if vl < lo.value {
-                    lo = Peak {
-                        time: t0 + tl,
-                        value: vl,
-                    };
-                }
-                if vh > hi.value {
-                    hi = Peak {
-                        time: t0 + th,
-                        value: vh,
-                    };
-                }
-            }
-            out.push((lo, hi));
+        (0..self.dof()).map(|j| self.joint_position_range(j)).collect()
+    }
+
+    /// Cheap bounds (lo, hi) of the position of joint `j` (< dof) over the whole trajectory,
+    /// containing its exact range ([`poly::bounds`] per segment).
+    pub fn joint_position_bounds(&self, j: usize) -> (f64, f64) {
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for k in 0..self.segments() {
+            let h = self.knots()[k + 1] - self.knots()[k];
+            let c = self.coefficients(k, j).expect("segment and joint in range");
+            let (l, u) = poly::bounds(&c, h);
+            lo = lo.min(l);
+            hi = hi.max(u);
         }
-        out
+        (lo, hi)
+    }
+
+    /// Exact lowest and highest position of joint `j` (< dof): (time s, value) pairs.
+    pub fn joint_position_range(&self, j: usize) -> (Peak, Peak) {
+        let mut lo = Peak {
+            time: 0.0,
+            value: f64::INFINITY,
+        };
+        let mut hi = Peak {
+            time: 0.0,
+            value: f64::NEG_INFINITY,
+        };
+        for k in 0..self.segments() {
+            let (t0, h) = (self.knots()[k], self.knots()[k + 1] - self.knots()[k]);
+            let c = self.coefficients(k, j).expect("segment and joint in range");
+            let ((tl, vl), (th, vh)) = poly::min_max(&c, h);
+            if vl < lo.value {
+                lo = Peak {
+                    time: t0 + tl,
+                    value: vl,
+                };
+            }
+            if vh > hi.value {
+                hi = Peak {
+                    time: t0 + th,
+                    value: vh,
+                };
+            }
+        }
+        (lo, hi)
     }
 
     /// Every joint's worst violation of each limit (position, velocity, acceleration, jerk), found
@@ -366,29 +380,78 @@ fn fine_scan(g: &impl Fn(f64) -> f64, from: f64) -> Option<(f64, f64, f64, f64)>
     None
 }
 
+/// Velocity, acceleration and jerk polynomials of joint `j`'s quintic from `start` to `end` in
+/// `duration` s, each with its limit, finite limits only.
+fn limited_derivatives(
+    start: &JointState,
+    end: &JointState,
+    j: usize,
+    duration: f64,
+    limits: &KinematicLimits,
+) -> impl Iterator<Item = (poly::Coeffs, f64)> {
+    let mut d = start.quintic_to(end, j, duration);
+    [limits.velocity[j], limits.acceleration[j], limits.jerk[j]]
+        .into_iter()
+        .filter_map(move |bound| {
+            d = poly::derivative(&d);
+            bound.is_finite().then_some((d, bound))
+        })
+}
+
 /// Largest ratio peak/limit of velocity, acceleration and jerk over the joints of the quintic from
 /// `start` to `end` in `duration` s (exact peaks); the quintic respects the limits iff it is ≤ 1.
 pub fn quintic_limit_ratio(start: &JointState, end: &JointState, duration: f64, limits: &KinematicLimits) -> f64 {
     let mut worst: f64 = 0.0;
     for j in 0..start.q.len() {
-        let mut d = poly::quintic(
-            start.q[j],
-            start.qd[j],
-            start.qdd[j],
-            end.q[j],
-            end.qd[j],
-            end.qdd[j],
-            duration,
-        );
-        for bound in [limits.velocity[j], limits.acceleration[j], limits.jerk[j]] {
-            d = poly::derivative(&d);
-            if bound.is_finite() {
-                worst = worst.max(poly::max_abs(&d, duration).1.abs() / bound);
-            }
+        for (d, bound) in limited_derivatives(start, end, j, duration, limits) {
+            worst = worst.max(poly::max_abs(&d, duration).1.abs() / bound);
         }
     }
     worst
 }
+
+/// [`quintic_limit_ratio`] when it exceeds `floor` (≥ 0), exactly the same number; otherwise some
+/// value ≤ `floor`. Cheaper: each peak is first bounded ([`poly::bound_abs`]) and computed exactly
+/// only when its bound exceeds both `floor` and the largest exact ratio found so far (largest
+/// bounds first).
+pub fn quintic_limit_ratio_above(
+    start: &JointState,
+    end: &JointState,
+    duration: f64,
+    limits: &KinematicLimits,
+    floor: f64,
+) -> f64 {
+    // (bound of the ratio, derivative polynomial, limit) of every finite limit above `floor`.
+    let mut items = [(0.0, [0.0; 6], 1.0); 3 * MAX_QUICK_DOF];
+    let n = start.q.len();
+    if n > MAX_QUICK_DOF {
+        let r = quintic_limit_ratio(start, end, duration, limits);
+        return if r > floor { r } else { 0.0 };
+    }
+    let mut count = 0;
+    for j in 0..n {
+        for (d, bound) in limited_derivatives(start, end, j, duration, limits) {
+            let ub = poly::bound_abs(&d, duration) / bound;
+            if ub > floor {
+                items[count] = (ub, d, bound);
+                count += 1;
+            }
+        }
+    }
+    let items = &mut items[..count];
+    items.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
+    let mut worst: f64 = 0.0;
+    for (ub, d, bound) in items.iter() {
+        if *ub <= worst {
+            break;
+        }
+        worst = worst.max(poly::max_abs(d, duration).1.abs() / bound);
+    }
+    worst
+}
+
+/// Most joints [`quintic_limit_ratio_above`] handles on the stack.
+const MAX_QUICK_DOF: usize = 8;
 
 /// Earliest duration T ≥ `not_before` (s) for which the quintic from `start` to `end` respects the
 /// velocity, acceleration and jerk limits.

@@ -53,6 +53,20 @@ impl JointState {
         }
     }
 
+    /// Coefficients (ascending powers of τ, s) of joint `j`'s quintic from this state to `end` in
+    /// `duration` s; `j` must be a joint of both.
+    pub(crate) fn quintic_to(&self, end: &JointState, j: usize, duration: f64) -> poly::Coeffs {
+        poly::quintic(
+            self.q[j],
+            self.qd[j],
+            self.qdd[j],
+            end.q[j],
+            end.qd[j],
+            end.qdd[j],
+            duration,
+        )
+    }
+
     /// Number of joints, after checking that the three vectors agree and are finite.
     pub fn check(&self, what: &str) -> Result<usize> {
         let n = self.q.len();
@@ -208,19 +222,7 @@ impl JointTrajectory {
 
     /// Quintic between states already checked for shape and finiteness.
     pub(crate) fn quintic_unchecked(start: &JointState, end: &JointState, duration: f64) -> Self {
-        let coeffs = (0..start.q.len())
-            .map(|j| {
-                poly::quintic(
-                    start.q[j],
-                    start.qd[j],
-                    start.qdd[j],
-                    end.q[j],
-                    end.qd[j],
-                    end.qdd[j],
-                    duration,
-                )
-            })
-            .collect();
+        let coeffs = (0..start.q.len()).map(|j| start.quintic_to(end, j, duration)).collect();
         Self::from_parts(start.q.len(), vec![0.0, duration], coeffs)
     }
 

@@ -153,6 +153,43 @@ fn bisect(c: &Coeffs, mut a: f64, mut b: f64, fa: f64) -> f64 {
     x
 }
 
+/// Bounds (lo, hi) with lo ≤ c(τ) ≤ hi for every τ in [0, tf], cheap and not exact: the extreme
+/// coefficients of `c` in the degree-5 Bernstein basis of [0, tf] (its values lie in their convex
+/// hull), widened by 1e-12 of Σ|c_k|·tf^k so that they also bound `c` evaluated with rounding.
+pub fn bounds(c: &Coeffs, tf: f64) -> (f64, f64) {
+    // b_k = Σ_{i ≤ k} C(k, i)/C(5, i) · c_i·tf^i.
+    const W: [[f64; 6]; 6] = [
+        [1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        [1.0, 0.2, 0.0, 0.0, 0.0, 0.0],
+        [1.0, 0.4, 0.1, 0.0, 0.0, 0.0],
+        [1.0, 0.6, 0.3, 0.1, 0.0, 0.0],
+        [1.0, 0.8, 0.6, 0.4, 0.2, 0.0],
+        [1.0, 1.0, 1.0, 1.0, 1.0, 1.0],
+    ];
+    let mut a = [0.0; 6];
+    let mut scale = 1.0;
+    let mut size = 0.0;
+    for k in 0..6 {
+        a[k] = c[k] * scale;
+        size += a[k].abs();
+        scale *= tf;
+    }
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for w in &W {
+        let b: f64 = w.iter().zip(&a).map(|(w, a)| w * a).sum();
+        lo = lo.min(b);
+        hi = hi.max(b);
+    }
+    let slack = 1e-12 * size;
+    (lo - slack, hi + slack)
+}
+
+/// An upper bound of |c(τ)| over [0, tf] from [`bounds`].
+pub fn bound_abs(c: &Coeffs, tf: f64) -> f64 {
+    let (lo, hi) = bounds(c, tf);
+    hi.max(-lo)
+}
+
 /// The τ in [0, tf] and value of the largest |c(τ)|, exact up to rounding (endpoints and the
 /// roots of the derivative are the only candidates).
 pub fn max_abs(c: &Coeffs, tf: f64) -> (f64, f64) {

@@ -1,0 +1,71 @@
+//! The gantry6 hit planner against stored plans: every 20th plan of the three hit sets of
+//! `support/gantry_hits.rs` (on time, too early, from a moving state), as main's planner made
+//! them before the speed work of issue 12 (`data/hit_plans.txt`, from `hit_icount dump SET`).
+//! Status, branch count, profile and violation count must match exactly, every number to
+//! 1e-10·(1 + |value|) (the speed work keeps them bit for bit on the machine that made them).
+
+use ttkin::hit::{HitOptions, HitPlan, HitPlanner};
+
+#[path = "support/gantry_hits.rs"]
+mod gantry_hits;
+
+const STORED: &str = include_str!("data/hit_plans.txt");
+
+fn close(a: f64, b: f64) -> bool {
+    (a.is_nan() && b.is_nan()) || a == b || (a - b).abs() <= 1e-10 * (1.0 + b.abs())
+}
+
+/// The numbers of a plan in the stored order (see the file's header).
+fn numbers(p: &HitPlan) -> Vec<f64> {
+    let mut v = vec![
+        p.t_hit,
+        p.earliest_t_hit,
+        p.return_duration,
+        p.sigma_min,
+        p.effort_ratio,
+    ];
+    v.extend(&p.q_hit);
+    v.extend(&p.qd_hit);
+    v.extend(&p.peak_effort);
+    let mut q = [0.0; 6];
+    let (mut qd, mut qdd) = ([0.0; 6], [0.0; 6]);
+    for k in 0..5 {
+        match &p.trajectory {
+            Some(t) => {
+                t.sample(t.duration() * k as f64 / 4.0, &mut q, &mut qd, &mut qdd)
+                    .unwrap();
+                v.extend(&q);
+            }
+            None => v.extend([f64::NAN; 6]),
+        }
+    }
+    v
+}
+
+#[test]
+fn plans_match_the_stored_ones() {
+    let planner = HitPlanner::new(&ttkin::robots::gantry6(), HitOptions::default()).unwrap();
+    let mut checked = 0;
+    for name in gantry_hits::SETS {
+        let hits = gantry_hits::set_hits(name);
+        let state = gantry_hits::set(name).1;
+        for line in STORED.lines().filter(|l| l.starts_with(&format!("{name} "))) {
+            let f: Vec<&str> = line.split(' ').collect();
+            let i: usize = f[1].parse().unwrap();
+            let p = planner.plan(&hits[i], state.as_ref(), None).unwrap();
+            let what = format!("{name} hit {i}");
+            assert_eq!(p.status.name(), f[2], "{what}: status ({})", p.message);
+            assert_eq!(p.branches.to_string(), f[3], "{what}: branches");
+            assert_eq!(p.profile.name(), f[4], "{what}: profile");
+            assert_eq!(p.violations.len().to_string(), f[5], "{what}: violations");
+            let stored: Vec<f64> = f[6..].iter().map(|s| s.parse().unwrap()).collect();
+            let got = numbers(&p);
+            assert_eq!(got.len(), stored.len(), "{what}: number count");
+            for (k, (a, b)) in got.iter().zip(&stored).enumerate() {
+                assert!(close(*a, *b), "{what}: number {k} is {a}, stored {b}");
+            }
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, 150);
+}
