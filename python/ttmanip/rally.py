@@ -116,11 +116,11 @@ def rally(
         "return_rate": float(returned.sum() / in_reach.sum()) if in_reach.any() else None,
         "returned_out_of_reach": int((res["returned"].astype(bool) & ~in_reach).sum()),
         "reach": dict(sorted(reach.items())),
-        "in_reach_definition": "after its bounce on the robot's half the true flight has a point in the hitting "
-        "volume where an admissible racket pose (normal within 30 deg of the opponent, roll within 60 deg) "
-        "has IK within the joint position limits and the joints' minimum time from rest at the ready "
-        "configuration under their speed and acceleration limits is at most the time left (ttkin::ball::reach); "
-        "independent of the planner",
+        "in_reach_definition": "after its bounce on the robot's half the true flight has a point in "
+        "the hitting volume where an admissible racket pose (normal within 30 deg of the opponent, "
+        "roll within 60 deg) has IK within the joint position limits and the joints' minimum time "
+        "from rest at the ready configuration under their speed and acceleration limits is at most "
+        "the time left (ttkin::ball::reach); independent of the planner",
         "racket_error_m_median": _median(res["racket_error"][in_reach]),
         "plan_time_us_median": _median(res["plan_time_us"]),  # thread CPU time
         "plan_wall_time_us_median": _median(res["plan_wall_time_us"]),

@@ -2,8 +2,8 @@
 //! target on the opponent's half.
 //!
 //! 1. **Candidates.** The ball is predicted from its state (through its bounce on the robot's half)
-//!    and every 10 ms sample inside the reach box ([`Reach`], the racket centre's region reachable by
-//!    gantry6 with a forward-facing racket, world frame), after the bounce and at least
+//!    and every 10 ms sample inside the hitting volume ([`Reach`], world frame; the same volume as
+//!    the reachable region of [`super::reach`]), after the bounce and at least
 //!    `min_stroke_time` after `now`, is a candidate; `candidates` of them, evenly spread, are tried
 //!    (up to 12 when none of those is feasible).
 //! 2. **Outgoing velocity.** Shooting: the velocity v₀ with which the ball, spinning with its
@@ -16,8 +16,8 @@
 //!    (along the normal); the racket centre is the ball centre minus r·n (the ball touches the face
 //!    centre); the racket frame has its z axis on the face normal and its x axis (the handle) as
 //!    close to world up as possible (the convention of `python/ttmanip/pipeline.py`).
-//! 4. **Robot.** The pose and twist go to the base frame ([`Placement`]), analytic IK (branch
-//!    nearest the ready configuration, within the limits), q̇ = J⁻¹·V, and a quintic stroke from
+//! 4. **Robot.** The pose (for each racket roll of `rolls` about the normal) and twist go to the
+//!    base frame ([`Placement`]), analytic IK (every branch within the limits), q̇ = J⁻¹·V, and a quintic stroke from
 //!    rest at the ready configuration at `now` to (q, q̇, q̈) at the hit, q̈ = 0 or a fraction of
 //!    the matching cubic's end acceleration, whichever has the lowest peaks. Feasible when the
 //!    stroke's exact velocity and acceleration peaks stay within the limits.
@@ -43,7 +43,7 @@ pub enum HitStatus {
     Ok,
     /// The ball does not bounce on the robot's half and come back up (net, long, wide, floor).
     NoBounce,
-    /// The ball never enters the reach box after its bounce, or too early for a stroke.
+    /// The ball never enters the hitting volume after its bounce, or too early for a stroke.
     OutOfReach,
     /// No outgoing flight reaches the target over the net.
     NoReturn,
@@ -102,7 +102,7 @@ pub struct HitPlan {
     pub candidates: usize,
 }
 
-/// The hit planner of one robot: its chain, placement, reach box, ready configuration and racket.
+/// The hit planner of one robot: its chain, placement, hitting volume, ready configuration and racket.
 #[derive(Debug, Clone)]
 pub struct HitPlanner {
     /// Robot chain (base frame as in [`Placement`]; tool frame = racket frame).
@@ -111,7 +111,7 @@ pub struct HitPlanner {
     limits: KinematicLimits,
     /// Base frame in the world.
     pub placement: Placement,
-    /// Reach box of the racket centre (world).
+    /// Hitting volume of the ball centre (world) searched for candidates.
     pub reach: Reach,
     /// Ready configuration (m, rad) from which strokes start at rest.
     pub ready: Vec<f64>,
@@ -123,7 +123,7 @@ pub struct HitPlanner {
     pub min_stroke_time: f64,
     /// Candidates tried first (evenly spread); all of them (up to 12) when none of these is feasible.
     pub candidates: usize,
-    /// How far (m) beyond the reach box the planner still looks for hits, so that a ball whose
+    /// How far (m) beyond the hitting volume the planner still looks for hits, so that a ball whose
     /// estimate lies just outside the box is still tried (IK decides).
     pub search_margin: f64,
     /// Return flight times (s) tried in order (slower returns first: they need less racket speed).
@@ -297,7 +297,7 @@ impl HitPlanner {
         })
     }
 
-    /// Predicted states every 10 ms inside the reach box after the bounce on the robot's half, and
+    /// Predicted states every 10 ms inside the hitting volume after the bounce on the robot's half, and
     /// whether that bounce happens.
     fn candidate_states(
         &self,
