@@ -47,8 +47,10 @@ def rally(
     ``summary.json`` and figures into ``out`` when given).
 
     Summary keys: ``balls``, ``in_reach``, ``out_of_reach``, ``returned``, ``return_rate``
-    (returned / in_reach), ``in_box`` and ``return_rate_in_box`` (over every ball passing the
-    reach box, whether or not the robot is fast enough for it), ``racket_error_m_median``,
+    (returned / in_reach; in reach by the robot's geometry and joint limits alone, see
+    ``ttkin::ball::reach``), ``reach`` (counts of the region's verdicts: ``in_reach``,
+    ``no_bounce``, ``outside_volume``, ``no_pose``, ``too_early``), ``returned_out_of_reach``,
+    ``racket_error_m_median``,
     ``landing_error_m_median``, ``velocity_error_mps_median``, ``plan_time_us_median`` (per-ball
     planning in thread CPU time, from the parallel batch), ``plan_wall_time_us_median``,
     ``statuses`` (counts of every outcome, in reach or not) and the stated simulation settings.
@@ -97,12 +99,14 @@ def rally(
     res = {k: np.concatenate([np.asarray(p[k]) for p in parts]) for k in parts[0] if k != "paths"}
     res["paths"] = parts[0]["paths"]
     in_reach = res["in_reach"].astype(bool)
-    in_box = res["in_box"].astype(bool)
     returned = res["returned"].astype(bool) & in_reach
     statuses: dict[str, int] = {}
-    for s, r in zip(res["status"], in_reach, strict=False):
-        key = ("in_reach/" if r else "out_of_reach/") + str(s).split(":")[0]
+    for s, r in zip(res["status"], res["reach"], strict=True):
+        key = f"{r}/{str(s).split(':')[0]}"
         statuses[key] = statuses.get(key, 0) + 1
+    reach: dict[str, int] = {}
+    for r in res["reach"]:
+        reach[str(r)] = reach.get(str(r), 0) + 1
     summary = {
         "balls": int(n),
         "seed": int(seed),
@@ -110,13 +114,13 @@ def rally(
         "out_of_reach": int((~in_reach).sum()),
         "returned": int(returned.sum()),
         "return_rate": float(returned.sum() / in_reach.sum()) if in_reach.any() else None,
-        "in_box": int(in_box.sum()),
-        "returned_in_box": int((res["returned"].astype(bool) & in_box).sum()),
-        "return_rate_in_box": float((res["returned"].astype(bool) & in_box).sum() / in_box.sum())
-        if in_box.any()
-        else None,
-        "in_reach_definition": "true flight passes the reach box after its bounce and the planner, given the "
-        "true ball state, finds a hit within the robot's limits; in_box drops the second condition",
+        "returned_out_of_reach": int((res["returned"].astype(bool) & ~in_reach).sum()),
+        "reach": dict(sorted(reach.items())),
+        "in_reach_definition": "after its bounce on the robot's half the true flight has a point in "
+        "the hitting volume where an admissible racket pose (normal within 30 deg of the opponent, "
+        "roll within 60 deg) has IK within the joint position limits and the joints' minimum time "
+        "from rest at the ready configuration under their speed and acceleration limits is at most "
+        "the time left (ttkin::ball::reach); independent of the planner",
         "racket_error_m_median": _median(res["racket_error"][in_reach]),
         "plan_time_us_median": _median(res["plan_time_us"]),  # thread CPU time
         "plan_wall_time_us_median": _median(res["plan_wall_time_us"]),

@@ -11,6 +11,7 @@ use ttkin::ball::hitplan::HitPlanner;
 use ttkin::ball::model::BallModel;
 use ttkin::ball::predict::{crossing, predict, CrossingOutcome};
 use ttkin::ball::rally::{self, RallyConfig};
+use ttkin::ball::reach::ReachRegion;
 
 use crate::args;
 use crate::convert::{f64_array, filled_without_gil_nan_allowed, pose_to_numpy, to_numpy, vector};
@@ -289,10 +290,17 @@ fn ball_rally<'py>(
         paths,
         ..RallyConfig::default()
     };
+    let region = ReachRegion::new(
+        &planner.chain,
+        planner.placement,
+        planner.ready.clone(),
+        truth.model.radius,
+    )
+    .py()?;
     let out: Vec<rally::BallOutcome> = py.detach(|| {
         (start..start + n as u64)
             .into_par_iter()
-            .map(|i| rally::play(&planner, &truth, &cfg, i))
+            .map(|i| rally::play(&planner, &region, &truth, &cfg, i))
             .collect()
     });
     let d = PyDict::new(py);
@@ -306,7 +314,7 @@ fn ball_rally<'py>(
         ),
     )?;
     d.set_item("in_reach", out.iter().map(|o| o.in_reach).collect::<Vec<_>>())?;
-    d.set_item("in_box", out.iter().map(|o| o.in_box).collect::<Vec<_>>())?;
+    d.set_item("reach", out.iter().map(|o| o.reach).collect::<Vec<_>>())?;
     d.set_item("returned", out.iter().map(|o| o.returned).collect::<Vec<_>>())?;
     d.set_item("contact", out.iter().map(|o| o.contact).collect::<Vec<_>>())?;
     d.set_item("status", out.iter().map(|o| o.status.clone()).collect::<Vec<_>>())?;

@@ -10,6 +10,7 @@ use ttkin::ball::impact::Racket;
 use ttkin::ball::model::BallModel;
 use ttkin::ball::predict::{crossing, predict, CrossingOutcome};
 use ttkin::ball::rally::{self, RallyConfig};
+use ttkin::ball::reach::ReachRegion;
 
 fn fine() -> Flight {
     Flight {
@@ -323,7 +324,8 @@ fn rally_returns_most_balls_in_reach() {
         seed: 5,
         ..RallyConfig::default()
     };
-    let out = rally::rally(&pl, &truth, &cfg, 120);
+    let region = ReachRegion::new(&pl.chain, pl.placement, pl.ready.clone(), truth.model.radius).unwrap();
+    let out = rally::rally(&pl, &region, &truth, &cfg, 120);
     let in_reach = out.iter().filter(|o| o.in_reach).count();
     let returned = out.iter().filter(|o| o.in_reach && o.returned).count();
     let mut statuses: Vec<String> = out
@@ -333,6 +335,8 @@ fn rally_returns_most_balls_in_reach() {
         .collect();
     statuses.sort();
     eprintln!("in reach {in_reach}/120, returned {returned}; failures {statuses:?}");
-    assert!(in_reach >= 60);
-    assert!(returned as f64 >= 0.95 * in_reach as f64, "{returned}/{in_reach}");
+    // In reach by the robot's geometry and joint limits alone (`ttkin::ball::reach`): the quintic
+    // strokes cannot use the joints' full speed, so the rate is well below 95 % (docs/ball.md).
+    assert!(in_reach >= 90, "{in_reach}");
+    assert!(returned as f64 >= 0.65 * in_reach as f64, "{returned}/{in_reach}");
 }

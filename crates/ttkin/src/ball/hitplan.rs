@@ -2,8 +2,8 @@
 //! target on the opponent's half.
 //!
 //! 1. **Candidates.** The ball is predicted from its state (through its bounce on the robot's half)
-//!    and every 10 ms sample inside the reach box ([`Reach`], the racket centre's region reachable by
-//!    gantry6 with a forward-facing racket, world frame), after the bounce and at least
+//!    and every 10 ms sample inside the hitting volume ([`Reach`], world frame; the same volume as
+//!    the reachable region of [`super::reach`]), after the bounce and at least
 //!    `min_stroke_time` after `now`, is a candidate; `candidates` of them, evenly spread, are tried
 //!    (up to 12 when none of those is feasible).
 //! 2. **Outgoing velocity.** Shooting: the velocity v₀ with which the ball, spinning with its
@@ -16,8 +16,8 @@
 //!    (along the normal); the racket centre is the ball centre minus r·n (the ball touches the face
 //!    centre); the racket frame has its z axis on the face normal and its x axis (the handle) as
 //!    close to world up as possible (the convention of `python/ttmanip/pipeline.py`).
-//! 4. **Robot.** The pose and twist go to the base frame ([`Placement`]), analytic IK (branch
-//!    nearest the ready configuration, within the limits), q̇ = J⁻¹·V, and a quintic stroke from
+//! 4. **Robot.** The pose (for each racket roll of `rolls` about the normal) and twist go to the
+//!    base frame ([`Placement`]), analytic IK (every branch within the limits), q̇ = J⁻¹·V, and a quintic stroke from
 //!    rest at the ready configuration at `now` to (q, q̇, q̈) at the hit, q̈ = 0 or a fraction of
 //!    the matching cubic's end acceleration, whichever has the lowest peaks. Feasible when the
 //!    stroke's exact velocity and acceleration peaks stay within the limits.
@@ -28,70 +28,13 @@
 
 use super::flight::{BallState, EventKind, Flight};
 use super::impact::{Racket, RacketHit};
+pub use super::reach::{racket_rotation, Placement, Reach};
 use crate::chain::Chain;
 use crate::error::{Error, Result};
 use crate::ik::{joint_velocity, Analytic, LimitFilter};
 use crate::traj::limits::{quintic_limit_ratio, KinematicLimits};
 use crate::traj::JointState;
-use nalgebra::{IsometryMatrix3, Matrix3, Rotation3, Translation3, Vector3};
-
-/// Where the robot's base frame sits in the world frame: base = world ∘ (translation, yaw about z).
-///
-/// gantry6 default: origin at (−2.0, 0, 0.15) m, yaw +90°, so base x = world y (the d2 axis moves
-/// across the table), base y = −world x (d1 moves along the table: its axis is −y of the base, i.e.
-/// toward the net), base z = world z. The racket then reaches about x ∈ [−2.9, −0.9] m along the
-/// table, |y| ≤ 0.6 m across it and 0.15 ± 0.45 m in height.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Placement {
-    /// Base-frame origin (m, world).
-    pub origin: Vector3<f64>,
-    /// Rotation of the base about world z (rad).
-    pub yaw: f64,
-}
-
-impl Default for Placement {
-    fn default() -> Self {
-        Placement {
-            origin: Vector3::new(-2.0, 0.0, 0.15),
-            yaw: std::f64::consts::FRAC_PI_2,
-        }
-    }
-}
-
-impl Placement {
-    /// The base frame in the world frame.
-    pub fn world_from_base(&self) -> IsometryMatrix3<f64> {
-        IsometryMatrix3::from_parts(
-            Translation3::from(self.origin),
-            Rotation3::from_axis_angle(&Vector3::z_axis(), self.yaw),
-        )
-    }
-}
-
-/// The racket-centre region (world frame, m) where the planner looks for hits: an axis-aligned box.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Reach {
-    /// Lower corner (m, world).
-    pub lo: Vector3<f64>,
-    /// Upper corner (m, world).
-    pub hi: Vector3<f64>,
-}
-
-impl Default for Reach {
-    fn default() -> Self {
-        Reach {
-            lo: Vector3::new(-2.0, -0.5, 0.06),
-            hi: Vector3::new(-1.3, 0.5, 0.45),
-        }
-    }
-}
-
-impl Reach {
-    /// Whether the world point `p` (m) lies in the box.
-    pub fn contains(&self, p: &Vector3<f64>) -> bool {
-        (0..3).all(|k| p[k] >= self.lo[k] && p[k] <= self.hi[k])
-    }
-}
+use nalgebra::{IsometryMatrix3, Matrix3, Translation3, Vector3};
 
 /// Why a ball got no hit, or that it got one.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -100,7 +43,7 @@ pub enum HitStatus {
     Ok,
     /// The ball does not bounce on the robot's half and come back up (net, long, wide, floor).
     NoBounce,
-    /// The ball never enters the reach box after its bounce, or too early for a stroke.
+    /// The ball never enters the hitting volume after its bounce, or too early for a stroke.
     OutOfReach,
     /// No outgoing flight reaches the target over the net.
     NoReturn,
@@ -159,7 +102,7 @@ pub struct HitPlan {
     pub candidates: usize,
 }
 
-/// The hit planner of one robot: its chain, placement, reach box, ready configuration and racket.
+/// The hit planner of one robot: its chain, placement, hitting volume, ready configuration and racket.
 #[derive(Debug, Clone)]
 pub struct HitPlanner {
     /// Robot chain (base frame as in [`Placement`]; tool frame = racket frame).
@@ -168,7 +111,7 @@ pub struct HitPlanner {
     limits: KinematicLimits,
     /// Base frame in the world.
     pub placement: Placement,
-    /// Reach box of the racket centre (world).
+    /// Hitting volume of the ball centre (world) searched for candidates.
     pub reach: Reach,
     /// Ready configuration (m, rad) from which strokes start at rest.
     pub ready: Vec<f64>,
@@ -180,18 +123,21 @@ pub struct HitPlanner {
     pub min_stroke_time: f64,
     /// Candidates tried first (evenly spread); all of them (up to 12) when none of these is feasible.
     pub candidates: usize,
-    /// How far (m) beyond the reach box the planner still looks for hits, so that a ball whose
+    /// How far (m) beyond the hitting volume the planner still looks for hits, so that a ball whose
     /// estimate lies just outside the box is still tried (IK decides).
     pub search_margin: f64,
     /// Return flight times (s) tried in order (slower returns first: they need less racket speed).
     pub return_times: [f64; 3],
     /// A feasible hit with at least this margin ends the search (candidates are tried middle first).
     pub good_margin: f64,
+    /// Rolls (rad) of the racket about its face normal tried in order (0: handle up); the ball
+    /// does not see the roll, the joints do.
+    pub rolls: Vec<f64>,
 }
 
 impl HitPlanner {
     /// The planner for `chain` (an analytic-IK gantry6 structure) with defaults: placement and reach
-    /// of gantry6, ready configuration = IK of a forward-facing racket at the reach box's centre.
+    /// of gantry6, ready configuration = IK of a forward-facing racket at (−1.85, 0, 0.255) m (world).
     pub fn new(chain: Chain, flight: Flight) -> Result<Self> {
         let ik = Analytic::for_chain(&chain)
             .ok_or_else(|| Error::Model("hit planning needs a chain with analytic IK (gantry6)".into()))?;
@@ -210,22 +156,25 @@ impl HitPlanner {
             search_margin: 0.03,
             return_times: [0.8, 0.65, 0.95],
             good_margin: 0.25,
+            rolls: [0.0, 30.0, -30.0].iter().map(|d: &f64| d.to_radians()).collect(),
         };
-        // Ready: racket facing forward at the box centre, 0.2 m back, so that a stroke accelerates
-        // forward into the hit (the hit velocity points toward the net).
-        let centre = 0.5 * (planner.reach.lo + planner.reach.hi) - Vector3::new(0.2, 0.0, 0.0);
+        // Ready: racket facing forward 0.48 m behind the end line, across the table's centre line,
+        // at mid-height of the band, so that a stroke accelerates forward into the hit.
+        let centre = Vector3::new(-1.85, 0.0, 0.5 * (planner.reach.lo.z + planner.reach.hi.z));
         let pose = planner.base_pose(&centre, &Vector3::x());
         planner.ready = planner.ik.nearest(&pose, &planner.ready, LimitFilter::Enforce)?;
         Ok(planner)
     }
 
-    /// Racket pose in the base frame for a racket centre `c` and face normal `n` (world).
+    /// Racket pose in the base frame for a racket centre `c` and face normal `n` (world), handle
+    /// as close to world up as possible.
     pub fn base_pose(&self, c: &Vector3<f64>, n: &Vector3<f64>) -> IsometryMatrix3<f64> {
-        let z = n.normalize();
-        let hint = if z.z.abs() < 0.95 { Vector3::z() } else { Vector3::x() };
-        let x = (hint - z * hint.dot(&z)).normalize();
-        let rot = Rotation3::from_matrix_unchecked(Matrix3::from_columns(&[x, z.cross(&x), z]));
-        let world = IsometryMatrix3::from_parts(Translation3::from(*c), rot);
+        self.base_pose_rolled(c, n, 0.0)
+    }
+
+    /// [`HitPlanner::base_pose`] with the racket turned by `roll` (rad) about its normal.
+    pub fn base_pose_rolled(&self, c: &Vector3<f64>, n: &Vector3<f64>, roll: f64) -> IsometryMatrix3<f64> {
+        let world = IsometryMatrix3::from_parts(Translation3::from(*c), racket_rotation(n, roll));
         self.placement.world_from_base().inverse() * world
     }
 
@@ -348,13 +297,7 @@ impl HitPlanner {
         })
     }
 
-    /// Whether the ball from `ball`, flying by `flight`, bounces on the robot's half and then passes
-    /// through the reach box at least `min_stroke_time` after `now` (s).
-    pub fn reachable(&self, flight: &Flight, ball: &BallState, now: f64) -> bool {
-        !self.candidate_states(flight, ball, now, 0.0, false).0.is_empty()
-    }
-
-    /// Predicted states every 10 ms inside the reach box after the bounce on the robot's half, and
+    /// Predicted states every 10 ms inside the hitting volume after the bounce on the robot's half, and
     /// whether that bounce happens.
     fn candidate_states(
         &self,
@@ -430,6 +373,8 @@ impl HitPlanner {
         ok.then_some((v_out, hit, landing))
     }
 
+    /// The best robot hit (largest margin) over the racket rolls `rolls` about the face normal and
+    /// every IK branch within the limits, or `None` when none is feasible.
     fn robot_hit(
         &self,
         s: &BallState,
@@ -441,35 +386,76 @@ impl HitPlanner {
     ) -> Option<Hit> {
         let r = self.flight.model.radius;
         let centre = s.p - r * racket.normal;
-        let pose = self.base_pose(&centre, &racket.normal);
-        let q = self.ik.nearest(&pose, &start.q, LimitFilter::Enforce).ok()?;
         let rot_bw = self.placement.world_from_base().rotation.inverse();
         let v_b = rot_bw * racket.velocity;
         let twist = [v_b.x, v_b.y, v_b.z, 0.0, 0.0, 0.0];
-        let jv = joint_velocity(&self.chain, &q, &twist).ok()?;
+        let t_hit = s.t - now;
+        let mut best: Option<Hit> = None;
+        for &roll in &self.rolls {
+            if best.as_ref().is_some_and(|b| b.margin >= self.good_margin) {
+                break;
+            }
+            let pose = self.base_pose_rolled(&centre, &racket.normal, roll);
+            let Ok(sols) = self.ik.solve(&pose, Some(&start.q), LimitFilter::Enforce) else {
+                continue;
+            };
+            for q in sols.iter() {
+                let Some((qd, qdd, margin)) = self.stroke_margin(q, start, &twist, t_hit) else {
+                    continue;
+                };
+                if best.as_ref().is_none_or(|b| margin > b.margin) {
+                    best = Some(Hit {
+                        ball: *s,
+                        v_out,
+                        racket,
+                        pose,
+                        twist,
+                        t_hit,
+                        q_hit: q.to_vec(),
+                        qd_hit: qd,
+                        qdd_hit: qdd,
+                        margin,
+                        landing,
+                    });
+                }
+            }
+        }
+        best
+    }
+
+    /// Joint velocities and accelerations at the hit and the margin of the stroke from `start` to
+    /// the configuration `q` moving the racket with `twist` (base frame) after `t_hit` s, or `None`
+    /// when it is singular or beyond the limits.
+    fn stroke_margin(
+        &self,
+        q: &[f64],
+        start: &JointState,
+        twist: &[f64; 6],
+        t_hit: f64,
+    ) -> Option<(Vec<f64>, Vec<f64>, f64)> {
+        let jv = joint_velocity(&self.chain, q, twist).ok()?;
         if jv.singular {
             return None;
         }
-        let t_hit = s.t - now;
         // The acceleration at the hit is free (the ball only sees pose and velocity): zero, or a
         // fraction of the end acceleration of the cubic through the same boundary positions and
         // velocities, −6·Δq/T² + 2·(q̇0 + 2·q̇1)/T, whichever gives the lowest peak/limit ratio.
         let cubic: Vec<f64> = (0..q.len())
             .map(|i| -6.0 * (q[i] - start.q[i]) / (t_hit * t_hit) + 2.0 * (start.qd[i] + 2.0 * jv.qdot[i]) / t_hit)
             .collect();
-        let mut best: Option<(f64, JointState)> = None;
+        let mut best: Option<(f64, Vec<f64>)> = None;
         for alpha in [0.0, 0.5, 1.0] {
             let end = JointState {
-                q: q.clone(),
+                q: q.to_vec(),
                 qd: jv.qdot.clone(),
                 qdd: cubic.iter().map(|a| alpha * a).collect(),
             };
             let ratio = quintic_limit_ratio(start, &end, t_hit, &self.limits);
             if best.as_ref().is_none_or(|(r, _)| ratio < *r) {
-                best = Some((ratio, end));
+                best = Some((ratio, end.qdd));
             }
         }
-        let (ratio, end) = best.expect("three trials");
+        let (ratio, qdd) = best.expect("three trials");
         if !(ratio <= 1.0) {
             return None;
         }
@@ -480,19 +466,7 @@ impl HitPlanner {
                 pos_margin = pos_margin.min(2.0 * (qi - lo).min(hi - qi) / (hi - lo));
             }
         }
-        Some(Hit {
-            ball: *s,
-            v_out,
-            racket,
-            pose,
-            twist,
-            t_hit,
-            q_hit: q,
-            qd_hit: jv.qdot,
-            qdd_hit: end.qdd,
-            margin: pos_margin.min(1.0 - ratio),
-            landing,
-        })
+        Some((jv.qdot, qdd, pos_margin.min(1.0 - ratio)))
     }
 }
 

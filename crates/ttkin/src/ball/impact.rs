@@ -3,10 +3,23 @@
 //!
 //! The same rigid-ball impulse model as the table bounce ([`super::contact::impulse`]), applied to
 //! the ball's velocity relative to the racket face: normal restitution e and Coulomb friction μ with
-//! the rolling cap. Rubber constants: e = 0.85 and μ = 0.9. The order of magnitude is that of
-//! inverted (pimples-in) rubber as reported by Nakashima et al. (ACC 2010, who identify rubber
-//! rebound with a restitution near 0.8–0.9 and a friction high enough that the ball usually leaves
-//! rolling); these are model parameters, to be identified for a real racket.
+//! the rolling cap (the rigid-ball part of Nakashima et al., "Modeling of rebound phenomenon of a
+//! rigid ball with friction and elastic effects", ACC 2010).
+//!
+//! Rubber constants, parameters of [`Racket`] (set `HitPlanner::racket` to change them):
+//! - **restitution e = 0.85**. Reference points: the ITTF ball rule (Technical Leaflet T3: dropped
+//!   from 305 mm on a steel block it bounces 240–260 mm, e = √(h₁/h₀) = 0.89–0.92) and the table
+//!   (ITTF Laws 2.1.3: about 23 cm from 30 cm, e ≈ 0.88) bound it from above, since rubber on a
+//!   wooden blade dissipates more than steel; measured rubber restitution falls with the impact
+//!   speed (JSME Symposium on Sports Engineering 2017, rubber sheets at 20–70 km/h; Rinaldi et al.,
+//!   "Table tennis ball impacting racket polymeric coatings", Appl. Sci. 9(1):158, 2019,
+//!   doi:10.3390/app9010158). 0.85 is our choice for the 5–10 m/s of these strokes, not a value
+//!   read from those papers.
+//! - **friction μ = 0.9**: inverted (pimples-in) rubber grips: the tangential impulse then almost
+//!   always reaches the rolling cap, so the result depends little on μ above ≈ 0.5 (Rinaldi et al.
+//!   2019 identify the friction coefficient of the outer layer as the key parameter of oblique
+//!   impacts). A choice of the order of tacky rubber, to be identified on a real racket.
+//! - Table, for comparison ([`super::model::BallModel`]): e = 0.93, μ = 0.25 (Nakashima et al. 2010).
 //!
 //! Inverse: the racket moves along its normal at the hit (velocity s·n, no brushing). Unknowns are
 //! the normal (two angles) and s; the frictionless solution n ∥ v_out − v_in,

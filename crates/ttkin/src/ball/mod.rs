@@ -10,7 +10,8 @@
 //! One concept per file: [`model`] (ball and table constants), [`flight`] (integration with events),
 //! [`contact`] (table, edge, net contacts and the bounce impulse), [`estimate`](mod@estimate) (state from
 //! observations), [`predict`] (positions, crossings), [`impact`] (racket impact and its inverse),
-//! [`hitplan`] (where, when and how to hit), [`rally`] (the closed loop in simulation).
+//! [`hitplan`] (where, when and how to hit), [`reach`] (the robot's reachable region,
+//! independent of the planner), [`rally`] (the closed loop in simulation).
 
 pub mod contact;
 pub mod estimate;
@@ -20,6 +21,7 @@ pub mod impact;
 pub mod model;
 pub mod predict;
 pub mod rally;
+pub mod reach;
 
 pub use estimate::{estimate, Estimate, EstimateOptions};
 pub use flight::{BallState, Event, EventKind, Flight};

@@ -23,16 +23,14 @@
 //! radius (bisection) and counts when the contact point lies within the racket radius of its
 //! centre; the ball then leaves by the racket impact model with the racket's actual normal and
 //! point velocity. **Scoring**: returned when its first contact is the table on the opponent's
-//! half. A ball is **in the box** when its true flight, after its bounce on the robot's half,
-//! passes through the reach box at least the shortest stroke time after planning, and **in reach**
-//! when, in addition, the planner given the ball's true state finds a hit within the robot's
-//! limits (position, velocity and acceleration of every axis): the balls this robot could return
-//! with perfect perception. The return rate over them measures perception, planning and execution;
-//! the rate over all balls in the box also counts the robot's speed limits.
+//! half. A ball is **in reach** when [`ReachRegion::classify`] says so: defined from the robot's
+//! geometry, joint position limits and joint speed/acceleration limits alone, independently of the
+//! planner (see [`super::reach`]). Balls out of reach are counted separately, with the reason.
 
 use super::estimate::{estimate, EstimateOptions};
 use super::flight::{BallState, EventKind, Flight};
 use super::hitplan::{shoot, HitPlanner, HitStatus};
+use super::reach::ReachRegion;
 use crate::chain::JacobianFrame;
 use crate::traj::{JointState, JointTrajectory};
 use nalgebra::Vector3;
@@ -115,11 +113,10 @@ impl Default for RallyConfig {
 pub struct BallOutcome {
     /// Incoming state at the opponent's hit (t = 0).
     pub incoming: BallState,
-    /// Whether the true flight enters the reach box in time (see the module doc).
-    pub in_box: bool,
-    /// Whether the ball is in the box and the planner, given its true state, finds a hit within
-    /// the robot's limits (the robot could return it with perfect perception).
+    /// Whether the ball is in the robot's reachable region ([`ReachRegion::classify`] of its true flight).
     pub in_reach: bool,
+    /// The region's verdict: "in_reach", or why not ("no_bounce", "outside_volume", "no_pose", "too_early").
+    pub reach: &'static str,
     /// Planner status name ("ok", "no_bounce", ...), or "estimate: ..." when estimation failed.
     pub status: String,
     /// Whether the racket met the ball.
@@ -217,8 +214,9 @@ impl Motion {
     }
 }
 
-/// Plays ball `index` of the rally: serve, observe, plan, re-plan, execute, score.
-pub fn play(planner: &HitPlanner, truth: &Flight, cfg: &RallyConfig, index: u64) -> BallOutcome {
+/// Plays ball `index` of the rally: serve, observe, classify against `region`, plan, re-plan,
+/// execute, score.
+pub fn play(planner: &HitPlanner, region: &ReachRegion, truth: &Flight, cfg: &RallyConfig, index: u64) -> BallOutcome {
     let mut rng = fastrand::Rng::with_seed(
         cfg.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ index.wrapping_mul(0xD1B5_4A32_D192_ED03),
     );
@@ -247,17 +245,11 @@ pub fn play(planner: &HitPlanner, truth: &Flight, cfg: &RallyConfig, index: u64)
     let t_last = times[first - 1];
     let now = t_last + cam.latency;
     let (truth_at_last, _) = truth.run(&s0, t_last, None);
-    let in_box = planner.reachable(truth, &s0, now);
-    // In reach: in the box and hittable within the robot's limits with perfect perception (the
-    // planner on the true state finds a feasible hit).
-    let in_reach = in_box
-        && planner
-            .plan(&truth_at_last, now, cfg.target)
-            .is_ok_and(|p| p.status == HitStatus::Ok);
+    let reach = region.classify(truth, &s0, now);
     let mut out = BallOutcome {
         incoming: s0,
-        in_box,
-        in_reach,
+        in_reach: reach.in_reach(),
+        reach: reach.name(),
         status: String::new(),
         contact: false,
         returned: false,
@@ -473,9 +465,15 @@ fn sample_path(flight: &Flight, s: &BallState, duration: f64) -> Vec<[f64; 3]> {
 }
 
 /// Plays balls 0..`n` in parallel.
-pub fn rally(planner: &HitPlanner, truth: &Flight, cfg: &RallyConfig, n: usize) -> Vec<BallOutcome> {
+pub fn rally(
+    planner: &HitPlanner,
+    region: &ReachRegion,
+    truth: &Flight,
+    cfg: &RallyConfig,
+    n: usize,
+) -> Vec<BallOutcome> {
     (0..n as u64)
         .into_par_iter()
-        .map(|i| play(planner, truth, cfg, i))
+        .map(|i| play(planner, region, truth, cfg, i))
         .collect()
 }

@@ -1,0 +1,286 @@
+//! The robot's reachable region, defined from its geometry and joint limits alone (no planner):
+//! which incoming balls the robot could meet with its racket.
+//!
+//! A ball is **in reach** when, after its bounce on the robot's half and before any other contact,
+//! its true flight (sampled every `step` s while it still moves toward the robot, x velocity < 0)
+//! has a point p at a time t such that
+//! 1. p lies in the **hitting volume** (world box: the height band above the surface and the
+//!    region behind the table the racket may sweep; the axis strokes are checked by IK, item 2);
+//! 2. the racket can be **placed** there: for some admissible racket orientation of a fixed grid
+//!    (face normals toward the opponent at azimuths and elevations of `normal_angles`, each at the
+//!    rolls `rolls` of the handle about the normal), the racket centre p − r·n has an IK solution
+//!    within every joint position limit (which include the d1 and d2 strokes);
+//! 3. the robot can **get there in time**: for that solution q, the per-joint minimum time from
+//!    rest at the ready configuration under the joint's speed limit v and acceleration limit a,
+//!    Δ = |q_i − q_ready,i|: √(2Δ/a) when Δ ≤ v²/(2a), else Δ/v + v/(2a) (full acceleration, then
+//!    full speed; any arrival speed), is at most t − now for every joint.
+//!
+//! Item 3 is a necessary condition for a stroke (no trajectory within the limits arrives earlier),
+//! so the region is an outer bound of the balls any planner could hit with these joints: a return
+//! rate over it is not flattered by the planner's own choices.
+
+use super::flight::{BallState, EventKind, Flight};
+use crate::chain::Chain;
+use crate::error::{Error, Result};
+use crate::ik::{Analytic, LimitFilter};
+use crate::traj::limits::KinematicLimits;
+use nalgebra::{IsometryMatrix3, Matrix3, Rotation3, Translation3, Vector3};
+
+/// How a ball relates to the reachable region (see the module doc), in the order checked.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Reachability {
+    /// Its flight does not bounce on the robot's half (net, long, wide, floor).
+    NoBounce,
+    /// After the bounce it never passes through the hitting volume.
+    OutsideVolume,
+    /// It passes the volume, but no admissible racket pose there is within the joint limits.
+    NoPose,
+    /// A racket pose exists, but every one needs more time from the ready configuration than the
+    /// ball leaves (too early for the joints' speed and acceleration limits).
+    TooEarly,
+    /// In reach: the earliest-feasible point found, its time (s, absolute) and the minimum time
+    /// (s) the joints need to get there from the ready configuration.
+    InReach {
+        /// Ball centre (m, world).
+        p: Vector3<f64>,
+        /// Time (s, absolute) of the ball at `p`.
+        t: f64,
+        /// Minimum joint time (s) from the ready configuration to the racket pose.
+        min_time: f64,
+    },
+}
+
+impl Reachability {
+    /// Short lower-case name ("no_bounce", "outside_volume", "no_pose", "too_early", "in_reach").
+    pub fn name(&self) -> &'static str {
+        match self {
+            Reachability::NoBounce => "no_bounce",
+            Reachability::OutsideVolume => "outside_volume",
+            Reachability::NoPose => "no_pose",
+            Reachability::TooEarly => "too_early",
+            Reachability::InReach { .. } => "in_reach",
+        }
+    }
+
+    /// Whether the ball is in reach.
+    pub fn in_reach(&self) -> bool {
+        matches!(self, Reachability::InReach { .. })
+    }
+}
+
+/// The reachable region of one robot: chain, placement, ready configuration, hitting volume and
+/// the grid of admissible racket orientations.
+#[derive(Debug, Clone)]
+pub struct ReachRegion {
+    ik: Analytic,
+    limits: KinematicLimits,
+    /// Base frame in the world.
+    pub placement: Placement,
+    /// Ready configuration (m, rad): strokes start from rest here.
+    pub ready: Vec<f64>,
+    /// Hitting volume of the ball centre (world, m).
+    pub volume: Reach,
+    /// Azimuths and elevations (rad) of the face normal, each combination one normal
+    /// (cos e·cos a, cos e·sin a, sin e) in the world: toward the opponent.
+    pub normal_angles: Vec<f64>,
+    /// Rolls (rad) of the racket about its normal, from the handle-up frame.
+    pub rolls: Vec<f64>,
+    /// Ball radius (m): the racket centre is the ball centre minus r·n.
+    pub ball_radius: f64,
+    /// Sampling period (s) of the flight.
+    pub step: f64,
+}
+
+/// Where the robot's base frame sits in the world frame: base = world ∘ (translation, yaw about z).
+///
+/// gantry6 default: origin at (−2.0, 0, 0.15) m, yaw +90°, so base x = world y (the d2 axis moves
+/// across the table), base y = −world x (d1 moves along the table: its axis is −y of the base, i.e.
+/// toward the net), base z = world z. The racket then reaches about x ∈ [−2.9, −0.9] m along the
+/// table, |y| ≤ 0.6 m across it and 0.15 ± 0.45 m in height.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Placement {
+    /// Base-frame origin (m, world).
+    pub origin: Vector3<f64>,
+    /// Rotation of the base about world z (rad).
+    pub yaw: f64,
+}
+
+impl Default for Placement {
+    fn default() -> Self {
+        Placement {
+            origin: Vector3::new(-2.0, 0.0, 0.15),
+            yaw: std::f64::consts::FRAC_PI_2,
+        }
+    }
+}
+
+impl Placement {
+    /// The base frame in the world frame.
+    pub fn world_from_base(&self) -> IsometryMatrix3<f64> {
+        IsometryMatrix3::from_parts(
+            Translation3::from(self.origin),
+            Rotation3::from_axis_angle(&Vector3::z_axis(), self.yaw),
+        )
+    }
+}
+
+/// An axis-aligned box of ball-centre positions (world frame, m): the hitting volume.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Reach {
+    /// Lower corner (m, world).
+    pub lo: Vector3<f64>,
+    /// Upper corner (m, world).
+    pub hi: Vector3<f64>,
+}
+
+impl Default for Reach {
+    /// The hitting volume of gantry6 (world, m): behind the table up to 7 cm over its end line,
+    /// x ∈ [−3.0, −1.3] (the d1 stroke decides by IK), |y| ≤ 1.0 (the d2 stroke decides), and the
+    /// height band z ∈ [0.06, 0.45] (the racket stays above the table top's level).
+    fn default() -> Self {
+        Reach {
+            lo: Vector3::new(-3.0, -1.0, 0.06),
+            hi: Vector3::new(-1.3, 1.0, 0.45),
+        }
+    }
+}
+
+impl Reach {
+    /// Whether the world point `p` (m) lies in the box.
+    pub fn contains(&self, p: &Vector3<f64>) -> bool {
+        (0..3).all(|k| p[k] >= self.lo[k] && p[k] <= self.hi[k])
+    }
+}
+
+/// Racket frame (world) for the face normal `n`: z = n, x (the handle) as close to world up as
+/// possible (world x when n is within 18° of vertical), then turned by `roll` (rad) about n.
+pub fn racket_rotation(n: &Vector3<f64>, roll: f64) -> Rotation3<f64> {
+    let z = n.normalize();
+    let hint = if z.z.abs() < 0.95 { Vector3::z() } else { Vector3::x() };
+    let x0 = (hint - z * hint.dot(&z)).normalize();
+    let x = roll.cos() * x0 + roll.sin() * z.cross(&x0);
+    Rotation3::from_matrix_unchecked(Matrix3::from_columns(&[x, z.cross(&x), z]))
+}
+
+/// Per-joint minimum time (s) to move `delta` (m or rad) from rest under speed `v` and
+/// acceleration `a`, arriving at any speed.
+pub fn min_joint_time(delta: f64, v: f64, a: f64) -> f64 {
+    let d = delta.abs();
+    if d * 2.0 * a <= v * v {
+        (2.0 * d / a).sqrt()
+    } else {
+        d / v + v / (2.0 * a)
+    }
+}
+
+impl ReachRegion {
+    /// The region of `chain` (analytic IK) placed by `placement`, starting from `ready`, with the
+    /// default volume, normals at 0, ±30° azimuth and elevation, rolls 0, ±30°, ±60°.
+    pub fn new(chain: &Chain, placement: Placement, ready: Vec<f64>, ball_radius: f64) -> Result<Self> {
+        let ik = Analytic::for_chain(chain)
+            .ok_or_else(|| Error::Model("the reachable region needs a chain with analytic IK (gantry6)".into()))?;
+        crate::error::check_vector("ready", &ready, chain.dof())?;
+        let deg = std::f64::consts::PI / 180.0;
+        Ok(ReachRegion {
+            ik,
+            limits: KinematicLimits::from_chain(chain, None)?,
+            placement,
+            ready,
+            volume: Reach::default(),
+            normal_angles: vec![-30.0 * deg, 0.0, 30.0 * deg],
+            rolls: vec![-60.0 * deg, -30.0 * deg, 0.0, 30.0 * deg, 60.0 * deg],
+            ball_radius,
+            step: 0.005,
+        })
+    }
+
+    /// Minimum time (s) from rest at the ready configuration to `q` (m, rad) over every joint.
+    pub fn min_time(&self, q: &[f64]) -> f64 {
+        q.iter()
+            .zip(&self.ready)
+            .enumerate()
+            .map(|(i, (qi, ri))| min_joint_time(qi - ri, self.limits.velocity[i], self.limits.acceleration[i]))
+            .fold(0.0, f64::max)
+    }
+
+    /// The smallest minimum time (s) over the admissible racket poses for a ball centre at `p`
+    /// (m, world), or `None` when `p` is outside the volume or no pose is within the joint limits.
+    pub fn placement_time(&self, p: &Vector3<f64>) -> Option<f64> {
+        if !self.volume.contains(p) {
+            return None;
+        }
+        let base_from_world = self.placement.world_from_base().inverse();
+        let mut best: Option<f64> = None;
+        for &az in &self.normal_angles {
+            for &el in &self.normal_angles {
+                let n = Vector3::new(el.cos() * az.cos(), el.cos() * az.sin(), el.sin());
+                for &roll in &self.rolls {
+                    let rot = racket_rotation(&n, roll);
+                    let c = p - self.ball_radius * n;
+                    let pose = base_from_world * IsometryMatrix3::from_parts(Translation3::from(c), rot);
+                    let Ok(sols) = self.ik.solve(&pose, Some(&self.ready), LimitFilter::Enforce) else {
+                        continue;
+                    };
+                    for q in sols.iter() {
+                        let t = self.min_time(q);
+                        if best.is_none_or(|b| t < b) {
+                            best = Some(t);
+                        }
+                    }
+                }
+            }
+        }
+        best
+    }
+
+    /// Classifies the ball `ball` (true state), flying by `flight`, for a stroke starting at rest
+    /// at the ready configuration at time `now` (s).
+    pub fn classify(&self, flight: &Flight, ball: &BallState, now: f64) -> Reachability {
+        let mut cur = *ball;
+        let mut bounced = false;
+        let (mut in_volume, mut placeable) = (false, false);
+        let t_end = ball.t + 2.0;
+        while cur.t < t_end {
+            let (next, ev) = flight.advance(&cur, cur.t + self.step, None);
+            cur = next;
+            if let Some(e) = ev {
+                match e.kind {
+                    EventKind::Table if e.before.p.x < 0.0 && !bounced => bounced = true,
+                    EventKind::Table | EventKind::Edge if bounced => break,
+                    EventKind::Net | EventKind::Floor => break,
+                    _ => {}
+                }
+                continue;
+            }
+            if !bounced {
+                if cur.v.x >= 0.0 && cur.p.x < 0.0 {
+                    break;
+                }
+                continue;
+            }
+            if cur.v.x >= 0.0 || cur.p.x < self.volume.lo.x {
+                break;
+            }
+            if !self.volume.contains(&cur.p) {
+                continue;
+            }
+            in_volume = true;
+            if let Some(min_time) = self.placement_time(&cur.p) {
+                placeable = true;
+                if min_time <= cur.t - now {
+                    return Reachability::InReach {
+                        p: cur.p,
+                        t: cur.t,
+                        min_time,
+                    };
+                }
+            }
+        }
+        match (bounced, in_volume, placeable) {
+            (false, _, _) => Reachability::NoBounce,
+            (true, false, _) => Reachability::OutsideVolume,
+            (true, true, false) => Reachability::NoPose,
+            (true, true, true) => Reachability::TooEarly,
+        }
+    }
+}
