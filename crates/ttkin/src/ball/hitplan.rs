@@ -28,6 +28,7 @@
 
 use super::flight::{BallState, EventKind, Flight};
 use super::impact::{Racket, RacketHit};
+use super::reach::walk_after_bounce;
 pub use super::reach::{racket_rotation, Placement, Reach};
 use crate::chain::Chain;
 use crate::error::{Error, Result};
@@ -311,29 +312,13 @@ impl HitPlanner {
             lo: self.reach.lo - Vector3::repeat(margin),
             hi: self.reach.hi + Vector3::repeat(margin),
         };
-        let mut cur = *ball;
-        let mut bounced = after_bounce;
         let mut out = Vec::new();
-        let t_end = ball.t + 2.0;
-        while cur.t < t_end {
-            let (next, ev) = f.advance(&cur, cur.t + 0.01, None);
-            cur = next;
-            if let Some(e) = ev {
-                match e.kind {
-                    EventKind::Table if e.before.p.x < 0.0 && !bounced => bounced = true,
-                    EventKind::Table | EventKind::Edge if bounced => break,
-                    EventKind::Net | EventKind::Floor => break,
-                    _ => {}
-                }
-                continue;
+        let bounced = walk_after_bounce(f, ball, 0.01, after_bounce, |s| {
+            if s.t >= now + self.min_stroke_time && reach.contains(&s.p) {
+                out.push(*s);
             }
-            if bounced && cur.t >= now + self.min_stroke_time && reach.contains(&cur.p) && cur.v.x < 0.0 {
-                out.push(cur);
-            }
-            if cur.p.x < self.reach.lo.x - 0.05 || (cur.v.x >= 0.0 && cur.p.x < 0.0) {
-                break;
-            }
-        }
+            s.p.x >= self.reach.lo.x - 0.05
+        });
         (out, bounced)
     }
 
