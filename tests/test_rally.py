@@ -26,6 +26,9 @@ def test_rally_summary_and_determinism():
     assert a["balls"] == 40 and a["in_reach"] + a["out_of_reach"] == 40
     assert 0.0 <= a["return_rate"] <= 1.0
     assert a["returned"] <= a["in_reach"]
+    # The reachable region's verdicts cover every ball; "in_reach" is the only one counted in reach.
+    assert sum(a["reach"].values()) == 40 and a["reach"].get("in_reach", 0) == a["in_reach"]
+    assert set(a["reach"]) <= {"in_reach", "no_bounce", "outside_volume", "no_pose", "too_early"}
     b = ttmanip.rally(40, seed=3)
     assert a["returned"] == b["returned"] and a["statuses"] == b["statuses"]
 

@@ -5,7 +5,8 @@
 //!    and every 10 ms sample inside the hitting volume ([`Reach`], world frame; the same volume as
 //!    the reachable region of [`super::reach`]), after the bounce and at least
 //!    `min_stroke_time` after `now`, is a candidate; `candidates` of them, evenly spread, are tried
-//!    (up to 12 when none of those is feasible).
+//!    (up to 12 when none of those is feasible). One with no IK for the approximate normal (see
+//!    `roughly_placeable`) is skipped, and tried in full only when no other gives a hit.
 //! 2. **Outgoing velocity.** Shooting: the velocity v₀ with which the ball, spinning with its
 //!    post-impact spin, is at (x_t, y_t, r) after the return flight time T: Broyden's method on the
 //!    3×3 map v₀ ↦ p(T), started from the drag-free solution with Jacobian T·I; T from
@@ -28,6 +29,7 @@
 
 use super::flight::{BallState, EventKind, Flight};
 use super::impact::{Racket, RacketHit};
+use super::reach::walk_after_bounce;
 pub use super::reach::{racket_rotation, Placement, Reach};
 use crate::chain::Chain;
 use crate::error::{Error, Result};
@@ -257,18 +259,33 @@ impl HitPlanner {
         let mut best: Option<Hit> = None;
         let mut any_return = false;
         let mut tried = 0;
-        for (round, count) in [(0, k), (1, extra)] {
-            if round == 1 && (best.is_some() || extra <= k) {
-                break;
-            }
-            // Middle of the spread first: it is the likeliest to have the largest margin.
-            let mut order: Vec<usize> = (0..count).collect();
-            order.sort_by_key(|&j| (2 * j + 1).abs_diff(count));
-            for j in order {
+        // Candidates that fail the cheap placement test are skipped, and tried in full only when no
+        // other candidate gives a hit (the test's normal is approximate).
+        let mut skipped: Vec<usize> = Vec::new();
+        for round in 0..3 {
+            let picks: Vec<usize> = match round {
+                0 | 1 => {
+                    let count = if round == 0 { k } else { extra };
+                    if round == 1 && (best.is_some() || extra <= k) {
+                        continue;
+                    }
+                    // Middle of the spread first: it is the likeliest to have the largest margin.
+                    let mut order: Vec<usize> = (0..count).collect();
+                    order.sort_by_key(|&j| (2 * j + 1).abs_diff(count));
+                    order.iter().map(|&j| (2 * j + 1) * list.len() / (2 * count)).collect()
+                }
+                _ if best.is_none() => std::mem::take(&mut skipped),
+                _ => Vec::new(),
+            };
+            for i in picks {
                 if best.as_ref().is_some_and(|b| b.margin >= self.good_margin) {
                     break;
                 }
-                let s = list[(2 * j + 1) * list.len() / (2 * count)];
+                let s = list[i];
+                if round < 2 && !self.roughly_placeable(&s, target) {
+                    skipped.push(i);
+                    continue;
+                }
                 tried += 1;
                 for &tf in &self.return_times {
                     let Some((v_out, racket, landing)) = self.outgoing(&s, target, tf) else {
@@ -311,29 +328,13 @@ impl HitPlanner {
             lo: self.reach.lo - Vector3::repeat(margin),
             hi: self.reach.hi + Vector3::repeat(margin),
         };
-        let mut cur = *ball;
-        let mut bounced = after_bounce;
         let mut out = Vec::new();
-        let t_end = ball.t + 2.0;
-        while cur.t < t_end {
-            let (next, ev) = f.advance(&cur, cur.t + 0.01, None);
-            cur = next;
-            if let Some(e) = ev {
-                match e.kind {
-                    EventKind::Table if e.before.p.x < 0.0 && !bounced => bounced = true,
-                    EventKind::Table | EventKind::Edge if bounced => break,
-                    EventKind::Net | EventKind::Floor => break,
-                    _ => {}
-                }
-                continue;
+        let bounced = walk_after_bounce(f, ball, 0.01, after_bounce, |s| {
+            if s.t >= now + self.min_stroke_time && reach.contains(&s.p) {
+                out.push(*s);
             }
-            if bounced && cur.t >= now + self.min_stroke_time && reach.contains(&cur.p) && cur.v.x < 0.0 {
-                out.push(cur);
-            }
-            if cur.p.x < self.reach.lo.x - 0.05 || (cur.v.x >= 0.0 && cur.p.x < 0.0) {
-                break;
-            }
-        }
+            s.p.x >= self.reach.lo.x - 0.05
+        });
         (out, bounced)
     }
 
@@ -371,6 +372,23 @@ impl HitPlanner {
             && f.table.on_opponent_half(landing.x, landing.y)
             && (landing - goal).xy().norm() < 1e-3;
         ok.then_some((v_out, hit, landing))
+    }
+
+    /// Whether some roll of a racket with the frictionless, drag-free normal (along v_out − v_in,
+    /// v_out the vacuum shot to `target` in the first return time) at the ball `s` has IK within the
+    /// limits: a cheap test before the shooting solve.
+    fn roughly_placeable(&self, s: &BallState, target: [f64; 2]) -> bool {
+        let tf = self.return_times[0];
+        let goal = Vector3::new(target[0], target[1], self.flight.model.radius);
+        let g = Vector3::new(0.0, 0.0, -self.flight.model.gravity);
+        let v_out = (goal - s.p - 0.5 * g * tf * tf) / tf;
+        let n = (v_out - s.v).normalize();
+        let c = s.p - self.flight.model.radius * n;
+        self.rolls.iter().any(|&roll| {
+            self.ik
+                .solve(&self.base_pose_rolled(&c, &n, roll), None, LimitFilter::Enforce)
+                .is_ok()
+        })
     }
 
     /// The best robot hit (largest margin) over the racket rolls `rolls` about the face normal and

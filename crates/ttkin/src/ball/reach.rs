@@ -236,51 +236,69 @@ impl ReachRegion {
     /// Classifies the ball `ball` (true state), flying by `flight`, for a stroke starting at rest
     /// at the ready configuration at time `now` (s).
     pub fn classify(&self, flight: &Flight, ball: &BallState, now: f64) -> Reachability {
-        let mut cur = *ball;
-        let mut bounced = false;
-        let (mut in_volume, mut placeable) = (false, false);
-        let t_end = ball.t + 2.0;
-        while cur.t < t_end {
-            let (next, ev) = flight.advance(&cur, cur.t + self.step, None);
-            cur = next;
-            if let Some(e) = ev {
-                match e.kind {
-                    EventKind::Table if e.before.p.x < 0.0 && !bounced => bounced = true,
-                    EventKind::Table | EventKind::Edge if bounced => break,
-                    EventKind::Net | EventKind::Floor => break,
-                    _ => {}
-                }
-                continue;
+        let (mut in_volume, mut placeable, mut found) = (false, false, None);
+        let bounced = walk_after_bounce(flight, ball, self.step, false, |s| {
+            if s.p.x < self.volume.lo.x {
+                return false;
             }
-            if !bounced {
-                if cur.v.x >= 0.0 && cur.p.x < 0.0 {
-                    break;
-                }
-                continue;
-            }
-            if cur.v.x >= 0.0 || cur.p.x < self.volume.lo.x {
-                break;
-            }
-            if !self.volume.contains(&cur.p) {
-                continue;
+            if !self.volume.contains(&s.p) {
+                return true;
             }
             in_volume = true;
-            if let Some(min_time) = self.placement_time(&cur.p) {
+            if let Some(min_time) = self.placement_time(&s.p) {
                 placeable = true;
-                if min_time <= cur.t - now {
-                    return Reachability::InReach {
-                        p: cur.p,
-                        t: cur.t,
+                if min_time <= s.t - now {
+                    found = Some(Reachability::InReach {
+                        p: s.p,
+                        t: s.t,
                         min_time,
-                    };
+                    });
+                    return false;
                 }
             }
-        }
-        match (bounced, in_volume, placeable) {
-            (false, _, _) => Reachability::NoBounce,
-            (true, false, _) => Reachability::OutsideVolume,
-            (true, true, false) => Reachability::NoPose,
-            (true, true, true) => Reachability::TooEarly,
+            true
+        });
+        match (found, bounced, in_volume, placeable) {
+            (Some(r), ..) => r,
+            (None, false, _, _) => Reachability::NoBounce,
+            (None, true, false, _) => Reachability::OutsideVolume,
+            (None, true, true, false) => Reachability::NoPose,
+            (None, true, true, true) => Reachability::TooEarly,
         }
     }
+}
+
+/// Walks the flight of `ball` every `step` s (at most 2 s) through its first bounce on the robot's
+/// half (`bounced`: it already happened), then calls `visit` with every sample free of contact until
+/// another contact, the ball moving back toward the net, or `visit` returning false. Returns whether
+/// the bounce happened.
+pub fn walk_after_bounce(
+    flight: &Flight,
+    ball: &BallState,
+    step: f64,
+    mut bounced: bool,
+    mut visit: impl FnMut(&BallState) -> bool,
+) -> bool {
+    let mut cur = *ball;
+    let t_end = ball.t + 2.0;
+    while cur.t < t_end {
+        let (next, ev) = flight.advance(&cur, cur.t + step, None);
+        cur = next;
+        if let Some(e) = ev {
+            match e.kind {
+                EventKind::Table if e.before.p.x < 0.0 && !bounced => bounced = true,
+                EventKind::Table | EventKind::Edge if bounced => break,
+                EventKind::Net | EventKind::Floor => break,
+                _ => {}
+            }
+            continue;
+        }
+        if cur.v.x >= 0.0 && cur.p.x < 0.0 {
+            break;
+        }
+        if bounced && !visit(&cur) {
+            break;
+        }
+    }
+    bounced
 }
