@@ -12,7 +12,7 @@ import timeit
 
 import numpy as np
 import ttmanip
-from timing import per_call_us
+from timing import per_call_us, random_configurations
 
 try:
     import pinocchio as pin
@@ -22,9 +22,8 @@ except ImportError:  # pragma: no cover - optional peer
 
 def bench_robot(name: str, batch: int) -> list[tuple[str, str, str]]:
     robot = ttmanip.Robot.builtin(name)
-    lim = robot.limits
-    rng = np.random.default_rng(0)
-    qs = lim[:, 0] + (lim[:, 1] - lim[:, 0]) * rng.random((batch, robot.dof))
+    qs = random_configurations(robot, batch)
+    rng = np.random.default_rng(1)
     qds = rng.uniform(-1, 1, qs.shape)
     qdds = rng.uniform(-1, 1, qs.shape)
     q, qd, qdd = qs[0].copy(), qds[0].copy(), qdds[0].copy()

@@ -14,7 +14,7 @@ import tempfile
 
 import numpy as np
 import ttmanip
-from timing import per_call_us, per_item_rate
+from timing import per_call_us, per_item_rate, random_configurations
 
 try:
     import pinocchio as pin
@@ -29,9 +29,7 @@ except ImportError:  # pragma: no cover - optional peer
 
 def bench_robot(name: str, batch: int) -> list[tuple[str, str, str]]:
     robot = ttmanip.Robot.builtin(name)
-    lim = robot.limits
-    rng = np.random.default_rng(0)
-    qs = lim[:, 0] + (lim[:, 1] - lim[:, 0]) * rng.random((batch, robot.dof))
+    qs = random_configurations(robot, batch)
     q = qs[0].copy()
     rows = []
     t_ref = robot.fk(q)

@@ -16,3 +16,10 @@ def per_call_us(fn, number: int = 20000, repeat: int = 7) -> float:
 def per_item_rate(fn, count: int, repeat: int = 5) -> float:
     """Items per second of a batch call over ``count`` items (best of ``repeat``)."""
     return count / min(timeit.repeat(fn, number=1, repeat=repeat))
+
+
+def random_configurations(robot, count: int, seed: int = 0) -> np.ndarray:
+    """(count, dof) configurations drawn uniformly within ``robot``'s joint limits (m, rad)."""
+    lim = robot.limits
+    rng = np.random.default_rng(seed)
+    return lim[:, 0] + (lim[:, 1] - lim[:, 0]) * rng.random((count, robot.dof))

@@ -22,6 +22,7 @@ pub mod batch;
 pub mod differential;
 pub mod gantry;
 pub mod numeric;
+pub mod residual;
 
 use std::f64::consts::PI;
 
