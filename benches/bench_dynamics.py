@@ -12,12 +12,9 @@ import timeit
 
 import numpy as np
 import ttmanip
-from timing import per_call_us, random_configurations
+from timing import optional_peer, per_call_us, print_rows, random_configurations
 
-try:
-    import pinocchio as pin
-except ImportError:  # pragma: no cover - optional peer
-    pin = None
+pin = optional_peer("pinocchio")
 
 
 def bench_robot(name: str, batch: int) -> list[tuple[str, str, str]]:
@@ -56,10 +53,7 @@ def main() -> None:
     rows = []
     for name in ("mobile8", "ur5"):
         rows += bench_robot(name, 200_000)
-    width = max(len(r[1]) for r in rows)
-    print(f"{'robot':8s}  {'operation':{width}s}  result")
-    for robot, op, result in rows:
-        print(f"{robot:8s}  {op:{width}s}  {result}")
+    print_rows(rows)
 
 
 if __name__ == "__main__":
