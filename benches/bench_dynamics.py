@@ -12,19 +12,15 @@ import timeit
 
 import numpy as np
 import ttmanip
-from timing import per_call_us
+from timing import optional_peer, per_call_us, print_rows, random_configurations
 
-try:
-    import pinocchio as pin
-except ImportError:  # pragma: no cover - optional peer
-    pin = None
+pin = optional_peer("pinocchio")
 
 
 def bench_robot(name: str, batch: int) -> list[tuple[str, str, str]]:
     robot = ttmanip.Robot.builtin(name)
-    lim = robot.limits
-    rng = np.random.default_rng(0)
-    qs = lim[:, 0] + (lim[:, 1] - lim[:, 0]) * rng.random((batch, robot.dof))
+    qs = random_configurations(robot, batch)
+    rng = np.random.default_rng(1)
     qds = rng.uniform(-1, 1, qs.shape)
     qdds = rng.uniform(-1, 1, qs.shape)
     q, qd, qdd = qs[0].copy(), qds[0].copy(), qdds[0].copy()
@@ -57,10 +53,7 @@ def main() -> None:
     rows = []
     for name in ("mobile8", "ur5"):
         rows += bench_robot(name, 200_000)
-    width = max(len(r[1]) for r in rows)
-    print(f"{'robot':8s}  {'operation':{width}s}  result")
-    for robot, op, result in rows:
-        print(f"{robot:8s}  {op:{width}s}  {result}")
+    print_rows(rows)
 
 
 if __name__ == "__main__":

@@ -22,6 +22,7 @@ import warnings
 
 import numpy as np
 import ttmanip
+from timing import random_configurations
 
 TOL = 1e-6
 BUDGET = 1e-3
@@ -167,9 +168,7 @@ def main() -> None:
     rows = []
     for name, task, q0 in cases:
         robot = ttmanip.Robot.builtin(name)
-        lim = robot.limits
-        rng = np.random.default_rng(0)
-        qs = lim[:, 0] + (lim[:, 1] - lim[:, 0]) * rng.random((args.count, robot.dof))
+        qs = random_configurations(robot, args.count)
         targets = robot.fk(qs)
         label = f"{name} {task}"
 
@@ -195,9 +194,7 @@ def main() -> None:
                     continue
                 rows.append((label, *run(plabel, solve, robot, targets[: args.peer_count], task)))
     gantry = ttmanip.robots.gantry6()
-    lim = gantry.limits
-    rng = np.random.default_rng(1)
-    ts = gantry.fk(lim[:, 0] + (lim[:, 1] - lim[:, 0]) * rng.random((100_000, 6)))
+    ts = gantry.fk(random_configurations(gantry, 100_000, seed=1))
     gantry.ik_all(ts)
     t0 = time.perf_counter()
     _, count = gantry.ik_all(ts)

@@ -14,12 +14,9 @@ import tempfile
 
 import numpy as np
 import ttmanip
-from timing import per_call_us, per_item_rate
+from timing import optional_peer, per_call_us, per_item_rate, print_rows, random_configurations
 
-try:
-    import pinocchio as pin
-except ImportError:  # pragma: no cover - optional peer
-    pin = None
+pin = optional_peer("pinocchio")
 try:
     import roboticstoolbox as rtb
     from roboticstoolbox.models.URDF.URDFRobot import URDF_file
@@ -29,9 +26,7 @@ except ImportError:  # pragma: no cover - optional peer
 
 def bench_robot(name: str, batch: int) -> list[tuple[str, str, str]]:
     robot = ttmanip.Robot.builtin(name)
-    lim = robot.limits
-    rng = np.random.default_rng(0)
-    qs = lim[:, 0] + (lim[:, 1] - lim[:, 0]) * rng.random((batch, robot.dof))
+    qs = random_configurations(robot, batch)
     q = qs[0].copy()
     rows = []
     t_ref = robot.fk(q)
@@ -98,10 +93,7 @@ def main() -> None:
     rows = []
     for name in ("gantry6", "mobile8", "ur5"):
         rows += bench_robot(name, batch)
-    width = max(len(r[1]) for r in rows)
-    print(f"{'robot':8s}  {'operation':{width}s}  result")
-    for robot, op, result in rows:
-        print(f"{robot:8s}  {op:{width}s}  {result}")
+    print_rows(rows)
 
 
 if __name__ == "__main__":

@@ -14,13 +14,10 @@ import timeit
 
 import numpy as np
 import ttmanip
-from timing import per_call_us
+from timing import optional_peer, per_call_us
 from ttmanip.experiments import seed000
 
-try:
-    import pinocchio as pin
-except ImportError:  # pragma: no cover - optional peer
-    pin = None
+pin = optional_peer("pinocchio")
 
 
 def skew(v: np.ndarray) -> np.ndarray:

@@ -459,84 +459,93 @@ def _export(args: argparse.Namespace) -> int:
     return 0
 
 
+def _arg(*flags: str, **options) -> tuple[tuple[str, ...], dict]:
+    """One argument of a subcommand: the flags and options of ``add_argument``."""
+    return flags, options
+
+
+def _command(sub, name: str, func, help: str, description: str, *arguments) -> argparse.ArgumentParser:
+    """Adds subcommand ``name`` running ``func``, with its help, description and arguments."""
+    parser = sub.add_parser(
+        name, help=help, description=description, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    for flags, options in arguments:
+        parser.add_argument(*flags, **options)
+    parser.set_defaults(func=func)
+    return parser
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``ttmanip`` command."""
     fmt = argparse.RawDescriptionHelpFormatter
     parser = argparse.ArgumentParser(prog="ttmanip", description=__doc__, formatter_class=fmt)
     sub = parser.add_subparsers(dest="command", required=True)
 
-    demo = sub.add_parser(
+    _command(
+        sub,
         "demo",
-        help="plan and simulate a gantry6 hit on every axis, write the figures",
-        description="Plans seed 002's demo hit on gantry6, simulates it through every "
+        _demo,
+        "plan and simulate a gantry6 hit on every axis, write the figures",
+        "Plans seed 002's demo hit on gantry6, simulates it through every "
         "axis's drive with gravity, then a mobile8 racket hit; writes figures, CSV and "
         "summary.json.\n\nexample:\n  ttmanip demo --out out/demo",
-        formatter_class=fmt,
+        _arg("--out", default="out/demo", help="output folder (default: out/demo)"),
+        _arg("--no-workspace", action="store_true", help="skip the workspace figures"),
     )
-    demo.add_argument("--out", default="out/demo", help="output folder (default: out/demo)")
-    demo.add_argument("--no-workspace", action="store_true", help="skip the workspace figures")
-    demo.set_defaults(func=_demo)
-
-    exp = sub.add_parser(
+    _command(
+        sub,
         "experiment",
-        help="reproduce a seed document's experiment",
-        description="Runs a seed experiment and writes every product.\n\nexample:\n"
+        _experiment,
+        "reproduce a seed document's experiment",
+        "Runs a seed experiment and writes every product.\n\nexample:\n"
         "  ttmanip experiment seed002 --out out/seed002",
-        formatter_class=fmt,
+        _arg("name", choices=EXPERIMENTS),
+        _arg("--out", required=True, help="output folder"),
     )
-    exp.add_argument("name", choices=EXPERIMENTS)
-    exp.add_argument("--out", required=True, help="output folder")
-    exp.set_defaults(func=_experiment)
-
-    fk = sub.add_parser(
+    _command(
+        sub,
         "fk",
-        help="tool pose of a built-in robot at a configuration",
-        description="Prints the 4x4 tool pose (base frame, m).\n\nexample:\n"
+        _fk,
+        "tool pose of a built-in robot at a configuration",
+        "Prints the 4x4 tool pose (base frame, m).\n\nexample:\n"
         "  ttmanip fk gantry6 --q 0.1,0,0.2,0.3,0.4,0.5 --out out/fk",
-        formatter_class=fmt,
+        _arg("robot", choices=ROBOTS),
+        _arg("--q", required=True, help="joint values, comma-separated (m, rad)"),
+        _arg("--out", help="output folder for fk.json"),
     )
-    fk.add_argument("robot", choices=ROBOTS)
-    fk.add_argument("--q", required=True, help="joint values, comma-separated (m, rad)")
-    fk.add_argument("--out", help="output folder for fk.json")
-    fk.set_defaults(func=_fk)
-
-    ik = sub.add_parser(
+    _command(
+        sub,
         "ik",
-        help="every IK branch for a racket centre and face normal",
-        description="Prints every analytic IK branch reaching the racket pose.\n\nexample:\n"
+        _ik,
+        "every IK branch for a racket centre and face normal",
+        "Prints every analytic IK branch reaching the racket pose.\n\nexample:\n"
         "  ttmanip ik gantry6 --centre 0.35,-0.55,0.05 --normal 0.3,-1,-0.2",
-        formatter_class=fmt,
+        _arg("robot", choices=ROBOTS),
+        _arg("--centre", required=True, help="racket centre x,y,z (m, base frame)"),
+        _arg("--normal", required=True, help="face normal nx,ny,nz (base axes)"),
+        _arg("--out", help="output folder for ik.json and ik.csv"),
     )
-    ik.add_argument("robot", choices=ROBOTS)
-    ik.add_argument("--centre", required=True, help="racket centre x,y,z (m, base frame)")
-    ik.add_argument("--normal", required=True, help="face normal nx,ny,nz (base axes)")
-    ik.add_argument("--out", help="output folder for ik.json and ik.csv")
-    ik.set_defaults(func=_ik)
-
-    plan = sub.add_parser(
+    _command(
+        sub,
         "plan",
-        help="plan the hits of a JSON hit file",
-        description=HIT_FILE_HELP + "\n\nexample:\n  ttmanip plan hit.json --out out/plan",
-        formatter_class=fmt,
+        _plan,
+        "plan the hits of a JSON hit file",
+        HIT_FILE_HELP + "\n\nexample:\n  ttmanip plan hit.json --out out/plan",
+        _arg("file", help="hit file (.json)"),
+        _arg("--out", default="out/plan", help="output folder (default: out/plan)"),
     )
-    plan.add_argument("file", help="hit file (.json)")
-    plan.add_argument("--out", default="out/plan", help="output folder (default: out/plan)")
-    plan.set_defaults(func=_plan)
-
-    sim = sub.add_parser(
+    _command(
+        sub,
         "simulate",
-        help="plan and simulate the hits of a JSON hit file on the drives",
-        description=HIT_FILE_HELP + "\n\nexample:\n  ttmanip simulate hit.json --out out/sim",
-        formatter_class=fmt,
+        _simulate,
+        "plan and simulate the hits of a JSON hit file on the drives",
+        HIT_FILE_HELP + "\n\nexample:\n  ttmanip simulate hit.json --out out/sim",
+        _arg("file", help="hit file (.json)"),
+        _arg("--out", default="out/simulate", help="output folder (default: out/simulate)"),
+        _arg("--noise", type=float, help="current-sense noise (A, DriveSim's default if unset)"),
+        _arg("--setpoint-rate", type=float, default=1000.0, help="setpoint rate to the drives (Hz)"),
+        _arg("--gif", action="store_true", help="also write a GIF of each stroke"),
     )
-    sim.add_argument("file", help="hit file (.json)")
-    sim.add_argument("--out", default="out/simulate", help="output folder (default: out/simulate)")
-    sim.add_argument(
-        "--noise", type=float, default=None, help="current-sense noise (A, DriveSim's default if unset)"
-    )
-    sim.add_argument("--setpoint-rate", type=float, default=1000.0, help="setpoint rate to the drives (Hz)")
-    sim.add_argument("--gif", action="store_true", help="also write a GIF of each stroke")
-    sim.set_defaults(func=_simulate)
 
     info = sub.add_parser(
         "info",
@@ -548,16 +557,16 @@ def build_parser() -> argparse.ArgumentParser:
     info.add_argument("--out", help="output folder for info.json")
     info.set_defaults(func=_info)
 
-    export = sub.add_parser(
+    _command(
+        sub,
         "export",
-        help="write a built-in robot as URDF and as a ttmanip robot file",
-        description="--out is a folder (both files) or a file ending in .urdf or .toml."
+        _export,
+        "write a built-in robot as URDF and as a ttmanip robot file",
+        "--out is a folder (both files) or a file ending in .urdf or .toml."
         "\n\nexample:\n  ttmanip export gantry6 --out out/robots",
-        formatter_class=fmt,
+        _arg("robot", choices=ROBOTS),
+        _arg("--out", required=True, help="output folder, or a file ending in .urdf or .toml"),
     )
-    export.add_argument("robot", choices=ROBOTS)
-    export.add_argument("--out", required=True, help="output folder, or a file ending in .urdf or .toml")
-    export.set_defaults(func=_export)
 
     from . import rally_cli  # issue 13
 

@@ -81,8 +81,10 @@ impl PyRobot {
     /// time_budget in s (None: unlimited, then fully deterministic for a seed).
     /// Returns an IkResult; an unreachable target gives success=False with the best q found,
     /// never an exception (unless raise_on_failure=True: UnreachableError).
-    #[pyo3(signature = (T, q0=None, task="pose", *, method="auto", position_tolerance=1e-6, orientation_tolerance=1e-6,
-        max_iterations=60, max_restarts=500, time_budget=Some(1e-3), seed=0, racket_offset=None, raise_on_failure=false))]
+    #[pyo3(signature = (T, q0=None, task="pose", *, method="auto", position_tolerance=IkSolver::default().position_tolerance,
+        orientation_tolerance=IkSolver::default().orientation_tolerance, max_iterations=IkSolver::default().max_iterations as i128,
+        max_restarts=IkSolver::default().max_restarts as i128, time_budget=IkSolver::default().time_budget.map(|d| d.as_secs_f64()),
+        seed=IkSolver::default().seed as i128, racket_offset=None, raise_on_failure=false))]
     #[allow(non_snake_case, clippy::too_many_arguments)]
     fn ik(
         &self,
@@ -136,17 +138,7 @@ impl PyRobot {
         let outcomes = py.detach(|| front.solve(chain, &targets, &q0s)).py()?;
         if raise_on_failure {
             if let Some((i, o)) = outcomes.iter().enumerate().find(|(_, o)| o.status != IkStatus::Solved) {
-                let r = &o.result;
-                let msg = format!(
-                    "IK {} for target {i}: position error {:.3e} m, orientation error {:.3e} rad",
-                    if o.status == IkStatus::Unreachable {
-                        "failed, target unreachable,"
-                    } else {
-                        "did not converge"
-                    },
-                    r.position_error,
-                    r.orientation_error
-                );
+                let msg = o.failure_message(i);
                 return Err(crate::errors::ik_failure(o.status, msg));
             }
         }
@@ -267,7 +259,8 @@ impl PyRobot {
     /// (σ_min < threshold) the inverse is damped up to max_damping. frame: axes of the twist,
     /// "base" or "tool". With info=True returns (qdot, {"singular", "sigma_min", "damping",
     /// "residual"}).
-    #[pyo3(signature = (q, twist, frame="base", weights=None, threshold=1e-3, max_damping=1e-2, info=false))]
+    #[pyo3(signature = (q, twist, frame="base", weights=None, threshold=DifferentialIk::default().threshold,
+        max_damping=DifferentialIk::default().max_damping, info=false))]
     #[allow(clippy::too_many_arguments)]
     fn joint_velocity<'py>(
         &self,

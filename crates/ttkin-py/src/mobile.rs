@@ -197,14 +197,10 @@ impl PyRobot {
     ) -> PyResult<Array<'py>> {
         let task = Task::from_name(task).py()?;
         let n = self.chain.dof();
-        let q = vector(q, "q", n)?;
-        let j = self.chain.jacobian(&q, ttkin::JacobianFrame::Base).py()?;
-        let t = self.chain.fk_unchecked(&q);
-        let target = match target {
-            Some(m) => transform(m, "target")?,
-            None => t,
-        };
-        let je = task.jacobian(&j, &t, &target);
+        let target = target.map(|m| transform(m, "target")).transpose()?;
+        let je = task
+            .jacobian_at(&self.chain, &vector(q, "q", n)?, target.as_ref())
+            .py()?;
         finite_to_numpy(py, &[task.dim(), n], je.transpose().as_slice())
     }
 
@@ -213,10 +209,10 @@ impl PyRobot {
     #[pyo3(signature = (q, task="racket5"))]
     fn task_coordinates<'py>(&self, py: Python<'py>, q: &Any<'py>, task: &str) -> PyResult<Array<'py>> {
         let task = Task::from_name(task).py()?;
-        let q = vector(q, "q", self.chain.dof())?;
-        let mut x = [0.0; 6];
-        task.coordinates(&self.chain.fk_unchecked(&q), &mut x);
-        finite_to_numpy(py, &[task.dim()], &x[..task.dim()])
+        let x = task
+            .coordinates_at(&self.chain, &vector(q, "q", self.chain.dof())?)
+            .py()?;
+        finite_to_numpy(py, &[task.dim()], &x)
     }
 }
 

@@ -10,7 +10,7 @@ use ttkin::traj::limits::{self, KinematicLimits, SegmentKind, Violation};
 use ttkin::traj::via::{self, ViaKind};
 use ttkin::traj::{JointState, JointTrajectory, Samples};
 
-use crate::convert::{f64_array, to_numpy, vector, zeros, Any, Array};
+use crate::convert::{f64_array, table, to_numpy, vector, zeros, Any, Array};
 use crate::errors::{PyResultExt, ShapeError};
 use crate::robot::PyRobot;
 
@@ -445,17 +445,8 @@ fn traj_stroke<'py>(
     };
     let (s0, s1) = (state(&start, "state")?, state(&hit, "hit")?);
     let ready = vector(ready, "ready", n)?;
-    // Infinite limits are allowed here, so read them without the finiteness check.
-    let raw = |x: &Any<'py>, w: &str| -> PyResult<Vec<f64>> {
-        let a = f64_array(x, w)?;
-        if a.shape() != [n] {
-            return Err(ShapeError::new_err(format!(
-                "{w}: expected shape ({n},), got {}",
-                a.shape_str()
-            )));
-        }
-        Ok(a.data().to_vec())
-    };
+    // Infinite limits are allowed here: `table` reads them without a finiteness check.
+    let raw = |x: &Any<'py>, w: &str| table(x, w, n, 1);
     let mut limits = KinematicLimits::new(
         &raw(velocity, "velocity")?,
         &raw(acceleration, "acceleration")?,

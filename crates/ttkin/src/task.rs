@@ -9,6 +9,7 @@
 
 use nalgebra::{DMatrix, DVector, IsometryMatrix3, Matrix3, Matrix6xX, Rotation3, Translation3, Unit, Vector3};
 
+use crate::chain::{Chain, JacobianFrame};
 use crate::error::{Error, Result};
 
 /// Distance of the racket centre along the z axis of the last frame in seed 000 (m).
@@ -176,6 +177,22 @@ impl Task {
         }
     }
 
+    /// Task Jacobian (dim × n) of `chain` at `q` (checked) against `target` (`None`: the current
+    /// tool pose, so that J_e q̇ is the task velocity); see [`Task::jacobian`].
+    pub fn jacobian_at(&self, chain: &Chain, q: &[f64], target: Option<&IsometryMatrix3<f64>>) -> Result<DMatrix<f64>> {
+        let j = chain.jacobian(q, JacobianFrame::Base)?;
+        let t = chain.fk_unchecked(q);
+        Ok(self.jacobian(&j, &t, target.unwrap_or(&t)))
+    }
+
+    /// Task coordinates (`dim()` values, see [`Task::coordinates`]) of `chain`'s tool at `q`.
+    pub fn coordinates_at(&self, chain: &Chain, q: &[f64]) -> Result<Vec<f64>> {
+        let t = chain.fk(q)?;
+        let mut x = vec![0.0; self.dim()];
+        self.coordinates(&t, &mut x);
+        Ok(x)
+    }
+
     /// Task coordinates of a tool pose (base frame), `dim()` values: position (m); position (m)
     /// and rotation vector (rad); or seed 000's 5-vector [centre (m), polar, azimuth (rad)].
     pub fn coordinates(&self, pose: &IsometryMatrix3<f64>, out: &mut [f64]) {
@@ -341,4 +358,25 @@ pub fn racket_pose(x: &[f64; 5], offset: f64, z_hint: &Vector3<f64>) -> Isometry
 /// Unit vector helper used by callers that build targets from a normal direction.
 pub fn unit(v: Vector3<f64>) -> Result<Unit<Vector3<f64>>> {
     Unit::try_new(v, 1e-12).ok_or_else(|| Error::invalid("normal", "must be a non-zero vector"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The chain-level forms equal the pose-level ones, and a bad q is an error, not a panic.
+    #[test]
+    fn chain_forms_match_pose_forms() {
+        let chain = crate::robots::mobile8();
+        let q = [0.1, -0.2, 0.3, 0.2, -0.4, 0.5, 0.3, -0.1];
+        let t = chain.fk(&q).unwrap();
+        let j = chain.jacobian(&q, JacobianFrame::Base).unwrap();
+        let task = Task::from_name("racket5").unwrap();
+        assert_eq!(task.jacobian_at(&chain, &q, None).unwrap(), task.jacobian(&j, &t, &t));
+        let mut x = [0.0; 5];
+        task.coordinates(&t, &mut x);
+        assert_eq!(task.coordinates_at(&chain, &q).unwrap(), x.to_vec());
+        assert!(task.jacobian_at(&chain, &q[..3], None).is_err());
+        assert!(task.coordinates_at(&chain, &[f64::NAN; 8]).is_err());
+    }
 }

@@ -11,41 +11,18 @@ use crate::bus::{BusEvent, BusFault};
 use crate::canopen::cia402::{controlword_towards_enabled, DriveState, OpMode, CW_QUICK_STOP};
 use crate::canopen::emcy::Emcy;
 use crate::canopen::frame::{Cob, Frame, Frames};
-use crate::canopen::nmt::{encode_nmt, encode_sync, HeartbeatConsumer, NmtCommand};
+use crate::canopen::nmt::{encode_nmt, encode_sync, NmtCommand};
 use crate::canopen::od;
 use crate::canopen::pdo::{Rpdo, Tpdo};
-use crate::canopen::sdo::{SdoClient, SdoRequest, SdoResponse};
-use crate::canopen::{ProtocolError, Units};
+use crate::canopen::sdo::SdoResponse;
+use crate::canopen::ProtocolError;
 
+pub use super::link::{AxisSetpoint, ChannelCounters, Feedback, LinkConfig, SDO_RETRIES};
+use super::link::{Link, CONFIG_STEPS};
 pub use super::watchdog::{StopReason, WatchdogConfig};
 
 /// Most axes on one channel (the bus budget allows 2 at 1 kHz and 1 Mbit/s).
 pub const MAX_AXES_PER_CHANNEL: usize = 4;
-
-/// One axis as the controller sees it.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct LinkConfig {
-    /// CANopen node id of the drive (1–127).
-    pub node: u8,
-    /// SI ↔ CiA 402 integer scaling.
-    #[serde(default)]
-    pub units: Units,
-    /// Largest |target − position| before the watchdog stops, joint units (rad or m).
-    #[serde(default = "default_following")]
-    pub following_error_limit: f64,
-    /// Largest |current| accepted from the drive, A (a larger value is an out-of-range frame).
-    #[serde(default = "default_current")]
-    pub max_current: f64,
-}
-
-fn default_following() -> f64 {
-    0.05
-}
-
-fn default_current() -> f64 {
-    10.0
-}
 
 /// Lifecycle of a channel.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -61,84 +38,6 @@ pub enum Phase {
     /// Every axis stopped (or the stop timed out).
     Stopped,
 }
-
-/// Joint setpoint of one axis, SI (rad or m, rad/s or m/s, N·m or N).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct AxisSetpoint {
-    /// Position.
-    pub q: f64,
-    /// Velocity (CSV target).
-    pub qd: f64,
-    /// Torque feed-forward (CSP/CSV torque offset) or torque target (CST).
-    pub tau: f64,
-}
-
-/// Counters of one channel (all visible to the application).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct ChannelCounters {
-    /// Cycles run.
-    pub cycles: u64,
-    /// Frames received.
-    pub rx: u64,
-    /// Malformed frames from our drives.
-    pub malformed: u64,
-    /// Out-of-range values from our drives.
-    pub out_of_range: u64,
-    /// Cycles in which an axis had no fresh feedback.
-    pub missed_feedback: u64,
-    /// Second TPDO of a node within one cycle.
-    pub duplicate_feedback: u64,
-    /// Bus error frames.
-    pub bus_faults: u64,
-    /// SDO timeouts and aborts.
-    pub sdo_failures: u64,
-    /// Valid TPDOs received.
-    pub tpdo_rx: u64,
-    /// TPDOs due: one per SYNC sent per axis, counted from the axis' first TPDO.
-    pub tpdo_expected: u64,
-}
-
-impl ChannelCounters {
-    /// TPDOs lost on the way (due − received; call after the late ones were drained).
-    pub fn tpdo_lost(&self) -> u64 {
-        self.tpdo_expected.saturating_sub(self.tpdo_rx)
-    }
-}
-
-/// Last feedback of one axis.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Feedback {
-    /// Position, joint units.
-    pub q: f64,
-    /// Current, A.
-    pub current: f64,
-    /// Statusword.
-    pub statusword: u16,
-    /// Cycles the channel had completed when this feedback arrived (fresh for the cycle after).
-    pub received_cycle: u64,
-}
-
-#[derive(Debug, Clone, Copy)]
-struct Link {
-    cfg: LinkConfig,
-    heartbeat: HeartbeatConsumer,
-    sdo: SdoClient,
-    config_step: u8,
-    sdo_retries: u8,
-    state: Option<DriveState>,
-    feedback: Option<Feedback>,
-    fresh: bool,
-    missed_in_row: u32,
-    controlword: u16,
-    following_holdoff: u32,
-    hold: f64,
-    last_target: f64,
-}
-
-const CONFIG_STEPS: u8 = 4;
-
-/// SDO timeouts tolerated per drive during configuration (frames can be lost: retry).
-pub const SDO_RETRIES: u8 = 3;
 
 /// The sans-I/O controller of one channel.
 #[derive(Debug, Clone)]
@@ -166,22 +65,7 @@ impl ChannelMaster {
         }
         let mut links = [None; MAX_AXES_PER_CHANNEL];
         for (k, a) in axes.iter().enumerate() {
-            a.units.validate()?;
-            links[k] = Some(Link {
-                cfg: *a,
-                heartbeat: HeartbeatConsumer::new(a.node, wd.heartbeat_cycles)?,
-                sdo: SdoClient::new(a.node, wd.sdo_cycles)?,
-                config_step: 0,
-                sdo_retries: 0,
-                state: None,
-                feedback: None,
-                fresh: false,
-                missed_in_row: 0,
-                controlword: 0,
-                following_holdoff: 0,
-                hold: 0.0,
-                last_target: 0.0,
-            });
+            links[k] = Some(Link::new(*a, &wd)?);
         }
         Ok(ChannelMaster {
             links,
@@ -363,36 +247,6 @@ impl ChannelMaster {
         }
     }
 
-    fn config_request(&self, step: u8, l: &Link) -> SdoRequest {
-        match step {
-            0 => SdoRequest::Upload {
-                index: od::DEVICE_TYPE,
-                sub: 0,
-            },
-            1 => SdoRequest::Download {
-                index: od::MODES_OF_OPERATION,
-                sub: 0,
-                size: 1,
-                value: self.mode.code() as u8 as u32,
-            },
-            2 => SdoRequest::Download {
-                index: od::HEARTBEAT_TIME,
-                sub: 0,
-                size: 2,
-                value: self.wd.heartbeat_period_ms as u32,
-            },
-            _ => {
-                let w = (l.cfg.following_error_limit * l.cfg.units.increments_per_unit).clamp(1.0, i32::MAX as f64);
-                SdoRequest::Download {
-                    index: od::FOLLOWING_ERROR_WINDOW,
-                    sub: 0,
-                    size: 4,
-                    value: w as u32,
-                }
-            }
-        }
-    }
-
     /// One cycle (update and write): watchdog checks on this cycle's feedback, phase logic, then
     /// the RPDO of every axis and the SYNC into `out`. `setpoints[k]` is used in [`Phase::Run`].
     pub fn cycle(&mut self, setpoints: &[AxisSetpoint], out: &mut Frames) {
@@ -416,7 +270,7 @@ impl ChannelMaster {
             let Some(mut l) = self.links[k] else { continue };
             // SDO configuration, one transfer at a time per node
             if phase == Phase::Configure && l.config_step < CONFIG_STEPS && !l.sdo.busy() {
-                let req = self.config_request(l.config_step, &l);
+                let req = l.config_request(l.config_step, mode, &wd);
                 if let Some(f) = l.sdo.start(req) {
                     out.push(f);
                 }

@@ -1,10 +1,12 @@
-//! The controller runtime: the sans-I/O channel controller ([`master`]) with its [`watchdog`],
+//! The controller runtime: the sans-I/O channel controller ([`master`]) with its axes ([`link`])
+//! and its [`watchdog`],
 //! and on top of it the real-time pieces: clocks and scheduling ([`rt`]), statistics ([`stats`]),
 //! trajectories ([`trajectory`]), the configuration file ([`config`]) and the per-channel thread
 //! ([`channel`]) that drives a controller over a [`crate::bus::CanBus`].
 
 pub mod channel;
 pub mod config;
+pub mod link;
 pub mod master;
 pub mod rt;
 pub mod stats;

@@ -95,6 +95,22 @@ pub struct IkOutcome {
     pub result: IkResult,
 }
 
+impl IkOutcome {
+    /// A sentence on a target that was not solved, for an error raised on failure: target
+    /// `index` of its batch, the status and the errors (m, rad) of the best configuration.
+    pub fn failure_message(&self, index: usize) -> String {
+        let what = match self.status {
+            IkStatus::Unreachable => "failed, target unreachable,",
+            _ => "did not converge",
+        };
+        let r = &self.result;
+        format!(
+            "IK {what} for target {index}: position error {:.3e} m, orientation error {:.3e} rad",
+            r.position_error, r.orientation_error
+        )
+    }
+}
+
 /// The IK front end: solver settings, method, and the analytic solver found for the chain.
 #[derive(Debug, Clone)]
 pub struct IkBatchSolver {

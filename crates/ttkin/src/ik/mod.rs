@@ -22,6 +22,7 @@ pub mod batch;
 pub mod differential;
 pub mod gantry;
 pub mod numeric;
+pub mod residual;
 
 use std::f64::consts::PI;
 
@@ -265,28 +266,12 @@ impl Analytic {
             crate::error::check_vector("hint", h, n)?;
         }
         let count = targets.len();
-        if out.len() != count * MAX_BRANCHES * n || counts.len() != count {
-            return Err(Error::shape(
-                "output buffers",
-                format!("{} and {count} values", count * MAX_BRANCHES * n),
-                format!("{} and {}", out.len(), counts.len()),
-            ));
-        }
+        check_branch_buffers(count, n, out, counts)?;
         out.par_chunks_mut(MAX_BRANCHES * n.max(1))
             .zip(counts.par_iter_mut())
             .zip(targets.par_iter())
             .try_for_each(|((oi, ci), pose)| {
-                oi.fill(f64::NAN);
-                *ci = match self.solve(pose, hint, filter) {
-                    Ok(sols) => {
-                        for (dst, q) in oi.chunks_exact_mut(n).zip(sols.iter()) {
-                            dst.copy_from_slice(q);
-                        }
-                        sols.len()
-                    }
-                    Err(Error::Unreachable(_)) => 0,
-                    Err(e) => return Err(e),
-                };
+                *ci = self.solve_into(pose, hint, filter, oi)?;
                 Ok(())
             })
     }
@@ -307,13 +292,7 @@ impl Analytic {
             return Err(Error::shape("targets", "N × 16 values", targets.len()));
         }
         let count = targets.len() / 16;
-        if out.len() != count * MAX_BRANCHES * n || counts.len() != count {
-            return Err(Error::shape(
-                "output buffers",
-                format!("{} and {count} values", count * MAX_BRANCHES * n),
-                format!("{} and {}", out.len(), counts.len()),
-            ));
-        }
+        check_branch_buffers(count, n, out, counts)?;
         const CHUNK: usize = 256;
         out.par_chunks_mut(CHUNK * MAX_BRANCHES * n)
             .zip(counts.par_chunks_mut(CHUNK))
@@ -329,20 +308,32 @@ impl Analytic {
                     let m = Matrix4::from_row_slice(ti);
                     let pose = isometry_from_matrix("target", &m)
                         .map_err(|e| Error::invalid(format!("targets[{}]", chunk * CHUNK + i), e.to_string()))?;
-                    oi.fill(f64::NAN);
-                    *ci = match self.solve(&pose, None, filter) {
-                        Ok(sols) => {
-                            for (dst, q) in oi.chunks_exact_mut(n).zip(sols.iter()) {
-                                dst.copy_from_slice(q);
-                            }
-                            sols.len()
-                        }
-                        Err(Error::Unreachable(_)) => 0,
-                        Err(e) => return Err(e),
-                    };
+                    *ci = self.solve_into(&pose, None, filter, oi)?;
                 }
                 Ok(())
             })
+    }
+
+    /// The branches of one pose into a row of [`MAX_BRANCHES`] × n values (NaN past the last);
+    /// returns their count, 0 for an unreachable pose.
+    fn solve_into(
+        &self,
+        pose: &IsometryMatrix3<f64>,
+        hint: Option<&[f64]>,
+        filter: LimitFilter,
+        row: &mut [f64],
+    ) -> Result<usize> {
+        row.fill(f64::NAN);
+        match self.solve(pose, hint, filter) {
+            Ok(sols) => {
+                for (dst, q) in row.chunks_exact_mut(self.dof()).zip(sols.iter()) {
+                    dst.copy_from_slice(q);
+                }
+                Ok(sols.len())
+            }
+            Err(Error::Unreachable(_)) => Ok(0),
+            Err(e) => Err(e),
+        }
     }
 
     /// Number of joints of the chain.
@@ -402,4 +393,17 @@ pub(crate) fn dh_rows(chain: &Chain, convention: DhConvention) -> Option<Vec<(Jo
 /// True when `a` equals `b` to the structural tolerance 1e-12.
 pub(crate) fn same(a: f64, b: f64) -> bool {
     (a - b).abs() <= 1e-12
+}
+
+/// Checks the output buffers of a batch of `count` poses of an n-joint chain: N × [`MAX_BRANCHES`]
+/// × n joint values and N branch counts.
+fn check_branch_buffers(count: usize, n: usize, out: &[f64], counts: &[usize]) -> Result<()> {
+    if out.len() != count * MAX_BRANCHES * n || counts.len() != count {
+        return Err(Error::shape(
+            "output buffers",
+            format!("{} and {count} values", count * MAX_BRANCHES * n),
+            format!("{} and {}", out.len(), counts.len()),
+        ));
+    }
+    Ok(())
 }

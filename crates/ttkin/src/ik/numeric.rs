@@ -25,8 +25,9 @@
 //!
 //! Hot loops allocate nothing: all buffers live in an [`IkScratch`] (Pinocchio's model/data split).
 //!
-//! Length (about 560 lines): one solver, its settings, scratch and restart loop, read top to
-//! bottom; the front end that chooses it is [`super::batch`].
+//! One solver, its settings, scratch and restart loop, read top to bottom; the residual it
+//! minimises and its Jacobian are [`super::residual`], the front end that chooses it is
+//! [`super::batch`].
 
 // Index loops over joints read like the maths here (several arrays per index): keep them.
 #![allow(clippy::needless_range_loop)]
@@ -39,7 +40,10 @@ use rayon::prelude::*;
 use crate::chain::{Chain, JacobianFrame};
 use crate::error::{check_finite, check_vector, Error, Result};
 use crate::joint::JointType;
-use crate::task::{racket_normal, Task};
+use crate::task::Task;
+
+pub use super::residual::{measure, residual_dim};
+use super::residual::{residual_errors, residual_into, residual_jacobian_into};
 
 /// Steps after which an attempt must have halved its cost E, or it is abandoned as stalled.
 pub const STALL_WINDOW: usize = 6;
@@ -416,85 +420,6 @@ pub(crate) fn check_batch(chain: &Chain, targets: &[IsometryMatrix3<f64>], q0s: 
         check_finite("target pose", t.translation.vector.as_slice())?;
     }
     Ok(())
-}
-
-/// Rows of the solver's residual for `task`: 6 for the pose and the racket, 3 for the position.
-pub fn residual_dim(task: &Task) -> usize {
-    match task {
-        Task::Racket { .. } => 6,
-        other => other.dim(),
-    }
-}
-
-/// The solver's residual (target − current): [`Task::error_into`], except for the racket task's
-/// chord form [c* − c; n* − n] (see the module doc).
-fn residual_into(task: &Task, t: &IsometryMatrix3<f64>, target: &IsometryMatrix3<f64>, e: &mut [f64]) {
-    match task {
-        Task::Racket { offset } => {
-            let dc = crate::task::racket_centre(target, *offset) - crate::task::racket_centre(t, *offset);
-            let dn = racket_normal(target) - racket_normal(t);
-            e[..3].copy_from_slice(dc.as_slice());
-            e[3..6].copy_from_slice(dn.as_slice());
-        }
-        other => other.error_into(t, target, e),
-    }
-}
-
-/// Jacobian of [`residual_into`] with ė = −J_e q̇: for the chord rows ṅ = ω × n, so J_n = −[n]× J_ω.
-fn residual_jacobian_into(
-    task: &Task,
-    j: &Matrix6xX<f64>,
-    t: &IsometryMatrix3<f64>,
-    target: &IsometryMatrix3<f64>,
-    out: &mut DMatrix<f64>,
-) {
-    match task {
-        Task::Racket { offset } => {
-            let zo = t.rotation.matrix().column(2) * *offset;
-            let n = racket_normal(t);
-            for c in 0..j.ncols() {
-                let v = nalgebra::Vector3::new(j[(0, c)], j[(1, c)], j[(2, c)]);
-                let w = nalgebra::Vector3::new(j[(3, c)], j[(4, c)], j[(5, c)]);
-                let jc = v - zo.cross(&w);
-                let jn = w.cross(&n);
-                for r in 0..3 {
-                    out[(r, c)] = jc[r];
-                    out[(3 + r, c)] = jn[r];
-                }
-            }
-        }
-        other => other.jacobian_into(j, t, target, out.as_mut_slice()),
-    }
-}
-
-/// Position error (m) and orientation error (rad) read from the solver's residual: the same values
-/// as [`measure`] (the pose residual's rotation part is the exact rotation vector; the racket's
-/// chord |n* − n| = 2·sin(θ/2)), without recomputing the pose difference.
-fn residual_errors(task: &Task, e: &[f64]) -> (f64, f64) {
-    let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
-    match task {
-        Task::Pose => (norm(&e[..3]), norm(&e[3..6])),
-        Task::Position => (norm(&e[..3]), 0.0),
-        Task::Racket { .. } => (norm(&e[..3]), 2.0 * (0.5 * norm(&e[3..6])).min(1.0).asin()),
-    }
-}
-
-/// Position error (m) and orientation error (rad) of pose `t` against `target` for `task`:
-/// distance of the tool points (racket centres) and rotation angle (angle between racket normals).
-pub fn measure(task: &Task, t: &IsometryMatrix3<f64>, target: &IsometryMatrix3<f64>) -> (f64, f64) {
-    match task {
-        Task::Pose => {
-            let dp = (target.translation.vector - t.translation.vector).norm();
-            let r = (target.rotation * t.rotation.inverse()).into_inner();
-            (dp, crate::task::rotation_log(&r).norm())
-        }
-        Task::Position => ((target.translation.vector - t.translation.vector).norm(), 0.0),
-        Task::Racket { offset } => {
-            let dc = crate::task::racket_centre(target, *offset) - crate::task::racket_centre(t, *offset);
-            let (n, nt) = (racket_normal(t), racket_normal(target));
-            (dc.norm(), n.cross(&nt).norm().atan2(n.dot(&nt)))
-        }
-    }
 }
 
 /// A uniform sample in [lower, upper]; unbounded revolute joints sample (−π, π], unbounded
