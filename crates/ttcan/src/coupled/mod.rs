@@ -43,7 +43,7 @@ mod trace;
 use crate::error::{Error, Result};
 use crate::motor::Measurement;
 use crate::schedule::Scheduler;
-pub use drives::{axis_config_from_drive, axis_configs_from_chain};
+pub use drives::axis_configs_from_chain;
 use trace::interpolate;
 pub use trace::CoupledTrace;
 
@@ -221,7 +221,7 @@ impl CoupledSim {
         Ok(sim)
     }
 
-    /// One axis per joint built by [`axis_configs_from_chain`] at `q0`, then
+    /// One axis per joint built from the robot's drive sections by [`axis_configs_from_chain`] at `q0`, then
     /// [`CoupledSim::reset`] to (`q0`, 0).
     pub fn from_chain(chain: &Chain, q0: &[f64], options: CoupledOptions) -> Result<Self> {
         let configs = axis_configs_from_chain(chain, q0, &options)?;
