@@ -161,6 +161,8 @@ API: dict[str, dict] = {
     "DriveSim.tick": {"args": {"n": "small_count"}},
     "DriveSim.run": {"args": {"t": "short_times"}},
     "motor.theta5_ripple_case": {},
+    "motor.actuators": {},
+    "motor.drive_line": {"skip_call": "formats an entry of motor.actuators"},
     "motor.theta5_figure": {"args": {"path": "out_path"}, "os_error": True},
     "motor.Loops.observer_bandwidth_hz": {},
     # --- ball rally (issue 13)

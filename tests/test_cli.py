@@ -167,3 +167,13 @@ def test_other_user_errors_are_one_line(tmp_path):
         ro.mkdir()
         ro.chmod(0o500)
         one_line_error(ttmanip("info", "gantry6", "--out", ro / "x"), "--out")
+
+
+def test_info_prints_each_joints_motor_ratings_and_gear():
+    r = ttmanip("info", "gantry6")
+    assert r.returncode == 0
+    lines = [ln for ln in r.stdout.splitlines() if "drive: motor k_t" in ln]
+    assert len(lines) == 6
+    # d1: the 400 W servo of robots/gantry6.toml, θ5: the RE 30 on 30:1
+    assert "2.80 A cont / 8.40 A peak" in lines[0] and "gear 200 (η 0.9)" in lines[0]
+    assert "k_t 0.0259 N·m/A" in lines[4] and "gear 30" in lines[4]

@@ -639,6 +639,10 @@ class DriveSim:
 def drive_theta5_case(setpoint_rate: float = 1000.0) -> dict[str, Any]:
     """Issue 10's θ5 case (gantry6 demo stroke on θ5, RE 25 + 14:1, 4096 counts): RMS numbers and traces."""
 
+def actuators(robot: Robot) -> list[dict[str, Any]]:
+    """Each joint's actuator from the robot file's drive section: joint, drive (as given),
+    continuous_current, peak_current, max_speed, bus_voltage, encoder_counts, gear_ratio."""
+
 def step_metrics(t: ArrayLike, y: ArrayLike, target: float) -> tuple[float, float]:
     """(10–90 % rise time in s, overshoot as a fraction of ``target``) of ``y`` sampled at ``t``."""
 

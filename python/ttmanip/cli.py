@@ -409,14 +409,30 @@ def _simulate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _actuators(robot):
+    """Each joint's actuator from the robot's drive sections, or None when a joint has none."""
+    from . import motor
+    from ._ttmanip import ModelError
+
+    try:
+        return motor.actuators(robot)
+    except ModelError:
+        return None
+
+
 def _info(args: argparse.Namespace) -> int:
+    from .motor import drive_line
+
     robot = _robot(args.robot)
     print(robot)
     rows = []
+    drives = _actuators(robot)
     columns = zip(robot.joint_names, robot.joint_types, robot.limits, strict=True)
     for j, (name, kind, (lo, hi)) in enumerate(columns):
         v, a, e = robot.velocity_limits[j], robot.acceleration_limits[j], robot.effort_limits[j]
         print(f"  {name:10s} {kind:9s} [{lo: .4f}, {hi: .4f}]  v {v:g}  a {a:g}  effort {e:g}")
+        if drives is not None:
+            print(f"  {'':10s} drive: {drive_line(drives[j])}")
         rows.append(
             {
                 "name": name,
@@ -426,6 +442,7 @@ def _info(args: argparse.Namespace) -> int:
                 "velocity": v,
                 "acceleration": a,
                 "effort": e,
+                "drive": None if drives is None else drives[j],
             }
         )
     if args.out:

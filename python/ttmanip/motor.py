@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ._ttmanip import ServoSim, TtmanipError, drive_theta5_case, step_metrics
+from ._ttmanip import ServoSim, TtmanipError, actuators, drive_theta5_case, step_metrics
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -38,6 +38,8 @@ __all__ = [
     "Loops",
     "Response",
     "Servo",
+    "actuators",
+    "drive_line",
     "plot",
     "quintic",
     "theta5_figure",
@@ -300,6 +302,26 @@ def plot(response: Response, path: str | PathLike[str] | None = None, title: str
     if path is not None:
         fig.savefig(path, dpi=120)
     return fig
+
+
+def drive_line(actuator: dict) -> str:
+    """One line describing an entry of :func:`actuators`: the motor (k_t, R, L, rotor inertia), its
+    ratings (continuous and peak current, largest joint speed), gear, encoder and bus."""
+    d = actuator["drive"] or {}
+
+    def value(key: str, fmt: str, scale: float = 1.0, unit: str = "") -> str:
+        v = d.get(key)
+        return "?" if v is None else f"{v * scale:{fmt}}{unit}"
+
+    eta = d.get("gear_efficiency")
+    return (
+        f"motor k_t {value('torque_constant', '.4g')} N·m/A, R {value('resistance', '.4g')} Ω, "
+        f"L {value('inductance', '.4g', 1e3)} mH, J {value('rotor_inertia', '.3g')} kg·m²; "
+        f"{actuator['continuous_current']:.2f} A cont / {actuator['peak_current']:.2f} A peak, "
+        f"max {actuator['max_speed']:.3g}; gear {actuator['gear_ratio']:g}"
+        + ("" if eta is None else f" (η {eta:g})")
+        + f", encoder {actuator['encoder_counts']}, bus {actuator['bus_voltage']:g} V"
+    )
 
 
 def theta5_ripple_case() -> dict[str, float]:

@@ -4,9 +4,10 @@
 //! The θ5 case (issue 10): gantry6's demo hitting stroke (the pipeline's default hit request:
 //! racket at (0.35, −0.55, 0.05) m, face normal (0.3, −1, −0.2), 3 m/s along the normal at
 //! t = 0.3 s, from and back to the ready pose (0, 0, 0, 0.6, 0.6, 0)), joint θ5 (index 4) driven
-//! alone by a maxon RE 25 + GP 26 A 14:1 with a 4096-count encoder, its load the mean of the
-//! link-only mass-matrix entry M₄₄ along the stroke (the drive's own rotor is in the motor model,
-//! so it is counted once), no gravity (as in the demo).
+//! alone by a maxon RE 25 + GP 26 A 14:1 with a 4096-count encoder, its load 0.0148 kg·m² as the
+//! issue defines it (the mean link-only mass-matrix entry M₄₄ along the stroke plus
+//! [`ISSUE_THETA5_ARMATURE`], so the case does not move when gantry6's drives change), no gravity
+//! (as in the demo).
 
 use nalgebra::{Matrix3, Vector3};
 use ttkin::ik::{Analytic, LimitFilter};
@@ -98,11 +99,15 @@ pub fn mean_joint_inertia(
     Ok(sum / samples as f64)
 }
 
+/// The armature of the θ5 drive gantry6 had when issue 10 was filed (30:1, 2·10⁻⁶ kg·m² rotor):
+/// part of the case's load as the issue defines it (0.0148 kg·m²), whatever gantry6's drive is now.
+pub const ISSUE_THETA5_ARMATURE: f64 = 30.0 * 30.0 * 2.0e-6;
+
 /// What the θ5 case measures.
 #[derive(Debug, Clone)]
 pub struct Theta5Case {
-    /// Load inertia about θ5 used (mean M₄₄ along the stroke, armature of gantry6's own θ5 drive
-    /// included, as in the issue), kg·m².
+    /// Load inertia about θ5 used (mean link-only M₄₄ along the stroke plus
+    /// [`ISSUE_THETA5_ARMATURE`], as the issue defines it), kg·m².
     pub load_inertia: f64,
     /// Rate at which the position setpoints reach the drive, Hz.
     pub setpoint_hz: f64,
@@ -133,7 +138,7 @@ pub fn theta5_case(setpoint_hz: f64) -> Result<Theta5Case> {
 pub fn theta5_case_with(setpoint_hz: f64, tune: impl FnOnce(&mut AxisConfig)) -> Result<Theta5Case> {
     let chain = ttkin::robots::gantry6();
     let s = gantry6_demo_stroke(&chain)?;
-    let load_inertia = mean_joint_inertia(&chain, &s.trajectory, 4, true)?;
+    let load_inertia = mean_joint_inertia(&chain, &s.trajectory, 4, false)? + ISSUE_THETA5_ARMATURE;
     let mut model = MotorModel::maxon_re25_gp26();
     model.load = Load {
         inertia: load_inertia,

@@ -39,7 +39,8 @@ impl JointSizing {
 /// Sizes the drives `configs` (one per joint of `chain`) for the motion sampled uniformly at K
 /// instants, `q`, `qd`, `qdd` K × n row-major, under `gravity` (m/s², base frame). The motor
 /// current is the joint torque (rigid bodies, armature, friction) through each axis' gear ratio
-/// and torque constant.
+/// and torque constant and the robot file's gear efficiency (1 when absent), a margin on top of
+/// the friction.
 pub fn size_drives(
     chain: &Chain,
     configs: &[AxisConfig],
@@ -64,6 +65,11 @@ pub fn size_drives(
         });
     }
     let k = q.len() / n;
+    let efficiency: Vec<f64> = chain
+        .joints()
+        .iter()
+        .map(|j| j.drive().and_then(|d| d.gear_efficiency).unwrap_or(1.0))
+        .collect();
     let mut data = DynamicsData::new(&dynamics);
     let (mut sum_sq, mut peak, mut speed) = (vec![0.0; n], vec![0.0f64; n], vec![0.0f64; n]);
     for s in 0..k {
@@ -71,9 +77,9 @@ pub fn size_drives(
         let tau = dynamics
             .inverse_dynamics(&mut data, &q[r.clone()], &qd[r.clone()], &qdd[r.clone()], gravity, None)
             .map_err(|e| Error::Model(e.to_string()))?;
-        for j in 0..n {
+        for (j, eta) in efficiency.iter().enumerate() {
             let m = &configs[j].model;
-            let i = tau[j] / (m.gearbox.ratio * m.motor.torque_constant);
+            let i = tau[j] / (m.gearbox.ratio * m.motor.torque_constant * eta);
             sum_sq[j] += i * i;
             peak[j] = peak[j].max(i.abs());
             speed[j] = speed[j].max(qd[s * n + j].abs());
@@ -93,4 +99,28 @@ pub fn size_drives(
             speed_limit: configs[j].max_speed,
         })
         .collect())
+}
+
+/// Ok when every joint of `sizing` passes; otherwise an error naming the first joint that does
+/// not and what it exceeds (RMS against continuous, peak against peak, speed against limit).
+pub fn check(sizing: &[JointSizing]) -> Result<()> {
+    for s in sizing {
+        let why = if s.rms_current > s.continuous_rating {
+            format!(
+                "RMS current {:.3} A above the continuous rating {:.3} A",
+                s.rms_current, s.continuous_rating
+            )
+        } else if s.peak_current > s.peak_rating {
+            format!(
+                "peak current {:.3} A above the peak rating {:.3} A",
+                s.peak_current, s.peak_rating
+            )
+        } else if s.peak_speed > s.speed_limit {
+            format!("speed {:.3} above the limit {:.3}", s.peak_speed, s.speed_limit)
+        } else {
+            continue;
+        };
+        return Err(Error::Model(format!("joint '{}' is undersized: {why}", s.joint)));
+    }
+    Ok(())
 }

@@ -245,9 +245,10 @@ fn step_metrics(t: &Bound<'_, PyAny>, y: &Bound<'_, PyAny>, target: f64) -> PyRe
     ))
 }
 
-/// Adds `DriveSim`, `drive_theta5_case` and `step_metrics` to the module.
+/// Adds `DriveSim`, `drive_theta5_case`, `actuators` and `step_metrics` to the module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<DriveSim>()?;
+    m.add_function(wrap_pyfunction!(actuators, m)?)?;
     m.add_function(wrap_pyfunction!(step_metrics, m)?)?;
     m.add_function(wrap_pyfunction!(drive_theta5_case, m)?)
 }
@@ -277,4 +278,35 @@ fn drive_theta5_case<'py>(py: Python<'py>, setpoint_rate: f64) -> PyResult<Bound
     d.set_item("position", to_numpy(py, &[k], &c.trace.position))?;
     d.set_item("position_ref", to_numpy(py, &[k], &c.reference))?;
     Ok(d)
+}
+
+/// Each joint's actuator as `ttcan::actuator` builds it from the robot file's drive section (at
+/// q = 0): `joint`, `drive` (the section's values as given, SI units, motor side; None without
+/// one) and the axis' `continuous_current`, `peak_current` (A), `max_speed` (rad/s or m/s at the
+/// joint), `bus_voltage` (V), `encoder_counts`, `gear_ratio`.
+#[ttkin_py_guard::guarded]
+#[pyfunction]
+fn actuators<'py>(py: Python<'py>, robot: &Robot) -> PyResult<Vec<Bound<'py, PyDict>>> {
+    let chain = &robot.chain;
+    let configs = ttcan::coupled::axis_configs_from_chain(chain, &vec![0.0; chain.dof()], &CoupledOptions::default())
+        .map_err(to_py)?;
+    let mut out = Vec::with_capacity(configs.len());
+    for (j, c) in chain.joints().iter().zip(&configs) {
+        let d = PyDict::new(py);
+        d.set_item("joint", j.name())?;
+        let drive = j
+            .drive()
+            .map(|v| pythonize::pythonize(py, v))
+            .transpose()
+            .map_err(|e| TtmanipError::new_err(e.to_string()))?;
+        d.set_item("drive", drive)?;
+        d.set_item("continuous_current", c.continuous_current)?;
+        d.set_item("peak_current", c.peak_current)?;
+        d.set_item("max_speed", c.max_speed)?;
+        d.set_item("bus_voltage", c.model.bus_voltage)?;
+        d.set_item("encoder_counts", c.model.encoder_counts_per_rev)?;
+        d.set_item("gear_ratio", c.model.gearbox.ratio)?;
+        out.push(d);
+    }
+    Ok(out)
 }

@@ -15,7 +15,10 @@
 //! inertial = { mass = 1.2, com = [-0.15, 0, 0], inertia = [1e-3, 9e-3, 9e-3, 0, 0, 0] }  # always SI
 //! ```
 //! A joint may also carry its drive (SI units; see [`crate::joint::Drive`]):
-//! `drive = { gear_ratio = 100, rotor_inertia = 1.2e-6, viscous = 0.05, coulomb = 0.2, torque_constant = 0.025 }`.
+//! `drive = { gear_ratio = 100, rotor_inertia = 1.2e-6, viscous = 0.05, coulomb = 0.2, torque_constant = 0.025 }`,
+//! optionally with the motor's datasheet values (`resistance`, `inductance`, `nominal_current`,
+//! `peak_current`, `max_motor_speed`, the five thermal values, `gear_efficiency`, `encoder_counts`,
+//! `bus_voltage`; see `robots/gantry6.toml`).
 //! A joint may give `origin = { xyz = [...], rpy = [...] }` and `axis = [x, y, z]` instead of `dh`.
 //! Inertias are always SI: kg, m, kg·m² (ixx, iyy, izz, ixy, ixz, iyz) about the centre of mass
 //! in link-frame axes. Unknown keys are errors, so a typo never passes silently.

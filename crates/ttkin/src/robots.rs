@@ -12,6 +12,8 @@ use crate::error::Result;
 use crate::inertial::Inertial;
 use crate::joint::{Dh, DhConvention, Drive, Joint, Limits};
 
+pub mod drives;
+
 const DEG: f64 = PI / 180.0;
 
 fn dh(a: f64, alpha: f64, d: f64, theta: f64) -> Dh {
@@ -382,6 +384,7 @@ fn drive(gear_ratio: f64, rotor_inertia: f64, viscous: f64, coulomb: f64, torque
         viscous,
         coulomb,
         torque_constant: Some(torque_constant),
+        ..Drive::geared(gear_ratio)
     }
 }
 
@@ -405,8 +408,7 @@ fn mobile8_dynamics(chain: Chain) -> Result<Chain> {
 /// gantry6 inertias (estimates): the d1 carriage (with the d2 axis) 8 kg and the d2 carriage
 /// 4 kg, solid blocks; links 3–6 are 40 × 2 mm aluminium tubes with the stators of joints 4–6
 /// (0.8, 0.6, 0.3 kg) lumped at the next joint; the 0.18 kg racket is centred at the tool point.
-/// Drives: belt axes with 20 mm pulleys behind 5:1 gears (G = 250 rad/m), 1.2·10⁻⁵ kg·m² servo
-/// rotors; wrist joints 50:1 (θ3, θ4) and 30:1 (θ5, θ6).
+/// Drives: catalogue-class motors with full datasheet values, see [`drives::gantry6`].
 fn gantry6_dynamics(chain: Chain) -> Result<Chain> {
     let links = vec![
         block(8.0, Vector3::zeros(), [0.30, 0.20, 0.10]),
@@ -416,14 +418,7 @@ fn gantry6_dynamics(chain: Chain) -> Result<Chain> {
         tube_link(&chain, 4, TUBE_40X2, 0.02, 0.3),
         tube_link(&chain, 5, TUBE_40X2, 0.02, 0.0).combine(&racket(chain.tool().translation.vector)),
     ];
-    let drives = vec![
-        drive(250.0, 1.2e-5, 20.0, 15.0, 0.3),
-        drive(250.0, 1.2e-5, 15.0, 10.0, 0.3),
-        drive(50.0, 5.0e-6, 0.05, 0.3, 0.06),
-        drive(50.0, 5.0e-6, 0.05, 0.3, 0.06),
-        drive(30.0, 2.0e-6, 0.02, 0.1, 0.04),
-        drive(30.0, 1.0e-6, 0.01, 0.05, 0.03),
-    ];
+    let drives = drives::gantry6();
     with_dynamics(chain, links, drives)
 }
 

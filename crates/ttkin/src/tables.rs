@@ -79,6 +79,7 @@ impl DriveColumns<'_> {
                 viscous: b[k],
                 coulomb: c[k],
                 torque_constant: kt[k],
+                ..Drive::geared(self.gear_ratio[k])
             })
             .collect())
     }

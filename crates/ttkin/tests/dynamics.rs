@@ -40,6 +40,7 @@ fn randomised(chain: &Chain, u: &[f64]) -> Chain {
                 viscous: w[8],
                 coulomb: w[9],
                 torque_constant: Some(0.05),
+                ..Drive::geared(1.0)
             };
             j.clone()
                 .with_inertial(random_inertial(w))

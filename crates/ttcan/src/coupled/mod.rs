@@ -40,30 +40,17 @@ use crate::axis::{Axis, AxisConfig, Mode};
 
 mod drives;
 mod trace;
+mod winding;
 use crate::error::{Error, Result};
 use crate::motor::Measurement;
 use crate::schedule::Scheduler;
-pub use drives::{axis_config_from_drive, axis_configs_from_chain};
-use trace::interpolate;
+pub use drives::axis_configs_from_chain;
 pub use trace::CoupledTrace;
+use winding::{open_winding_step, winding_step, Winding};
 
 /// The longest whole-trajectory run [`CoupledSim::run`] accepts, in current-loop ticks (50 s at
 /// 20 kHz): its trace keeps every tick (about 100 bytes per tick and axis).
 pub const MAX_RUN_TICKS: u64 = 1_000_000;
-/// The electrical side of one joint's actuator, as simulated.
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct Winding {
-    resistance: f64,
-    inductance: f64,
-    torque_constant: f64,
-    back_emf_constant: f64,
-    gear: f64,
-    bus_voltage: f64,
-    counts_per_rev: f64,
-    current_noise: f64,
-    decay: f64,
-}
-
 /// Options of a [`CoupledSim`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CoupledOptions {
@@ -221,7 +208,7 @@ impl CoupledSim {
         Ok(sim)
     }
 
-    /// One axis per joint built by [`axis_configs_from_chain`] at `q0`, then
+    /// One axis per joint built from the robot's drive sections by [`axis_configs_from_chain`] at `q0`, then
     /// [`CoupledSim::reset`] to (`q0`, 0).
     pub fn from_chain(chain: &Chain, q0: &[f64], options: CoupledOptions) -> Result<Self> {
         let configs = axis_configs_from_chain(chain, q0, &options)?;
@@ -475,97 +462,6 @@ impl CoupledSim {
         self.dynamics.chain().joints().iter().map(|j| j.kind()).collect()
     }
 
-    /// Runs a reference trajectory sampled at `times` (s from now, increasing, at any rate; q, qd,
-    /// qdd and the optional torque feed-forward K × n row-major), handing setpoints to the drives
-    /// every `setpoint_period` s (linear interpolation between the samples, each sent one period
-    /// ahead, see [`crate::setpoint`]) until the last sample's time; records every tick.
-    pub fn run(
-        &mut self,
-        times: &[f64],
-        q: &[f64],
-        qd: &[f64],
-        qdd: &[f64],
-        tau_ff: Option<&[f64]>,
-        setpoint_period: f64,
-    ) -> Result<CoupledTrace> {
-        let n = self.dof();
-        let k = times.len();
-        if k < 2 {
-            return Err(Error::InvalidParameter {
-                what: "t".into(),
-                value: k as f64,
-                reason: "needs at least two samples".into(),
-            });
-        }
-        for (name, v) in [("t", times), ("q", q), ("qd", qd), ("qdd", qdd)] {
-            if let Some(i) = v.iter().position(|x| !x.is_finite()) {
-                return Err(Error::NonFinite {
-                    what: format!("{name}[{i}]"),
-                    value: v[i],
-                });
-            }
-        }
-        if let Some(i) = times.windows(2).position(|w| w[1] <= w[0]) {
-            return Err(Error::InvalidParameter {
-                what: format!("t[{}]", i + 1),
-                value: times[i + 1],
-                reason: "times must increase".into(),
-            });
-        }
-        for (name, v) in [("q", q), ("qd", qd), ("qdd", qdd)] {
-            check_len(name, v, k * n)?;
-        }
-        if let Some(t) = tau_ff {
-            check_len("tau_ff", t, k * n)?;
-            if let Some(i) = t.iter().position(|x| !x.is_finite()) {
-                return Err(Error::NonFinite {
-                    what: format!("tau_ff[{i}]"),
-                    value: t[i],
-                });
-            }
-        }
-        crate::error::positive("setpoint period (s)", setpoint_period)?;
-        let ticks_per_setpoint = (setpoint_period / self.period).round().max(1.0) as u64;
-        let t0 = times[0];
-        let duration = times[k - 1] - t0;
-        let total = (duration / self.period).round() as u64 + 1;
-        if total > MAX_RUN_TICKS {
-            return Err(Error::InvalidParameter {
-                what: "t".into(),
-                value: duration,
-                reason: format!(
-                    "a run of {duration} s is {total} ticks at {} Hz; at most {MAX_RUN_TICKS} ticks \
-                     (the trace keeps every tick): run it in pieces",
-                    1.0 / self.period
-                ),
-            });
-        }
-        let mut trace = CoupledTrace::with_capacity(total as usize, n);
-        let mut buf = vec![0.0; 4 * n];
-        let lead = if self.axes[0].config().setpoint_period.is_some() {
-            ticks_per_setpoint as f64 * self.period
-        } else {
-            0.0
-        };
-        let start_tick = self.ticks;
-        for tick in 0..total {
-            let t_rel = tick as f64 * self.period;
-            if tick % ticks_per_setpoint == 0 {
-                interpolate(times, t0 + t_rel + lead, n, q, qd, qdd, tau_ff, &mut buf);
-                let (a, rest) = buf.split_at(n);
-                let (b, rest) = rest.split_at(n);
-                let (c, d) = rest.split_at(n);
-                self.set_setpoint(a, b, c, if tau_ff.is_some() { Some(d) } else { None })?;
-            }
-            interpolate(times, t0 + t_rel, n, q, qd, qdd, None, &mut buf);
-            trace.push(self, &buf[..n]);
-            self.tick();
-        }
-        let _ = start_tick;
-        trace.faults = self.fault_names();
-        Ok(trace)
-    }
-
     /// Fault of each axis as text ("" when none).
     pub fn fault_names(&self) -> Vec<String> {
         self.axes
@@ -575,40 +471,7 @@ impl CoupledSim {
     }
 }
 
-/// Exact winding step with net voltage `v` (u − back-EMF) held over `t`: (end current, mean
-/// current, mean square current).
-#[inline]
-fn winding_step(w: &Winding, i0: f64, v: f64, t: f64) -> (f64, f64, f64) {
-    let inf = v / w.resistance;
-    let a = w.decay;
-    let i1 = inf + (i0 - inf) * a;
-    let tau = w.inductance / w.resistance;
-    let d = i0 - inf;
-    // i(s) = inf + d e^{−s/τ}: mean and mean square over [0, t].
-    let e1 = (1.0 - a) * tau / t;
-    let e2 = (1.0 - a * a) * tau / (2.0 * t);
-    (i1, inf + d * e1, inf * inf + 2.0 * inf * d * e1 + d * d * e2)
-}
-
-/// Bridge off: diodes conduct while current flows (applied voltage −V_bus·sign(i)), or when the
-/// back-EMF exceeds the bus; otherwise the winding is open. Returns (u, i1, mean, mean square).
-fn open_winding_step(w: &Winding, i0: f64, emf: f64, t: f64) -> (f64, f64, f64, f64) {
-    if i0 == 0.0 && emf.abs() <= w.bus_voltage {
-        return (0.0, 0.0, 0.0, 0.0);
-    }
-    let dir = if i0 != 0.0 { i0.signum() } else { -emf.signum() };
-    let u = -dir * w.bus_voltage;
-    let (i1, mean, mean_sq) = winding_step(w, i0, u - emf, t);
-    if i1 * dir < 0.0 {
-        // The current reached zero inside the period: the diodes block from then on.
-        let frac = (i0 / (i0 - i1)).clamp(0.0, 1.0);
-        let m = 0.5 * i0 * frac;
-        return (u, 0.0, m, i0 * i0 * frac / 3.0);
-    }
-    (u, i1, mean, mean_sq)
-}
-
-fn check_vector(what: &str, v: &[f64], n: usize) -> Result<()> {
+pub(super) fn check_vector(what: &str, v: &[f64], n: usize) -> Result<()> {
     check_len(what, v, n)?;
     if let Some(i) = v.iter().position(|x| !x.is_finite()) {
         return Err(Error::NonFinite {
@@ -619,7 +482,7 @@ fn check_vector(what: &str, v: &[f64], n: usize) -> Result<()> {
     Ok(())
 }
 
-fn check_len(what: &str, v: &[f64], n: usize) -> Result<()> {
+pub(super) fn check_len(what: &str, v: &[f64], n: usize) -> Result<()> {
     if v.len() != n {
         return Err(Error::InvalidParameter {
             what: format!("{what} length"),

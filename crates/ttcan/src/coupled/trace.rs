@@ -1,6 +1,8 @@
-//! What a whole-trajectory run records, and the linear interpolation of the input samples.
+//! A whole-trajectory run ([`CoupledSim::run`]): the setpoints it hands to the drives, the linear
+//! interpolation of the input samples, and what it records.
 
-use super::CoupledSim;
+use super::{check_len, CoupledSim, MAX_RUN_TICKS};
+use crate::error::{Error, Result};
 
 /// What [`CoupledSim::run`] records, one row per tick (K rows, n columns, row-major).
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -97,5 +99,98 @@ pub(super) fn interpolate(
             let (a, b) = (src[i * n + j], src[(i + 1) * n + j]);
             out[3 * n + j] = a + s * (b - a);
         }
+    }
+}
+
+impl CoupledSim {
+    /// Runs a reference trajectory sampled at `times` (s from now, increasing, at any rate; q, qd,
+    /// qdd and the optional torque feed-forward K × n row-major), handing setpoints to the drives
+    /// every `setpoint_period` s (linear interpolation between the samples, each sent one period
+    /// ahead, see [`crate::setpoint`]) until the last sample's time; records every tick.
+    pub fn run(
+        &mut self,
+        times: &[f64],
+        q: &[f64],
+        qd: &[f64],
+        qdd: &[f64],
+        tau_ff: Option<&[f64]>,
+        setpoint_period: f64,
+    ) -> Result<CoupledTrace> {
+        let n = self.dof();
+        let k = times.len();
+        if k < 2 {
+            return Err(Error::InvalidParameter {
+                what: "t".into(),
+                value: k as f64,
+                reason: "needs at least two samples".into(),
+            });
+        }
+        for (name, v) in [("t", times), ("q", q), ("qd", qd), ("qdd", qdd)] {
+            if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+                return Err(Error::NonFinite {
+                    what: format!("{name}[{i}]"),
+                    value: v[i],
+                });
+            }
+        }
+        if let Some(i) = times.windows(2).position(|w| w[1] <= w[0]) {
+            return Err(Error::InvalidParameter {
+                what: format!("t[{}]", i + 1),
+                value: times[i + 1],
+                reason: "times must increase".into(),
+            });
+        }
+        for (name, v) in [("q", q), ("qd", qd), ("qdd", qdd)] {
+            check_len(name, v, k * n)?;
+        }
+        if let Some(t) = tau_ff {
+            check_len("tau_ff", t, k * n)?;
+            if let Some(i) = t.iter().position(|x| !x.is_finite()) {
+                return Err(Error::NonFinite {
+                    what: format!("tau_ff[{i}]"),
+                    value: t[i],
+                });
+            }
+        }
+        crate::error::positive("setpoint period (s)", setpoint_period)?;
+        let ticks_per_setpoint = (setpoint_period / self.period).round().max(1.0) as u64;
+        let t0 = times[0];
+        let duration = times[k - 1] - t0;
+        let total = (duration / self.period).round() as u64 + 1;
+        if total > MAX_RUN_TICKS {
+            return Err(Error::InvalidParameter {
+                what: "t".into(),
+                value: duration,
+                reason: format!(
+                    "a run of {duration} s is {total} ticks at {} Hz; at most {MAX_RUN_TICKS} ticks \
+                     (the trace keeps every tick): run it in pieces",
+                    1.0 / self.period
+                ),
+            });
+        }
+        let mut trace = CoupledTrace::with_capacity(total as usize, n);
+        let mut buf = vec![0.0; 4 * n];
+        let lead = if self.axes[0].config().setpoint_period.is_some() {
+            ticks_per_setpoint as f64 * self.period
+        } else {
+            0.0
+        };
+        let start_tick = self.ticks;
+        for tick in 0..total {
+            let t_rel = tick as f64 * self.period;
+            if tick % ticks_per_setpoint == 0 {
+                interpolate(times, t0 + t_rel + lead, n, q, qd, qdd, tau_ff, &mut buf);
+                let (a, rest) = buf.split_at(n);
+                let (b, rest) = rest.split_at(n);
+                let (c, d) = rest.split_at(n);
+                self.set_setpoint(a, b, c, if tau_ff.is_some() { Some(d) } else { None })?;
+            }
+            interpolate(times, t0 + t_rel, n, q, qd, qdd, None, &mut buf);
+            trace.push(self, &buf[..n]);
+            self.tick();
+        }
+        let _ = start_tick;
+        trace.faults = self.fault_names();
+        Ok(trace)
     }
 }

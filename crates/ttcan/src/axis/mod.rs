@@ -11,6 +11,11 @@
 //! Everything that can be wrong with the configuration is checked by [`Axis::new`]; [`Axis::tick`]
 //! never fails and never allocates.
 
+mod build;
+mod protection;
+
+pub use protection::{Fault, Reaction};
+
 pub use crate::axis_config::{AxisConfig, HoldingBrake};
 use crate::error::{finite, non_negative, positive, Error, Result};
 use crate::loops::{CurrentLoop, LowPass, Pi, PositionLoop, PositionOutput, SpeedLoop};
@@ -30,59 +35,6 @@ pub enum Mode {
     Velocity,
     /// Output position reference with velocity and acceleration, rad, rad/s, rad/s².
     Position,
-}
-
-/// Why an axis stopped.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Fault {
-    /// The measured current exceeded the trip level.
-    OverCurrent,
-    /// |position reference − position| exceeded the following-error limit.
-    FollowingError,
-    /// The encoder moved further in one current-loop period than the axis can.
-    EncoderJump,
-    /// A reference was NaN or infinite.
-    InvalidReference,
-    /// The current reading was NaN or infinite.
-    InvalidMeasurement,
-    /// `setpoint_max_missed` cyclic position setpoints in a row did not arrive.
-    SetpointsLost,
-    /// The estimated speed exceeded the overspeed limit (checked in every mode).
-    Overspeed,
-    /// The position (or a position reference) left the software position limits.
-    PositionLimit,
-    /// The measured DC-bus voltage exceeded the over-voltage limit (regeneration).
-    OverVoltage,
-    /// The measured DC-bus voltage fell below the under-voltage limit.
-    UnderVoltage,
-}
-
-/// What the axis does about a fault: each fault has exactly one reaction.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Reaction {
-    /// Duty 0 and the bridge off at once (open winding: the joint coasts); used when the current
-    /// cannot be controlled or a sensor the loops need has failed.
-    BridgeOff,
-    /// Controlled stop at the quick-stop deceleration, then (brake engaged) bridge off.
-    QuickStop,
-}
-
-impl Fault {
-    /// The one reaction to this fault. A fault while stopping always escalates to
-    /// [`Reaction::BridgeOff`].
-    pub fn reaction(self) -> Reaction {
-        match self {
-            Fault::OverCurrent | Fault::EncoderJump | Fault::InvalidMeasurement | Fault::OverVoltage => {
-                Reaction::BridgeOff
-            }
-            Fault::FollowingError
-            | Fault::InvalidReference
-            | Fault::SetpointsLost
-            | Fault::Overspeed
-            | Fault::PositionLimit
-            | Fault::UnderVoltage => Reaction::QuickStop,
-        }
-    }
 }
 
 /// State of the axis' power stage and fault machine.
@@ -157,221 +109,6 @@ pub struct Axis {
 }
 
 impl Axis {
-    /// Validates `config`, tunes the loops and builds a disabled axis in current mode.
-    pub fn new(config: &AxisConfig) -> Result<Self> {
-        let c = config;
-        c.model.validate()?;
-        positive("continuous current (A)", c.continuous_current)?;
-        positive("peak current (A)", c.peak_current)?;
-        positive("over-current trip (A)", c.overcurrent_trip)?;
-        positive("max speed (rad/s)", c.max_speed)?;
-        positive("following error limit (rad)", c.following_error_limit)?;
-        positive("quick-stop deceleration (rad/s²)", c.quick_stop_deceleration)?;
-        if c.peak_current < c.continuous_current {
-            return Err(invalid(
-                "peak current (A)",
-                c.peak_current,
-                "must be >= the continuous current",
-            ));
-        }
-        if c.overcurrent_trip <= c.peak_current {
-            return Err(invalid(
-                "over-current trip (A)",
-                c.overcurrent_trip,
-                "must be > the peak current",
-            ));
-        }
-        let m = &c.model;
-        let n = m.gearbox.ratio;
-        let emf_at_max = m.motor.back_emf_constant * c.max_speed * n;
-        if emf_at_max + m.motor.resistance * c.continuous_current > m.max_voltage() {
-            return Err(invalid(
-                "max speed (rad/s)",
-                c.max_speed,
-                &format!(
-                    "back-EMF {emf_at_max:.2} V plus R·I_cont exceeds the usable bus voltage {:.2} V",
-                    m.max_voltage()
-                ),
-            ));
-        }
-        if c.emf_filter_hz.is_nan() || c.emf_filter_hz <= 0.0 {
-            return Err(invalid(
-                "EMF filter (Hz)",
-                c.emf_filter_hz,
-                "must be > 0 (infinite: no filter)",
-            ));
-        }
-        if let Some(f) = c.speed_reference_filter_hz {
-            if f.is_nan() || f <= 0.0 {
-                return Err(invalid(
-                    "speed reference filter (Hz)",
-                    f,
-                    "must be > 0 (infinite: no filter)",
-                ));
-            }
-        }
-        let [tc, ts, tp] = c.rates.periods();
-        let tuning = tune_cascade(m, [tc, ts, tp], &c.tuning)?;
-        finite("tuned speed gain", tuning.speed.kp)?;
-        positive("max quantisation ripple share", c.max_quantisation_ripple_share)?;
-        let ripple = tuning.quantisation_ripple_rms;
-        if ripple > c.max_quantisation_ripple_share * c.continuous_current {
-            return Err(invalid(
-                "observer bandwidth (Hz)",
-                c.tuning.observer_bandwidth_hz,
-                &format!(
-                    "encoder quantisation puts {ripple:.3} A RMS on the current reference (Kp·Δω), above {:.0} % of the \
-                     continuous current {:.2} A: lower the observer bandwidth or use a finer encoder",
-                    100.0 * c.max_quantisation_ripple_share,
-                    c.continuous_current
-                ),
-            ));
-        }
-        let observer = TrackingObserver::new(
-            c.tuning.observer_bandwidth_hz,
-            tc,
-            if c.tuning.observer_acceleration_input {
-                m.acceleration_per_amp()
-            } else {
-                0.0
-            },
-        )?;
-
-        let rad_per_count = m.radians_per_count();
-        let current_loop = CurrentLoop::new(
-            Pi::new(tuning.current.kp, tuning.current.ki, tc, c.anti_windup),
-            m.bus_voltage,
-            m.max_voltage(),
-            if c.emf_feedforward {
-                m.motor.back_emf_constant * n
-            } else {
-                0.0
-            },
-            c.peak_current,
-        );
-        let thermal = ThermalState::new(&c.thermal, m.motor.resistance)?;
-        let ref_filter_hz = c.speed_reference_filter_hz.unwrap_or(tuning.speed_reference_filter_hz);
-        let speed_loop = SpeedLoop::new(
-            Pi::new(tuning.speed.kp, tuning.speed.ki, ts, c.anti_windup),
-            c.max_speed,
-            LowPass::new(ref_filter_hz, ts),
-            LowPass::new(c.tuning.speed_output_filter_hz, ts),
-        );
-        let position_loop = PositionLoop::new(
-            tuning.position.kp,
-            1.0 / m.acceleration_per_amp(),
-            c.velocity_feedforward,
-            c.acceleration_feedforward,
-        );
-        if let Some(p) = c.setpoint_period {
-            positive("setpoint period (s)", p)?;
-            if p < ts * (1.0 - 1e-9) {
-                return Err(invalid(
-                    "setpoint period (s)",
-                    p,
-                    "must be at least one speed-loop period",
-                ));
-            }
-        }
-        if c.setpoint_max_missed == 0 {
-            return Err(invalid("setpoint max missed", 0.0, "must be >= 1"));
-        }
-        non_negative("following error per speed (s)", c.following_error_per_speed)?;
-        if c.overspeed_limit.is_nan() || c.overspeed_limit <= c.max_speed {
-            return Err(invalid(
-                "overspeed limit (rad/s)",
-                c.overspeed_limit,
-                "must be > the max speed",
-            ));
-        }
-        if let Some((lo, hi)) = c.position_limits {
-            finite("position limit lower (rad)", lo)?;
-            finite("position limit upper (rad)", hi)?;
-            if lo >= hi {
-                return Err(invalid("position limit lower (rad)", lo, "must be < the upper limit"));
-            }
-        }
-        positive("bus under-voltage (V)", c.bus_undervoltage)?;
-        if c.bus_overvoltage.is_nan() || c.bus_overvoltage <= m.bus_voltage {
-            return Err(invalid(
-                "bus over-voltage (V)",
-                c.bus_overvoltage,
-                "must be > the nominal bus voltage",
-            ));
-        }
-        if c.bus_undervoltage >= m.bus_voltage {
-            return Err(invalid(
-                "bus under-voltage (V)",
-                c.bus_undervoltage,
-                "must be < the nominal bus voltage",
-            ));
-        }
-        let stop_timeout = 2.0 * c.max_speed / c.quick_stop_deceleration + 0.2;
-        if let Some(b) = c.holding_brake {
-            for (what, v) in [
-                ("brake release delay (s)", b.release_delay),
-                ("brake engage delay (s)", b.engage_delay),
-            ] {
-                non_negative(what, v)?;
-                if v > stop_timeout {
-                    return Err(invalid(
-                        what,
-                        v,
-                        &format!("must not exceed the stop time {stop_timeout:.3} s (the axis could not hold until the brake acts)"),
-                    ));
-                }
-            }
-        }
-        // An encoder may move at most twice the largest speed's worth of counts per current period.
-        let jump_limit = (2.0 * c.max_speed * tc / rad_per_count).ceil() as u64 + 2;
-        Ok(Axis {
-            config: *c,
-            tuning,
-            rad_per_count,
-            speed_period: ts,
-            current_period: tc,
-            jump_limit,
-            // "Stopped": 1 % of the largest speed, or three encoder counts per speed period.
-            standstill: (0.01 * c.max_speed).max(3.0 * rad_per_count / ts),
-            stop_timeout,
-            bus_nominal: m.bus_voltage,
-            brake_engaged: c.holding_brake.is_some(),
-            brake_timer: 0.0,
-            disable_pending: false,
-            q_hold: 0.0,
-            current_loop,
-            thermal,
-            emf_speed: LowPass::new(c.emf_filter_hz, ts),
-            speed_loop,
-            position_loop,
-            interpolator: SetpointInterpolator::new(c.setpoint_period.unwrap_or(tp), c.setpoint_max_missed),
-            interpolating: c.setpoint_period.is_some(),
-            amps_per_joint_torque: 1.0 / (m.motor.torque_constant * n),
-            primed: false,
-            count_offset: 0,
-            last_counts: 0,
-            encoder_position: 0.0,
-            observer,
-            position: 0.0,
-            speed: 0.0,
-            state: AxisState::Disabled,
-            mode: Mode::Current,
-            current_command: 0.0,
-            speed_command: 0.0,
-            q_ref: 0.0,
-            qd_ref: 0.0,
-            qdd_ref: 0.0,
-            torque_feedforward: 0.0,
-            torque_segment: [0.0; 2],
-            host_torque: false,
-            position_output: PositionOutput::default(),
-            current_reference: 0.0,
-            duty: 0.0,
-            stop_reference: 0.0,
-            stop_time: 0.0,
-        })
-    }
-
     /// One base tick: the current loop always, the speed and position loops when `due`; returns the
     /// bridge duty cycle in [−1, 1]. Never fails, never allocates.
     #[inline]
@@ -439,33 +176,6 @@ impl Axis {
             .current_loop
             .step(self.current_reference, current, self.emf_speed.output());
         self.duty
-    }
-
-    /// Brake timing and the disable sequence: engage, hold until it holds, then bridge off.
-    fn run_brake(&mut self) {
-        if self.brake_timer > 0.0 {
-            self.brake_timer -= self.current_period;
-        }
-        if self.disable_pending && self.brake_timer <= 0.0 {
-            self.disable_pending = false;
-            self.state = AxisState::Disabled;
-            self.current_reference = 0.0;
-            self.current_loop.reset();
-        }
-    }
-
-    /// True while the brake is being released (the axis holds its position meanwhile).
-    fn brake_releasing(&self) -> bool {
-        !self.brake_engaged && self.brake_timer > 0.0 && self.config.holding_brake.is_some()
-    }
-
-    fn engage_brake(&mut self) {
-        if let Some(b) = self.config.holding_brake {
-            if !self.brake_engaged {
-                self.brake_engaged = true;
-                self.brake_timer = b.engage_delay;
-            }
-        }
     }
 
     fn sense(&mut self, raw_counts: i64, current: f64, speed_due: bool) {
@@ -554,74 +264,6 @@ impl Axis {
         let lo = -lim - current_feedforward;
         let hi = lim - current_feedforward;
         self.speed_loop.step(command, feedforward, self.speed, lo, hi) + current_feedforward
-    }
-
-    fn run_stopping(&mut self, due: Due) {
-        if !due.speed {
-            return;
-        }
-        let fault = match self.state {
-            AxisState::Stopping(f) => f,
-            _ => return,
-        };
-        let dv = self.config.quick_stop_deceleration * self.speed_period;
-        let r = self.stop_reference;
-        self.stop_reference = if r > dv {
-            r - dv
-        } else if r < -dv {
-            r + dv
-        } else {
-            0.0
-        };
-        let lim = self.config.continuous_current.min(self.current_loop.limit());
-        self.current_reference = self.speed_loop.step(self.stop_reference, 0.0, self.speed, -lim, lim);
-        self.stop_time += self.speed_period;
-        let stopped = self.stop_reference == 0.0 && self.speed.abs() <= self.standstill;
-        if stopped || self.stop_time > self.stop_timeout {
-            if self.config.holding_brake.is_some() && !self.brake_engaged {
-                // Engage the brake and keep holding (zero speed) until it holds.
-                self.engage_brake();
-            }
-            if self.brake_timer <= 0.0 {
-                self.bridge_off(fault);
-            }
-        }
-    }
-
-    /// Bridge off at once (duty 0, open winding) and the brake (if any) engaged.
-    fn bridge_off(&mut self, fault: Fault) {
-        self.state = AxisState::Faulted(fault);
-        self.current_reference = 0.0;
-        self.duty = 0.0;
-        self.current_loop.reset();
-        self.disable_pending = false;
-        if let Some(b) = self.config.holding_brake {
-            if !self.brake_engaged {
-                self.brake_engaged = true;
-                self.brake_timer = b.engage_delay;
-            }
-        }
-    }
-
-    fn trip(&mut self, fault: Fault) {
-        match self.state {
-            AxisState::Enabled => match fault.reaction() {
-                Reaction::BridgeOff => self.bridge_off(fault),
-                Reaction::QuickStop => {
-                    self.state = AxisState::Stopping(fault);
-                    self.disable_pending = false;
-                    self.stop_reference = self.speed.max(-self.config.max_speed).min(self.config.max_speed);
-                    self.stop_time = 0.0;
-                    self.speed_loop.reset(self.speed, self.current_reference);
-                }
-            },
-            // The condition being handled, still present: the stop goes on.
-            AxisState::Stopping(f) if f == fault => {}
-            // Another fault while stopping: the stop itself is in doubt, escalate.
-            AxisState::Stopping(_) => self.bridge_off(fault),
-            AxisState::Disabled => self.state = AxisState::Faulted(fault),
-            AxisState::Faulted(_) => {}
-        }
     }
 
     /// Switches the bridge on in `mode`, holding the present position (position mode) or zero speed
@@ -837,13 +479,5 @@ impl Axis {
     /// Mutable thermal state (to start from a warm motor).
     pub fn thermal_state_mut(&mut self) -> &mut ThermalState {
         &mut self.thermal
-    }
-}
-
-fn invalid(what: &str, value: f64, reason: &str) -> Error {
-    Error::InvalidParameter {
-        what: what.into(),
-        value,
-        reason: reason.into(),
     }
 }
