@@ -41,19 +41,7 @@ fn missing(joint: &str, field: &str, why: &str) -> Error {
 /// The thermal model of `drive`: its five datasheet values, the RE 25 class model when it gives
 /// none, an error naming the first missing value when it gives some.
 pub fn thermal_model(joint: &str, drive: &ttkin::Drive) -> Result<ThermalModel> {
-    let values = [
-        (
-            "thermal_resistance_winding_housing",
-            drive.thermal_resistance_winding_housing,
-        ),
-        (
-            "thermal_resistance_housing_ambient",
-            drive.thermal_resistance_housing_ambient,
-        ),
-        ("thermal_time_constant_winding", drive.thermal_time_constant_winding),
-        ("thermal_time_constant_housing", drive.thermal_time_constant_housing),
-        ("max_winding_temperature", drive.max_winding_temperature),
-    ];
+    let values = drive.thermal_values();
     if values.iter().all(|(_, v)| v.is_none()) {
         return Ok(ThermalModel::maxon_re25());
     }

@@ -240,6 +240,24 @@ impl Drive {
         self.viscous * qd + self.coulomb * sign
     }
 
+    /// The five thermal datasheet values by field name: R_wh, R_ha (K/W), τ_w, τ_h (s), largest
+    /// winding temperature (°C); `None` where not given.
+    pub fn thermal_values(&self) -> [(&'static str, Option<f64>); 5] {
+        [
+            (
+                "thermal_resistance_winding_housing",
+                self.thermal_resistance_winding_housing,
+            ),
+            (
+                "thermal_resistance_housing_ambient",
+                self.thermal_resistance_housing_ambient,
+            ),
+            ("thermal_time_constant_winding", self.thermal_time_constant_winding),
+            ("thermal_time_constant_housing", self.thermal_time_constant_housing),
+            ("max_winding_temperature", self.max_winding_temperature),
+        ]
+    }
+
     /// Checks that every value is finite and in range; `joint` names the joint in the message.
     pub fn validate(&self, joint: &str) -> Result<()> {
         let what = format!("drive of joint '{joint}'");
@@ -281,20 +299,13 @@ impl Drive {
             ("nominal_current", self.nominal_current),
             ("peak_current", self.peak_current),
             ("max_motor_speed", self.max_motor_speed),
-            (
-                "thermal_resistance_winding_housing",
-                self.thermal_resistance_winding_housing,
-            ),
-            (
-                "thermal_resistance_housing_ambient",
-                self.thermal_resistance_housing_ambient,
-            ),
-            ("thermal_time_constant_winding", self.thermal_time_constant_winding),
-            ("thermal_time_constant_housing", self.thermal_time_constant_housing),
             ("gear_efficiency", self.gear_efficiency),
             ("bus_voltage", self.bus_voltage),
             ("encoder_counts", self.encoder_counts.map(f64::from)),
-        ] {
+        ]
+        .into_iter()
+        .chain(self.thermal_values().into_iter().take(4))
+        {
             if let Some(v) = v {
                 if !(v > 0.0 && v.is_finite()) {
                     return Err(Error::Model(format!("{what}: {name} must be finite and > 0, got {v}")));
