@@ -1,6 +1,7 @@
 //! The gantry6 hit planner against stored plans: every 20th plan of the three hit sets of
 //! `support/gantry_hits.rs` (on time, too early, from a moving state), as main's planner made
-//! them before the speed work of issue 12 (`data/hit_plans.txt`, from `hit_icount dump SET`).
+//! them before the speed work of issue 12 (`data/hit_plans.txt`; regenerated from that planner with
+//! gantry6's issue-10 drives, which change the armatures and so the efforts).
 //! Status, branch count, profile and violation count must match exactly, every number to
 //! 1e-10·(1 + |value|) (the speed work keeps them bit for bit on the machine that made them).
 
