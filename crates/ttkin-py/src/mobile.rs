@@ -175,12 +175,6 @@ fn model(robot: &PyRobot, base: Option<&PyDiffDrive>, mount: Option<&Any<'_>>) -
     }
 }
 
-fn make_damping(lambda_max: f64, epsilon: f64) -> PyResult<Damping> {
-    let d = Damping { epsilon, lambda_max };
-    d.validate().py()?;
-    Ok(d)
-}
-
 #[ttkin_py_guard::guarded]
 #[pymethods]
 impl PyRobot {
@@ -245,7 +239,7 @@ fn wls_step<'py>(
         Some(p) => vector(p, "qdot_prev", model.nu())?,
         None => vec![0.0; model.nu()],
     };
-    let mut step = WlsStep::new(&model, task, weighting, make_damping(damping, epsilon)?).py()?;
+    let mut step = WlsStep::new(&model, task, weighting, Damping::new(epsilon, damping).py()?).py()?;
     let (qd, _) = step.try_solve(&q, &xdot, &prev).py()?;
     finite_to_numpy(py, &[qd.len()], &qd)
 }
@@ -400,7 +394,7 @@ fn track<'py>(
     let options = ClikOptions {
         gain,
         weighting: Weighting::from_name(weights).py()?,
-        damping: make_damping(damping, epsilon)?,
+        damping: Damping::new(epsilon, damping).py()?,
         input_weights,
         limit_gain,
         manipulability_gain,

@@ -40,6 +40,14 @@ impl Damping {
         }
     }
 
+    /// Damping that starts below σ_min = `epsilon` and rises to `lambda_max`, both checked
+    /// ([`Damping::validate`]).
+    pub fn new(epsilon: f64, lambda_max: f64) -> Result<Self> {
+        let d = Damping { epsilon, lambda_max };
+        d.validate()?;
+        Ok(d)
+    }
+
     /// Checks that both numbers are finite and ≥ 0.
     pub fn validate(&self) -> Result<()> {
         for (what, v) in [
@@ -396,5 +404,22 @@ impl WlsSolver {
             self.a_part[k] = z.map_or(0.0, |z| z[k]) + self.winv[k] * da;
             self.b_part[k] = self.winv[k] * db;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `Damping::new` keeps good numbers and refuses negative or non-finite ones by name.
+    #[test]
+    fn damping_new_checks_both_numbers() {
+        let d = Damping::new(0.02, 0.05).unwrap();
+        assert_eq!((d.epsilon, d.lambda_max), (0.02, 0.05));
+        assert!(Damping::new(-1.0, 0.05).unwrap_err().to_string().contains("epsilon"));
+        assert!(Damping::new(0.02, f64::NAN)
+            .unwrap_err()
+            .to_string()
+            .contains("lambda_max"));
     }
 }
