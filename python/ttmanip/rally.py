@@ -136,8 +136,8 @@ def rally(
             "outliers": 0.02,
             "window_s": 0.20,
         },
-        "stroke_execution": "planned quintic stroke executed exactly; drive_* keys: a subset through "
-        "plan_hit + simulate (coupled drive simulation)",
+        "stroke_execution": "planned hit leg (quintic, else jerk-limited) executed exactly; "
+        "drive_* keys: a subset through plan_hit + simulate (coupled drive simulation)",
     }
     if drives > 0:
         summary.update(_drive_check(res, in_reach, int(drives)))

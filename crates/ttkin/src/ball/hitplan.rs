@@ -18,23 +18,26 @@
 //!    centre); the racket frame has its z axis on the face normal and its x axis (the handle) as
 //!    close to world up as possible (the convention of `python/ttmanip/pipeline.py`).
 //! 4. **Robot.** The pose (for each racket roll of `rolls` about the normal) and twist go to the
-//!    base frame ([`Placement`]), analytic IK (every branch within the limits), q̇ = J⁻¹·V, and a quintic stroke from
-//!    rest at the ready configuration at `now` to (q, q̇, q̈) at the hit, q̈ = 0 or a fraction of
-//!    the matching cubic's end acceleration, whichever has the lowest peaks. Feasible when the
-//!    stroke's exact velocity and acceleration peaks stay within the limits.
+//!    base frame ([`Placement`]), analytic IK (every branch within the limits), q̇ = J⁻¹·V, and the
+//!    hit leg from the stroke's start state at `now` to (q, q̇, q̈) at the hit ([`super::leg`]): a
+//!    quintic when its exact velocity, acceleration and jerk peaks are within the limits, else the
+//!    jerk-limited (Ruckig) leg that reaches the hit state exactly at the hit time inside the
+//!    position limits. Jerk limits: the robot files carry none, so
+//!    [`crate::hit::DEFAULT_JERK_PER_ACCELERATION`] × the acceleration limits, as `plan_hit` uses.
 //! 5. **Choice.** Among feasible candidates, the one with the largest margin: the smallest of the
-//!    joints' normalised distance to their position limits at the hit and 1 − the stroke's
-//!    peak/limit ratio. Candidates are tried from the middle of the spread outward and the search
+//!    joints' normalised distance to their position limits at the hit and the leg's margin
+//!    (1 − peak/limit ratio for a quintic, 1 − fastest duration / hit time for a jerk-limited leg). Candidates are tried from the middle of the spread outward and the search
 //!    stops at the first with a margin ≥ `good_margin` (0.25), which bounds the planning time.
 
 use super::flight::{BallState, EventKind, Flight};
 use super::impact::{Racket, RacketHit};
+use super::leg::{hit_leg, HitLeg};
 use super::reach::walk_after_bounce;
 pub use super::reach::{racket_rotation, Placement, Reach};
 use crate::chain::Chain;
 use crate::error::{Error, Result};
 use crate::ik::{joint_velocity, Analytic, LimitFilter};
-use crate::traj::limits::{quintic_limit_ratio, KinematicLimits};
+use crate::traj::limits::KinematicLimits;
 use crate::traj::JointState;
 use nalgebra::{IsometryMatrix3, Matrix3, Translation3, Vector3};
 
@@ -85,8 +88,11 @@ pub struct Hit {
     pub q_hit: Vec<f64>,
     /// Joint velocities (m/s, rad/s) at the hit.
     pub qd_hit: Vec<f64>,
-    /// Joint accelerations (m/s², rad/s²) at the hit chosen for the stroke (see `robot_hit`).
+    /// Joint accelerations (m/s², rad/s²) at the hit chosen for the stroke (see [`super::leg`]).
     pub qdd_hit: Vec<f64>,
+    /// The accepted hit leg (its profile and trajectory from the stroke start at `now` to the hit):
+    /// what the rally executes.
+    pub leg: HitLeg,
     /// Choice margin (see the module doc), in (0, 1].
     pub margin: f64,
     /// Landing point (m, world) of the exactly executed impact and its flight time (s).
@@ -143,7 +149,14 @@ impl HitPlanner {
     pub fn new(chain: Chain, flight: Flight) -> Result<Self> {
         let ik = Analytic::for_chain(&chain)
             .ok_or_else(|| Error::Model("hit planning needs a chain with analytic IK (gantry6)".into()))?;
-        let limits = KinematicLimits::from_chain(&chain, None)?;
+        // Robot files carry no jerk limits: the same default as `plan_hit` (infinite when an
+        // acceleration limit is, and then no jerk-limited leg).
+        let jerk: Vec<f64> = chain
+            .limits()
+            .iter()
+            .map(|l| l.acceleration.unwrap_or(f64::INFINITY) * crate::hit::DEFAULT_JERK_PER_ACCELERATION)
+            .collect();
+        let limits = KinematicLimits::from_chain(&chain, Some(&jerk))?;
         let mut planner = HitPlanner {
             ready: vec![0.0; chain.dof()],
             chain,
@@ -418,7 +431,7 @@ impl HitPlanner {
                 continue;
             };
             for q in sols.iter() {
-                let Some((qd, qdd, margin)) = self.stroke_margin(q, start, &twist, t_hit) else {
+                let Some((qd, leg, margin)) = self.stroke_margin(q, start, &twist, t_hit) else {
                     continue;
                 };
                 if best.as_ref().is_none_or(|b| margin > b.margin) {
@@ -431,7 +444,8 @@ impl HitPlanner {
                         t_hit,
                         q_hit: q.to_vec(),
                         qd_hit: qd,
-                        qdd_hit: qdd,
+                        qdd_hit: leg.qdd_hit.clone(),
+                        leg,
                         margin,
                         landing,
                     });
@@ -441,42 +455,21 @@ impl HitPlanner {
         best
     }
 
-    /// Joint velocities and accelerations at the hit and the margin of the stroke from `start` to
-    /// the configuration `q` moving the racket with `twist` (base frame) after `t_hit` s, or `None`
-    /// when it is singular or beyond the limits.
+    /// Joint velocities at the hit, the hit leg ([`super::leg`]) and the margin of the stroke from
+    /// `start` to the configuration `q` moving the racket with `twist` (base frame) after `t_hit`
+    /// s, or `None` when it is singular or no leg is within the limits.
     fn stroke_margin(
         &self,
         q: &[f64],
         start: &JointState,
         twist: &[f64; 6],
         t_hit: f64,
-    ) -> Option<(Vec<f64>, Vec<f64>, f64)> {
+    ) -> Option<(Vec<f64>, HitLeg, f64)> {
         let jv = joint_velocity(&self.chain, q, twist).ok()?;
         if jv.singular {
             return None;
         }
-        // The acceleration at the hit is free (the ball only sees pose and velocity): zero, or a
-        // fraction of the end acceleration of the cubic through the same boundary positions and
-        // velocities, −6·Δq/T² + 2·(q̇0 + 2·q̇1)/T, whichever gives the lowest peak/limit ratio.
-        let cubic: Vec<f64> = (0..q.len())
-            .map(|i| -6.0 * (q[i] - start.q[i]) / (t_hit * t_hit) + 2.0 * (start.qd[i] + 2.0 * jv.qdot[i]) / t_hit)
-            .collect();
-        let mut best: Option<(f64, Vec<f64>)> = None;
-        for alpha in [0.0, 0.5, 1.0] {
-            let end = JointState {
-                q: q.to_vec(),
-                qd: jv.qdot.clone(),
-                qdd: cubic.iter().map(|a| alpha * a).collect(),
-            };
-            let ratio = quintic_limit_ratio(start, &end, t_hit, &self.limits);
-            if best.as_ref().is_none_or(|(r, _)| ratio < *r) {
-                best = Some((ratio, end.qdd));
-            }
-        }
-        let (ratio, qdd) = best.expect("three trials");
-        if !(ratio <= 1.0) {
-            return None;
-        }
+        let leg = hit_leg(start, q, &jv.qdot, t_hit, &self.limits)?;
         let mut pos_margin = f64::INFINITY;
         for (i, &qi) in q.iter().enumerate() {
             let (lo, hi) = (self.limits.lower[i], self.limits.upper[i]);
@@ -484,7 +477,13 @@ impl HitPlanner {
                 pos_margin = pos_margin.min(2.0 * (qi - lo).min(hi - qi) / (hi - lo));
             }
         }
-        Some((jv.qdot, qdd, pos_margin.min(1.0 - ratio)))
+        let margin = pos_margin.min(leg.margin);
+        Some((jv.qdot, leg, margin))
+    }
+
+    /// Kinematic limits of the strokes (joint order of the chain; jerk as in the module doc).
+    pub fn limits(&self) -> &KinematicLimits {
+        &self.limits
     }
 }
 

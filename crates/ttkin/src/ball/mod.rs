@@ -10,7 +10,7 @@
 //! One concept per file: [`model`] (ball and table constants), [`flight`] (integration with events),
 //! [`contact`] (table, edge, net contacts and the bounce impulse), [`estimate`](mod@estimate) (state from
 //! observations), [`predict`] (positions, crossings), [`impact`] (racket impact and its inverse),
-//! [`hitplan`] (where, when and how to hit), [`reach`] (the robot's reachable region,
+//! [`hitplan`] (where, when and how to hit), [`leg`] (the hit leg: quintic or jerk-limited), [`reach`] (the robot's reachable region,
 //! independent of the planner), [`rally`] (the closed loop in simulation).
 
 pub mod contact;
@@ -18,6 +18,7 @@ pub mod estimate;
 pub mod flight;
 pub mod hitplan;
 pub mod impact;
+pub mod leg;
 pub mod model;
 pub mod predict;
 pub mod rally;

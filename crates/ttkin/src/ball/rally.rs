@@ -17,7 +17,8 @@
 //! (latency); planning happens at the delivery of the last observation.
 //!
 //! **Execution**: the planned stroke is executed exactly (no drive simulation): the racket follows
-//! the quintic hit leg and then a 0.4 s quintic back to the ready configuration; the racket pose and
+//! the hit leg the planner accepted ([`super::leg`]: quintic or jerk-limited; on a re-plan the new
+//! leg from the state at that time) and then a 0.4 s quintic back to the ready configuration; the racket pose and
 //! velocity at the impact come from forward kinematics and the Jacobian along it. The true ball is
 //! integrated at 1 ms; the impact happens when the ball's distance to the racket plane falls to its
 //! radius (bisection) and counts when the contact point lies within the racket radius of its
@@ -29,7 +30,7 @@
 
 use super::estimate::{estimate, EstimateOptions};
 use super::flight::{BallState, EventKind, Flight};
-use super::hitplan::{shoot, HitPlanner, HitStatus};
+use super::hitplan::{shoot, Hit, HitPlanner, HitStatus};
 use super::reach::ReachRegion;
 use crate::chain::JacobianFrame;
 use crate::traj::{JointState, JointTrajectory};
@@ -137,6 +138,8 @@ pub struct BallOutcome {
     pub velocity_error: f64,
     /// Re-plans adopted during the stroke.
     pub replans: usize,
+    /// Profile of the executed hit leg ("quintic", "jerk"; "" without a planned hit).
+    pub profile: &'static str,
     /// Sampled true ball path (m, world; 5 ms) and racket-centre path, for the first balls.
     pub path: Vec<[f64; 3]>,
     /// Racket-centre path (m, world), same times as `path` while the stroke lasts.
@@ -260,6 +263,7 @@ pub fn play(planner: &HitPlanner, region: &ReachRegion, truth: &Flight, cfg: &Ra
         landing_error: f64::NAN,
         velocity_error: f64::NAN,
         replans: 0,
+        profile: "",
         path: Vec::new(),
         racket_path: Vec::new(),
     };
@@ -297,17 +301,9 @@ pub fn play(planner: &HitPlanner, region: &ReachRegion, truth: &Flight, cfg: &Ra
     };
     let n = hit.q_hit.len();
     let ready = JointState::rest(&planner.ready);
-    let leg = |from: &JointState, hit: &super::hitplan::Hit| {
-        let at_hit = JointState {
-            q: hit.q_hit.clone(),
-            qd: hit.qd_hit.clone(),
-            qdd: hit.qdd_hit.clone(),
-        };
-        JointTrajectory::quintic_unchecked(from, &at_hit, hit.t_hit)
-            .append(JointTrajectory::quintic_unchecked(&at_hit, &ready, 0.4))
-    };
+    let leg = |hit: &Hit| execution(hit, &ready);
     let mut motion = Motion {
-        pieces: vec![(now, leg(&ready, &hit))],
+        pieces: vec![(now, leg(&hit))],
     };
     let mut hit_abs = now + hit.t_hit;
     // Re-plan every `replan_period` with the newest observations (at most `max_window` s of them)
@@ -346,13 +342,14 @@ pub fn play(planner: &HitPlanner, region: &ReachRegion, truth: &Flight, cfg: &Ra
                 if let Some(h) = p.hit.filter(|_| p.status == HitStatus::Ok) {
                     hit = h;
                     hit_abs = t_plan + hit.t_hit;
-                    motion.pieces.push((t_plan, leg(&start, &hit)));
+                    motion.pieces.push((t_plan, leg(&hit)));
                     out.replans += 1;
                 }
             }
         }
         t_plan += cfg.replan_period;
     }
+    out.profile = hit.leg.profile.name();
     let world = planner.placement.world_from_base();
     let (mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     // Racket centre, normal, velocity and angular velocity (world) at time t (s, absolute).
@@ -453,6 +450,20 @@ pub fn play(planner: &HitPlanner, region: &ReachRegion, truth: &Flight, cfg: &Ra
         None => out.status = "return_long".into(),
     }
     out
+}
+
+/// The executed stroke of `hit` (joint frame, from the stroke start): its accepted hit leg, then a
+/// 0.4 s quintic from the hit state to rest at `ready`.
+pub fn execution(hit: &Hit, ready: &JointState) -> JointTrajectory {
+    let at_hit = JointState {
+        q: hit.q_hit.clone(),
+        qd: hit.qd_hit.clone(),
+        qdd: hit.qdd_hit.clone(),
+    };
+    hit.leg
+        .trajectory
+        .clone()
+        .append(JointTrajectory::quintic_unchecked(&at_hit, ready, 0.4))
 }
 
 /// True positions every 5 ms for `duration` s from `s`, ending at a terminal event.

@@ -1,0 +1,109 @@
+//! The hit leg of a ball stroke: the joint motion from the stroke's start state to the hit state
+//! (q, q̇, q̈) at the hit time, the one the hit planner accepts and the rally executes.
+//!
+//! 1. **Quintic** (cheap, tried first): from the start state to (q, q̇, q̈) at `t_hit`, with q̈ = 0
+//!    or a fraction (½, 1) of the end acceleration of the cubic through the same boundary
+//!    positions and velocities, −6·Δq/T² + 2·(q̇0 + 2·q̇1)/T, whichever has the lowest exact
+//!    peak/limit ratio r over velocity, acceleration and jerk. Accepted when r ≤ 1; its margin is
+//!    1 − r.
+//! 2. **Jerk-limited** (Ruckig, [`crate::traj::jerk`]), only when the quintic is beyond the
+//!    limits: the time-optimal leg to (q, q̇, q̈ = 0) gives the shortest duration T*; when
+//!    T* ≤ `t_hit`, the leg with `t_hit` as minimum duration is accepted if it reaches the hit
+//!    state exactly at `t_hit` (duration within 1e-9 s) and stays inside the position limits
+//!    (planned without them and checked exactly, then, if it leaves them, planned with them and
+//!    checked again). Its margin is 1 − T*/`t_hit`: the fraction of the time available that the
+//!    fastest stroke leaves unused.
+//!
+//! A quintic needs about 1.7 times the time-optimal duration for a rest-to-rest move, so the
+//! jerk-limited leg reaches balls the quintic cannot (docs/ball.md). Margins of the two profiles
+//! measure different things (peak ratio, time ratio); both are 0 at the limit and grow toward 1
+//! with slack.
+
+use crate::hit::StrokeProfile;
+use crate::traj::jerk::{jerk_limited, PositionLimits};
+use crate::traj::limits::{quintic_limit_ratio, KinematicLimits, LIMIT_TOLERANCE};
+use crate::traj::{JointState, JointTrajectory};
+
+/// Largest difference (s) between the jerk-limited leg's duration and the hit time.
+const DURATION_TOLERANCE: f64 = 1e-9;
+
+/// An accepted hit leg (joint frame: m, rad, from the stroke start at 0 s to the hit at `t_hit`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct HitLeg {
+    /// Which profile the leg is ([`StrokeProfile::Quintic`] or [`StrokeProfile::Jerk`]).
+    pub profile: StrokeProfile,
+    /// The leg, from the start state at 0 s to the hit state at its duration (= the hit time).
+    pub trajectory: JointTrajectory,
+    /// Joint accelerations (m/s², rad/s²) at the hit.
+    pub qdd_hit: Vec<f64>,
+    /// Margin to the kinematic limits (see the module doc), in [0, 1].
+    pub margin: f64,
+}
+
+/// The leg from `start` to the configuration `q` with velocities `qd` (m, rad, per s) at `t_hit`
+/// s within `limits`: the quintic when it is within them, else the jerk-limited leg when that
+/// reaches the hit state on time inside the position limits; `None` when neither does.
+pub fn hit_leg(start: &JointState, q: &[f64], qd: &[f64], t_hit: f64, limits: &KinematicLimits) -> Option<HitLeg> {
+    if !(t_hit > 0.0 && t_hit.is_finite()) {
+        return None;
+    }
+    let cubic: Vec<f64> = (0..q.len())
+        .map(|i| -6.0 * (q[i] - start.q[i]) / (t_hit * t_hit) + 2.0 * (start.qd[i] + 2.0 * qd[i]) / t_hit)
+        .collect();
+    let mut best: Option<(f64, JointState)> = None;
+    for alpha in [0.0, 0.5, 1.0] {
+        let end = JointState {
+            q: q.to_vec(),
+            qd: qd.to_vec(),
+            qdd: cubic.iter().map(|a| alpha * a).collect(),
+        };
+        let ratio = quintic_limit_ratio(start, &end, t_hit, limits);
+        if best.as_ref().is_none_or(|(r, _)| ratio < *r) {
+            best = Some((ratio, end));
+        }
+    }
+    let (ratio, end) = best.expect("three trials");
+    if ratio <= 1.0 {
+        return Some(HitLeg {
+            profile: StrokeProfile::Quintic,
+            trajectory: JointTrajectory::quintic_unchecked(start, &end, t_hit),
+            qdd_hit: end.qdd,
+            margin: 1.0 - ratio,
+        });
+    }
+    jerk_leg(start, q, qd, t_hit, limits)
+}
+
+/// The jerk-limited leg of [`hit_leg`] (step 2 of the module doc).
+fn jerk_leg(start: &JointState, q: &[f64], qd: &[f64], t_hit: f64, limits: &KinematicLimits) -> Option<HitLeg> {
+    let end = JointState {
+        q: q.to_vec(),
+        qd: qd.to_vec(),
+        qdd: vec![0.0; q.len()],
+    };
+    let fastest = jerk_limited(start, &end, limits, None, PositionLimits::Ignore).ok()?;
+    if fastest.duration > t_hit {
+        return None;
+    }
+    let on_time = |position: PositionLimits| {
+        jerk_limited(start, &end, limits, Some(t_hit), position)
+            .ok()
+            .filter(|leg| (leg.duration - t_hit).abs() <= DURATION_TOLERANCE && inside(&leg.trajectory, limits))
+    };
+    let leg = on_time(PositionLimits::Ignore).or_else(|| on_time(PositionLimits::Respect))?;
+    Some(HitLeg {
+        profile: StrokeProfile::Jerk,
+        trajectory: leg.trajectory,
+        qdd_hit: end.qdd,
+        margin: (1.0 - fastest.duration / t_hit).clamp(0.0, 1.0),
+    })
+}
+
+/// Whether `traj` stays inside the position limits of `limits` (exact extrema, to
+/// [`LIMIT_TOLERANCE`]).
+fn inside(traj: &JointTrajectory, limits: &KinematicLimits) -> bool {
+    let slack = |b: f64| LIMIT_TOLERANCE * b.abs().max(1.0);
+    traj.position_range().iter().enumerate().all(|(j, (lo, hi))| {
+        lo.value >= limits.lower[j] - slack(limits.lower[j]) && hi.value <= limits.upper[j] + slack(limits.upper[j])
+    })
+}
