@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 import ttmanip
 from ttmanip import cli
@@ -40,6 +41,9 @@ def test_rally_bad_arguments():
         ttmanip.rally(5, seed=-1)
     with pytest.raises(ttmanip.TtmanipError, match="target"):
         ttmanip.rally(5, target=(3.0, 0.0))
+    # found by the 10,000-example fuzzer campaign: an array for a flag
+    with pytest.raises(ttmanip.TtmanipError, match="progress"):
+        ttmanip.rally(5, progress=np.zeros((0, 8)))
 
 
 def test_rally_cli_writes_summary_and_figures(tmp_path, capsys):

@@ -69,6 +69,8 @@ def rally(
         raise _t.TtmanipError(f"chunk: must be a positive integer, got {chunk!r}")
     if not isinstance(drives, (int, np.integer)) or isinstance(drives, bool) or drives < 0:
         raise _t.TtmanipError(f"drives: must be a non-negative integer, got {drives!r}")
+    if not isinstance(progress, (bool, np.bool_)):
+        raise _t.TtmanipError(f"progress: must be True or False, got {progress!r}")
     try:
         target = tuple(float(v) for v in np.asarray(target, dtype=float).reshape(-1))
         max_spin_rps = float(np.asarray(max_spin_rps, dtype=float))
