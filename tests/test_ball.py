@@ -115,3 +115,5 @@ def test_bad_state_and_model_are_errors():
         ball.predict(np.zeros(9), [0.1])
     with pytest.raises(ttmanip.TtmanipError, match="model"):
         ball.BallModel("unknown")
+    with pytest.raises(ttmanip.TtmanipError, match="events"):
+        ball.predict(np.zeros(10), [0.1], events=np.zeros(2))

@@ -146,6 +146,8 @@ def estimate(t: ArrayLike, p: ArrayLike, model: BallModel | str = "default") -> 
 def predict(state: ArrayLike, times: ArrayLike, model: BallModel | str = "default", events: bool = False):
     """Positions (len(times), 3) of the ball from ``state`` at ``times`` (s, non-decreasing), through
     bounces; NaN after the net or the floor. With ``events=True`` also the list of events."""
+    if not isinstance(events, (bool, np.bool_)):
+        raise _t.TtmanipError(f"events: must be True or False, got {events!r}")
     d = _t.ball_predict(state, times, _model(model))
     return (d["positions"], d["events"]) if events else d["positions"]
 
