@@ -21,7 +21,7 @@
 
 use crate::hit::StrokeProfile;
 use crate::traj::jerk::{jerk_limited, PositionLimits};
-use crate::traj::limits::{quintic_limit_ratio, KinematicLimits, LIMIT_TOLERANCE};
+use crate::traj::limits::{quintic_limit_ratio, KinematicLimits};
 use crate::traj::{JointState, JointTrajectory};
 
 /// Largest difference (s) between the jerk-limited leg's duration and the hit time.
@@ -99,11 +99,7 @@ fn jerk_leg(start: &JointState, q: &[f64], qd: &[f64], t_hit: f64, limits: &Kine
     })
 }
 
-/// Whether `traj` stays inside the position limits of `limits` (exact extrema, to
-/// [`LIMIT_TOLERANCE`]).
+/// Whether `traj` stays inside the position limits of `limits` (exact, to [`crate::traj::limits::LIMIT_TOLERANCE`]).
 fn inside(traj: &JointTrajectory, limits: &KinematicLimits) -> bool {
-    let slack = |b: f64| LIMIT_TOLERANCE * b.abs().max(1.0);
-    traj.position_range().iter().enumerate().all(|(j, (lo, hi))| {
-        lo.value >= limits.lower[j] - slack(limits.lower[j]) && hi.value <= limits.upper[j] + slack(limits.upper[j])
-    })
+    traj.position_violations(limits, 0.0).is_empty()
 }

@@ -26,7 +26,7 @@ use super::{HitPlan, HitPlanner, HitStatus, StrokeProfile};
 use crate::dynamics::DynamicsData;
 use crate::error::Result;
 use crate::traj::jerk::{jerk_limited, PositionLimits};
-use crate::traj::limits::{self, Quantity, Violation, LIMIT_TOLERANCE};
+use crate::traj::limits::{self, LIMIT_TOLERANCE};
 use crate::traj::{JointState, JointTrajectory};
 
 /// Relative precision of the earliest hit time under effort limits.
@@ -156,10 +156,10 @@ pub(super) fn plan_stroke(p: &HitPlanner, plan: &mut HitPlan, mut data: Option<&
     // Speed, acceleration and jerk hold by construction (Ruckig's profiles; quintics accepted only
     // when their exact peaks are within the limits): only the position limits are left to check.
     if !legs.hit_known.inside {
-        plan.violations = position_violations(p, &legs.hit, 0.0);
+        plan.violations = legs.hit.position_violations(&p.limits, 0.0);
     }
     if !legs.back_known.inside {
-        plan.violations.extend(position_violations(p, &legs.back, t_hit));
+        plan.violations.extend(legs.back.position_violations(&p.limits, t_hit));
     }
     let trajectory = legs.hit.append(legs.back);
     plan.trajectory = Some(trajectory);
@@ -259,39 +259,9 @@ fn quick_quintic(from: &JointState, to: &JointState, lim: &limits::KinematicLimi
     JointTrajectory::quintic_unchecked(from, to, t)
 }
 
-/// Position-limit violations of `traj` (exact extrema per segment, computed only for the joints
-/// whose cheap bounds leave the limits), times shifted by `t0` s.
-fn position_violations(p: &HitPlanner, traj: &JointTrajectory, t0: f64) -> Vec<Violation> {
-    let lim = &p.limits;
-    let slack = |b: f64| LIMIT_TOLERANCE * b.abs().max(1.0);
-    let mut out = Vec::new();
-    for j in 0..traj.dof() {
-        let (lo_bound, hi_bound) = traj.joint_position_bounds(j);
-        if lo_bound >= lim.lower[j] - slack(lim.lower[j]) && hi_bound <= lim.upper[j] + slack(lim.upper[j]) {
-            continue;
-        }
-        let (lo, hi) = traj.joint_position_range(j);
-        for (peak, limit, bad) in [
-            (lo, lim.lower[j], lo.value < lim.lower[j] - slack(lim.lower[j])),
-            (hi, lim.upper[j], hi.value > lim.upper[j] + slack(lim.upper[j])),
-        ] {
-            if bad {
-                out.push(Violation {
-                    joint: j,
-                    quantity: Quantity::Position,
-                    time: t0 + peak.time,
-                    value: peak.value,
-                    limit,
-                });
-            }
-        }
-    }
-    out
-}
-
 /// True when `traj` stays inside the position limits (exact extrema).
 fn inside(p: &HitPlanner, traj: &JointTrajectory) -> bool {
-    position_violations(p, traj, 0.0).is_empty()
+    traj.position_violations(&p.limits, 0.0).is_empty()
 }
 
 /// Replans a leg that leaves the position limits jerk-limited with position limits (the hit leg

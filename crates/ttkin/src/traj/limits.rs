@@ -259,32 +259,42 @@ impl JointTrajectory {
         (lo, hi)
     }
 
+    /// Every joint's lowest and highest position that leaves the position limits of `limits`
+    /// (to [`LIMIT_TOLERANCE`]), exactly, with times shifted by `t0` s; `limits` must have
+    /// `self.dof()` joints. Cheap bounds first: the exact extrema only for joints they cannot clear.
+    pub fn position_violations(&self, limits: &KinematicLimits, t0: f64) -> Vec<Violation> {
+        let slack = |b: f64| LIMIT_TOLERANCE * b.abs().max(1.0);
+        let mut out = Vec::new();
+        for j in 0..self.dof() {
+            let (lower, upper) = (limits.lower[j], limits.upper[j]);
+            let (lo_bound, hi_bound) = self.joint_position_bounds(j);
+            if lo_bound >= lower - slack(lower) && hi_bound <= upper + slack(upper) {
+                continue;
+            }
+            let (lo, hi) = self.joint_position_range(j);
+            for (peak, limit, bad) in [
+                (lo, lower, lo.value < lower - slack(lower)),
+                (hi, upper, hi.value > upper + slack(upper)),
+            ] {
+                if bad {
+                    out.push(Violation {
+                        joint: j,
+                        quantity: Quantity::Position,
+                        time: t0 + peak.time,
+                        value: peak.value,
+                        limit,
+                    });
+                }
+            }
+        }
+        out
+    }
+
     /// Every joint's worst violation of each limit (position, velocity, acceleration, jerk), found
     /// exactly; empty when the trajectory respects all limits (to [`LIMIT_TOLERANCE`]).
     pub fn check_limits(&self, limits: &KinematicLimits) -> Result<Vec<Violation>> {
         limits.check_dof(self.dof())?;
-        let mut out = Vec::new();
-        for (j, (lo, hi)) in self.position_range().into_iter().enumerate() {
-            let slack = |b: f64| LIMIT_TOLERANCE * b.abs().max(1.0);
-            if lo.value < limits.lower[j] - slack(limits.lower[j]) {
-                out.push(Violation {
-                    joint: j,
-                    quantity: Quantity::Position,
-                    time: lo.time,
-                    value: lo.value,
-                    limit: limits.lower[j],
-                });
-            }
-            if hi.value > limits.upper[j] + slack(limits.upper[j]) {
-                out.push(Violation {
-                    joint: j,
-                    quantity: Quantity::Position,
-                    time: hi.time,
-                    value: hi.value,
-                    limit: limits.upper[j],
-                });
-            }
-        }
+        let mut out = self.position_violations(limits, 0.0);
         for (order, quantity, bound) in [
             (1, Quantity::Velocity, &limits.velocity),
             (2, Quantity::Acceleration, &limits.acceleration),
