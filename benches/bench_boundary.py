@@ -26,14 +26,19 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 
 
+def mobile8_case():
+    """mobile8 and its aligned, C-contiguous float64 start configuration (m, rad)."""
+    import ttmanip
+
+    return ttmanip.Robot.builtin("mobile8"), ttmanip.robots.mobile8_start()
+
+
 def measure() -> dict[str, float]:
     """Per-call µs of each case in this process (whichever ttmanip is importable)."""
     sys.path.insert(0, HERE)
-    import ttmanip
     from timing import per_call_us
 
-    robot = ttmanip.Robot.builtin("mobile8")
-    q = np.array([0.26, *np.deg2rad([200.0, 90.0, 80.0, 250.0, 105.0, 180.0, 135.0])])
+    robot, q = mobile8_case()
     out = {
         "fk aligned": per_call_us(lambda: robot.fk(q)),
         "jacobian aligned": per_call_us(lambda: robot.jacobian(q)),
@@ -68,12 +73,11 @@ def run_child(pythonpath: str | None) -> dict[str, float]:
     return json.loads(res.stdout.strip().splitlines()[-1])
 
 
-ICOUNT_CHILD = """
+ICOUNT_CHILD = f"""
 import sys
-import numpy as np
-import ttmanip
-robot = ttmanip.Robot.builtin("mobile8")
-q = np.array([0.26, *np.deg2rad([200.0, 90.0, 80.0, 250.0, 105.0, 180.0, 135.0])])
+sys.path.insert(0, {HERE!r})
+from bench_boundary import mobile8_case
+robot, q = mobile8_case()
 f = getattr(robot, sys.argv[1])
 f(q)
 for _ in range(int(sys.argv[2])):
