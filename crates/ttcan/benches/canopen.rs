@@ -2,14 +2,16 @@
 //! and the controller's per-cycle work for 8 axes (4 channels × 2: read the TPDOs, watchdog,
 //! update, write RPDOs + SYNC). Budget: each ≤ 2 µs.
 
+#[path = "../tests/support/links.rs"]
+mod links;
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::hint::black_box;
 use ttcan::bus::BusEvent;
 use ttcan::canopen::cia402::OpMode;
 use ttcan::canopen::nmt::{decode_sync, encode_sync};
 use ttcan::canopen::node::{DriveNode, NodeEvent};
-use ttcan::canopen::{Frame, Frames, Rpdo, Tpdo, Units};
-use ttcan::runtime::master::{AxisSetpoint, ChannelMaster, LinkConfig, Phase, WatchdogConfig};
+use ttcan::canopen::{Frame, Frames, Rpdo, Tpdo};
+use ttcan::runtime::master::{AxisSetpoint, ChannelMaster, Phase, WatchdogConfig};
 
 fn encode_decode(c: &mut Criterion) {
     c.bench_function("canopen_encode_decode_cycle_8_axes", |b| {
@@ -52,14 +54,7 @@ fn encode_decode(c: &mut Criterion) {
 /// A channel master brought to Run by two protocol-only drive nodes; returns it and the TPDOs the
 /// drives answer a steady-state SYNC with.
 fn running_channel() -> (ChannelMaster, Vec<BusEvent>) {
-    let links: Vec<LinkConfig> = (1..=2)
-        .map(|n| LinkConfig {
-            node: n,
-            units: Units::default(),
-            following_error_limit: 0.05,
-            max_current: 10.0,
-        })
-        .collect();
+    let links = links::two_links();
     let mut m = ChannelMaster::new(&links, OpMode::Csp, WatchdogConfig::default()).unwrap();
     let mut boot = Frames::new();
     let mut nodes: Vec<DriveNode> = (1..=2).map(|n| DriveNode::new(n, &mut boot).unwrap()).collect();

@@ -91,7 +91,7 @@ pub struct ChannelReport {
     /// Telemetry rows.
     pub telemetry: Vec<TelemetryRow>,
     /// Largest |feedback − the target sent two cycles earlier| during the motion, per axis
-    /// (fresh feedback only).
+    /// (feedback in step with the SYNCs only, [`ChannelMaster::feedback_in_step`]).
     pub max_tracking_error: [f64; MAX_AXES_PER_CHANNEL],
     /// Frames that could not be sent (queue full).
     pub tx_full: u64,
@@ -235,8 +235,14 @@ pub fn run_channel<B: CanBus>(
             if let Some(fb) = master.feedback(a) {
                 row.q[a] = fb.q;
                 row.current[a] = fb.current;
-                let fresh = fb.received_cycle + 1 == master.counters().cycles;
-                if fresh && phase == Phase::Run && t >= 2.0 * period && master.stop_reason().is_none() {
+                // only feedback known to answer the last SYNC: after a stall of the drives the
+                // newest answer can be older, and pairing it with refs[1] would count the motion
+                // of the missed cycles as tracking error
+                if master.feedback_in_step(a)
+                    && phase == Phase::Run
+                    && t >= 2.0 * period
+                    && master.stop_reason().is_none()
+                {
                     max_err[a] = max_err[a].max((fb.q - refs[1][a]).abs());
                 }
             }

@@ -102,6 +102,9 @@ pub(super) struct Link {
     pub(super) state: Option<DriveState>,
     pub(super) feedback: Option<Feedback>,
     pub(super) fresh: bool,
+    /// This cycle's feedback answers the last SYNC: fresh, the stream continuous and no hold-off
+    /// (what the following-error check compared).
+    pub(super) in_step: bool,
     pub(super) missed_in_row: u32,
     pub(super) controlword: u16,
     pub(super) following_holdoff: u32,
@@ -128,6 +131,7 @@ impl Link {
             state: None,
             feedback: None,
             fresh: false,
+            in_step: false,
             missed_in_row: 0,
             controlword: 0,
             following_holdoff: 0,

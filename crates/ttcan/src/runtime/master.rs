@@ -120,6 +120,14 @@ impl ChannelMaster {
         self.links.get(k).copied().flatten().and_then(|l| l.feedback)
     }
 
+    /// Whether axis `k`'s feedback of this cycle answers the last SYNC (Run phase, fresh, the
+    /// stream continuous and no hold-off after a gap, a burst or skipped deadlines): the
+    /// feedback the following-error check compared with the target in force. Valid after
+    /// [`ChannelMaster::cycle`].
+    pub fn feedback_in_step(&self, k: usize) -> bool {
+        self.links.get(k).copied().flatten().is_some_and(|l| l.in_step)
+    }
+
     /// Drive state of axis `k` from its last statusword.
     pub fn drive_state(&self, k: usize) -> Option<DriveState> {
         self.links.get(k).copied().flatten().and_then(|l| l.state)
@@ -191,7 +199,10 @@ impl ChannelMaster {
                                 stop = Some(StopReason::BadFrame(node));
                             } else {
                                 if l.fresh {
+                                    // two answers in one read: they came late, the newest may
+                                    // answer an older SYNC than the last one
                                     self.counters.duplicate_feedback += 1;
+                                    l.following_holdoff = l.following_holdoff.max(2);
                                 }
                                 l.fresh = true;
                                 self.counters.tpdo_rx += 1;
@@ -369,6 +380,7 @@ impl ChannelMaster {
         let mut stop = None;
         let mut missed = 0;
         for l in self.links() {
+            l.in_step = false;
             if l.heartbeat.received() > 0 && l.heartbeat.tick() && phase != Phase::Stopped {
                 stop.get_or_insert(StopReason::HeartbeatLost(l.cfg.node));
             }
@@ -393,8 +405,11 @@ impl ChannelMaster {
                         stop.get_or_insert(StopReason::LeftOperationEnabled(l.cfg.node));
                     } else if l.following_holdoff > 0 {
                         l.following_holdoff -= 1;
-                    } else if (l.last_target - fb.q).abs() > l.cfg.following_error_limit {
-                        stop.get_or_insert(StopReason::FollowingError(l.cfg.node));
+                    } else {
+                        l.in_step = true;
+                        if (l.last_target - fb.q).abs() > l.cfg.following_error_limit {
+                            stop.get_or_insert(StopReason::FollowingError(l.cfg.node));
+                        }
                     }
                 }
             }
