@@ -5,20 +5,6 @@ mod common;
 use common::*;
 use ttcan::{AxisState, Fault, Mode, Setpoint, Simulation};
 
-/// Runs at 15 rad/s for 200 ms in velocity mode.
-fn running() -> Simulation {
-    let mut s = sim();
-    assert!(s.enable(Mode::Velocity));
-    s.run(0.2, |_| Setpoint::Velocity(15.0)).unwrap();
-    assert_eq!(s.axis.state(), AxisState::Enabled);
-    assert!(
-        (s.plant.output_speed() - 15.0).abs() < 0.5,
-        "speed {}",
-        s.plant.output_speed()
-    );
-    s
-}
-
 /// Runs until the axis leaves `Stopping` (at most 1 s); returns the stop duration.
 fn run_until_stopped(s: &mut Simulation, fault: Fault) -> f64 {
     let t0 = s.time();

@@ -5,25 +5,7 @@
 mod common;
 use common::*;
 use ttcan::axis::{HoldingBrake, Reaction};
-use ttcan::{AxisConfig, AxisState, Fault, Mode, Setpoint, Simulation};
-
-/// Runs at 15 rad/s for 200 ms in velocity mode.
-fn running_with(f: impl FnOnce(&mut AxisConfig)) -> Simulation {
-    let mut s = sim_with(f);
-    assert!(s.enable(Mode::Velocity));
-    s.run(0.2, |_| Setpoint::Velocity(15.0)).unwrap();
-    assert_eq!(s.axis.state(), AxisState::Enabled);
-    assert!(
-        (s.plant.output_speed() - 15.0).abs() < 0.5,
-        "speed {}",
-        s.plant.output_speed()
-    );
-    s
-}
-
-fn running() -> Simulation {
-    running_with(|_| {})
-}
+use ttcan::{AxisState, Fault, Mode, Setpoint, Simulation};
 
 /// Steps until the state is `Faulted(fault)` (at most `max` s); returns the time it took.
 fn until_faulted(s: &mut Simulation, fault: Fault, max: f64) -> f64 {

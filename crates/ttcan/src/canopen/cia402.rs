@@ -88,6 +88,18 @@ pub enum DriveState {
 }
 
 impl DriveState {
+    /// Every state, in the order of the state machine's diagram.
+    pub const ALL: [DriveState; 8] = [
+        DriveState::NotReadyToSwitchOn,
+        DriveState::SwitchOnDisabled,
+        DriveState::ReadyToSwitchOn,
+        DriveState::SwitchedOn,
+        DriveState::OperationEnabled,
+        DriveState::QuickStopActive,
+        DriveState::FaultReactionActive,
+        DriveState::Fault,
+    ];
+
     /// The state bits of the statusword (bits 0–3, 5, 6).
     pub fn statusword_bits(self) -> u16 {
         match self {
@@ -241,16 +253,7 @@ mod tests {
 
     #[test]
     fn every_state_round_trips_through_its_statusword() {
-        for s in [
-            NotReadyToSwitchOn,
-            SwitchOnDisabled,
-            ReadyToSwitchOn,
-            SwitchedOn,
-            OperationEnabled,
-            QuickStopActive,
-            FaultReactionActive,
-            Fault,
-        ] {
+        for s in DriveState::ALL {
             let sw = s.statusword_bits() | SW_VOLTAGE_ENABLED | SW_REMOTE | SW_TARGET_REACHED;
             assert_eq!(DriveState::from_statusword(sw).unwrap(), s);
         }

@@ -58,19 +58,9 @@ impl SdoRequest {
     pub fn encode(&self, node: u8) -> Result<Frame, ProtocolError> {
         let n = check_node(node)?;
         let (index, sub) = self.address();
-        let i = index.to_le_bytes();
-        let mut d = [0u8, i[0], i[1], sub, 0, 0, 0, 0];
+        let mut d = frame_data(index, sub);
         match *self {
-            SdoRequest::Download { size, value, .. } => {
-                if !(1..=4).contains(&size) {
-                    return Err(ProtocolError::OutOfRange {
-                        what: "SDO size",
-                        value: size as i64,
-                    });
-                }
-                d[0] = 0x23 | ((4 - size) << 2);
-                d[4..8].copy_from_slice(&value.to_le_bytes());
-            }
+            SdoRequest::Download { size, value, .. } => put_expedited(&mut d, 0x23, size, value)?,
             SdoRequest::Upload { .. } => d[0] = 0x40,
         }
         Ok(Frame::raw(Cob::SdoRx(n).id(), 8, d))
@@ -82,20 +72,15 @@ impl SdoRequest {
         let Some(Cob::SdoRx(node)) = Cob::classify(f.id()) else {
             return Err(ProtocolError::UnexpectedFrame(f.id()));
         };
-        f.expect_len(8)?;
-        let d = f.data();
-        let index = u16::from_le_bytes([d[1], d[2]]);
-        let sub = d[3];
-        let req = match d[0] {
+        let (command, index, sub, word) = fields(f)?;
+        let req = match command {
             c @ (0x23 | 0x27 | 0x2B | 0x2F) => {
-                let size = 4 - ((c >> 2) & 0x3);
-                let mut v = [0u8; 4];
-                v[..size as usize].copy_from_slice(&d[4..4 + size as usize]);
+                let (size, value) = expedited_value(c, word);
                 SdoRequest::Download {
                     index,
                     sub,
                     size,
-                    value: u32::from_le_bytes(v),
+                    value,
                 }
             }
             0x40 => SdoRequest::Upload { index, sub },
@@ -151,20 +136,10 @@ impl SdoResponse {
     pub fn encode(&self, node: u8) -> Result<Frame, ProtocolError> {
         let n = check_node(node)?;
         let (index, sub) = self.address();
-        let i = index.to_le_bytes();
-        let mut d = [0u8, i[0], i[1], sub, 0, 0, 0, 0];
+        let mut d = frame_data(index, sub);
         match *self {
             SdoResponse::Downloaded { .. } => d[0] = 0x60,
-            SdoResponse::Uploaded { size, value, .. } => {
-                if !(1..=4).contains(&size) {
-                    return Err(ProtocolError::OutOfRange {
-                        what: "SDO size",
-                        value: size as i64,
-                    });
-                }
-                d[0] = 0x43 | ((4 - size) << 2);
-                d[4..8].copy_from_slice(&value.to_le_bytes());
-            }
+            SdoResponse::Uploaded { size, value, .. } => put_expedited(&mut d, 0x43, size, value)?,
             SdoResponse::Abort { code, .. } => {
                 d[0] = 0x80;
                 d[4..8].copy_from_slice(&code.to_le_bytes());
@@ -178,21 +153,16 @@ impl SdoResponse {
         let Some(Cob::SdoTx(node)) = Cob::classify(f.id()) else {
             return Err(ProtocolError::UnexpectedFrame(f.id()));
         };
-        f.expect_len(8)?;
-        let d = f.data();
-        let index = u16::from_le_bytes([d[1], d[2]]);
-        let sub = d[3];
-        let word = u32::from_le_bytes([d[4], d[5], d[6], d[7]]);
-        let r = match d[0] {
+        let (command, index, sub, word) = fields(f)?;
+        let r = match command {
             0x60 => SdoResponse::Downloaded { index, sub },
             c @ (0x43 | 0x47 | 0x4B | 0x4F) => {
-                let size = 4 - ((c >> 2) & 0x3);
-                let mask = if size == 4 { u32::MAX } else { (1u32 << (8 * size)) - 1 };
+                let (size, value) = expedited_value(c, word);
                 SdoResponse::Uploaded {
                     index,
                     sub,
                     size,
-                    value: word & mask,
+                    value,
                 }
             }
             0x80 => SdoResponse::Abort { index, sub, code: word },
@@ -200,6 +170,46 @@ impl SdoResponse {
         };
         Ok((node, r))
     }
+}
+
+/// The data bytes of an SDO frame about `index:sub`: the address in bytes 1–3, the rest zero.
+fn frame_data(index: u16, sub: u8) -> [u8; 8] {
+    let i = index.to_le_bytes();
+    [0, i[0], i[1], sub, 0, 0, 0, 0]
+}
+
+/// An expedited transfer of `size` (1–4) bytes of `value` into `d`: the command specifier
+/// `base` (0x23 download request, 0x43 upload answer) with the unused-byte count, the value
+/// little-endian in bytes 4–7.
+fn put_expedited(d: &mut [u8; 8], base: u8, size: u8, value: u32) -> Result<(), ProtocolError> {
+    if !(1..=4).contains(&size) {
+        return Err(ProtocolError::OutOfRange {
+            what: "SDO size",
+            value: size as i64,
+        });
+    }
+    d[0] = base | ((4 - size) << 2);
+    d[4..8].copy_from_slice(&value.to_le_bytes());
+    Ok(())
+}
+
+/// (command byte, index, sub-index, data word) of an 8-byte SDO frame.
+fn fields(f: &Frame) -> Result<(u8, u16, u8, u32), ProtocolError> {
+    f.expect_len(8)?;
+    let d = f.data();
+    Ok((
+        d[0],
+        u16::from_le_bytes([d[1], d[2]]),
+        d[3],
+        u32::from_le_bytes([d[4], d[5], d[6], d[7]]),
+    ))
+}
+
+/// Size (1–4 bytes) and zero-extended value of the expedited command `c` carrying `word`.
+fn expedited_value(c: u8, word: u32) -> (u8, u32) {
+    let size = 4 - ((c >> 2) & 0x3);
+    let mask = if size == 4 { u32::MAX } else { (1u32 << (8 * size)) - 1 };
+    (size, word & mask)
 }
 
 /// Why an SDO transfer of the client failed.

@@ -28,6 +28,12 @@ impl Default for Units {
     }
 }
 
+/// `value` as per-mille of `rated` (the CiA 402 torque and current unit), named `what` when out of
+/// the i16 range.
+fn to_permille(what: &'static str, value: f64, rated: f64) -> Result<i16, ProtocolError> {
+    Ok(to_int(what, value / rated * 1000.0, i16::MIN as f64, i16::MAX as f64)? as i16)
+}
+
 fn to_int(what: &'static str, x: f64, lo: f64, hi: f64) -> Result<i64, ProtocolError> {
     let r = x.round();
     if r.is_finite() && r >= lo && r <= hi {
@@ -93,13 +99,7 @@ impl Units {
 
     /// Joint torque (N·m or N) → per-mille of the rated torque.
     pub fn torque_to_permille(&self, tau: f64) -> Result<i16, ProtocolError> {
-        let v = to_int(
-            "torque",
-            tau / self.rated_torque * 1000.0,
-            i16::MIN as f64,
-            i16::MAX as f64,
-        )?;
-        Ok(v as i16)
+        to_permille("torque", tau, self.rated_torque)
     }
 
     /// Per-mille of the rated torque → joint torque (N·m or N).
@@ -109,13 +109,7 @@ impl Units {
 
     /// Motor current (A) → per-mille of the rated current.
     pub fn current_to_permille(&self, i: f64) -> Result<i16, ProtocolError> {
-        let v = to_int(
-            "current",
-            i / self.rated_current * 1000.0,
-            i16::MIN as f64,
-            i16::MAX as f64,
-        )?;
-        Ok(v as i16)
+        to_permille("current", i, self.rated_current)
     }
 
     /// Per-mille of the rated current → motor current (A).

@@ -1,7 +1,8 @@
-//! Helpers shared by the ttcan tests: the reference motor, a quintic, step-response metrics.
+//! Helpers shared by the ttcan tests: the reference motor, a running axis, a quintic,
+//! step-response metrics.
 #![allow(dead_code)]
 
-use ttcan::{AxisConfig, MotorModel, Simulation};
+use ttcan::{AxisConfig, AxisState, Mode, MotorModel, Setpoint, Simulation};
 
 /// The documented maxon RE 25 + GP 26 A 14:1 actuator.
 pub fn model() -> MotorModel {
@@ -18,6 +19,25 @@ pub fn sim_with(f: impl FnOnce(&mut AxisConfig)) -> Simulation {
     let mut c = AxisConfig::new(model());
     f(&mut c);
     Simulation::new(&model(), &c).expect("test configuration is valid")
+}
+
+/// An axis with a changed configuration running at 15 rad/s after 200 ms in velocity mode.
+pub fn running_with(f: impl FnOnce(&mut AxisConfig)) -> Simulation {
+    let mut s = sim_with(f);
+    assert!(s.enable(Mode::Velocity));
+    s.run(0.2, |_| Setpoint::Velocity(15.0)).unwrap();
+    assert_eq!(s.axis.state(), AxisState::Enabled);
+    assert!(
+        (s.plant.output_speed() - 15.0).abs() < 0.5,
+        "speed {}",
+        s.plant.output_speed()
+    );
+    s
+}
+
+/// The default axis running at 15 rad/s after 200 ms in velocity mode.
+pub fn running() -> Simulation {
+    running_with(|_| {})
 }
 
 /// Rest-to-rest quintic from 0 to `h` in `tf` seconds (ttkin's quintic with zero boundary
