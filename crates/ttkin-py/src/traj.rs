@@ -6,7 +6,8 @@ use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
-use ttkin::traj::limits::{self, KinematicLimits, SegmentKind, Violation};
+use ttkin::traj::duration::{self, SegmentKind};
+use ttkin::traj::limits::{KinematicLimits, Violation};
 use ttkin::traj::via::{self, ViaKind};
 use ttkin::traj::{JointState, JointTrajectory, Samples};
 
@@ -411,7 +412,7 @@ fn traj_minimal_duration(
     let n = robot.chain.dof();
     let (q0, q1) = (vector(q0, "q0", n)?, vector(q1, "q1", n)?);
     let kind = kind.parse::<SegmentKind>().py()?;
-    limits::minimal_duration_rest(&q0, &q1, &robot_limits(robot, jerk)?, kind).py()
+    duration::minimal_duration_rest(&q0, &q1, &robot_limits(robot, jerk)?, kind).py()
 }
 
 /// Hitting stroke: from (q, qd, qdd) reach (q_hit, qd_hit, qdd_hit) at t_hit s (or the earliest

@@ -12,7 +12,7 @@ use ttkin::ball::predict::{crossing, predict, CrossingOutcome};
 use ttkin::ball::rally::{self, RallyConfig};
 use ttkin::ball::reach::ReachRegion;
 use ttkin::hit::StrokeProfile;
-use ttkin::traj::limits::quintic_limit_ratio;
+use ttkin::traj::duration::quintic_limit_ratio;
 use ttkin::traj::JointState;
 
 fn fine() -> Flight {

@@ -3,10 +3,10 @@
 
 use nalgebra::{IsometryMatrix3, Rotation3, Translation3, Vector3};
 use proptest::prelude::*;
-use ttkin::traj::limits::{
+use ttkin::traj::duration::{
     earliest_quintic_duration, minimal_duration_rest, minimal_quintic_duration, quintic_limit_ratio, SegmentKind,
-    LIMIT_TOLERANCE,
 };
+use ttkin::traj::limits::LIMIT_TOLERANCE;
 use ttkin::traj::via::{self, ViaKind};
 use ttkin::traj::{stroke, CartesianTrajectory, JointState, JointTrajectory, KinematicLimits, Path, Quantity, TimeLaw};
 use ttkin::{Chain, Error, Geometry, Joint, JointType};

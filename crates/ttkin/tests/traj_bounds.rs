@@ -2,7 +2,7 @@
 //! and the bounded limit ratio is the exact one whenever it matters.
 
 use proptest::prelude::*;
-use ttkin::traj::limits::{quintic_limit_ratio, quintic_limit_ratio_above};
+use ttkin::traj::duration::{quintic_limit_ratio, quintic_limit_ratio_above};
 use ttkin::traj::{poly, JointState, JointTrajectory, KinematicLimits};
 
 fn vecs(n: usize, r: f64) -> impl Strategy<Value = Vec<f64>> {

@@ -20,8 +20,9 @@
 //! with slack.
 
 use crate::hit::StrokeProfile;
+use crate::traj::duration::quintic_limit_ratio;
 use crate::traj::jerk::{jerk_limited, PositionLimits};
-use crate::traj::limits::{quintic_limit_ratio, KinematicLimits};
+use crate::traj::limits::KinematicLimits;
 use crate::traj::{JointState, JointTrajectory};
 
 /// Largest difference (s) between the jerk-limited leg's duration and the hit time.

@@ -25,8 +25,9 @@
 use super::{HitPlan, HitPlanner, HitStatus, StrokeProfile};
 use crate::dynamics::DynamicsData;
 use crate::error::Result;
+use crate::traj::duration;
 use crate::traj::jerk::{jerk_limited, PositionLimits};
-use crate::traj::limits::{self, LIMIT_TOLERANCE};
+use crate::traj::limits::{KinematicLimits, LIMIT_TOLERANCE};
 use crate::traj::{JointState, JointTrajectory};
 
 /// Relative precision of the earliest hit time under effort limits.
@@ -190,7 +191,7 @@ fn first_legs(
 ) -> Result<(Legs, f64)> {
     let lim = &p.limits;
     if profile == StrokeProfile::Quintic {
-        let t = limits::earliest_quintic_duration(start, hit, lim, t_req)?;
+        let t = duration::earliest_quintic_duration(start, hit, lim, t_req)?;
         let legs = Legs::new(
             JointTrajectory::quintic_unchecked(start, hit, t),
             quick_quintic(hit, rest, lim),
@@ -198,8 +199,9 @@ fn first_legs(
         );
         return Ok((legs, if t > t_req { t } else { f64::NAN }));
     }
-    let fits =
-        |t: f64| limits::quintic_limit_ratio_above(start, hit, t, lim, 1.0 + LIMIT_TOLERANCE) <= 1.0 + LIMIT_TOLERANCE;
+    let fits = |t: f64| {
+        duration::quintic_limit_ratio_above(start, hit, t, lim, 1.0 + LIMIT_TOLERANCE) <= 1.0 + LIMIT_TOLERANCE
+    };
     if profile == StrokeProfile::Auto && fits(t_req) {
         let legs = Legs::new(
             JointTrajectory::quintic_unchecked(start, hit, t_req),
@@ -224,7 +226,7 @@ fn first_legs(
 /// the minimal quintic duration (`Quintic`).
 pub(super) fn earliest_kinematic(p: &HitPlanner, start: &JointState, hit: &JointState) -> Result<f64> {
     match p.options.profile {
-        StrokeProfile::Quintic => limits::minimal_quintic_duration(start, hit, &p.limits),
+        StrokeProfile::Quintic => duration::minimal_quintic_duration(start, hit, &p.limits),
         _ => Ok(jerk_limited(start, hit, &p.limits, None, PositionLimits::Ignore)?.duration),
     }
 }
@@ -237,7 +239,7 @@ const QUICK_GROWTH: f64 = 1.1;
 /// and the time to cancel the start velocity and acceleration, and grows by √(peak/limit) (at least
 /// [`QUICK_GROWTH`]) until the exact peaks are within the limits; not minimal, typically within a
 /// few tens of percent of the minimal duration of that family.
-fn quick_quintic(from: &JointState, to: &JointState, lim: &limits::KinematicLimits) -> JointTrajectory {
+fn quick_quintic(from: &JointState, to: &JointState, lim: &KinematicLimits) -> JointTrajectory {
     let mut t: f64 = 1e-3;
     for j in 0..from.q.len() {
         let h = (to.q[j] - from.q[j]).abs();
@@ -249,7 +251,7 @@ fn quick_quintic(from: &JointState, to: &JointState, lim: &limits::KinematicLimi
             .max((to.qdd[j] - from.qdd[j]).abs() / lim.jerk[j]);
     }
     for _ in 0..200 {
-        let ratio = limits::quintic_limit_ratio_above(from, to, t, lim, 1.0 + LIMIT_TOLERANCE);
+        let ratio = duration::quintic_limit_ratio_above(from, to, t, lim, 1.0 + LIMIT_TOLERANCE);
         if ratio <= 1.0 + LIMIT_TOLERANCE {
             break;
         }

@@ -229,6 +229,24 @@ impl CartesianTrajectory {
         })
     }
 
+    /// `path` in `duration` s with the orientation turning by slerp from `start`'s to `end`'s
+    /// (about a fixed axis).
+    fn slerped(
+        path: Path,
+        start: &IsometryMatrix3<f64>,
+        end: &IsometryMatrix3<f64>,
+        duration: f64,
+        law: TimeLaw,
+    ) -> Result<Self> {
+        Self::build(
+            path,
+            start.rotation,
+            slerp_vector(&start.rotation, &end.rotation),
+            duration,
+            law,
+        )
+    }
+
     /// Straight line from pose `start` to pose `end` (tool in base frame) in `duration` s; the
     /// orientation turns by slerp about a fixed axis.
     pub fn line(start: &IsometryMatrix3<f64>, end: &IsometryMatrix3<f64>, duration: f64, law: TimeLaw) -> Result<Self> {
@@ -238,13 +256,7 @@ impl CartesianTrajectory {
             start: start.translation.vector,
             end: end.translation.vector,
         };
-        Self::build(
-            path,
-            start.rotation,
-            slerp_vector(&start.rotation, &end.rotation),
-            duration,
-            law,
-        )
+        Self::slerped(path, start, end, duration, law)
     }
 
     /// Circular arc from pose `start` through the point `via` (m, base frame) to pose `end`, in
@@ -289,13 +301,7 @@ impl CartesianTrajectory {
             axis,
             angle,
         };
-        Self::build(
-            path,
-            start.rotation,
-            slerp_vector(&start.rotation, &end.rotation),
-            duration,
-            law,
-        )
+        Self::slerped(path, start, end, duration, law)
     }
 
     /// Circular arc from pose `start` about the line through `centre` (m) along `axis` (base frame)

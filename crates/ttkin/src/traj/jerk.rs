@@ -56,21 +56,8 @@ pub fn jerk_limited(
     minimum_duration: Option<f64>,
     position: PositionLimits,
 ) -> Result<JerkLimited> {
-    let n = start.check("start")?;
-    if end.check("end")? != n {
-        return Err(Error::shape(
-            "end.q",
-            format!("{n} values"),
-            format!("{} values", end.q.len()),
-        ));
-    }
-    if limits.dof() != n {
-        return Err(Error::shape(
-            "limits",
-            format!("{n} joints"),
-            format!("{} joints", limits.dof()),
-        ));
-    }
+    let n = start.check_pair("start", end, "end")?;
+    limits.check_dof(n)?;
     for (what, v) in [
         ("velocity limits", &limits.velocity),
         ("acceleration limits", &limits.acceleration),

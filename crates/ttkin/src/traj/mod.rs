@@ -12,6 +12,7 @@
 //! s², s³. Time runs from 0 to [`JointTrajectory::duration`].
 
 pub mod cartesian;
+pub mod duration;
 pub mod jerk;
 pub mod limits;
 pub mod poly;
@@ -76,6 +77,20 @@ impl JointState {
         check_vector(&format!("{what}.q"), &self.q, n)?;
         check_vector(&format!("{what}.qd"), &self.qd, n)?;
         check_vector(&format!("{what}.qdd"), &self.qdd, n)?;
+        Ok(n)
+    }
+
+    /// [`JointState::check`] of two states, `self` named `what` and `other` named `other_what`,
+    /// and an error naming `other_what.q` unless both have the same number of joints.
+    pub(crate) fn check_pair(&self, what: &str, other: &JointState, other_what: &str) -> Result<usize> {
+        let n = self.check(what)?;
+        if other.check(other_what)? != n {
+            return Err(Error::shape(
+                format!("{other_what}.q"),
+                format!("{n} values"),
+                format!("{} values", other.q.len()),
+            ));
+        }
         Ok(n)
     }
 }
@@ -208,14 +223,7 @@ impl JointTrajectory {
 
     /// Quintic between two full joint states in `duration` s.
     pub fn quintic_between(start: &JointState, end: &JointState, duration: f64) -> Result<Self> {
-        let n = start.check("start")?;
-        if end.check("end")? != n {
-            return Err(Error::shape(
-                "end.q",
-                format!("{n} values"),
-                format!("{} values", end.q.len()),
-            ));
-        }
+        start.check_pair("start", end, "end")?;
         check_duration("duration", duration)?;
         Ok(Self::quintic_unchecked(start, end, duration))
     }

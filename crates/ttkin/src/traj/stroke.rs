@@ -6,13 +6,14 @@
 //! it respects the velocity, acceleration and jerk limits; otherwise the hit time becomes the
 //! earliest feasible one after it, found by root bracketing on the duration (growth, then the
 //! Illinois regula falsi safeguarded by bisection) with the quintic's exact extrema (roots of its
-//! derivative polynomials) at every step ([`limits::earliest_quintic_duration`]); not a closed
+//! derivative polynomials) at every step ([`duration::earliest_quintic_duration`]); not a closed
 //! form, since the peaks of a quintic with nonzero boundary velocities are not monotone in T. The return leg takes the minimal
-//! feasible duration ([`limits::minimal_quintic_duration`]) unless one is given.
+//! feasible duration ([`duration::minimal_quintic_duration`]) unless one is given.
 
-use super::limits::{self, KinematicLimits, Violation};
+use super::duration;
+use super::limits::{KinematicLimits, Violation};
 use super::{check_duration, JointState, JointTrajectory};
-use crate::error::{check_vector, Error, Result};
+use crate::error::{check_vector, Result};
 
 /// A planned stroke.
 #[derive(Debug, Clone, PartialEq)]
@@ -48,24 +49,17 @@ pub fn stroke(
     return_duration: Option<f64>,
     limits: &KinematicLimits,
 ) -> Result<Stroke> {
-    let n = start.check("start")?;
-    if hit.check("hit")? != n {
-        return Err(Error::shape(
-            "hit.q",
-            format!("{n} values"),
-            format!("{} values", hit.q.len()),
-        ));
-    }
+    let n = start.check_pair("start", hit, "hit")?;
     check_vector("ready", ready, n)?;
     check_duration("t_hit", t_hit)?;
-    let planned = limits::earliest_quintic_duration(start, hit, limits, t_hit)?;
+    let planned = duration::earliest_quintic_duration(start, hit, limits, t_hit)?;
     let rest = JointState::rest(ready);
     let back = match return_duration {
         Some(d) => {
             check_duration("return_duration", d)?;
             d
         }
-        None => limits::minimal_quintic_duration(hit, &rest, limits)?,
+        None => duration::minimal_quintic_duration(hit, &rest, limits)?,
     };
     let first = JointTrajectory::quintic_unchecked(start, hit, planned);
     let second = JointTrajectory::quintic_unchecked(hit, &rest, back);

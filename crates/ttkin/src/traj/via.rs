@@ -87,17 +87,22 @@ pub fn heuristic_velocities(points: &[f64], times: &[f64], dof: usize) -> Result
     Ok(v)
 }
 
+/// The `m` via velocities (row-major m × dof): `given`, checked, or [`heuristic_velocities`].
+fn via_velocities(points: &[f64], times: &[f64], dof: usize, m: usize, given: Option<&[f64]>) -> Result<Vec<f64>> {
+    match given {
+        Some(v) => {
+            check_vector("velocities", v, m * dof)?;
+            Ok(v.to_vec())
+        }
+        None => heuristic_velocities(points, times, dof),
+    }
+}
+
 /// Cubic segments through the via points, velocity continuous. `velocities` (row-major m × dof,
 /// rad/s or m/s) are the via velocities, or [`heuristic_velocities`] when `None`.
 pub fn cubic(points: &[f64], times: &[f64], dof: usize, velocities: Option<&[f64]>) -> Result<JointTrajectory> {
     let (m, h) = check_points(points, times, dof)?;
-    let v = match velocities {
-        Some(v) => {
-            check_vector("velocities", v, m * dof)?;
-            v.to_vec()
-        }
-        None => heuristic_velocities(points, times, dof)?,
-    };
+    let v = via_velocities(points, times, dof, m, velocities)?;
     let mut coeffs = Vec::with_capacity((m - 1) * dof);
     for (k, &hk) in h.iter().enumerate() {
         for j in 0..dof {
@@ -179,13 +184,7 @@ pub fn quintic(
     accelerations: Option<&[f64]>,
 ) -> Result<JointTrajectory> {
     let (m, h) = check_points(points, times, dof)?;
-    let v = match velocities {
-        Some(v) => {
-            check_vector("velocities", v, m * dof)?;
-            v.to_vec()
-        }
-        None => heuristic_velocities(points, times, dof)?,
-    };
+    let v = via_velocities(points, times, dof, m, velocities)?;
     let a = match accelerations {
         Some(a) => {
             check_vector("accelerations", a, m * dof)?;
