@@ -502,6 +502,37 @@ fn bad_arguments_are_errors_not_panics() {
         torque: Vector3::zeros(),
     };
     assert!(dy.rnea(&mut d, &z, &z, &z, &EARTH_GRAVITY, Some(&w)).is_err());
+    // a non-finite wrench is an error wherever a wrench goes in, never a NaN result
+    let nan_wrench = |r: ttkin::Result<()>| matches!(r, Err(Error::NonFinite { ref what, .. }) if what == "wrench");
+    assert!(nan_wrench(
+        dy.forward_dynamics(&mut d, &z, &z, &z, &EARTH_GRAVITY, Some(&w))
+            .map(|_| ())
+    ));
+    let mut rows = vec![0.0; 12];
+    assert!(nan_wrench(dy.rnea_batch(
+        &[0.0; 12],
+        &[0.0; 12],
+        &[0.0; 12],
+        &EARTH_GRAVITY,
+        Some(&w),
+        &mut rows
+    )));
+    assert!(nan_wrench(dy.inverse_dynamics_batch(
+        &[0.0; 12],
+        &[0.0; 12],
+        &[0.0; 12],
+        &EARTH_GRAVITY,
+        Some(&w),
+        &mut rows
+    )));
+    assert!(nan_wrench(dy.forward_dynamics_batch(
+        &[0.0; 12],
+        &[0.0; 12],
+        &[0.0; 12],
+        &EARTH_GRAVITY,
+        Some(&w),
+        &mut rows
+    )));
     let (mut q, mut qd) = (z, z);
     assert!(dy
         .step(&mut d, &mut q, &mut qd, &z, 0.0, &EARTH_GRAVITY, false)

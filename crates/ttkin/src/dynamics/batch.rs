@@ -3,7 +3,7 @@
 
 use rayon::prelude::*;
 
-use super::model::{vec3, Dynamics, DynamicsData};
+use super::model::{check_wrench, vec3, Dynamics, DynamicsData};
 use super::Wrench;
 use crate::error::{check_finite, Error, Result};
 
@@ -38,6 +38,7 @@ impl Dynamics {
         out: &mut [f64],
     ) -> Result<()> {
         let g = vec3("gravity", gravity)?;
+        check_wrench(wrench)?;
         self.batch3(["qd", "qdd"], q, qd, qdd, out, |data, q, qd, qdd| {
             self.rnea_unchecked(data, q, qd, qdd, &g, wrench);
             if friction {
@@ -83,6 +84,7 @@ impl Dynamics {
         out: &mut [f64],
     ) -> Result<()> {
         let g = vec3("gravity", gravity)?;
+        check_wrench(wrench)?;
         self.batch3(["qd", "tau"], q, qd, tau, out, |data, q, qd, tau| {
             self.forward_unchecked(data, q, qd, tau, &g, wrench, false)?;
             Ok(data.qdd.as_slice())

@@ -8,7 +8,7 @@
 use nalgebra::{DVector, Vector3};
 
 use super::batch::batch_count;
-use super::model::{vec3, Dynamics, DynamicsData};
+use super::model::{check_wrench, vec3, Dynamics, DynamicsData};
 use super::Wrench;
 use crate::error::{check_finite, check_vector, Error, Result};
 
@@ -55,6 +55,7 @@ impl Dynamics {
         self.check_state(data, q, qd)?;
         check_vector("tau", tau, self.dof())?;
         let g = vec3("gravity", gravity)?;
+        check_wrench(wrench)?;
         self.forward_unchecked(data, q, qd, tau, &g, wrench, false)?;
         Ok(&data.qdd)
     }

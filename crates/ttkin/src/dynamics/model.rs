@@ -155,6 +155,17 @@ pub(super) fn vec3(what: &str, v: &[f64; 3]) -> Result<Vector3<f64>> {
     Ok(Vector3::from(*v))
 }
 
+/// Checks that an optional tool wrench is finite (an error names `wrench`).
+pub(super) fn check_wrench(wrench: Option<&super::Wrench>) -> Result<()> {
+    match wrench {
+        Some(w) => check_finite(
+            "wrench",
+            &[w.force.x, w.force.y, w.force.z, w.torque.x, w.torque.y, w.torque.z],
+        ),
+        None => Ok(()),
+    }
+}
+
 impl Dynamics {
     /// The dynamic model of `chain`. Every link needs an inertial (an error names the first link
     /// without one); inertias were already checked for physical consistency when attached.

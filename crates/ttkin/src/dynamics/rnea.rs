@@ -6,9 +6,9 @@
 
 use nalgebra::{DVector, Matrix3, Vector3};
 
-use super::model::{vec3, Dynamics, DynamicsData};
+use super::model::{check_wrench, vec3, Dynamics, DynamicsData};
 use super::Wrench;
-use crate::error::{check_finite, check_vector, Result};
+use crate::error::{check_vector, Result};
 use crate::joint::JointType;
 
 impl Dynamics {
@@ -173,12 +173,7 @@ impl Dynamics {
         self.check_state(data, q, qd)?;
         check_vector("qdd", qdd, self.dof())?;
         let g = vec3("gravity", gravity)?;
-        if let Some(w) = wrench {
-            check_finite(
-                "wrench",
-                &[w.force.x, w.force.y, w.force.z, w.torque.x, w.torque.y, w.torque.z],
-            )?;
-        }
+        check_wrench(wrench)?;
         self.rnea_unchecked(data, q, qd, qdd, &g, wrench);
         Ok(&data.tau)
     }
