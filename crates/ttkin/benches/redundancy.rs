@@ -9,6 +9,9 @@ use ttkin::redundancy::{Damping, Weighting, WlsStep};
 use ttkin::task::Task;
 use ttkin::wholebody::WholeBody;
 
+#[path = "../tests/support/seed000.rs"]
+mod seed000;
+
 fn wls_step(c: &mut Criterion) {
     let model = WholeBody::fixed(ttkin::robots::mobile8());
     let q = ttkin::robots::mobile8_start();
@@ -25,13 +28,7 @@ fn wls_step(c: &mut Criterion) {
 }
 
 fn seed000_track(c: &mut Criterion) {
-    let model = WholeBody::fixed(ttkin::robots::mobile8());
-    let q0 = ttkin::robots::mobile8_start();
-    let task = Task::Racket { offset: 0.15 };
-    let mut x0 = [0.0; 5];
-    task.coordinates(&model.tool_pose(&q0).unwrap(), &mut x0);
-    let x4 = [0.5501, 1.0647, 0.3998, 0.4699, 1.0528];
-    let x1: Vec<f64> = (0..5).map(|i| x0[i] + 0.15 * (x4[i] - x0[i])).collect();
+    let (model, q0, task, x0, x1) = seed000::seed000_line(0.15);
     let mut group = c.benchmark_group("clik");
     group.sample_size(20);
     group.bench_function("track seed000 4 s at 1 kHz", |b| {

@@ -1,5 +1,6 @@
 //! Fixed-count loops of the operations the issue-16 refactor moved (fk, jacobian, rnea, ik), for
-//! instruction counts under valgrind: `refactor_icount OP N`.
+//! instruction counts under valgrind: `refactor_icount OP N`. Public API of main 40fcfd8 only, so
+//! the same source builds on both sides of a before/after comparison.
 use std::hint::black_box;
 use ttkin::ik::{Analytic, IkSolver, LimitFilter};
 use ttkin::{Dynamics, DynamicsData, JacobianFrame};
@@ -61,6 +62,20 @@ fn main() {
             let t = g6.fk(&[0.1, -0.1, 0.5, 0.4, -0.6, 0.9]).unwrap();
             (0..n).for_each(|_| {
                 black_box(ik.solve(black_box(&t), None, LimitFilter::Off).unwrap());
+            });
+        }
+        "stroke" => {
+            // gantry6's hit stroke: the earliest feasible quintic to the hit, the minimal return
+            let limits = ttkin::traj::KinematicLimits::from_chain(&g6, Some(&[2000.0; 6])).unwrap();
+            let start = ttkin::traj::JointState::rest(&[0.0, 0.0, 0.5, 0.0, 0.0, 0.0]);
+            let hit = ttkin::traj::JointState {
+                q: vec![0.1, -0.1, 0.6, 0.4, -0.6, 0.9],
+                qd: vec![0.5, 0.3, 0.2, 1.0, -1.0, 2.0],
+                qdd: vec![0.0; 6],
+            };
+            let ready = [0.0, 0.0, 0.5, 0.0, 0.0, 0.0];
+            (0..n).for_each(|_| {
+                black_box(ttkin::traj::stroke(black_box(&start), &hit, 0.05, &ready, None, &limits).unwrap());
             });
         }
         other => panic!("unknown op {other}"),

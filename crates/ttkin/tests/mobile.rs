@@ -4,6 +4,8 @@
 mod common;
 
 use common::config_from_unit;
+#[path = "support/seed000.rs"]
+mod seed000;
 use nalgebra::{IsometryMatrix3, Matrix6xX, Translation3, Vector3};
 use proptest::prelude::*;
 use ttkin::clik::{track, ClikOptions, ClikStatus, TaskTrajectory};
@@ -42,6 +44,18 @@ fn drive() -> DiffDrive {
 fn mobile_arm() -> WholeBody {
     let mount = IsometryMatrix3::from_parts(Translation3::new(0.1, -0.05, 0.3), nalgebra::Rotation3::identity());
     WholeBody::on_diff_drive(drive(), mount, ttkin::robots::ur5())
+}
+
+/// mobile8 on a fixed base at the configuration `u` (in [0, 1) per joint, see
+/// `config_from_unit`), the racket task and its 5 × 8 Jacobian there.
+fn racket_task_at(u: &[f64]) -> (WholeBody, Vec<f64>, Task, nalgebra::DMatrix<f64>) {
+    let model = WholeBody::fixed(ttkin::robots::mobile8());
+    let q = config_from_unit(model.arm(), u);
+    let task = Task::Racket { offset: 0.15 };
+    let j6 = model.jacobian(&q).unwrap();
+    let t = model.tool_pose(&q).unwrap();
+    let je = task.jacobian(&j6, &t, &t);
+    (model, q, task, je)
 }
 
 proptest! {
@@ -99,12 +113,7 @@ proptest! {
 
     #[test]
     fn wls_solution_achieves_the_task_at_full_rank(u in prop::collection::vec(0.05..0.95f64, 8), x in prop::collection::vec(-1.0..1.0f64, 5)) {
-        let model = WholeBody::fixed(ttkin::robots::mobile8());
-        let q = config_from_unit(model.arm(), &u);
-        let task = Task::Racket { offset: 0.15 };
-        let j6 = model.jacobian(&q).unwrap();
-        let t = model.tool_pose(&q).unwrap();
-        let je = task.jacobian(&j6, &t, &t);
+        let (model, q, task, je) = racket_task_at(&u);
         for weighting in [Weighting::None, Weighting::ChanDubey] {
             let mut step = WlsStep::new(&model, task, weighting, Damping::none()).unwrap();
             let (qd, rep) = step.try_solve(&q, &x, &[0.0; 8]).unwrap();
@@ -118,12 +127,7 @@ proptest! {
 
     #[test]
     fn null_space_motion_leaves_the_task_unchanged(u in prop::collection::vec(0.05..0.95f64, 8), z in prop::collection::vec(-1.0..1.0f64, 8)) {
-        let model = WholeBody::fixed(ttkin::robots::mobile8());
-        let q = config_from_unit(model.arm(), &u);
-        let task = Task::Racket { offset: 0.15 };
-        let j6 = model.jacobian(&q).unwrap();
-        let t = model.tool_pose(&q).unwrap();
-        let je = task.jacobian(&j6, &t, &t);
+        let (model, q, _, je) = racket_task_at(&u);
         let w: Vec<f64> = q.iter().zip(model.arm().limits()).map(|(&qi, l)| chan_dubey_weight(qi, l.lower, l.upper, 0.0)).collect();
         let mut solver = WlsSolver::new(5, 8, Damping::none()).unwrap();
         let inf = [f64::INFINITY; 8];
@@ -337,16 +341,10 @@ fn racket_angle_jacobian_matches_finite_differences() {
     assert!(matches!(racket_angle_jacobian(&j, &up, 0.15), Err(Error::Singular(_))));
 }
 
-/// The seed000 motion: 15 % of the way from our x(0) toward the seed's x(4) (beyond ≈18 % the
-/// literal Table 1 arm is stretched out and singular).
+/// The seed000 motion over 4 s at 1 kHz: `fraction` of the way from our x(0) toward the seed's
+/// x(4) (see `support/seed000.rs`).
 fn seed000_trajectory(fraction: f64) -> (WholeBody, [f64; 8], TaskTrajectory) {
-    let model = WholeBody::fixed(ttkin::robots::mobile8());
-    let q0 = ttkin::robots::mobile8_start();
-    let task = Task::Racket { offset: 0.15 };
-    let mut x0 = [0.0; 5];
-    task.coordinates(&model.tool_pose(&q0).unwrap(), &mut x0);
-    let x4 = [0.5501, 1.0647, 0.3998, 0.4699, 1.0528];
-    let x1: Vec<f64> = (0..5).map(|i| x0[i] + fraction * (x4[i] - x0[i])).collect();
+    let (model, q0, task, x0, x1) = seed000::seed000_line(fraction);
     let traj = TaskTrajectory::line(task, &x0, &x1, 4.0, 1000.0).unwrap();
     (model, q0, traj)
 }

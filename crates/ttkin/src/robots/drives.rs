@@ -23,109 +23,96 @@ pub struct Friction {
     pub coulomb: f64,
 }
 
+/// A motor class's datasheet values, motor side, in the columns: rotor inertia (kg·m²), torque
+/// constant (N·m/A), winding resistance (Ω) and inductance (H), nominal and peak current (A), top
+/// speed (rpm), thermal resistances winding–housing and housing–ambient (K/W), thermal time
+/// constants of winding and housing (s), winding temperature limit (°C), encoder counts per motor
+/// turn, bus voltage (V).
+type Datasheet = [f64; 14];
+
+/// The motor of [`servo_400w`].
+const SERVO_400W: Datasheet = [
+    2.6e-5,
+    0.45,
+    2.3,
+    6.0e-3,
+    2.8,
+    8.4,
+    6000.0,
+    1.2,
+    3.4,
+    60.0,
+    1800.0,
+    155.0,
+    1_048_576.0,
+    325.0,
+];
+/// The motor of [`maxon_re40`].
+const MAXON_RE40: Datasheet = [
+    1.34e-5, 60.3e-3, 1.16, 0.33e-3, 3.0, 9.0, 12_000.0, 1.93, 4.65, 41.6, 1120.0, 155.0, 4096.0, 48.0,
+];
+/// The motor of [`maxon_re30`].
+const MAXON_RE30: Datasheet = [
+    3.35e-6, 25.9e-3, 0.611, 0.119e-3, 3.44, 10.0, 12_000.0, 1.7, 6.0, 16.3, 714.0, 125.0, 4096.0, 24.0,
+];
+/// The motor of [`maxon_re25`].
+const MAXON_RE25: Datasheet = [
+    10.8e-7, 43.9e-3, 2.32, 0.238e-3, 1.2, 3.6, 14_000.0, 4.0, 13.2, 12.5, 700.0, 125.0, 4096.0, 24.0,
+];
+
+/// The drive of motor `m` behind a transmission of ratio `gear_ratio` (rad/rad or rad/m) and
+/// `gear_efficiency`, with the joint-side `friction`.
+fn fitted(m: &Datasheet, gear_ratio: f64, gear_efficiency: f64, friction: Friction) -> Drive {
+    let [rotor_inertia, kt, r, l, i_nominal, i_peak, rpm, r_wh, r_ha, tau_w, tau_h, t_max, counts, u_bus] = *m;
+    Drive {
+        rotor_inertia,
+        viscous: friction.viscous,
+        coulomb: friction.coulomb,
+        torque_constant: Some(kt),
+        resistance: Some(r),
+        inductance: Some(l),
+        nominal_current: Some(i_nominal),
+        peak_current: Some(i_peak),
+        max_motor_speed: Some(rpm * RPM),
+        thermal_resistance_winding_housing: Some(r_wh),
+        thermal_resistance_housing_ambient: Some(r_ha),
+        thermal_time_constant_winding: Some(tau_w),
+        thermal_time_constant_housing: Some(tau_h),
+        max_winding_temperature: Some(t_max),
+        gear_efficiency: Some(gear_efficiency),
+        encoder_counts: Some(counts as u32),
+        bus_voltage: Some(u_bus),
+        ..Drive::geared(gear_ratio)
+    }
+}
+
 /// 400 W AC servo class (DC-equivalent), 325 V bus (rectified 230 V AC), 20-bit encoder, behind a
 /// transmission of ratio `gear_ratio` (rad/rad or rad/m) and `gear_efficiency`: k_t 0.45 N·m/A
 /// (1.27 N·m at 2.8 A rated), 8.4 A peak (drive limit, 3× rated), 2.3 Ω, 6 mH, rotor 2.6·10⁻⁵
 /// kg·m², 6000 rpm, thermal 1.2 + 3.4 K/W, τ 60 s / 1800 s, 155 °C (class F).
 pub fn servo_400w(gear_ratio: f64, gear_efficiency: f64, friction: Friction) -> Drive {
-    Drive {
-        rotor_inertia: 2.6e-5,
-        viscous: friction.viscous,
-        coulomb: friction.coulomb,
-        torque_constant: Some(0.45),
-        resistance: Some(2.3),
-        inductance: Some(6.0e-3),
-        nominal_current: Some(2.8),
-        peak_current: Some(8.4),
-        max_motor_speed: Some(6000.0 * RPM),
-        thermal_resistance_winding_housing: Some(1.2),
-        thermal_resistance_housing_ambient: Some(3.4),
-        thermal_time_constant_winding: Some(60.0),
-        thermal_time_constant_housing: Some(1800.0),
-        max_winding_temperature: Some(155.0),
-        gear_efficiency: Some(gear_efficiency),
-        encoder_counts: Some(1 << 20),
-        bus_voltage: Some(325.0),
-        ..Drive::geared(gear_ratio)
-    }
+    fitted(&SERVO_400W, gear_ratio, gear_efficiency, friction)
 }
 
 /// maxon RE 40 class (Ø40 mm, graphite brushes, 150 W, 48 V winding), 48 V bus, 1024-CPT encoder
 /// (4096 counts): k_t 60.3 mN·m/A, 3.0 A nominal, 9 A peak (drive limit), 1.16 Ω, 0.33 mH, rotor
 /// 134 g·cm², 12 000 rpm, thermal 1.93 + 4.65 K/W, τ 41.6 s / 1120 s, 155 °C.
 pub fn maxon_re40(gear_ratio: f64, gear_efficiency: f64, friction: Friction) -> Drive {
-    Drive {
-        rotor_inertia: 1.34e-5,
-        viscous: friction.viscous,
-        coulomb: friction.coulomb,
-        torque_constant: Some(60.3e-3),
-        resistance: Some(1.16),
-        inductance: Some(0.33e-3),
-        nominal_current: Some(3.0),
-        peak_current: Some(9.0),
-        max_motor_speed: Some(12_000.0 * RPM),
-        thermal_resistance_winding_housing: Some(1.93),
-        thermal_resistance_housing_ambient: Some(4.65),
-        thermal_time_constant_winding: Some(41.6),
-        thermal_time_constant_housing: Some(1120.0),
-        max_winding_temperature: Some(155.0),
-        gear_efficiency: Some(gear_efficiency),
-        encoder_counts: Some(4096),
-        bus_voltage: Some(48.0),
-        ..Drive::geared(gear_ratio)
-    }
+    fitted(&MAXON_RE40, gear_ratio, gear_efficiency, friction)
 }
 
 /// maxon RE 30 class (Ø30 mm, graphite brushes, 60 W, 24 V winding), 24 V bus, 1024-CPT encoder:
 /// k_t 25.9 mN·m/A, 3.44 A nominal, 10 A peak (drive limit), 0.611 Ω, 0.119 mH, rotor
 /// 33.5 g·cm², 12 000 rpm, thermal 1.7 + 6.0 K/W, τ 16.3 s / 714 s, 125 °C.
 pub fn maxon_re30(gear_ratio: f64, gear_efficiency: f64, friction: Friction) -> Drive {
-    Drive {
-        rotor_inertia: 3.35e-6,
-        viscous: friction.viscous,
-        coulomb: friction.coulomb,
-        torque_constant: Some(25.9e-3),
-        resistance: Some(0.611),
-        inductance: Some(0.119e-3),
-        nominal_current: Some(3.44),
-        peak_current: Some(10.0),
-        max_motor_speed: Some(12_000.0 * RPM),
-        thermal_resistance_winding_housing: Some(1.7),
-        thermal_resistance_housing_ambient: Some(6.0),
-        thermal_time_constant_winding: Some(16.3),
-        thermal_time_constant_housing: Some(714.0),
-        max_winding_temperature: Some(125.0),
-        gear_efficiency: Some(gear_efficiency),
-        encoder_counts: Some(4096),
-        bus_voltage: Some(24.0),
-        ..Drive::geared(gear_ratio)
-    }
+    fitted(&MAXON_RE30, gear_ratio, gear_efficiency, friction)
 }
 
 /// maxon RE 25 class (Ø25 mm, graphite brushes, 24 V winding), 24 V bus, 1024-CPT encoder: the
 /// values of `ttcan`'s reference motor, k_t 43.9 mN·m/A, 1.2 A continuous, 3.6 A peak, 2.32 Ω,
 /// 0.238 mH, rotor 10.8 g·cm², 14 000 rpm, thermal 4.0 + 13.2 K/W, τ 12.5 s / 700 s, 125 °C.
 pub fn maxon_re25(gear_ratio: f64, gear_efficiency: f64, friction: Friction) -> Drive {
-    Drive {
-        rotor_inertia: 10.8e-7,
-        viscous: friction.viscous,
-        coulomb: friction.coulomb,
-        torque_constant: Some(43.9e-3),
-        resistance: Some(2.32),
-        inductance: Some(0.238e-3),
-        nominal_current: Some(1.2),
-        peak_current: Some(3.6),
-        max_motor_speed: Some(14_000.0 * RPM),
-        thermal_resistance_winding_housing: Some(4.0),
-        thermal_resistance_housing_ambient: Some(13.2),
-        thermal_time_constant_winding: Some(12.5),
-        thermal_time_constant_housing: Some(700.0),
-        max_winding_temperature: Some(125.0),
-        gear_efficiency: Some(gear_efficiency),
-        encoder_counts: Some(4096),
-        bus_voltage: Some(24.0),
-        ..Drive::geared(gear_ratio)
-    }
+    fitted(&MAXON_RE25, gear_ratio, gear_efficiency, friction)
 }
 
 /// gantry6's drives, d1 … θ6: both belt axes a 400 W servo behind a 4:1 planetary on a Ø40 mm
