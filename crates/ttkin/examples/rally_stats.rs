@@ -120,7 +120,10 @@ fn main() {
     let mut pl = HitPlanner::new(ttkin::robots::gantry6(), Flight::default()).expect("gantry6");
     // Experiments: ROLLS="0,30,-30" (degrees), RETURN_TIMES="0.8,0.65,0.95" (s).
     if let Ok(r) = std::env::var("ROLLS") {
-        pl.rolls = r.split(',').map(|d| d.parse::<f64>().expect("ROLLS").to_radians()).collect();
+        pl.rolls = r
+            .split(',')
+            .map(|d| d.parse::<f64>().expect("ROLLS").to_radians())
+            .collect();
     }
     if let Ok(r) = std::env::var("RETURN_TIMES") {
         let v: Vec<f64> = r.split(',').map(|d| d.parse().expect("RETURN_TIMES")).collect();
@@ -153,11 +156,7 @@ fn main() {
     for o in in_reach.iter().filter(|o| o.returned) {
         *profiles.entry(o.profile).or_insert(0usize) += 1;
     }
-    let mut times: Vec<f64> = out
-        .iter()
-        .map(|o| o.plan_time_us)
-        .filter(|t| t.is_finite())
-        .collect();
+    let mut times: Vec<f64> = out.iter().map(|o| o.plan_time_us).filter(|t| t.is_finite()).collect();
     times.sort_by(f64::total_cmp);
     let returned_out = out.iter().filter(|o| !o.in_reach && o.returned).count();
     println!(

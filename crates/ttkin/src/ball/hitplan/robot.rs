@@ -1,0 +1,89 @@
+//! The robot's side of a hit: racket pose and twist in the base frame, IK branches, joint velocities
+//! at the hit, the hit leg and the choice margin.
+
+use super::super::flight::BallState;
+use super::super::impact::RacketHit;
+use super::super::leg::{hit_leg, HitLeg};
+use super::{Hit, HitPlanner};
+use crate::ik::{joint_velocity, LimitFilter};
+use crate::traj::JointState;
+use nalgebra::Vector3;
+
+impl HitPlanner {
+    /// The best robot hit (largest margin) over the racket rolls `rolls` about the face normal and
+    /// every IK branch within the limits, or `None` when none is feasible.
+    pub(super) fn robot_hit(
+        &self,
+        s: &BallState,
+        now: f64,
+        start: &JointState,
+        v_out: Vector3<f64>,
+        racket: RacketHit,
+        landing: Vector3<f64>,
+    ) -> Option<Hit> {
+        let r = self.flight.model.radius;
+        let centre = s.p - r * racket.normal;
+        let rot_bw = self.placement.world_from_base().rotation.inverse();
+        let v_b = rot_bw * racket.velocity;
+        let twist = [v_b.x, v_b.y, v_b.z, 0.0, 0.0, 0.0];
+        let t_hit = s.t - now;
+        let mut best: Option<Hit> = None;
+        for &roll in &self.rolls {
+            if best.as_ref().is_some_and(|b| b.margin >= self.good_margin) {
+                break;
+            }
+            let pose = self.base_pose_rolled(&centre, &racket.normal, roll);
+            let Ok(sols) = self.ik.solve(&pose, Some(&start.q), LimitFilter::Enforce) else {
+                continue;
+            };
+            for q in sols.iter() {
+                let Some((qd, leg, margin)) = self.stroke_margin(q, start, &twist, t_hit) else {
+                    continue;
+                };
+                if best.as_ref().is_none_or(|b| margin > b.margin) {
+                    best = Some(Hit {
+                        ball: *s,
+                        v_out,
+                        racket,
+                        pose,
+                        twist,
+                        t_hit,
+                        q_hit: q.to_vec(),
+                        qd_hit: qd,
+                        qdd_hit: leg.qdd_hit.clone(),
+                        leg,
+                        margin,
+                        landing,
+                    });
+                }
+            }
+        }
+        best
+    }
+
+    /// Joint velocities at the hit, the hit leg ([`super::leg`]) and the margin of the stroke from
+    /// `start` to the configuration `q` moving the racket with `twist` (base frame) after `t_hit`
+    /// s, or `None` when it is singular or no leg is within the limits.
+    pub(super) fn stroke_margin(
+        &self,
+        q: &[f64],
+        start: &JointState,
+        twist: &[f64; 6],
+        t_hit: f64,
+    ) -> Option<(Vec<f64>, HitLeg, f64)> {
+        let jv = joint_velocity(&self.chain, q, twist).ok()?;
+        if jv.singular {
+            return None;
+        }
+        let leg = hit_leg(start, q, &jv.qdot, t_hit, &self.limits)?;
+        let mut pos_margin = f64::INFINITY;
+        for (i, &qi) in q.iter().enumerate() {
+            let (lo, hi) = (self.limits.lower[i], self.limits.upper[i]);
+            if lo.is_finite() && hi.is_finite() {
+                pos_margin = pos_margin.min(2.0 * (qi - lo).min(hi - qi) / (hi - lo));
+            }
+        }
+        let margin = pos_margin.min(leg.margin);
+        Some((jv.qdot, leg, margin))
+    }
+}
