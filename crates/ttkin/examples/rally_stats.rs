@@ -18,6 +18,11 @@ use ttkin::ball::reach::{min_joint_time, walk_after_bounce, Reach, ReachRegion};
 use ttkin::ik::{joint_velocity, Analytic, LimitFilter};
 use ttkin::traj::JointState;
 
+thread_local! {
+    /// Smallest joint-limit excess (m or rad) of any IK branch of the shots seen by `deepest`.
+    static EXCESS: std::cell::Cell<f64> = const { std::cell::Cell::new(f64::INFINITY) };
+}
+
 const STAGES: [&str; 8] = [
     "no_candidate",
     "no_shot",
@@ -62,17 +67,12 @@ fn deepest(pl: &HitPlanner, ik: &Analytic, ball: &BallState, now: f64, target: [
             };
             best = best.max(2);
             let c = s.p - f.model.radius * racket.normal;
-            if std::env::var_os("SHOW_IK").is_some() && tf == pl.return_times[0] {
-                let pose = pl.base_pose_rolled(&c, &racket.normal, 0.0);
-                if let Err(e) = ik.solve(&pose, Some(&pl.ready), LimitFilter::Enforce) {
-                    let nn = racket.normal;
-                    println!(
-                        "  p ({:.2} {:.2} {:.2}) n ({nn:.2}) |V| {:.2}: {e}",
-                        s.p.x,
-                        s.p.y,
-                        s.p.z,
-                        racket.velocity.norm()
-                    );
+            if let Ok(all) = ik.solve(&pl.base_pose_rolled(&c, &racket.normal, 0.0), None, LimitFilter::Off) {
+                for q in all.iter() {
+                    let over = (0..q.len())
+                        .map(|i| (q[i] - lim.upper[i]).max(lim.lower[i] - q[i]).max(0.0))
+                        .fold(0.0, f64::max);
+                    EXCESS.with(|e| e.set(e.get().min(over)));
                 }
             }
             let vb = rot_bw * racket.velocity;
@@ -177,9 +177,15 @@ fn main() {
     }
     let ik = Analytic::for_chain(&pl.chain).expect("analytic IK");
     let mut stages = [0usize; STAGES.len()];
+    let mut excess = Vec::new();
     for o in in_reach.iter().filter(|o| o.status == "infeasible") {
         let Some(est) = o.estimate else { continue };
-        stages[deepest(&pl, &ik, &est, o.now, cfg.target)] += 1;
+        EXCESS.with(|e| e.set(f64::INFINITY));
+        let d = deepest(&pl, &ik, &est, o.now, cfg.target);
+        stages[d] += 1;
+        if d == 2 {
+            excess.push(EXCESS.with(|e| e.get()));
+        }
     }
     let named: Vec<String> = STAGES
         .iter()
@@ -188,4 +194,13 @@ fn main() {
         .map(|(s, c)| format!("{s} {c}"))
         .collect();
     println!("infeasible by deepest stage: {}", named.join(", "));
+    excess.sort_by(f64::total_cmp);
+    let below = |x: f64| excess.iter().filter(|e| **e <= x).count();
+    println!(
+        "no_ik: smallest joint-limit excess of any shot's IK branch ≤ 2 cm {}, ≤ 4 cm {}, ≤ 8 cm {}, of {}",
+        below(0.02),
+        below(0.04),
+        below(0.08),
+        excess.len()
+    );
 }

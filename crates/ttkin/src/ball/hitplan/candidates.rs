@@ -48,4 +48,56 @@ impl HitPlanner {
                 .is_ok()
         })
     }
+
+
+    /// Landing targets (x, y, m, world) tried in order for a hit point: the requested `target`,
+    /// then the points of `FALLBACK_TARGETS` by distance from it. A racket whose face must turn
+    /// the ball toward the requested target may be beyond the joints (a ball wide of the table
+    /// returned across it needs the carriage past its stroke) where a return along the line is not.
+    pub(super) fn targets(&self, target: [f64; 2]) -> Vec<[f64; 2]> {
+        let mut out = vec![target];
+        let mut rest: Vec<[f64; 2]> = FALLBACK_TARGETS.iter().copied().filter(|t| *t != target).collect();
+        let d = |t: &[f64; 2]| (t[0] - target[0]).hypot(t[1] - target[1]);
+        rest.sort_by(|a, b| d(a).total_cmp(&d(b)));
+        out.extend(rest);
+        out
+    }
+}
+
+/// Fallback landing targets (x, y, m, world) on the opponent's half, at least 0.2 m inside its
+/// end and side lines and 0.5 m past the net.
+const FALLBACK_TARGETS: [[f64; 2]; 15] = [
+    [0.9, 0.0],
+    [0.9, 0.25],
+    [0.9, -0.25],
+    [0.9, 0.5],
+    [0.9, -0.5],
+    [0.6, 0.0],
+    [0.6, 0.25],
+    [0.6, -0.25],
+    [0.6, 0.5],
+    [0.6, -0.5],
+    [1.15, 0.0],
+    [1.15, 0.25],
+    [1.15, -0.25],
+    [1.15, 0.5],
+    [1.15, -0.5],
+];
+
+/// Indices into a list of `len` candidates in the order tried: `first` evenly spread, middle of
+/// the spread first (the likeliest to have the largest margin), then up to 12 evenly spread
+/// (middle first), each index once.
+pub(super) fn candidate_order(len: usize, first: usize) -> Vec<usize> {
+    let mut out: Vec<usize> = Vec::new();
+    for count in [first.min(len), len.min(12)] {
+        let mut spread: Vec<usize> = (0..count).collect();
+        spread.sort_by_key(|&j| (2 * j + 1).abs_diff(count));
+        for j in spread {
+            let i = (2 * j + 1) * len / (2 * count);
+            if !out.contains(&i) {
+                out.push(i);
+            }
+        }
+    }
+    out
 }

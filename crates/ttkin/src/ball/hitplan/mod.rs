@@ -30,6 +30,7 @@
 //!    stops at the first with a margin ≥ `good_margin` (0.25), which bounds the planning time.
 
 mod candidates;
+use candidates::candidate_order;
 mod robot;
 mod shoot;
 
@@ -45,6 +46,9 @@ use crate::ik::{Analytic, LimitFilter};
 use crate::traj::limits::KinematicLimits;
 use crate::traj::JointState;
 use nalgebra::{IsometryMatrix3, Translation3, Vector3};
+
+/// Most shooting solves for the fallback targets of a ball no candidate hit otherwise.
+const FALLBACK_ATTEMPTS: usize = 24;
 
 /// Why a ball got no hit, or that it got one.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -271,51 +275,73 @@ impl HitPlanner {
                 candidates: 0,
             });
         }
-        // `candidates` evenly spread first; more of them only when none of those is feasible.
-        let k = self.candidates.max(1).min(list.len());
-        let extra = list.len().min(12);
+        let order = candidate_order(list.len(), self.candidates.max(1));
+        let first = self.candidates.max(1).min(list.len());
+        let targets = self.targets(target);
         let mut best: Option<Hit> = None;
         let mut any_return = false;
         let mut tried = 0;
-        // Candidates that fail the cheap placement test are skipped, and tried in full only when no
-        // other candidate gives a hit (the test's normal is approximate).
+        // Candidates that fail the cheap placement test for every target are skipped, and tried
+        // in full (requested target) only when no other candidate gives a hit (the test's normal
+        // is approximate).
         let mut skipped: Vec<usize> = Vec::new();
-        for round in 0..3 {
-            let picks: Vec<usize> = match round {
-                0 | 1 => {
-                    let count = if round == 0 { k } else { extra };
-                    if round == 1 && (best.is_some() || extra <= k) {
-                        continue;
+        // The target tried first for each candidate examined, in `order`.
+        let mut first_goal: Vec<Option<[f64; 2]>> = Vec::new();
+        let mut attempt = |s: &BallState, goal: [f64; 2], best: &mut Option<Hit>| {
+            tried += 1;
+            for &tf in &self.return_times {
+                let Some((v_out, racket, landing)) = self.outgoing(s, goal, tf) else {
+                    continue;
+                };
+                any_return = true;
+                if let Some(hit) = self.robot_hit(s, now, start, v_out, racket, landing) {
+                    if best.as_ref().is_none_or(|b| hit.margin > b.margin) {
+                        *best = Some(hit);
                     }
-                    // Middle of the spread first: it is the likeliest to have the largest margin.
-                    let mut order: Vec<usize> = (0..count).collect();
-                    order.sort_by_key(|&j| (2 * j + 1).abs_diff(count));
-                    order.iter().map(|&j| (2 * j + 1) * list.len() / (2 * count)).collect()
-                }
-                _ if best.is_none() => std::mem::take(&mut skipped),
-                _ => Vec::new(),
-            };
-            for i in picks {
-                if best.as_ref().is_some_and(|b| b.margin >= self.good_margin) {
                     break;
                 }
-                let s = list[i];
-                if round < 2 && !self.roughly_placeable(&s, target) {
-                    skipped.push(i);
-                    continue;
+            }
+        };
+        for (rank, &i) in order.iter().enumerate() {
+            // More than the first `candidates` only when none of those is feasible.
+            if rank == first && best.is_some() {
+                break;
+            }
+            if best.as_ref().is_some_and(|b| b.margin >= self.good_margin) {
+                break;
+            }
+            let s = list[i];
+            let Some(&goal) = targets.iter().find(|&&g| self.roughly_placeable(&s, g)) else {
+                skipped.push(i);
+                first_goal.push(None);
+                continue;
+            };
+            first_goal.push(Some(goal));
+            attempt(&s, goal, &mut best);
+        }
+        if best.is_none() {
+            for &i in &skipped {
+                if best.is_some() {
+                    break;
                 }
-                tried += 1;
-                for &tf in &self.return_times {
-                    let Some((v_out, racket, landing)) = self.outgoing(&s, target, tf) else {
-                        continue;
-                    };
-                    any_return = true;
-                    if let Some(hit) = self.robot_hit(&s, now, start, v_out, racket, landing) {
-                        if best.as_ref().is_none_or(|b| hit.margin > b.margin) {
-                            best = Some(hit);
-                        }
-                        break;
-                    }
+                attempt(&list[i], target, &mut best);
+            }
+        }
+        // Still nothing: the other placeable targets of each candidate (another face normal, other
+        // joint positions and velocities at the hit), at most `FALLBACK_ATTEMPTS` shooting solves.
+        let mut budget = FALLBACK_ATTEMPTS;
+        'fallback: for (&i, &tried_goal) in order.iter().zip(&first_goal) {
+            if best.is_some() {
+                break;
+            }
+            let s = list[i];
+            for &goal in targets.iter().filter(|g| Some(**g) != tried_goal) {
+                if budget == 0 || best.is_some() {
+                    break 'fallback;
+                }
+                if self.roughly_placeable(&s, goal) {
+                    budget -= 1;
+                    attempt(&s, goal, &mut best);
                 }
             }
         }
