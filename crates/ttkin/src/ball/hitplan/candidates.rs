@@ -41,11 +41,12 @@ impl HitPlanner {
         let g = Vector3::new(0.0, 0.0, -self.flight.model.gravity);
         let v_out = (goal - s.p - 0.5 * g * tf * tf) / tf;
         let n = (v_out - s.v).normalize();
-        let c = s.p - self.flight.model.radius * n;
-        self.rolls.iter().any(|&roll| {
-            self.ik
-                .solve(&self.base_pose_rolled(&c, &n, roll), None, LimitFilter::Enforce)
-                .is_ok()
+        self.racket_centres(&s.p, &n).iter().any(|c| {
+            self.rolls.iter().any(|&roll| {
+                self.ik
+                    .solve(&self.base_pose_rolled(c, &n, roll), None, LimitFilter::Enforce)
+                    .is_ok()
+            })
         })
     }
 

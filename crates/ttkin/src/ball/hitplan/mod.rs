@@ -147,6 +147,10 @@ pub struct HitPlanner {
     pub return_times: [f64; 3],
     /// A feasible hit with at least this margin ends the search (candidates are tried middle first).
     pub good_margin: f64,
+    /// Largest distance (m) of the contact point from the racket centre the planner chooses (only
+    /// when the ball on the centre has no IK within the limits); the rally counts a contact within
+    /// the racket radius.
+    pub contact_offset: f64,
     /// Rolls (rad) of the racket about its face normal tried in order (0: handle up); the ball
     /// does not see the roll, the joints do.
     pub rolls: Vec<f64>,
@@ -180,6 +184,7 @@ impl HitPlanner {
             search_margin: 0.03,
             return_times: [0.8, 0.65, 0.95],
             good_margin: 0.25,
+            contact_offset: 0.03,
             rolls: [0.0, 30.0, -30.0].iter().map(|d: &f64| d.to_radians()).collect(),
         };
         // Ready: racket facing forward 0.48 m behind the end line, across the table's centre line,

@@ -21,18 +21,17 @@ impl HitPlanner {
         racket: RacketHit,
         landing: Vector3<f64>,
     ) -> Option<Hit> {
-        let r = self.flight.model.radius;
-        let centre = s.p - r * racket.normal;
         let rot_bw = self.placement.world_from_base().rotation.inverse();
         let v_b = rot_bw * racket.velocity;
         let twist = [v_b.x, v_b.y, v_b.z, 0.0, 0.0, 0.0];
         let t_hit = s.t - now;
         let mut best: Option<Hit> = None;
-        for &roll in &self.rolls {
-            if best.as_ref().is_some_and(|b| b.margin >= self.good_margin) {
+        let centres = self.racket_centres(&s.p, &racket.normal);
+        for (k, &roll) in centres.iter().enumerate().flat_map(|(k, _)| self.rolls.iter().map(move |r| (k, r))) {
+            if best.as_ref().is_some_and(|b| b.margin >= self.good_margin || k > 0) {
                 break;
             }
-            let pose = self.base_pose_rolled(&centre, &racket.normal, roll);
+            let pose = self.base_pose_rolled(&centres[k], &racket.normal, roll);
             let Ok(sols) = self.ik.solve(&pose, Some(&start.q), LimitFilter::Enforce) else {
                 continue;
             };
@@ -85,5 +84,20 @@ impl HitPlanner {
         }
         let margin = pos_margin.min(leg.margin);
         Some((jv.qdot, leg, margin))
+    }
+
+    /// Racket centres (m, world) for a ball centre `p` touching a face with normal `n`, in the
+    /// order tried: the ball on the face centre, then moved by ±`contact_offset` in the face plane
+    /// along its direction closest to world y (across the table, the carriage's d2 axis), for a
+    /// ball just beyond the carriage's stroke.
+    pub(super) fn racket_centres(&self, p: &Vector3<f64>, n: &Vector3<f64>) -> [Vector3<f64>; 3] {
+        let c = p - self.flight.model.radius * n;
+        let across = Vector3::y() - n * n.y;
+        let e = if across.norm() > 1e-6 {
+            across.normalize() * self.contact_offset
+        } else {
+            Vector3::zeros()
+        };
+        [c, c + e, c - e]
     }
 }
