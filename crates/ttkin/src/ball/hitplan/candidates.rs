@@ -50,7 +50,6 @@ impl HitPlanner {
         })
     }
 
-
     /// Landing targets (x, y, m, world) tried in order for a hit point: the requested `target`,
     /// then the points of `FALLBACK_TARGETS` by distance from it. A racket whose face must turn
     /// the ball toward the requested target may be beyond the joints (a ball wide of the table

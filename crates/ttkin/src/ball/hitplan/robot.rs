@@ -4,6 +4,7 @@
 use super::super::flight::BallState;
 use super::super::impact::RacketHit;
 use super::super::leg::{hit_leg, HitLeg};
+use super::super::reach::min_joint_time;
 use super::{Hit, HitPlanner};
 use crate::ik::{joint_velocity, LimitFilter};
 use crate::traj::JointState;
@@ -27,7 +28,11 @@ impl HitPlanner {
         let t_hit = s.t - now;
         let mut best: Option<Hit> = None;
         let centres = self.racket_centres(&s.p, &racket.normal);
-        for (k, &roll) in centres.iter().enumerate().flat_map(|(k, _)| self.rolls.iter().map(move |r| (k, r))) {
+        for (k, &roll) in centres
+            .iter()
+            .enumerate()
+            .flat_map(|(k, _)| self.rolls.iter().map(move |r| (k, r)))
+        {
             if best.as_ref().is_some_and(|b| b.margin >= self.good_margin || k > 0) {
                 break;
             }
@@ -70,8 +75,12 @@ impl HitPlanner {
         twist: &[f64; 6],
         t_hit: f64,
     ) -> Option<(Vec<f64>, HitLeg, f64)> {
+        if self.too_far(q, start, t_hit) {
+            return None;
+        }
         let jv = joint_velocity(&self.chain, q, twist).ok()?;
-        if jv.singular {
+        let lim = &self.limits;
+        if jv.singular || jv.qdot.iter().zip(&lim.velocity).any(|(qd, v)| qd.abs() > *v) {
             return None;
         }
         let leg = hit_leg(start, q, &jv.qdot, t_hit, &self.limits)?;
@@ -99,5 +108,16 @@ impl HitPlanner {
             Vector3::zeros()
         };
         [c, c + e, c - e]
+    }
+
+    /// Whether some joint cannot reach `q` from `start` within `t_hit` s even at full acceleration
+    /// then full speed with any arrival speed (the bound of [`super::super::reach`]): a cheap
+    /// necessary test before the hit leg's solves, from rest only (false when `start` moves).
+    fn too_far(&self, q: &[f64], start: &JointState, t_hit: f64) -> bool {
+        if start.qd.iter().chain(&start.qdd).any(|x| *x != 0.0) {
+            return false;
+        }
+        let lim = &self.limits;
+        (0..q.len()).any(|i| min_joint_time(q[i] - start.q[i], lim.velocity[i], lim.acceleration[i]) > t_hit)
     }
 }
