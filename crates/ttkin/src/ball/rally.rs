@@ -130,6 +130,10 @@ pub struct BallOutcome {
     pub plan_time_us: f64,
     /// The same planning step in wall-clock time (µs; includes preemption on a loaded machine).
     pub plan_wall_time_us: f64,
+    /// Planning time (s, absolute): the delivery of the last observation used.
+    pub now: f64,
+    /// The estimated ball state the plan started from (`None` when estimation failed).
+    pub estimate: Option<BallState>,
     /// Landing point (m, world) of the return (NaN when it did not touch the table).
     pub landing: [f64; 3],
     /// Distance (m) from the landing point to the target (NaN without landing).
@@ -259,6 +263,8 @@ pub fn play(planner: &HitPlanner, region: &ReachRegion, truth: &Flight, cfg: &Ra
         racket_error: f64::NAN,
         plan_time_us: f64::NAN,
         plan_wall_time_us: f64::NAN,
+        now,
+        estimate: None,
         landing: [f64::NAN; 3],
         landing_error: f64::NAN,
         velocity_error: f64::NAN,
@@ -284,6 +290,7 @@ pub fn play(planner: &HitPlanner, region: &ReachRegion, truth: &Flight, cfg: &Ra
     out.plan_time_us = cpu.elapsed().as_secs_f64() * 1e6;
     out.plan_wall_time_us = clock.elapsed().as_secs_f64() * 1e6;
     out.velocity_error = (est.state.v - truth_at_last.v).norm();
+    out.estimate = Some(est.state);
     let plan = match plan {
         Ok(p) => p,
         Err(e) => {

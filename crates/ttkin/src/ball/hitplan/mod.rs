@@ -29,17 +29,26 @@
 //!    (1 − peak/limit ratio for a quintic, 1 − fastest duration / hit time for a jerk-limited leg). Candidates are tried from the middle of the spread outward and the search
 //!    stops at the first with a margin ≥ `good_margin` (0.25), which bounds the planning time.
 
-use super::flight::{BallState, EventKind, Flight};
+mod candidates;
+use candidates::candidate_order;
+mod robot;
+mod shoot;
+
+pub use shoot::shoot;
+
+use super::flight::{BallState, Flight};
 use super::impact::{Racket, RacketHit};
-use super::leg::{hit_leg, HitLeg};
-use super::reach::walk_after_bounce;
+use super::leg::HitLeg;
 pub use super::reach::{racket_rotation, Placement, Reach};
 use crate::chain::Chain;
 use crate::error::{Error, Result};
-use crate::ik::{joint_velocity, Analytic, LimitFilter};
+use crate::ik::{Analytic, LimitFilter};
 use crate::traj::limits::KinematicLimits;
 use crate::traj::JointState;
-use nalgebra::{IsometryMatrix3, Matrix3, Translation3, Vector3};
+use nalgebra::{IsometryMatrix3, Translation3, Vector3};
+
+/// Most shooting solves for the fallback targets of a ball no candidate hit otherwise.
+const FALLBACK_ATTEMPTS: usize = 24;
 
 /// Why a ball got no hit, or that it got one.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -138,6 +147,10 @@ pub struct HitPlanner {
     pub return_times: [f64; 3],
     /// A feasible hit with at least this margin ends the search (candidates are tried middle first).
     pub good_margin: f64,
+    /// Largest distance (m) of the contact point from the racket centre the planner chooses (only
+    /// when the ball on the centre has no IK within the limits); the rally counts a contact within
+    /// the racket radius.
+    pub contact_offset: f64,
     /// Rolls (rad) of the racket about its face normal tried in order (0: handle up); the ball
     /// does not see the roll, the joints do.
     pub rolls: Vec<f64>,
@@ -171,6 +184,7 @@ impl HitPlanner {
             search_margin: 0.03,
             return_times: [0.8, 0.65, 0.95],
             good_margin: 0.25,
+            contact_offset: 0.03,
             rolls: [0.0, 30.0, -30.0].iter().map(|d: &f64| d.to_radians()).collect(),
         };
         // Ready: racket facing forward 0.48 m behind the end line, across the table's centre line,
@@ -266,51 +280,73 @@ impl HitPlanner {
                 candidates: 0,
             });
         }
-        // `candidates` evenly spread first; more of them only when none of those is feasible.
-        let k = self.candidates.max(1).min(list.len());
-        let extra = list.len().min(12);
+        let order = candidate_order(list.len(), self.candidates.max(1));
+        let first = self.candidates.max(1).min(list.len());
+        let targets = self.targets(target);
         let mut best: Option<Hit> = None;
         let mut any_return = false;
         let mut tried = 0;
-        // Candidates that fail the cheap placement test are skipped, and tried in full only when no
-        // other candidate gives a hit (the test's normal is approximate).
+        // Candidates that fail the cheap placement test for every target are skipped, and tried
+        // in full (requested target) only when no other candidate gives a hit (the test's normal
+        // is approximate).
         let mut skipped: Vec<usize> = Vec::new();
-        for round in 0..3 {
-            let picks: Vec<usize> = match round {
-                0 | 1 => {
-                    let count = if round == 0 { k } else { extra };
-                    if round == 1 && (best.is_some() || extra <= k) {
-                        continue;
+        // The target tried first for each candidate examined, in `order`.
+        let mut first_goal: Vec<Option<[f64; 2]>> = Vec::new();
+        let mut attempt = |s: &BallState, goal: [f64; 2], best: &mut Option<Hit>| {
+            tried += 1;
+            for &tf in &self.return_times {
+                let Some((v_out, racket, landing)) = self.outgoing(s, goal, tf) else {
+                    continue;
+                };
+                any_return = true;
+                if let Some(hit) = self.robot_hit(s, now, start, v_out, racket, landing) {
+                    if best.as_ref().is_none_or(|b| hit.margin > b.margin) {
+                        *best = Some(hit);
                     }
-                    // Middle of the spread first: it is the likeliest to have the largest margin.
-                    let mut order: Vec<usize> = (0..count).collect();
-                    order.sort_by_key(|&j| (2 * j + 1).abs_diff(count));
-                    order.iter().map(|&j| (2 * j + 1) * list.len() / (2 * count)).collect()
-                }
-                _ if best.is_none() => std::mem::take(&mut skipped),
-                _ => Vec::new(),
-            };
-            for i in picks {
-                if best.as_ref().is_some_and(|b| b.margin >= self.good_margin) {
                     break;
                 }
-                let s = list[i];
-                if round < 2 && !self.roughly_placeable(&s, target) {
-                    skipped.push(i);
-                    continue;
+            }
+        };
+        for (rank, &i) in order.iter().enumerate() {
+            // More than the first `candidates` only when none of those is feasible.
+            if rank == first && best.is_some() {
+                break;
+            }
+            if best.as_ref().is_some_and(|b| b.margin >= self.good_margin) {
+                break;
+            }
+            let s = list[i];
+            let Some(&goal) = targets.iter().find(|&&g| self.roughly_placeable(&s, g)) else {
+                skipped.push(i);
+                first_goal.push(None);
+                continue;
+            };
+            first_goal.push(Some(goal));
+            attempt(&s, goal, &mut best);
+        }
+        if best.is_none() {
+            for &i in &skipped {
+                if best.is_some() {
+                    break;
                 }
-                tried += 1;
-                for &tf in &self.return_times {
-                    let Some((v_out, racket, landing)) = self.outgoing(&s, target, tf) else {
-                        continue;
-                    };
-                    any_return = true;
-                    if let Some(hit) = self.robot_hit(&s, now, start, v_out, racket, landing) {
-                        if best.as_ref().is_none_or(|b| hit.margin > b.margin) {
-                            best = Some(hit);
-                        }
-                        break;
-                    }
+                attempt(&list[i], target, &mut best);
+            }
+        }
+        // Still nothing: the other placeable targets of each candidate (another face normal, other
+        // joint positions and velocities at the hit), at most `FALLBACK_ATTEMPTS` shooting solves.
+        let mut budget = FALLBACK_ATTEMPTS;
+        'fallback: for (&i, &tried_goal) in order.iter().zip(&first_goal) {
+            if best.is_some() {
+                break;
+            }
+            let s = list[i];
+            for &goal in targets.iter().filter(|g| Some(**g) != tried_goal) {
+                if budget == 0 || best.is_some() {
+                    break 'fallback;
+                }
+                if self.roughly_placeable(&s, goal) {
+                    budget -= 1;
+                    attempt(&s, goal, &mut best);
                 }
             }
         }
@@ -327,212 +363,8 @@ impl HitPlanner {
         })
     }
 
-    /// Predicted states every 10 ms inside the hitting volume after the bounce on the robot's half, and
-    /// whether that bounce happens.
-    fn candidate_states(
-        &self,
-        f: &Flight,
-        ball: &BallState,
-        now: f64,
-        margin: f64,
-        after_bounce: bool,
-    ) -> (Vec<BallState>, bool) {
-        let reach = Reach {
-            lo: self.reach.lo - Vector3::repeat(margin),
-            hi: self.reach.hi + Vector3::repeat(margin),
-        };
-        let mut out = Vec::new();
-        let bounced = walk_after_bounce(f, ball, 0.01, after_bounce, |s| {
-            if s.t >= now + self.min_stroke_time && reach.contains(&s.p) {
-                out.push(*s);
-            }
-            s.p.x >= self.reach.lo.x - 0.05
-        });
-        (out, bounced)
-    }
-
-    /// Outgoing velocity, racket and landing point returning the ball at `s` to `target` in a
-    /// return flight of `tf` s.
-    fn outgoing(&self, s: &BallState, target: [f64; 2], tf: f64) -> Option<(Vector3<f64>, RacketHit, Vector3<f64>)> {
-        let f = &self.flight;
-        let goal = Vector3::new(target[0], target[1], f.model.radius);
-        // Each solve starts from the previous one (the shooting iterates move v₀ a little).
-        let last: std::cell::Cell<Option<RacketHit>> = std::cell::Cell::new(None);
-        let racket = |v: &Vector3<f64>| {
-            let guess = last.get();
-            let hit = self
-                .racket
-                .solve_from(&f.model, &s.v, &s.w, v, guess.as_ref())
-                .or_else(|_| self.racket.solve(&f.model, &s.v, &s.w, v))
-                .ok();
-            if hit.is_some() {
-                last.set(hit);
-            }
-            hit
-        };
-        // The outgoing spin follows the racket, which follows v₀: solved together.
-        let v_out = shoot(f, &s.p, &goal, tf, |v| racket(v).map(|r| r.spin_out))?;
-        let hit = racket(&v_out)?;
-        let out = BallState {
-            v: v_out,
-            w: hit.spin_out,
-            ..*s
-        };
-        let (_, events) = f.run(&out, s.t + tf + 0.5, None);
-        let e = events.first()?;
-        let landing = e.before.p;
-        let ok = e.kind == EventKind::Table
-            && f.table.on_opponent_half(landing.x, landing.y)
-            && (landing - goal).xy().norm() < 1e-3;
-        ok.then_some((v_out, hit, landing))
-    }
-
-    /// Whether some roll of a racket with the frictionless, drag-free normal (along v_out − v_in,
-    /// v_out the vacuum shot to `target` in the first return time) at the ball `s` has IK within the
-    /// limits: a cheap test before the shooting solve.
-    fn roughly_placeable(&self, s: &BallState, target: [f64; 2]) -> bool {
-        let tf = self.return_times[0];
-        let goal = Vector3::new(target[0], target[1], self.flight.model.radius);
-        let g = Vector3::new(0.0, 0.0, -self.flight.model.gravity);
-        let v_out = (goal - s.p - 0.5 * g * tf * tf) / tf;
-        let n = (v_out - s.v).normalize();
-        let c = s.p - self.flight.model.radius * n;
-        self.rolls.iter().any(|&roll| {
-            self.ik
-                .solve(&self.base_pose_rolled(&c, &n, roll), None, LimitFilter::Enforce)
-                .is_ok()
-        })
-    }
-
-    /// The best robot hit (largest margin) over the racket rolls `rolls` about the face normal and
-    /// every IK branch within the limits, or `None` when none is feasible.
-    fn robot_hit(
-        &self,
-        s: &BallState,
-        now: f64,
-        start: &JointState,
-        v_out: Vector3<f64>,
-        racket: RacketHit,
-        landing: Vector3<f64>,
-    ) -> Option<Hit> {
-        let r = self.flight.model.radius;
-        let centre = s.p - r * racket.normal;
-        let rot_bw = self.placement.world_from_base().rotation.inverse();
-        let v_b = rot_bw * racket.velocity;
-        let twist = [v_b.x, v_b.y, v_b.z, 0.0, 0.0, 0.0];
-        let t_hit = s.t - now;
-        let mut best: Option<Hit> = None;
-        for &roll in &self.rolls {
-            if best.as_ref().is_some_and(|b| b.margin >= self.good_margin) {
-                break;
-            }
-            let pose = self.base_pose_rolled(&centre, &racket.normal, roll);
-            let Ok(sols) = self.ik.solve(&pose, Some(&start.q), LimitFilter::Enforce) else {
-                continue;
-            };
-            for q in sols.iter() {
-                let Some((qd, leg, margin)) = self.stroke_margin(q, start, &twist, t_hit) else {
-                    continue;
-                };
-                if best.as_ref().is_none_or(|b| margin > b.margin) {
-                    best = Some(Hit {
-                        ball: *s,
-                        v_out,
-                        racket,
-                        pose,
-                        twist,
-                        t_hit,
-                        q_hit: q.to_vec(),
-                        qd_hit: qd,
-                        qdd_hit: leg.qdd_hit.clone(),
-                        leg,
-                        margin,
-                        landing,
-                    });
-                }
-            }
-        }
-        best
-    }
-
-    /// Joint velocities at the hit, the hit leg ([`super::leg`]) and the margin of the stroke from
-    /// `start` to the configuration `q` moving the racket with `twist` (base frame) after `t_hit`
-    /// s, or `None` when it is singular or no leg is within the limits.
-    fn stroke_margin(
-        &self,
-        q: &[f64],
-        start: &JointState,
-        twist: &[f64; 6],
-        t_hit: f64,
-    ) -> Option<(Vec<f64>, HitLeg, f64)> {
-        let jv = joint_velocity(&self.chain, q, twist).ok()?;
-        if jv.singular {
-            return None;
-        }
-        let leg = hit_leg(start, q, &jv.qdot, t_hit, &self.limits)?;
-        let mut pos_margin = f64::INFINITY;
-        for (i, &qi) in q.iter().enumerate() {
-            let (lo, hi) = (self.limits.lower[i], self.limits.upper[i]);
-            if lo.is_finite() && hi.is_finite() {
-                pos_margin = pos_margin.min(2.0 * (qi - lo).min(hi - qi) / (hi - lo));
-            }
-        }
-        let margin = pos_margin.min(leg.margin);
-        Some((jv.qdot, leg, margin))
-    }
-
     /// Kinematic limits of the strokes (joint order of the chain; jerk as in the module doc).
     pub fn limits(&self) -> &KinematicLimits {
         &self.limits
     }
-}
-
-/// Velocity v₀ (m/s) with which a ball at `p`, spinning with `spin(v₀)` (rad/s; a constant or the
-/// spin a racket gives it), is at `goal` after `tf` s of free flight (no contacts): Broyden's method
-/// from the drag-free solution, to 1e-5 m. `None` when `spin` has no answer or it does not converge.
-pub fn shoot<S>(f: &Flight, p: &Vector3<f64>, goal: &Vector3<f64>, tf: f64, spin: S) -> Option<Vector3<f64>>
-where
-    S: Fn(&Vector3<f64>) -> Option<Vector3<f64>>,
-{
-    let g = Vector3::new(0.0, 0.0, -f.model.gravity);
-    let mut v = (goal - p - 0.5 * g * tf * tf) / tf;
-    let end = |v: &Vector3<f64>| {
-        let Some(w) = spin(v) else {
-            return Vector3::repeat(f64::NAN);
-        };
-        let mut s = BallState {
-            t: 0.0,
-            p: *p,
-            v: *v,
-            w,
-        };
-        while s.t < tf - 1e-12 {
-            s = f.rk4(&s, f.step.min(tf - s.t));
-        }
-        s.p - goal
-    };
-    let mut jinv = Matrix3::identity() / tf; // inverse Jacobian (Broyden, "good" update on the inverse)
-    let mut r = end(&v);
-    if !r.norm().is_finite() {
-        return None;
-    }
-    for _ in 0..20 {
-        if r.norm() < 1e-5 {
-            return Some(v);
-        }
-        let dv = -(jinv * r);
-        let vn = v + dv;
-        let rn = end(&vn);
-        let dr = rn - r;
-        let denom = dv.dot(&(jinv * dr));
-        if denom.abs() > 1e-30 {
-            jinv += (dv - jinv * dr) * (dv.transpose() * jinv) / denom;
-        }
-        v = vn;
-        r = rn;
-        if !r.norm().is_finite() {
-            return None;
-        }
-    }
-    (r.norm() < 1e-4).then_some(v)
 }

@@ -1,0 +1,209 @@
+//! The 10k-ball rally in release, with the in-reach failures classified, for iterating on the
+//! hit planner in seconds: `rally_stats [N] [SEED]` (defaults 10000, 0).
+//!
+//! Prints the counts of `ttmanip rally` (in reach, returned, return rate, statuses of the in-reach
+//! failures) and, for every in-reach ball the planner called `infeasible`, the deepest stage any
+//! candidate reached when every 10 ms sample of the estimated flight in the search volume, every
+//! return time and the planner's rolls are tried with the planner's own pieces (shooting, racket
+//! inverse, IK, q̇ = J⁻¹V, the hit leg): `no_candidate`, `no_shot`, `no_ik`, `singular`, `speed`
+//! (some |q̇_i| above its limit on every solution), `time_bound` (the region's per-joint minimum
+//! time exceeds the time left), `leg` (no hit leg within the limits), `feasible` (a hit exists
+//! that the planner's search did not try). Also the median planning CPU time.
+use nalgebra::Vector3;
+use ttkin::ball::flight::{BallState, Flight};
+use ttkin::ball::hitplan::{shoot, HitPlanner};
+use ttkin::ball::leg::hit_leg;
+use ttkin::ball::rally::{self, RallyConfig};
+use ttkin::ball::reach::{min_joint_time, walk_after_bounce, Reach, ReachRegion};
+use ttkin::ik::{joint_velocity, Analytic, LimitFilter};
+use ttkin::traj::JointState;
+
+thread_local! {
+    /// Smallest joint-limit excess (m or rad) of any IK branch of the shots seen by `deepest`.
+    static EXCESS: std::cell::Cell<f64> = const { std::cell::Cell::new(f64::INFINITY) };
+}
+
+const STAGES: [&str; 8] = [
+    "no_candidate",
+    "no_shot",
+    "no_ik",
+    "singular",
+    "speed",
+    "time_bound",
+    "leg",
+    "feasible",
+];
+
+/// Deepest stage (index into `STAGES`) any candidate of `ball` planned at `now` reaches.
+fn deepest(pl: &HitPlanner, ik: &Analytic, ball: &BallState, now: f64, target: [f64; 2]) -> usize {
+    let m = pl.search_margin;
+    let reach = Reach {
+        lo: pl.reach.lo - Vector3::repeat(m),
+        hi: pl.reach.hi + Vector3::repeat(m),
+    };
+    let mut list = Vec::new();
+    walk_after_bounce(&pl.flight, ball, 0.01, false, |s| {
+        if s.t >= now + pl.min_stroke_time && reach.contains(&s.p) {
+            list.push(*s);
+        }
+        s.p.x >= pl.reach.lo.x - 0.05
+    });
+    let lim = pl.limits();
+    let start = JointState::rest(&pl.ready);
+    let f = &pl.flight;
+    let goal = Vector3::new(target[0], target[1], f.model.radius);
+    let rot_bw = pl.placement.world_from_base().rotation.inverse();
+    let mut best = 0;
+    for s in &list {
+        for &tf in &pl.return_times {
+            let spin = |v: &Vector3<f64>| pl.racket.solve(&f.model, &s.v, &s.w, v).ok().map(|r| r.spin_out);
+            let Some(v_out) = shoot(f, &s.p, &goal, tf, spin) else {
+                best = best.max(1);
+                continue;
+            };
+            let Ok(racket) = pl.racket.solve(&f.model, &s.v, &s.w, &v_out) else {
+                best = best.max(1);
+                continue;
+            };
+            best = best.max(2);
+            let c = s.p - f.model.radius * racket.normal;
+            if let Ok(all) = ik.solve(&pl.base_pose_rolled(&c, &racket.normal, 0.0), None, LimitFilter::Off) {
+                for q in all.iter() {
+                    let over = (0..q.len())
+                        .map(|i| (q[i] - lim.upper[i]).max(lim.lower[i] - q[i]).max(0.0))
+                        .fold(0.0, f64::max);
+                    EXCESS.with(|e| e.set(e.get().min(over)));
+                }
+            }
+            let vb = rot_bw * racket.velocity;
+            let twist = [vb.x, vb.y, vb.z, 0.0, 0.0, 0.0];
+            let t = s.t - now;
+            for &roll in &pl.rolls {
+                let pose = pl.base_pose_rolled(&c, &racket.normal, roll);
+                let Ok(sols) = ik.solve(&pose, Some(&pl.ready), LimitFilter::Enforce) else {
+                    continue;
+                };
+                for q in sols.iter() {
+                    best = best.max(3);
+                    let Ok(jv) = joint_velocity(&pl.chain, q, &twist) else {
+                        continue;
+                    };
+                    if jv.singular {
+                        continue;
+                    }
+                    best = best.max(4);
+                    if (0..q.len()).any(|i| jv.qdot[i].abs() > lim.velocity[i]) {
+                        continue;
+                    }
+                    best = best.max(5);
+                    let tmin = (0..q.len())
+                        .map(|i| min_joint_time(q[i] - pl.ready[i], lim.velocity[i], lim.acceleration[i]))
+                        .fold(0.0, f64::max);
+                    if tmin > t {
+                        continue;
+                    }
+                    best = best.max(6);
+                    if hit_leg(&start, q, &jv.qdot, t, lim).is_some() {
+                        return 7;
+                    }
+                }
+            }
+        }
+    }
+    best
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let n: usize = args.get(1).map_or(10_000, |a| a.parse().expect("N"));
+    let seed: u64 = args.get(2).map_or(0, |a| a.parse().expect("SEED"));
+    let mut pl = HitPlanner::new(ttkin::robots::gantry6(), Flight::default()).expect("gantry6");
+    // Experiments: ROLLS="0,30,-30" (degrees), RETURN_TIMES="0.8,0.65,0.95" (s), CONTACT_OFFSET=0.03 (m).
+    if let Ok(r) = std::env::var("ROLLS") {
+        pl.rolls = r
+            .split(',')
+            .map(|d| d.parse::<f64>().expect("ROLLS").to_radians())
+            .collect();
+    }
+    if let Ok(r) = std::env::var("CONTACT_OFFSET") {
+        pl.contact_offset = r.parse().expect("CONTACT_OFFSET (m)");
+    }
+    if let Ok(r) = std::env::var("RETURN_TIMES") {
+        let v: Vec<f64> = r.split(',').map(|d| d.parse().expect("RETURN_TIMES")).collect();
+        pl.return_times = v.try_into().expect("three return times");
+    }
+    let truth = Flight {
+        step: 0.001,
+        ..Flight::default()
+    };
+    let cfg = RallyConfig {
+        seed,
+        paths: 0,
+        ..RallyConfig::default()
+    };
+    let region = ReachRegion::new(&pl.chain, pl.placement, pl.ready.clone(), truth.model.radius).expect("region");
+    let clock = std::time::Instant::now();
+    let out = rally::rally(&pl, &region, &truth, &cfg, n);
+    let wall = clock.elapsed().as_secs_f64();
+    let in_reach: Vec<_> = out.iter().filter(|o| o.in_reach).collect();
+    let returned = in_reach.iter().filter(|o| o.returned).count();
+    let mut statuses = std::collections::BTreeMap::new();
+    for o in in_reach.iter().filter(|o| !o.returned) {
+        *statuses.entry(o.status.clone()).or_insert(0usize) += 1;
+    }
+    let mut reach = std::collections::BTreeMap::new();
+    for o in &out {
+        *reach.entry(o.reach).or_insert(0usize) += 1;
+    }
+    let mut profiles = std::collections::BTreeMap::new();
+    for o in in_reach.iter().filter(|o| o.returned) {
+        *profiles.entry(o.profile).or_insert(0usize) += 1;
+    }
+    let mut times: Vec<f64> = out.iter().map(|o| o.plan_time_us).filter(|t| t.is_finite()).collect();
+    times.sort_by(f64::total_cmp);
+    let returned_out = out.iter().filter(|o| !o.in_reach && o.returned).count();
+    println!(
+        "balls {n} seed {seed}: in reach {}, returned {returned} -> return rate {:.2} %, returned out of reach {returned_out}",
+        in_reach.len(),
+        100.0 * returned as f64 / in_reach.len().max(1) as f64
+    );
+    println!("reach {reach:?}");
+    println!("returned by profile {profiles:?}");
+    println!("in-reach failures {statuses:?}");
+    println!(
+        "plan CPU time median {:.0} us, mean {:.0} us (rally wall {wall:.1} s)",
+        times.get(times.len() / 2).copied().unwrap_or(f64::NAN),
+        times.iter().sum::<f64>() / times.len().max(1) as f64
+    );
+    if std::env::var_os("NO_DIAG").is_some() {
+        return;
+    }
+    let ik = Analytic::for_chain(&pl.chain).expect("analytic IK");
+    let mut stages = [0usize; STAGES.len()];
+    let mut excess = Vec::new();
+    for o in in_reach.iter().filter(|o| o.status == "infeasible") {
+        let Some(est) = o.estimate else { continue };
+        EXCESS.with(|e| e.set(f64::INFINITY));
+        let d = deepest(&pl, &ik, &est, o.now, cfg.target);
+        stages[d] += 1;
+        if d == 2 {
+            excess.push(EXCESS.with(|e| e.get()));
+        }
+    }
+    let named: Vec<String> = STAGES
+        .iter()
+        .zip(stages)
+        .filter(|(_, c)| *c > 0)
+        .map(|(s, c)| format!("{s} {c}"))
+        .collect();
+    println!("infeasible by deepest stage: {}", named.join(", "));
+    excess.sort_by(f64::total_cmp);
+    let below = |x: f64| excess.iter().filter(|e| **e <= x).count();
+    println!(
+        "no_ik: smallest joint-limit excess of any shot's IK branch ≤ 2 cm {}, ≤ 4 cm {}, ≤ 8 cm {}, of {}",
+        below(0.02),
+        below(0.04),
+        below(0.08),
+        excess.len()
+    );
+}

@@ -1,0 +1,103 @@
+//! Hit-point candidates of the hit planner: the predicted ball every 10 ms in the hitting volume,
+//! and the cheap placement test that skips the ones no racket reaches before the shooting solve.
+
+use super::super::flight::{BallState, Flight};
+use super::super::reach::{walk_after_bounce, Reach};
+use super::HitPlanner;
+use crate::ik::LimitFilter;
+use nalgebra::Vector3;
+
+impl HitPlanner {
+    /// Predicted states every 10 ms inside the hitting volume after the bounce on the robot's half, and
+    /// whether that bounce happens.
+    pub(super) fn candidate_states(
+        &self,
+        f: &Flight,
+        ball: &BallState,
+        now: f64,
+        margin: f64,
+        after_bounce: bool,
+    ) -> (Vec<BallState>, bool) {
+        let reach = Reach {
+            lo: self.reach.lo - Vector3::repeat(margin),
+            hi: self.reach.hi + Vector3::repeat(margin),
+        };
+        let mut out = Vec::new();
+        let bounced = walk_after_bounce(f, ball, 0.01, after_bounce, |s| {
+            if s.t >= now + self.min_stroke_time && reach.contains(&s.p) {
+                out.push(*s);
+            }
+            s.p.x >= self.reach.lo.x - 0.05
+        });
+        (out, bounced)
+    }
+
+    /// Whether some roll of a racket with the frictionless, drag-free normal (along v_out − v_in,
+    /// v_out the vacuum shot to `target` in the first return time) at the ball `s` has IK within the
+    /// limits: a cheap test before the shooting solve.
+    pub(super) fn roughly_placeable(&self, s: &BallState, target: [f64; 2]) -> bool {
+        let tf = self.return_times[0];
+        let goal = Vector3::new(target[0], target[1], self.flight.model.radius);
+        let g = Vector3::new(0.0, 0.0, -self.flight.model.gravity);
+        let v_out = (goal - s.p - 0.5 * g * tf * tf) / tf;
+        let n = (v_out - s.v).normalize();
+        self.racket_centres(&s.p, &n).iter().any(|c| {
+            self.rolls.iter().any(|&roll| {
+                self.ik
+                    .solve(&self.base_pose_rolled(c, &n, roll), None, LimitFilter::Enforce)
+                    .is_ok()
+            })
+        })
+    }
+
+    /// Landing targets (x, y, m, world) tried in order for a hit point: the requested `target`,
+    /// then the points of `FALLBACK_TARGETS` by distance from it. A racket whose face must turn
+    /// the ball toward the requested target may be beyond the joints (a ball wide of the table
+    /// returned across it needs the carriage past its stroke) where a return along the line is not.
+    pub(super) fn targets(&self, target: [f64; 2]) -> Vec<[f64; 2]> {
+        let mut out = vec![target];
+        let mut rest: Vec<[f64; 2]> = FALLBACK_TARGETS.iter().copied().filter(|t| *t != target).collect();
+        let d = |t: &[f64; 2]| (t[0] - target[0]).hypot(t[1] - target[1]);
+        rest.sort_by(|a, b| d(a).total_cmp(&d(b)));
+        out.extend(rest);
+        out
+    }
+}
+
+/// Fallback landing targets (x, y, m, world) on the opponent's half, at least 0.2 m inside its
+/// end and side lines and 0.5 m past the net.
+const FALLBACK_TARGETS: [[f64; 2]; 15] = [
+    [0.9, 0.0],
+    [0.9, 0.25],
+    [0.9, -0.25],
+    [0.9, 0.5],
+    [0.9, -0.5],
+    [0.6, 0.0],
+    [0.6, 0.25],
+    [0.6, -0.25],
+    [0.6, 0.5],
+    [0.6, -0.5],
+    [1.15, 0.0],
+    [1.15, 0.25],
+    [1.15, -0.25],
+    [1.15, 0.5],
+    [1.15, -0.5],
+];
+
+/// Indices into a list of `len` candidates in the order tried: `first` evenly spread, middle of
+/// the spread first (the likeliest to have the largest margin), then up to 12 evenly spread
+/// (middle first), each index once.
+pub(super) fn candidate_order(len: usize, first: usize) -> Vec<usize> {
+    let mut out: Vec<usize> = Vec::new();
+    for count in [first.min(len), len.min(12)] {
+        let mut spread: Vec<usize> = (0..count).collect();
+        spread.sort_by_key(|&j| (2 * j + 1).abs_diff(count));
+        for j in spread {
+            let i = (2 * j + 1) * len / (2 * count);
+            if !out.contains(&i) {
+                out.push(i);
+            }
+        }
+    }
+    out
+}

@@ -1,0 +1,123 @@
+//! The robot's side of a hit: racket pose and twist in the base frame, IK branches, joint velocities
+//! at the hit, the hit leg and the choice margin.
+
+use super::super::flight::BallState;
+use super::super::impact::RacketHit;
+use super::super::leg::{hit_leg, HitLeg};
+use super::super::reach::min_joint_time;
+use super::{Hit, HitPlanner};
+use crate::ik::{joint_velocity, LimitFilter};
+use crate::traj::JointState;
+use nalgebra::Vector3;
+
+impl HitPlanner {
+    /// The best robot hit (largest margin) over the racket rolls `rolls` about the face normal and
+    /// every IK branch within the limits, or `None` when none is feasible.
+    pub(super) fn robot_hit(
+        &self,
+        s: &BallState,
+        now: f64,
+        start: &JointState,
+        v_out: Vector3<f64>,
+        racket: RacketHit,
+        landing: Vector3<f64>,
+    ) -> Option<Hit> {
+        let rot_bw = self.placement.world_from_base().rotation.inverse();
+        let v_b = rot_bw * racket.velocity;
+        let twist = [v_b.x, v_b.y, v_b.z, 0.0, 0.0, 0.0];
+        let t_hit = s.t - now;
+        let mut best: Option<Hit> = None;
+        let centres = self.racket_centres(&s.p, &racket.normal);
+        for (k, &roll) in centres
+            .iter()
+            .enumerate()
+            .flat_map(|(k, _)| self.rolls.iter().map(move |r| (k, r)))
+        {
+            if best.as_ref().is_some_and(|b| b.margin >= self.good_margin || k > 0) {
+                break;
+            }
+            let pose = self.base_pose_rolled(&centres[k], &racket.normal, roll);
+            let Ok(sols) = self.ik.solve(&pose, Some(&start.q), LimitFilter::Enforce) else {
+                continue;
+            };
+            for q in sols.iter() {
+                let Some((qd, leg, margin)) = self.stroke_margin(q, start, &twist, t_hit) else {
+                    continue;
+                };
+                if best.as_ref().is_none_or(|b| margin > b.margin) {
+                    best = Some(Hit {
+                        ball: *s,
+                        v_out,
+                        racket,
+                        pose,
+                        twist,
+                        t_hit,
+                        q_hit: q.to_vec(),
+                        qd_hit: qd,
+                        qdd_hit: leg.qdd_hit.clone(),
+                        leg,
+                        margin,
+                        landing,
+                    });
+                }
+            }
+        }
+        best
+    }
+
+    /// Joint velocities at the hit, the hit leg ([`super::leg`]) and the margin of the stroke from
+    /// `start` to the configuration `q` moving the racket with `twist` (base frame) after `t_hit`
+    /// s, or `None` when it is singular or no leg is within the limits.
+    pub(super) fn stroke_margin(
+        &self,
+        q: &[f64],
+        start: &JointState,
+        twist: &[f64; 6],
+        t_hit: f64,
+    ) -> Option<(Vec<f64>, HitLeg, f64)> {
+        if self.too_far(q, start, t_hit) {
+            return None;
+        }
+        let jv = joint_velocity(&self.chain, q, twist).ok()?;
+        let lim = &self.limits;
+        if jv.singular || jv.qdot.iter().zip(&lim.velocity).any(|(qd, v)| qd.abs() > *v) {
+            return None;
+        }
+        let leg = hit_leg(start, q, &jv.qdot, t_hit, &self.limits)?;
+        let mut pos_margin = f64::INFINITY;
+        for (i, &qi) in q.iter().enumerate() {
+            let (lo, hi) = (self.limits.lower[i], self.limits.upper[i]);
+            if lo.is_finite() && hi.is_finite() {
+                pos_margin = pos_margin.min(2.0 * (qi - lo).min(hi - qi) / (hi - lo));
+            }
+        }
+        let margin = pos_margin.min(leg.margin);
+        Some((jv.qdot, leg, margin))
+    }
+
+    /// Racket centres (m, world) for a ball centre `p` touching a face with normal `n`, in the
+    /// order tried: the ball on the face centre, then moved by ±`contact_offset` in the face plane
+    /// along its direction closest to world y (across the table, the carriage's d2 axis), for a
+    /// ball just beyond the carriage's stroke.
+    pub(super) fn racket_centres(&self, p: &Vector3<f64>, n: &Vector3<f64>) -> [Vector3<f64>; 3] {
+        let c = p - self.flight.model.radius * n;
+        let across = Vector3::y() - n * n.y;
+        let e = if across.norm() > 1e-6 {
+            across.normalize() * self.contact_offset
+        } else {
+            Vector3::zeros()
+        };
+        [c, c + e, c - e]
+    }
+
+    /// Whether some joint cannot reach `q` from `start` within `t_hit` s even at full acceleration
+    /// then full speed with any arrival speed (the bound of [`super::super::reach`]): a cheap
+    /// necessary test before the hit leg's solves, from rest only (false when `start` moves).
+    fn too_far(&self, q: &[f64], start: &JointState, t_hit: f64) -> bool {
+        if start.qd.iter().chain(&start.qdd).any(|x| *x != 0.0) {
+            return false;
+        }
+        let lim = &self.limits;
+        (0..q.len()).any(|i| min_joint_time(q[i] - start.q[i], lim.velocity[i], lim.acceleration[i]) > t_hit)
+    }
+}
