@@ -297,7 +297,16 @@ API: dict[str, dict] = {
                 "velocity_feedforward",
             ),
             "Response": (),
-            "Servo": ("params", "rates", "step_response", "track", "track_quintic", "tuning"),
+            "Servo": (
+                "follow",
+                "follow_quintic",
+                "params",
+                "rates",
+                "step_response",
+                "track",
+                "track_quintic",
+                "tuning",
+            ),
         }.items()
         for a in attrs
     },

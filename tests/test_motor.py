@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import asdict
+
 import numpy as np
 import pytest
 import ttmanip
@@ -19,6 +21,57 @@ def test_defaults_are_the_documented_maxon_re25_axis():
     assert m.rotor_inertia == pytest.approx(10.8e-7)
     assert (g.ratio, g.efficiency) == (14.0, 0.81)
     assert motor.Drive().encoder_counts_per_rev == 4096
+
+
+def test_dataclasses_are_the_rust_axis_schema():
+    # One schema (ttcan::AxisConfig, serde): every dataclass field is an entry of it with the same
+    # default, and an entry of the Rust schema that no dataclass exposes is listed here on purpose.
+    params = motor.Servo().params
+    model = params["model"]
+    parts = {
+        motor.DcMotor: model["motor"],
+        motor.Gearbox: model["gearbox"],
+        motor.Load: model["load"],
+        motor.Drive: {k: v for k, v in model.items() if not isinstance(v, dict)},
+    }
+    for cls, entries in parts.items():
+        assert asdict(cls()) == entries, cls.__name__
+    loops = {k: v for k, v in asdict(motor.Loops()).items() if k not in ("speed_window", "peak_duration")}
+    rust = {**params["rates"], **params["tuning"], **{k: v for k, v in params.items() if k not in SECTIONS}}
+    assert loops == {k: rust[k] for k in loops}
+    assert set(rust) - set(loops) == NOT_IN_LOOPS
+
+
+SECTIONS = {"model", "rates", "tuning"}
+NOT_IN_LOOPS = {
+    "observer_acceleration_input",
+    "thermal",
+    "max_quantisation_ripple_share",
+    "setpoint_period",
+    "setpoint_max_missed",
+    "following_error_per_speed",
+    "overspeed_limit",
+    "position_limits",
+    "bus_overvoltage",
+    "bus_undervoltage",
+    "holding_brake",
+}
+
+
+def test_params_are_nested_and_changes_reach_their_entry():
+    servo = motor.Servo(gearbox=motor.Gearbox(ratio=10.0), loops=motor.Loops(position_hz=500.0))
+    assert servo.params["model"]["gearbox"]["ratio"] == 10.0
+    assert servo.params["rates"] == {"current_hz": 20000.0, "speed_hz": 5000.0, "position_hz": 500.0}
+    assert servo.rates == (20000.0, 5000.0, 500.0)
+
+
+def test_a_bad_entry_is_named_by_its_path():
+    with pytest.raises(ttmanip.TtmanipError, match=r"motor\.no_such"):
+        motor.Servo(plant={"motor": {"no_such": 1.0}})
+    with pytest.raises(ttmanip.TtmanipError, match=r"gearbox\.ratio"):
+        motor.Servo(plant={"gearbox": {"ratio": "fourteen"}})
+    with pytest.raises(ttmanip.TtmanipError, match=r"rates"):
+        motor.Servo(loops=motor.Loops(speed_hz=6000.0))
 
 
 def test_tuning_reports_designed_bandwidths(servo):
@@ -61,9 +114,9 @@ def test_velocity_step_settles(servo):
 def test_quintic_tracking_with_and_without_feedforward():
     t, q, qd, qdd = motor.quintic(3.0, 0.3, 1000.0)
     assert q[0] == 0 and q[-1] == pytest.approx(3.0) and qd[-1] == pytest.approx(0.0)
-    with_ff = motor.Servo().track(q, qd, qdd, settle=0.05)
+    with_ff = motor.Servo().follow(q, qd, qdd, settle=0.05)
     no_ff = motor.Loops(velocity_feedforward=False, acceleration_feedforward=False, following_error_limit=1.0)
-    without_ff = motor.Servo(loops=no_ff).track(q, qd, qdd, settle=0.05)
+    without_ff = motor.Servo(loops=no_ff).follow(q, qd, qdd, settle=0.05)
     e_with = np.max(np.abs(with_ff.following_error))
     e_without = np.max(np.abs(without_ff.following_error))
     assert e_with < 2e-3
@@ -72,7 +125,7 @@ def test_quintic_tracking_with_and_without_feedforward():
 
 
 def test_model_error_in_the_plant_is_tolerated():
-    r = motor.Servo(plant=motor.Load(inertia=2e-3)).track_quintic(2.0, 0.3)
+    r = motor.Servo(plant=motor.Load(inertia=2e-3)).follow_quintic(2.0, 0.3)
     assert r.fault is None
     assert np.max(np.abs(r.following_error)) < 0.02
 
@@ -80,7 +133,7 @@ def test_model_error_in_the_plant_is_tolerated():
 def test_too_fast_reference_trips_following_error_and_stops(servo):
     # A ramp at 40 rad/s for an axis limited to 30 rad/s.
     t = np.arange(100) / 1000.0
-    r = servo.track(40.0 * t, np.full(100, 40.0), np.zeros(100), settle=0.4)
+    r = servo.follow(40.0 * t, np.full(100, 40.0), np.zeros(100), settle=0.4)
     assert r.fault == "FollowingError"
     assert 2 in r.state and r.state[-1] == 3
     assert np.all(r.duty[r.state == 3] == 0.0)
@@ -105,8 +158,10 @@ def test_plot_writes_a_png(servo, tmp_path):
         ({"loops": motor.Loops(speed_hz=6000.0)}, ttmanip.TtmanipError),
         ({"loops": motor.Loops(peak_current=0.5)}, ttmanip.ModelError),
         ({"loops": motor.Loops(observer_bandwidth_hz=0.0)}, ttmanip.ModelError),
-        ({"plant": {"resistance": 0.0}}, ttmanip.ModelError),
+        ({"plant": {"motor": {"resistance": 0.0}}}, ttmanip.ModelError),
         ({"plant": {"no_such_parameter": 1.0}}, ttmanip.TtmanipError),
+        ({"plant": {"gearbox": {"ratio": "14"}}}, ttmanip.TtmanipError),
+        ({"loops": motor.Loops(anti_windup="no")}, ttmanip.TtmanipError),
     ],
 )
 def test_bad_parameters_are_rejected_when_built(kwargs, error):
@@ -124,8 +179,8 @@ def test_bad_references_are_rejected_before_simulating(servo):
         servo.step_response("current", 1.0, -1.0)
     q = np.zeros(10)
     with pytest.raises(ttmanip.NonFiniteError, match=r"qd\[3\]"):
-        servo.track(q, np.where(np.arange(10) == 3, np.inf, 0.0), q)
+        servo.follow(q, np.where(np.arange(10) == 3, np.inf, 0.0), q)
     with pytest.raises(ttmanip.ShapeError):
-        servo.track(q, q[:5], q)
+        servo.follow(q, q[:5], q)
     with pytest.raises(ttmanip.ShapeError):
-        servo.track(np.zeros((2, 5)), q, q)
+        servo.follow(np.zeros((2, 5)), q, q)

@@ -77,3 +77,30 @@ def test_callback_exception_keeps_its_type():
         line.to_joint(100.0, np.zeros(6), unreachable)
     assert isinstance(info.value.__cause__, ttmanip.UnreachableError)
     assert "beyond the rail" in str(info.value.__cause__)
+
+
+def test_servo_track_is_a_deprecated_follow():
+    from ttmanip import motor
+
+    servo = motor.Servo()
+    _, q, qd, qdd = motor.quintic(0.5, 0.05, 1000.0)
+    new = servo.follow(q, qd, qdd, settle=0.01)
+    with pytest.warns(DeprecationWarning, match=r"Servo\.track is deprecated; use Servo\.follow"):
+        old = servo.track(q, qd, qdd, settle=0.01)
+    np.testing.assert_array_equal(old.position, new.position)
+    with pytest.warns(DeprecationWarning, match=r"Servo\.follow_quintic"):
+        old = servo.track_quintic(0.5, 0.05)
+    np.testing.assert_array_equal(old.current, servo.follow_quintic(0.5, 0.05).current)
+
+
+def test_flat_plant_keys_are_deprecated_nested_entries():
+    from ttmanip import motor
+
+    with pytest.warns(DeprecationWarning, match="gear_ratio, load_inertia"):
+        old = motor.Servo(plant={"gear_ratio": 12.0, "load_inertia": 2e-3, "bus_voltage": 30.0})
+    new = motor.Servo(plant={"gearbox": {"ratio": 12.0}, "load": {"inertia": 2e-3}, "bus_voltage": 30.0})
+    assert old._sim.plant_params == new._sim.plant_params
+    assert new._sim.plant_params["gearbox"]["ratio"] == 12.0
+    np.testing.assert_array_equal(
+        old.step_response("velocity", 5.0, 0.01).speed, new.step_response("velocity", 5.0, 0.01).speed
+    )

@@ -258,10 +258,11 @@ class ServoSim:
     def __init__(
         self, params: dict[str, object] | None = None, plant: dict[str, object] | None = None
     ) -> None:
-        """Controller from ``params`` (keys of ``defaults()``); plant: the same, overridden by ``plant``."""
+        """Controller from ``params`` (nested entries of ``defaults()``, ``ttcan::AxisConfig``'s serde
+        shape); plant: its ``model`` overridden by ``plant``."""
     @staticmethod
     def defaults() -> dict[str, object]:
-        """The reference axis: maxon RE 25 + GP 26 A 14:1, 24 V, 20/5/1 kHz loops."""
+        """The reference axis as a nested dict: maxon RE 25 + GP 26 A 14:1, 24 V, 20/5/1 kHz loops."""
     @property
     def params(self) -> dict[str, object]:
         """The controller's parameters, SI units."""
@@ -278,7 +279,7 @@ class ServoSim:
         self, kind: str, amplitude: float, duration: float, external_torque: float = 0.0, seed: int = 7
     ) -> dict[str, object]:
         """Step response in 'current' (A), 'velocity' (rad/s) or 'position' (rad) mode."""
-    def trajectory(
+    def follow(
         self,
         q: ArrayLike,
         qd: ArrayLike,
@@ -287,7 +288,7 @@ class ServoSim:
         external_torque: float = 0.0,
         seed: int = 7,
     ) -> dict[str, object]:
-        """Tracks (q, qd, qdd) given at the position-loop rate, then holds the end for ``settle`` s."""
+        """Follows (q, qd, qdd) given at the position-loop rate from rest, then holds the end ``settle`` s."""
 
 class DiffDrive:
     """Differential-drive base: wheel speeds (left, right) rad/s, body velocity (v m/s, ω rad/s)."""

@@ -19,7 +19,7 @@ True
 from __future__ import annotations
 
 import warnings
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, fields
 from os import PathLike
 from typing import TYPE_CHECKING, Any
 
@@ -46,61 +46,65 @@ __all__ = [
     "theta5_ripple_case",
 ]
 
+# The one axis schema is Rust's (``ttcan::AxisConfig``, serde): the dataclasses below take their
+# defaults from it, ``Servo`` places their fields in it by name, and tests/test_motor.py checks
+# that their fields and its entries agree.
 _D = ServoSim.defaults()
+_M = _D["model"]
 
 
 @dataclass(frozen=True)
 class DcMotor:
     """Brushed DC motor at its shaft (defaults: maxon RE 25, 24 V winding)."""
 
-    resistance: float = _D["resistance"]  # terminal resistance, Ω
-    inductance: float = _D["inductance"]  # terminal inductance, H
-    torque_constant: float = _D["torque_constant"]  # N·m/A
-    back_emf_constant: float = _D["back_emf_constant"]  # V·s/rad
-    rotor_inertia: float = _D["rotor_inertia"]  # kg·m²
-    viscous_friction: float = _D["viscous_friction"]  # N·m·s/rad
-    coulomb_friction: float = _D["coulomb_friction"]  # N·m
+    resistance: float = _M["motor"]["resistance"]  # terminal resistance, Ω
+    inductance: float = _M["motor"]["inductance"]  # terminal inductance, H
+    torque_constant: float = _M["motor"]["torque_constant"]  # N·m/A
+    back_emf_constant: float = _M["motor"]["back_emf_constant"]  # V·s/rad
+    rotor_inertia: float = _M["motor"]["rotor_inertia"]  # kg·m²
+    viscous_friction: float = _M["motor"]["viscous_friction"]  # N·m·s/rad
+    coulomb_friction: float = _M["motor"]["coulomb_friction"]  # N·m
 
 
 @dataclass(frozen=True)
 class Gearbox:
     """Gearbox, ω_motor = ratio · ω_output (defaults: maxon GP 26 A 14:1)."""
 
-    ratio: float = _D["gear_ratio"]  # motor turns per output turn
-    efficiency: float = _D["gear_efficiency"]  # in (0, 1]
-    inertia: float = _D["gear_inertia"]  # kg·m² at the motor shaft
+    ratio: float = _M["gearbox"]["ratio"]  # motor turns per output turn
+    efficiency: float = _M["gearbox"]["efficiency"]  # in (0, 1]
+    inertia: float = _M["gearbox"]["inertia"]  # kg·m² at the motor shaft
 
 
 @dataclass(frozen=True)
 class Load:
     """Rigid load on the output shaft."""
 
-    inertia: float = _D["load_inertia"]  # kg·m² about the output axis
-    viscous_friction: float = _D["load_viscous_friction"]  # N·m·s/rad at the output
+    inertia: float = _M["load"]["inertia"]  # kg·m² about the output axis
+    viscous_friction: float = _M["load"]["viscous_friction"]  # N·m·s/rad at the output
 
 
 @dataclass(frozen=True)
 class Drive:
     """Power stage and sensors."""
 
-    bus_voltage: float = _D["bus_voltage"]  # V
-    max_duty: float = _D["max_duty"]  # largest |duty| in (0, 1]
-    encoder_counts_per_rev: int = _D["encoder_counts_per_rev"]  # counts per motor turn (quadrature)
-    current_noise: float = _D["current_noise"]  # current-sense noise standard deviation, A
+    bus_voltage: float = _M["bus_voltage"]  # V
+    max_duty: float = _M["max_duty"]  # largest |duty| in (0, 1]
+    encoder_counts_per_rev: int = _M["encoder_counts_per_rev"]  # counts per motor turn (quadrature)
+    current_noise: float = _M["current_noise"]  # current-sense noise standard deviation, A
 
 
 @dataclass(frozen=True)
 class Loops:
     """Loop rates, tuning targets, limits and switches of the cascade."""
 
-    current_hz: float = _D["current_hz"]  # current-loop (PWM) rate
-    speed_hz: float = _D["speed_hz"]  # must divide current_hz
-    position_hz: float = _D["position_hz"]  # must divide speed_hz
-    current_bandwidth_hz: float = _D["current_bandwidth_hz"]  # ≤ current_hz / 6
-    speed_symmetric_optimum: float = _D["speed_symmetric_optimum"]  # a ≥ 2
-    speed_output_filter_hz: float = _D["speed_output_filter_hz"]
-    position_ratio: float = _D["position_ratio"]  # speed crossover / position gain
-    observer_bandwidth_hz: float = _D["observer_bandwidth_hz"]  # tracking observer (speed/position estimate)
+    current_hz: float = _D["rates"]["current_hz"]  # current-loop (PWM) rate
+    speed_hz: float = _D["rates"]["speed_hz"]  # must divide current_hz
+    position_hz: float = _D["rates"]["position_hz"]  # must divide speed_hz
+    current_bandwidth_hz: float = _D["tuning"]["current_bandwidth_hz"]  # ≤ current_hz / 6
+    speed_symmetric_optimum: float = _D["tuning"]["speed_symmetric_optimum"]  # a ≥ 2
+    speed_output_filter_hz: float = _D["tuning"]["speed_output_filter_hz"]
+    position_ratio: float = _D["tuning"]["position_ratio"]  # speed crossover / position gain
+    observer_bandwidth_hz: float = _D["tuning"]["observer_bandwidth_hz"]  # tracking observer
     speed_reference_filter_hz: float | None = _D["speed_reference_filter_hz"]  # None: 1/(2π a T_σ)
     continuous_current: float = _D["continuous_current"]  # A
     peak_current: float = _D["peak_current"]  # A
@@ -132,11 +136,46 @@ class Loops:
                 )
 
 
-def _flat(motor: DcMotor, gearbox: Gearbox, load: Load, drive: Drive) -> dict[str, Any]:
-    out: dict[str, Any] = asdict(motor)
-    out.update({f"gear_{k}": v for k, v in asdict(gearbox).items()})
-    out.update({f"load_{k}": v for k, v in asdict(load).items()})
-    out.update(asdict(drive))
+def _model(motor: DcMotor, gearbox: Gearbox, load: Load, drive: Drive) -> dict[str, Any]:
+    """The parts as ``ttcan::MotorModel``'s entries (``ServoSim.defaults()["model"]``)."""
+    return {"motor": asdict(motor), "gearbox": asdict(gearbox), "load": asdict(load), **asdict(drive)}
+
+
+def _axis(loops: Loops) -> dict[str, Any]:
+    """``loops`` as ``ttcan::AxisConfig``'s entries: each field goes to the section (``rates``,
+    ``tuning``) of the Rust schema that holds its name, else to the top level."""
+    out: dict[str, Any] = {"rates": {}, "tuning": {}}
+    for name, value in asdict(loops).items():
+        if name in ("speed_window", "peak_duration"):  # deprecated, ignored
+            continue
+        section = next((s for s in ("rates", "tuning") if name in _D[s]), None)
+        (out[section] if section else out)[name] = value
+    return out
+
+
+# The flat plant keys of the previous release ("resistance", "gear_ratio", "load_inertia", ...) by
+# the dataclass fields they name; they keep working one release with a DeprecationWarning.
+_FLAT_PLANT = {
+    **{f.name: ("motor", f.name) for f in fields(DcMotor)},
+    **{f"gear_{f.name}": ("gearbox", f.name) for f in fields(Gearbox)},
+    **{f"load_{f.name}": ("load", f.name) for f in fields(Load)},
+}
+
+
+def _plant_entries(plant: dict[str, Any]) -> dict[str, Any]:
+    """A plant dict in ``ServoSim.defaults()["model"]``'s nested shape; flat keys are moved in."""
+    out = {k: v for k, v in plant.items() if k not in _FLAT_PLANT}
+    flat = [k for k in plant if k in _FLAT_PLANT]
+    if flat:
+        warnings.warn(
+            f"flat plant keys ({', '.join(flat)}) are deprecated; use the nested form of "
+            'Servo().params["model"], e.g. {"motor": {"resistance": ...}}',
+            DeprecationWarning,
+            stacklevel=3,
+        )
+    for k in flat:
+        section, name = _FLAT_PLANT[k]
+        out.setdefault(section, {})[name] = plant[k]
     return out
 
 
@@ -214,17 +253,12 @@ class Servo:
         plant: DcMotor | Gearbox | Load | Drive | dict[str, Any] | None = None,
     ) -> None:
         parts = (motor or DcMotor(), gearbox or Gearbox(), load or Load(), drive or Drive())
-        params = _flat(*parts)
-        loop_params = asdict(loops or Loops())
-        loop_params.pop("speed_window")
-        loop_params.pop("peak_duration")
-        params.update(loop_params)
+        params = {"model": _model(*parts), **_axis(loops or Loops())}
         plant_params = None
         if isinstance(plant, dict):
-            plant_params = dict(plant)
+            plant_params = _plant_entries(plant)
         elif plant is not None:
-            swapped = [plant if type(plant) is type(p) else p for p in parts]
-            plant_params = _flat(*swapped)
+            plant_params = _model(*[plant if type(plant) is type(p) else p for p in parts])
         self._sim = ServoSim(params, plant_params)
 
     @property
@@ -239,7 +273,8 @@ class Servo:
 
     @property
     def params(self) -> dict[str, Any]:
-        """The controller's parameters as the flat dict the native layer uses."""
+        """The controller's parameters: ``ttcan::AxisConfig`` as a nested dict (``model`` with
+        ``motor``, ``gearbox``, ``load``; ``rates``; ``tuning``; ``thermal``; ratings, limits, ...)."""
         return self._sim.params
 
     def step_response(
@@ -248,14 +283,29 @@ class Servo:
         """Step of ``amplitude`` in 'current' (A), 'velocity' (rad/s) or 'position' (rad) mode."""
         return Response._from_native(self._sim.step(kind, amplitude, duration, external_torque, seed))
 
+    def follow(
+        self, q, qd, qdd, settle: float = 0.0, external_torque: float = 0.0, seed: int = 7
+    ) -> Response:
+        """Follows (q, qd, qdd) given at the position-loop rate from rest at q[0], then holds the end
+        for ``settle`` s (``ttcan::Simulation::follow``)."""
+        return Response._from_native(self._sim.follow(q, qd, qdd, settle, external_torque, seed))
+
+    def follow_quintic(self, distance: float, duration: float, settle: float = 0.05) -> Response:
+        """Follows a rest-to-rest quintic of ``distance`` rad in ``duration`` s from 0."""
+        _, q, qd, qdd = quintic(distance, duration, self.rates[2])
+        return self.follow(q, qd, qdd, settle=settle)
+
     def track(self, q, qd, qdd, settle: float = 0.0, external_torque: float = 0.0, seed: int = 7) -> Response:
-        """Tracks (q, qd, qdd) given at the position-loop rate, then holds the end for ``settle`` s."""
-        return Response._from_native(self._sim.trajectory(q, qd, qdd, settle, external_torque, seed))
+        """Deprecated name of :meth:`follow` ("track" is CLIK tracking; see the glossary)."""
+        warnings.warn("Servo.track is deprecated; use Servo.follow", DeprecationWarning, stacklevel=2)
+        return self.follow(q, qd, qdd, settle, external_torque, seed)
 
     def track_quintic(self, distance: float, duration: float, settle: float = 0.05) -> Response:
-        """Tracks a rest-to-rest quintic of ``distance`` rad in ``duration`` s from 0."""
-        _, q, qd, qdd = quintic(distance, duration, self.rates[2])
-        return self.track(q, qd, qdd, settle=settle)
+        """Deprecated name of :meth:`follow_quintic`."""
+        warnings.warn(
+            "Servo.track_quintic is deprecated; use Servo.follow_quintic", DeprecationWarning, stacklevel=2
+        )
+        return self.follow_quintic(distance, duration, settle)
 
     def __repr__(self) -> str:
         return repr(self._sim)

@@ -2,7 +2,7 @@
 //! with the duty the axis computed from the measurement taken at the start of that period.
 
 use crate::axis::{Axis, AxisConfig, AxisState, Mode};
-use crate::error::{Error, Result};
+use crate::error::{finite, Error, Result};
 use crate::motor::{MotorModel, Plant};
 use crate::schedule::Scheduler;
 
@@ -15,6 +15,17 @@ pub enum Setpoint {
     Velocity(f64),
     /// Output position, velocity, acceleration: rad, rad/s, rad/s².
     Position(f64, f64, f64),
+}
+
+impl Setpoint {
+    /// The step of `amplitude` in `mode`: A, rad/s, or rad (with zero velocity and acceleration).
+    pub fn step(mode: Mode, amplitude: f64) -> Setpoint {
+        match mode {
+            Mode::Current => Setpoint::Current(amplitude),
+            Mode::Velocity => Setpoint::Velocity(amplitude),
+            Mode::Position => Setpoint::Position(amplitude, 0.0, 0.0),
+        }
+    }
 }
 
 /// Recorded signals, one sample per current-loop period (before the step is applied).
@@ -67,6 +78,20 @@ impl Trace {
     pub fn is_empty(&self) -> bool {
         self.time.is_empty()
     }
+
+    /// Appends `tail`, recorded after this trace, to it.
+    pub fn append(&mut self, tail: Trace) {
+        self.time.extend(tail.time);
+        self.current.extend(tail.current);
+        self.current_reference.extend(tail.current_reference);
+        self.duty.extend(tail.duty);
+        self.speed.extend(tail.speed);
+        self.speed_reference.extend(tail.speed_reference);
+        self.position.extend(tail.position);
+        self.position_reference.extend(tail.position_reference);
+        self.following_error.extend(tail.following_error);
+        self.state.extend(tail.state);
+    }
 }
 
 /// 10 %–90 % rise time of `y` (sampled at times `t`, s) towards `target` (≠ 0): the time from the
@@ -84,6 +109,27 @@ pub fn rise_time(t: &[f64], y: &[f64], target: f64) -> f64 {
 /// for an empty signal. The one definition of overshoot in ttmanip (Rust and Python).
 pub fn overshoot(y: &[f64], target: f64) -> f64 {
     y.iter().map(|v| v / target).fold(f64::NAN, f64::max) - 1.0
+}
+
+/// (10–90 % rise time in s, overshoot as a fraction) of `y` sampled at times `t` (s) towards
+/// `target`: [`rise_time`] and [`overshoot`] with their arguments checked (equal lengths, a
+/// finite target ≠ 0).
+pub fn step_metrics(t: &[f64], y: &[f64], target: f64) -> Result<(f64, f64)> {
+    if t.len() != y.len() {
+        return Err(Error::InvalidParameter {
+            what: "signal length".into(),
+            value: y.len() as f64,
+            reason: format!("t and y must have equal lengths (got {} and {})", t.len(), y.len()),
+        });
+    }
+    if finite("step target", target)? == 0.0 {
+        return Err(Error::InvalidParameter {
+            what: "step target".into(),
+            value: target,
+            reason: "must be ≠ 0".into(),
+        });
+    }
+    Ok((rise_time(t, y, target), overshoot(y, target)))
 }
 
 /// One axis controlling one simulated actuator.
@@ -164,31 +210,49 @@ impl Simulation {
         Ok(trace)
     }
 
+    /// Step response: enables the axis in `mode` and holds [`Setpoint::step`] of `amplitude` for
+    /// `duration` s, with `external_torque` (N·m at the output) acting throughout. Every argument
+    /// is checked (finite, duration ≥ 0) before anything runs.
+    pub fn step_response(&mut self, mode: Mode, amplitude: f64, duration: f64, external_torque: f64) -> Result<Trace> {
+        finite("step amplitude", amplitude)?;
+        finite("external torque (N·m)", external_torque)?;
+        self.periods_in(duration)?;
+        self.plant.set_external_torque(external_torque);
+        self.enable(mode);
+        let setpoint = Setpoint::step(mode, amplitude);
+        self.run(duration, |_| setpoint)
+    }
+
+    /// Follows a position trajectory (q, qd, qdd: rad, rad/s, rad/s², at least one sample, given
+    /// at the position-loop rate as in [`Simulation::run_position`]) from rest at q[0] in position
+    /// mode, then holds its last sample for `settle` s; `external_torque` (N·m at the output) acts
+    /// throughout. Every argument is checked before anything runs.
+    pub fn follow(&mut self, q: &[f64], qd: &[f64], qdd: &[f64], settle: f64, external_torque: f64) -> Result<Trace> {
+        check_trajectory(q, qd, qdd)?;
+        let (Some(&q0), Some(&q_end), Some(&qd_end), Some(&qdd_end)) = (q.first(), q.last(), qd.last(), qdd.last())
+        else {
+            return Err(Error::InvalidParameter {
+                what: "trajectory length".into(),
+                value: 0.0,
+                reason: "must hold at least one sample".into(),
+            });
+        };
+        finite("external torque (N·m)", external_torque)?;
+        self.periods_in(settle)?;
+        self.plant.set_external_torque(external_torque);
+        self.plant.set_output_state(q0, 0.0);
+        self.enable(Mode::Position);
+        let mut trace = self.run_position(q, qd, qdd)?;
+        trace.append(self.run(settle, |_| Setpoint::Position(q_end, qd_end, qdd_end))?);
+        Ok(trace)
+    }
+
     /// Runs a position trajectory given at the position-loop rate: sample k of (q, qd, qdd) (rad,
     /// rad/s, rad/s²) is handed to the axis just before its k-th position-loop step from now, and
     /// the run ends after the position period of the last sample. All three must have the same length and
     /// be finite (checked before anything runs).
     pub fn run_position(&mut self, q: &[f64], qd: &[f64], qdd: &[f64]) -> Result<Trace> {
-        if qd.len() != q.len() || qdd.len() != q.len() {
-            return Err(Error::InvalidParameter {
-                what: "trajectory length".into(),
-                value: q.len() as f64,
-                reason: format!(
-                    "q, qd, qdd must have equal lengths (got {}, {}, {})",
-                    q.len(),
-                    qd.len(),
-                    qdd.len()
-                ),
-            });
-        }
-        for (name, v) in [("q", q), ("qd", qd), ("qdd", qdd)] {
-            if let Some(k) = v.iter().position(|x| !x.is_finite()) {
-                return Err(Error::NonFinite {
-                    what: format!("trajectory {name}[{k}]"),
-                    value: v[k],
-                });
-            }
-        }
+        check_trajectory(q, qd, qdd)?;
         let per = self.axis.rates().position_ticks() as usize;
         let mut trace = Trace::with_capacity(q.len() * per);
         let mut k = 0;
@@ -232,5 +296,127 @@ impl Simulation {
             AxisState::Stopping(_) => 2,
             AxisState::Faulted(_) => 3,
         });
+    }
+}
+
+/// Checks a position trajectory (q, qd, qdd): equal lengths, every sample finite.
+fn check_trajectory(q: &[f64], qd: &[f64], qdd: &[f64]) -> Result<()> {
+    if qd.len() != q.len() || qdd.len() != q.len() {
+        return Err(Error::InvalidParameter {
+            what: "trajectory length".into(),
+            value: q.len() as f64,
+            reason: format!(
+                "q, qd, qdd must have equal lengths (got {}, {}, {})",
+                q.len(),
+                qd.len(),
+                qdd.len()
+            ),
+        });
+    }
+    for (name, v) in [("q", q), ("qd", qd), ("qdd", qdd)] {
+        if let Some(k) = v.iter().position(|x| !x.is_finite()) {
+            return Err(Error::NonFinite {
+                what: format!("trajectory {name}[{k}]"),
+                value: v[k],
+            });
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sim() -> Simulation {
+        let config = AxisConfig::new(MotorModel::maxon_re25_gp26());
+        Simulation::new(&config.model, &config).unwrap()
+    }
+
+    fn ramp(n: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+        let q = (0..n).map(|k| 0.2 + 1e-3 * k as f64).collect();
+        (q, vec![1.0; n], vec![0.0; n])
+    }
+
+    #[test]
+    fn follow_is_the_trajectory_from_rest_then_the_held_last_sample() {
+        let (q, qd, qdd) = ramp(50);
+        let got = sim().follow(&q, &qd, &qdd, 0.02, 0.01).unwrap();
+        let mut s = sim();
+        s.plant.set_external_torque(0.01);
+        s.plant.set_output_state(q[0], 0.0);
+        s.enable(Mode::Position);
+        let mut want = s.run_position(&q, &qd, &qdd).unwrap();
+        let n_path = want.len();
+        want.append(s.run(0.02, |_| Setpoint::Position(q[49], 1.0, 0.0)).unwrap());
+        assert_eq!(got, want);
+        assert_eq!(got.len(), n_path + 400, "20 ms of hold at 20 kHz");
+        assert_eq!(got.position_reference.last(), Some(&q[49]));
+    }
+
+    #[test]
+    fn follow_checks_everything_before_it_runs() {
+        let (q, qd, qdd) = ramp(5);
+        let mut s = sim();
+        assert!(matches!(
+            s.follow(&[], &[], &[], 0.0, 0.0),
+            Err(Error::InvalidParameter { .. })
+        ));
+        assert!(matches!(
+            s.follow(&q, &qd[..4], &qdd, 0.0, 0.0),
+            Err(Error::InvalidParameter { .. })
+        ));
+        let mut bad = qd.clone();
+        bad[3] = f64::NAN;
+        let e = s.follow(&q, &bad, &qdd, 0.0, 0.0).unwrap_err();
+        assert!(e.to_string().contains("qd[3]"), "{e}");
+        assert!(matches!(
+            s.follow(&q, &qd, &qdd, -1.0, 0.0),
+            Err(Error::InvalidParameter { .. })
+        ));
+        assert!(matches!(
+            s.follow(&q, &qd, &qdd, 0.0, f64::INFINITY),
+            Err(Error::NonFinite { .. })
+        ));
+        assert_eq!(s.time(), 0.0, "nothing ran");
+    }
+
+    #[test]
+    fn step_response_holds_the_step_of_its_mode() {
+        let got = sim().step_response(Mode::Velocity, 5.0, 0.01, 0.0).unwrap();
+        let mut s = sim();
+        s.enable(Mode::Velocity);
+        assert_eq!(got, s.run(0.01, |_| Setpoint::Velocity(5.0)).unwrap());
+        assert_eq!(Setpoint::step(Mode::Position, 0.3), Setpoint::Position(0.3, 0.0, 0.0));
+        assert_eq!(Setpoint::step(Mode::Current, 0.3), Setpoint::Current(0.3));
+        let mut s = sim();
+        assert!(matches!(
+            s.step_response(Mode::Current, f64::NAN, 0.01, 0.0),
+            Err(Error::NonFinite { .. })
+        ));
+        assert!(matches!(
+            s.step_response(Mode::Current, 1.0, -0.01, 0.0),
+            Err(Error::InvalidParameter { .. })
+        ));
+        assert_eq!(s.time(), 0.0, "nothing ran");
+    }
+
+    #[test]
+    fn step_metrics_checks_its_arguments() {
+        let t = [0.0, 1.0, 2.0, 3.0];
+        let y = [0.0, 0.5, 1.0, 1.1];
+        let (rise, over) = step_metrics(&t, &y, 1.0).unwrap();
+        assert_eq!(rise, rise_time(&t, &y, 1.0));
+        assert!((over - 0.1).abs() < 1e-12);
+        assert!(step_metrics(&t, &y[..3], 1.0).is_err());
+        assert!(step_metrics(&t, &y, 0.0).is_err());
+        assert!(matches!(step_metrics(&t, &y, f64::NAN), Err(Error::NonFinite { .. })));
+    }
+
+    #[test]
+    fn modes_parse_from_the_names_users_type() {
+        assert_eq!("speed".parse::<Mode>(), Ok(Mode::Velocity));
+        assert_eq!("position".parse::<Mode>(), Ok(Mode::Position));
+        assert!("torque".parse::<Mode>().unwrap_err().contains("'torque'"));
     }
 }

@@ -35,7 +35,7 @@ use nalgebra::Complex;
 use std::f64::consts::PI;
 
 /// Gains of one loop and what they achieve.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct LoopReport {
     /// Proportional gain (V/A, A per rad/s, or 1/s for the position loop).
     pub kp: f64,
@@ -49,8 +49,8 @@ pub struct LoopReport {
     pub bandwidth_hz: f64,
 }
 
-/// Gains and reports of the whole cascade.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// Gains and reports of the whole cascade (serialised for reports: `current.kp`, …).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct CascadeTuning {
     /// Current loop (V/A).
     pub current: LoopReport,

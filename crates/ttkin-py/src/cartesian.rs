@@ -8,10 +8,11 @@ use pyo3::types::PyList;
 use ttkin::traj::cartesian::{CartesianState, CartesianTrajectory, TimeLaw};
 use ttkin::traj::Samples;
 
+use crate::convert::vector_of_len;
 use crate::convert::{pose_to_numpy, to_numpy, transform, vector, Any};
 use crate::errors::{Callback, PyResultExt};
 use crate::robot::PyRobot;
-use crate::traj::{any_vector, robot_limits, samples_to_py, violations_to_py};
+use crate::traj::{robot_limits, samples_to_py, violations_to_py};
 
 /// A task-space trajectory: tool pose (4×4, base frame, m) along a line or arc under a time law.
 #[pyclass(name = "CartesianTrajectory", module = "ttmanip", frozen)]
@@ -172,12 +173,12 @@ impl PyCartesianTrajectory {
 impl PyCartesianTrajectory {
     /// Joint samples through the Python callable `ik` (see `to_joint`).
     fn joint_samples<'py>(&self, py: Python<'py>, hz: f64, q_start: &Any<'py>, ik: &Any<'py>) -> PyResult<Samples> {
-        let q0 = any_vector(q_start, "q_start")?;
+        let q0 = vector_of_len(q_start, "q_start", 1)?;
         let n = q0.len();
         let callback = Callback::default();
         let result = self.inner.to_joint(hz, &q0, |pose, seed| {
             let call = ik.call1((pose_to_numpy(py, pose), to_numpy(py, &[n], seed)));
-            call.and_then(|r| any_vector(&r, "ik result"))
+            call.and_then(|r| vector_of_len(&r, "ik result", 1))
                 .map_err(|e| callback.error(py, e))
         });
         callback.finish(py, result)

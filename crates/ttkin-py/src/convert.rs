@@ -165,6 +165,19 @@ pub fn f64_array<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<F64Array<
     Ok(F64Array { array, precision })
 }
 
+/// Reads a vector (n,) of finite values of any length n ≥ `min` (1 for a state, 0 for a batch).
+pub fn vector_of_len(obj: &Bound<'_, PyAny>, what: &str, min: usize) -> PyResult<Vec<f64>> {
+    let a = f64_array(obj, what)?;
+    if !matches!(a.shape(), [n] if *n >= min) {
+        let got = a.shape_str();
+        return Err(ShapeError::new_err(format!(
+            "{what}: expected shape (n,) with n ≥ {min}, got {got}"
+        )));
+    }
+    ttkin::error::check_finite(what, a.data()).py()?;
+    Ok(a.data().to_vec())
+}
+
 /// Reads a vector of exactly `n` finite values.
 pub fn vector(obj: &Bound<'_, PyAny>, what: &str, n: usize) -> PyResult<Vec<f64>> {
     let a = f64_array(obj, what)?;

@@ -8,20 +8,11 @@ use ttcan::{CoupledOptions, CoupledSim};
 
 use crate::args;
 use crate::convert::{f64_array, to_numpy, vector};
-use crate::errors::{ModelError, NonFiniteError, TtmanipError};
+use crate::errors::{PyResultExt, TtmanipError};
 use crate::robot::PyRobot as Robot;
 
 /// The current-sense noise of the drives `CoupledSim::from_chain` builds, A.
 const DEFAULT_NOISE: f64 = 0.005;
-
-fn to_py(e: ttcan::Error) -> PyErr {
-    let msg = e.to_string();
-    match e {
-        ttcan::Error::NonFinite { .. } => NonFiniteError::new_err(msg),
-        ttcan::Error::InvalidParameter { .. } | ttcan::Error::Model(_) => ModelError::new_err(msg),
-        _ => TtmanipError::new_err(msg),
-    }
-}
 
 /// Every joint of a robot driven by its own current/speed/position cascade, on the robot's shared
 /// rigid-body mechanics (gravity included), stepped one current-loop period at a time.
@@ -45,17 +36,8 @@ impl DriveSim {
         seed: i128,
         ideal_current: bool,
     ) -> PyResult<Self> {
-        if !(setpoint_rate.is_finite() && setpoint_rate > 0.0) {
-            return Err(TtmanipError::new_err(format!(
-                "setpoint_rate: expected a finite rate > 0 Hz, got {setpoint_rate}"
-            )));
-        }
-        let noise = noise.unwrap_or(DEFAULT_NOISE);
-        if !(noise.is_finite() && noise >= 0.0) {
-            return Err(TtmanipError::new_err(format!(
-                "noise: expected a current-sense noise >= 0 A, got {noise}"
-            )));
-        }
+        let setpoint_rate = args::positive("setpoint_rate", setpoint_rate)?;
+        let noise = args::non_negative("noise", noise.unwrap_or(DEFAULT_NOISE))?;
         let options = CoupledOptions {
             gravity: if gravity {
                 ttkin::dynamics::EARTH_GRAVITY
@@ -69,7 +51,7 @@ impl DriveSim {
             ..CoupledOptions::default()
         };
         let q0 = vec![0.0; robot.chain.dof()];
-        let sim = CoupledSim::from_chain(&robot.chain, &q0, options).map_err(to_py)?;
+        let sim = CoupledSim::from_chain(&robot.chain, &q0, options).py()?;
         Ok(DriveSim {
             chain: robot.chain.clone(),
             options,
@@ -83,8 +65,8 @@ impl DriveSim {
         let n = self.sim.dof();
         let q0 = vector(q0, "q0", n)?;
         let qd0 = qd0.map(|v| vector(v, "qd0", n)).transpose()?;
-        let mut sim = CoupledSim::from_chain(&self.chain, &q0, self.options).map_err(to_py)?;
-        sim.reset(&q0, qd0.as_deref()).map_err(to_py)?;
+        let mut sim = CoupledSim::from_chain(&self.chain, &q0, self.options).py()?;
+        sim.reset(&q0, qd0.as_deref()).py()?;
         self.sim = sim;
         Ok(())
     }
@@ -110,7 +92,7 @@ impl DriveSim {
             .transpose()?
             .unwrap_or_else(|| zeros.clone());
         let tau = tau_ff.map(|v| vector(v, "tau_ff", n)).transpose()?;
-        self.sim.set_setpoint(&q, &qd, &qdd, tau.as_deref()).map_err(to_py)
+        self.sim.set_setpoint(&q, &qd, &qdd, tau.as_deref()).py()
     }
 
     /// Advances `n` current-loop periods.
@@ -202,7 +184,7 @@ impl DriveSim {
         let sim = &mut self.sim;
         let tr = py
             .detach(|| sim.run(&times, &q, &qd, &qdd, tau.as_deref(), period))
-            .map_err(to_py)?;
+            .py()?;
         let rows = tr.len();
         let d = PyDict::new(py);
         d.set_item("t", to_numpy(py, &[rows], &tr.t))?;
@@ -226,23 +208,8 @@ impl DriveSim {
 #[pyfunction]
 fn step_metrics(t: &Bound<'_, PyAny>, y: &Bound<'_, PyAny>, target: f64) -> PyResult<(f64, f64)> {
     let t = f64_array(t, "t")?;
-    let y = f64_array(y, "y")?;
-    if t.data().len() != y.data().len() {
-        return Err(crate::errors::ShapeError::new_err(format!(
-            "t and y: expected equal lengths, got {} and {}",
-            t.data().len(),
-            y.data().len()
-        )));
-    }
-    if !(target.is_finite() && target != 0.0) {
-        return Err(TtmanipError::new_err(format!(
-            "target: expected a finite value ≠ 0, got {target}"
-        )));
-    }
-    Ok((
-        ttcan::sim::rise_time(t.data(), y.data(), target),
-        ttcan::sim::overshoot(y.data(), target),
-    ))
+    let y = crate::convert::table(y, "y", t.data().len(), 1)?;
+    ttcan::sim::step_metrics(t.data(), &y, target).py()
 }
 
 /// Adds `DriveSim`, `drive_theta5_case`, `actuators` and `step_metrics` to the module.
@@ -258,12 +225,8 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 #[pyfunction]
 #[pyo3(signature = (setpoint_rate=1000.0))]
 fn drive_theta5_case<'py>(py: Python<'py>, setpoint_rate: f64) -> PyResult<Bound<'py, PyDict>> {
-    if !(setpoint_rate.is_finite() && setpoint_rate > 0.0) {
-        return Err(TtmanipError::new_err(format!(
-            "setpoint_rate: expected a finite rate > 0 Hz, got {setpoint_rate}"
-        )));
-    }
-    let c = py.detach(|| ttcan::cases::theta5_case(setpoint_rate)).map_err(to_py)?;
+    let setpoint_rate = args::positive("setpoint_rate", setpoint_rate)?;
+    let c = py.detach(|| ttcan::cases::theta5_case(setpoint_rate)).py()?;
     let d = PyDict::new(py);
     d.set_item("load_inertia", c.load_inertia)?;
     d.set_item("setpoint_rate", c.setpoint_hz)?;
@@ -288,8 +251,8 @@ fn drive_theta5_case<'py>(py: Python<'py>, setpoint_rate: f64) -> PyResult<Bound
 #[pyfunction]
 fn actuators<'py>(py: Python<'py>, robot: &Robot) -> PyResult<Vec<Bound<'py, PyDict>>> {
     let chain = &robot.chain;
-    let configs = ttcan::coupled::axis_configs_from_chain(chain, &vec![0.0; chain.dof()], &CoupledOptions::default())
-        .map_err(to_py)?;
+    let configs =
+        ttcan::coupled::axis_configs_from_chain(chain, &vec![0.0; chain.dof()], &CoupledOptions::default()).py()?;
     let mut out = Vec::with_capacity(configs.len());
     for (j, c) in chain.joints().iter().zip(&configs) {
         let d = PyDict::new(py);

@@ -7,7 +7,7 @@
 //! | --- | --- | --- | --- |
 //! | wrong length or shape | `Shape` | – | `ShapeError` |
 //! | NaN or infinity | `NonFinite` | `NonFinite` | `NonFiniteError` |
-//! | non-physical or inconsistent model / configuration | `Model` | `InvalidParameter`, `Rates`, `Stepper` | `ModelError` |
+//! | non-physical or inconsistent model / configuration | `Model` | `InvalidParameter`, `Rates`, `Stepper`, `Model` | `ModelError` |
 //! | robot file or URDF unreadable | `File`, `Urdf` | – | `RobotFileError` |
 //! | target proven out of reach | `Unreachable` | – | `UnreachableError` |
 //! | solver did not converge (maybe reachable) | (an [`IkStatus`]) | – | `NotConvergedError` |
@@ -109,7 +109,7 @@ pub fn ttcan_to_py(e: ttcan::Error) -> PyErr {
     let msg = e.to_string();
     match e {
         E::NonFinite { .. } => NonFiniteError::new_err(msg),
-        E::InvalidParameter { .. } | E::Rates(_) | E::Stepper(_) => ModelError::new_err(msg),
+        E::InvalidParameter { .. } | E::Rates(_) | E::Stepper(_) | E::Model(_) => ModelError::new_err(msg),
         _ => TtmanipError::new_err(msg),
     }
 }

@@ -8,6 +8,7 @@ use ttkin::redundancy::{Damping, Weighting, WlsStep};
 use ttkin::task::Task;
 use ttkin::wholebody::WholeBody;
 
+use crate::args;
 use crate::convert::{array_getters, f64_array, finite_to_numpy, to_numpy, transform, vector, Any, Array};
 use crate::errors::{PyResultExt, ShapeError, TtmanipError};
 use crate::robot::PyRobot;
@@ -23,11 +24,6 @@ pub struct PyDiffDrive {
 fn wheel_pair(obj: &Any<'_>, what: &str) -> PyResult<[f64; 2]> {
     let v = vector(obj, what, 2)?;
     Ok([v[0], v[1]])
-}
-
-fn finite(what: &str, v: f64) -> PyResult<f64> {
-    ttkin::error::check_finite(what, &[v]).py()?;
-    Ok(v)
 }
 
 #[ttkin_py_guard::guarded]
@@ -103,7 +99,9 @@ impl PyDiffDrive {
 
     /// Wheel speeds (left, right) in rad/s for a body velocity (v m/s, ω rad/s), shape (2,).
     fn wheel_speeds<'py>(&self, py: Python<'py>, v: f64, omega: f64) -> PyResult<Array<'py>> {
-        let w = self.drive.wheel_speeds(finite("v", v)?, finite("omega", omega)?);
+        let w = self
+            .drive
+            .wheel_speeds(args::finite("v", v)?, args::finite("omega", omega)?);
         finite_to_numpy(py, &[2], &w)
     }
 
@@ -235,10 +233,8 @@ fn wls_step<'py>(
     let model = model(robot, base.as_deref(), mount)?;
     let q = vector(q, "q", model.nq())?;
     let xdot = vector(xdot, "xdot", task.dim())?;
-    let prev = match qdot_prev {
-        Some(p) => vector(p, "qdot_prev", model.nu())?,
-        None => vec![0.0; model.nu()],
-    };
+    let prev = qdot_prev.map(|p| vector(p, "qdot_prev", model.nu())).transpose()?;
+    let prev = prev.unwrap_or_else(|| vec![0.0; model.nu()]);
     let mut step = WlsStep::new(&model, task, weighting, Damping::new(epsilon, damping).py()?).py()?;
     let (qd, _) = step.try_solve(&q, &xdot, &prev).py()?;
     finite_to_numpy(py, &[qd.len()], &qd)
@@ -387,10 +383,9 @@ fn track<'py>(
         None => TaskTrajectory::from_samples(task, rate_hz, x),
     }
     .py()?;
-    let input_weights = match input_weights {
-        Some(w) => Some(vector(w, "input_weights", model.nu())?),
-        None => None,
-    };
+    let input_weights = input_weights
+        .map(|w| vector(w, "input_weights", model.nu()))
+        .transpose()?;
     let options = ClikOptions {
         gain,
         weighting: Weighting::from_name(weights).py()?,

@@ -11,39 +11,9 @@ use ttkin::traj::limits::{KinematicLimits, Violation};
 use ttkin::traj::via::{self, ViaKind};
 use ttkin::traj::{JointState, JointTrajectory, Samples};
 
-use crate::convert::{f64_array, table, to_numpy, vector, zeros, Any, Array};
+use crate::convert::{f64_array, table, to_numpy, vector, vector_of_len, zeros, Any, Array};
 use crate::errors::{PyResultExt, ShapeError};
 use crate::robot::PyRobot;
-
-/// Reads a vector of any length ≥ 1 (finite values).
-pub(crate) fn any_vector(obj: &Any<'_>, what: &str) -> PyResult<Vec<f64>> {
-    let a = f64_array(obj, what)?;
-    match a.shape() {
-        [n] if *n > 0 => {
-            ttkin::error::check_finite(what, a.data()).py()?;
-            Ok(a.data().to_vec())
-        }
-        _ => Err(ShapeError::new_err(format!(
-            "{what}: expected shape (n,) with n ≥ 1, got {}",
-            a.shape_str()
-        ))),
-    }
-}
-
-/// Reads a batch of N ≥ 0 finite values (N = 0: an empty batch, an empty result).
-fn batch_vector(obj: &Any<'_>, what: &str) -> PyResult<Vec<f64>> {
-    let a = f64_array(obj, what)?;
-    match a.shape() {
-        [_] => {
-            ttkin::error::check_finite(what, a.data()).py()?;
-            Ok(a.data().to_vec())
-        }
-        _ => Err(ShapeError::new_err(format!(
-            "{what}: expected shape (N,), got {}",
-            a.shape_str()
-        ))),
-    }
-}
 
 fn opt_vector(obj: Option<&Any<'_>>, what: &str, n: usize) -> PyResult<Option<Vec<f64>>> {
     obj.map(|o| vector(o, what, n)).transpose()
@@ -151,7 +121,7 @@ impl PyJointTrajectory {
             })?;
             return Ok((q, qd, qdd).into_pyobject(py)?.into_any());
         }
-        let times = batch_vector(t, "t")?;
+        let times = vector_of_len(t, "t", 0)?;
         let s = self.inner.sample_times(&times).py()?;
         let m = times.len();
         Ok((
@@ -254,7 +224,7 @@ fn traj_cubic(
     v0: Option<&Any<'_>>,
     v1: Option<&Any<'_>>,
 ) -> PyResult<PyJointTrajectory> {
-    let q0 = any_vector(q0, "q0")?;
+    let q0 = vector_of_len(q0, "q0", 1)?;
     let n = q0.len();
     let q1 = vector(q1, "q1", n)?;
     let (v0, v1) = (opt_vector(v0, "v0", n)?, opt_vector(v1, "v1", n)?);
@@ -362,7 +332,7 @@ fn traj_via(
     v_end: Option<&Any<'_>>,
 ) -> PyResult<PyJointTrajectory> {
     let (p, m, n) = matrix(points, "points")?;
-    let t = any_vector(times, "times")?;
+    let t = vector_of_len(times, "times", 1)?;
     if t.len() != m {
         return Err(ShapeError::new_err(format!(
             "times: expected {m} times (one per via point), got {}",
@@ -435,7 +405,7 @@ fn traj_stroke<'py>(
     upper: Option<&Any<'py>>,
     return_duration: Option<f64>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let q = any_vector(&start.0, "state.q")?;
+    let q = vector_of_len(&start.0, "state.q", 1)?;
     let n = q.len();
     let state = |s: &(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>), w: &str| -> PyResult<JointState> {
         Ok(JointState {

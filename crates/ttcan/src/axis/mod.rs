@@ -37,6 +37,20 @@ pub enum Mode {
     Position,
 }
 
+impl std::str::FromStr for Mode {
+    type Err = String;
+
+    /// The names users type: `current`, `velocity` (or `speed`), `position`.
+    fn from_str(s: &str) -> std::result::Result<Mode, String> {
+        match s {
+            "current" => Ok(Mode::Current),
+            "velocity" | "speed" => Ok(Mode::Velocity),
+            "position" => Ok(Mode::Position),
+            other => Err(format!("expected 'current', 'velocity' or 'position', got '{other}'")),
+        }
+    }
+}
+
 /// State of the axis' power stage and fault machine.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum AxisState {
