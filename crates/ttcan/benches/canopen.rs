@@ -2,16 +2,14 @@
 //! and the controller's per-cycle work for 8 axes (4 channels × 2: read the TPDOs, watchdog,
 //! update, write RPDOs + SYNC). Budget: each ≤ 2 µs.
 
-#[path = "../tests/support/links.rs"]
-mod links;
+#[path = "../tests/support/channel.rs"]
+mod channel;
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::hint::black_box;
 use ttcan::bus::BusEvent;
-use ttcan::canopen::cia402::OpMode;
 use ttcan::canopen::nmt::{decode_sync, encode_sync};
-use ttcan::canopen::node::{DriveNode, NodeEvent};
 use ttcan::canopen::{Frame, Frames, Rpdo, Tpdo};
-use ttcan::runtime::master::{AxisSetpoint, ChannelMaster, Phase, WatchdogConfig};
+use ttcan::runtime::master::{AxisSetpoint, ChannelMaster};
 
 fn encode_decode(c: &mut Criterion) {
     c.bench_function("canopen_encode_decode_cycle_8_axes", |b| {
@@ -51,44 +49,8 @@ fn encode_decode(c: &mut Criterion) {
     });
 }
 
-/// A channel master brought to Run by two protocol-only drive nodes; returns it and the TPDOs the
-/// drives answer a steady-state SYNC with.
-fn running_channel() -> (ChannelMaster, Vec<BusEvent>) {
-    let links = links::two_links();
-    let mut m = ChannelMaster::new(&links, OpMode::Csp, WatchdogConfig::default()).unwrap();
-    let mut boot = Frames::new();
-    let mut nodes: Vec<DriveNode> = (1..=2).map(|n| DriveNode::new(n, &mut boot).unwrap()).collect();
-    let mut last = Vec::new();
-    for _ in 0..100 {
-        let mut out = Frames::new();
-        m.cycle(&[AxisSetpoint::default(); 2], &mut out);
-        last.clear();
-        for f in out.as_slice() {
-            for n in nodes.iter_mut() {
-                let mut back = Frames::new();
-                if n.on_frame(f, &mut back) == NodeEvent::Sync {
-                    n.on_sync(0, 0, 0, 1000, &mut back);
-                }
-                for g in back.as_slice() {
-                    let ev = BusEvent::Frame {
-                        frame: *g,
-                        timestamp_ns: 0,
-                    };
-                    m.on_event(&ev);
-                    last.push(ev);
-                }
-            }
-        }
-        if m.phase() == Phase::Run {
-            break;
-        }
-    }
-    assert_eq!(m.phase(), Phase::Run);
-    (m, last)
-}
-
 fn controller_cycle(c: &mut Criterion) {
-    let mut channels: Vec<(ChannelMaster, Vec<BusEvent>)> = (0..4).map(|_| running_channel()).collect();
+    let mut channels: Vec<(ChannelMaster, Vec<BusEvent>)> = (0..4).map(|_| channel::running_channel()).collect();
     let sp = [AxisSetpoint::default(); 2];
     c.bench_function("controller_cycle_8_axes", |b| {
         let mut out = Frames::new();

@@ -3,8 +3,8 @@
 //! both axes to a controlled stop with the right reason, without panics and without motion on
 //! stale data.
 
-#[path = "support/links.rs"]
-mod links;
+#[path = "support/channel.rs"]
+mod channel;
 use ttcan::bus::memory::{Faults, MemoryBus, MemoryPort};
 use ttcan::bus::CanBus;
 use ttcan::canopen::cia402::OpMode;
@@ -31,7 +31,7 @@ fn rig() -> Rig {
 fn rig_with(cfg: AxisConfig) -> Rig {
     let bus = MemoryBus::new();
     let master_port = bus.port();
-    let links = links::two_links();
+    let links = channel::two_links();
     let master = ChannelMaster::new(&links, OpMode::Csp, WatchdogConfig::default()).unwrap();
     let model = MotorModel::maxon_re25_gp26();
     let drives = (1..=2)
@@ -408,7 +408,7 @@ fn threaded(interrupt_after_ms: Option<u64>) -> ttcan::runtime::channel::Channel
     let bus = MemoryBus::new();
     let mut master_port = bus.port();
     let mut drive_port = bus.port();
-    let links = links::two_links();
+    let links = channel::two_links();
     // the test machine is shared: generous feedback watchdog, the timing is not what is tested here
     let wd = WatchdogConfig {
         feedback_cycles: 200,
