@@ -118,12 +118,19 @@ fn main() {
     let n: usize = args.get(1).map_or(10_000, |a| a.parse().expect("N"));
     let seed: u64 = args.get(2).map_or(0, |a| a.parse().expect("SEED"));
     let mut pl = HitPlanner::new(ttkin::robots::gantry6(), Flight::default()).expect("gantry6");
-    // Experiments: ROLLS="0,30,-30" (degrees), RETURN_TIMES="0.8,0.65,0.95" (s), CONTACT_OFFSET=0.03 (m).
+    // Experiments: ROLLS="0,30,-30" (degrees), RETURN_TIMES="0.8,0.65,0.95" (s), CONTACT_OFFSET=0.03 (m),
+    // READY=-1.85,0,0.255 (racket centre facing forward, m, world; also the region's).
     if let Ok(r) = std::env::var("ROLLS") {
         pl.rolls = r
             .split(',')
             .map(|d| d.parse::<f64>().expect("ROLLS").to_radians())
             .collect();
+    }
+    if let Ok(r) = std::env::var("READY") {
+        let c: Vec<f64> = r.split(',').map(|d| d.parse().expect("READY x,y,z (m, world)")).collect();
+        let pose = pl.base_pose(&Vector3::new(c[0], c[1], c[2]), &Vector3::x());
+        let ik = Analytic::for_chain(&pl.chain).expect("analytic IK");
+        pl.ready = ik.nearest(&pose, &pl.ready, LimitFilter::Enforce).expect("ready IK");
     }
     if let Ok(r) = std::env::var("CONTACT_OFFSET") {
         pl.contact_offset = r.parse().expect("CONTACT_OFFSET (m)");
