@@ -127,7 +127,10 @@ fn main() {
             .collect();
     }
     if let Ok(r) = std::env::var("READY") {
-        let c: Vec<f64> = r.split(',').map(|d| d.parse().expect("READY x,y,z (m, world)")).collect();
+        let c: Vec<f64> = r
+            .split(',')
+            .map(|d| d.parse().expect("READY x,y,z (m, world)"))
+            .collect();
         let pose = pl.base_pose(&Vector3::new(c[0], c[1], c[2]), &Vector3::x());
         let ik = Analytic::for_chain(&pl.chain).expect("analytic IK");
         pl.ready = ik.nearest(&pose, &pl.ready, LimitFilter::Enforce).expect("ready IK");
