@@ -185,6 +185,16 @@ fn main() {
         times.get(times.len() / 2).copied().unwrap_or(f64::NAN),
         times.iter().sum::<f64>() / times.len().max(1) as f64
     );
+    let median = |f: &dyn Fn(&rally::BallOutcome) -> f64| {
+        let mut v: Vec<f64> = out.iter().filter(|o| o.returned).map(f).filter(|x| x.is_finite()).collect();
+        v.sort_by(f64::total_cmp);
+        v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+    };
+    println!(
+        "returned: racket-centre error median {:.1} mm, landing error median {:.0} mm",
+        1e3 * median(&|o| o.racket_error),
+        1e3 * median(&|o| o.landing_error)
+    );
     if std::env::var_os("NO_DIAG").is_some() {
         return;
     }
