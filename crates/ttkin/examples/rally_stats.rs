@@ -186,7 +186,12 @@ fn main() {
         times.iter().sum::<f64>() / times.len().max(1) as f64
     );
     let median = |f: &dyn Fn(&rally::BallOutcome) -> f64| {
-        let mut v: Vec<f64> = out.iter().filter(|o| o.returned).map(f).filter(|x| x.is_finite()).collect();
+        let mut v: Vec<f64> = out
+            .iter()
+            .filter(|o| o.returned)
+            .map(f)
+            .filter(|x| x.is_finite())
+            .collect();
         v.sort_by(f64::total_cmp);
         v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
     };
