@@ -118,7 +118,7 @@ fn main() {
     let n: usize = args.get(1).map_or(10_000, |a| a.parse().expect("N"));
     let seed: u64 = args.get(2).map_or(0, |a| a.parse().expect("SEED"));
     let mut pl = HitPlanner::new(ttkin::robots::gantry6(), Flight::default()).expect("gantry6");
-    // Experiments: ROLLS="0,30,-30" (degrees), RETURN_TIMES="0.8,0.65,0.95" (s), CONTACT_OFFSET=0.03 (m),
+    // Experiments: ROLLS="0,30,-30" (degrees), RETURN_TIMES="0.8,0.65,0.95" (s), CONTACT_OFFSET=0.03 (m), CANDIDATES=3, GOOD_MARGIN=0.25,
     // READY=-1.85,0,0.255 (racket centre facing forward, m, world; also the region's).
     if let Ok(r) = std::env::var("ROLLS") {
         pl.rolls = r
@@ -134,6 +134,12 @@ fn main() {
         let pose = pl.base_pose(&Vector3::new(c[0], c[1], c[2]), &Vector3::x());
         let ik = Analytic::for_chain(&pl.chain).expect("analytic IK");
         pl.ready = ik.nearest(&pose, &pl.ready, LimitFilter::Enforce).expect("ready IK");
+    }
+    if let Ok(r) = std::env::var("CANDIDATES") {
+        pl.candidates = r.parse().expect("CANDIDATES");
+    }
+    if let Ok(r) = std::env::var("GOOD_MARGIN") {
+        pl.good_margin = r.parse().expect("GOOD_MARGIN");
     }
     if let Ok(r) = std::env::var("CONTACT_OFFSET") {
         pl.contact_offset = r.parse().expect("CONTACT_OFFSET (m)");
