@@ -158,3 +158,37 @@ impl HitPlanner {
         (turned <= hi + SLACK).then(|| turned.clamp(lo, hi))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::super::flight::Flight;
+    use super::*;
+    use nalgebra::Vector3;
+
+    #[test]
+    fn own_branch_filter_matches_the_ik_limit_filter() {
+        let pl = HitPlanner::new(crate::robots::gantry6(), Flight::default()).unwrap();
+        let mut rng = fastrand::Rng::with_seed(4);
+        let (mut some, mut none) = (0, 0);
+        for _ in 0..2000 {
+            let p = Vector3::new(-3.1 + 2.0 * rng.f64(), -1.1 + 2.2 * rng.f64(), 0.0 + 0.5 * rng.f64());
+            let (az, el) = (rng.f64() - 0.5, rng.f64() - 0.5);
+            let n = Vector3::new(el.cos() * az.cos(), el.cos() * az.sin(), el.sin());
+            let pose = pl.base_pose_rolled(&p, &n, 2.0 * rng.f64() - 1.0);
+            let hint = pl.ready.clone();
+            let ours: Vec<Vec<f64>> = pl.branches(&pose, Some(&hint)).collect();
+            match pl.ik.solve(&pose, Some(&hint), LimitFilter::Enforce) {
+                Ok(sols) => {
+                    some += 1;
+                    let theirs: Vec<Vec<f64>> = sols.iter().map(|q| q.to_vec()).collect();
+                    assert_eq!(ours, theirs);
+                }
+                Err(_) => {
+                    none += 1;
+                    assert!(ours.is_empty());
+                }
+            }
+        }
+        assert!(some > 100 && none > 100, "{some} placeable, {none} not");
+    }
+}
