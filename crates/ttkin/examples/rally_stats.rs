@@ -118,12 +118,28 @@ fn main() {
     let n: usize = args.get(1).map_or(10_000, |a| a.parse().expect("N"));
     let seed: u64 = args.get(2).map_or(0, |a| a.parse().expect("SEED"));
     let mut pl = HitPlanner::new(ttkin::robots::gantry6(), Flight::default()).expect("gantry6");
-    // Experiments: ROLLS="0,30,-30" (degrees), RETURN_TIMES="0.8,0.65,0.95" (s), CONTACT_OFFSET=0.03 (m).
+    // Experiments: ROLLS="0,30,-30" (degrees), RETURN_TIMES="0.8,0.65,0.95" (s), CONTACT_OFFSET=0.03 (m), CANDIDATES=3, GOOD_MARGIN=0.25,
+    // READY=-1.85,0,0.255 (racket centre facing forward, m, world; also the region's).
     if let Ok(r) = std::env::var("ROLLS") {
         pl.rolls = r
             .split(',')
             .map(|d| d.parse::<f64>().expect("ROLLS").to_radians())
             .collect();
+    }
+    if let Ok(r) = std::env::var("READY") {
+        let c: Vec<f64> = r
+            .split(',')
+            .map(|d| d.parse().expect("READY x,y,z (m, world)"))
+            .collect();
+        let pose = pl.base_pose(&Vector3::new(c[0], c[1], c[2]), &Vector3::x());
+        let ik = Analytic::for_chain(&pl.chain).expect("analytic IK");
+        pl.ready = ik.nearest(&pose, &pl.ready, LimitFilter::Enforce).expect("ready IK");
+    }
+    if let Ok(r) = std::env::var("CANDIDATES") {
+        pl.candidates = r.parse().expect("CANDIDATES");
+    }
+    if let Ok(r) = std::env::var("GOOD_MARGIN") {
+        pl.good_margin = r.parse().expect("GOOD_MARGIN");
     }
     if let Ok(r) = std::env::var("CONTACT_OFFSET") {
         pl.contact_offset = r.parse().expect("CONTACT_OFFSET (m)");
@@ -174,6 +190,21 @@ fn main() {
         "plan CPU time median {:.0} us, mean {:.0} us (rally wall {wall:.1} s)",
         times.get(times.len() / 2).copied().unwrap_or(f64::NAN),
         times.iter().sum::<f64>() / times.len().max(1) as f64
+    );
+    let median = |f: &dyn Fn(&rally::BallOutcome) -> f64| {
+        let mut v: Vec<f64> = out
+            .iter()
+            .filter(|o| o.returned)
+            .map(f)
+            .filter(|x| x.is_finite())
+            .collect();
+        v.sort_by(f64::total_cmp);
+        v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+    };
+    println!(
+        "returned: racket-centre error median {:.1} mm, landing error median {:.0} mm",
+        1e3 * median(&|o| o.racket_error),
+        1e3 * median(&|o| o.landing_error)
     );
     if std::env::var_os("NO_DIAG").is_some() {
         return;

@@ -316,6 +316,9 @@ fn target_off_the_table_is_an_error_and_unreachable_balls_a_status() {
     assert!(matches!(st, HitStatus::NoBounce | HitStatus::OutOfReach), "{st:?}");
 }
 
+/// Smallest return rate of the balls in reach asserted on the 120-ball sample (docs/ball.md).
+const RALLY_RATE: f64 = 0.85;
+
 #[test]
 fn rally_returns_most_balls_in_reach() {
     let pl = planner();
@@ -339,9 +342,10 @@ fn rally_returns_most_balls_in_reach() {
     statuses.sort();
     eprintln!("in reach {in_reach}/120, returned {returned}; failures {statuses:?}");
     // In reach by the robot's geometry and joint limits alone (`ttkin::ball::reach`), a bound no
-    // stroke meets for every ball (docs/ball.md); quintic strokes alone returned about 78 %.
+    // stroke meets for every ball (docs/ball.md); quintic strokes alone returned about 78 %, the
+    // planner before fallback targets and off-centre contacts 83 %.
     assert!(in_reach >= 90, "{in_reach}");
-    assert!(returned as f64 >= 0.82 * in_reach as f64, "{returned}/{in_reach}");
+    assert!(returned as f64 >= RALLY_RATE * in_reach as f64, "{returned}/{in_reach}");
     // Some of the returns were executed through a jerk-limited hit leg.
     assert!(out.iter().any(|o| o.returned && o.profile == "jerk"));
 }
@@ -390,4 +394,41 @@ fn ball_beyond_the_quintic_is_planned_and_executed_jerk_limited() {
         found += 1;
     }
     assert!(found >= 3, "only {found} jerk-limited hits in 200 balls");
+}
+
+#[test]
+fn wide_balls_are_returned_to_another_target_or_off_the_racket_centre() {
+    let pl = planner();
+    let target = [0.9, 0.0];
+    let mut rng = fastrand::Rng::with_seed(21);
+    let (mut moved_target, mut off_centre) = (0, 0);
+    for _ in 0..400 {
+        let s = rally::serve(&pl.flight, &mut rng, 30.0, 0.2);
+        let plan = pl.plan(&s, 0.2, target).unwrap();
+        let Some(hit) = plan.hit else { continue };
+        // Wherever it aims, the planned return lands on the opponent's half, and the contact point
+        // (ball centre − r·n) is on the face within `contact_offset` of the racket centre.
+        assert!(
+            pl.flight.table.on_opponent_half(hit.landing.x, hit.landing.y),
+            "{:?}",
+            hit.landing
+        );
+        let world = pl.placement.world_from_base() * hit.pose;
+        let n = world.rotation * Vector3::z();
+        assert!((n - hit.racket.normal).norm() < 1e-9);
+        let contact = hit.ball.p - pl.flight.model.radius * n;
+        let d = contact - world.translation.vector;
+        assert!(d.dot(&n).abs() < 1e-9 && d.norm() <= pl.contact_offset + 1e-9, "{d:?}");
+        if (hit.landing.xy() - Vector3::new(target[0], target[1], 0.0).xy()).norm() > 0.1 {
+            moved_target += 1;
+        }
+        if d.norm() > 1e-6 {
+            off_centre += 1;
+        }
+    }
+    eprintln!("{moved_target} returns to another target, {off_centre} off the racket centre");
+    assert!(
+        moved_target >= 2 && off_centre >= 2,
+        "{moved_target} other targets, {off_centre} off centre"
+    );
 }

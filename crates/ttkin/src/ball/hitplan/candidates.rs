@@ -4,7 +4,6 @@
 use super::super::flight::{BallState, Flight};
 use super::super::reach::{walk_after_bounce, Reach};
 use super::HitPlanner;
-use crate::ik::LimitFilter;
 use nalgebra::Vector3;
 
 impl HitPlanner {
@@ -43,9 +42,9 @@ impl HitPlanner {
         let n = (v_out - s.v).normalize();
         self.racket_centres(&s.p, &n).iter().any(|c| {
             self.rolls.iter().any(|&roll| {
-                self.ik
-                    .solve(&self.base_pose_rolled(c, &n, roll), None, LimitFilter::Enforce)
-                    .is_ok()
+                self.branches(&self.base_pose_rolled(c, &n, roll), None)
+                    .next()
+                    .is_some()
             })
         })
     }

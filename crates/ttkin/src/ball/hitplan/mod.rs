@@ -1,13 +1,16 @@
 //! Hit planning: where, when and how the robot hits the predicted ball so that it lands on a
 //! target on the opponent's half.
 //!
-//! 1. **Candidates.** The ball is predicted from its state (through its bounce on the robot's half)
-//!    and every 10 ms sample inside the hitting volume ([`Reach`], world frame; the same volume as
-//!    the reachable region of [`super::reach`]), after the bounce and at least
-//!    `min_stroke_time` after `now`, is a candidate; `candidates` of them, evenly spread, are tried
-//!    (up to 12 when none of those is feasible). One with no IK for the approximate normal (see
-//!    `roughly_placeable`) is skipped, and tried in full only when no other gives a hit.
-//! 2. **Outgoing velocity.** Shooting: the velocity v₀ with which the ball, spinning with its
+//! 1. **Candidates** (`candidates.rs`). The ball is predicted from its state (through its
+//!    bounce on the robot's half) and every 10 ms sample inside the hitting volume ([`Reach`],
+//!    world frame; the same volume as the reachable region of [`super::reach`]), after the bounce
+//!    and at least `min_stroke_time` after `now`, is a candidate; `candidates` of them, evenly
+//!    spread, are tried (up to 12 when none of those is feasible). Each aims at the requested
+//!    target or, when no racket with the approximate normal toward it has IK (see
+//!    `roughly_placeable`), at the nearest fallback target on the opponent's half that has one; a
+//!    candidate with none is tried in full only when no other gives a hit, and then the other
+//!    placeable targets of every candidate (at most `FALLBACK_ATTEMPTS` shooting solves).
+//! 2. **Outgoing velocity** (`shoot.rs`). Shooting: the velocity v₀ with which the ball, spinning with its
 //!    post-impact spin, is at (x_t, y_t, r) after the return flight time T: Broyden's method on the
 //!    3×3 map v₀ ↦ p(T), started from the drag-free solution with Jacobian T·I; T from
 //!    `return_times` in order until the flight clears the net and first touches the table at the
@@ -15,9 +18,9 @@
 //!    evaluation of the map solves the racket for its v₀ and flies the ball with that spin.
 //! 3. **Racket.** [`super::impact::Racket::solve`] gives the face normal and the racket velocity
 //!    (along the normal); the racket centre is the ball centre minus r·n (the ball touches the face
-//!    centre); the racket frame has its z axis on the face normal and its x axis (the handle) as
+//!    centre; only when that has no IK, `contact_offset` across the table in the face plane); the racket frame has its z axis on the face normal and its x axis (the handle) as
 //!    close to world up as possible (the convention of `python/ttmanip/pipeline.py`).
-//! 4. **Robot.** The pose (for each racket roll of `rolls` about the normal) and twist go to the
+//! 4. **Robot** (`robot.rs`). The pose (for each racket roll of `rolls` about the normal) and twist go to the
 //!    base frame ([`Placement`]), analytic IK (every branch within the limits), q̇ = J⁻¹·V, and the
 //!    hit leg from the stroke's start state at `now` to (q, q̇, q̈) at the hit ([`super::leg`]): a
 //!    quintic when its exact velocity, acceleration and jerk peaks are within the limits, else the

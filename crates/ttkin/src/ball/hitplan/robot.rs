@@ -6,8 +6,10 @@ use super::super::impact::RacketHit;
 use super::super::leg::{hit_leg, HitLeg};
 use super::super::reach::min_joint_time;
 use super::{Hit, HitPlanner};
-use crate::ik::{joint_velocity, LimitFilter};
+use crate::ik::{joint_velocity, LimitFilter, Solutions};
+use crate::joint::JointType;
 use crate::traj::JointState;
+use nalgebra::IsometryMatrix3;
 use nalgebra::Vector3;
 
 impl HitPlanner {
@@ -37,10 +39,8 @@ impl HitPlanner {
                 break;
             }
             let pose = self.base_pose_rolled(&centres[k], &racket.normal, roll);
-            let Ok(sols) = self.ik.solve(&pose, Some(&start.q), LimitFilter::Enforce) else {
-                continue;
-            };
-            for q in sols.iter() {
+            for q in self.branches(&pose, Some(&start.q)) {
+                let q = q.as_slice();
                 let Some((qd, leg, margin)) = self.stroke_margin(q, start, &twist, t_hit) else {
                     continue;
                 };
@@ -119,5 +119,76 @@ impl HitPlanner {
         }
         let lim = &self.limits;
         (0..q.len()).any(|i| min_joint_time(q[i] - start.q[i], lim.velocity[i], lim.acceleration[i]) > t_hit)
+    }
+
+    /// The analytic IK branches of the racket pose `pose` (base frame) within the joint position
+    /// limits, revolute angles moved by 2πk into them where that fits (the branches and values of
+    /// [`LimitFilter::Enforce`], without building its error message for the dropped ones: the
+    /// search asks for thousands of poses beyond the strokes).
+    pub(super) fn branches(
+        &self,
+        pose: &IsometryMatrix3<f64>,
+        hint: Option<&[f64]>,
+    ) -> impl Iterator<Item = Vec<f64>> + '_ {
+        let sols = self
+            .ik
+            .solve(pose, hint, LimitFilter::Off)
+            .unwrap_or_else(|_| Solutions::empty(self.chain.dof()));
+        (0..sols.len()).filter_map(move |b| {
+            sols.get(b)
+                .iter()
+                .enumerate()
+                .map(|(i, &q)| self.fit(i, q))
+                .collect::<Option<Vec<f64>>>()
+        })
+    }
+
+    /// Joint `i`'s value `q` inside its position limits (to 1e-12, then clamped), or a revolute
+    /// angle moved by the smallest 2πk that brings it above the lower limit when that fits.
+    fn fit(&self, i: usize, q: f64) -> Option<f64> {
+        const SLACK: f64 = 1e-12;
+        let (lo, hi) = (self.limits.lower[i], self.limits.upper[i]);
+        if q >= lo - SLACK && q <= hi + SLACK {
+            return Some(q.clamp(lo, hi));
+        }
+        if self.chain.joints()[i].kind() != JointType::Revolute || !lo.is_finite() {
+            return None;
+        }
+        let turned = q + std::f64::consts::TAU * ((lo - q) / std::f64::consts::TAU).ceil();
+        (turned <= hi + SLACK).then(|| turned.clamp(lo, hi))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::super::flight::Flight;
+    use super::*;
+    use nalgebra::Vector3;
+
+    #[test]
+    fn own_branch_filter_matches_the_ik_limit_filter() {
+        let pl = HitPlanner::new(crate::robots::gantry6(), Flight::default()).unwrap();
+        let mut rng = fastrand::Rng::with_seed(4);
+        let (mut some, mut none) = (0, 0);
+        for _ in 0..2000 {
+            let p = Vector3::new(-3.1 + 2.0 * rng.f64(), -1.1 + 2.2 * rng.f64(), 0.0 + 0.5 * rng.f64());
+            let (az, el) = (rng.f64() - 0.5, rng.f64() - 0.5);
+            let n = Vector3::new(el.cos() * az.cos(), el.cos() * az.sin(), el.sin());
+            let pose = pl.base_pose_rolled(&p, &n, 2.0 * rng.f64() - 1.0);
+            let hint = pl.ready.clone();
+            let ours: Vec<Vec<f64>> = pl.branches(&pose, Some(&hint)).collect();
+            match pl.ik.solve(&pose, Some(&hint), LimitFilter::Enforce) {
+                Ok(sols) => {
+                    some += 1;
+                    let theirs: Vec<Vec<f64>> = sols.iter().map(|q| q.to_vec()).collect();
+                    assert_eq!(ours, theirs);
+                }
+                Err(_) => {
+                    none += 1;
+                    assert!(ours.is_empty());
+                }
+            }
+        }
+        assert!(some > 100 && none > 100, "{some} placeable, {none} not");
     }
 }
