@@ -252,6 +252,37 @@ fn estimation_bad_input_gives_clear_errors() {
     let mut t2 = t.clone();
     t2[10] = t2[9];
     assert!(matches!(estimate(&t2, &p, &o), Err(EstimateError::Times { .. })));
+    for step in [0.0, -0.01, f64::NAN, 0.2] {
+        let bad = EstimateOptions { step, ..o };
+        assert!(matches!(
+            estimate(&t, &p, &bad),
+            Err(EstimateError::Option { what: "step", .. })
+        ));
+    }
+}
+
+#[test]
+fn estimation_step_does_not_change_the_fit() {
+    // The fit's integration step (10 ms by default) against a 1 ms one on the same noisy data:
+    // the model error it adds is far below the noise (σ = 2 mm).
+    let mut rng = fastrand::Rng::with_seed(11);
+    let fine_opts = EstimateOptions {
+        step: 0.001,
+        ..EstimateOptions::default()
+    };
+    for seed in 0..10 {
+        let s = rally::serve(&fine(), &mut rng, 40.0, 0.2);
+        let (t, p, _) = observe(&s, 0.002, 41, true, seed);
+        let a = estimate(&t, &p, &EstimateOptions::default()).unwrap();
+        let b = estimate(&t, &p, &fine_opts).unwrap();
+        // Both stop within 2 % of a standard deviation of the optimum: compare at 10 %.
+        let sd_p = (a.covariance[0][0] + a.covariance[1][1] + a.covariance[2][2]).sqrt();
+        let sd_v = (a.covariance[3][3] + a.covariance[4][4] + a.covariance[5][5]).sqrt();
+        let (dp, dv) = ((a.state.p - b.state.p).norm(), (a.state.v - b.state.v).norm());
+        assert!(dp < 0.1 * sd_p, "{dp} vs σ {sd_p}");
+        assert!(dv < 0.1 * sd_v, "{dv} vs σ {sd_v}");
+        assert_eq!(a.outliers, b.outliers);
+    }
 }
 
 #[test]

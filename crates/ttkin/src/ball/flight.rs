@@ -1,10 +1,12 @@
 //! Ball flight: fixed-step RK4 on the model of [`super::model`] with event detection.
 //!
 //! After every step the guards are evaluated: distance to the table top minus the radius, the same
-//! for the net, height above the floor, and optionally a user plane. When one falls to ≤ 0 during a
-//! step, the event time is located by bisection on the step length (each trial one RK4 step from
-//! the start of the step, 48 halvings: below 1e-15 s) and the state just before the contact is
-//! returned. Table (surface) and edge contacts bounce ([`super::contact::impulse`]) and the flight
+//! for the net, height above the floor, and optionally a user plane (first by squared distances, no
+//! square root; the exact values only when one may have fired). When one falls to ≤ 0 during a
+//! step, the event time is located by bisection on the step's cubic Hermite interpolant of the
+//! position (from p and v at both ends; its error is h⁴·|p⁗|/384 ≈ 1e-12 m at 2 ms), 30 halvings
+//! (2e-12 s at 2 ms), and the state just before the contact is one RK4 step from the start of the
+//! step to there (stepped back until every armed guard is > 0 on that state). Table (surface) and edge contacts bounce ([`super::contact::impulse`]) and the flight
 //! goes on; net and floor contacts end it; a plane crossing is reported. RK4's global error is
 //! O(h⁴): at the default 2 ms step a 1 s flight is within 1e-6 m of a 0.05 ms reference (tested).
 
@@ -183,14 +185,34 @@ impl Flight {
         }
     }
 
-    fn guards(&self, s: &BallState, plane: Option<&Plane>) -> Guards {
+    fn guards(&self, p: &Vector3<f64>, plane: Option<&Plane>) -> Guards {
         let r = self.model.radius;
         Guards([
-            table_distance(&self.table, &s.p).0 - r,
-            net_distance(&self.table, &s.p).0 - r,
-            floor_distance(&self.table, &self.model, &s.p),
-            plane.map_or(f64::INFINITY, |pl| pl.distance(&s.p)),
+            table_distance(&self.table, p).0 - r,
+            net_distance(&self.table, p).0 - r,
+            floor_distance(&self.table, &self.model, p),
+            plane.map_or(f64::INFINITY, |pl| pl.distance(p)),
         ])
+    }
+
+    /// Whether an armed guard may be ≤ 0 at `p`: squared distances to the table top and the net
+    /// against (r + 1 nm)², no square root. False means no guard fired; true asks for [`Self::guards`].
+    fn may_fire(&self, armed: &[bool; 4], p: &Vector3<f64>, plane: Option<&Plane>) -> bool {
+        let t = &self.table;
+        let reach = self.model.radius + 1e-9;
+        let reach2 = reach * reach;
+        let (hl, hw) = (t.half_length(), t.half_width());
+        let outside = |x: f64, lo: f64, hi: f64| {
+            let d = x - x.clamp(lo, hi);
+            d * d
+        };
+        let table2 = outside(p.x, -hl, hl) + outside(p.y, -hw, hw) + outside(p.z, -t.thickness, 0.0);
+        let half = hw + t.net_overhang;
+        let net2 = outside(p.x, -0.001, 0.001) + outside(p.y, -half, half) + outside(p.z, 0.0, t.net_height);
+        (armed[0] && table2 <= reach2)
+            || (armed[1] && net2 <= reach2)
+            || (armed[2] && floor_distance(t, &self.model, p) <= 1e-9)
+            || (armed[3] && plane.is_some_and(|pl| pl.distance(p) <= 1e-9))
     }
 
     /// Integrates from `s` up to time `t_end` (s) or the first event, whichever comes first.
@@ -198,33 +220,70 @@ impl Flight {
     /// Guards already ≤ 0 at `s` are ignored (e.g. a ball resting on a plane it just crossed).
     pub fn advance(&self, s: &BallState, t_end: f64, plane: Option<&Plane>) -> (BallState, Option<Event>) {
         let mut cur = *s;
-        let g0 = self.guards(&cur, plane);
+        let g0 = self.guards(&cur.p, plane);
         let armed: [bool; 4] = std::array::from_fn(|k| g0.0[k] > 0.0);
         while cur.t < t_end {
             let h = self.step.min(t_end - cur.t);
             let next = self.rk4(&cur, h);
-            let g1 = self.guards(&next, plane);
-            if let Some(k) = fired(&armed, &g1) {
-                // Bisection on the step length: lo keeps every armed guard > 0, hi has one ≤ 0.
-                let (mut lo, mut hi) = (0.0, h);
-                let mut hit_k = k;
-                for _ in 0..48 {
-                    let mid = 0.5 * (lo + hi);
-                    let g = self.guards(&self.rk4(&cur, mid), plane);
-                    match fired(&armed, &g) {
-                        Some(kk) => {
-                            hi = mid;
-                            hit_k = kk;
-                        }
-                        None => lo = mid,
-                    }
+            if self.may_fire(&armed, &next.p, plane) {
+                if let Some(k) = fired(&armed, &self.guards(&next.p, plane)) {
+                    let (before, hit_k) = self.locate(&cur, &next, &armed, plane, k);
+                    return (self.apply(&before, hit_k), Some(self.event(before, hit_k)));
                 }
-                let before = if lo > 0.0 { self.rk4(&cur, lo) } else { cur };
-                return (self.apply(&before, hit_k), Some(self.event(before, hit_k)));
             }
             cur = next;
         }
         (cur, None)
+    }
+
+    /// The state just before guard `k` (or an earlier one) fires in the step `cur` → `next`, and
+    /// which guard fired: bisection on the cubic Hermite interpolant of the position, then one RK4
+    /// step from `cur`, stepped back until every armed guard is > 0 on it.
+    fn locate(
+        &self,
+        cur: &BallState,
+        next: &BallState,
+        armed: &[bool; 4],
+        plane: Option<&Plane>,
+        k: usize,
+    ) -> (BallState, usize) {
+        let h = next.t - cur.t;
+        let hermite = |tau: f64| {
+            let s = tau / h;
+            let (s2, s3) = (s * s, s * s * s);
+            cur.p * (2.0 * s3 - 3.0 * s2 + 1.0)
+                + cur.v * (h * (s3 - 2.0 * s2 + s))
+                + next.p * (3.0 * s2 - 2.0 * s3)
+                + next.v * (h * (s3 - s2))
+        };
+        // lo keeps every armed guard > 0 on the interpolant, hi has one ≤ 0.
+        let (mut lo, mut hi) = (0.0, h);
+        let mut hit_k = k;
+        for _ in 0..30 {
+            let mid = 0.5 * (lo + hi);
+            match fired(armed, &self.guards(&hermite(mid), plane)) {
+                Some(kk) => {
+                    hi = mid;
+                    hit_k = kk;
+                }
+                None => lo = mid,
+            }
+        }
+        let mut back = hi - lo;
+        loop {
+            if lo <= 0.0 {
+                return (*cur, hit_k);
+            }
+            let before = self.rk4(cur, lo);
+            match fired(armed, &self.guards(&before.p, plane)) {
+                None => return (before, hit_k),
+                Some(kk) => {
+                    hit_k = kk;
+                    lo -= back;
+                    back *= 2.0;
+                }
+            }
+        }
     }
 
     fn event(&self, before: BallState, k: usize) -> Event {
