@@ -6,10 +6,9 @@
 mod channel;
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::hint::black_box;
-use ttcan::bus::BusEvent;
 use ttcan::canopen::nmt::{decode_sync, encode_sync};
 use ttcan::canopen::{Frame, Frames, Rpdo, Tpdo};
-use ttcan::runtime::master::{AxisSetpoint, ChannelMaster};
+use ttcan::runtime::master::AxisSetpoint;
 
 fn encode_decode(c: &mut Criterion) {
     c.bench_function("canopen_encode_decode_cycle_8_axes", |b| {
@@ -50,24 +49,13 @@ fn encode_decode(c: &mut Criterion) {
 }
 
 fn controller_cycle(c: &mut Criterion) {
-    let mut channels: Vec<(ChannelMaster, Vec<BusEvent>)> = (0..4).map(|_| channel::running_channel()).collect();
+    let mut channels = channel::running_channels_8_axes();
     let sp = [AxisSetpoint::default(); 2];
     c.bench_function("controller_cycle_8_axes", |b| {
         let mut out = Frames::new();
-        b.iter(|| {
-            for (m, tpdos) in channels.iter_mut() {
-                for ev in tpdos.iter() {
-                    m.on_event(black_box(ev));
-                }
-                out.clear();
-                m.cycle(black_box(&sp), &mut out);
-                black_box(out.len());
-            }
-        })
+        b.iter(|| channel::cycle_all(&mut channels, &sp, &mut out))
     });
-    for (m, _) in &channels {
-        assert_eq!(m.stop_reason(), None, "the benchmarked channels stayed in Run");
-    }
+    channel::assert_all_in_run(&channels);
 }
 
 criterion_group!(benches, encode_decode, controller_cycle);

@@ -78,6 +78,19 @@ fn main() {
                 black_box(ttkin::traj::stroke(black_box(&start), &hit, 0.05, &ready, None, &limits).unwrap());
             });
         }
+        "wls" => {
+            // mobile8's base Jacobian: a fresh weighted least-norm solve, then a re-solve
+            let dof = m8.dof();
+            let jac = m8.jacobian(&q8, JacobianFrame::Base).unwrap();
+            let damping = ttkin::redundancy::Damping::new(1e-3, 0.1).unwrap();
+            let mut s = ttkin::redundancy::WlsSolver::new(6, dof, damping).unwrap();
+            let (w, lo, hi, mut qdot) = (vec![1.0; dof], vec![-1.0; dof], vec![1.0; dof], vec![0.0; dof]);
+            let xdot = [0.1, -0.2, 0.05, 0.0, 0.1, 0.0];
+            (0..n).for_each(|_| {
+                black_box(s.solve(jac.as_slice(), &w, black_box(&xdot), None, &lo, &hi, &mut qdot));
+                black_box(s.resolve(jac.as_slice(), black_box(&xdot), None, &lo, &hi, &mut qdot));
+            });
+        }
         other => panic!("unknown op {other}"),
     }
 }

@@ -68,6 +68,32 @@ fn models(u: &[f64]) -> Vec<Dynamics> {
         .collect()
 }
 
+/// `n` numbers in [0, 1), the proptests' raw draws.
+fn unit(n: usize) -> impl Strategy<Value = Vec<f64>> {
+    prop::collection::vec(0.0..1.0f64, n)
+}
+
+/// One model of `models(u)` with a fresh workspace and the joint state from `s` (rad, rad/s, rad/s²).
+struct Case {
+    dy: Dynamics,
+    d: DynamicsData,
+    q: Vec<f64>,
+    qd: Vec<f64>,
+    qdd: Vec<f64>,
+}
+
+/// Every model of `models(u)` at the state `state(chain, s)`.
+fn cases(u: &[f64], s: &[f64]) -> Vec<Case> {
+    models(u)
+        .into_iter()
+        .map(|dy| {
+            let d = DynamicsData::new(&dy);
+            let (q, qd, qdd) = state(dy.chain(), s);
+            Case { dy, d, q, qd, qdd }
+        })
+        .collect()
+}
+
 /// Scale of a vector for relative tolerances.
 fn scale(v: &DVector<f64>) -> f64 {
     1.0 + v.amax()
@@ -78,11 +104,9 @@ proptest! {
 
     #[test]
     fn rnea_equals_mass_matrix_times_qdd_plus_nonlinear_effects(
-        u in prop::collection::vec(0.0..1.0f64, 80), s in prop::collection::vec(0.0..1.0f64, 24)
+        u in unit(80), s in unit(24)
     ) {
-        for dy in models(&u) {
-            let mut d = DynamicsData::new(&dy);
-            let (q, qd, qdd) = state(dy.chain(), &s);
+        for Case { dy, mut d, q, qd, qdd } in cases(&u, &s) {
             let tau = dy.rnea(&mut d, &q, &qd, &qdd, &EARTH_GRAVITY, None).unwrap().clone();
             let h = dy.nonlinear_effects(&mut d, &q, &qd, &EARTH_GRAVITY).unwrap().clone();
             let c = dy.coriolis(&mut d, &q, &qd).unwrap().clone();
@@ -96,11 +120,9 @@ proptest! {
 
     #[test]
     fn mass_matrix_is_symmetric_positive_definite(
-        u in prop::collection::vec(0.0..1.0f64, 80), s in prop::collection::vec(0.0..1.0f64, 24)
+        u in unit(80), s in unit(24)
     ) {
-        for dy in models(&u) {
-            let mut d = DynamicsData::new(&dy);
-            let (q, _, _) = state(dy.chain(), &s);
+        for Case { dy, mut d, q, .. } in cases(&u, &s) {
             let m = dy.mass_matrix(&mut d, &q).unwrap().clone();
             prop_assert_eq!(&m, &m.transpose());
             let eig = m.clone().symmetric_eigenvalues();
@@ -124,13 +146,11 @@ proptest! {
 
     #[test]
     fn forward_dynamics_inverts_rnea(
-        u in prop::collection::vec(0.0..1.0f64, 80), s in prop::collection::vec(0.0..1.0f64, 24),
+        u in unit(80), s in unit(24),
         w in prop::collection::vec(-5.0..5.0f64, 6)
     ) {
         let wrench = Wrench { force: Vector3::new(w[0], w[1], w[2]), torque: Vector3::new(w[3], w[4], w[5]) };
-        for dy in models(&u) {
-            let mut d = DynamicsData::new(&dy);
-            let (q, qd, qdd) = state(dy.chain(), &s);
+        for Case { dy, mut d, q, qd, qdd } in cases(&u, &s) {
             let tau = dy.rnea(&mut d, &q, &qd, &qdd, &EARTH_GRAVITY, Some(&wrench)).unwrap().clone();
             let acc = dy.forward_dynamics(&mut d, &q, &qd, tau.as_slice(), &EARTH_GRAVITY, Some(&wrench)).unwrap();
             let err = (acc - DVector::from_column_slice(&qdd)).amax();
@@ -140,7 +160,7 @@ proptest! {
 
     #[test]
     fn tool_wrench_maps_through_the_transposed_tool_jacobian(
-        u in prop::collection::vec(0.0..1.0f64, 80), s in prop::collection::vec(0.0..1.0f64, 24),
+        u in unit(80), s in unit(24),
         w in prop::collection::vec(-5.0..5.0f64, 6)
     ) {
         let wrench = Wrench { force: Vector3::new(w[0], w[1], w[2]), torque: Vector3::new(w[3], w[4], w[5]) };
@@ -160,13 +180,11 @@ proptest! {
 
     #[test]
     fn kinetic_energy_rate_is_power_of_non_gravity_torques(
-        u in prop::collection::vec(0.0..1.0f64, 80), s in prop::collection::vec(0.0..1.0f64, 24)
+        u in unit(80), s in unit(24)
     ) {
         // Along q(t) = q + t·q̇ + t²/2·q̈: dT/dt = q̇ᵀ(τ − g(q)) with τ = RNEA(q, q̇, q̈).
         let h = 1e-5;
-        for dy in models(&u) {
-            let mut d = DynamicsData::new(&dy);
-            let (q, qd, qdd) = state(dy.chain(), &s);
+        for Case { dy, mut d, q, qd, qdd } in cases(&u, &s) {
             let at = |t: f64| -> (Vec<f64>, Vec<f64>) {
                 (
                     q.iter().zip(&qd).zip(&qdd).map(|((q, v), a)| q + t * v + 0.5 * t * t * a).collect(),
@@ -190,14 +208,12 @@ proptest! {
 
     #[test]
     fn gravity_torques_are_the_gradient_of_the_potential_energy(
-        u in prop::collection::vec(0.0..1.0f64, 80), s in prop::collection::vec(0.0..1.0f64, 24),
+        u in unit(80), s in unit(24),
         gdir in prop::collection::vec(-10.0..10.0f64, 3)
     ) {
         let grav = [gdir[0], gdir[1], gdir[2]];
         let h = 1e-6;
-        for dy in models(&u) {
-            let mut d = DynamicsData::new(&dy);
-            let (q, _, _) = state(dy.chain(), &s);
+        for Case { dy, mut d, q, .. } in cases(&u, &s) {
             let g = dy.gravity(&mut d, &q, &grav).unwrap().clone();
             for i in 0..q.len() {
                 let (mut qp, mut qm) = (q.clone(), q.clone());
@@ -210,7 +226,7 @@ proptest! {
     }
 
     #[test]
-    fn batch_calls_match_single_calls(u in prop::collection::vec(0.0..1.0f64, 80), s in prop::collection::vec(0.0..1.0f64, 24 * 5)) {
+    fn batch_calls_match_single_calls(u in unit(80), s in unit(24 * 5)) {
         for dy in models(&u) {
             let n = dy.dof();
             let mut d = DynamicsData::new(&dy);
@@ -508,31 +524,19 @@ fn bad_arguments_are_errors_not_panics() {
         dy.forward_dynamics(&mut d, &z, &z, &z, &EARTH_GRAVITY, Some(&w))
             .map(|_| ())
     ));
-    let mut rows = vec![0.0; 12];
-    assert!(nan_wrench(dy.rnea_batch(
-        &[0.0; 12],
-        &[0.0; 12],
-        &[0.0; 12],
-        &EARTH_GRAVITY,
-        Some(&w),
-        &mut rows
-    )));
-    assert!(nan_wrench(dy.inverse_dynamics_batch(
-        &[0.0; 12],
-        &[0.0; 12],
-        &[0.0; 12],
-        &EARTH_GRAVITY,
-        Some(&w),
-        &mut rows
-    )));
-    assert!(nan_wrench(dy.forward_dynamics_batch(
-        &[0.0; 12],
-        &[0.0; 12],
-        &[0.0; 12],
-        &EARTH_GRAVITY,
-        Some(&w),
-        &mut rows
-    )));
+    type Batch = fn(&Dynamics, &[f64], &[f64], &[f64], &[f64; 3], Option<&Wrench>, &mut [f64]) -> ttkin::Result<()>;
+    let batches: [(&str, Batch); 3] = [
+        ("rnea_batch", Dynamics::rnea_batch),
+        ("inverse_dynamics_batch", Dynamics::inverse_dynamics_batch),
+        ("forward_dynamics_batch", Dynamics::forward_dynamics_batch),
+    ];
+    for (name, batch) in batches {
+        let (x, mut out) = ([0.0; 12], [0.0; 12]);
+        assert!(
+            nan_wrench(batch(&dy, &x, &x, &x, &EARTH_GRAVITY, Some(&w), &mut out)),
+            "{name}"
+        );
+    }
     let (mut q, mut qd) = (z, z);
     assert!(dy
         .step(&mut d, &mut q, &mut qd, &z, 0.0, &EARTH_GRAVITY, false)

@@ -1,8 +1,9 @@
 //! One channel of two axes (nodes 1 and 2) for the CANopen tests, the bench and the
 //! instruction-count example: the axes as the controller sees them, and a controller brought to
-//! Run by protocol-only drive nodes.
+//! Run by protocol-only drive nodes, and the controller cycle the bench and the example measure.
 #![allow(dead_code)]
 
+use std::hint::black_box;
 use ttcan::bus::BusEvent;
 use ttcan::canopen::cia402::OpMode;
 use ttcan::canopen::node::{DriveNode, NodeEvent};
@@ -55,4 +56,29 @@ pub fn running_channel() -> (ChannelMaster, Vec<BusEvent>) {
     }
     assert_eq!(m.phase(), Phase::Run);
     (m, last)
+}
+
+/// Four channels of two axes (8 axes), each brought to Run with its steady-state TPDOs.
+pub fn running_channels_8_axes() -> Vec<(ChannelMaster, Vec<BusEvent>)> {
+    (0..4).map(|_| running_channel()).collect()
+}
+
+/// One controller cycle of every channel at the setpoints `sp`: read its drives' TPDOs,
+/// watchdog, update, write RPDOs and SYNC into `out` (cleared per channel).
+pub fn cycle_all(channels: &mut [(ChannelMaster, Vec<BusEvent>)], sp: &[AxisSetpoint], out: &mut Frames) {
+    for (m, tpdos) in channels.iter_mut() {
+        for ev in tpdos.iter() {
+            m.on_event(black_box(ev));
+        }
+        out.clear();
+        m.cycle(black_box(sp), out);
+        black_box(out.len());
+    }
+}
+
+/// Panics unless every channel is still in Run (no stop reason).
+pub fn assert_all_in_run(channels: &[(ChannelMaster, Vec<BusEvent>)]) {
+    for (m, _) in channels {
+        assert_eq!(m.stop_reason(), None, "the measured channels stayed in Run");
+    }
 }

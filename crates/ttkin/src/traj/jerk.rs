@@ -73,88 +73,100 @@ pub fn jerk_limited(
     if let Some(d) = minimum_duration {
         super::check_duration("minimum_duration", d)?;
     }
+    let stroke = Stroke {
+        start,
+        end,
+        limits,
+        minimum_duration,
+        position,
+    };
     match n {
-        6 => solve::<6>(start, end, limits, minimum_duration, position),
-        _ => solve::<0>(start, end, limits, minimum_duration, position),
+        6 => stroke.solve::<6>(),
+        _ => stroke.solve::<0>(),
     }
 }
 
-/// [`jerk_limited`] after the checks, with Ruckig's data on the stack for `N` > 0 joints (heap for
-/// `N` = 0, any count).
-fn solve<const N: usize>(
-    start: &JointState,
-    end: &JointState,
-    limits: &KinematicLimits,
+/// The arguments of [`jerk_limited`] after its checks.
+struct Stroke<'a> {
+    start: &'a JointState,
+    end: &'a JointState,
+    limits: &'a KinematicLimits,
     minimum_duration: Option<f64>,
     position: PositionLimits,
-) -> Result<JerkLimited> {
-    let n = start.q.len();
-    let dofs = if N == 0 { Some(n) } else { None };
-    let mut input = InputParameter::<N>::new(dofs);
-    for j in 0..n {
-        input.current_position[j] = start.q[j];
-        input.current_velocity[j] = start.qd[j];
-        input.current_acceleration[j] = start.qdd[j];
-        input.target_position[j] = end.q[j];
-        input.target_velocity[j] = end.qd[j];
-        input.target_acceleration[j] = end.qdd[j];
-        input.max_velocity[j] = limits.velocity[j];
-        input.max_acceleration[j] = limits.acceleration[j];
-        input.max_jerk[j] = limits.jerk[j];
-    }
-    input.minimum_duration = minimum_duration;
-    if position == PositionLimits::Respect {
-        let mut lo = input.current_position.clone();
-        let mut hi = input.current_position.clone();
+}
+
+impl Stroke<'_> {
+    /// [`jerk_limited`] after the checks, with Ruckig's data on the stack for `N` > 0 joints (heap for
+    /// `N` = 0, any count).
+    fn solve<const N: usize>(&self) -> Result<JerkLimited> {
+        let n = self.start.q.len();
+        let dofs = if N == 0 { Some(n) } else { None };
+        let mut input = InputParameter::<N>::new(dofs);
         for j in 0..n {
-            lo[j] = if limits.lower[j].is_finite() {
-                limits.lower[j]
-            } else {
-                -1e12
-            };
-            hi[j] = if limits.upper[j].is_finite() {
-                limits.upper[j]
-            } else {
-                1e12
-            };
+            input.current_position[j] = self.start.q[j];
+            input.current_velocity[j] = self.start.qd[j];
+            input.current_acceleration[j] = self.start.qdd[j];
+            input.target_position[j] = self.end.q[j];
+            input.target_velocity[j] = self.end.qd[j];
+            input.target_acceleration[j] = self.end.qdd[j];
+            input.max_velocity[j] = self.limits.velocity[j];
+            input.max_acceleration[j] = self.limits.acceleration[j];
+            input.max_jerk[j] = self.limits.jerk[j];
         }
-        input.min_position = Some(lo);
-        input.max_position = Some(hi);
-    }
-    let mut otg = Ruckig::<N, IgnoreErrorHandler>::new(dofs, 1e-3);
-    let mut traj = Trajectory::<N>::new(dofs);
-    let result = otg
-        .calculate(&input, &mut traj)
-        .map_err(|e| Error::invalid("jerk-limited stroke", format!("{e:?}")))?;
-    match result {
-        RuckigResult::Working | RuckigResult::Finished => {}
-        RuckigResult::ErrorPositionalLimits => {
-            return Err(Error::invalid(
-                "position limits",
-                "no jerk-limited trajectory between these states stays inside the position limits",
-            ))
+        input.minimum_duration = self.minimum_duration;
+        if self.position == PositionLimits::Respect {
+            let mut lo = input.current_position.clone();
+            let mut hi = input.current_position.clone();
+            for j in 0..n {
+                lo[j] = if self.limits.lower[j].is_finite() {
+                    self.limits.lower[j]
+                } else {
+                    -1e12
+                };
+                hi[j] = if self.limits.upper[j].is_finite() {
+                    self.limits.upper[j]
+                } else {
+                    1e12
+                };
+            }
+            input.min_position = Some(lo);
+            input.max_position = Some(hi);
         }
-        other => {
+        let mut otg = Ruckig::<N, IgnoreErrorHandler>::new(dofs, 1e-3);
+        let mut traj = Trajectory::<N>::new(dofs);
+        let result = otg
+            .calculate(&input, &mut traj)
+            .map_err(|e| Error::invalid("jerk-limited stroke", format!("{e:?}")))?;
+        match result {
+            RuckigResult::Working | RuckigResult::Finished => {}
+            RuckigResult::ErrorPositionalLimits => {
+                return Err(Error::invalid(
+                    "position limits",
+                    "no jerk-limited trajectory between these states stays inside the position limits",
+                ))
+            }
+            other => {
+                return Err(Error::invalid(
+                    "jerk-limited stroke",
+                    format!(
+                        "no trajectory within the velocity, acceleration and jerk limits reaches the target state \
+                         ({other:?}): is the target velocity or acceleration beyond the limits?"
+                    ),
+                ))
+            }
+        }
+        let duration = traj.get_duration();
+        if !(duration > 0.0) || !duration.is_finite() {
             return Err(Error::invalid(
                 "jerk-limited stroke",
-                format!(
-                    "no trajectory within the velocity, acceleration and jerk limits reaches the target state \
-                     ({other:?}): is the target velocity or acceleration beyond the limits?"
-                ),
-            ))
+                format!("the solver returned a duration of {duration} s"),
+            ));
         }
+        Ok(JerkLimited {
+            trajectory: to_joint_trajectory::<N>(&traj, n, duration),
+            duration,
+        })
     }
-    let duration = traj.get_duration();
-    if !(duration > 0.0) || !duration.is_finite() {
-        return Err(Error::invalid(
-            "jerk-limited stroke",
-            format!("the solver returned a duration of {duration} s"),
-        ));
-    }
-    Ok(JerkLimited {
-        trajectory: to_joint_trajectory::<N>(&traj, n, duration),
-        duration,
-    })
 }
 
 /// Converts Ruckig's per-joint phase profiles into one piecewise-cubic [`JointTrajectory`] on
