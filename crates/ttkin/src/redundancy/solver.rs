@@ -178,24 +178,12 @@ impl WlsSolver {
             *wi = 1.0 / x;
         }
         self.cached = None;
-        self.solve_inner(jac, xdot, z, lower, upper, qdot)
+        self.resolve(jac, xdot, z, lower, upper, qdot)
     }
 
     /// [`WlsSolver::solve`] with the Jacobian and weights of the previous `solve` (only the task
     /// velocity, secondary motion and box change): reuses the factorisation when possible.
     pub fn resolve(
-        &mut self,
-        jac: &[f64],
-        xdot: &[f64],
-        z: Option<&[f64]>,
-        lower: &[f64],
-        upper: &[f64],
-        qdot: &mut [f64],
-    ) -> StepReport {
-        self.solve_inner(jac, xdot, z, lower, upper, qdot)
-    }
-
-    fn solve_inner(
         &mut self,
         jac: &[f64],
         xdot: &[f64],
