@@ -224,7 +224,7 @@ impl Simulation {
     }
 
     /// Follows a position trajectory (q, qd, qdd: rad, rad/s, rad/s², at least one sample, given
-    /// at the position-loop rate as in [`Simulation::run_position`]) from rest at q[0] in position
+    /// at the position-loop rate as in [`Simulation::run_position`]) from rest at q\[0\] in position
     /// mode, then holds its last sample for `settle` s; `external_torque` (N·m at the output) acts
     /// throughout. Every argument is checked before anything runs.
     pub fn follow(&mut self, q: &[f64], qd: &[f64], qdd: &[f64], settle: f64, external_torque: f64) -> Result<Trace> {

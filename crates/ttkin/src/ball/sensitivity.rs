@@ -5,7 +5,7 @@
 //! v̇ = a(v, ω) = g − k_d·|v|·v + k_m·ω × v. The position enters no derivative, so ∂p(t)/∂p0 = I;
 //! the sensitivities S_p = ∂p/∂(v0, ω) and S_v = ∂v/∂(v0, ω) (3 × 6 each, v0 and ω at the end
 //! time t0) obey Ṡ_p = S_v, Ṡ_v = A_v·S_v + [0 | A_ω] with A_v = ∂a/∂v =
-//! −k_d·(|v|·I + v·vᵀ/|v|) + k_m·[ω]× and A_ω = ∂a/∂ω = −k_m·[v]×.
+//! −k_d·(|v|·I + v·vᵀ/|v|) + k_m·\[ω\]× and A_ω = ∂a/∂ω = −k_m·\[v\]×.
 //!
 //! The window is integrated backward from t0 in equal steps of at most the given step: the state
 //! by RK4 (the same step as [`super::flight::Flight::rk4`]), the sensitivities alongside by the
