@@ -7,35 +7,10 @@ use std::hint::black_box;
 use ttkin::ball::estimate::{estimate, EstimateOptions};
 use ttkin::ball::flight::{BallState, Flight, Plane};
 use ttkin::ball::hitplan::HitPlanner;
-use ttkin::ball::predict::{crossing, predict};
-use ttkin::ball::rally;
-
-/// Noisy observations (200 Hz, σ = 2 mm, 0.02–0.22 s) of `count` incoming balls.
-fn observations(count: usize) -> Vec<(Vec<f64>, Vec<[f64; 3]>)> {
-    let truth = Flight {
-        step: 0.001,
-        ..Flight::default()
-    };
-    let mut rng = fastrand::Rng::with_seed(1);
-    (0..count)
-        .map(|_| {
-            let s = rally::serve(&truth, &mut rng, 40.0, 0.2);
-            let t: Vec<f64> = (0..41).map(|k| 0.02 + k as f64 * 0.005).collect();
-            let p = predict(&truth, &s, &t).unwrap().positions;
-            let p = p
-                .iter()
-                .map(|x| {
-                    let mut o = *x;
-                    for v in o.iter_mut() {
-                        *v += 0.002 * (rng.f64() + rng.f64() + rng.f64() - 1.5) * 2.0;
-                    }
-                    o
-                })
-                .collect();
-            (t, p)
-        })
-        .collect()
-}
+use ttkin::ball::predict::crossing;
+#[path = "../tests/support/ball_windows.rs"]
+mod ball_windows;
+use ball_windows::observations;
 
 fn ball(c: &mut Criterion) {
     let obs = observations(64);

@@ -6,37 +6,11 @@
 use nalgebra::Vector3;
 use std::hint::black_box;
 use ttkin::ball::estimate::{estimate, EstimateOptions};
-use ttkin::ball::flight::{BallState, Flight, Plane};
-use ttkin::ball::predict::{crossing, predict};
-use ttkin::ball::rally;
-
-/// Noisy observations of `count` incoming balls and the true state at the last observation.
-fn observations(count: usize) -> Vec<(Vec<f64>, Vec<[f64; 3]>, BallState)> {
-    let truth = Flight {
-        step: 0.001,
-        ..Flight::default()
-    };
-    let mut rng = fastrand::Rng::with_seed(1);
-    (0..count)
-        .map(|_| {
-            let s = rally::serve(&truth, &mut rng, 40.0, 0.2);
-            let t: Vec<f64> = (0..41).map(|k| 0.02 + k as f64 * 0.005).collect();
-            let p = predict(&truth, &s, &t).unwrap().positions;
-            let p = p
-                .iter()
-                .map(|x| {
-                    let mut o = *x;
-                    for v in o.iter_mut() {
-                        *v += 0.002 * (rng.f64() + rng.f64() + rng.f64() - 1.5) * 2.0;
-                    }
-                    o
-                })
-                .collect();
-            let (last, _) = truth.run(&s, t[40], None);
-            (t, p, last)
-        })
-        .collect()
-}
+use ttkin::ball::flight::{Flight, Plane};
+use ttkin::ball::predict::crossing;
+#[path = "../tests/support/ball_windows.rs"]
+mod ball_windows;
+use ball_windows::observations;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
