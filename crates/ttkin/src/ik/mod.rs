@@ -109,9 +109,9 @@ impl Solutions {
         }
     }
 
-    /// Drops the branches outside `limits` (after shifting revolute angles by 2πk); returns a
-    /// description of why each dropped branch failed.
-    fn filter(&mut self, kinds: &[JointType], limits: &[Limits], names: &[String]) -> Vec<String> {
+    /// Drops the branches outside `limits` (after shifting revolute angles by 2πk); returns why
+    /// each dropped branch failed as (branch, joint, value), formatted only when no branch is left.
+    fn filter(&mut self, kinds: &[JointType], limits: &[Limits]) -> Vec<(usize, usize, f64)> {
         let mut kept = 0;
         let mut why = Vec::new();
         for b in 0..self.count {
@@ -121,10 +121,7 @@ impl Solutions {
                 match fit_to_limits(q[i], kinds[i], &limits[i]) {
                     Some(v) => q[i] = v,
                     None => {
-                        why.push(format!(
-                            "branch {b}: {} = {:.6} outside [{}, {}]",
-                            names[i], q[i], limits[i].lower, limits[i].upper
-                        ));
+                        why.push((b, i, q[i]));
                         ok = false;
                         break;
                     }
@@ -142,8 +139,18 @@ impl Solutions {
     /// Applies `filter` and turns "no branch left" into [`Error::Unreachable`].
     fn apply(&mut self, filter: LimitFilter, chain_info: &ChainInfo) -> Result<()> {
         if filter == LimitFilter::Enforce {
-            let why = self.filter(&chain_info.kinds, &chain_info.limits, &chain_info.names);
+            let why = self.filter(&chain_info.kinds, &chain_info.limits);
             if self.is_empty() {
+                let (names, limits) = (&chain_info.names, &chain_info.limits);
+                let why: Vec<String> = why
+                    .iter()
+                    .map(|&(b, i, q)| {
+                        format!(
+                            "branch {b}: {} = {q:.6} outside [{}, {}]",
+                            names[i], limits[i].lower, limits[i].upper
+                        )
+                    })
+                    .collect();
                 return Err(Error::Unreachable(format!(
                     "every IK branch violates a joint limit ({})",
                     why.join("; ")
