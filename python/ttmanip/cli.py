@@ -114,20 +114,17 @@ _UNITS = {"length": "m", "time": "s", "angle": "rad"}
 
 
 def _vector(entry: dict, key: str, where: str, count: int, required: bool = True):
+    from . import TtmanipError
+    from .pipeline import _array
+
     if key not in entry:
         if required:
             raise CliError(f"{where}.{key}: missing key")
         return None
-    value = entry[key]
     try:
-        a = np.array(value, dtype=float)
-    except (TypeError, ValueError) as e:
-        raise CliError(f"{where}.{key}: expected {count} numbers, got {value!r}") from e
-    if a.size != count:
-        raise CliError(f"{where}.{key}: expected {count} numbers, got {a.size}")
-    if not np.isfinite(a).all():
-        raise CliError(f"{where}.{key}: every value must be finite, got {value!r}")
-    return a.reshape((4, 4) if count == 16 else (count,))
+        return _array(entry[key], (4, 4) if count == 16 else (count,), f"{where}.{key}", flat=True)
+    except TtmanipError as e:
+        raise CliError(str(e)) from e
 
 
 def _hit(entry, where: str):

@@ -135,27 +135,8 @@ def run_hit(
     )
     step("figures")
     figures = [
-        plots.joint_figure(
-            robot,
-            t,
-            q,
-            qd,
-            qdd,
-            tau,
-            out / f"{prefix}_joints.png",
-            current=np.asarray(ex["current"]),
-            t_hit=plan.t_hit,
-            executed={"t": np.asarray(ex["t"]), "q": np.asarray(ex["q"]), "qd": np.asarray(ex["qd"])},
-        ),
-        plots.racket_figure(
-            robot,
-            sim.racket_centre,
-            sim.racket_normal,
-            plan.q_hit,
-            plan.hit_pose,
-            out / f"{prefix}_racket.png",
-            planned_centre=racket_states(robot, q, qd)[1],
-            velocity=plan.hit_twist[:3],
+        *plots.hit_figures(
+            robot, plan, sim, (t, q, qd, qdd, tau), out / f"{prefix}_joints.png", out / f"{prefix}_racket.png"
         ),
         plots.error_figure(sim.summary(), out / f"{prefix}_errors.png"),
     ]

@@ -59,11 +59,15 @@ def racket_mount(robot: Robot) -> np.ndarray:
     return _ttmanip.racket_mount(robot)
 
 
-def _array(value: Any, shape: tuple[int, ...], what: str) -> np.ndarray:
+def _array(value: Any, shape: tuple[int, ...], what: str, flat: bool = False) -> np.ndarray:
+    """``value`` as a read-only finite float array of ``shape`` (``flat``: any array of as many
+    numbers, reshaped); :class:`ShapeError` or :class:`NonFiniteError` naming ``what`` otherwise."""
     try:
         a = np.array(value, dtype=float)
     except (TypeError, ValueError) as e:
         raise ShapeError(f"{what}: expected numbers of shape {shape}, got {value!r}") from e
+    if flat and a.size == np.prod(shape):
+        a = a.reshape(shape)
     if a.shape != shape:
         raise ShapeError(f"{what}: expected shape {shape}, got {a.shape}")
     if not np.isfinite(a).all():

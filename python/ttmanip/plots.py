@@ -21,6 +21,7 @@ __all__ = [
     "TABLE_PLACEMENT",
     "animation",
     "error_figure",
+    "hit_figures",
     "joint_figure",
     "racket_figure",
     "robot_points",
@@ -169,6 +170,41 @@ def racket_figure(
     fig.savefig(path, dpi=100)
     plt.close(fig)
     return path
+
+
+def hit_figures(robot, plan, sim, samples, joints_path, racket_path, *, title: str = "") -> list[Path]:
+    """The joint figure and the racket figure of one planned and simulated hit: ``samples`` are
+    the plan's ``(t, q, qd, qdd, tau)`` (1 kHz), ``sim`` its :class:`ttmanip.SimResult` (the
+    executed motion and drive currents overlaid)."""
+    from .pipeline import racket_states
+
+    t, q, qd, qdd, tau = samples
+    ex = {k: np.asarray(v) for k, v in sim.arrays.items() if k in ("t", "q", "qd", "current")}
+    return [
+        joint_figure(
+            robot,
+            t,
+            q,
+            qd,
+            qdd,
+            tau,
+            joints_path,
+            current=ex["current"],
+            t_hit=plan.t_hit,
+            executed={"t": ex["t"], "q": ex["q"], "qd": ex["qd"]},
+            title=title,
+        ),
+        racket_figure(
+            robot,
+            sim.racket_centre,
+            sim.racket_normal,
+            plan.q_hit,
+            plan.hit_pose,
+            racket_path,
+            planned_centre=racket_states(robot, q, qd)[1],
+            velocity=plan.hit_twist[:3],
+        ),
+    ]
 
 
 def error_figure(errors: dict, path, thresholds: dict | None = None) -> Path:

@@ -52,62 +52,12 @@ __all__ = [
 ]
 
 
-def cubic(
-    q0: ArrayLike, q1: ArrayLike, duration: float, v0: ArrayLike | None = None, v1: ArrayLike | None = None
-) -> JointTrajectory:
-    """Cubic from ``q0`` to ``q1`` in ``duration`` s, boundary velocities ``v0``, ``v1`` (zero if None).
-
-    Seed 001's formulas, corrected: a2 = 3h/tf² − (2v0 + v1)/tf, a3 = −2h/tf³ + (v0 + v1)/tf².
-    """
-    return traj_cubic(q0, q1, duration, v0, v1)
-
-
-def quintic(
-    q0: ArrayLike,
-    q1: ArrayLike,
-    duration: float,
-    v0: ArrayLike | None = None,
-    v1: ArrayLike | None = None,
-    a0: ArrayLike | None = None,
-    a1: ArrayLike | None = None,
-) -> JointTrajectory:
-    """Quintic from ``q0`` to ``q1`` in ``duration`` s with boundary velocities and accelerations."""
-    return traj_quintic(q0, q1, duration, v0, v1, a0, a1)
-
-
-def quintic_samples(
-    q0: ArrayLike,
-    q1: ArrayLike,
-    duration: float,
-    n: int = 101,
-    v0: ArrayLike | None = None,
-    v1: ArrayLike | None = None,
-    a0: ArrayLike | None = None,
-    a1: ArrayLike | None = None,
-):
-    """Builds a quintic and samples it at ``n`` evenly spaced times in one native call.
-
-    Returns ``(t, q, qd, qdd)``: t of shape (n,), the others (n, dof).
-    """
-    return traj_quintic_samples(q0, q1, duration, n, v0, v1, a0, a1)
-
-
-def via(
-    points: ArrayLike,
-    times: ArrayLike,
-    kind: str = "cubic",
-    velocities: ArrayLike | None = None,
-    accelerations: ArrayLike | None = None,
-    v_start: ArrayLike | None = None,
-    v_end: ArrayLike | None = None,
-) -> JointTrajectory:
-    """Trajectory through via ``points`` (m, dof) reached at strictly increasing ``times`` (m,).
-
-    ``kind``: ``"cubic"`` (velocity continuous; via velocities given or by the usual heuristic),
-    ``"spline"`` (C² cubic spline, end velocities ``v_start``/``v_end``, zero by default) or
-    ``"quintic"`` (acceleration continuous). The trajectory's time starts at 0 at ``times[0]``.
-    """
-    return traj_via(points, times, kind, velocities, accelerations, v_start, v_end)
+# Joint polynomials and via points are the native functions themselves (their signatures and
+# docs: ``_ttmanip.pyi`` and ``crates/ttkin-py/src/traj.rs``); nothing to convert here.
+cubic = traj_cubic
+quintic = traj_quintic
+quintic_samples = traj_quintic_samples
+via = traj_via
 
 
 def line(
@@ -150,11 +100,7 @@ def arc(
     return CartesianTrajectory.arc_about(T0, centre, axis, angle, duration, law, blend)
 
 
-def minimal_duration(
-    robot: Robot, q0: ArrayLike, q1: ArrayLike, kind: str = "quintic", jerk: ArrayLike | None = None
-) -> float:
-    """Shortest rest-to-rest ``kind`` segment q0 → q1 (s) within the robot's (and ``jerk``) limits."""
-    return traj_minimal_duration(robot, q0, q1, kind, jerk)
+minimal_duration = traj_minimal_duration
 
 
 @dataclass(frozen=True)

@@ -214,6 +214,7 @@ fn sample_uniform<'py>(py: Python<'py>, traj: &JointTrajectory, n: usize) -> PyR
 }
 
 /// Cubic from q0 to q1 in `duration` s with boundary velocities v0, v1 (zero when None).
+/// Seed 001's formulas, corrected: a2 = 3h/tf² − (2v0 + v1)/tf, a3 = −2h/tf³ + (v0 + v1)/tf².
 #[ttkin_py_guard::guarded]
 #[pyfunction]
 #[pyo3(signature = (q0, q1, duration, v0=None, v1=None))]
@@ -318,6 +319,7 @@ fn traj_quintic_samples<'py>(
 
 /// Trajectory through via points (m, n) at strictly increasing times (m,): kind "cubic" (C¹,
 /// heuristic or given velocities), "spline" (C², clamped end velocities) or "quintic" (C²).
+/// The trajectory's time starts at 0 at times[0].
 #[ttkin_py_guard::guarded]
 #[pyfunction]
 #[pyo3(signature = (points, times, kind="cubic", velocities=None, accelerations=None, v_start=None, v_end=None))]

@@ -25,7 +25,7 @@ import numpy as np
 
 from .. import plots, robots
 from ..demo import write_csv
-from ..pipeline import Hit, plan_hit, racket_states, simulate
+from ..pipeline import Hit, plan_hit, simulate
 
 __all__ = ["HITS", "hits", "run"]
 
@@ -109,28 +109,14 @@ def run(out_dir: str | Path) -> dict:
         write_csv(
             d / "s106_drives.csv", {"t": ex["t"], "q": ex["q"], "qd": ex["qd"], "current": ex["current"]}
         )
-        plots.joint_figure(
+        plots.hit_figures(
             robot,
-            t,
-            q,
-            qd,
-            qdd,
-            tau,
+            plan,
+            sim,
+            (t, q, qd, qdd, tau),
             d / "joints.png",
-            current=np.asarray(ex["current"]),
-            t_hit=plan.t_hit,
-            executed={"t": np.asarray(ex["t"]), "q": np.asarray(ex["q"]), "qd": np.asarray(ex["qd"])},
-            title=f"seed 002, hit '{name}': S104 stroke, S105 torques, S106 drives",
-        )
-        plots.racket_figure(
-            robot,
-            sim.racket_centre,
-            sim.racket_normal,
-            plan.q_hit,
-            plan.hit_pose,
             d / "racket.png",
-            planned_centre=racket_states(robot, q, qd)[1],
-            velocity=plan.hit_twist[:3],
+            title=f"seed 002, hit '{name}': S104 stroke, S105 torques, S106 drives",
         )
         entry.update(
             {
