@@ -108,7 +108,7 @@ pub fn axis_config(joint: &Joint, link_inertia: f64) -> Result<AxisConfig> {
         bus_voltage,
         max_duty,
         encoder_counts_per_rev: drive.encoder_counts.unwrap_or(4096),
-        current_noise: 0.005,
+        current_noise: crate::motor::DEFAULT_CURRENT_NOISE,
     };
     let mut c = AxisConfig::new(model);
     c.peak_current = drive

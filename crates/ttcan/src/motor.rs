@@ -152,6 +152,10 @@ pub struct MotorModel {
     pub current_noise: f64,
 }
 
+/// Standard deviation of the simulated current-sense noise of a drive whose data names none, A:
+/// 5 mA, about one LSB of a 12-bit current ADC over a ±10 A range (20 A / 4096 ≈ 4.9 mA).
+pub const DEFAULT_CURRENT_NOISE: f64 = 0.005;
+
 impl MotorModel {
     /// maxon RE 25 + GP 26 A 14:1 + 1024-CPT encoder (4096 counts/rev), 24 V bus, 1e-3 kg·m² load.
     pub fn maxon_re25_gp26() -> Self {
@@ -165,7 +169,7 @@ impl MotorModel {
             bus_voltage: 24.0,
             max_duty: 0.95,
             encoder_counts_per_rev: 4096,
-            current_noise: 0.005,
+            current_noise: DEFAULT_CURRENT_NOISE,
         }
     }
 

@@ -198,3 +198,22 @@ fn an_undersized_motor_fails_the_sizing_with_its_joint_named() {
     let e = ttcan::sizing::check(&sizing).unwrap_err().to_string();
     assert!(e.contains("'theta5'") && e.contains("continuous"), "{e}");
 }
+
+#[test]
+fn a_current_noise_in_amps_reaches_every_axis_built_from_the_drive_sections() {
+    let chain = ttkin::robots::gantry6();
+    let q0 = vec![0.0; chain.dof()];
+    for amps in [0.0, ttcan::motor::DEFAULT_CURRENT_NOISE, 0.012] {
+        let options = CoupledOptions::default().with_current_noise(amps);
+        let configs = ttcan::coupled::axis_configs_from_chain(&chain, &q0, &options).unwrap();
+        for c in &configs {
+            assert!(
+                (c.model.current_noise - amps).abs() < 1e-15,
+                "{} != {amps}",
+                c.model.current_noise
+            );
+        }
+    }
+    let negative = CoupledOptions::default().with_current_noise(-0.001);
+    assert!(ttcan::coupled::axis_configs_from_chain(&chain, &q0, &negative).is_err());
+}

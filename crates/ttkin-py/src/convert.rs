@@ -256,6 +256,14 @@ pub fn to_numpy<'py>(py: Python<'py>, shape: &[usize], data: &[f64]) -> Bound<'p
 
 /// Checks that a result is finite; otherwise `NumericalError` (the guard adds the call's name).
 pub fn check_finite_output(data: &[f64]) -> PyResult<()> {
+    // Branch-free within blocks, so that it vectorises (an early-exit scan of every element cost
+    // 0.75 µs on 101 samples of an 8-joint quintic); the position only once something is wrong.
+    if !data
+        .chunks(64)
+        .any(|c| c.iter().fold(false, |bad, v| bad | !v.is_finite()))
+    {
+        return Ok(());
+    }
     match data.iter().position(|v| !v.is_finite()) {
         None => Ok(()),
         Some(i) => Err(NumericalError::new_err(format!(

@@ -11,15 +11,14 @@ use crate::convert::{f64_array, to_numpy, vector};
 use crate::errors::{PyResultExt, TtmanipError};
 use crate::robot::PyRobot as Robot;
 
-/// The current-sense noise of the drives `CoupledSim::from_chain` builds, A.
-const DEFAULT_NOISE: f64 = 0.005;
-
 /// Every joint of a robot driven by its own current/speed/position cascade, on the robot's shared
 /// rigid-body mechanics (gravity included), stepped one current-loop period at a time.
 #[pyclass(module = "ttmanip._ttmanip")]
 pub struct DriveSim {
     chain: std::sync::Arc<ttkin::Chain>,
     options: CoupledOptions,
+    /// The cyclic setpoint period the drives interpolate, s (1 / `setpoint_rate`).
+    setpoint_period: f64,
     sim: CoupledSim,
 }
 
@@ -36,8 +35,8 @@ impl DriveSim {
         seed: i128,
         ideal_current: bool,
     ) -> PyResult<Self> {
-        let setpoint_rate = args::positive("setpoint_rate", setpoint_rate)?;
-        let noise = args::non_negative("noise", noise.unwrap_or(DEFAULT_NOISE))?;
+        let setpoint_period = 1.0 / args::positive("setpoint_rate", setpoint_rate)?;
+        let noise = noise.map(|a| args::non_negative("noise", a)).transpose()?;
         let options = CoupledOptions {
             gravity: if gravity {
                 ttkin::dynamics::EARTH_GRAVITY
@@ -46,15 +45,16 @@ impl DriveSim {
             },
             ideal_current,
             seed: args::unsigned(seed, "seed")?,
-            setpoint_period: Some(1.0 / setpoint_rate),
-            noise_scale: noise / DEFAULT_NOISE,
+            setpoint_period: Some(setpoint_period),
             ..CoupledOptions::default()
         };
+        let options = noise.map_or(options, |a| options.with_current_noise(a));
         let q0 = vec![0.0; robot.chain.dof()];
         let sim = CoupledSim::from_chain(&robot.chain, &q0, options).py()?;
         Ok(DriveSim {
             chain: robot.chain.clone(),
             options,
+            setpoint_period,
             sim,
         })
     }
@@ -180,7 +180,7 @@ impl DriveSim {
         let (q, qd, qdd) = (arr(q, "q")?, arr(qd, "qd")?, arr(qdd, "qdd")?);
         let tau = tau_ff.map(|a| arr(a, "tau_ff")).transpose()?;
         let times = t.data().to_vec();
-        let period = self.options.setpoint_period.unwrap_or(1e-3);
+        let period = self.setpoint_period;
         let sim = &mut self.sim;
         let tr = py
             .detach(|| sim.run(&times, &q, &qd, &qdd, tau.as_deref(), period))

@@ -246,16 +246,14 @@ fn start_state(
     qdd: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Option<JointState>> {
     let Some(q) = q else { return Ok(None) };
-    let q = vector(q, "state.q", n)?;
-    let qd = qd
-        .map(|v| vector(v, "state.qd", n))
-        .transpose()?
-        .unwrap_or(vec![0.0; n]);
-    let qdd = qdd
-        .map(|v| vector(v, "state.qdd", n))
-        .transpose()?
-        .unwrap_or(vec![0.0; n]);
-    Ok(Some(JointState { q, qd, qdd }))
+    let mut state = JointState::rest(&vector(q, "state.q", n)?);
+    if let Some(qd) = qd {
+        state.qd = vector(qd, "state.qd", n)?;
+    }
+    if let Some(qdd) = qdd {
+        state.qdd = vector(qdd, "state.qdd", n)?;
+    }
+    Ok(Some(state))
 }
 
 /// Plans one hit: racket pose (4, 4), racket-centre twist (6,), hit time (s); optional start
@@ -374,10 +372,10 @@ fn racket_frame<'py>(
     handle: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let n = vector(normal, "normal", 3)?;
-    let h = handle
-        .map(|h| vector(h, "handle", 3))
-        .transpose()?
-        .unwrap_or(vec![0.0, 0.0, 1.0]);
+    let h = match handle {
+        Some(h) => vector(h, "handle", 3)?,
+        None => hit::DEFAULT_HANDLE.to_vec(),
+    };
     let r = hit::racket_frame(&Vector3::from_column_slice(&n), &Vector3::from_column_slice(&h)).py()?;
     let m = r.matrix();
     let rows: Vec<f64> = (0..3).flat_map(|i| (0..3).map(move |j| m[(i, j)])).collect();

@@ -4,23 +4,17 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use nalgebra::Vector3;
 use std::hint::black_box;
-use ttkin::ball::estimate::{estimate, EstimateOptions};
+use ttkin::ball::estimate::estimate;
 use ttkin::ball::flight::{BallState, Flight, Plane};
 use ttkin::ball::hitplan::HitPlanner;
 use ttkin::ball::predict::crossing;
 #[path = "../tests/support/ball_windows.rs"]
 mod ball_windows;
-use ball_windows::observations;
+use ball_windows::{estimate_options, observations};
 
 fn ball(c: &mut Criterion) {
     let obs = observations(64);
-    let opts = EstimateOptions {
-        flight: Flight {
-            step: 0.005,
-            ..Flight::default()
-        },
-        ..EstimateOptions::default()
-    };
+    let opts = estimate_options();
     let mut k = 0;
     c.bench_function("ball_estimate_41obs", |b| {
         b.iter(|| {

@@ -5,24 +5,18 @@
 //! prints each fit's velocity error against the truth (m/s) for comparing estimator versions.
 use nalgebra::Vector3;
 use std::hint::black_box;
-use ttkin::ball::estimate::{estimate, EstimateOptions};
+use ttkin::ball::estimate::estimate;
 use ttkin::ball::flight::{Flight, Plane};
 use ttkin::ball::predict::crossing;
 #[path = "../tests/support/ball_windows.rs"]
 mod ball_windows;
-use ball_windows::observations;
+use ball_windows::{estimate_options, observations};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let n: usize = args.get(2).map_or(1000, |a| a.parse().unwrap());
     let obs = observations(64);
-    let opts = EstimateOptions {
-        flight: Flight {
-            step: 0.005,
-            ..Flight::default()
-        },
-        ..EstimateOptions::default()
-    };
+    let opts = estimate_options();
     match args[1].as_str() {
         "estimate" => {
             for i in 0..n {

@@ -262,50 +262,64 @@ def _joint_grid(robot: Robot):
     return fig, axes.ravel()
 
 
-def _fig_positions(robot: Robot, res: TrackResult, path: Path) -> None:
-    q, units = _display(robot, res.q)
-    lim, _ = _display(robot, robot.limits.T)
+def _fig_joints(
+    robot: Robot, time: np.ndarray, values: np.ndarray, what: str, units, limits, path: Path, title
+):
+    """One panel a joint of ``values`` (display units) against ``time`` with the dashed limit
+    lines ``limits(i)`` gives for joint i (pairs (value, label or None)); ``title`` as text."""
     fig, axes = _joint_grid(robot)
     for i, ax in enumerate(axes):
-        ax.plot(res.time, q[:, i], color="C0", label="weighted (Chan–Dubey)")
-        ax.axhline(lim[0, i], color="C3", ls="--", lw=1, label="joint limits")
-        ax.axhline(lim[1, i], color="C3", ls="--", lw=1)
+        ax.plot(time, values[:, i], color="C0", label="weighted (Chan–Dubey)")
+        for value, label in limits(i):
+            ax.axhline(value, color="C3", ls="--", lw=1, label=label)
         ax.set_title(robot.joint_names[i])
-        ax.set_ylabel(f"position ({units[i]})")
+        ax.set_ylabel(f"{what} ({units[i]})")
         if i >= 4:
             ax.set_xlabel("time (s)")
         ax.grid(alpha=0.3)
     axes[0].legend(loc="best", fontsize=8)
-    fig.suptitle("Fig. 8: joint positions of the weighted least-norm motion, with joint limits")
+    fig.suptitle(title)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
+
+
+def _fig_positions(robot: Robot, res: TrackResult, path: Path) -> None:
+    q, units = _display(robot, res.q)
+    lim, _ = _display(robot, robot.limits.T)
+    _fig_joints(
+        robot,
+        res.time,
+        q,
+        "position",
+        units,
+        lambda i: [(lim[0, i], "joint limits"), (lim[1, i], None)],
+        path,
+        "Fig. 8: joint positions of the weighted least-norm motion, with joint limits",
+    )
 
 
 def _fig_speeds(robot: Robot, res: TrackResult, path: Path) -> None:
     qd, _ = _display(robot, res.qd)
     vmax, _ = _display(robot, robot.velocity_limits)
     units = ["m/s" if k == "prismatic" else "°/s" for k in robot.joint_types]
-    fig, axes = _joint_grid(robot)
-    for i, ax in enumerate(axes):
-        ax.plot(res.time, qd[:, i], color="C0", label="weighted (Chan–Dubey)")
-        if np.isfinite(vmax[i]) and np.abs(qd[:, i]).max() > 0.5 * vmax[i]:
-            ax.axhline(vmax[i], color="C3", ls="--", lw=1, label="speed limit")
-            ax.axhline(-vmax[i], color="C3", ls="--", lw=1)
-        ax.set_title(robot.joint_names[i])
-        ax.set_ylabel(f"speed ({units[i]})")
-        if i >= 4:
-            ax.set_xlabel("time (s)")
-        ax.grid(alpha=0.3)
-    axes[0].legend(loc="best", fontsize=8)
+
+    def limits(i):
+        near = np.isfinite(vmax[i]) and np.abs(qd[:, i]).max() > 0.5 * vmax[i]
+        return [(vmax[i], "speed limit"), (-vmax[i], None)] if near else []
+
     reached = bool((np.abs(qd) >= vmax - 1e-9).any())
-    fig.suptitle(
+    _fig_joints(
+        robot,
+        res.time,
+        qd,
+        "speed",
+        units,
+        limits,
+        path,
         f"Fig. 9: joint speeds (limits {vmax[0]:.1f} m/s and {vmax[1]:.0f} °/s "
-        + ("reached at some samples)" if reached else "never reached)")
+        + ("reached at some samples)" if reached else "never reached)"),
     )
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
 
 
 def _fig_error(res: TrackResult, path: Path) -> None:

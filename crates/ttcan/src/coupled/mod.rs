@@ -65,8 +65,22 @@ pub struct CoupledOptions {
     /// Cyclic setpoint period given to the axes [`CoupledSim::from_chain`] builds, s (`None`:
     /// setpoints used as they come).
     pub setpoint_period: Option<f64>,
-    /// Scale of the current-sense noise of those axes (1: the configured 5 mA; 0: none).
+    /// Scale of the current-sense noise of those axes (1: each drive's own, which is
+    /// [`DEFAULT_CURRENT_NOISE`](crate::motor::DEFAULT_CURRENT_NOISE) for a drive section; 0: none).
     pub noise_scale: f64,
+}
+
+impl CoupledOptions {
+    /// These options with the current-sense noise of the axes [`CoupledSim::from_chain`] builds
+    /// set to `amps` (standard deviation, A; ≥ 0, checked when the axes are built): the scale
+    /// `amps` / [`DEFAULT_CURRENT_NOISE`](crate::motor::DEFAULT_CURRENT_NOISE), the noise every
+    /// drive section gets.
+    pub fn with_current_noise(self, amps: f64) -> Self {
+        CoupledOptions {
+            noise_scale: amps / crate::motor::DEFAULT_CURRENT_NOISE,
+            ..self
+        }
+    }
 }
 
 impl Default for CoupledOptions {

@@ -36,7 +36,7 @@ use crate::error::{check_finite, check_vector, Error, Result};
 use crate::ik::Analytic;
 use crate::traj::limits::{KinematicLimits, Violation};
 use crate::traj::{JointState, JointTrajectory};
-pub use racket::{racket_frame, Racket};
+pub use racket::{racket_frame, Racket, DEFAULT_HANDLE};
 
 /// Standard gravity (m/s², base frame: base z up).
 pub const GRAVITY: [f64; 3] = [0.0, 0.0, -9.81];
@@ -71,7 +71,7 @@ impl Hit {
     /// A hit from the racket centre (m, base frame), the face normal (any length, base axes), the
     /// racket-centre velocity (m/s, base axes), the hit time (s) and the racket's angular velocity
     /// (rad/s, base axes, zero when `None`). The handle points as close as possible to `handle`
-    /// (base +z when `None`): see [`racket_frame`].
+    /// ([`DEFAULT_HANDLE`] when `None`): see [`racket_frame`].
     pub fn from_normal(
         centre: [f64; 3],
         normal: [f64; 3],
@@ -84,10 +84,7 @@ impl Hit {
         check_finite("velocity", &velocity)?;
         let w = omega.unwrap_or([0.0; 3]);
         check_finite("omega", &w)?;
-        let r = racket_frame(
-            &Vector3::from(normal),
-            &Vector3::from(handle.unwrap_or([0.0, 0.0, 1.0])),
-        )?;
+        let r = racket_frame(&Vector3::from(normal), &Vector3::from(handle.unwrap_or(DEFAULT_HANDLE)))?;
         let pose = IsometryMatrix3::from_parts(Vector3::from(centre).into(), r);
         Hit::new(pose, [velocity[0], velocity[1], velocity[2], w[0], w[1], w[2]], t)
     }

@@ -82,6 +82,10 @@ impl Racket {
     }
 }
 
+/// The handle direction a racket frame takes when none is given (base axes): base +z, the handle
+/// pointing up, as a player holds a shake-hand racket at the hit.
+pub const DEFAULT_HANDLE: [f64; 3] = [0.0, 0.0, 1.0];
+
 /// The racket orientation (base axes) whose z axis is the face `normal` and whose x axis (the
 /// handle) is as close as possible to `handle` (base axes; any vector not parallel to the
 /// normal). When `handle` is (nearly) parallel to the normal, base +z, then base +x, is used.

@@ -3,6 +3,7 @@
 //! 0.22 s after the hit, σ = 2 mm per axis (world frame, m), from a 1 ms reference flight.
 #![allow(dead_code)]
 
+use ttkin::ball::estimate::EstimateOptions;
 use ttkin::ball::flight::{BallState, Flight};
 use ttkin::ball::predict::predict;
 use ttkin::ball::rally;
@@ -33,4 +34,15 @@ pub fn observations(count: usize) -> Vec<(Vec<f64>, Vec<[f64; 3]>, BallState)> {
             (t, p, last)
         })
         .collect()
+}
+
+/// The estimator options both measure: the defaults with a 5 ms RK4 step (the observation spacing).
+pub fn estimate_options() -> EstimateOptions {
+    EstimateOptions {
+        flight: Flight {
+            step: 0.005,
+            ..Flight::default()
+        },
+        ..EstimateOptions::default()
+    }
 }
