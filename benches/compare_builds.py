@@ -25,6 +25,10 @@ import sys
 import timeit
 
 import numpy as np
+import ttmanip
+import ttmanip.traj as tt
+from bench_traj import T_REQUEST, problems, ttmanip_stroke
+from timing import per_call_us
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -39,6 +43,12 @@ def _configurations(robot, count: int, seed: int = 0) -> np.ndarray:
     lim = robot.limits
     rng = np.random.default_rng(seed)
     return lim[:, 0] + (lim[:, 1] - lim[:, 0]) * rng.random((count, _dof(robot)))
+
+
+def _robot(name: str, count: int):
+    """The built-in robot ``name`` and ``count`` configurations within its limits."""
+    robot = ttmanip.Robot.builtin(name)
+    return robot, _configurations(robot, count)
 
 
 def _batch_us(fn, count: int, repeat: int = 3) -> float:
@@ -63,11 +73,8 @@ def kinematics(out: dict[str, float]) -> None:
 
 
 def _kinematics_of(name: str, out: dict[str, float]) -> None:
-    import ttmanip
-    from timing import per_call_us
 
-    robot = ttmanip.Robot.builtin(name)
-    qs = _configurations(robot, 100_000)
+    robot, qs = _robot(name, 100_000)
     q = qs[0].copy()
     out[f"{name} fk"] = per_call_us(lambda: robot.fk(q))
     out[f"{name} jacobian"] = per_call_us(lambda: robot.jacobian(q))
@@ -81,11 +88,8 @@ def dynamics(out: dict[str, float]) -> None:
 
 
 def _dynamics_of(name: str, out: dict[str, float]) -> None:
-    import ttmanip
-    from timing import per_call_us
 
-    robot = ttmanip.Robot.builtin(name)
-    qs = _configurations(robot, 200_000)
+    robot, qs = _robot(name, 200_000)
     rng = np.random.default_rng(1)
     qds, qdds = rng.uniform(-1, 1, qs.shape), rng.uniform(-1, 1, qs.shape)
     q, qd, qdd = qs[0].copy(), qds[0].copy(), qdds[0].copy()
@@ -98,7 +102,6 @@ def _dynamics_of(name: str, out: dict[str, float]) -> None:
 
 def ik(out: dict[str, float]) -> None:
     """``bench_ik``: numeric ik per target (median of 1,000) and batched (10,000); gantry6 ik_all."""
-    import ttmanip
 
     ur5_start = np.array([0.0, -np.pi / 2, np.pi / 2, 0.0, np.pi / 2, 0.0])
     _ik_of("ur5", "pose", ur5_start, out)
@@ -111,10 +114,9 @@ def ik(out: dict[str, float]) -> None:
 
 
 def _ik_of(name: str, task: str, q0: np.ndarray, out: dict[str, float]) -> None:
-    import ttmanip
 
-    robot = ttmanip.Robot.builtin(name)
-    targets = robot.fk(_configurations(robot, 10_000))
+    robot, qs = _robot(name, 10_000)
+    targets = robot.fk(qs)
     out[f"{name} {task} ik"] = _loop_us(lambda t: robot.ik(t, q0, task=task), targets[:1000])
     out[f"{name} {task} ik batch (per target)"] = _batch_us(
         lambda: robot.ik(targets, q0, task=task), len(targets), repeat=1
@@ -123,36 +125,19 @@ def _ik_of(name: str, task: str, q0: np.ndarray, out: dict[str, float]) -> None:
 
 def traj(out: dict[str, float]) -> None:
     """``bench_traj``: an 8-joint quintic sampled at 101 points; hitting strokes (20 problems)."""
-    import ttmanip.traj as tt
-    from bench_traj import AMAX, JMAX, T_REQUEST, VMAX, problems
-    from timing import per_call_us
 
     q0, q1 = np.linspace(0.0, 1.0, 8), np.linspace(1.0, -1.0, 8)
     out["quintic_samples 8 joints x 101"] = per_call_us(lambda: tt.quintic_samples(q0, q1, 0.8, 101))
     out["quintic + sample_uniform 101"] = per_call_us(lambda: tt.quintic(q0, q1, 0.8).sample_uniform(101))
 
-    def stroke(p):
-        s = (p["q"], p["qd"], p["qdd"])
-        return tt.stroke(
-            None,
-            s,
-            p["q_hit"],
-            p["qd_hit"],
-            T_REQUEST,
-            p["ready"],
-            velocity=VMAX,
-            acceleration=AMAX,
-            jerk=JMAX,
-        )
-
     ps = problems(20)
-    out["stroke 8 joints (per problem)"] = min(_loop_us(stroke, ps) for _ in range(5))
+    out["stroke 8 joints (per problem)"] = min(
+        _loop_us(lambda p: ttmanip_stroke(p, T_REQUEST), ps) for _ in range(5)
+    )
 
 
 def redundancy(out: dict[str, float]) -> None:
     """``bench_redundancy``: one wls_step of mobile8; tracking seed 000's 4 s motion at 1 kHz."""
-    import ttmanip
-    from timing import per_call_us
     from ttmanip.experiments import seed000
 
     robot = ttmanip.robots.mobile8()

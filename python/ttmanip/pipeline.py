@@ -62,11 +62,14 @@ def racket_mount(robot: Robot) -> np.ndarray:
 def _array(value: Any, shape: tuple[int, ...], what: str, flat: bool = False) -> np.ndarray:
     """``value`` as a read-only finite float array of ``shape`` (``flat``: any array of as many
     numbers, reshaped); :class:`ShapeError` or :class:`NonFiniteError` naming ``what`` otherwise."""
+    expected = f"{int(np.prod(shape))} numbers" if flat else f"numbers of shape {shape}"
     try:
         a = np.array(value, dtype=float)
     except (TypeError, ValueError) as e:
-        raise ShapeError(f"{what}: expected numbers of shape {shape}, got {value!r}") from e
-    if flat and a.size == np.prod(shape):
+        raise ShapeError(f"{what}: expected {expected}, got {value!r}") from e
+    if flat:
+        if a.size != np.prod(shape):
+            raise ShapeError(f"{what}: expected {expected}, got {a.size}")
         a = a.reshape(shape)
     if a.shape != shape:
         raise ShapeError(f"{what}: expected shape {shape}, got {a.shape}")
