@@ -55,6 +55,13 @@ fn rig_with(cfg: AxisConfig) -> Rig {
 }
 
 impl Rig {
+    /// Injects `failure` into drive `k` (0-based) and returns the frames it answers with (unsent).
+    fn inject(&mut self, k: usize, failure: Failure) -> Frames {
+        let mut out = Frames::new();
+        self.drives[k].1.inject(failure, &mut out);
+        out
+    }
+
     /// One lock-step cycle: the controller reads, updates and writes, then the drives answer.
     fn step(&mut self, q: f64) {
         self.master_read();
@@ -268,8 +275,7 @@ fn fault_case_coasting(
 fn silent_drive_stops_every_axis() {
     fault_case_except(
         &|r| {
-            let mut out = Frames::new();
-            r.drives[0].1.inject(Failure::Silent, &mut out);
+            r.inject(0, Failure::Silent);
         },
         |s| matches!(s, StopReason::MissingFeedback(1)),
         400,
@@ -285,8 +291,7 @@ fn silent_drive_stops_every_axis() {
 fn emcy_stops_every_axis() {
     fault_case_coasting(
         &|r| {
-            let mut out = Frames::new();
-            r.drives[1].1.inject(Failure::Emcy, &mut out);
+            let out = r.inject(1, Failure::Emcy);
             for f in out.as_slice() {
                 r.drives[1].0.send(f).unwrap();
             }
@@ -302,8 +307,7 @@ fn emcy_stops_every_axis() {
 fn drive_leaving_operation_enabled_stops_every_axis() {
     fault_case(
         &|r| {
-            let mut out = Frames::new();
-            r.drives[0].1.inject(Failure::LeaveEnabled, &mut out);
+            r.inject(0, Failure::LeaveEnabled);
         },
         |s| matches!(s, StopReason::LeftOperationEnabled(1)),
         400,
@@ -315,8 +319,7 @@ fn malformed_and_out_of_range_feedback_stop_every_axis() {
     for f in [Failure::Malformed, Failure::OutOfRange] {
         fault_case(
             &move |r| {
-                let mut out = Frames::new();
-                r.drives[1].1.inject(f, &mut out);
+                r.inject(1, f);
             },
             |s| matches!(s, StopReason::BadFrame(2)),
             400,
@@ -560,8 +563,7 @@ fn controlled_stop_engages_the_holding_brake_before_bridge_off() {
     r.run(
         300,
         Some((200, &|r: &mut Rig| {
-            let mut out = Frames::new();
-            r.drives[0].1.inject(Failure::LeaveEnabled, &mut out);
+            r.inject(0, Failure::LeaveEnabled);
         })),
     );
     assert_eq!(r.master.stop_reason(), Some(StopReason::LeftOperationEnabled(1)));

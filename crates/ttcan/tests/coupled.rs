@@ -33,12 +33,18 @@ fn stroke_samples() -> Samples {
     (t, q, qd, qdd, tau, s.t_hit)
 }
 
+/// gantry6's drives (default options) at the start of the demo stroke, and the stroke's samples.
+fn at_stroke_start() -> (CoupledSim, Samples) {
+    let samples = stroke_samples();
+    let q0 = &samples.1[..6];
+    let sim = CoupledSim::from_chain(&ttkin::robots::gantry6(), q0, CoupledOptions::default()).unwrap();
+    (sim, samples)
+}
+
 #[test]
 fn gantry6_tracks_the_demo_stroke_with_inverse_dynamics_feedforward() {
-    let chain = ttkin::robots::gantry6();
-    let (t, q, qd, qdd, tau, t_hit) = stroke_samples();
+    let (mut sim, (t, q, qd, qdd, tau, t_hit)) = at_stroke_start();
     let n = 6;
-    let mut sim = CoupledSim::from_chain(&chain, &q[..n], CoupledOptions::default()).unwrap();
     // Settle on gravity first: hold the start with the gravity feed-forward.
     let g0: Vec<f64> = tau[..n].to_vec();
     sim.set_setpoint(&q[..n], &vec![0.0; n], &vec![0.0; n], Some(&g0))
@@ -128,10 +134,7 @@ fn accelerations_agree(chain: &ttkin::Chain, refresh: u32, tolerance: f64) {
 #[test]
 fn energy_bookkeeping_closes() {
     // Electrical input = copper loss + friction work + Δ(kinetic + potential + magnetic).
-    let chain = ttkin::robots::gantry6();
-    let (t, q, qd, qdd, tau, _) = stroke_samples();
-    let n = 6;
-    let mut sim = CoupledSim::from_chain(&chain, &q[..n], CoupledOptions::default()).unwrap();
+    let (mut sim, (t, q, qd, qdd, tau, _)) = at_stroke_start();
     let e0 = sim.stored_energy().unwrap();
     let before = sim.energy();
     sim.run(&t, &q, &qd, &qdd, Some(&tau), 1e-3).unwrap();

@@ -765,3 +765,31 @@ fn stroke_finds_a_feasible_window_narrower_than_the_coarse_bracketing() {
     assert!(s.violations.is_empty());
     assert!(quintic_limit_ratio(&start, &hit, s.t_hit, &limits) <= 1.0 + 1e-9);
 }
+
+#[test]
+fn the_overflow_bound_holds_for_ordinary_segments_and_refuses_overflowing_ones() {
+    let q0 = [0.0, 1.0, -2.0];
+    let q1 = [1.5, -1.0, 0.5];
+    let ok = JointTrajectory::quintic(&q0, &q1, None, None, None, None, 0.8).unwrap();
+    assert!(ok.samples_cannot_overflow());
+    let slow = JointTrajectory::quintic(&q0, &q1, None, None, None, None, 50.0).unwrap();
+    assert!(slow.samples_cannot_overflow());
+    // 1/T⁵ overflows: the bound refuses, and sampling indeed gives non-finite values.
+    let fast = JointTrajectory::quintic(&q0, &q1, None, None, None, None, 1e-70).unwrap();
+    assert!(!fast.samples_cannot_overflow());
+    let n = 11;
+    let (mut t, mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; 3 * n], vec![0.0; 3 * n], vec![0.0; 3 * n]);
+    fast.sample_uniform_columns_into(&mut t, &mut q, &mut qd, &mut qdd)
+        .unwrap();
+    assert!(qdd.iter().any(|v| !v.is_finite()));
+    // Below the threshold the bound is a proof: every sample of a bounded trajectory is finite.
+    let edge = JointTrajectory::quintic(&q0, &q1, None, None, None, None, 1e-50).unwrap();
+    assert!(edge.samples_cannot_overflow());
+    edge.sample_uniform_columns_into(&mut t, &mut q, &mut qd, &mut qdd)
+        .unwrap();
+    assert!(q.iter().chain(&qd).chain(&qdd).all(|v| v.is_finite()));
+    assert!(
+        qdd.iter().any(|v| v.abs() > 1e90),
+        "the edge case does produce huge values"
+    );
+}

@@ -190,6 +190,29 @@ pub fn bound_abs(c: &Coeffs, tf: f64) -> f64 {
     hi.max(-lo)
 }
 
+/// True when evaluating `c` and its first two derivatives by Horner's rule anywhere in
+/// τ ∈ [0, h] cannot overflow: every intermediate is at most 2·20·Σ|c_k|·max(1, h)⁵ in magnitude
+/// (the derivatives' coefficients are k·c_k and k(k−1)·c_k ≤ 20|c_k|), and that bound is
+/// required below 1e300. False only means the bound cannot tell (NaN or infinite coefficients
+/// included).
+pub fn cannot_overflow(c: &Coeffs, h: f64) -> bool {
+    let sum: f64 = c.iter().map(|x| x.abs()).sum();
+    40.0 * sum * h.max(1.0).powi(5) < 1e300
+}
+
+impl super::JointTrajectory {
+    /// True when no sample of this trajectory can overflow ([`cannot_overflow`] on every segment
+    /// and joint): callers may then skip checking sampled values for infinities. False only means
+    /// the bound cannot tell (e.g. a duration so short that 1/T⁵ overflows).
+    pub fn samples_cannot_overflow(&self) -> bool {
+        let knots = self.knots();
+        (0..self.segments()).all(|k| {
+            let h = knots[k + 1] - knots[k];
+            (0..self.dof()).all(|j| self.coefficients(k, j).is_some_and(|c| cannot_overflow(&c, h)))
+        })
+    }
+}
+
 /// The τ in [0, tf] and value of the largest |c(τ)|, exact up to rounding (endpoints and the
 /// roots of the derivative are the only candidates).
 pub fn max_abs(c: &Coeffs, tf: f64) -> (f64, f64) {
