@@ -55,11 +55,16 @@ fn rig_with(cfg: AxisConfig) -> Rig {
 }
 
 impl Rig {
-    /// Injects `failure` into drive `k` (0-based) and returns the frames it answers with (unsent).
-    fn inject(&mut self, k: usize, failure: Failure) -> Frames {
+    /// Injects `failure` into drive `k` (0-based); the frames it answers with are sent on the bus
+    /// when `send` is true, dropped otherwise.
+    fn inject(&mut self, k: usize, failure: Failure, send: bool) {
         let mut out = Frames::new();
         self.drives[k].1.inject(failure, &mut out);
-        out
+        if send {
+            for f in out.as_slice() {
+                self.drives[k].0.send(f).unwrap();
+            }
+        }
     }
 
     /// One lock-step cycle: the controller reads, updates and writes, then the drives answer.
@@ -274,9 +279,7 @@ fn fault_case_coasting(
 #[test]
 fn silent_drive_stops_every_axis() {
     fault_case_except(
-        &|r| {
-            r.inject(0, Failure::Silent);
-        },
+        &|r| r.inject(0, Failure::Silent, false),
         |s| matches!(s, StopReason::MissingFeedback(1)),
         400,
         Some(0),
@@ -290,12 +293,7 @@ fn silent_drive_stops_every_axis() {
 #[test]
 fn emcy_stops_every_axis() {
     fault_case_coasting(
-        &|r| {
-            let out = r.inject(1, Failure::Emcy);
-            for f in out.as_slice() {
-                r.drives[1].0.send(f).unwrap();
-            }
-        },
+        &|r| r.inject(1, Failure::Emcy, true),
         |s| matches!(s, StopReason::Emcy(2, 0x2310)),
         400,
         None,
@@ -306,9 +304,7 @@ fn emcy_stops_every_axis() {
 #[test]
 fn drive_leaving_operation_enabled_stops_every_axis() {
     fault_case(
-        &|r| {
-            r.inject(0, Failure::LeaveEnabled);
-        },
+        &|r| r.inject(0, Failure::LeaveEnabled, false),
         |s| matches!(s, StopReason::LeftOperationEnabled(1)),
         400,
     );
@@ -318,9 +314,7 @@ fn drive_leaving_operation_enabled_stops_every_axis() {
 fn malformed_and_out_of_range_feedback_stop_every_axis() {
     for f in [Failure::Malformed, Failure::OutOfRange] {
         fault_case(
-            &move |r| {
-                r.inject(1, f);
-            },
+            &move |r| r.inject(1, f, false),
             |s| matches!(s, StopReason::BadFrame(2)),
             400,
         );
@@ -562,9 +556,7 @@ fn controlled_stop_engages_the_holding_brake_before_bridge_off() {
     r.enable();
     r.run(
         300,
-        Some((200, &|r: &mut Rig| {
-            r.inject(0, Failure::LeaveEnabled);
-        })),
+        Some((200, &|r: &mut Rig| r.inject(0, Failure::LeaveEnabled, false))),
     );
     assert_eq!(r.master.stop_reason(), Some(StopReason::LeftOperationEnabled(1)));
     let p: Vec<f64> = r.drives.iter().map(|d| d.1.position()).collect();
