@@ -42,14 +42,14 @@ impl PyRobot {
         O: for<'d> FnOnce(&Dynamics, &'d mut DynamicsData) -> ttkin::Result<&'d [f64]>,
         M: FnOnce(&Dynamics, &mut [f64]) -> ttkin::Result<()> + Send,
     {
-        let (_, shape) = out_shape(batch, item);
         match batch {
+            // The single-state path allocates nothing for the shape: it is `item`.
             None => self
-                .with_data(|dy, d| one(dy, d).map(|v| finite_to_numpy(py, &shape, v)))?
+                .with_data(|dy, d| one(dy, d).map(|v| finite_to_numpy(py, item, v)))?
                 .py()?,
-            Some(_) => {
+            Some(count) => {
                 let dy = self.dynamics()?;
-                filled_without_gil(py, &shape, |o| many(dy, o))
+                filled_without_gil(py, &batch_shape(count, item), |o| many(dy, o))
             }
         }
     }
@@ -108,11 +108,9 @@ pub(crate) fn wrench_arg(w: Option<&Any<'_>>) -> PyResult<Option<Wrench>> {
     .transpose()
 }
 
-fn out_shape(batch: Option<usize>, item: &[usize]) -> (usize, Vec<usize>) {
-    match batch {
-        None => (1, item.to_vec()),
-        Some(c) => (c, std::iter::once(c).chain(item.iter().copied()).collect()),
-    }
+/// The shape (count, *item) of a batch result.
+fn batch_shape(count: usize, item: &[usize]) -> Vec<usize> {
+    std::iter::once(count).chain(item.iter().copied()).collect()
 }
 
 #[ttkin_py_guard::guarded]
@@ -244,7 +242,8 @@ impl PyRobot {
     fn friction<'py>(&self, py: Python<'py>, qd: &Any<'py>) -> PyResult<Array<'py>> {
         let (a, batch) = self.configs(qd, "qd")?;
         let dy = self.dynamics()?;
-        let (_, shape) = out_shape(batch, &[self.chain.dof()]);
+        let item = [self.chain.dof()];
+        let shape = batch.map_or(item.to_vec(), |count| batch_shape(count, &item));
         let qd = a.data();
         filled_without_gil(py, &shape, |o| dy.friction_batch(qd, o))
     }
