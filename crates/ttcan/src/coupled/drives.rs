@@ -23,3 +23,16 @@ pub fn axis_configs_from_chain(chain: &Chain, q0: &[f64], options: &CoupledOptio
     }
     Ok(configs)
 }
+
+impl CoupledOptions {
+    /// These options with the current-sense noise of the axes [`CoupledSim::from_chain`](super::CoupledSim::from_chain) builds
+    /// set to `amps` (standard deviation, A; ≥ 0, checked when the axes are built): the scale
+    /// `amps` / [`DEFAULT_CURRENT_NOISE`](crate::motor::DEFAULT_CURRENT_NOISE), the noise every
+    /// drive section gets.
+    pub fn with_current_noise(self, amps: f64) -> Self {
+        CoupledOptions {
+            noise_scale: amps / crate::motor::DEFAULT_CURRENT_NOISE,
+            ..self
+        }
+    }
+}

@@ -70,19 +70,6 @@ pub struct CoupledOptions {
     pub noise_scale: f64,
 }
 
-impl CoupledOptions {
-    /// These options with the current-sense noise of the axes [`CoupledSim::from_chain`] builds
-    /// set to `amps` (standard deviation, A; ≥ 0, checked when the axes are built): the scale
-    /// `amps` / [`DEFAULT_CURRENT_NOISE`](crate::motor::DEFAULT_CURRENT_NOISE), the noise every
-    /// drive section gets.
-    pub fn with_current_noise(self, amps: f64) -> Self {
-        CoupledOptions {
-            noise_scale: amps / crate::motor::DEFAULT_CURRENT_NOISE,
-            ..self
-        }
-    }
-}
-
 impl Default for CoupledOptions {
     fn default() -> Self {
         CoupledOptions {
