@@ -21,7 +21,7 @@
 
 use crate::hit::StrokeProfile;
 use crate::traj::duration::quintic_limit_ratio;
-use crate::traj::jerk::{jerk_limited, PositionLimits};
+use crate::traj::jerk::{jerk_limited, jerk_limited_duration, PositionLimits};
 use crate::traj::limits::KinematicLimits;
 use crate::traj::{JointState, JointTrajectory};
 
@@ -82,8 +82,8 @@ fn jerk_leg(start: &JointState, q: &[f64], qd: &[f64], t_hit: f64, limits: &Kine
         qd: qd.to_vec(),
         qdd: vec![0.0; q.len()],
     };
-    let fastest = jerk_limited(start, &end, limits, None, PositionLimits::Ignore).ok()?;
-    if fastest.duration > t_hit {
+    let fastest = jerk_limited_duration(start, &end, limits, None, PositionLimits::Ignore).ok()?;
+    if fastest > t_hit {
         return None;
     }
     let on_time = |position: PositionLimits| {
@@ -96,7 +96,7 @@ fn jerk_leg(start: &JointState, q: &[f64], qd: &[f64], t_hit: f64, limits: &Kine
         profile: StrokeProfile::Jerk,
         trajectory: leg.trajectory,
         qdd_hit: end.qdd,
-        margin: (1.0 - fastest.duration / t_hit).clamp(0.0, 1.0),
+        margin: (1.0 - fastest / t_hit).clamp(0.0, 1.0),
     })
 }
 

@@ -6,7 +6,7 @@ use super::super::impact::RacketHit;
 use super::super::leg::{hit_leg, HitLeg};
 use super::super::reach::min_joint_time;
 use super::{Hit, HitPlanner};
-use crate::ik::{joint_velocity, LimitFilter, Solutions};
+use crate::ik::{joint_velocity, Solutions};
 use crate::joint::JointType;
 use crate::traj::JointState;
 use nalgebra::IsometryMatrix3;
@@ -132,8 +132,8 @@ impl HitPlanner {
     ) -> impl Iterator<Item = Vec<f64>> + '_ {
         let sols = self
             .ik
-            .solve(pose, hint, LimitFilter::Off)
-            .unwrap_or_else(|_| Solutions::empty(self.chain.dof()));
+            .solve_quiet(pose, hint)
+            .unwrap_or_else(|| Solutions::empty(self.chain.dof()));
         (0..sols.len()).filter_map(move |b| {
             sols.get(b)
                 .iter()
@@ -163,6 +163,7 @@ impl HitPlanner {
 mod tests {
     use super::super::super::flight::Flight;
     use super::*;
+    use crate::ik::LimitFilter;
     use nalgebra::Vector3;
 
     #[test]
