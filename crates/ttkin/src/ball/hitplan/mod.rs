@@ -295,6 +295,12 @@ impl HitPlanner {
         let mut skipped: Vec<usize> = Vec::new();
         // The target tried first for each candidate examined, in `order`.
         let mut first_goal: Vec<Option<[f64; 2]>> = Vec::new();
+        // The placement test of (candidate, target), each computed once (the fallback asks again).
+        let nt = targets.len();
+        let mut placeable_memo: Vec<Option<bool>> = vec![None; list.len() * nt];
+        let mut placeable = |i: usize, t: usize| -> bool {
+            *placeable_memo[i * nt + t].get_or_insert_with(|| self.roughly_placeable(&list[i], targets[t]))
+        };
         let mut attempt = |s: &BallState, goal: [f64; 2], best: &mut Option<Hit>| {
             tried += 1;
             for &tf in &self.return_times {
@@ -319,7 +325,7 @@ impl HitPlanner {
                 break;
             }
             let s = list[i];
-            let Some(&goal) = targets.iter().find(|&&g| self.roughly_placeable(&s, g)) else {
+            let Some(goal) = (0..nt).find(|&t| placeable(i, t)).map(|t| targets[t]) else {
                 skipped.push(i);
                 first_goal.push(None);
                 continue;
@@ -343,11 +349,11 @@ impl HitPlanner {
                 break;
             }
             let s = list[i];
-            for &goal in targets.iter().filter(|g| Some(**g) != tried_goal) {
+            for (t, &goal) in targets.iter().enumerate().filter(|(_, g)| Some(**g) != tried_goal) {
                 if budget == 0 || best.is_some() {
                     break 'fallback;
                 }
-                if self.roughly_placeable(&s, goal) {
+                if placeable(i, t) {
                     budget -= 1;
                     attempt(&s, goal, &mut best);
                 }

@@ -6,11 +6,11 @@ use super::super::impact::RacketHit;
 use super::super::leg::{hit_leg, HitLeg};
 use super::super::reach::min_joint_time;
 use super::{Hit, HitPlanner};
-use crate::ik::{joint_velocity, Solutions};
+use crate::chain::JacobianFrame;
+use crate::ik::{joint_velocity, DifferentialIk, Solutions};
 use crate::joint::JointType;
 use crate::traj::JointState;
-use nalgebra::IsometryMatrix3;
-use nalgebra::Vector3;
+use nalgebra::{IsometryMatrix3, Matrix6, Vector3, Vector6};
 
 impl HitPlanner {
     /// The best robot hit (largest margin) over the racket rolls `rolls` about the face normal and
@@ -78,12 +78,12 @@ impl HitPlanner {
         if self.too_far(q, start, t_hit) {
             return None;
         }
-        let jv = joint_velocity(&self.chain, q, twist).ok()?;
+        let qdot = self.hit_joint_velocity(q, twist)?;
         let lim = &self.limits;
-        if jv.singular || jv.qdot.iter().zip(&lim.velocity).any(|(qd, v)| qd.abs() > *v) {
+        if qdot.iter().zip(&lim.velocity).any(|(qd, v)| qd.abs() > *v) {
             return None;
         }
-        let leg = hit_leg(start, q, &jv.qdot, t_hit, &self.limits)?;
+        let leg = hit_leg(start, q, &qdot, t_hit, &self.limits)?;
         let mut pos_margin = f64::INFINITY;
         for (i, &qi) in q.iter().enumerate() {
             let (lo, hi) = (self.limits.lower[i], self.limits.upper[i]);
@@ -92,7 +92,26 @@ impl HitPlanner {
             }
         }
         let margin = pos_margin.min(leg.margin);
-        Some((jv.qdot, leg, margin))
+        Some((qdot, leg, margin))
+    }
+
+    /// q̇ = J⁻¹·V (base frame) at `q` for the racket twist `twist`, or `None` where
+    /// [`joint_velocity`] calls the Jacobian singular (σ_min below its default threshold): for six
+    /// joints on the stack, σ_min from the singular values alone and q̇ from an LU solve (the
+    /// same q̇ to rounding as the damped-SVD solve away from singularities).
+    pub(super) fn hit_joint_velocity(&self, q: &[f64], twist: &[f64; 6]) -> Option<Vec<f64>> {
+        if q.len() != 6 {
+            let jv = joint_velocity(&self.chain, q, twist).ok()?;
+            return (!jv.singular).then_some(jv.qdot);
+        }
+        let j = self.chain.jacobian(q, JacobianFrame::Base).ok()?;
+        let m = Matrix6::from_iterator(j.iter().copied());
+        let sigma_min = m.singular_values().min();
+        if !(sigma_min >= DifferentialIk::default().threshold) {
+            return None;
+        }
+        let qdot = m.lu().solve(&Vector6::from_column_slice(twist))?;
+        Some(qdot.iter().copied().collect())
     }
 
     /// Racket centres (m, world) for a ball centre `p` touching a face with normal `n`, in the
@@ -165,6 +184,39 @@ mod tests {
     use super::*;
     use crate::ik::LimitFilter;
     use nalgebra::Vector3;
+
+    #[test]
+    fn hit_joint_velocity_matches_differential_ik() {
+        let pl = HitPlanner::new(crate::robots::gantry6(), Flight::default()).unwrap();
+        let mut rng = fastrand::Rng::with_seed(7);
+        let (mut regular, mut singular) = (0, 0);
+        for k in 0..3000 {
+            let mut q: Vec<f64> = pl.ready.iter().map(|x| x + 2.0 * rng.f64() - 1.0).collect();
+            if k % 10 == 0 {
+                q[3] = std::f64::consts::FRAC_PI_2 + 1e-5 * (rng.f64() - 0.5); // c4 ≈ 0: singular
+            }
+            let twist = [0.0, 1.0, 0.0, 0.0, 0.0, 0.0].map(|_| 4.0 * rng.f64() - 2.0);
+            let twist = [twist[0], twist[1], twist[2], 0.0, 0.0, 0.0];
+            let jv = joint_velocity(&pl.chain, &q, &twist).unwrap();
+            match pl.hit_joint_velocity(&q, &twist) {
+                Some(qd) => {
+                    regular += 1;
+                    assert!(!jv.singular, "{q:?}");
+                    for (a, b) in qd.iter().zip(&jv.qdot) {
+                        assert!((a - b).abs() <= 1e-9 * (1.0 + b.abs()), "{qd:?} vs {:?}", jv.qdot);
+                    }
+                }
+                None => {
+                    singular += 1;
+                    assert!(jv.singular, "{q:?} sigma_min {}", jv.sigma_min);
+                }
+            }
+        }
+        assert!(
+            regular > 1000 && singular > 100,
+            "{regular} regular, {singular} singular"
+        );
+    }
 
     #[test]
     fn own_branch_filter_matches_the_ik_limit_filter() {
