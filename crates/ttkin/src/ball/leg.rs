@@ -20,13 +20,16 @@
 //! with slack.
 
 use crate::hit::StrokeProfile;
-use crate::traj::duration::quintic_limit_ratio;
+use crate::traj::duration::quintic_limit_ratio_below;
 use crate::traj::jerk::{jerk_limited, jerk_limited_duration, PositionLimits};
 use crate::traj::limits::KinematicLimits;
 use crate::traj::{JointState, JointTrajectory};
 
 /// Largest difference (s) between the jerk-limited leg's duration and the hit time.
 const DURATION_TOLERANCE: f64 = 1e-9;
+
+/// Ceiling of the quintic's peak/limit search: above the acceptance limit 1 by a rounding margin.
+const ACCEPT_CEILING: f64 = 1.0 + 1e-12;
 
 /// An accepted hit leg (joint frame: m, rad, from the stroke start at 0 s to the hit at `t_hit`).
 #[derive(Debug, Clone, PartialEq)]
@@ -58,7 +61,10 @@ pub fn hit_leg(start: &JointState, q: &[f64], qd: &[f64], t_hit: f64, limits: &K
             qd: qd.to_vec(),
             qdd: cubic.iter().map(|a| alpha * a).collect(),
         };
-        let ratio = quintic_limit_ratio(start, &end, t_hit, limits);
+        // Exact below the best so far and below 1 (a ratio above both is neither chosen nor
+        // accepted); the small excess over 1 keeps a ratio of exactly 1 exact.
+        let ceiling = best.as_ref().map_or(ACCEPT_CEILING, |(r, _)| r.min(ACCEPT_CEILING));
+        let ratio = quintic_limit_ratio_below(start, &end, t_hit, limits, ceiling);
         if best.as_ref().is_none_or(|(r, _)| ratio < *r) {
             best = Some((ratio, end));
         }

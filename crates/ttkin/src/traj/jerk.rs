@@ -346,6 +346,25 @@ mod tests {
     }
 
     #[test]
+    fn duration_alone_is_the_built_trajectory_s() {
+        let lim = KinematicLimits::new(&[2.0; 6], &[20.0; 6], &[4000.0; 6]).unwrap();
+        let mut rng = fastrand::Rng::with_seed(11);
+        for k in 0..200 {
+            let r = |rng: &mut fastrand::Rng, a: f64| (0..6).map(|_| a * (2.0 * rng.f64() - 1.0)).collect::<Vec<f64>>();
+            let s = JointState::rest(&r(&mut rng, 1.0));
+            let e = JointState {
+                q: r(&mut rng, 1.0),
+                qd: r(&mut rng, 1.5),
+                qdd: vec![0.0; 6],
+            };
+            let min = (k % 2 == 1).then(|| 0.5 + rng.f64());
+            let alone = jerk_limited_duration(&s, &e, &lim, min, PositionLimits::Ignore).unwrap();
+            let full = jerk_limited(&s, &e, &lim, min, PositionLimits::Ignore).unwrap();
+            assert_eq!(alone.to_bits(), full.duration.to_bits(), "problem {k}");
+        }
+    }
+
+    #[test]
     fn infinite_jerk_limit_is_an_error_naming_it() {
         let l = KinematicLimits::new(&[3.0], &[20.0], &[f64::INFINITY]).unwrap();
         let s = JointState::rest(&[0.0]);
