@@ -39,8 +39,9 @@ impl HitPlanner {
             w: hit.spin_out,
             ..*s
         };
-        let (_, events) = f.run(&out, s.t + tf + 0.5, None);
-        let e = events.first()?;
+        // The first event only (what `run` reports first, without the flight after it).
+        let (_, first) = f.advance(&out, s.t + tf + 0.5, None);
+        let e = first.as_ref()?;
         let landing = e.before.p;
         let ok = e.kind == EventKind::Table
             && f.table.on_opponent_half(landing.x, landing.y)
