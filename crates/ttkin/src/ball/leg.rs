@@ -88,6 +88,17 @@ fn jerk_leg(start: &JointState, q: &[f64], qd: &[f64], t_hit: f64, limits: &Kine
         qd: qd.to_vec(),
         qdd: vec![0.0; q.len()],
     };
+    // From rest, a joint cannot reach its hit state sooner than without a jerk limit: no
+    // Ruckig solve when that bound already exceeds the hit time.
+    let at_rest = start.qd.iter().chain(&start.qdd).all(|x| *x == 0.0);
+    if at_rest
+        && (0..q.len()).any(|i| {
+            let bound = min_time_from_rest(q[i] - start.q[i], qd[i], limits.velocity[i], limits.acceleration[i]);
+            bound > t_hit * (1.0 + 1e-9)
+        })
+    {
+        return None;
+    }
     let fastest = jerk_limited_duration(start, &end, limits, None, PositionLimits::Ignore).ok()?;
     if fastest > t_hit {
         return None;
@@ -109,4 +120,72 @@ fn jerk_leg(start: &JointState, q: &[f64], qd: &[f64], t_hit: f64, limits: &Kine
 /// Whether `traj` stays inside the position limits of `limits` (exact, to [`crate::traj::limits::LIMIT_TOLERANCE`]).
 fn inside(traj: &JointTrajectory, limits: &KinematicLimits) -> bool {
     traj.position_violations(limits, 0.0).is_empty()
+}
+
+/// Shortest time (s) for one joint from rest to travel `delta` and arrive with velocity `v1` (m
+/// or rad, per s) under the speed limit `vmax` and acceleration limit `amax`, jerk unlimited: the
+/// time-optimal bang-bang (and cruise) profile of the double integrator (Pontryagin's maximum
+/// principle; e.g. Kröger, "On-Line Trajectory Generation in Robotic Systems", 2010). Forward (peak ≥ v1) when delta ≥ v1²/(2·amax) after
+/// turning signs so that v1 ≥ 0, else first backward then forward. A lower bound on any
+/// jerk-limited profile of the same problem; infinite when |v1| > vmax.
+pub(crate) fn min_time_from_rest(delta: f64, v1: f64, vmax: f64, amax: f64) -> f64 {
+    let (d, v1) = if v1 < 0.0 { (-delta, -v1) } else { (delta, v1) };
+    let (v, a) = (vmax, amax);
+    if v1 > v {
+        return f64::INFINITY;
+    }
+    if d >= v1 * v1 / (2.0 * a) {
+        let peak = (a * d + 0.5 * v1 * v1).sqrt();
+        if peak <= v {
+            (2.0 * peak - v1) / a
+        } else {
+            (2.0 * v - v1) / a + (d - (2.0 * v * v - v1 * v1) / (2.0 * a)) / v
+        }
+    } else {
+        let back = (0.5 * v1 * v1 - a * d).sqrt();
+        if back <= v {
+            (2.0 * back + v1) / a
+        } else {
+            (2.0 * v + v1) / a + ((v1 * v1 - 2.0 * v * v) / (2.0 * a) - d) / v
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::traj::jerk::jerk_limited;
+
+    #[test]
+    fn rest_bound_is_below_ruckig_and_tight_for_a_large_jerk_limit() {
+        let mut rng = fastrand::Rng::with_seed(3);
+        let (v, a) = (2.0, 20.0);
+        let (mut worst_gap, mut cases) = (0.0f64, 0);
+        for _ in 0..2000 {
+            let delta = 2.0 * (2.0 * rng.f64() - 1.0);
+            let v1 = v * (2.0 * rng.f64() - 1.0);
+            let bound = min_time_from_rest(delta, v1, v, a);
+            for (jerk, tight) in [(2000.0, false), (2e6, true)] {
+                let lim = KinematicLimits::new(&[v], &[a], &[jerk]).unwrap();
+                let end = JointState {
+                    q: vec![delta],
+                    qd: vec![v1],
+                    qdd: vec![0.0],
+                };
+                let t = jerk_limited(&JointState::rest(&[0.0]), &end, &lim, None, PositionLimits::Ignore)
+                    .unwrap()
+                    .duration;
+                assert!(
+                    bound <= t * (1.0 + 1e-9),
+                    "bound {bound} above Ruckig {t} ({delta}, {v1})"
+                );
+                if tight {
+                    worst_gap = worst_gap.max(t - bound);
+                    cases += 1;
+                }
+            }
+        }
+        assert!(cases == 2000 && worst_gap < 1e-3, "largest gap {worst_gap} s");
+        assert_eq!(min_time_from_rest(0.5, 3.0, v, a), f64::INFINITY);
+    }
 }
