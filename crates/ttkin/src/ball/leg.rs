@@ -48,6 +48,20 @@ pub struct HitLeg {
 /// s within `limits`: the quintic when it is within them, else the jerk-limited leg when that
 /// reaches the hit state on time inside the position limits; `None` when neither does.
 pub fn hit_leg(start: &JointState, q: &[f64], qd: &[f64], t_hit: f64, limits: &KinematicLimits) -> Option<HitLeg> {
+    hit_leg_above(start, q, qd, t_hit, limits, f64::NEG_INFINITY)
+}
+
+/// [`hit_leg`] when the leg's margin exceeds `floor`, else `None` (also when `hit_leg` has no
+/// leg): a caller keeping the largest margin skips the solves of legs it would not keep (the
+/// jerk-limited leg's margin is known from its time-optimal duration, before the on-time solve).
+pub fn hit_leg_above(
+    start: &JointState,
+    q: &[f64],
+    qd: &[f64],
+    t_hit: f64,
+    limits: &KinematicLimits,
+    floor: f64,
+) -> Option<HitLeg> {
     if !(t_hit > 0.0 && t_hit.is_finite()) {
         return None;
     }
@@ -71,6 +85,9 @@ pub fn hit_leg(start: &JointState, q: &[f64], qd: &[f64], t_hit: f64, limits: &K
     }
     let (ratio, end) = best.expect("three trials");
     if ratio <= 1.0 {
+        if 1.0 - ratio <= floor {
+            return None;
+        }
         return Some(HitLeg {
             profile: StrokeProfile::Quintic,
             trajectory: JointTrajectory::quintic_unchecked(start, &end, t_hit),
@@ -78,11 +95,18 @@ pub fn hit_leg(start: &JointState, q: &[f64], qd: &[f64], t_hit: f64, limits: &K
             margin: 1.0 - ratio,
         });
     }
-    jerk_leg(start, q, qd, t_hit, limits)
+    jerk_leg(start, q, qd, t_hit, limits, floor)
 }
 
 /// The jerk-limited leg of [`hit_leg`] (step 2 of the module doc).
-fn jerk_leg(start: &JointState, q: &[f64], qd: &[f64], t_hit: f64, limits: &KinematicLimits) -> Option<HitLeg> {
+fn jerk_leg(
+    start: &JointState,
+    q: &[f64],
+    qd: &[f64],
+    t_hit: f64,
+    limits: &KinematicLimits,
+    floor: f64,
+) -> Option<HitLeg> {
     let end = JointState {
         q: q.to_vec(),
         qd: qd.to_vec(),
@@ -100,7 +124,8 @@ fn jerk_leg(start: &JointState, q: &[f64], qd: &[f64], t_hit: f64, limits: &Kine
         return None;
     }
     let fastest = jerk_limited_duration(start, &end, limits, None, PositionLimits::Ignore).ok()?;
-    if fastest > t_hit {
+    let margin = (1.0 - fastest / t_hit).clamp(0.0, 1.0);
+    if fastest > t_hit || margin <= floor {
         return None;
     }
     let on_time = |position: PositionLimits| {
@@ -113,7 +138,7 @@ fn jerk_leg(start: &JointState, q: &[f64], qd: &[f64], t_hit: f64, limits: &Kine
         profile: StrokeProfile::Jerk,
         trajectory: leg.trajectory,
         qdd_hit: end.qdd,
-        margin: (1.0 - fastest / t_hit).clamp(0.0, 1.0),
+        margin,
     })
 }
 
@@ -155,6 +180,35 @@ pub(crate) fn min_time_from_rest(delta: f64, v1: f64, vmax: f64, amax: f64) -> f
 mod tests {
     use super::*;
     use crate::traj::jerk::jerk_limited;
+
+    #[test]
+    fn leg_above_a_floor_is_the_leg_when_its_margin_exceeds_the_floor() {
+        let pl = crate::ball::hitplan::HitPlanner::new(crate::robots::gantry6(), Default::default()).unwrap();
+        let lim = pl.limits();
+        let mut rng = fastrand::Rng::with_seed(5);
+        let (mut quintic, mut jerk, mut none) = (0, 0, 0);
+        for _ in 0..400 {
+            let start = JointState::rest(&pl.ready);
+            let q: Vec<f64> = pl.ready.iter().map(|x| x + 0.6 * (2.0 * rng.f64() - 1.0)).collect();
+            let qd: Vec<f64> = lim.velocity.iter().map(|v| 0.8 * v * (2.0 * rng.f64() - 1.0)).collect();
+            let t_hit = 0.15 + 0.5 * rng.f64();
+            let full = hit_leg(&start, &q, &qd, t_hit, lim);
+            match &full {
+                Some(l) if l.profile == StrokeProfile::Quintic => quintic += 1,
+                Some(_) => jerk += 1,
+                None => none += 1,
+            }
+            for floor in [0.0, 0.1, 0.3, 0.6] {
+                let above = hit_leg_above(&start, &q, &qd, t_hit, lim, floor);
+                let want = full.clone().filter(|l| l.margin > floor);
+                assert_eq!(above, want, "floor {floor}");
+            }
+        }
+        assert!(
+            quintic > 10 && jerk > 10 && none > 10,
+            "{quintic} quintic, {jerk} jerk, {none} none"
+        );
+    }
 
     #[test]
     fn rest_bound_is_below_ruckig_and_tight_for_a_large_jerk_limit() {

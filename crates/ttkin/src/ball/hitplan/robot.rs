@@ -3,7 +3,7 @@
 
 use super::super::flight::BallState;
 use super::super::impact::RacketHit;
-use super::super::leg::{hit_leg, HitLeg};
+use super::super::leg::{hit_leg_above, HitLeg};
 use super::super::reach::min_joint_time;
 use super::{Hit, HitPlanner};
 use crate::chain::JacobianFrame;
@@ -41,7 +41,9 @@ impl HitPlanner {
             let pose = self.base_pose_rolled(&centres[k], &racket.normal, roll);
             for q in self.branches(&pose, Some(&start.q)) {
                 let q = q.as_slice();
-                let Some((qd, leg, margin)) = self.stroke_margin(q, start, &twist, t_hit) else {
+                // Only a margin above the best so far can replace it: no solves for the rest.
+                let floor = best.as_ref().map_or(f64::NEG_INFINITY, |b| b.margin);
+                let Some((qd, leg, margin)) = self.stroke_margin(q, start, &twist, t_hit, floor) else {
                     continue;
                 };
                 if best.as_ref().is_none_or(|b| margin > b.margin) {
@@ -67,23 +69,16 @@ impl HitPlanner {
 
     /// Joint velocities at the hit, the hit leg ([`super::leg`]) and the margin of the stroke from
     /// `start` to the configuration `q` moving the racket with `twist` (base frame) after `t_hit`
-    /// s, or `None` when it is singular or no leg is within the limits.
+    /// s, or `None` when it is singular, no leg is within the limits or the margin is at most
+    /// `floor` (−∞: any margin).
     pub(super) fn stroke_margin(
         &self,
         q: &[f64],
         start: &JointState,
         twist: &[f64; 6],
         t_hit: f64,
+        floor: f64,
     ) -> Option<(Vec<f64>, HitLeg, f64)> {
-        if self.too_far(q, start, t_hit) {
-            return None;
-        }
-        let qdot = self.hit_joint_velocity(q, twist)?;
-        let lim = &self.limits;
-        if qdot.iter().zip(&lim.velocity).any(|(qd, v)| qd.abs() > *v) {
-            return None;
-        }
-        let leg = hit_leg(start, q, &qdot, t_hit, &self.limits)?;
         let mut pos_margin = f64::INFINITY;
         for (i, &qi) in q.iter().enumerate() {
             let (lo, hi) = (self.limits.lower[i], self.limits.upper[i]);
@@ -91,6 +86,15 @@ impl HitPlanner {
                 pos_margin = pos_margin.min(2.0 * (qi - lo).min(hi - qi) / (hi - lo));
             }
         }
+        if pos_margin <= floor || self.too_far(q, start, t_hit) {
+            return None;
+        }
+        let qdot = self.hit_joint_velocity(q, twist)?;
+        let lim = &self.limits;
+        if qdot.iter().zip(&lim.velocity).any(|(qd, v)| qd.abs() > *v) {
+            return None;
+        }
+        let leg = hit_leg_above(start, q, &qdot, t_hit, &self.limits, floor)?;
         let margin = pos_margin.min(leg.margin);
         Some((qdot, leg, margin))
     }
