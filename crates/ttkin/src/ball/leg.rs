@@ -14,6 +14,12 @@
 //!    checked again). Its margin is 1 − T*/`t_hit`: the fraction of the time available that the
 //!    fastest stroke leaves unused.
 //!
+//! Cheap rejections first (the same legs): from rest, no Ruckig solve when a joint's jerk-free
+//! minimum time to its hit state (`min_time_from_rest`) exceeds the hit time; the quintic's
+//! peak search stops at the first peak above the best trial or the limit
+//! ([`crate::traj::duration::quintic_limit_ratio_below`]); [`hit_leg_above`] skips the legs whose
+//! margin cannot exceed a floor (the hit planner's best so far) before their solves.
+//!
 //! A quintic needs about 1.7 times the time-optimal duration for a rest-to-rest move, so the
 //! jerk-limited leg reaches balls the quintic cannot (docs/ball.md). Margins of the two profiles
 //! measure different things (peak ratio, time ratio); both are 0 at the limit and grow toward 1

@@ -12,7 +12,8 @@
 //!    placeable targets of every candidate (at most `FALLBACK_ATTEMPTS` shooting solves).
 //! 2. **Outgoing velocity** (`shoot.rs`). Shooting: the velocity v₀ with which the ball, spinning with its
 //!    post-impact spin, is at (x_t, y_t, r) after the return flight time T: Broyden's method on the
-//!    3×3 map v₀ ↦ p(T), started from the drag-free solution with Jacobian T·I; T from
+//!    3×3 map v₀ ↦ p(T), started from the drag-free solution with Jacobian T·I, first on a 4×
+//!    coarser RK4 step to 0.1 mm and then at the flight's step to 0.01 mm; T from
 //!    `return_times` in order until the flight clears the net and first touches the table at the
 //!    target (within 1 mm). The post-impact spin depends on the racket, which depends on v₀: every
 //!    evaluation of the map solves the racket for its v₀ and flies the ball with that spin.
