@@ -68,8 +68,8 @@ where
 }
 
 /// [`shoot`] in two stages, the result to the same tolerance at the flight's own step: Broyden's
-/// method first on the flight integrated at [`COARSE_FACTOR`] × its step (4 times fewer RK4
-/// steps, to [`COARSE_TOLERANCE`]), then continued from that velocity and inverse Jacobian at the
+/// method first on the flight integrated at 4 × its step (4 times fewer RK4
+/// steps, to 0.1 mm), then continued from that velocity and inverse Jacobian at the
 /// flight's step (usually one or two evaluations, as the two integrations differ by far less than
 /// the coarse tolerance).
 pub fn shoot_coarse_first<S>(
