@@ -2,7 +2,7 @@
 //! and the bounded limit ratio is the exact one whenever it matters.
 
 use proptest::prelude::*;
-use ttkin::traj::duration::{quintic_limit_ratio, quintic_limit_ratio_above};
+use ttkin::traj::duration::{quintic_limit_ratio, quintic_limit_ratio_above, quintic_limit_ratio_below};
 use ttkin::traj::{poly, JointState, JointTrajectory, KinematicLimits};
 
 fn vecs(n: usize, r: f64) -> impl Strategy<Value = Vec<f64>> {
@@ -60,6 +60,22 @@ proptest! {
             prop_assert_eq!(above.to_bits(), exact.to_bits());
         } else {
             prop_assert!(above <= floor, "{above} above the floor {floor} while the exact ratio is {exact}");
+        }
+    }
+
+    #[test]
+    fn ratio_below_is_the_exact_ratio_when_it_is_under_the_ceiling(
+        q0 in vecs(6, 2.0), q1 in vecs(6, 2.0), v0 in vecs(6, 3.0), v1 in vecs(6, 3.0),
+        a0 in vecs(6, 5.0), t in 0.05..2.0f64, ceiling in 0.0..3.0f64,
+    ) {
+        let lim = KinematicLimits::new(&[2.0; 6], &[20.0; 6], &[400.0; 6]).unwrap();
+        let (s, e) = (state(q0, v0, a0), state(q1, v1, vec![0.0; 6]));
+        let exact = quintic_limit_ratio(&s, &e, t, &lim);
+        let below = quintic_limit_ratio_below(&s, &e, t, &lim, ceiling);
+        if exact < ceiling {
+            prop_assert_eq!(below.to_bits(), exact.to_bits());
+        } else {
+            prop_assert!(below >= ceiling && below <= exact, "{below} for the ceiling {ceiling}, exact {exact}");
         }
     }
 }

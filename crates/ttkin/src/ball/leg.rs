@@ -14,19 +14,28 @@
 //!    checked again). Its margin is 1 − T*/`t_hit`: the fraction of the time available that the
 //!    fastest stroke leaves unused.
 //!
+//! Cheap rejections first (the same legs): from rest, no Ruckig solve when a joint's jerk-free
+//! minimum time to its hit state (`min_time_from_rest`) exceeds the hit time; the quintic's
+//! peak search stops at the first peak above the best trial or the limit
+//! ([`crate::traj::duration::quintic_limit_ratio_below`]); [`hit_leg_above`] skips the legs whose
+//! margin cannot exceed a floor (the hit planner's best so far) before their solves.
+//!
 //! A quintic needs about 1.7 times the time-optimal duration for a rest-to-rest move, so the
 //! jerk-limited leg reaches balls the quintic cannot (docs/ball.md). Margins of the two profiles
 //! measure different things (peak ratio, time ratio); both are 0 at the limit and grow toward 1
 //! with slack.
 
 use crate::hit::StrokeProfile;
-use crate::traj::duration::quintic_limit_ratio;
-use crate::traj::jerk::{jerk_limited, PositionLimits};
+use crate::traj::duration::quintic_limit_ratio_below;
+use crate::traj::jerk::{jerk_limited, jerk_limited_duration, PositionLimits};
 use crate::traj::limits::KinematicLimits;
 use crate::traj::{JointState, JointTrajectory};
 
 /// Largest difference (s) between the jerk-limited leg's duration and the hit time.
 const DURATION_TOLERANCE: f64 = 1e-9;
+
+/// Ceiling of the quintic's peak/limit search: above the acceptance limit 1 by a rounding margin.
+const ACCEPT_CEILING: f64 = 1.0 + 1e-12;
 
 /// An accepted hit leg (joint frame: m, rad, from the stroke start at 0 s to the hit at `t_hit`).
 #[derive(Debug, Clone, PartialEq)]
@@ -45,6 +54,20 @@ pub struct HitLeg {
 /// s within `limits`: the quintic when it is within them, else the jerk-limited leg when that
 /// reaches the hit state on time inside the position limits; `None` when neither does.
 pub fn hit_leg(start: &JointState, q: &[f64], qd: &[f64], t_hit: f64, limits: &KinematicLimits) -> Option<HitLeg> {
+    hit_leg_above(start, q, qd, t_hit, limits, f64::NEG_INFINITY)
+}
+
+/// [`hit_leg`] when the leg's margin exceeds `floor`, else `None` (also when `hit_leg` has no
+/// leg): a caller keeping the largest margin skips the solves of legs it would not keep (the
+/// jerk-limited leg's margin is known from its time-optimal duration, before the on-time solve).
+pub fn hit_leg_above(
+    start: &JointState,
+    q: &[f64],
+    qd: &[f64],
+    t_hit: f64,
+    limits: &KinematicLimits,
+    floor: f64,
+) -> Option<HitLeg> {
     if !(t_hit > 0.0 && t_hit.is_finite()) {
         return None;
     }
@@ -58,13 +81,19 @@ pub fn hit_leg(start: &JointState, q: &[f64], qd: &[f64], t_hit: f64, limits: &K
             qd: qd.to_vec(),
             qdd: cubic.iter().map(|a| alpha * a).collect(),
         };
-        let ratio = quintic_limit_ratio(start, &end, t_hit, limits);
+        // Exact below the best so far and below 1 (a ratio above both is neither chosen nor
+        // accepted); the small excess over 1 keeps a ratio of exactly 1 exact.
+        let ceiling = best.as_ref().map_or(ACCEPT_CEILING, |(r, _)| r.min(ACCEPT_CEILING));
+        let ratio = quintic_limit_ratio_below(start, &end, t_hit, limits, ceiling);
         if best.as_ref().is_none_or(|(r, _)| ratio < *r) {
             best = Some((ratio, end));
         }
     }
     let (ratio, end) = best.expect("three trials");
     if ratio <= 1.0 {
+        if 1.0 - ratio <= floor {
+            return None;
+        }
         return Some(HitLeg {
             profile: StrokeProfile::Quintic,
             trajectory: JointTrajectory::quintic_unchecked(start, &end, t_hit),
@@ -72,18 +101,37 @@ pub fn hit_leg(start: &JointState, q: &[f64], qd: &[f64], t_hit: f64, limits: &K
             margin: 1.0 - ratio,
         });
     }
-    jerk_leg(start, q, qd, t_hit, limits)
+    jerk_leg(start, q, qd, t_hit, limits, floor)
 }
 
 /// The jerk-limited leg of [`hit_leg`] (step 2 of the module doc).
-fn jerk_leg(start: &JointState, q: &[f64], qd: &[f64], t_hit: f64, limits: &KinematicLimits) -> Option<HitLeg> {
+fn jerk_leg(
+    start: &JointState,
+    q: &[f64],
+    qd: &[f64],
+    t_hit: f64,
+    limits: &KinematicLimits,
+    floor: f64,
+) -> Option<HitLeg> {
     let end = JointState {
         q: q.to_vec(),
         qd: qd.to_vec(),
         qdd: vec![0.0; q.len()],
     };
-    let fastest = jerk_limited(start, &end, limits, None, PositionLimits::Ignore).ok()?;
-    if fastest.duration > t_hit {
+    // From rest, a joint cannot reach its hit state sooner than without a jerk limit: no
+    // Ruckig solve when that bound already exceeds the hit time.
+    let at_rest = start.qd.iter().chain(&start.qdd).all(|x| *x == 0.0);
+    if at_rest
+        && (0..q.len()).any(|i| {
+            let bound = min_time_from_rest(q[i] - start.q[i], qd[i], limits.velocity[i], limits.acceleration[i]);
+            bound > t_hit * (1.0 + 1e-9)
+        })
+    {
+        return None;
+    }
+    let fastest = jerk_limited_duration(start, &end, limits, None, PositionLimits::Ignore).ok()?;
+    let margin = (1.0 - fastest / t_hit).clamp(0.0, 1.0);
+    if fastest > t_hit || margin <= floor {
         return None;
     }
     let on_time = |position: PositionLimits| {
@@ -96,11 +144,108 @@ fn jerk_leg(start: &JointState, q: &[f64], qd: &[f64], t_hit: f64, limits: &Kine
         profile: StrokeProfile::Jerk,
         trajectory: leg.trajectory,
         qdd_hit: end.qdd,
-        margin: (1.0 - fastest.duration / t_hit).clamp(0.0, 1.0),
+        margin,
     })
 }
 
 /// Whether `traj` stays inside the position limits of `limits` (exact, to [`crate::traj::limits::LIMIT_TOLERANCE`]).
 fn inside(traj: &JointTrajectory, limits: &KinematicLimits) -> bool {
     traj.position_violations(limits, 0.0).is_empty()
+}
+
+/// Shortest time (s) for one joint from rest to travel `delta` and arrive with velocity `v1` (m
+/// or rad, per s) under the speed limit `vmax` and acceleration limit `amax`, jerk unlimited: the
+/// time-optimal bang-bang (and cruise) profile of the double integrator (Pontryagin's maximum
+/// principle; e.g. Kröger, "On-Line Trajectory Generation in Robotic Systems", 2010). Forward (peak ≥ v1) when delta ≥ v1²/(2·amax) after
+/// turning signs so that v1 ≥ 0, else first backward then forward. A lower bound on any
+/// jerk-limited profile of the same problem; infinite when |v1| > vmax.
+pub(crate) fn min_time_from_rest(delta: f64, v1: f64, vmax: f64, amax: f64) -> f64 {
+    let (d, v1) = if v1 < 0.0 { (-delta, -v1) } else { (delta, v1) };
+    let (v, a) = (vmax, amax);
+    if v1 > v {
+        return f64::INFINITY;
+    }
+    if d >= v1 * v1 / (2.0 * a) {
+        let peak = (a * d + 0.5 * v1 * v1).sqrt();
+        if peak <= v {
+            (2.0 * peak - v1) / a
+        } else {
+            (2.0 * v - v1) / a + (d - (2.0 * v * v - v1 * v1) / (2.0 * a)) / v
+        }
+    } else {
+        let back = (0.5 * v1 * v1 - a * d).sqrt();
+        if back <= v {
+            (2.0 * back + v1) / a
+        } else {
+            (2.0 * v + v1) / a + ((v1 * v1 - 2.0 * v * v) / (2.0 * a) - d) / v
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::traj::jerk::jerk_limited;
+
+    #[test]
+    fn leg_above_a_floor_is_the_leg_when_its_margin_exceeds_the_floor() {
+        let pl = crate::ball::hitplan::HitPlanner::new(crate::robots::gantry6(), Default::default()).unwrap();
+        let lim = pl.limits();
+        let mut rng = fastrand::Rng::with_seed(5);
+        let (mut quintic, mut jerk, mut none) = (0, 0, 0);
+        for _ in 0..400 {
+            let start = JointState::rest(&pl.ready);
+            let q: Vec<f64> = pl.ready.iter().map(|x| x + 0.6 * (2.0 * rng.f64() - 1.0)).collect();
+            let qd: Vec<f64> = lim.velocity.iter().map(|v| 0.8 * v * (2.0 * rng.f64() - 1.0)).collect();
+            let t_hit = 0.15 + 0.5 * rng.f64();
+            let full = hit_leg(&start, &q, &qd, t_hit, lim);
+            match &full {
+                Some(l) if l.profile == StrokeProfile::Quintic => quintic += 1,
+                Some(_) => jerk += 1,
+                None => none += 1,
+            }
+            for floor in [0.0, 0.1, 0.3, 0.6] {
+                let above = hit_leg_above(&start, &q, &qd, t_hit, lim, floor);
+                let want = full.clone().filter(|l| l.margin > floor);
+                assert_eq!(above, want, "floor {floor}");
+            }
+        }
+        assert!(
+            quintic > 10 && jerk > 10 && none > 10,
+            "{quintic} quintic, {jerk} jerk, {none} none"
+        );
+    }
+
+    #[test]
+    fn rest_bound_is_below_ruckig_and_tight_for_a_large_jerk_limit() {
+        let mut rng = fastrand::Rng::with_seed(3);
+        let (v, a) = (2.0, 20.0);
+        let (mut worst_gap, mut cases) = (0.0f64, 0);
+        for _ in 0..2000 {
+            let delta = 2.0 * (2.0 * rng.f64() - 1.0);
+            let v1 = v * (2.0 * rng.f64() - 1.0);
+            let bound = min_time_from_rest(delta, v1, v, a);
+            for (jerk, tight) in [(2000.0, false), (2e6, true)] {
+                let lim = KinematicLimits::new(&[v], &[a], &[jerk]).unwrap();
+                let end = JointState {
+                    q: vec![delta],
+                    qd: vec![v1],
+                    qdd: vec![0.0],
+                };
+                let t = jerk_limited(&JointState::rest(&[0.0]), &end, &lim, None, PositionLimits::Ignore)
+                    .unwrap()
+                    .duration;
+                assert!(
+                    bound <= t * (1.0 + 1e-9),
+                    "bound {bound} above Ruckig {t} ({delta}, {v1})"
+                );
+                if tight {
+                    worst_gap = worst_gap.max(t - bound);
+                    cases += 1;
+                }
+            }
+        }
+        assert!(cases == 2000 && worst_gap < 1e-3, "largest gap {worst_gap} s");
+        assert_eq!(min_time_from_rest(0.5, 3.0, v, a), f64::INFINITY);
+    }
 }

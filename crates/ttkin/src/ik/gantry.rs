@@ -154,21 +154,47 @@ impl GantryIk {
         sols: &mut Solutions,
     ) -> Result<()> {
         let t = self.info.to_chain(target);
+        crate::error::check_finite("target pose", t.rotation.matrix().as_slice())?;
+        crate::error::check_finite("target pose", t.translation.vector.as_slice())?;
+        self.branches_of(&t, q3_hint, sols).map_err(|BandMiss { pz, az, h }| {
+            let GantryLengths { l1, l3, l4, .. } = self.lengths;
+            Error::Unreachable(format!(
+                "gantry height band |pz − L1 − L4·az| ≤ L3 fails: |{pz:.6} − {l1} − {l4}·({az:.6})| = {:.6} m > L3 = {l3} m",
+                h.abs()
+            ))
+        })
+    }
+
+    /// [`GantryIk::solve_into`] without error messages: `None` outside the height band or for a
+    /// non-finite target (the hit planner's search asks for thousands of poses beyond the arm).
+    pub(crate) fn solve_quiet(&self, target: &IsometryMatrix3<f64>, q3_hint: Option<f64>) -> Option<Solutions> {
+        let t = self.info.to_chain(target);
+        let finite = t
+            .rotation
+            .matrix()
+            .iter()
+            .chain(t.translation.vector.iter())
+            .all(|x| x.is_finite());
+        let mut sols = Solutions::empty(6);
+        (finite && self.branches_of(&t, q3_hint, &mut sols).is_ok()).then_some(sols)
+    }
+
+    /// The branches of the finite chain-frame pose `t` into `sols`, or the height band's values
+    /// when it fails.
+    fn branches_of(
+        &self,
+        t: &IsometryMatrix3<f64>,
+        q3_hint: Option<f64>,
+        sols: &mut Solutions,
+    ) -> std::result::Result<(), BandMiss> {
         let r = t.rotation.matrix();
         let p = t.translation.vector;
-        crate::error::check_finite("target pose", r.as_slice())?;
-        crate::error::check_finite("target pose", p.as_slice())?;
         let GantryLengths { l1, l2, l3, l4 } = self.lengths;
         let a: Vector3<f64> = r.column(2).into_owned();
         let h = p.z - l1 - l4 * a.z;
         let s4 = h / l3;
         if !(s4.abs() <= 1.0 + BAND_SLACK) {
-            return Err(Error::Unreachable(format!(
-                "gantry height band |pz − L1 − L4·az| ≤ L3 fails: |{:.6} − {l1} − {l4}·({:.6})| = {:.6} m > L3 = {l3} m",
-                p.z,
-                a.z,
-                h.abs()
-            )));
+            return Err(BandMiss { pz: p.z, az: a.z, h });
         }
         let s4 = s4.clamp(-1.0, 1.0);
         let c4_abs = (1.0 - s4 * s4).max(0.0).sqrt();
@@ -213,6 +239,13 @@ impl GantryIk {
         }
         Ok(())
     }
+}
+
+/// The values of a failed height band test (m; `az` the tool axis' z component), for its message.
+struct BandMiss {
+    pz: f64,
+    az: f64,
+    h: f64,
 }
 
 /// Rz(−θ)·v from s = sin θ, c = cos θ.

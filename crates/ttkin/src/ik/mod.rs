@@ -247,6 +247,15 @@ impl Analytic {
         }
     }
 
+    /// [`Analytic::solve`] without limit filter and without building error messages: `None` when
+    /// the pose is unreachable or not finite (the hit planner's search).
+    pub(crate) fn solve_quiet(&self, target: &IsometryMatrix3<f64>, hint: Option<&[f64]>) -> Option<Solutions> {
+        match self {
+            Analytic::Gantry6(g) => g.solve_quiet(target, hint.map(|h| h.get(2).copied().unwrap_or(0.0))),
+            Analytic::Arm4(a) => a.solve(target, LimitFilter::Off).ok(),
+        }
+    }
+
     /// The branch nearest to `current` (m, rad): joint-space distance, revolute angles shifted
     /// by 2πk to the copy nearest `current`.
     pub fn nearest(&self, target: &IsometryMatrix3<f64>, current: &[f64], filter: LimitFilter) -> Result<Vec<f64>> {

@@ -152,6 +152,44 @@ pub fn quintic_limit_ratio_above(
     worst
 }
 
+/// [`quintic_limit_ratio`] when it is below `ceiling`, exactly the same number; otherwise some
+/// value ≥ `ceiling` (a peak found so far). Cheaper when most trials fail: peaks are computed
+/// exactly in the order of their bounds ([`poly::bound_abs`], largest first), skipping those whose
+/// bound is below the largest exact ratio found, and the search stops at the first ≥ `ceiling`.
+pub fn quintic_limit_ratio_below(
+    start: &JointState,
+    end: &JointState,
+    duration: f64,
+    limits: &KinematicLimits,
+    ceiling: f64,
+) -> f64 {
+    let mut items = [(0.0, [0.0; 6], 1.0); 3 * MAX_QUICK_DOF];
+    let n = start.q.len();
+    if n > MAX_QUICK_DOF {
+        return quintic_limit_ratio(start, end, duration, limits);
+    }
+    let mut count = 0;
+    for j in 0..n {
+        for (d, bound) in limited_derivatives(start, end, j, duration, limits) {
+            items[count] = (poly::bound_abs(&d, duration) / bound, d, bound);
+            count += 1;
+        }
+    }
+    let items = &mut items[..count];
+    items.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
+    let mut worst: f64 = 0.0;
+    for (ub, d, bound) in items.iter() {
+        if *ub <= worst {
+            break;
+        }
+        worst = worst.max(poly::max_abs(d, duration).1.abs() / bound);
+        if worst >= ceiling {
+            break;
+        }
+    }
+    worst
+}
+
 /// Most joints [`quintic_limit_ratio_above`] handles on the stack.
 const MAX_QUICK_DOF: usize = 8;
 

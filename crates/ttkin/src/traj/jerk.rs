@@ -56,34 +56,32 @@ pub fn jerk_limited(
     minimum_duration: Option<f64>,
     position: PositionLimits,
 ) -> Result<JerkLimited> {
-    let n = start.check_pair("start", end, "end")?;
-    limits.check_dof(n)?;
-    for (what, v) in [
-        ("velocity limits", &limits.velocity),
-        ("acceleration limits", &limits.acceleration),
-        ("jerk limits", &limits.jerk),
-    ] {
-        if let Some(j) = v.iter().position(|x| !x.is_finite()) {
-            return Err(Error::invalid(
-                what,
-                format!("joint {j}: a jerk-limited stroke needs a finite limit, got {}", v[j]),
-            ));
-        }
+    let stroke = Stroke::checked(start, end, limits, minimum_duration, position)?;
+    match start.q.len() {
+        6 => stroke.solve::<6>(true),
+        _ => stroke.solve::<0>(true),
     }
-    if let Some(d) = minimum_duration {
-        super::check_duration("minimum_duration", d)?;
+    .map(|(duration, trajectory)| JerkLimited {
+        trajectory: trajectory.expect("built"),
+        duration,
+    })
+}
+
+/// The duration (s) of [`jerk_limited`]'s trajectory for the same arguments and errors, without
+/// building the trajectory (the hit leg's time-optimal bound).
+pub fn jerk_limited_duration(
+    start: &JointState,
+    end: &JointState,
+    limits: &KinematicLimits,
+    minimum_duration: Option<f64>,
+    position: PositionLimits,
+) -> Result<f64> {
+    let stroke = Stroke::checked(start, end, limits, minimum_duration, position)?;
+    match start.q.len() {
+        6 => stroke.solve::<6>(false),
+        _ => stroke.solve::<0>(false),
     }
-    let stroke = Stroke {
-        start,
-        end,
-        limits,
-        minimum_duration,
-        position,
-    };
-    match n {
-        6 => stroke.solve::<6>(),
-        _ => stroke.solve::<0>(),
-    }
+    .map(|(duration, _)| duration)
 }
 
 /// The arguments of [`jerk_limited`] after its checks.
@@ -95,10 +93,52 @@ struct Stroke<'a> {
     position: PositionLimits,
 }
 
-impl Stroke<'_> {
-    /// [`jerk_limited`] after the checks, with Ruckig's data on the stack for `N` > 0 joints (heap for
-    /// `N` = 0, any count).
-    fn solve<const N: usize>(&self) -> Result<JerkLimited> {
+thread_local! {
+    /// A 6-joint Ruckig solver and trajectory reused across calls (building them costs about as
+    /// much as a solve; `calculate` keeps no state between problems).
+    static SIX: std::cell::RefCell<Option<(Ruckig<6, IgnoreErrorHandler>, Trajectory<6>)>> =
+        const { std::cell::RefCell::new(None) };
+}
+
+impl<'a> Stroke<'a> {
+    /// The checks of [`jerk_limited`].
+    fn checked(
+        start: &'a JointState,
+        end: &'a JointState,
+        limits: &'a KinematicLimits,
+        minimum_duration: Option<f64>,
+        position: PositionLimits,
+    ) -> Result<Self> {
+        let n = start.check_pair("start", end, "end")?;
+        limits.check_dof(n)?;
+        for (what, v) in [
+            ("velocity limits", &limits.velocity),
+            ("acceleration limits", &limits.acceleration),
+            ("jerk limits", &limits.jerk),
+        ] {
+            if let Some(j) = v.iter().position(|x| !x.is_finite()) {
+                return Err(Error::invalid(
+                    what,
+                    format!("joint {j}: a jerk-limited stroke needs a finite limit, got {}", v[j]),
+                ));
+            }
+        }
+        if let Some(d) = minimum_duration {
+            super::check_duration("minimum_duration", d)?;
+        }
+        Ok(Stroke {
+            start,
+            end,
+            limits,
+            minimum_duration,
+            position,
+        })
+    }
+
+    /// [`jerk_limited`] after the checks: the duration and, when `build`, the trajectory, with
+    /// Ruckig's data on the stack for `N` > 0 joints (heap for `N` = 0, any count; the 6-joint
+    /// solver reused per thread).
+    fn solve<const N: usize>(&self, build: bool) -> Result<(f64, Option<JointTrajectory>)> {
         let n = self.start.q.len();
         let dofs = if N == 0 { Some(n) } else { None };
         let mut input = InputParameter::<N>::new(dofs);
@@ -132,11 +172,44 @@ impl Stroke<'_> {
             input.min_position = Some(lo);
             input.max_position = Some(hi);
         }
+        if N == 6 {
+            // Same code as below on the thread's reused solver (N = 6 here, so the casts hold).
+            let input6: &InputParameter<6> = as_six(&input);
+            return SIX.with(|cell| {
+                let mut slot = cell.borrow_mut();
+                let (otg, traj) = slot.get_or_insert_with(|| {
+                    (
+                        Ruckig::<6, IgnoreErrorHandler>::new(None, 1e-3),
+                        Trajectory::<6>::new(None),
+                    )
+                });
+                let result = otg.calculate(input6, traj);
+                finish::<6>(result, traj, n, build)
+            });
+        }
         let mut otg = Ruckig::<N, IgnoreErrorHandler>::new(dofs, 1e-3);
         let mut traj = Trajectory::<N>::new(dofs);
-        let result = otg
-            .calculate(&input, &mut traj)
-            .map_err(|e| Error::invalid("jerk-limited stroke", format!("{e:?}")))?;
+        let result = otg.calculate(&input, &mut traj);
+        finish::<N>(result, &traj, n, build)
+    }
+}
+
+/// `input` as the 6-joint type when `N` = 6 (the same type then).
+fn as_six<const N: usize>(input: &InputParameter<N>) -> &InputParameter<6> {
+    (input as &dyn std::any::Any)
+        .downcast_ref::<InputParameter<6>>()
+        .expect("N = 6")
+}
+
+/// The duration and (when `build`) the trajectory of a Ruckig result, or the error it means.
+fn finish<const N: usize>(
+    result: std::result::Result<RuckigResult, rsruckig::prelude::RuckigError>,
+    traj: &Trajectory<N>,
+    n: usize,
+    build: bool,
+) -> Result<(f64, Option<JointTrajectory>)> {
+    {
+        let result = result.map_err(|e| Error::invalid("jerk-limited stroke", format!("{e:?}")))?;
         match result {
             RuckigResult::Working | RuckigResult::Finished => {}
             RuckigResult::ErrorPositionalLimits => {
@@ -162,10 +235,7 @@ impl Stroke<'_> {
                 format!("the solver returned a duration of {duration} s"),
             ));
         }
-        Ok(JerkLimited {
-            trajectory: to_joint_trajectory::<N>(&traj, n, duration),
-            duration,
-        })
+        Ok((duration, build.then(|| to_joint_trajectory::<N>(traj, n, duration))))
     }
 }
 
@@ -273,6 +343,25 @@ mod tests {
         assert!(r.trajectory.check_limits(&limits()).unwrap().is_empty());
         // The stretched one cannot be faster than the time-optimal one.
         assert!(fastest.duration <= r.duration);
+    }
+
+    #[test]
+    fn duration_alone_is_the_built_trajectory_s() {
+        let lim = KinematicLimits::new(&[2.0; 6], &[20.0; 6], &[4000.0; 6]).unwrap();
+        let mut rng = fastrand::Rng::with_seed(11);
+        for k in 0..200 {
+            let r = |rng: &mut fastrand::Rng, a: f64| (0..6).map(|_| a * (2.0 * rng.f64() - 1.0)).collect::<Vec<f64>>();
+            let s = JointState::rest(&r(&mut rng, 1.0));
+            let e = JointState {
+                q: r(&mut rng, 1.0),
+                qd: r(&mut rng, 1.5),
+                qdd: vec![0.0; 6],
+            };
+            let min = (k % 2 == 1).then(|| 0.5 + rng.f64());
+            let alone = jerk_limited_duration(&s, &e, &lim, min, PositionLimits::Ignore).unwrap();
+            let full = jerk_limited(&s, &e, &lim, min, PositionLimits::Ignore).unwrap();
+            assert_eq!(alone.to_bits(), full.duration.to_bits(), "problem {k}");
+        }
     }
 
     #[test]

@@ -12,7 +12,8 @@
 //!    placeable targets of every candidate (at most `FALLBACK_ATTEMPTS` shooting solves).
 //! 2. **Outgoing velocity** (`shoot.rs`). Shooting: the velocity v₀ with which the ball, spinning with its
 //!    post-impact spin, is at (x_t, y_t, r) after the return flight time T: Broyden's method on the
-//!    3×3 map v₀ ↦ p(T), started from the drag-free solution with Jacobian T·I; T from
+//!    3×3 map v₀ ↦ p(T), started from the drag-free solution with Jacobian T·I, first on a 4×
+//!    coarser RK4 step to 0.1 mm and then at the flight's step to 0.01 mm; T from
 //!    `return_times` in order until the flight clears the net and first touches the table at the
 //!    target (within 1 mm). The post-impact spin depends on the racket, which depends on v₀: every
 //!    evaluation of the map solves the racket for its v₀ and flies the ball with that spin.
@@ -295,6 +296,12 @@ impl HitPlanner {
         let mut skipped: Vec<usize> = Vec::new();
         // The target tried first for each candidate examined, in `order`.
         let mut first_goal: Vec<Option<[f64; 2]>> = Vec::new();
+        // The placement test of (candidate, target), each computed once (the fallback asks again).
+        let nt = targets.len();
+        let mut placeable_memo: Vec<Option<bool>> = vec![None; list.len() * nt];
+        let mut placeable = |i: usize, t: usize| -> bool {
+            *placeable_memo[i * nt + t].get_or_insert_with(|| self.roughly_placeable(&list[i], targets[t]))
+        };
         let mut attempt = |s: &BallState, goal: [f64; 2], best: &mut Option<Hit>| {
             tried += 1;
             for &tf in &self.return_times {
@@ -319,7 +326,7 @@ impl HitPlanner {
                 break;
             }
             let s = list[i];
-            let Some(&goal) = targets.iter().find(|&&g| self.roughly_placeable(&s, g)) else {
+            let Some(goal) = (0..nt).find(|&t| placeable(i, t)).map(|t| targets[t]) else {
                 skipped.push(i);
                 first_goal.push(None);
                 continue;
@@ -343,11 +350,11 @@ impl HitPlanner {
                 break;
             }
             let s = list[i];
-            for &goal in targets.iter().filter(|g| Some(**g) != tried_goal) {
+            for (t, &goal) in targets.iter().enumerate().filter(|(_, g)| Some(**g) != tried_goal) {
                 if budget == 0 || best.is_some() {
                     break 'fallback;
                 }
-                if self.roughly_placeable(&s, goal) {
+                if placeable(i, t) {
                     budget -= 1;
                     attempt(&s, goal, &mut best);
                 }

@@ -3,14 +3,14 @@
 
 use super::super::flight::BallState;
 use super::super::impact::RacketHit;
-use super::super::leg::{hit_leg, HitLeg};
+use super::super::leg::{hit_leg_above, HitLeg};
 use super::super::reach::min_joint_time;
 use super::{Hit, HitPlanner};
-use crate::ik::{joint_velocity, LimitFilter, Solutions};
+use crate::chain::JacobianFrame;
+use crate::ik::{joint_velocity, DifferentialIk, Solutions};
 use crate::joint::JointType;
 use crate::traj::JointState;
-use nalgebra::IsometryMatrix3;
-use nalgebra::Vector3;
+use nalgebra::{IsometryMatrix3, Matrix6, Vector3, Vector6};
 
 impl HitPlanner {
     /// The best robot hit (largest margin) over the racket rolls `rolls` about the face normal and
@@ -41,7 +41,9 @@ impl HitPlanner {
             let pose = self.base_pose_rolled(&centres[k], &racket.normal, roll);
             for q in self.branches(&pose, Some(&start.q)) {
                 let q = q.as_slice();
-                let Some((qd, leg, margin)) = self.stroke_margin(q, start, &twist, t_hit) else {
+                // Only a margin above the best so far can replace it: no solves for the rest.
+                let floor = best.as_ref().map_or(f64::NEG_INFINITY, |b| b.margin);
+                let Some((qd, leg, margin)) = self.stroke_margin(q, start, &twist, t_hit, floor) else {
                     continue;
                 };
                 if best.as_ref().is_none_or(|b| margin > b.margin) {
@@ -67,23 +69,16 @@ impl HitPlanner {
 
     /// Joint velocities at the hit, the hit leg ([`super::leg`]) and the margin of the stroke from
     /// `start` to the configuration `q` moving the racket with `twist` (base frame) after `t_hit`
-    /// s, or `None` when it is singular or no leg is within the limits.
+    /// s, or `None` when it is singular, no leg is within the limits or the margin is at most
+    /// `floor` (−∞: any margin).
     pub(super) fn stroke_margin(
         &self,
         q: &[f64],
         start: &JointState,
         twist: &[f64; 6],
         t_hit: f64,
+        floor: f64,
     ) -> Option<(Vec<f64>, HitLeg, f64)> {
-        if self.too_far(q, start, t_hit) {
-            return None;
-        }
-        let jv = joint_velocity(&self.chain, q, twist).ok()?;
-        let lim = &self.limits;
-        if jv.singular || jv.qdot.iter().zip(&lim.velocity).any(|(qd, v)| qd.abs() > *v) {
-            return None;
-        }
-        let leg = hit_leg(start, q, &jv.qdot, t_hit, &self.limits)?;
         let mut pos_margin = f64::INFINITY;
         for (i, &qi) in q.iter().enumerate() {
             let (lo, hi) = (self.limits.lower[i], self.limits.upper[i]);
@@ -91,8 +86,36 @@ impl HitPlanner {
                 pos_margin = pos_margin.min(2.0 * (qi - lo).min(hi - qi) / (hi - lo));
             }
         }
+        if pos_margin <= floor || self.too_far(q, start, t_hit) {
+            return None;
+        }
+        let qdot = self.hit_joint_velocity(q, twist)?;
+        let lim = &self.limits;
+        if qdot.iter().zip(&lim.velocity).any(|(qd, v)| qd.abs() > *v) {
+            return None;
+        }
+        let leg = hit_leg_above(start, q, &qdot, t_hit, &self.limits, floor)?;
         let margin = pos_margin.min(leg.margin);
-        Some((jv.qdot, leg, margin))
+        Some((qdot, leg, margin))
+    }
+
+    /// q̇ = J⁻¹·V (base frame) at `q` for the racket twist `twist`, or `None` where
+    /// [`joint_velocity`] calls the Jacobian singular (σ_min below its default threshold): for six
+    /// joints on the stack, σ_min from the singular values alone and q̇ from an LU solve (the
+    /// same q̇ to rounding as the damped-SVD solve away from singularities).
+    pub(super) fn hit_joint_velocity(&self, q: &[f64], twist: &[f64; 6]) -> Option<Vec<f64>> {
+        if q.len() != 6 {
+            let jv = joint_velocity(&self.chain, q, twist).ok()?;
+            return (!jv.singular).then_some(jv.qdot);
+        }
+        let j = self.chain.jacobian(q, JacobianFrame::Base).ok()?;
+        let m = Matrix6::from_iterator(j.iter().copied());
+        let sigma_min = m.singular_values().min();
+        if !(sigma_min >= DifferentialIk::default().threshold) {
+            return None;
+        }
+        let qdot = m.lu().solve(&Vector6::from_column_slice(twist))?;
+        Some(qdot.iter().copied().collect())
     }
 
     /// Racket centres (m, world) for a ball centre `p` touching a face with normal `n`, in the
@@ -132,8 +155,8 @@ impl HitPlanner {
     ) -> impl Iterator<Item = Vec<f64>> + '_ {
         let sols = self
             .ik
-            .solve(pose, hint, LimitFilter::Off)
-            .unwrap_or_else(|_| Solutions::empty(self.chain.dof()));
+            .solve_quiet(pose, hint)
+            .unwrap_or_else(|| Solutions::empty(self.chain.dof()));
         (0..sols.len()).filter_map(move |b| {
             sols.get(b)
                 .iter()
@@ -163,7 +186,41 @@ impl HitPlanner {
 mod tests {
     use super::super::super::flight::Flight;
     use super::*;
+    use crate::ik::LimitFilter;
     use nalgebra::Vector3;
+
+    #[test]
+    fn hit_joint_velocity_matches_differential_ik() {
+        let pl = HitPlanner::new(crate::robots::gantry6(), Flight::default()).unwrap();
+        let mut rng = fastrand::Rng::with_seed(7);
+        let (mut regular, mut singular) = (0, 0);
+        for k in 0..3000 {
+            let mut q: Vec<f64> = pl.ready.iter().map(|x| x + 2.0 * rng.f64() - 1.0).collect();
+            if k % 10 == 0 {
+                q[3] = std::f64::consts::FRAC_PI_2 + 1e-5 * (rng.f64() - 0.5); // c4 ≈ 0: singular
+            }
+            let twist = [0.0, 1.0, 0.0, 0.0, 0.0, 0.0].map(|_| 4.0 * rng.f64() - 2.0);
+            let twist = [twist[0], twist[1], twist[2], 0.0, 0.0, 0.0];
+            let jv = joint_velocity(&pl.chain, &q, &twist).unwrap();
+            match pl.hit_joint_velocity(&q, &twist) {
+                Some(qd) => {
+                    regular += 1;
+                    assert!(!jv.singular, "{q:?}");
+                    for (a, b) in qd.iter().zip(&jv.qdot) {
+                        assert!((a - b).abs() <= 1e-9 * (1.0 + b.abs()), "{qd:?} vs {:?}", jv.qdot);
+                    }
+                }
+                None => {
+                    singular += 1;
+                    assert!(jv.singular, "{q:?} sigma_min {}", jv.sigma_min);
+                }
+            }
+        }
+        assert!(
+            regular > 1000 && singular > 100,
+            "{regular} regular, {singular} singular"
+        );
+    }
 
     #[test]
     fn own_branch_filter_matches_the_ik_limit_filter() {
