@@ -10,6 +10,7 @@
 //! time exceeds the time left), `leg` (no hit leg within the limits), `feasible` (a hit exists
 //! that the planner's search did not try). Also the median planning CPU time.
 use nalgebra::Vector3;
+use rayon::prelude::*;
 use ttkin::ball::flight::{BallState, Flight};
 use ttkin::ball::hitplan::{shoot, HitPlanner};
 use ttkin::ball::leg::hit_leg;
@@ -178,12 +179,36 @@ fn main() {
     let mut times: Vec<f64> = out.iter().map(|o| o.plan_time_us).filter(|t| t.is_finite()).collect();
     times.sort_by(f64::total_cmp);
     let returned_out = out.iter().filter(|o| !o.in_reach && o.returned).count();
+    let mut returned_out_by = std::collections::BTreeMap::new();
+    for o in out.iter().filter(|o| !o.in_reach && o.returned) {
+        *returned_out_by.entry(o.reach).or_insert(0usize) += 1;
+    }
     println!(
         "balls {n} seed {seed}: in reach {}, returned {returned} -> return rate {:.2} %, returned out of reach {returned_out}",
         in_reach.len(),
         100.0 * returned as f64 / in_reach.len().max(1) as f64
     );
     println!("reach {reach:?}");
+    println!("returned out of reach by reason {returned_out_by:?}");
+    // The touch region (the region before the return conditions) on the same balls, for comparison.
+    let touch: Vec<_> = out
+        .par_iter()
+        .map(|o| region.classify_touch(&truth, &o.incoming, o.now))
+        .collect();
+    let mut touch_counts = std::collections::BTreeMap::new();
+    for r in &touch {
+        *touch_counts.entry(r.name()).or_insert(0usize) += 1;
+    }
+    let touch_in = touch.iter().filter(|r| r.in_reach()).count();
+    let touch_returned = out
+        .iter()
+        .zip(&touch)
+        .filter(|(o, r)| r.in_reach() && o.returned)
+        .count();
+    println!(
+        "touch region: in reach {touch_in}, returned {touch_returned} -> return rate {:.2} %, {touch_counts:?}",
+        100.0 * touch_returned as f64 / touch_in.max(1) as f64
+    );
     println!("returned by profile {profiles:?}");
     println!("in-reach failures {statuses:?}");
     println!(

@@ -24,9 +24,12 @@
 //! radius (bisection) and counts when the contact point lies within the racket radius of its
 //! centre; the ball then leaves by the racket impact model with the racket's actual normal and
 //! point velocity. **Scoring**: returned when its first contact is the table on the opponent's
-//! half. A ball is **in reach** when [`ReachRegion::classify`] says so: defined from the robot's
-//! geometry, joint position limits and joint speed/acceleration limits alone, independently of the
-//! planner (see [`super::reach`]). Balls out of reach are counted separately, with the reason.
+//! half. A ball is **in reach** when [`ReachRegion::classify`] says so: a return is physically
+//! possible (a shot of a fixed grid lands on the opponent's half, its racket pose has IK, its
+//! joint velocities and the minimum time from the ready configuration are within the limits),
+//! defined from the robot's geometry, the ball and impact physics and the joint limits alone,
+//! independently of the planner (see [`super::reach`]). Balls out of reach are counted
+//! separately, with the reason.
 
 use super::estimate::{estimate, EstimateOptions};
 use super::flight::{BallState, EventKind, Flight};
@@ -116,7 +119,8 @@ pub struct BallOutcome {
     pub incoming: BallState,
     /// Whether the ball is in the robot's reachable region ([`ReachRegion::classify`] of its true flight).
     pub in_reach: bool,
-    /// The region's verdict: "in_reach", or why not ("no_bounce", "outside_volume", "no_pose", "too_early").
+    /// The region's verdict: "in_reach", or why not ("no_bounce", "outside_volume", "no_return",
+    /// "no_return_pose", "return_speed", "too_early"; [`super::reach::Reachability::NAMES`]).
     pub reach: &'static str,
     /// Planner status name ("ok", "no_bounce", ...), or "estimate: ..." when estimation failed.
     pub status: String,
