@@ -234,6 +234,17 @@ fn main() {
     if std::env::var_os("NO_DIAG").is_some() {
         return;
     }
+    miss_diagnosis(&truth, &in_reach);
+    // The infeasible balls planned again from their true state (same time, same `now`): what the
+    // estimate's error costs, against what the search itself misses.
+    let mut from_truth = std::collections::BTreeMap::new();
+    for o in in_reach.iter().filter(|o| o.status == "infeasible") {
+        let Some(est) = o.estimate else { continue };
+        let (s, _) = truth.run(&o.incoming, est.t, None);
+        let st = pl.plan(&s, o.now, cfg.target).map_or("error", |p| p.status.name());
+        *from_truth.entry(st).or_insert(0usize) += 1;
+    }
+    println!("infeasible, planned from the true state: {from_truth:?}");
     let ik = Analytic::for_chain(&pl.chain).expect("analytic IK");
     let mut stages = [0usize; STAGES.len()];
     let mut excess = Vec::new();
@@ -261,5 +272,58 @@ fn main() {
         below(0.04),
         below(0.08),
         excess.len()
+    );
+}
+
+/// Why the in-reach balls the racket missed were missed: the true ball at the planned impact time
+/// against the prediction the plan hit, split into the error in the planned face plane (beyond the
+/// racket radius the face cannot meet it) and along the normal (the impact happens earlier or
+/// later, elsewhere on the face), with the time from the bounce to the hit.
+fn miss_diagnosis(truth: &Flight, in_reach: &[&rally::BallOutcome]) {
+    let bounce = |o: &rally::BallOutcome| {
+        let (_, ev) = truth.run(&o.incoming, 1.5, None);
+        ev.first().map_or(f64::NAN, |e| e.before.t)
+    };
+    let stats = |pick: &dyn Fn(&rally::BallOutcome) -> bool| {
+        let (mut plane, mut normal, mut after) = (Vec::new(), Vec::new(), Vec::new());
+        for o in in_reach.iter().filter(|o| pick(o)) {
+            let Some((b, n)) = o.planned else { continue };
+            let (t, _) = truth.run(&o.incoming, b.t, None);
+            let e = t.p - b.p;
+            normal.push(n.dot(&e).abs());
+            plane.push((e - n * n.dot(&e)).norm());
+            after.push(b.t - bounce(o));
+        }
+        for v in [&mut plane, &mut normal, &mut after] {
+            v.sort_by(f64::total_cmp);
+        }
+        (plane, normal, after)
+    };
+    let med = |v: &[f64]| v.get(v.len() / 2).copied().unwrap_or(f64::NAN);
+    if std::env::var_os("MISS_HISTOGRAM").is_some() {
+        let mut bins = std::collections::BTreeMap::new();
+        for o in in_reach {
+            let Some((b, _)) = o.planned else { continue };
+            let k = ((b.t - bounce(o)) / 0.05).floor() as i64 * 50;
+            let e = bins.entry(k).or_insert((0usize, 0usize));
+            e.0 += usize::from(o.returned);
+            e.1 += usize::from(o.status == "missed");
+        }
+        println!("bounce to hit (ms bin): (returned, missed) {bins:?}");
+    }
+    let (mp, mn, ma) = stats(&|o| o.status == "missed");
+    let (rp, rn, ra) = stats(&|o| o.returned);
+    let far = mp.iter().filter(|e| **e > 0.075).count();
+    println!(
+        "missed {}: prediction error at the planned impact in the face plane > 75 mm {far}, median {:.0} mm \
+         (returned {:.0} mm), along the normal median {:.0} mm (returned {:.0} mm); bounce to hit median \
+         {:.0} ms (returned {:.0} ms)",
+        mp.len(),
+        1e3 * med(&mp),
+        1e3 * med(&rp),
+        1e3 * med(&mn),
+        1e3 * med(&rn),
+        1e3 * med(&ma),
+        1e3 * med(&ra)
     );
 }

@@ -146,6 +146,9 @@ pub struct BallOutcome {
     pub velocity_error: f64,
     /// Re-plans adopted during the stroke.
     pub replans: usize,
+    /// The predicted ball at the planned impact (time absolute, s) and the planned face normal
+    /// (world) of the executed hit (`None` without a planned hit).
+    pub planned: Option<(BallState, Vector3<f64>)>,
     /// Profile of the executed hit leg ("quintic", "jerk"; "" without a planned hit).
     pub profile: &'static str,
     /// Sampled true ball path (m, world; 5 ms) and racket-centre path, for the first balls.
@@ -273,6 +276,7 @@ pub fn play(planner: &HitPlanner, region: &ReachRegion, truth: &Flight, cfg: &Ra
         landing_error: f64::NAN,
         velocity_error: f64::NAN,
         replans: 0,
+        planned: None,
         profile: "",
         path: Vec::new(),
         racket_path: Vec::new(),
@@ -361,6 +365,7 @@ pub fn play(planner: &HitPlanner, region: &ReachRegion, truth: &Flight, cfg: &Ra
         t_plan += cfg.replan_period;
     }
     out.profile = hit.leg.profile.name();
+    out.planned = Some((hit.ball, hit.racket.normal));
     let world = planner.placement.world_from_base();
     let (mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     // Racket centre, normal, velocity and angular velocity (world) at time t (s, absolute).
