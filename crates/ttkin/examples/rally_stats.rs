@@ -156,6 +156,7 @@ fn main() {
     let cfg = RallyConfig {
         seed,
         paths: 0,
+        replan_period: std::env::var("REPLAN").map_or(0.0, |r| r.parse().expect("REPLAN (s)")),
         ..RallyConfig::default()
     };
     let region = ReachRegion::new(&pl.chain, pl.placement, pl.ready.clone(), truth.model.radius).expect("region");
@@ -243,6 +244,17 @@ fn main() {
         let (s, _) = truth.run(&o.incoming, est.t, None);
         let st = pl.plan(&s, o.now, cfg.target).map_or("error", |p| p.status.name());
         *from_truth.entry(st).or_insert(0usize) += 1;
+        if std::env::var_os("SHOW").is_some() && st == "infeasible" {
+            if let ttkin::ball::reach::Reachability::InReach { p, t, min_time } =
+                region.classify(&truth, &o.incoming, o.now)
+            {
+                println!(
+                    "  region point {p:.2?} at {:.3} s after now, min time {min_time:.3} s; y0 {:.2}",
+                    t - o.now,
+                    o.incoming.p.y
+                );
+            }
+        }
     }
     println!("infeasible, planned from the true state: {from_truth:?}");
     let ik = Analytic::for_chain(&pl.chain).expect("analytic IK");
@@ -290,6 +302,12 @@ fn miss_diagnosis(truth: &Flight, in_reach: &[&rally::BallOutcome]) {
             let Some((b, n)) = o.planned else { continue };
             let (t, _) = truth.run(&o.incoming, b.t, None);
             let e = t.p - b.p;
+            if std::env::var_os("SHOW_E").is_some() && o.status == "missed" {
+                println!(
+                    "  miss e = {:.3?} (m, world), n = {:.2?}, v_true {:.2?}, v_pred {:.2?}",
+                    e, n, t.v, b.v
+                );
+            }
             normal.push(n.dot(&e).abs());
             plane.push((e - n * n.dot(&e)).norm());
             after.push(b.t - bounce(o));
