@@ -119,7 +119,7 @@ fn main() {
     let n: usize = args.get(1).map_or(10_000, |a| a.parse().expect("N"));
     let seed: u64 = args.get(2).map_or(0, |a| a.parse().expect("SEED"));
     let mut pl = HitPlanner::new(ttkin::robots::gantry6(), Flight::default()).expect("gantry6");
-    // Experiments: ROLLS="0,30,-30" (degrees), RETURN_TIMES="0.8,0.65,0.95" (s), CONTACT_OFFSET=0.03 (m), CANDIDATES=3, GOOD_MARGIN=0.25,
+    // Experiments: ROLLS="0,30,-30" (degrees), RETURN_TIMES="0.8,0.55,1.05" (s), CONTACT_OFFSET=0.03 (m), CANDIDATES=3, GOOD_MARGIN=0.25,
     // READY=-1.85,0,0.255 (racket centre facing forward, m, world; also the region's).
     if let Ok(r) = std::env::var("ROLLS") {
         pl.rolls = r
