@@ -76,9 +76,9 @@ impl HitPlanner {
 }
 
 /// Latest hit (s after the first predicted sample past the bounce) among the candidates when
-/// some are that early: on seed 0 (3000 balls) the racket missed 0.5 % of the balls hit within
-/// 0.25 s of the bounce, 3 % at 0.3–0.35 s, 12 % at 0.35–0.4 s; 0.25 s loses more balls to the
-/// joints' time than it saves, 0.35 s saves fewer misses (docs/ball.md).
+/// some are that early: on seed 0 (3000 balls) the racket missed 0.7 % of the balls hit within
+/// 0.25 s of the bounce, 2 % at 0.25–0.3 s, 3 % at 0.3–0.35 s, 11 % at 0.35–0.4 s; 0.25 s loses
+/// more balls to the joints' time than it saves, 0.35 s saves fewer misses (docs/ball.md).
 const LATEST_AFTER_BOUNCE: f64 = 0.3;
 
 /// Fallback landing targets (x, y, m, world) on the opponent's half, at least 0.2 m inside its
