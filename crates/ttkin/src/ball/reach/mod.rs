@@ -6,7 +6,7 @@
 //! has a point p at a time t such that
 //! 1. p lies in the **hitting volume** (world box: the height band above the surface and the
 //!    region behind the table the racket may sweep; the axis strokes are checked by IK, item 3);
-//! 2. a **return shot** of a fixed grid exists there ([`returns`]): for a landing target of
+//! 2. a **return shot** of a fixed grid exists there (`reach/returns.rs`): for a landing target of
 //!    `targets` (x ∈ {0.4, 0.8, 1.2} m, y ∈ {−0.5, 0, 0.5} m on the opponent's half) and a return
 //!    time T of `return_times` ({0.45, 0.6, 0.75, 0.9, 1.05} s), the drag-free parabola's
 //!    v_out = (goal − p − ½·g·T²)/T, the racket normal and velocity of the impact model that give
