@@ -25,9 +25,7 @@
 //! centre; the ball then leaves by the racket impact model with the racket's actual normal and
 //! point velocity. **Scoring**: returned when its first contact is the table on the opponent's
 //! half. A ball is **in reach** when [`ReachRegion::classify`] says so: a return is physically
-//! possible (a shot of a fixed grid lands on the opponent's half, its racket pose has IK, its
-//! joint velocities and the minimum time from the ready configuration are within the limits),
-//! defined from the robot's geometry, the ball and impact physics and the joint limits alone,
+//! possible, by the robot's geometry, the ball and impact physics and the joint limits alone,
 //! independently of the planner (see [`super::reach`]). Balls out of reach are counted
 //! separately, with the reason.
 
@@ -119,8 +117,7 @@ pub struct BallOutcome {
     pub incoming: BallState,
     /// Whether the ball is in the robot's reachable region ([`ReachRegion::classify`] of its true flight).
     pub in_reach: bool,
-    /// The region's verdict: "in_reach", or why not ("no_bounce", "outside_volume", "no_return",
-    /// "no_return_pose", "return_speed", "too_early"; [`super::reach::Reachability::NAMES`]).
+    /// The region's verdict: "in_reach", or why not (one of [`super::reach::Reachability::NAMES`]).
     pub reach: &'static str,
     /// Planner status name ("ok", "no_bounce", ...), or "estimate: ..." when estimation failed.
     pub status: String,
@@ -146,8 +143,7 @@ pub struct BallOutcome {
     pub velocity_error: f64,
     /// Re-plans adopted during the stroke.
     pub replans: usize,
-    /// The predicted ball at the planned impact (time absolute, s) and the planned face normal
-    /// (world) of the executed hit (`None` without a planned hit).
+    /// Predicted ball at the executed hit's impact (time absolute, s) and its face normal (world).
     pub planned: Option<(BallState, Vector3<f64>)>,
     /// Profile of the executed hit leg ("quintic", "jerk"; "" without a planned hit).
     pub profile: &'static str,
