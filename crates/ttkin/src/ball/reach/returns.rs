@@ -62,7 +62,7 @@ impl ReachRegion {
                 };
                 // The robot's conditions first (IK and J⁻¹V cost about a µs, the landing check a
                 // flight); the landing decides only a shot that would deepen the verdict.
-                let (stage, min_time) = self.shot_stage(s, &racket, now);
+                let (stage, min_time) = self.shot_stage(s, &racket, now, *deepest);
                 if stage <= *deepest && min_time.is_none() {
                     continue;
                 }
@@ -80,8 +80,9 @@ impl ReachRegion {
 
     /// The robot's conditions for the shot `racket` at the sample `s`: the deepest stage over the
     /// rolls and IK branches (`Shot` when no pose is within the position limits) and, when one
-    /// meets them all, its minimum joint time (s).
-    fn shot_stage(&self, s: &BallState, racket: &RacketHit, now: f64) -> (Stage, Option<f64>) {
+    /// meets them all, its minimum joint time (s). J⁻¹V (the costly test) is skipped for a pose
+    /// out of time once the stage it could show is reached (`deepest` or this shot's).
+    fn shot_stage(&self, s: &BallState, racket: &RacketHit, now: f64, deepest: Stage) -> (Stage, Option<f64>) {
         let base_from_world = self.placement.world_from_base().inverse();
         let v_b = base_from_world.rotation * racket.velocity;
         let twist = [v_b.x, v_b.y, v_b.z, 0.0, 0.0, 0.0];
@@ -109,6 +110,11 @@ impl ReachRegion {
             };
             for q in sols.iter() {
                 stage = stage.max(Stage::Pose);
+                let t = self.min_time(q);
+                let in_time = t <= s.t - now;
+                if !in_time && stage.max(deepest) >= Stage::Speed {
+                    continue;
+                }
                 let Ok(jv) = joint_velocity(&self.chain, q, &twist) else {
                     continue;
                 };
@@ -116,8 +122,7 @@ impl ReachRegion {
                     continue;
                 }
                 stage = Stage::Speed;
-                let t = self.min_time(q);
-                if t <= s.t - now {
+                if in_time {
                     return (stage, Some(t));
                 }
             }
