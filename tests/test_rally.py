@@ -20,6 +20,17 @@ KEYS = (
 )
 
 
+REACH = (
+    "no_bounce",
+    "outside_volume",
+    "no_return",
+    "no_return_pose",
+    "return_speed",
+    "too_early",
+    "in_reach",
+)
+
+
 def test_rally_summary_and_determinism():
     a = ttmanip.rally(40, seed=3)
     for k in KEYS:
@@ -29,7 +40,8 @@ def test_rally_summary_and_determinism():
     assert a["returned"] <= a["in_reach"]
     # The reachable region's verdicts cover every ball; "in_reach" is the only one counted in reach.
     assert sum(a["reach"].values()) == 40 and a["reach"].get("in_reach", 0) == a["in_reach"]
-    assert set(a["reach"]) <= {"in_reach", "no_bounce", "outside_volume", "no_pose", "too_early"}
+    # Every reason is reported, in the order checked, with 0 when no ball has it.
+    assert list(a["reach"]) == list(REACH)
     b = ttmanip.rally(40, seed=3)
     assert a["returned"] == b["returned"] and a["statuses"] == b["statuses"]
 
@@ -52,6 +64,7 @@ def test_rally_cli_writes_summary_and_figures(tmp_path, capsys):
     summary = json.loads((out / "summary.json").read_text())
     for k in KEYS:
         assert k in summary
+    assert list(summary["reach"]) == list(REACH) and sum(summary["reach"].values()) == 30
     for f in summary["figures"]:
         assert (tmp_path / f).exists() or __import__("pathlib").Path(f).exists()
     assert cli.main(["rally", "--n", "0", "--out", str(out)]) == 2

@@ -48,8 +48,12 @@ def rally(
 
     Summary keys: ``balls``, ``in_reach``, ``out_of_reach``, ``returned``, ``return_rate``
     (returned / in_reach; in reach by the robot's geometry and joint limits alone, see
-    ``ttkin::ball::reach``), ``reach`` (counts of the region's verdicts: ``in_reach``,
-    ``no_bounce``, ``outside_volume``, ``no_pose``, ``too_early``), ``returned_out_of_reach``,
+    ``ttkin::ball::reach``: a return is possible), ``reach`` (counts of the region's verdicts, in
+    the order checked, every one present: ``no_bounce``, ``outside_volume``, ``no_return`` (no
+    shot of the grid lands on the opponent's half), ``no_return_pose`` (no racket pose for a
+    return shot within the joint position limits), ``return_speed`` (the joint velocities
+    q̇ = J⁻¹·V of every such pose above their limits), ``too_early`` (not in the time left),
+    ``in_reach``), ``returned_out_of_reach``,
     ``racket_error_m_median``,
     ``landing_error_m_median``, ``velocity_error_mps_median``, ``plan_time_us_median`` (per-ball
     planning in thread CPU time, from the parallel batch), ``plan_wall_time_us_median``,
@@ -98,7 +102,11 @@ def rally(
         )
         if progress:
             _progress(start + m, n)
-    res = {k: np.concatenate([np.asarray(p[k]) for p in parts]) for k in parts[0] if k != "paths"}
+    res = {
+        k: np.concatenate([np.asarray(p[k]) for p in parts])
+        for k in parts[0]
+        if k not in ("paths", "reach_names")
+    }
     res["paths"] = parts[0]["paths"]
     in_reach = res["in_reach"].astype(bool)
     returned = res["returned"].astype(bool) & in_reach
@@ -106,7 +114,8 @@ def rally(
     for s, r in zip(res["status"], res["reach"], strict=True):
         key = f"{r}/{str(s).split(':')[0]}"
         statuses[key] = statuses.get(key, 0) + 1
-    reach: dict[str, int] = {}
+    # Every verdict of the region, counted (0 when none): the reasons a ball is out of reach.
+    reach: dict[str, int] = {str(name): 0 for name in parts[0]["reach_names"]}
     for r in res["reach"]:
         reach[str(r)] = reach.get(str(r), 0) + 1
     summary = {
@@ -117,12 +126,14 @@ def rally(
         "returned": int(returned.sum()),
         "return_rate": float(returned.sum() / in_reach.sum()) if in_reach.any() else None,
         "returned_out_of_reach": int((res["returned"].astype(bool) & ~in_reach).sum()),
-        "reach": dict(sorted(reach.items())),
-        "in_reach_definition": "after its bounce on the robot's half the true flight has a point in "
-        "the hitting volume where an admissible racket pose (normal within 30 deg of the opponent, "
-        "roll within 60 deg) has IK within the joint position limits and the joints' minimum time "
-        "from rest at the ready configuration under their speed and acceleration limits is at most "
-        "the time left (ttkin::ball::reach); independent of the planner",
+        "reach": reach,
+        "in_reach_definition": "a return is possible: after its bounce on the robot's half the true "
+        "flight has a point in the hitting volume where a shot of a fixed grid (drag-free parabola "
+        "to x in {0.4, 0.8, 1.2} m, y in {-0.5, 0, 0.5} m in 0.45 to 1.05 s) with the racket of the "
+        "impact model lands on the opponent's half in the real flight model, a racket pose for it "
+        "(roll 0, +-30, +-60 deg) has IK within the joint position limits, q_dot = J^-1 V is within "
+        "the velocity limits and the joints' minimum time from rest at the ready configuration is "
+        "at most the time left (ttkin::ball::reach); independent of the planner",
         "racket_error_m_median": _median(res["racket_error"][in_reach]),
         "plan_time_us_median": _median(res["plan_time_us"]),  # thread CPU time
         "plan_wall_time_us_median": _median(res["plan_wall_time_us"]),

@@ -315,6 +315,7 @@ fn ball_rally<'py>(
     )?;
     d.set_item("in_reach", out.iter().map(|o| o.in_reach).collect::<Vec<_>>())?;
     d.set_item("reach", out.iter().map(|o| o.reach).collect::<Vec<_>>())?;
+    d.set_item("reach_names", ttkin::ball::reach::Reachability::NAMES.to_vec())?;
     d.set_item("returned", out.iter().map(|o| o.returned).collect::<Vec<_>>())?;
     d.set_item("contact", out.iter().map(|o| o.contact).collect::<Vec<_>>())?;
     d.set_item("status", out.iter().map(|o| o.status.clone()).collect::<Vec<_>>())?;

@@ -10,6 +10,7 @@
 //! time exceeds the time left), `leg` (no hit leg within the limits), `feasible` (a hit exists
 //! that the planner's search did not try). Also the median planning CPU time.
 use nalgebra::Vector3;
+use rayon::prelude::*;
 use ttkin::ball::flight::{BallState, Flight};
 use ttkin::ball::hitplan::{shoot, HitPlanner};
 use ttkin::ball::leg::hit_leg;
@@ -118,7 +119,7 @@ fn main() {
     let n: usize = args.get(1).map_or(10_000, |a| a.parse().expect("N"));
     let seed: u64 = args.get(2).map_or(0, |a| a.parse().expect("SEED"));
     let mut pl = HitPlanner::new(ttkin::robots::gantry6(), Flight::default()).expect("gantry6");
-    // Experiments: ROLLS="0,30,-30" (degrees), RETURN_TIMES="0.8,0.65,0.95" (s), CONTACT_OFFSET=0.03 (m), CANDIDATES=3, GOOD_MARGIN=0.25,
+    // Experiments: ROLLS="0,30,-30" (degrees), RETURN_TIMES="0.8,0.55,1.05" (s), CONTACT_OFFSET=0.03 (m), CANDIDATES=3, GOOD_MARGIN=0.25,
     // READY=-1.85,0,0.255 (racket centre facing forward, m, world; also the region's).
     if let Ok(r) = std::env::var("ROLLS") {
         pl.rolls = r
@@ -155,6 +156,7 @@ fn main() {
     let cfg = RallyConfig {
         seed,
         paths: 0,
+        replan_period: std::env::var("REPLAN").map_or(0.0, |r| r.parse().expect("REPLAN (s)")),
         ..RallyConfig::default()
     };
     let region = ReachRegion::new(&pl.chain, pl.placement, pl.ready.clone(), truth.model.radius).expect("region");
@@ -178,12 +180,36 @@ fn main() {
     let mut times: Vec<f64> = out.iter().map(|o| o.plan_time_us).filter(|t| t.is_finite()).collect();
     times.sort_by(f64::total_cmp);
     let returned_out = out.iter().filter(|o| !o.in_reach && o.returned).count();
+    let mut returned_out_by = std::collections::BTreeMap::new();
+    for o in out.iter().filter(|o| !o.in_reach && o.returned) {
+        *returned_out_by.entry(o.reach).or_insert(0usize) += 1;
+    }
     println!(
         "balls {n} seed {seed}: in reach {}, returned {returned} -> return rate {:.2} %, returned out of reach {returned_out}",
         in_reach.len(),
         100.0 * returned as f64 / in_reach.len().max(1) as f64
     );
     println!("reach {reach:?}");
+    println!("returned out of reach by reason {returned_out_by:?}");
+    // The touch region (the region before the return conditions) on the same balls, for comparison.
+    let touch: Vec<_> = out
+        .par_iter()
+        .map(|o| region.classify_touch(&truth, &o.incoming, o.now))
+        .collect();
+    let mut touch_counts = std::collections::BTreeMap::new();
+    for r in &touch {
+        *touch_counts.entry(r.name()).or_insert(0usize) += 1;
+    }
+    let touch_in = touch.iter().filter(|r| r.in_reach()).count();
+    let touch_returned = out
+        .iter()
+        .zip(&touch)
+        .filter(|(o, r)| r.in_reach() && o.returned)
+        .count();
+    println!(
+        "touch region: in reach {touch_in}, returned {touch_returned} -> return rate {:.2} %, {touch_counts:?}",
+        100.0 * touch_returned as f64 / touch_in.max(1) as f64
+    );
     println!("returned by profile {profiles:?}");
     println!("in-reach failures {statuses:?}");
     println!(
@@ -209,6 +235,28 @@ fn main() {
     if std::env::var_os("NO_DIAG").is_some() {
         return;
     }
+    miss_diagnosis(&truth, &in_reach);
+    // The infeasible balls planned again from their true state (same time, same `now`): what the
+    // estimate's error costs, against what the search itself misses.
+    let mut from_truth = std::collections::BTreeMap::new();
+    for o in in_reach.iter().filter(|o| o.status == "infeasible") {
+        let Some(est) = o.estimate else { continue };
+        let (s, _) = truth.run(&o.incoming, est.t, None);
+        let st = pl.plan(&s, o.now, cfg.target).map_or("error", |p| p.status.name());
+        *from_truth.entry(st).or_insert(0usize) += 1;
+        if std::env::var_os("SHOW").is_some() && st == "infeasible" {
+            if let ttkin::ball::reach::Reachability::InReach { p, t, min_time } =
+                region.classify(&truth, &o.incoming, o.now)
+            {
+                println!(
+                    "  region point {p:.2?} at {:.3} s after now, min time {min_time:.3} s; y0 {:.2}",
+                    t - o.now,
+                    o.incoming.p.y
+                );
+            }
+        }
+    }
+    println!("infeasible, planned from the true state: {from_truth:?}");
     let ik = Analytic::for_chain(&pl.chain).expect("analytic IK");
     let mut stages = [0usize; STAGES.len()];
     let mut excess = Vec::new();
@@ -236,5 +284,64 @@ fn main() {
         below(0.04),
         below(0.08),
         excess.len()
+    );
+}
+
+/// Why the in-reach balls the racket missed were missed: the true ball at the planned impact time
+/// against the prediction the plan hit, split into the error in the planned face plane (beyond the
+/// racket radius the face cannot meet it) and along the normal (the impact happens earlier or
+/// later, elsewhere on the face), with the time from the bounce to the hit.
+fn miss_diagnosis(truth: &Flight, in_reach: &[&rally::BallOutcome]) {
+    let bounce = |o: &rally::BallOutcome| {
+        let (_, ev) = truth.run(&o.incoming, 1.5, None);
+        ev.first().map_or(f64::NAN, |e| e.before.t)
+    };
+    let stats = |pick: &dyn Fn(&rally::BallOutcome) -> bool| {
+        let (mut plane, mut normal, mut after) = (Vec::new(), Vec::new(), Vec::new());
+        for o in in_reach.iter().filter(|o| pick(o)) {
+            let Some((b, n)) = o.planned else { continue };
+            let (t, _) = truth.run(&o.incoming, b.t, None);
+            let e = t.p - b.p;
+            if std::env::var_os("SHOW_E").is_some() && o.status == "missed" {
+                println!(
+                    "  miss e = {:.3?} (m, world), n = {:.2?}, v_true {:.2?}, v_pred {:.2?}",
+                    e, n, t.v, b.v
+                );
+            }
+            normal.push(n.dot(&e).abs());
+            plane.push((e - n * n.dot(&e)).norm());
+            after.push(b.t - bounce(o));
+        }
+        for v in [&mut plane, &mut normal, &mut after] {
+            v.sort_by(f64::total_cmp);
+        }
+        (plane, normal, after)
+    };
+    let med = |v: &[f64]| v.get(v.len() / 2).copied().unwrap_or(f64::NAN);
+    if std::env::var_os("MISS_HISTOGRAM").is_some() {
+        let mut bins = std::collections::BTreeMap::new();
+        for o in in_reach {
+            let Some((b, _)) = o.planned else { continue };
+            let k = ((b.t - bounce(o)) / 0.05).floor() as i64 * 50;
+            let e = bins.entry(k).or_insert((0usize, 0usize));
+            e.0 += usize::from(o.returned);
+            e.1 += usize::from(o.status == "missed");
+        }
+        println!("bounce to hit (ms bin): (returned, missed) {bins:?}");
+    }
+    let (mp, mn, ma) = stats(&|o| o.status == "missed");
+    let (rp, rn, ra) = stats(&|o| o.returned);
+    let far = mp.iter().filter(|e| **e > 0.075).count();
+    println!(
+        "missed {}: prediction error at the planned impact in the face plane > 75 mm {far}, median {:.0} mm \
+         (returned {:.0} mm), along the normal median {:.0} mm (returned {:.0} mm); bounce to hit median \
+         {:.0} ms (returned {:.0} ms)",
+        mp.len(),
+        1e3 * med(&mp),
+        1e3 * med(&rp),
+        1e3 * med(&mn),
+        1e3 * med(&rn),
+        1e3 * med(&ma),
+        1e3 * med(&ra)
     );
 }

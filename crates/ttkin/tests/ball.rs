@@ -347,8 +347,10 @@ fn target_off_the_table_is_an_error_and_unreachable_balls_a_status() {
     assert!(matches!(st, HitStatus::NoBounce | HitStatus::OutOfReach), "{st:?}");
 }
 
-/// Smallest return rate of the balls in reach asserted on the 120-ball sample (docs/ball.md).
-const RALLY_RATE: f64 = 0.85;
+/// Smallest return rate of the balls in reach asserted on the 120-ball sample (docs/ball.md): it
+/// returns 102 of 106 (96.2 %); two binomial standard deviations of a 106-ball sample below the
+/// 10 000-ball rates (94.9 % and 95.4 % on seeds 0 and 1) is 91 %.
+const RALLY_RATE: f64 = 0.93;
 
 #[test]
 fn rally_returns_most_balls_in_reach() {
@@ -372,10 +374,11 @@ fn rally_returns_most_balls_in_reach() {
         .collect();
     statuses.sort();
     eprintln!("in reach {in_reach}/120, returned {returned}; failures {statuses:?}");
-    // In reach by the robot's geometry and joint limits alone (`ttkin::ball::reach`), a bound no
-    // stroke meets for every ball (docs/ball.md); quintic strokes alone returned about 78 %, the
-    // planner before fallback targets and off-centre contacts 83 %.
-    assert!(in_reach >= 90, "{in_reach}");
+    // In reach when a return is possible by the robot's geometry, the physics and the joint limits
+    // alone (`ttkin::ball::reach`), a bound no stroke meets for every ball (docs/ball.md); over
+    // the earlier touch region, quintic strokes alone returned about 78 %, the planner before
+    // fallback targets and off-centre contacts 83 %, with them 91 % of this sample.
+    assert!(in_reach >= 95, "{in_reach}");
     assert!(returned as f64 >= RALLY_RATE * in_reach as f64, "{returned}/{in_reach}");
     // Some of the returns were executed through a jerk-limited hit leg.
     assert!(out.iter().any(|o| o.returned && o.profile == "jerk"));

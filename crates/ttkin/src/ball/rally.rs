@@ -24,9 +24,10 @@
 //! radius (bisection) and counts when the contact point lies within the racket radius of its
 //! centre; the ball then leaves by the racket impact model with the racket's actual normal and
 //! point velocity. **Scoring**: returned when its first contact is the table on the opponent's
-//! half. A ball is **in reach** when [`ReachRegion::classify`] says so: defined from the robot's
-//! geometry, joint position limits and joint speed/acceleration limits alone, independently of the
-//! planner (see [`super::reach`]). Balls out of reach are counted separately, with the reason.
+//! half. A ball is **in reach** when [`ReachRegion::classify`] says so: a return is physically
+//! possible, by the robot's geometry, the ball and impact physics and the joint limits alone,
+//! independently of the planner (see [`super::reach`]). Balls out of reach are counted
+//! separately, with the reason.
 
 use super::estimate::{estimate, EstimateOptions};
 use super::flight::{BallState, EventKind, Flight};
@@ -116,7 +117,7 @@ pub struct BallOutcome {
     pub incoming: BallState,
     /// Whether the ball is in the robot's reachable region ([`ReachRegion::classify`] of its true flight).
     pub in_reach: bool,
-    /// The region's verdict: "in_reach", or why not ("no_bounce", "outside_volume", "no_pose", "too_early").
+    /// The region's verdict: "in_reach", or why not (one of [`super::reach::Reachability::NAMES`]).
     pub reach: &'static str,
     /// Planner status name ("ok", "no_bounce", ...), or "estimate: ..." when estimation failed.
     pub status: String,
@@ -142,6 +143,8 @@ pub struct BallOutcome {
     pub velocity_error: f64,
     /// Re-plans adopted during the stroke.
     pub replans: usize,
+    /// Predicted ball at the executed hit's impact (time absolute, s) and its face normal (world).
+    pub planned: Option<(BallState, Vector3<f64>)>,
     /// Profile of the executed hit leg ("quintic", "jerk"; "" without a planned hit).
     pub profile: &'static str,
     /// Sampled true ball path (m, world; 5 ms) and racket-centre path, for the first balls.
@@ -269,6 +272,7 @@ pub fn play(planner: &HitPlanner, region: &ReachRegion, truth: &Flight, cfg: &Ra
         landing_error: f64::NAN,
         velocity_error: f64::NAN,
         replans: 0,
+        planned: None,
         profile: "",
         path: Vec::new(),
         racket_path: Vec::new(),
@@ -357,6 +361,7 @@ pub fn play(planner: &HitPlanner, region: &ReachRegion, truth: &Flight, cfg: &Ra
         t_plan += cfg.replan_period;
     }
     out.profile = hit.leg.profile.name();
+    out.planned = Some((hit.ball, hit.racket.normal));
     let world = planner.placement.world_from_base();
     let (mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     // Racket centre, normal, velocity and angular velocity (world) at time t (s, absolute).

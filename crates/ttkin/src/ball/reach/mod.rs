@@ -1,25 +1,47 @@
-//! The robot's reachable region, defined from its geometry and joint limits alone (no planner):
-//! which incoming balls the robot could meet with its racket.
+//! The robot's reachable region, defined from its geometry, physics and joint limits alone (no
+//! planner): which incoming balls the robot could **return**.
 //!
 //! A ball is **in reach** when, after its bounce on the robot's half and before any other contact,
 //! its true flight (sampled every `step` s while it still moves toward the robot, x velocity < 0)
 //! has a point p at a time t such that
 //! 1. p lies in the **hitting volume** (world box: the height band above the surface and the
-//!    region behind the table the racket may sweep; the axis strokes are checked by IK, item 2);
-//! 2. the racket can be **placed** there: for some admissible racket orientation of a fixed grid
-//!    (face normals toward the opponent at azimuths and elevations of `normal_angles`, each at the
-//!    rolls `rolls` of the handle about the normal), the racket centre p − r·n has an IK solution
+//!    region behind the table the racket may sweep; the axis strokes are checked by IK, item 3);
+//! 2. a **return shot** of a fixed grid exists there (`reach/returns.rs`): for a landing target of
+//!    `targets` (x ∈ {0.4, 0.8, 1.2} m, y ∈ {−0.5, 0, 0.5} m on the opponent's half) and a return
+//!    time T of `return_times` ({0.45, 0.6, 0.75, 0.9, 1.05} s), the drag-free parabola's
+//!    v_out = (goal − p − ½·g·T²)/T, the racket normal and velocity of the impact model that give
+//!    it ([`super::impact::Racket::solve`]), and the ball leaving with v_out and that racket's
+//!    outgoing spin **really** returns: in the flight model (drag and Magnus, 10 ms RK4) its first
+//!    contact is the table on the opponent's half (so it clears the net);
+//! 3. the racket can be **placed** for that shot: for some roll of `rolls` ({0, ±30°, ±60°}) of
+//!    the handle about the shot's normal n, the racket centre p − r·n has an analytic IK solution q
 //!    within every joint position limit (which include the d1 and d2 strokes);
-//! 3. the robot can **get there in time**: for that solution q, the per-joint minimum time from
-//!    rest at the ready configuration under the joint's speed limit v and acceleration limit a,
+//! 4. the joints can **move the racket** at the hit: q̇ = J⁻¹(q)·V for the racket twist V (the
+//!    shot's racket velocity, no rotation) is within every joint's velocity limit (a singular J
+//!    fails: no exact q̇);
+//! 5. the robot can **get there in time**: for that q, the per-joint minimum time from rest at the
+//!    ready configuration under the joint's speed limit v and acceleration limit a,
 //!    Δ = |q_i − q_ready,i|: √(2Δ/a) when Δ ≤ v²/(2a), else Δ/v + v/(2a) (full acceleration, then
 //!    full speed; any arrival speed), is at most t − now for every joint.
 //!
-//! Item 3 is a necessary condition for a stroke (no trajectory within the limits arrives earlier),
-//! so the region is an outer bound of the balls any planner could hit with these joints: a return
-//! rate over it is not flattered by the planner's own choices.
+//! Items 4 and 5 are necessary conditions for a stroke, so the region is an outer bound of the
+//! balls any planner could return with these joints through these shots: a return rate over it is
+//! not flattered by the planner's own choices. The grids are fixed, never the planner's.
+//!
+//! Why the drag-free parabola with the real landing check, and not the real model's shooting: a
+//! shooting solve costs about 46 µs (six flights), the landing check of one flight about 8 µs, and
+//! the region tries up to 45 shots at each of some 30 samples of a ball it rejects; the shot tried
+//! is then not exactly at its grid target, but it is a real return (it lands on the opponent's
+//! half in the same flight model), which is what "a return is possible" asks.
+//!
+//! [`ReachRegion::classify_touch`] keeps the earlier, weaker region for comparison: a ball the
+//! racket can **touch** (some orientation of a fixed grid of 45 has IK at the ball in time),
+//! whether or not any of them returns it.
+
+mod returns;
 
 use super::flight::{BallState, EventKind, Flight};
+use super::impact::Racket;
 use crate::chain::Chain;
 use crate::error::{Error, Result};
 use crate::ik::{Analytic, LimitFilter};
@@ -33,12 +55,22 @@ pub enum Reachability {
     NoBounce,
     /// After the bounce it never passes through the hitting volume.
     OutsideVolume,
-    /// It passes the volume, but no admissible racket pose there is within the joint limits.
+    /// Touch region only ([`ReachRegion::classify_touch`]): it passes the volume, but no racket
+    /// orientation of the grid is within the joint limits there.
     NoPose,
-    /// A racket pose exists, but every one needs more time from the ready configuration than the
-    /// ball leaves (too early for the joints' speed and acceleration limits).
+    /// It passes the volume, but no shot of the grid returns it to the opponent's half.
+    NoReturn,
+    /// Return shots exist, but no racket pose for any of them (rolls of the grid) is within the
+    /// joint position limits.
+    NoReturnPose,
+    /// Racket poses for return shots exist, but every one needs a joint velocity q̇ = J⁻¹·V above
+    /// its limit (or a singular configuration) to move the racket at the shot's speed.
+    ReturnSpeed,
+    /// A pose exists (for the touch region; with the speed condition for the return region), but
+    /// every one needs more time from the ready configuration than the ball leaves (too early for
+    /// the joints' speed and acceleration limits).
     TooEarly,
-    /// In reach: the earliest-feasible point found, its time (s, absolute) and the minimum time
+    /// In reach: the first feasible point found, its time (s, absolute) and the minimum time
     /// (s) the joints need to get there from the ready configuration.
     InReach {
         /// Ball centre (m, world).
@@ -51,12 +83,27 @@ pub enum Reachability {
 }
 
 impl Reachability {
-    /// Short lower-case name ("no_bounce", "outside_volume", "no_pose", "too_early", "in_reach").
+    /// The names of the return region's verdicts ([`ReachRegion::classify`]), in the order checked.
+    pub const NAMES: [&'static str; 7] = [
+        "no_bounce",
+        "outside_volume",
+        "no_return",
+        "no_return_pose",
+        "return_speed",
+        "too_early",
+        "in_reach",
+    ];
+
+    /// Short lower-case name ("no_bounce", "outside_volume", "no_pose", "no_return",
+    /// "no_return_pose", "return_speed", "too_early", "in_reach").
     pub fn name(&self) -> &'static str {
         match self {
             Reachability::NoBounce => "no_bounce",
             Reachability::OutsideVolume => "outside_volume",
             Reachability::NoPose => "no_pose",
+            Reachability::NoReturn => "no_return",
+            Reachability::NoReturnPose => "no_return_pose",
+            Reachability::ReturnSpeed => "return_speed",
             Reachability::TooEarly => "too_early",
             Reachability::InReach { .. } => "in_reach",
         }
@@ -68,10 +115,11 @@ impl Reachability {
     }
 }
 
-/// The reachable region of one robot: chain, placement, ready configuration, hitting volume and
-/// the grid of admissible racket orientations.
+/// The reachable region of one robot: chain, placement, ready configuration, hitting volume, the
+/// grid of return shots and racket rolls (and the orientation grid of the touch region).
 #[derive(Debug, Clone)]
 pub struct ReachRegion {
+    chain: Chain,
     ik: Analytic,
     limits: KinematicLimits,
     /// Base frame in the world.
@@ -80,8 +128,17 @@ pub struct ReachRegion {
     pub ready: Vec<f64>,
     /// Hitting volume of the ball centre (world, m).
     pub volume: Reach,
-    /// Azimuths and elevations (rad) of the face normal, each combination one normal
-    /// (cos e·cos a, cos e·sin a, sin e) in the world: toward the opponent.
+    /// Landing targets (x, y, m, world) of the return shots, on the opponent's half.
+    pub targets: Vec<[f64; 2]>,
+    /// Return flight times (s) of the return shots.
+    pub return_times: Vec<f64>,
+    /// Contact points (m) of the ball on the face, from its centre along the face's direction
+    /// closest to world y (across the table): the racket centre is moved by the opposite.
+    pub contact_offsets: Vec<f64>,
+    /// Rubber of the racket whose impact model gives each shot's normal and velocity.
+    pub racket: Racket,
+    /// Touch region only: azimuths and elevations (rad) of the face normal, each combination one
+    /// normal (cos e·cos a, cos e·sin a, sin e) in the world: toward the opponent.
     pub normal_angles: Vec<f64>,
     /// Rolls (rad) of the racket about its normal, from the handle-up frame.
     pub rolls: Vec<f64>,
@@ -175,18 +232,29 @@ pub fn min_joint_time(delta: f64, v: f64, a: f64) -> f64 {
 
 impl ReachRegion {
     /// The region of `chain` (analytic IK) placed by `placement`, starting from `ready`, with the
-    /// default volume, normals at 0, ±30° azimuth and elevation, rolls 0, ±30°, ±60°.
+    /// default volume, targets x ∈ {0.4, 0.8, 1.2} m × y ∈ {−0.5, 0, 0.5} m, return times 0.45 to
+    /// 1.05 s by 0.15 s, the default racket rubber, rolls 0, ±30°, ±60° (and, for the touch
+    /// region, normals at 0, ±30° azimuth and elevation).
     pub fn new(chain: &Chain, placement: Placement, ready: Vec<f64>, ball_radius: f64) -> Result<Self> {
         let ik = Analytic::for_chain(chain)
             .ok_or_else(|| Error::Model("the reachable region needs a chain with analytic IK (gantry6)".into()))?;
         crate::error::check_vector("ready", &ready, chain.dof())?;
         let deg = std::f64::consts::PI / 180.0;
+        let targets = [0.4, 0.8, 1.2]
+            .iter()
+            .flat_map(|&x| [-0.5, 0.0, 0.5].map(|y| [x, y]))
+            .collect();
         Ok(ReachRegion {
+            chain: chain.clone(),
             ik,
             limits: KinematicLimits::from_chain(chain, None)?,
             placement,
             ready,
             volume: Reach::default(),
+            targets,
+            return_times: vec![0.45, 0.6, 0.75, 0.9, 1.05],
+            racket: Racket::default(),
+            contact_offsets: vec![0.0],
             normal_angles: vec![-30.0 * deg, 0.0, 30.0 * deg],
             rolls: vec![-60.0 * deg, -30.0 * deg, 0.0, 30.0 * deg, 60.0 * deg],
             ball_radius,
@@ -233,9 +301,43 @@ impl ReachRegion {
         best
     }
 
-    /// Classifies the ball `ball` (true state), flying by `flight`, for a stroke starting at rest
-    /// at the ready configuration at time `now` (s).
+    /// Classifies the ball `ball` (true state), flying by `flight` (the return shots fly by its
+    /// model and table), for a stroke starting at rest at the ready configuration at time `now`
+    /// (s): in reach, or the deepest condition of the module doc that no sample met.
     pub fn classify(&self, flight: &Flight, ball: &BallState, now: f64) -> Reachability {
+        let mut deepest = returns::Stage::Nothing;
+        let mut found = None;
+        let bounced = walk_after_bounce(flight, ball, self.step, false, |s| {
+            if s.p.x < self.volume.lo.x {
+                return false;
+            }
+            if !self.volume.contains(&s.p) {
+                return true;
+            }
+            match self.return_at(flight, s, now, &mut deepest) {
+                Some(min_time) => {
+                    found = Some(Reachability::InReach {
+                        p: s.p,
+                        t: s.t,
+                        min_time,
+                    });
+                    false
+                }
+                None => true,
+            }
+        });
+        match (found, bounced) {
+            (Some(r), _) => r,
+            (None, false) => Reachability::NoBounce,
+            (None, true) => deepest.verdict(),
+        }
+    }
+
+    /// The touch region (the region before the return conditions, kept for comparison): classifies
+    /// `ball` (true state), flying by `flight`, by items 1 and 5 of the module doc with the racket
+    /// placed for any orientation of the grid (`normal_angles` × `normal_angles` × `rolls`) instead
+    /// of a return shot's: `NoBounce`, `OutsideVolume`, `NoPose`, `TooEarly` or `InReach`.
+    pub fn classify_touch(&self, flight: &Flight, ball: &BallState, now: f64) -> Reachability {
         let (mut in_volume, mut placeable, mut found) = (false, false, None);
         let bounced = walk_after_bounce(flight, ball, self.step, false, |s| {
             if s.p.x < self.volume.lo.x {
