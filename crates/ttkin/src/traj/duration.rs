@@ -123,33 +123,11 @@ pub fn quintic_limit_ratio_above(
     limits: &KinematicLimits,
     floor: f64,
 ) -> f64 {
-    // (bound of the ratio, derivative polynomial, limit) of every finite limit above `floor`.
-    let mut items = [(0.0, [0.0; 6], 1.0); 3 * MAX_QUICK_DOF];
-    let n = start.q.len();
-    if n > MAX_QUICK_DOF {
+    if start.q.len() > MAX_QUICK_DOF {
         let r = quintic_limit_ratio(start, end, duration, limits);
         return if r > floor { r } else { 0.0 };
     }
-    let mut count = 0;
-    for j in 0..n {
-        for (d, bound) in limited_derivatives(start, end, j, duration, limits) {
-            let ub = poly::bound_abs(&d, duration) / bound;
-            if ub > floor {
-                items[count] = (ub, d, bound);
-                count += 1;
-            }
-        }
-    }
-    let items = &mut items[..count];
-    items.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
-    let mut worst: f64 = 0.0;
-    for (ub, d, bound) in items.iter() {
-        if *ub <= worst {
-            break;
-        }
-        worst = worst.max(poly::max_abs(d, duration).1.abs() / bound);
-    }
-    worst
+    bounded_limit_ratio(start, end, duration, limits, floor, f64::INFINITY)
 }
 
 /// [`quintic_limit_ratio`] when it is below `ceiling`, exactly the same number; otherwise some
@@ -163,16 +141,33 @@ pub fn quintic_limit_ratio_below(
     limits: &KinematicLimits,
     ceiling: f64,
 ) -> f64 {
-    let mut items = [(0.0, [0.0; 6], 1.0); 3 * MAX_QUICK_DOF];
-    let n = start.q.len();
-    if n > MAX_QUICK_DOF {
+    if start.q.len() > MAX_QUICK_DOF {
         return quintic_limit_ratio(start, end, duration, limits);
     }
+    bounded_limit_ratio(start, end, duration, limits, f64::NEG_INFINITY, ceiling)
+}
+
+/// The search of [`quintic_limit_ratio_above`] and [`quintic_limit_ratio_below`] (at most
+/// `MAX_QUICK_DOF` joints): the peaks whose bound exceeds `floor`, computed exactly largest bound
+/// first while the bound exceeds the largest exact ratio found, stopping at the first ≥ `ceiling`.
+fn bounded_limit_ratio(
+    start: &JointState,
+    end: &JointState,
+    duration: f64,
+    limits: &KinematicLimits,
+    floor: f64,
+    ceiling: f64,
+) -> f64 {
+    // (bound of the ratio, derivative polynomial, limit) of every finite limit above `floor`.
+    let mut items = [(0.0, [0.0; 6], 1.0); 3 * MAX_QUICK_DOF];
     let mut count = 0;
-    for j in 0..n {
+    for j in 0..start.q.len() {
         for (d, bound) in limited_derivatives(start, end, j, duration, limits) {
-            items[count] = (poly::bound_abs(&d, duration) / bound, d, bound);
-            count += 1;
+            let ub = poly::bound_abs(&d, duration) / bound;
+            if ub > floor {
+                items[count] = (ub, d, bound);
+                count += 1;
+            }
         }
     }
     let items = &mut items[..count];
