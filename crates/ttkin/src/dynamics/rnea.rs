@@ -6,7 +6,7 @@
 
 use nalgebra::{DVector, Matrix3, Vector3};
 
-use super::model::{check_wrench, vec3, Dynamics, DynamicsData};
+use super::model::{check_wrench, vec3, BodyInertia, Dynamics, DynamicsData};
 use super::Wrench;
 use crate::error::{check_vector, Result};
 use crate::joint::JointType;
@@ -24,29 +24,34 @@ impl Dynamics {
     ) {
         let n = self.dof();
         self.place(data, q);
+        // Every array cut to n joints once, so that the loops index without bounds checks.
+        let (kinds, bodies, armature) = (&self.kinds[..n], &self.bodies[..n], &self.armature[..n]);
+        let (qd, qdd) = (&qd[..n], &qdd[..n]);
+        let (rot, pos) = (&data.rot[..n], &data.pos[..n]);
+        let (moment, force) = (&mut data.moment[..n], &mut data.force[..n]);
+        let (w, v) = (&mut data.w[..n], &mut data.v[..n]);
         // The base is fixed; gravity enters as an upward acceleration of the base, a_0 = −g.
         let mut m = Motion::base(gravity);
         for i in 0..n {
-            let (moment, force) = self.forward_step(i, &data.rot[i], &data.pos[i], &mut m, qd[i], qdd[i]);
-            data.moment[i] = moment;
-            data.force[i] = force;
-            data.w[i] = m.w;
-            data.v[i] = m.v;
+            (moment[i], force[i]) = forward_step(kinds[i], &bodies[i], &rot[i], &pos[i], &mut m, qd[i], qdd[i]);
+            w[i] = m.w;
+            v[i] = m.v;
         }
         if let Some(ext) = wrench {
             // The environment pushes on the tool: the joints need that much less.
             let t = &self.fixed[n];
             let f = t.rotation * ext.force;
             let m = t.rotation * ext.torque + t.translation.vector.cross(&f);
-            data.force[n - 1] -= f;
-            data.moment[n - 1] -= m;
+            force[n - 1] -= f;
+            moment[n - 1] -= m;
         }
+        let tau = &mut data.tau.as_mut_slice()[..n];
         for i in (0..n).rev() {
-            data.tau[i] = self.joint_torque(i, &data.moment[i], &data.force[i], qdd[i]);
+            tau[i] = joint_torque(kinds[i], armature[i], &moment[i], &force[i], qdd[i]);
             if i > 0 {
-                let (f, m) = to_parent(&data.rot[i], &data.pos[i], &data.force[i], &data.moment[i]);
-                data.force[i - 1] += f;
-                data.moment[i - 1] += m;
+                let (f, m) = to_parent(&rot[i], &pos[i], &force[i], &moment[i]);
+                force[i - 1] += f;
+                moment[i - 1] += m;
             }
         }
     }
@@ -68,15 +73,16 @@ impl Dynamics {
         self.place(data, q);
         let rot: &[Matrix3<f64>; N] = data.rot[..N].try_into().ok()?;
         let pos: &[Vector3<f64>; N] = data.pos[..N].try_into().ok()?;
+        let (kinds, bodies, armature) = (&self.kinds[..N], &self.bodies[..N], &self.armature[..N]);
         let mut m = Motion::base(gravity);
         let mut moment = [Vector3::zeros(); N];
         let mut force = [Vector3::zeros(); N];
         for i in 0..N {
-            (moment[i], force[i]) = self.forward_step(i, &rot[i], &pos[i], &mut m, qd[i], qdd[i]);
+            (moment[i], force[i]) = forward_step(kinds[i], &bodies[i], &rot[i], &pos[i], &mut m, qd[i], qdd[i]);
         }
         let mut tau = [0.0; N];
         for i in (0..N).rev() {
-            tau[i] = self.joint_torque(i, &moment[i], &force[i], qdd[i]);
+            tau[i] = joint_torque(kinds[i], armature[i], &moment[i], &force[i], qdd[i]);
             if i > 0 {
                 let (f, mm) = to_parent(&rot[i], &pos[i], &force[i], &moment[i]);
                 force[i - 1] += f;
@@ -89,59 +95,6 @@ impl Dynamics {
             }
         }
         Some(tau)
-    }
-
-    /// One joint of the outward pass: the motion `m` of the parent carried into joint frame `i`
-    /// (rotation `r`, origin `p` in the parent) plus the joint's own, and the net body wrench
-    /// (moment, force) that motion needs.
-    #[inline(always)]
-    fn forward_step(
-        &self,
-        i: usize,
-        r: &Matrix3<f64>,
-        p: &Vector3<f64>,
-        m: &mut Motion,
-        qd: f64,
-        qdd: f64,
-    ) -> (Vector3<f64>, Vector3<f64>) {
-        let rt = r.transpose();
-        let dv_parent = m.dv + m.dw.cross(p);
-        let v_parent = m.v + m.w.cross(p);
-        m.w = rt * m.w;
-        m.v = rt * v_parent;
-        m.dw = rt * m.dw;
-        m.dv = rt * dv_parent;
-        let z = Vector3::z();
-        match self.kinds[i] {
-            JointType::Revolute => {
-                m.w.z += qd;
-                // a_i += S·q̈ + v_i ×ₘ S·q̇, S = (ẑ; 0).
-                m.dw += m.w.cross(&z) * qd;
-                m.dw.z += qdd;
-                m.dv += m.v.cross(&z) * qd;
-            }
-            JointType::Prismatic => {
-                m.v.z += qd;
-                // a_i += S·q̈ + v_i ×ₘ S·q̇, S = (0; ẑ).
-                m.dv += m.w.cross(&z) * qd;
-                m.dv.z += qdd;
-            }
-        }
-        // f_i = I·a + v ×* (I·v).
-        let body = &self.bodies[i];
-        let (ia_n, ia_f) = body.apply(&m.dw, &m.dv);
-        let (iv_n, iv_f) = body.apply(&m.w, &m.v);
-        (ia_n + m.w.cross(&iv_n) + m.v.cross(&iv_f), ia_f + m.w.cross(&iv_f))
-    }
-
-    /// Joint `i`'s torque (or force) from its body wrench, with armature.
-    #[inline(always)]
-    fn joint_torque(&self, i: usize, moment: &Vector3<f64>, force: &Vector3<f64>, qdd: f64) -> f64 {
-        let own = match self.kinds[i] {
-            JointType::Revolute => moment.z,
-            JointType::Prismatic => force.z,
-        };
-        own + self.armature[i] * qdd
     }
 
     /// The bias torques h = C(q, q̇)·q̇ + g(q) − Jᵀw without checks (RNEA at q̈ = 0) in `data.tau`.
@@ -261,6 +214,58 @@ impl Motion {
             dv: -gravity,
         }
     }
+}
+
+/// One joint of the outward pass: the motion `m` of the parent carried into the frame of a joint
+/// of type `kind` moving `body` (rotation `r`, origin `p` in the parent) plus the joint's own, and
+/// the net body wrench (moment, force) that motion needs.
+#[inline(always)]
+fn forward_step(
+    kind: JointType,
+    body: &BodyInertia,
+    r: &Matrix3<f64>,
+    p: &Vector3<f64>,
+    m: &mut Motion,
+    qd: f64,
+    qdd: f64,
+) -> (Vector3<f64>, Vector3<f64>) {
+    let rt = r.transpose();
+    let dv_parent = m.dv + m.dw.cross(p);
+    let v_parent = m.v + m.w.cross(p);
+    m.w = rt * m.w;
+    m.v = rt * v_parent;
+    m.dw = rt * m.dw;
+    m.dv = rt * dv_parent;
+    let z = Vector3::z();
+    match kind {
+        JointType::Revolute => {
+            m.w.z += qd;
+            // a_i += S·q̈ + v_i ×ₘ S·q̇, S = (ẑ; 0).
+            m.dw += m.w.cross(&z) * qd;
+            m.dw.z += qdd;
+            m.dv += m.v.cross(&z) * qd;
+        }
+        JointType::Prismatic => {
+            m.v.z += qd;
+            // a_i += S·q̈ + v_i ×ₘ S·q̇, S = (0; ẑ).
+            m.dv += m.w.cross(&z) * qd;
+            m.dv.z += qdd;
+        }
+    }
+    // f_i = I·a + v ×* (I·v).
+    let (ia_n, ia_f) = body.apply(&m.dw, &m.dv);
+    let (iv_n, iv_f) = body.apply(&m.w, &m.v);
+    (ia_n + m.w.cross(&iv_n) + m.v.cross(&iv_f), ia_f + m.w.cross(&iv_f))
+}
+
+/// The torque (or force) of a joint of type `kind` with `armature` from its body wrench.
+#[inline(always)]
+fn joint_torque(kind: JointType, armature: f64, moment: &Vector3<f64>, force: &Vector3<f64>, qdd: f64) -> f64 {
+    let own = match kind {
+        JointType::Revolute => moment.z,
+        JointType::Prismatic => force.z,
+    };
+    own + armature * qdd
 }
 
 /// A body wrench (force, moment) of a frame with rotation `r` and origin `p` in its parent, in
