@@ -234,8 +234,14 @@ impl Flight {
         plane: Option<&Plane>,
     ) -> (BallState, Option<Event>) {
         let mut cur = *s;
-        let g0 = self.guards(&cur.p, plane);
-        let armed: [bool; 4] = std::array::from_fn(|k| g0.0[k] > 0.0);
+        // Every guard is > 0 where none may fire (the cheap test has a 1e-9 m margin): the exact
+        // guards only near a surface.
+        let armed: [bool; 4] = if self.may_fire(&[true; 4], &cur.p, plane) {
+            let g0 = self.guards(&cur.p, plane);
+            std::array::from_fn(|k| g0.0[k] > 0.0)
+        } else {
+            [true; 4]
+        };
         let mut done = done.iter();
         while cur.t < t_end {
             let h = self.step.min(t_end - cur.t);
