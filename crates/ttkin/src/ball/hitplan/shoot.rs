@@ -34,7 +34,10 @@ impl HitPlanner {
         };
         // The outgoing spin follows the racket, which follows v₀: solved together. The fine
         // stage's last flight (the one at v_out) is kept for the return check.
-        let path = RefCell::new(FinePath::default());
+        let path = RefCell::new(FinePath {
+            steps: Vec::with_capacity((tf / f.step) as usize + 2),
+            ..FinePath::default()
+        });
         let v_out = shoot_coarse_first(f, &s.p, &goal, tf, |v| racket(v).map(|r| r.spin_out), Some(&path))?;
         let path = path.into_inner();
         // The racket of the last evaluation is the one at v_out (`racket` ran last for it).
