@@ -144,6 +144,39 @@ fn net_and_floor_end_the_flight() {
 }
 
 #[test]
+fn advance_along_a_prefix_of_its_steps_is_advance() {
+    let f = Flight {
+        step: 0.01,
+        ..Flight::default()
+    };
+    let mut rng = fastrand::Rng::with_seed(3);
+    for _ in 0..200 {
+        // Returns from behind the robot's end line toward the opponent's half, some into the net.
+        let s = BallState::new(
+            1.3 * rng.f64(),
+            [-1.6 - 0.4 * rng.f64(), 0.8 * (rng.f64() - 0.5), 0.05 + 0.3 * rng.f64()],
+            [2.0 + 4.0 * rng.f64(), 0.6 * (rng.f64() - 0.5), 0.5 + 2.0 * rng.f64()],
+            [0.0, 150.0 * (rng.f64() - 0.5), 60.0 * (rng.f64() - 0.5)],
+        );
+        let t_end = s.t + 1.3;
+        let want = f.advance(&s, t_end, None);
+        // The steps integrated from t = 0 (as the shooting does): only p and v are taken.
+        let mut cur = BallState { t: 0.0, ..s };
+        let mut steps = Vec::new();
+        for _ in 0..rng.usize(0..140) {
+            cur = f.rk4(&cur, f.step);
+            steps.push((cur.p, cur.v));
+        }
+        assert_eq!(f.advance_along(&s, &steps, t_end, None), want);
+        // The prefix is used: another flight's steps (1 cm higher) give another result.
+        if !steps.is_empty() {
+            steps.iter_mut().for_each(|(p, _)| p.z += 0.01);
+            assert_ne!(f.advance_along(&s, &steps, t_end, None), want);
+        }
+    }
+}
+
+#[test]
 fn edge_contact_has_a_non_vertical_normal() {
     let f = Flight::default();
     // Falls onto the end line's edge, just beyond it.

@@ -219,12 +219,44 @@ impl Flight {
     /// Returns the state reached (after the bounce impulse at a table or edge event) and the event.
     /// Guards already ≤ 0 at `s` are ignored (e.g. a ball resting on a plane it just crossed).
     pub fn advance(&self, s: &BallState, t_end: f64, plane: Option<&Plane>) -> (BallState, Option<Event>) {
+        self.advance_along(s, &[], t_end, plane)
+    }
+
+    /// [`Flight::advance`] with the positions and velocities (m, m/s, world) after its first
+    /// full steps already integrated: `done[k]` is the state after k + 1 RK4 steps of
+    /// `self.step` from `s` (as [`Flight::rk4`] gives them; its spin is `s.w`). Bit-equal to
+    /// `advance` for such a prefix; the steps past it are integrated.
+    pub fn advance_along(
+        &self,
+        s: &BallState,
+        done: &[(Vector3<f64>, Vector3<f64>)],
+        t_end: f64,
+        plane: Option<&Plane>,
+    ) -> (BallState, Option<Event>) {
         let mut cur = *s;
-        let g0 = self.guards(&cur.p, plane);
-        let armed: [bool; 4] = std::array::from_fn(|k| g0.0[k] > 0.0);
+        // Every guard is > 0 where none may fire (the cheap test has a 1e-9 m margin): the exact
+        // guards only near a surface.
+        let armed: [bool; 4] = if self.may_fire(&[true; 4], &cur.p, plane) {
+            let g0 = self.guards(&cur.p, plane);
+            std::array::from_fn(|k| g0.0[k] > 0.0)
+        } else {
+            [true; 4]
+        };
+        let mut done = done.iter();
         while cur.t < t_end {
             let h = self.step.min(t_end - cur.t);
-            let next = self.rk4(&cur, h);
+            let next = match done.next() {
+                Some(&(p, v)) if h == self.step => BallState {
+                    t: cur.t + h,
+                    p,
+                    v,
+                    w: cur.w,
+                },
+                _ => {
+                    done = [].iter();
+                    self.rk4(&cur, h)
+                }
+            };
             if self.may_fire(&armed, &next.p, plane) {
                 if let Some(k) = fired(&armed, &self.guards(&next.p, plane)) {
                     let (before, hit_k) = self.locate(&cur, &next, &armed, plane, k);

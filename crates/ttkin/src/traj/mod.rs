@@ -169,14 +169,19 @@ impl JointTrajectory {
     /// `coeffs[k·dof + j]` is the polynomial of joint j on segment k.
     pub(crate) fn from_parts(dof: usize, knots: Vec<f64>, coeffs: Vec<Coeffs>) -> Self {
         debug_assert!(knots.len() >= 2 && coeffs.len() == (knots.len() - 1) * dof);
-        let mut powers = vec![0.0; coeffs.len() * ROWS];
-        for (i, c) in coeffs.iter().enumerate() {
-            let (k, j) = (i / dof, i % dof);
-            let d1 = poly::derivative(c);
-            let d2 = poly::derivative(&d1);
-            let rows = c.iter().chain(&d1[..5]).chain(&d2[..4]);
-            for (r, &v) in rows.enumerate() {
-                powers[(ROWS * k + r) * dof + j] = v;
+        // Written in storage order (segment, row, joint): no zeroed buffer, no scattered writes.
+        let mut powers = Vec::with_capacity(coeffs.len() * ROWS);
+        let mut rows: Vec<[f64; ROWS]> = vec![[0.0; ROWS]; dof];
+        for seg in coeffs.chunks_exact(dof.max(1)) {
+            for (out, c) in rows.iter_mut().zip(seg) {
+                let d1 = poly::derivative(c);
+                let d2 = poly::derivative(&d1);
+                for (o, &v) in out.iter_mut().zip(c.iter().chain(&d1[..5]).chain(&d2[..4])) {
+                    *o = v;
+                }
+            }
+            for r in 0..ROWS {
+                powers.extend(rows.iter().map(|row| row[r]));
             }
         }
         JointTrajectory { dof, knots, powers }

@@ -5,6 +5,7 @@ use super::super::flight::{BallState, EventKind, Flight};
 use super::super::impact::RacketHit;
 use super::HitPlanner;
 use nalgebra::{Matrix3, Vector3};
+use std::cell::RefCell;
 
 impl HitPlanner {
     /// Outgoing velocity, racket and landing point returning the ball at `s` to `target` in a
@@ -31,16 +32,29 @@ impl HitPlanner {
             }
             hit
         };
-        // The outgoing spin follows the racket, which follows v₀: solved together.
-        let v_out = shoot_coarse_first(f, &s.p, &goal, tf, |v| racket(v).map(|r| r.spin_out))?;
-        let hit = racket(&v_out)?;
+        // The outgoing spin follows the racket, which follows v₀: solved together. The fine
+        // stage's last flight (the one at v_out) is kept for the return check.
+        let path = RefCell::new(FinePath {
+            steps: Vec::with_capacity((tf / f.step) as usize + 2),
+            ..FinePath::default()
+        });
+        let v_out = shoot_coarse_first(f, &s.p, &goal, tf, |v| racket(v).map(|r| r.spin_out), Some(&path))?;
+        let path = path.into_inner();
+        // The racket of the last evaluation is the one at v_out (`racket` ran last for it).
+        let kept = last.get().filter(|h| path.v == v_out && path.w == h.spin_out);
+        let hit = match kept {
+            Some(h) => h,
+            None => racket(&v_out)?,
+        };
         let out = BallState {
             v: v_out,
             w: hit.spin_out,
             ..*s
         };
-        // The first event only (what `run` reports first, without the flight after it).
-        let (_, first) = f.advance(&out, s.t + tf + 0.5, None);
+        // The first event only (what `run` reports first, without the flight after it), along the
+        // steps the shooting already integrated when they are those of this flight.
+        let done: &[_] = if kept.is_some() { &path.steps } else { &[] };
+        let (_, first) = f.advance_along(&out, done, s.t + tf + 0.5, None);
         let e = first.as_ref()?;
         let landing = e.before.p;
         let ok = e.kind == EventKind::Table
@@ -57,7 +71,7 @@ pub fn shoot<S>(f: &Flight, p: &Vector3<f64>, goal: &Vector3<f64>, tf: f64, spin
 where
     S: Fn(&Vector3<f64>) -> Option<Vector3<f64>>,
 {
-    let end = |v: &Vector3<f64>| end_point(f, f.step, p, v, tf, &spin) - goal;
+    let end = |v: &Vector3<f64>| end_point(f, f.step, p, v, tf, &spin, None) - goal;
     let (v, r, _) = broyden(
         &end,
         drag_free(f, p, goal, tf),
@@ -67,28 +81,39 @@ where
     (r.norm() < 1e-4).then_some(v)
 }
 
+/// The last fine flight of a shooting solve: its initial velocity (m/s) and spin (rad/s), and
+/// the positions and velocities after each of its full steps (world), as
+/// [`Flight::advance_along`] takes them.
+#[derive(Debug, Default)]
+struct FinePath {
+    v: Vector3<f64>,
+    w: Vector3<f64>,
+    steps: Vec<(Vector3<f64>, Vector3<f64>)>,
+}
+
 /// [`shoot`] in two stages, the result to the same tolerance at the flight's own step: Broyden's
 /// method first on the flight integrated at 4 × its step (4 times fewer RK4
 /// steps, to 0.1 mm), then continued from that velocity and inverse Jacobian at the
 /// flight's step (usually one or two evaluations, as the two integrations differ by far less than
-/// the coarse tolerance).
-pub fn shoot_coarse_first<S>(
+/// the coarse tolerance). With `path`, the last fine flight is kept there.
+fn shoot_coarse_first<S>(
     f: &Flight,
     p: &Vector3<f64>,
     goal: &Vector3<f64>,
     tf: f64,
     spin: S,
+    path: Option<&RefCell<FinePath>>,
 ) -> Option<Vector3<f64>>
 where
     S: Fn(&Vector3<f64>) -> Option<Vector3<f64>>,
 {
-    let coarse = |v: &Vector3<f64>| end_point(f, COARSE_FACTOR * f.step, p, v, tf, &spin) - goal;
+    let coarse = |v: &Vector3<f64>| end_point(f, COARSE_FACTOR * f.step, p, v, tf, &spin, None) - goal;
     let start = drag_free(f, p, goal, tf);
     let (v0, jinv) = match broyden(&coarse, start, Matrix3::identity() / tf, COARSE_TOLERANCE) {
         Some((v, r, jinv)) if r.norm() < COARSE_TOLERANCE => (v, jinv),
         _ => (start, Matrix3::identity() / tf),
     };
-    let fine = |v: &Vector3<f64>| end_point(f, f.step, p, v, tf, &spin) - goal;
+    let fine = |v: &Vector3<f64>| end_point(f, f.step, p, v, tf, &spin, path) - goal;
     let (v, r, _) = broyden(&fine, v0, jinv, FINE_TOLERANCE)?;
     (r.norm() < 1e-4).then_some(v)
 }
@@ -107,8 +132,17 @@ fn drag_free(f: &Flight, p: &Vector3<f64>, goal: &Vector3<f64>, tf: f64) -> Vect
 }
 
 /// Position after `tf` s of flight from `p` with velocity `v` and spin `spin(v)`, RK4 steps of at
-/// most `step` s (the last one shortened); NaN when `spin` has no answer.
-fn end_point<S>(f: &Flight, step: f64, p: &Vector3<f64>, v: &Vector3<f64>, tf: f64, spin: &S) -> Vector3<f64>
+/// most `step` s (the last one shortened); NaN when `spin` has no answer. With `path`, the flight
+/// is kept there (its full steps only).
+fn end_point<S>(
+    f: &Flight,
+    step: f64,
+    p: &Vector3<f64>,
+    v: &Vector3<f64>,
+    tf: f64,
+    spin: &S,
+    path: Option<&RefCell<FinePath>>,
+) -> Vector3<f64>
 where
     S: Fn(&Vector3<f64>) -> Option<Vector3<f64>>,
 {
@@ -121,8 +155,18 @@ where
         v: *v,
         w,
     };
+    let mut path = path.map(|c| c.borrow_mut());
+    if let Some(path) = path.as_mut() {
+        path.v = *v;
+        path.w = w;
+        path.steps.clear();
+    }
     while s.t < tf - 1e-12 {
-        s = f.rk4(&s, step.min(tf - s.t));
+        let h = step.min(tf - s.t);
+        s = f.rk4(&s, h);
+        if let (Some(path), true) = (path.as_mut(), h == step) {
+            path.steps.push((s.p, s.v));
+        }
     }
     s.p
 }
@@ -186,9 +230,9 @@ mod tests {
             let spin = |v: &Vector3<f64>| Some(w + Vector3::new(0.0, 2.0 * v.x, 0.0));
             let tf = [0.65, 0.8, 0.95][rng.usize(0..3)];
             let one = shoot(&f, &p, &goal, tf, spin).unwrap();
-            let two = shoot_coarse_first(&f, &p, &goal, tf, spin).unwrap();
+            let two = shoot_coarse_first(&f, &p, &goal, tf, spin, None).unwrap();
             // Both land within the tolerance at the flight's own step.
-            let miss = (end_point(&f, f.step, &p, &two, tf, &spin) - goal).norm();
+            let miss = (end_point(&f, f.step, &p, &two, tf, &spin, None) - goal).norm();
             assert!(miss < FINE_TOLERANCE, "miss {miss}");
             worst = worst.max((one - two).norm());
         }
