@@ -23,7 +23,7 @@
 //!
 //! Inverse: the racket moves along its normal at the hit (velocity s·n, no brushing). Unknowns are
 //! the normal (two angles) and s; the frictionless solution n ∥ v_out − v_in,
-//! s = (v_out·n + e·v_in·n)/(1 + e) starts a Newton iteration (finite-difference Jacobian, 3×3) on
+//! s = (v_out·n + e·v_in·n)/(1 + e) starts a Newton iteration (analytic 3×3 Jacobian, [`Racket::jacobian`]) on
 //! the full model until the outgoing velocity matches to 1e-9 m/s.
 
 use super::contact::impulse;
@@ -112,27 +112,19 @@ impl Racket {
         let n0 = dv.normalize();
         let s0 = (v_out.dot(&n0) + e * v_in.dot(&n0)) / (1.0 + e);
         // Parameters: azimuth, elevation of n, speed s.
-        let to_n = |x: &Vector3<f64>| Vector3::new(x[1].cos() * x[0].cos(), x[1].cos() * x[0].sin(), x[1].sin());
         let (n0, s0) = match guess {
             Some(g) => (g.normal, g.velocity.dot(&g.normal)),
             None => (n0, s0),
         };
         let mut x = Vector3::new(n0.y.atan2(n0.x), n0.z.clamp(-1.0, 1.0).asin(), s0);
-        let f = |x: &Vector3<f64>| {
-            let n = to_n(x);
-            self.hit(model, v_in, w_in, &n, &(x[2] * n)).0 - v_out
-        };
-        let mut r = f(&x);
+        let f = |fr: &NormalFrame, s: f64| self.hit(model, v_in, w_in, &fr.n, &(s * fr.n)).0 - v_out;
+        let mut fr = NormalFrame::at(&x);
+        let mut r = f(&fr, x[2]);
         for _ in 0..30 {
             if r.norm() < 1e-9 {
                 break;
             }
-            let mut jac = Matrix3::zeros();
-            for c in 0..3 {
-                let mut xp = x;
-                xp[c] += 1e-7;
-                jac.set_column(c, &((f(&xp) - r) / 1e-7));
-            }
+            let jac = self.jacobian(model, v_in, w_in, &fr, x[2]);
             let step = jac
                 .lu()
                 .solve(&(-r))
@@ -141,9 +133,11 @@ impl Racket {
             let mut lambda = 1.0;
             loop {
                 let xn = x + lambda * step;
-                let rn = f(&xn);
+                let frn = NormalFrame::at(&xn);
+                let rn = f(&frn, xn[2]);
                 if rn.norm() < r.norm() || lambda < 1e-3 {
                     x = xn;
+                    fr = frn;
                     r = rn;
                     break;
                 }
@@ -156,7 +150,7 @@ impl Racket {
                 r.norm()
             )));
         }
-        let n = to_n(&x);
+        let n = fr.n;
         let velocity = x[2] * n;
         let (_, spin_out) = self.hit(model, v_in, w_in, &n, &velocity);
         Ok(RacketHit {
@@ -164,5 +158,161 @@ impl Racket {
             velocity,
             spin_out,
         })
+    }
+
+    /// Jacobian (m/s per rad, per rad, per m/s) of the outgoing ball velocity of [`Racket::hit`]
+    /// with respect to (azimuth, elevation, speed s) of a racket moving at s·n, at the normal
+    /// `fr` and speed `s`: the impulse model of [`super::contact::impulse`] differentiated by
+    /// hand. With rel = v − s·n: N = (1+e)(s − v·n), slip u = v − (v·n)n − r·ω×n (independent
+    /// of s), v' = v + N·n + j with j = −u/κ (rolling) or −μN·u/|u| (sliding).
+    fn jacobian(
+        &self,
+        model: &BallModel,
+        v: &Vector3<f64>,
+        w: &Vector3<f64>,
+        fr: &NormalFrame,
+        s: f64,
+    ) -> Matrix3<f64> {
+        let (e, mu, r) = (self.restitution, self.friction, model.radius);
+        let n = &fr.n;
+        let vn_ball = v.dot(n);
+        if vn_ball - s >= 0.0 {
+            // No impact: the outgoing velocity is v, independent of the racket.
+            return Matrix3::zeros();
+        }
+        let big_n = (1.0 + e) * (s - vn_ball);
+        let slip = v - vn_ball * n - r * w.cross(n);
+        let kappa = 1.0 + model.mass * r * r / model.inertia();
+        let rolling = (slip / kappa).norm() <= mu * big_n;
+        let slip_norm = slip.norm();
+        let u = if slip_norm > 0.0 {
+            slip / slip_norm
+        } else {
+            Vector3::zeros()
+        };
+        let mut jac = Matrix3::zeros();
+        for (c, d) in [fr.n_az, fr.n_el].iter().enumerate() {
+            let dvn = v.dot(d);
+            let d_big_n = -(1.0 + e) * dvn;
+            let d_slip = -dvn * n - vn_ball * d - r * w.cross(d);
+            let dj = if rolling {
+                -d_slip / kappa
+            } else {
+                -mu * (d_big_n * u + big_n * (d_slip - u * u.dot(&d_slip)) / slip_norm)
+            };
+            jac.set_column(c, &(d_big_n * n + big_n * d + dj));
+        }
+        let dj_ds = if rolling { Vector3::zeros() } else { -mu * (1.0 + e) * u };
+        jac.set_column(2, &((1.0 + e) * n + dj_ds));
+        jac
+    }
+}
+
+/// A unit normal from (azimuth, elevation) and its two partial derivatives, one sin/cos each.
+struct NormalFrame {
+    /// n = (cos el·cos az, cos el·sin az, sin el).
+    n: Vector3<f64>,
+    /// ∂n/∂az.
+    n_az: Vector3<f64>,
+    /// ∂n/∂el.
+    n_el: Vector3<f64>,
+}
+
+impl NormalFrame {
+    /// The frame at x = (azimuth, elevation, ·) (rad).
+    fn at(x: &Vector3<f64>) -> Self {
+        let (sa, ca) = x[0].sin_cos();
+        let (sb, cb) = x[1].sin_cos();
+        NormalFrame {
+            n: Vector3::new(cb * ca, cb * sa, sb),
+            n_az: Vector3::new(-cb * sa, cb * ca, 0.0),
+            n_el: Vector3::new(-sb * ca, -sb * sa, cb),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Incoming states and wanted outgoing velocities of rally-like returns, with spin.
+    fn cases() -> Vec<(Vector3<f64>, Vector3<f64>, Vector3<f64>)> {
+        let mut out = Vec::new();
+        for (i, &(vx, vz, w)) in [
+            (-5.0, -1.0, 0.0),
+            (-7.0, 1.5, 120.0),
+            (-3.0, -2.5, -200.0),
+            (-9.0, 0.2, 60.0),
+        ]
+        .iter()
+        .enumerate()
+        {
+            let v_in = Vector3::new(vx, 0.3 * i as f64 - 0.4, vz);
+            let w_in = Vector3::new(10.0 * i as f64, w, -0.5 * w);
+            let v_out = Vector3::new(4.0 + i as f64, 0.5 - 0.3 * i as f64, 1.0 + 0.5 * i as f64);
+            out.push((v_in, w_in, v_out));
+        }
+        out
+    }
+
+    #[test]
+    fn analytic_jacobian_matches_central_differences() {
+        let m = BallModel::default();
+        let racket = Racket::default();
+        let mut checked = 0;
+        for (v_in, w_in, v_out) in cases() {
+            let sol = racket.solve(&m, &v_in, &w_in, &v_out).unwrap();
+            let n = sol.normal;
+            let s = sol.velocity.dot(&n);
+            let x0 = Vector3::new(n.y.atan2(n.x), n.z.asin(), s);
+            // At the solution and at perturbed points (other regimes of the friction law).
+            for dx in [
+                Vector3::zeros(),
+                Vector3::new(0.2, -0.1, 1.0),
+                Vector3::new(-0.3, 0.25, -0.8),
+            ] {
+                let x = x0 + dx;
+                let fr = NormalFrame::at(&x);
+                let jac = racket.jacobian(&m, &v_in, &w_in, &fr, x[2]);
+                let h = 1e-6;
+                let mut fd = Matrix3::zeros();
+                for c in 0..3 {
+                    let (mut xp, mut xm) = (x, x);
+                    xp[c] += h;
+                    xm[c] -= h;
+                    let g = |x: &Vector3<f64>| {
+                        let fr = NormalFrame::at(x);
+                        racket.hit(&m, &v_in, &w_in, &fr.n, &(x[2] * fr.n)).0
+                    };
+                    fd.set_column(c, &((g(&xp) - g(&xm)) / (2.0 * h)));
+                }
+                assert!(jac.norm() > 1.0, "a zero Jacobian checks nothing");
+                assert!(
+                    (jac - fd).norm() < 1e-6 * (1.0 + fd.norm()),
+                    "analytic {jac} central differences {fd}"
+                );
+                checked += 1;
+            }
+        }
+        assert_eq!(checked, 12);
+    }
+
+    #[test]
+    fn solve_reproduces_the_outgoing_velocity_through_the_forward_model() {
+        let m = BallModel::default();
+        let racket = Racket::default();
+        for (v_in, w_in, v_out) in cases() {
+            let sol = racket.solve(&m, &v_in, &w_in, &v_out).unwrap();
+            assert!((sol.normal.norm() - 1.0).abs() < 1e-12);
+            assert!((sol.velocity - sol.velocity.dot(&sol.normal) * sol.normal).norm() < 1e-12);
+            let (v, spin) = racket.hit(&m, &v_in, &w_in, &sol.normal, &sol.velocity);
+            assert!((v - v_out).norm() < 1e-9, "{v} vs {v_out}");
+            assert!((spin - sol.spin_out).norm() < 1e-12);
+            // A warm start from a neighbour's solution reaches the same hit.
+            let near = v_out + Vector3::new(0.05, -0.02, 0.03);
+            let warm = racket.solve_from(&m, &v_in, &w_in, &near, Some(&sol)).unwrap();
+            let (v2, _) = racket.hit(&m, &v_in, &w_in, &warm.normal, &warm.velocity);
+            assert!((v2 - near).norm() < 1e-9);
+        }
     }
 }
