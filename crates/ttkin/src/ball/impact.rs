@@ -111,20 +111,21 @@ impl Racket {
         }
         let n0 = dv.normalize();
         let s0 = (v_out.dot(&n0) + e * v_in.dot(&n0)) / (1.0 + e);
-        // Parameters: azimuth, elevation of n, speed s.
         let (n0, s0) = match guess {
-            Some(g) => (g.normal, g.velocity.dot(&g.normal)),
+            Some(g) => (g.normal.normalize(), g.velocity.dot(&g.normal)),
             None => (n0, s0),
         };
-        let mut x = Vector3::new(n0.y.atan2(n0.x), n0.z.clamp(-1.0, 1.0).asin(), s0);
+        // Unknowns: the normal, moved in its tangent plane and renormalised (no angles, no
+        // sin/cos), and the speed s.
         let f = |fr: &NormalFrame, s: f64| self.hit(model, v_in, w_in, &fr.n, &(s * fr.n)).0 - v_out;
-        let mut fr = NormalFrame::at(&x);
-        let mut r = f(&fr, x[2]);
+        let mut fr = NormalFrame::at(&n0);
+        let mut speed = s0;
+        let mut r = f(&fr, speed);
         for _ in 0..30 {
             if r.norm() < 1e-9 {
                 break;
             }
-            let jac = self.jacobian(model, v_in, w_in, &fr, x[2]);
+            let jac = self.jacobian(model, v_in, w_in, &fr, speed);
             let step = jac
                 .lu()
                 .solve(&(-r))
@@ -132,12 +133,12 @@ impl Racket {
             // Damped step: halve until the residual falls.
             let mut lambda = 1.0;
             loop {
-                let xn = x + lambda * step;
-                let frn = NormalFrame::at(&xn);
-                let rn = f(&frn, xn[2]);
+                let frn = fr.moved(lambda * step[0], lambda * step[1]);
+                let sn = speed + lambda * step[2];
+                let rn = f(&frn, sn);
                 if rn.norm() < r.norm() || lambda < 1e-3 {
-                    x = xn;
                     fr = frn;
+                    speed = sn;
                     r = rn;
                     break;
                 }
@@ -151,7 +152,7 @@ impl Racket {
             )));
         }
         let n = fr.n;
-        let velocity = x[2] * n;
+        let velocity = speed * n;
         let (_, spin_out) = self.hit(model, v_in, w_in, &n, &velocity);
         Ok(RacketHit {
             normal: n,
@@ -161,8 +162,8 @@ impl Racket {
     }
 
     /// Jacobian (m/s per rad, per rad, per m/s) of the outgoing ball velocity of [`Racket::hit`]
-    /// with respect to (azimuth, elevation, speed s) of a racket moving at s·n, at the normal
-    /// `fr` and speed `s`: the impulse model of [`super::contact::impulse`] differentiated by
+    /// with respect to (a, b, s) of a racket moving at s·n, n = (n₀ + a·t₁ + b·t₂)/|·| in the
+    /// tangent basis of `fr` (n₀ = `fr.n`), at a = b = 0 and speed `s`: the impulse model of [`super::contact::impulse`] differentiated by
     /// hand. With rel = v − s·n: N = (1+e)(s − v·n), slip u = v − (v·n)n − r·ω×n (independent
     /// of s), v' = v + N·n + j with j = −u/κ (rolling) or −μN·u/|u| (sliding).
     fn jacobian(
@@ -191,7 +192,7 @@ impl Racket {
             Vector3::zeros()
         };
         let mut jac = Matrix3::zeros();
-        for (c, d) in [fr.n_az, fr.n_el].iter().enumerate() {
+        for (c, d) in [fr.t1, fr.t2].iter().enumerate() {
             let dvn = v.dot(d);
             let d_big_n = -(1.0 + e) * dvn;
             let d_slip = -dvn * n - vn_ball * d - r * w.cross(d);
@@ -208,26 +209,40 @@ impl Racket {
     }
 }
 
-/// A unit normal from (azimuth, elevation) and its two partial derivatives, one sin/cos each.
+/// A unit normal and an orthonormal basis of its tangent plane (the derivatives of the normal in
+/// the solve's two direction unknowns).
 struct NormalFrame {
-    /// n = (cos el·cos az, cos el·sin az, sin el).
+    /// Unit normal.
     n: Vector3<f64>,
-    /// ∂n/∂az.
-    n_az: Vector3<f64>,
-    /// ∂n/∂el.
-    n_el: Vector3<f64>,
+    /// First tangent, ⟂ n.
+    t1: Vector3<f64>,
+    /// Second tangent, n × t₁.
+    t2: Vector3<f64>,
 }
 
 impl NormalFrame {
-    /// The frame at x = (azimuth, elevation, ·) (rad).
-    fn at(x: &Vector3<f64>) -> Self {
-        let (sa, ca) = x[0].sin_cos();
-        let (sb, cb) = x[1].sin_cos();
+    /// The frame at the unit normal `n`.
+    fn at(n: &Vector3<f64>) -> Self {
+        // Cross with the axis least aligned with n: |n × axis| ≥ √(2/3).
+        let (ax, ay, az) = (n.x.abs(), n.y.abs(), n.z.abs());
+        let axis = if ax <= ay && ax <= az {
+            Vector3::x()
+        } else if ay <= az {
+            Vector3::y()
+        } else {
+            Vector3::z()
+        };
+        let t1 = n.cross(&axis).normalize();
         NormalFrame {
-            n: Vector3::new(cb * ca, cb * sa, sb),
-            n_az: Vector3::new(-cb * sa, cb * ca, 0.0),
-            n_el: Vector3::new(-sb * ca, -sb * sa, cb),
+            n: *n,
+            t1,
+            t2: n.cross(&t1),
         }
+    }
+
+    /// The frame at the normal n + a·t₁ + b·t₂, renormalised.
+    fn moved(&self, a: f64, b: f64) -> Self {
+        NormalFrame::at(&(self.n + a * self.t1 + b * self.t2).normalize())
     }
 }
 
@@ -258,43 +273,62 @@ mod tests {
     #[test]
     fn analytic_jacobian_matches_central_differences() {
         let m = BallModel::default();
-        let racket = Racket::default();
         let mut checked = 0;
-        for (v_in, w_in, v_out) in cases() {
-            let sol = racket.solve(&m, &v_in, &w_in, &v_out).unwrap();
-            let n = sol.normal;
-            let s = sol.velocity.dot(&n);
-            let x0 = Vector3::new(n.y.atan2(n.x), n.z.asin(), s);
-            // At the solution and at perturbed points (other regimes of the friction law).
-            for dx in [
-                Vector3::zeros(),
-                Vector3::new(0.2, -0.1, 1.0),
-                Vector3::new(-0.3, 0.25, -0.8),
-            ] {
-                let x = x0 + dx;
-                let fr = NormalFrame::at(&x);
-                let jac = racket.jacobian(&m, &v_in, &w_in, &fr, x[2]);
-                let h = 1e-6;
-                let mut fd = Matrix3::zeros();
-                for c in 0..3 {
-                    let (mut xp, mut xm) = (x, x);
-                    xp[c] += h;
-                    xm[c] -= h;
+        let (mut rolling, mut sliding) = (0, 0);
+        // The default rubber grips (the ball leaves rolling); a slippery one makes it slide.
+        for racket in [
+            Racket::default(),
+            Racket {
+                friction: 0.1,
+                ..Racket::default()
+            },
+        ] {
+            for (v_in, w_in, v_out) in cases() {
+                let sol = racket.solve(&m, &v_in, &w_in, &v_out).unwrap();
+                let n = sol.normal;
+                let s = sol.velocity.dot(&n);
+                // At the solution and at perturbed points (other regimes of the friction law).
+                for (dn, ds) in [
+                    (Vector3::zeros(), 0.0),
+                    (Vector3::new(0.2, -0.1, 0.15), 1.0),
+                    (Vector3::new(-0.3, 0.25, -0.1), -0.8),
+                ] {
+                    let fr = NormalFrame::at(&(n + dn).normalize());
+                    let speed = s + ds;
+                    let jac = racket.jacobian(&m, &v_in, &w_in, &fr, speed);
+                    let h = 1e-6;
                     let g = |x: &Vector3<f64>| {
-                        let fr = NormalFrame::at(x);
-                        racket.hit(&m, &v_in, &w_in, &fr.n, &(x[2] * fr.n)).0
+                        let f2 = fr.moved(x[0], x[1]);
+                        racket.hit(&m, &v_in, &w_in, &f2.n, &(x[2] * f2.n)).0
                     };
-                    fd.set_column(c, &((g(&xp) - g(&xm)) / (2.0 * h)));
+                    let x = Vector3::new(0.0, 0.0, speed);
+                    let mut fd = Matrix3::zeros();
+                    for c in 0..3 {
+                        let (mut xp, mut xm) = (x, x);
+                        xp[c] += h;
+                        xm[c] -= h;
+                        fd.set_column(c, &((g(&xp) - g(&xm)) / (2.0 * h)));
+                    }
+                    assert!(jac.norm() > 1.0, "a zero Jacobian checks nothing");
+                    assert!(
+                        (jac - fd).norm() < 1e-6 * (1.0 + fd.norm()),
+                        "analytic {jac} central differences {fd}"
+                    );
+                    // ∂v'/∂s = (1+e)·n exactly when the ball leaves rolling.
+                    if (jac.column(2) - (1.0 + racket.restitution) * fr.n).norm() < 1e-12 {
+                        rolling += 1;
+                    } else {
+                        sliding += 1;
+                    }
+                    checked += 1;
                 }
-                assert!(jac.norm() > 1.0, "a zero Jacobian checks nothing");
-                assert!(
-                    (jac - fd).norm() < 1e-6 * (1.0 + fd.norm()),
-                    "analytic {jac} central differences {fd}"
-                );
-                checked += 1;
             }
         }
-        assert_eq!(checked, 12);
+        assert_eq!(checked, 24);
+        assert!(
+            rolling > 0 && sliding > 0,
+            "both friction regimes: {rolling} rolling, {sliding} sliding"
+        );
     }
 
     #[test]
