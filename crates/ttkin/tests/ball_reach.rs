@@ -221,3 +221,22 @@ fn joints_too_slow_for_the_racket_speed_put_a_ball_out_with_return_speed() {
     assert_eq!(Reachability::NoReturnPose.name(), "no_return_pose");
     assert!(Reachability::NAMES.contains(&"return_speed") && !Reachability::NAMES.contains(&"no_pose"));
 }
+
+#[test]
+fn racket_rotation_at_roll_zero_is_the_full_turn_and_rolls_about_the_normal() {
+    let tau = std::f64::consts::TAU;
+    for n in [
+        Vector3::new(1.0, 0.2, 0.3),
+        Vector3::new(0.1, -0.9, 0.2),
+        Vector3::new(0.05, 0.02, 1.0),
+    ] {
+        let r0 = racket_rotation(&n, 0.0);
+        // Roll 0 takes a path without sin/cos: it must agree with the general one (a full turn).
+        assert!((r0.matrix() - racket_rotation(&n, tau).matrix()).norm() < 1e-14);
+        assert!((r0.matrix().column(2) - n.normalize()).norm() < 1e-15);
+        // Handle x: as close to world up as possible at roll 0, turned by the roll about n.
+        let r = racket_rotation(&n, 0.5);
+        assert!((r.matrix().column(0).dot(&r0.matrix().column(0)) - 0.5f64.cos()).abs() < 1e-14);
+        assert!((r0.matrix() * r0.matrix().transpose() - nalgebra::Matrix3::identity()).norm() < 1e-14);
+    }
+}

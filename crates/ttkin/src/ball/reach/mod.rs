@@ -215,7 +215,9 @@ pub fn racket_rotation(n: &Vector3<f64>, roll: f64) -> Rotation3<f64> {
     let z = n.normalize();
     let hint = if z.z.abs() < 0.95 { Vector3::z() } else { Vector3::x() };
     let x0 = (hint - z * hint.dot(&z)).normalize();
-    let x = roll.cos() * x0 + roll.sin() * z.cross(&x0);
+    // Roll 0 (the first one tried, the most frequent) without the sin/cos: the same values.
+    let (sin, cos) = if roll == 0.0 { (0.0, 1.0) } else { roll.sin_cos() };
+    let x = cos * x0 + sin * z.cross(&x0);
     Rotation3::from_matrix_unchecked(Matrix3::from_columns(&[x, z.cross(&x), z]))
 }
 
