@@ -23,7 +23,7 @@
 //!
 //! Inverse: the racket moves along its normal at the hit (velocity s·n, no brushing). Unknowns are
 //! the normal (two angles) and s; the frictionless solution n ∥ v_out − v_in,
-//! s = (v_out·n + e·v_in·n)/(1 + e) starts a Newton iteration (analytic 3×3 Jacobian, [`Racket::jacobian`]) on
+//! s = (v_out·n + e·v_in·n)/(1 + e) starts a Newton iteration (analytic 3×3 Jacobian, `Racket::jacobian`, private) on
 //! the full model until the outgoing velocity matches to 1e-9 m/s.
 
 use super::contact::impulse;
