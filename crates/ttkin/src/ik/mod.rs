@@ -380,15 +380,21 @@ pub fn wrap(angle: f64) -> f64 {
 
 /// `q` moved into `limits`: revolute angles are shifted by 2πk when that fits; `None` if it can't.
 fn fit_to_limits(q: f64, kind: JointType, l: &Limits) -> Option<f64> {
+    fit_to_range(q, kind, l.lower, l.upper)
+}
+
+/// `q` (m or rad) inside `lo..=hi` (to 1e-12, then clamped), or a revolute angle moved by the
+/// smallest 2πk that brings it above `lo` when that fits; `None` otherwise.
+pub(crate) fn fit_to_range(q: f64, kind: JointType, lo: f64, hi: f64) -> Option<f64> {
     const SLACK: f64 = 1e-12;
-    if q >= l.lower - SLACK && q <= l.upper + SLACK {
-        return Some(q.clamp(l.lower, l.upper));
+    if q >= lo - SLACK && q <= hi + SLACK {
+        return Some(q.clamp(lo, hi));
     }
-    if kind == JointType::Revolute && l.lower.is_finite() {
-        let k = ((l.lower - q) / (2.0 * PI)).ceil();
+    if kind == JointType::Revolute && lo.is_finite() {
+        let k = ((lo - q) / (2.0 * PI)).ceil();
         let v = q + 2.0 * PI * k;
-        if v <= l.upper + SLACK {
-            return Some(v.clamp(l.lower, l.upper));
+        if v <= hi + SLACK {
+            return Some(v.clamp(lo, hi));
         }
     }
     None

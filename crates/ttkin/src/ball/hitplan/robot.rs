@@ -8,7 +8,6 @@ use super::super::reach::min_joint_time;
 use super::{Hit, HitPlanner};
 use crate::chain::JacobianFrame;
 use crate::ik::{joint_velocity, DifferentialIk, Solutions};
-use crate::joint::JointType;
 use crate::traj::JointState;
 use nalgebra::{IsometryMatrix3, Matrix6, Vector3, Vector6};
 
@@ -166,19 +165,10 @@ impl HitPlanner {
         })
     }
 
-    /// Joint `i`'s value `q` inside its position limits (to 1e-12, then clamped), or a revolute
-    /// angle moved by the smallest 2πk that brings it above the lower limit when that fits.
+    /// Joint `i`'s value `q` inside its position limits ([`crate::ik::fit_to_range`]).
     fn fit(&self, i: usize, q: f64) -> Option<f64> {
-        const SLACK: f64 = 1e-12;
-        let (lo, hi) = (self.limits.lower[i], self.limits.upper[i]);
-        if q >= lo - SLACK && q <= hi + SLACK {
-            return Some(q.clamp(lo, hi));
-        }
-        if self.chain.joints()[i].kind() != JointType::Revolute || !lo.is_finite() {
-            return None;
-        }
-        let turned = q + std::f64::consts::TAU * ((lo - q) / std::f64::consts::TAU).ceil();
-        (turned <= hi + SLACK).then(|| turned.clamp(lo, hi))
+        let kind = self.chain.joints()[i].kind();
+        crate::ik::fit_to_range(q, kind, self.limits.lower[i], self.limits.upper[i])
     }
 }
 
