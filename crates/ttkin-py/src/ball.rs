@@ -14,8 +14,8 @@ use ttkin::ball::rally::{self, RallyConfig};
 use ttkin::ball::reach::ReachRegion;
 
 use crate::args;
-use crate::convert::{f64_array, filled_without_gil_nan_allowed, pose_to_numpy, to_numpy, vector};
-use crate::errors::{PyResultExt, ShapeError, TtmanipError};
+use crate::convert::{filled_without_gil_nan_allowed, pose_to_numpy, rows_array, to_numpy, vector};
+use crate::errors::{PyResultExt, TtmanipError};
 
 fn flight(model: &str) -> PyResult<Flight> {
     Ok(Flight::new(BallModel::by_name(model).py()?))
@@ -43,20 +43,8 @@ fn ball_estimate<'py>(
     p: &Bound<'py, PyAny>,
     model: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let ta = f64_array(t, "t")?;
-    if ta.shape().len() != 1 {
-        return Err(ShapeError::new_err(format!(
-            "t: expected shape (N,), got {}",
-            ta.shape_str()
-        )));
-    }
-    let pa = f64_array(p, "p")?;
-    if pa.shape().len() != 2 || pa.shape()[1] != 3 {
-        return Err(ShapeError::new_err(format!(
-            "p: expected shape (N, 3), got {}",
-            pa.shape_str()
-        )));
-    }
+    let ta = rows_array(t, "t", "N", &[])?;
+    let pa = rows_array(p, "p", "N", &[3])?;
     let times = ta.data().to_vec();
     let obs: Vec<[f64; 3]> = pa.data().chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
     let opts = EstimateOptions {
@@ -98,14 +86,7 @@ fn ball_predict<'py>(
     model: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let s = state_arg(state, "state")?;
-    let ta = f64_array(times, "times")?;
-    if ta.shape().len() != 1 {
-        return Err(ShapeError::new_err(format!(
-            "times: expected shape (K,), got {}",
-            ta.shape_str()
-        )));
-    }
-    let ts = ta.data().to_vec();
+    let ts = rows_array(times, "times", "K", &[])?.data().to_vec();
     let f = flight(model)?;
     let pred = py.detach(|| predict(&f, &s, &ts)).py()?;
     let d = PyDict::new(py);
@@ -135,20 +116,8 @@ fn ball_predict_batch<'py>(
     times: &Bound<'py, PyAny>,
     model: &str,
 ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-    let sa = f64_array(states, "states")?;
-    if sa.shape().len() != 2 || sa.shape()[1] != 10 {
-        return Err(ShapeError::new_err(format!(
-            "states: expected shape (N, 10), got {}",
-            sa.shape_str()
-        )));
-    }
-    let ta = f64_array(times, "times")?;
-    if ta.shape().len() != 1 {
-        return Err(ShapeError::new_err(format!(
-            "times: expected shape (K,), got {}",
-            ta.shape_str()
-        )));
-    }
+    let sa = rows_array(states, "states", "N", &[10])?;
+    let ta = rows_array(times, "times", "K", &[])?;
     let list: Vec<BallState> = sa.data().chunks_exact(10).map(state_from).collect();
     let ts = ta.data().to_vec();
     let f = flight(model)?;

@@ -178,6 +178,27 @@ pub fn vector_of_len(obj: &Bound<'_, PyAny>, what: &str, min: usize) -> PyResult
     Ok(a.data().to_vec())
 }
 
+/// Reads an array of `rows` × `item` values for any number of rows: shape (N,) when `item` is
+/// empty, else (N, *item); `rows` names N in the error ("N", "K"). Values are not checked.
+pub fn rows_array<'py>(obj: &Bound<'py, PyAny>, what: &str, rows: &str, item: &[usize]) -> PyResult<F64Array<'py>> {
+    let a = f64_array(obj, what)?;
+    if a.shape().len() != 1 + item.len() || a.shape()[1..] != *item {
+        let dims: Vec<String> = std::iter::once(rows.to_string())
+            .chain(item.iter().map(usize::to_string))
+            .collect();
+        let expected = if item.is_empty() {
+            format!("({rows},)")
+        } else {
+            format!("({})", dims.join(", "))
+        };
+        return Err(ShapeError::new_err(format!(
+            "{what}: expected shape {expected}, got {}",
+            a.shape_str()
+        )));
+    }
+    Ok(a)
+}
+
 /// Reads a vector of exactly `n` finite values.
 pub fn vector(obj: &Bound<'_, PyAny>, what: &str, n: usize) -> PyResult<Vec<f64>> {
     let a = f64_array(obj, what)?;
@@ -385,3 +406,23 @@ macro_rules! array_getters {
     };
 }
 pub(crate) use array_getters;
+
+/// A `#[pymethods]` block of read-only plain-value properties of a result class, one line each:
+/// `/// doc` then `name: Type => value;`, where `value` reads the object as `$r`.
+macro_rules! value_getters {
+    ($ty:ty, |$r:ident| { $( $(#[$doc:meta])* $name:ident: $out:ty => $value:expr; )* }) => {
+        #[ttkin_py_guard::guarded]
+        #[pyo3::pymethods]
+        impl $ty {
+            $(
+                $(#[$doc])*
+                #[getter]
+                fn $name(&self) -> $out {
+                    let $r = self;
+                    $value
+                }
+            )*
+        }
+    };
+}
+pub(crate) use value_getters;

@@ -113,41 +113,47 @@ fn batch_shape(count: usize, item: &[usize]) -> Vec<usize> {
     std::iter::once(count).chain(item.iter().copied()).collect()
 }
 
-#[ttkin_py_guard::guarded]
-#[pymethods]
-impl PyRobot {
+/// A `#[pymethods]` block of the inverse-dynamics methods: one signature (q, qd, qdd of shape (n,)
+/// or (N, n), optional gravity and wrench) and one body, [`PyRobot::inverse`], that differ only in
+/// whether joint friction is added.
+macro_rules! inverse_dynamics_methods {
+    ($( $(#[$doc:meta])* $name:ident => friction: $friction:expr; )*) => {
+        #[ttkin_py_guard::guarded]
+        #[pymethods]
+        impl PyRobot {
+            $(
+                $(#[$doc])*
+                #[pyo3(signature = (q, qd, qdd, gravity=None, wrench=None))]
+                fn $name<'py>(
+                    &self,
+                    py: Python<'py>,
+                    q: &Any<'py>,
+                    qd: &Any<'py>,
+                    qdd: &Any<'py>,
+                    gravity: Option<&Any<'py>>,
+                    wrench: Option<&Any<'py>>,
+                ) -> PyResult<Array<'py>> {
+                    self.inverse(py, q, qd, qdd, gravity, wrench, $friction)
+                }
+            )*
+        }
+    };
+}
+
+inverse_dynamics_methods! {
     /// Inverse dynamics (recursive Newton–Euler): joint torques (N·m) / forces (N) for q, qd, qdd
     /// of shape (n,) or (N, n); rigid bodies plus rotor armature, no friction (Pinocchio's rnea).
     /// `gravity` is a base-frame vector (default (0, 0, −9.81) m/s²); `wrench` [fx, fy, fz, mx, my,
     /// mz] (N, N·m) is applied to the tool by the environment, tool-frame axes, moment about the
     /// tool point.
-    #[pyo3(signature = (q, qd, qdd, gravity=None, wrench=None))]
-    fn rnea<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Any<'py>,
-        qd: &Any<'py>,
-        qdd: &Any<'py>,
-        gravity: Option<&Any<'py>>,
-        wrench: Option<&Any<'py>>,
-    ) -> PyResult<Array<'py>> {
-        self.inverse(py, q, qd, qdd, gravity, wrench, false)
-    }
-
+    rnea => friction: false;
     /// `rnea` plus joint friction b·q̇ + f_c·sign(q̇): the torques the drives must deliver.
-    #[pyo3(signature = (q, qd, qdd, gravity=None, wrench=None))]
-    fn inverse_dynamics<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Any<'py>,
-        qd: &Any<'py>,
-        qdd: &Any<'py>,
-        gravity: Option<&Any<'py>>,
-        wrench: Option<&Any<'py>>,
-    ) -> PyResult<Array<'py>> {
-        self.inverse(py, q, qd, qdd, gravity, wrench, true)
-    }
+    inverse_dynamics => friction: true;
+}
 
+#[ttkin_py_guard::guarded]
+#[pymethods]
+impl PyRobot {
     /// Joint-space mass matrix M(q), armature included: (n, n) or (N, n, n).
     fn mass_matrix<'py>(&self, py: Python<'py>, q: &Any<'py>) -> PyResult<Array<'py>> {
         let (a, batch) = self.configs(q, "q")?;
@@ -384,7 +390,7 @@ impl PyRobot {
 }
 
 impl PyRobot {
-    /// Shared body of rnea / inverse_dynamics / coriolis / nonlinear_effects.
+    /// Shared body of rnea and inverse_dynamics (`friction`: add the joint friction).
     #[allow(clippy::too_many_arguments)]
     fn inverse<'py>(
         &self,

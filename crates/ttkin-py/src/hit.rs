@@ -10,7 +10,7 @@ use ttkin::hit::{self, Hit, HitOptions, HitPlan, HitPlanner, HitTask, StrokeProf
 use ttkin::traj::JointState;
 use ttkin::Dynamics;
 
-use crate::convert::{f64_array, pose_to_numpy, to_numpy, transform, vector};
+use crate::convert::{array_getters, f64_array, pose_to_numpy, to_numpy, transform, value_getters, vector};
 use crate::errors::{PyResultExt, ShapeError, TtmanipError};
 use crate::robot::PyRobot;
 use crate::traj::{samples_to_py, violations_to_py, PyJointTrajectory};
@@ -22,9 +22,51 @@ pub struct PyHitPlan {
     planner: Arc<HitPlanner>,
 }
 
-fn vec_py<'py>(py: Python<'py>, v: &[f64]) -> Bound<'py, PyAny> {
-    to_numpy(py, &[v.len()], v).into_any()
-}
+value_getters!(PyHitPlan, |h| {
+    /// True when the hit is on time and within every limit.
+    ok: bool => h.plan.ok();
+    /// "ok", "too_early", "unreachable", "singular", "hit_speed_limit", "position_limit",
+    /// "effort_limit" or "no_stroke".
+    status: &'static str => h.plan.status.name();
+    /// One line on what limited the plan ("" when ok).
+    message: &str => h.plan.message.as_str();
+    /// Planned hit time (s from now); NaN when no stroke.
+    t_hit: f64 => h.plan.t_hit;
+    /// Requested hit time (s from now).
+    requested_t_hit: f64 => h.plan.hit.t;
+    /// Earliest feasible hit time (s), computed on first need when planning did not find it;
+    /// NaN when there is no hit state.
+    earliest_t_hit: f64 => h.planner.earliest_t_hit(&h.plan);
+    /// Profile of the hit leg: "quintic" or "jerk" ("auto" when no stroke).
+    profile: &'static str => h.plan.profile.name();
+    /// Smallest singular value of the (task) Jacobian at the hit.
+    sigma_min: f64 => h.plan.sigma_min;
+    /// Number of IK branches within the limits.
+    branches: usize => h.plan.branches;
+    /// Duration of the return leg (s); NaN when no stroke.
+    return_duration: f64 => h.plan.return_duration;
+    /// Total stroke duration (s); NaN when no stroke.
+    duration: f64 => h.plan.trajectory.as_ref().map_or(f64::NAN, |t| t.duration());
+    /// Largest |τ|/effort limit over joints and check points.
+    effort_ratio: f64 => h.plan.effort_ratio;
+    /// The stroke as a `JointTrajectory` (None when no stroke was planned).
+    trajectory: Option<PyJointTrajectory> => h.plan.trajectory.clone().map(|inner| PyJointTrajectory { inner });
+});
+
+array_getters!(PyHitPlan, |h| {
+    /// (n,) hit configuration (m, rad); NaN when unreachable.
+    q_hit => h.plan.q_hit, [h.plan.q_hit.len()];
+    /// (n,) hit joint velocities (m/s, rad/s); NaN when unreachable.
+    qd_hit => h.plan.qd_hit, [h.plan.qd_hit.len()];
+    /// (6,) requested racket-centre twist [v; ω] (m/s, rad/s, base axes).
+    hit_twist => h.plan.hit.twist, [6];
+    /// (n,) start configuration (m, rad).
+    start => h.plan.start.q, [h.plan.start.q.len()];
+    /// (n,) ready (rest) configuration the stroke returns to (m, rad).
+    ready => h.plan.ready, [h.plan.ready.len()];
+    /// (n,) largest |joint torque| (N·m or N, friction included) at the effort check points.
+    peak_effort => h.plan.peak_effort, [h.plan.peak_effort.len()];
+});
 
 impl PyHitPlan {
     fn stroke(&self) -> PyResult<&ttkin::traj::JointTrajectory> {
@@ -41,84 +83,10 @@ impl PyHitPlan {
 #[ttkin_py_guard::guarded]
 #[pymethods]
 impl PyHitPlan {
-    /// True when the hit is on time and within every limit.
-    #[getter]
-    fn ok(&self) -> bool {
-        self.plan.ok()
-    }
-
-    /// "ok", "too_early", "unreachable", "singular", "hit_speed_limit", "position_limit",
-    /// "effort_limit" or "no_stroke".
-    #[getter]
-    fn status(&self) -> &'static str {
-        self.plan.status.name()
-    }
-
-    /// One line on what limited the plan ("" when ok).
-    #[getter]
-    fn message(&self) -> &str {
-        self.plan.message.as_str()
-    }
-
-    /// (n,) hit configuration (m, rad); NaN when unreachable.
-    #[getter]
-    fn q_hit<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        vec_py(py, &self.plan.q_hit)
-    }
-
-    /// (n,) hit joint velocities (m/s, rad/s); NaN when unreachable.
-    #[getter]
-    fn qd_hit<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        vec_py(py, &self.plan.qd_hit)
-    }
-
-    /// Planned hit time (s from now); NaN when no stroke.
-    #[getter]
-    fn t_hit(&self) -> f64 {
-        self.plan.t_hit
-    }
-
-    /// Requested hit time (s from now).
-    #[getter]
-    fn requested_t_hit(&self) -> f64 {
-        self.plan.hit.t
-    }
-
-    /// Earliest feasible hit time (s), computed on first need when planning did not find it;
-    /// NaN when there is no hit state.
-    #[getter]
-    fn earliest_t_hit(&self) -> f64 {
-        self.planner.earliest_t_hit(&self.plan)
-    }
-
-    /// Profile of the hit leg: "quintic" or "jerk" ("auto" when no stroke).
-    #[getter]
-    fn profile(&self) -> &'static str {
-        self.plan.profile.name()
-    }
-
-    /// Smallest singular value of the (task) Jacobian at the hit.
-    #[getter]
-    fn sigma_min(&self) -> f64 {
-        self.plan.sigma_min
-    }
-
-    /// Number of IK branches within the limits.
-    #[getter]
-    fn branches(&self) -> usize {
-        self.plan.branches
-    }
-
     /// (4, 4) requested racket pose (racket frame in the base frame, m).
     #[getter]
     fn hit_pose<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
         pose_to_numpy(py, &self.plan.hit.pose).into_any()
-    }
-
-    /// (6,) requested racket-centre twist [v; ω] (m/s, rad/s, base axes).
-    #[getter]
-    fn hit_twist<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        vec_py(py, &self.plan.hit.twist)
     }
 
     /// (4, 4) tool pose that puts the racket at the hit pose (base frame, m).
@@ -127,52 +95,10 @@ impl PyHitPlan {
         pose_to_numpy(py, &self.plan.tool_target).into_any()
     }
 
-    /// (n,) start configuration (m, rad).
-    #[getter]
-    fn start<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        vec_py(py, &self.plan.start.q)
-    }
-
-    /// (n,) ready (rest) configuration the stroke returns to (m, rad).
-    #[getter]
-    fn ready<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        vec_py(py, &self.plan.ready)
-    }
-
-    /// Duration of the return leg (s); NaN when no stroke.
-    #[getter]
-    fn return_duration(&self) -> f64 {
-        self.plan.return_duration
-    }
-
-    /// Total stroke duration (s); NaN when no stroke.
-    #[getter]
-    fn duration(&self) -> f64 {
-        self.plan.trajectory.as_ref().map_or(f64::NAN, |t| t.duration())
-    }
-
-    /// (n,) largest |joint torque| (N·m or N, friction included) at the effort check points.
-    #[getter]
-    fn peak_effort<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        vec_py(py, &self.plan.peak_effort)
-    }
-
-    /// Largest |τ|/effort limit over joints and check points.
-    #[getter]
-    fn effort_ratio(&self) -> f64 {
-        self.plan.effort_ratio
-    }
-
     /// Kinematic limit violations (exact peaks): list of dicts (joint, quantity, time, value, limit).
     #[getter]
     fn violations<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
         violations_to_py(py, &self.plan.violations)
-    }
-
-    /// The stroke as a `JointTrajectory` (None when no stroke was planned).
-    #[getter]
-    fn trajectory(&self) -> Option<PyJointTrajectory> {
-        self.plan.trajectory.clone().map(|inner| PyJointTrajectory { inner })
     }
 
     /// Samples the stroke at `rate` Hz: (t (K,), q, qd, qdd (K, n)). TtmanipError when no stroke.
@@ -210,50 +136,66 @@ impl PyHitPlan {
     }
 }
 
-/// Options from the Python keywords.
-fn options(
-    robot: &PyRobot,
-    profile: &str,
-    task: &str,
-    jerk: Option<&Bound<'_, PyAny>>,
+/// The Python keywords `hit_plan` and `hit_plan_batch` share: start state, ready configuration
+/// and planner options.
+struct Keywords<'a, 'py> {
+    q: Option<&'a Bound<'py, PyAny>>,
+    qd: Option<&'a Bound<'py, PyAny>>,
+    qdd: Option<&'a Bound<'py, PyAny>>,
+    ready: Option<&'a Bound<'py, PyAny>>,
+    profile: &'a str,
+    task: &'a str,
+    jerk: Option<&'a Bound<'py, PyAny>>,
     effort: bool,
-) -> PyResult<HitOptions> {
-    let task = match task {
-        "auto" => HitTask::Auto,
-        "pose" => HitTask::Pose,
-        "racket5" => HitTask::Racket5,
-        other => {
-            return Err(TtmanipError::new_err(format!(
-                "task: expected 'auto', 'pose' or 'racket5', got '{other}'"
-            )))
-        }
-    };
-    let jerk = jerk.map(|j| vector(j, "jerk", robot.chain.dof())).transpose()?;
-    Ok(HitOptions {
-        profile: StrokeProfile::from_name(profile).py()?,
-        task,
-        jerk,
-        check_effort: effort,
-        ..Default::default()
-    })
 }
 
-/// The start state from optional q, qd, qdd.
-fn start_state(
-    n: usize,
-    q: Option<&Bound<'_, PyAny>>,
-    qd: Option<&Bound<'_, PyAny>>,
-    qdd: Option<&Bound<'_, PyAny>>,
-) -> PyResult<Option<JointState>> {
-    let Some(q) = q else { return Ok(None) };
-    let mut state = JointState::rest(&vector(q, "state.q", n)?);
-    if let Some(qd) = qd {
-        state.qd = vector(qd, "state.qd", n)?;
+/// What the keywords turn into: the start state, the ready configuration and the planner.
+type Prepared = (Option<JointState>, Option<Vec<f64>>, Arc<HitPlanner>);
+
+impl Keywords<'_, '_> {
+    /// Reads the keywords for `robot` and builds its planner.
+    fn prepare(self, robot: &PyRobot) -> PyResult<Prepared> {
+        let n = robot.chain.dof();
+        let state = self.start_state(n)?;
+        let ready = self.ready.map(|r| vector(r, "ready", n)).transpose()?;
+        let planner = Arc::new(HitPlanner::new(&robot.chain, self.options(n)?).py()?);
+        Ok((state, ready, planner))
     }
-    if let Some(qdd) = qdd {
-        state.qdd = vector(qdd, "state.qdd", n)?;
+
+    /// Options from the Python keywords.
+    fn options(&self, n: usize) -> PyResult<HitOptions> {
+        let task = match self.task {
+            "auto" => HitTask::Auto,
+            "pose" => HitTask::Pose,
+            "racket5" => HitTask::Racket5,
+            other => {
+                return Err(TtmanipError::new_err(format!(
+                    "task: expected 'auto', 'pose' or 'racket5', got '{other}'"
+                )))
+            }
+        };
+        let jerk = self.jerk.map(|j| vector(j, "jerk", n)).transpose()?;
+        Ok(HitOptions {
+            profile: StrokeProfile::from_name(self.profile).py()?,
+            task,
+            jerk,
+            check_effort: self.effort,
+            ..Default::default()
+        })
     }
-    Ok(Some(state))
+
+    /// The start state from optional q, qd, qdd.
+    fn start_state(&self, n: usize) -> PyResult<Option<JointState>> {
+        let Some(q) = self.q else { return Ok(None) };
+        let mut state = JointState::rest(&vector(q, "state.q", n)?);
+        if let Some(qd) = self.qd {
+            state.qd = vector(qd, "state.qd", n)?;
+        }
+        if let Some(qdd) = self.qdd {
+            state.qdd = vector(qdd, "state.qdd", n)?;
+        }
+        Ok(Some(state))
+    }
 }
 
 /// Plans one hit: racket pose (4, 4), racket-centre twist (6,), hit time (s); optional start
@@ -278,14 +220,21 @@ fn hit_plan(
     jerk: Option<&Bound<'_, PyAny>>,
     effort: bool,
 ) -> PyResult<PyHitPlan> {
-    let n = robot.chain.dof();
     let pose = transform(pose, "hit.pose")?;
     let tw = vector(twist, "hit.twist", 6)?;
     let hit = Hit::new(pose, [tw[0], tw[1], tw[2], tw[3], tw[4], tw[5]], t)
         .map_err(|e| TtmanipError::new_err(format!("hit.{e}")))?;
-    let state = start_state(n, q, qd, qdd)?;
-    let ready = ready.map(|r| vector(r, "ready", n)).transpose()?;
-    let planner = Arc::new(HitPlanner::new(&robot.chain, options(robot, profile, task, jerk, effort)?).py()?);
+    let keywords = Keywords {
+        q,
+        qd,
+        qdd,
+        ready,
+        profile,
+        task,
+        jerk,
+        effort,
+    };
+    let (state, ready, planner) = keywords.prepare(robot)?;
     let plan = py
         .detach(|| planner.plan(&hit, state.as_ref(), ready.as_deref()))
         .py()?;
@@ -313,7 +262,6 @@ fn hit_plan_batch(
     jerk: Option<&Bound<'_, PyAny>>,
     effort: bool,
 ) -> PyResult<Vec<PyHitPlan>> {
-    let n = robot.chain.dof();
     let p = f64_array(poses, "poses")?;
     let k = match p.shape() {
         [k, 4, 4] => *k,
@@ -346,9 +294,17 @@ fn hit_plan_batch(
             .map_err(|e| TtmanipError::new_err(format!("hits[{i}].{e}")))?;
         hits.push(hit);
     }
-    let state = start_state(n, q, qd, qdd)?;
-    let ready = ready.map(|r| vector(r, "ready", n)).transpose()?;
-    let planner = Arc::new(HitPlanner::new(&robot.chain, options(robot, profile, task, jerk, effort)?).py()?);
+    let keywords = Keywords {
+        q,
+        qd,
+        qdd,
+        ready,
+        profile,
+        task,
+        jerk,
+        effort,
+    };
+    let (state, ready, planner) = keywords.prepare(robot)?;
     let plans = py
         .detach(|| planner.plan_batch(&hits, state.as_ref(), ready.as_deref()))
         .py()?;
