@@ -43,28 +43,24 @@ pub enum Error {
 
 /// Checks that `value` is finite and strictly positive.
 pub fn positive(what: &str, value: f64) -> Result<f64> {
-    finite(what, value)?;
-    if value > 0.0 {
-        Ok(value)
-    } else {
-        Err(Error::InvalidParameter {
-            what: what.to_string(),
-            value,
-            reason: "must be > 0".to_string(),
-        })
-    }
+    finite_with(what, value, value > 0.0, || "must be > 0".to_string())
 }
 
 /// Checks that `value` is finite and not negative.
 pub fn non_negative(what: &str, value: f64) -> Result<f64> {
+    finite_with(what, value, value >= 0.0, || "must be >= 0".to_string())
+}
+
+/// Checks that `value` is finite and that `ok` holds; otherwise `reason` says what it must be.
+fn finite_with(what: &str, value: f64, ok: bool, reason: impl FnOnce() -> String) -> Result<f64> {
     finite(what, value)?;
-    if value >= 0.0 {
+    if ok {
         Ok(value)
     } else {
         Err(Error::InvalidParameter {
             what: what.to_string(),
             value,
-            reason: "must be >= 0".to_string(),
+            reason: reason(),
         })
     }
 }
@@ -83,14 +79,7 @@ pub fn finite(what: &str, value: f64) -> Result<f64> {
 
 /// Checks that `lo < value <= hi` (finite).
 pub fn in_range(what: &str, value: f64, lo: f64, hi: f64) -> Result<f64> {
-    finite(what, value)?;
-    if value > lo && value <= hi {
-        Ok(value)
-    } else {
-        Err(Error::InvalidParameter {
-            what: what.to_string(),
-            value,
-            reason: format!("must be in ({lo}, {hi}]"),
-        })
-    }
+    finite_with(what, value, value > lo && value <= hi, || {
+        format!("must be in ({lo}, {hi}]")
+    })
 }

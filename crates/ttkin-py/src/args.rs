@@ -50,24 +50,22 @@ pub fn finite(what: &str, v: f64) -> PyResult<f64> {
 
 /// A finite float argument ≥ 0.
 pub fn non_negative(what: &str, v: f64) -> PyResult<f64> {
-    finite(what, v)?;
-    if v >= 0.0 {
-        Ok(v)
-    } else {
-        Err(TtmanipError::new_err(format!(
-            "{what}: expected a finite number ≥ 0, got {v}"
-        )))
-    }
+    finite_with(what, v, v >= 0.0, "≥ 0")
 }
 
 /// A finite float argument > 0.
 pub fn positive(what: &str, v: f64) -> PyResult<f64> {
+    finite_with(what, v, v > 0.0, "> 0")
+}
+
+/// A finite float argument for which `ok` holds, the bound written `bound` in the error.
+fn finite_with(what: &str, v: f64, ok: bool, bound: &str) -> PyResult<f64> {
     finite(what, v)?;
-    if v > 0.0 {
+    if ok {
         Ok(v)
     } else {
         Err(TtmanipError::new_err(format!(
-            "{what}: expected a finite number > 0, got {v}"
+            "{what}: expected a finite number {bound}, got {v}"
         )))
     }
 }

@@ -7,7 +7,7 @@ use pyo3::types::PyDict;
 use ttcan::{CoupledOptions, CoupledSim};
 
 use crate::args;
-use crate::convert::{f64_array, to_numpy, vector};
+use crate::convert::{f64_array, to_numpy, value_getters, vector};
 use crate::errors::{PyResultExt, TtmanipError};
 use crate::robot::PyRobot as Robot;
 
@@ -110,12 +110,6 @@ impl DriveSim {
         Ok(())
     }
 
-    /// Simulated time since the last reset, s.
-    #[getter]
-    fn t(&self) -> f64 {
-        self.sim.time()
-    }
-
     /// True joint positions, rad or m.
     #[getter]
     fn q<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
@@ -139,18 +133,6 @@ impl DriveSim {
     fn current_ref<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         let v: Vec<f64> = self.sim.axes().iter().map(|a| a.current_reference()).collect();
         PyArray1::from_vec(py, v)
-    }
-
-    /// Fault of each axis ("" when none).
-    #[getter]
-    fn faults(&self) -> Vec<String> {
-        self.sim.fault_names()
-    }
-
-    /// Current-loop (tick) rate, Hz.
-    #[getter]
-    fn tick_rate(&self) -> f64 {
-        self.sim.tick_rate()
     }
 
     /// Runs the reference (t (K,), q, qd, qdd and optional tau_ff (K, n)); returns the recorded arrays.
@@ -202,6 +184,15 @@ impl DriveSim {
         format!("DriveSim({} axes, {} Hz)", self.sim.dof(), self.sim.tick_rate())
     }
 }
+
+value_getters!(DriveSim, |s| {
+    /// Simulated time since the last reset, s.
+    t: f64 => s.sim.time();
+    /// Fault of each axis ("" when none).
+    faults: Vec<String> => s.sim.fault_names();
+    /// Current-loop (tick) rate, Hz.
+    tick_rate: f64 => s.sim.tick_rate();
+});
 
 /// (10–90 % rise time in s, overshoot as a fraction) of `y` sampled at `t` towards `target`.
 #[ttkin_py_guard::guarded]

@@ -9,7 +9,9 @@ use ttkin::task::Task;
 use ttkin::wholebody::WholeBody;
 
 use crate::args;
-use crate::convert::{array_getters, f64_array, finite_to_numpy, to_numpy, transform, vector, Any, Array};
+use crate::convert::{
+    array_getters, f64_array, finite_to_numpy, to_numpy, transform, value_getters, vector, Any, Array,
+};
 use crate::errors::{PyResultExt, ShapeError, TtmanipError};
 use crate::robot::PyRobot;
 
@@ -61,35 +63,11 @@ impl PyDiffDrive {
         Ok(PyDiffDrive { drive })
     }
 
-    /// Wheel radius (m).
-    #[getter]
-    fn wheel_radius(&self) -> f64 {
-        self.drive.wheel_radius()
-    }
-
-    /// Distance between the wheel contact points (m).
-    #[getter]
-    fn track_width(&self) -> f64 {
-        self.drive.track()
-    }
-
     /// Deprecated name of `track_width`.
     #[getter]
     fn track(&self, py: Python<'_>) -> PyResult<f64> {
         crate::errors::deprecated(py, "DiffDrive.track", "DiffDrive.track_width")?;
         Ok(self.drive.track())
-    }
-
-    /// Wheel speed limit (rad/s; inf when none).
-    #[getter]
-    fn max_wheel_speed(&self) -> f64 {
-        self.drive.max_wheel_speed()
-    }
-
-    /// Wheel acceleration limit (rad/s²; inf when none).
-    #[getter]
-    fn max_wheel_acceleration(&self) -> f64 {
-        self.drive.max_wheel_acceleration()
     }
 
     /// Body velocity (v m/s, ω rad/s) from wheel speeds (left, right) rad/s.
@@ -151,6 +129,17 @@ impl PyDiffDrive {
         )
     }
 }
+
+value_getters!(PyDiffDrive, |d| {
+    /// Wheel radius (m).
+    wheel_radius: f64 => d.drive.wheel_radius();
+    /// Distance between the wheel contact points (m).
+    track_width: f64 => d.drive.track();
+    /// Wheel speed limit (rad/s; inf when none).
+    max_wheel_speed: f64 => d.drive.max_wheel_speed();
+    /// Wheel acceleration limit (rad/s²; inf when none).
+    max_wheel_acceleration: f64 => d.drive.max_wheel_acceleration();
+});
 
 /// The whole-body model of a robot, optionally on a diff-drive base with a mount transform.
 fn model(robot: &PyRobot, base: Option<&PyDiffDrive>, mount: Option<&Any<'_>>) -> PyResult<WholeBody> {
@@ -303,26 +292,6 @@ impl PyTrackResult {
         crate::errors::deprecated(py, "TrackResult.qdot", "TrackResult.qd")?;
         Ok(to_numpy(py, &[self.r.len(), self.r.nu], &self.r.qdot))
     }
-    /// "completed", "saturated" (finished, task velocity scaled at some samples) or "failed".
-    #[getter]
-    fn status(&self) -> &'static str {
-        self.r.status.name()
-    }
-    /// True when the motion completed with the full task velocity at every sample.
-    #[getter]
-    fn ok(&self) -> bool {
-        self.r.status == ClikStatus::Completed
-    }
-    /// A sentence on how the motion ended.
-    #[getter]
-    fn message(&self) -> String {
-        self.r.status.to_string()
-    }
-    /// Names of the arm joints (columns of `margin`).
-    #[getter]
-    fn joint_names(&self) -> Vec<String> {
-        self.joint_names.clone()
-    }
     fn __len__(&self) -> usize {
         self.r.len()
     }
@@ -330,6 +299,17 @@ impl PyTrackResult {
         Ok(format!("TrackResult({} samples, {})", self.r.len(), self.message()?))
     }
 }
+
+value_getters!(PyTrackResult, |t| {
+    /// "completed", "saturated" (finished, task velocity scaled at some samples) or "failed".
+    status: &'static str => t.r.status.name();
+    /// True when the motion completed with the full task velocity at every sample.
+    ok: bool => t.r.status == ClikStatus::Completed;
+    /// A sentence on how the motion ended.
+    message: String => t.r.status.to_string();
+    /// Names of the arm joints (columns of `margin`).
+    joint_names: Vec<String> => t.joint_names.clone();
+});
 
 /// Closed-loop tracking of a task trajectory sampled at `rate_hz` (N, dim) from `q0`; the loop
 /// runs in Rust without the GIL. `velocities` (N, dim) are the task rates (default: finite

@@ -11,7 +11,8 @@ use ttkin::dh::DhColumns;
 use ttkin::{Chain, DhConvention, JacobianFrame, JointType};
 
 use crate::convert::{
-    f64_array, filled_without_gil, pose_to_numpy, shape_str, to_numpy, transform, vector, zeros, Any, Array,
+    array_getters, f64_array, filled_without_gil, pose_to_numpy, shape_str, to_numpy, transform, value_getters, vector,
+    zeros, Any, Array,
 };
 use crate::errors::{PyResultExt, ShapeError, TtmanipError};
 
@@ -173,12 +174,6 @@ impl PyRobot {
         Ok(PyRobot::new(self.chain.with_base(transform(base, "base")?).py()?))
     }
 
-    /// Number of joints (degrees of freedom).
-    #[getter]
-    fn dof(&self) -> usize {
-        self.chain.dof()
-    }
-
     /// Deprecated name of `dof`.
     #[getter]
     fn n(&self, py: Python<'_>) -> PyResult<usize> {
@@ -186,47 +181,11 @@ impl PyRobot {
         Ok(self.chain.dof())
     }
 
-    /// Robot name.
-    #[getter]
-    fn name(&self) -> String {
-        self.chain.name().to_string()
-    }
-
-    /// Joint names, base to tool.
-    #[getter]
-    fn joint_names(&self) -> Vec<String> {
-        self.chain.joints().iter().map(|j| j.name().to_string()).collect()
-    }
-
-    /// Joint types, "revolute" or "prismatic".
-    #[getter]
-    fn joint_types(&self) -> Vec<&'static str> {
-        self.chain.joints().iter().map(|j| j.kind().name()).collect()
-    }
-
     /// (n, 2) lower and upper position limits (m or rad; ±inf where unbounded).
     #[getter]
     fn limits<'py>(&self, py: Python<'py>) -> Array<'py> {
         let flat: Vec<f64> = self.chain.limits().iter().flat_map(|l| [l.lower, l.upper]).collect();
         to_numpy(py, &[self.chain.dof(), 2], &flat)
-    }
-
-    /// (n,) speed limits (m/s or rad/s; inf where none).
-    #[getter]
-    fn velocity_limits<'py>(&self, py: Python<'py>) -> Array<'py> {
-        to_numpy(py, &[self.chain.dof()], &self.chain.limit_column(|l| l.velocity))
-    }
-
-    /// (n,) acceleration limits (m/s² or rad/s²; inf where none).
-    #[getter]
-    fn acceleration_limits<'py>(&self, py: Python<'py>) -> Array<'py> {
-        to_numpy(py, &[self.chain.dof()], &self.chain.limit_column(|l| l.acceleration))
-    }
-
-    /// (n,) effort limits (N or N·m; inf where none).
-    #[getter]
-    fn effort_limits<'py>(&self, py: Python<'py>) -> Array<'py> {
-        to_numpy(py, &[self.chain.dof()], &self.chain.limit_column(|l| l.effort))
     }
 
     /// Base frame → frame 0 (4×4).
@@ -300,6 +259,26 @@ impl PyRobot {
         )
     }
 }
+
+array_getters!(PyRobot, |r| {
+    /// (n,) speed limits (m/s or rad/s; inf where none).
+    velocity_limits => r.chain.limit_column(|l| l.velocity), [r.chain.dof()];
+    /// (n,) acceleration limits (m/s² or rad/s²; inf where none).
+    acceleration_limits => r.chain.limit_column(|l| l.acceleration), [r.chain.dof()];
+    /// (n,) effort limits (N or N·m; inf where none).
+    effort_limits => r.chain.limit_column(|l| l.effort), [r.chain.dof()];
+});
+
+value_getters!(PyRobot, |r| {
+    /// Number of joints (degrees of freedom).
+    dof: usize => r.chain.dof();
+    /// Robot name.
+    name: String => r.chain.name().to_string();
+    /// Joint names, base to tool.
+    joint_names: Vec<String> => r.chain.joints().iter().map(|j| j.name().to_string()).collect();
+    /// Joint types, "revolute" or "prismatic".
+    joint_types: Vec<&'static str> => r.chain.joints().iter().map(|j| j.kind().name()).collect();
+});
 
 /// Adds `Robot` to the module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

@@ -11,7 +11,7 @@ use ttkin::traj::limits::{KinematicLimits, Violation};
 use ttkin::traj::via::{self, ViaKind};
 use ttkin::traj::{JointState, JointTrajectory, Samples};
 
-use crate::convert::{f64_array, table, to_numpy, vector, vector_of_len, zeros, Any, Array};
+use crate::convert::{f64_array, table, to_numpy, value_getters, vector, vector_of_len, zeros, Any, Array};
 use crate::errors::{PyResultExt, ShapeError};
 use crate::robot::PyRobot;
 
@@ -70,18 +70,6 @@ pub struct PyJointTrajectory {
 #[ttkin_py_guard::guarded]
 #[pymethods]
 impl PyJointTrajectory {
-    /// Duration (s).
-    #[getter]
-    fn duration(&self) -> f64 {
-        self.inner.duration()
-    }
-
-    /// Number of joints.
-    #[getter]
-    fn dof(&self) -> usize {
-        self.inner.dof()
-    }
-
     /// Segment boundaries (s), from 0 to the duration.
     #[getter]
     fn knots<'py>(&self, py: Python<'py>) -> Array<'py> {
@@ -191,6 +179,13 @@ impl PyJointTrajectory {
         )
     }
 }
+
+value_getters!(PyJointTrajectory, |j| {
+    /// Duration (s).
+    duration: f64 => j.inner.duration();
+    /// Number of joints.
+    dof: usize => j.inner.dof();
+});
 
 /// (t, q, qd, qdd) at `n` evenly spaced times. q, qd, qdd are (n, dof) arrays in Fortran (column)
 /// order: Rust fills them joint by joint, which vectorises over the samples, then hands them to
