@@ -491,8 +491,9 @@ def _command(sub, name: str, func, help: str, description: str, *arguments) -> a
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``ttmanip`` command."""
-    fmt = argparse.RawDescriptionHelpFormatter
-    parser = argparse.ArgumentParser(prog="ttmanip", description=__doc__, formatter_class=fmt)
+    parser = argparse.ArgumentParser(
+        prog="ttmanip", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     sub = parser.add_subparsers(dest="command", required=True)
 
     _command(
@@ -561,15 +562,15 @@ def build_parser() -> argparse.ArgumentParser:
         _arg("--gif", action="store_true", help="also write a GIF of each stroke"),
     )
 
-    info = sub.add_parser(
+    _command(
+        sub,
         "info",
-        help="print a built-in robot's joints and limits",
-        description="example:\n  ttmanip info gantry6 --out out/info",
-        formatter_class=fmt,
+        _info,
+        "print a built-in robot's joints and limits",
+        "example:\n  ttmanip info gantry6 --out out/info",
+        _arg("robot", choices=ROBOTS),
+        _arg("--out", help="output folder for info.json"),
     )
-    info.add_argument("robot", choices=ROBOTS)
-    info.add_argument("--out", help="output folder for info.json")
-    info.set_defaults(func=_info)
 
     _command(
         sub,
@@ -595,10 +596,7 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)
-    except CliError as e:
-        print(f"ttmanip: error: {e}", file=sys.stderr)
-        return 2
-    except TtmanipError as e:
+    except (CliError, TtmanipError) as e:
         print(f"ttmanip: error: {e}", file=sys.stderr)
         return 2
     except OSError as e:

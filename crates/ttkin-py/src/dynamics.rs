@@ -13,7 +13,9 @@ use pyo3::prelude::*;
 use ttkin::dynamics::EARTH_GRAVITY;
 use ttkin::{Dynamics, DynamicsData, Wrench};
 
-use crate::convert::{filled_without_gil, finite_to_numpy, table, to_numpy, vector, Any, Array, F64Array};
+use crate::convert::{
+    array_getters, filled_without_gil, finite_to_numpy, table, to_numpy, vector, Any, Array, F64Array,
+};
 use crate::errors::{PyResultExt, ShapeError};
 use crate::robot::PyRobot;
 
@@ -113,42 +115,61 @@ fn batch_shape(count: usize, item: &[usize]) -> Vec<usize> {
     std::iter::once(count).chain(item.iter().copied()).collect()
 }
 
-/// A `#[pymethods]` block of the inverse-dynamics methods: one signature (q, qd, qdd of shape (n,)
-/// or (N, n), optional gravity and wrench) and one body, [`PyRobot::inverse`], that differ only in
-/// whether joint friction is added.
-macro_rules! inverse_dynamics_methods {
-    ($( $(#[$doc:meta])* $name:ident => friction: $friction:expr; )*) => {
+/// What a method of three per-state arrays (q, qd and a third) computes.
+#[derive(Clone, Copy)]
+enum StateMethod {
+    /// Inverse dynamics (third array q̈), joint friction added when `friction` is true.
+    Inverse { friction: bool },
+    /// Forward dynamics (third array τ).
+    Forward,
+}
+
+/// A `#[pymethods]` block of the dynamics methods of three per-state arrays: one signature (q, qd
+/// and `third`, each (n,) or (N, n), optional gravity and wrench) and one body,
+/// [`PyRobot::state_method`]; they differ only in the [`StateMethod`].
+macro_rules! state_methods {
+    ($( $(#[$doc:meta])* $name:ident($third:ident) => $method:expr; )*) => {
         #[ttkin_py_guard::guarded]
         #[pymethods]
         impl PyRobot {
             $(
                 $(#[$doc])*
-                #[pyo3(signature = (q, qd, qdd, gravity=None, wrench=None))]
+                #[pyo3(signature = (q, qd, $third, gravity=None, wrench=None))]
                 fn $name<'py>(
                     &self,
                     py: Python<'py>,
                     q: &Any<'py>,
                     qd: &Any<'py>,
-                    qdd: &Any<'py>,
+                    $third: &Any<'py>,
                     gravity: Option<&Any<'py>>,
                     wrench: Option<&Any<'py>>,
                 ) -> PyResult<Array<'py>> {
-                    self.inverse(py, q, qd, qdd, gravity, wrench, $friction)
+                    self.state_method(py, [q, qd, $third], stringify!($third), gravity, wrench, $method)
                 }
             )*
         }
     };
 }
 
-inverse_dynamics_methods! {
+array_getters!(PyRobot, |r| {
+    /// (n,) rotor inertia reflected to each joint, G²·J (kg·m² or kg); Pinocchio's model.armature.
+    armature => r.chain.armatures(), [r.chain.dof()];
+    /// (n,) link masses (kg; NaN where a link has no inertial).
+    masses => r.chain.masses(), [r.chain.dof()];
+});
+
+state_methods! {
     /// Inverse dynamics (recursive Newton–Euler): joint torques (N·m) / forces (N) for q, qd, qdd
     /// of shape (n,) or (N, n); rigid bodies plus rotor armature, no friction (Pinocchio's rnea).
     /// `gravity` is a base-frame vector (default (0, 0, −9.81) m/s²); `wrench` [fx, fy, fz, mx, my,
     /// mz] (N, N·m) is applied to the tool by the environment, tool-frame axes, moment about the
     /// tool point.
-    rnea => friction: false;
+    rnea(qdd) => StateMethod::Inverse { friction: false };
     /// `rnea` plus joint friction b·q̇ + f_c·sign(q̇): the torques the drives must deliver.
-    inverse_dynamics => friction: true;
+    inverse_dynamics(qdd) => StateMethod::Inverse { friction: true };
+    /// Forward dynamics q̈ = M⁻¹(τ − h + Jᵀw) (rad/s², m/s²) for q, qd, tau of shape (n,) or
+    /// (N, n); no friction (the inverse of `rnea`). `gravity` and `wrench` as in `rnea`.
+    forward_dynamics(tau) => StateMethod::Forward;
 }
 
 #[ttkin_py_guard::guarded]
@@ -218,32 +239,6 @@ impl PyRobot {
         )
     }
 
-    /// Forward dynamics q̈ = M⁻¹(τ − h + Jᵀw) (rad/s², m/s²) for q, qd, tau of shape (n,) or
-    /// (N, n); no friction (the inverse of `rnea`). `gravity` and `wrench` as in `rnea`.
-    #[pyo3(signature = (q, qd, tau, gravity=None, wrench=None))]
-    fn forward_dynamics<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Any<'py>,
-        qd: &Any<'py>,
-        tau: &Any<'py>,
-        gravity: Option<&Any<'py>>,
-        wrench: Option<&Any<'py>>,
-    ) -> PyResult<Array<'py>> {
-        let g = gravity_arg(gravity)?;
-        let w = wrench_arg(wrench)?;
-        let (arrays, batch) = self.states([(q, "q"), (qd, "qd"), (tau, "tau")])?;
-        let n = self.chain.dof();
-        let (q, qd, tau) = (arrays[0].data(), arrays[1].data(), arrays[2].data());
-        self.one_or_many(
-            py,
-            batch,
-            &[n],
-            |dy, d| dy.forward_dynamics(d, q, qd, tau, &g, w.as_ref()).map(|a| a.as_slice()),
-            |dy, o| dy.forward_dynamics_batch(q, qd, tau, &g, w.as_ref(), o),
-        )
-    }
-
     /// Joint friction b·q̇ + f_c·sign(q̇) (N·m or N) at speeds qd: (n,) or (N, n).
     fn friction<'py>(&self, py: Python<'py>, qd: &Any<'py>) -> PyResult<Array<'py>> {
         let (a, batch) = self.configs(qd, "qd")?;
@@ -299,20 +294,6 @@ impl PyRobot {
         let (qs, qds) = py.detach(|| dy.simulate(&q0, &qd0, taus, dt, &g, friction)).py()?;
         let rows = qs.len() / n;
         Ok((to_numpy(py, &[rows, n], &qs), to_numpy(py, &[rows, n], &qds)))
-    }
-
-    /// (n,) rotor inertia reflected to each joint, G²·J (kg·m² or kg); Pinocchio's model.armature.
-    #[getter]
-    fn armature<'py>(&self, py: Python<'py>) -> Array<'py> {
-        let a = self.chain.armatures();
-        to_numpy(py, &[a.len()], &a)
-    }
-
-    /// (n,) link masses (kg; NaN where a link has no inertial).
-    #[getter]
-    fn masses<'py>(&self, py: Python<'py>) -> Array<'py> {
-        let m = self.chain.masses();
-        to_numpy(py, &[m.len()], &m)
     }
 
     /// Drive of each joint as a dict (gear_ratio, rotor_inertia, viscous, coulomb,
@@ -390,42 +371,39 @@ impl PyRobot {
 }
 
 impl PyRobot {
-    /// Shared body of rnea and inverse_dynamics (`friction`: add the joint friction).
-    #[allow(clippy::too_many_arguments)]
-    fn inverse<'py>(
+    /// Shared body of rnea, inverse_dynamics and forward_dynamics: `arrays` are q, qd and the
+    /// third array (named `third` in errors), all (n,) or all (N, n).
+    fn state_method<'py>(
         &self,
         py: Python<'py>,
-        q: &Any<'py>,
-        qd: &Any<'py>,
-        qdd: &Any<'py>,
+        arrays: [&Any<'py>; 3],
+        third: &str,
         gravity: Option<&Any<'py>>,
         wrench: Option<&Any<'py>>,
-        friction: bool,
+        method: StateMethod,
     ) -> PyResult<Array<'py>> {
         let g = gravity_arg(gravity)?;
         let w = wrench_arg(wrench)?;
-        let (arrays, batch) = self.states([(q, "q"), (qd, "qd"), (qdd, "qdd")])?;
+        let (arrays, batch) = self.states([(arrays[0], "q"), (arrays[1], "qd"), (arrays[2], third)])?;
         let n = self.chain.dof();
-        let (q, qd, qdd) = (arrays[0].data(), arrays[1].data(), arrays[2].data());
+        let (q, qd, x) = (arrays[0].data(), arrays[1].data(), arrays[2].data());
         let w = w.as_ref();
         self.one_or_many(
             py,
             batch,
             &[n],
             |dy, d| {
-                let t = if friction {
-                    dy.inverse_dynamics(d, q, qd, qdd, &g, w)
-                } else {
-                    dy.rnea(d, q, qd, qdd, &g, w)
+                let out = match method {
+                    StateMethod::Inverse { friction: true } => dy.inverse_dynamics(d, q, qd, x, &g, w),
+                    StateMethod::Inverse { friction: false } => dy.rnea(d, q, qd, x, &g, w),
+                    StateMethod::Forward => dy.forward_dynamics(d, q, qd, x, &g, w),
                 };
-                t.map(|t| t.as_slice())
+                out.map(|t| t.as_slice())
             },
-            |dy, o| {
-                if friction {
-                    dy.inverse_dynamics_batch(q, qd, qdd, &g, w, o)
-                } else {
-                    dy.rnea_batch(q, qd, qdd, &g, w, o)
-                }
+            |dy, o| match method {
+                StateMethod::Inverse { friction: true } => dy.inverse_dynamics_batch(q, qd, x, &g, w, o),
+                StateMethod::Inverse { friction: false } => dy.rnea_batch(q, qd, x, &g, w, o),
+                StateMethod::Forward => dy.forward_dynamics_batch(q, qd, x, &g, w, o),
             },
         )
     }
