@@ -10,7 +10,7 @@ use nalgebra::{DVector, Vector3};
 use super::batch::batch_count;
 use super::model::{check_wrench, vec3, Dynamics, DynamicsData};
 use super::Wrench;
-use crate::error::{check_finite, check_vector, Error, Result};
+use crate::error::{check_finite, Error, Result};
 
 impl Dynamics {
     /// Forward dynamics without checks: q̈ = M⁻¹(τ − τ_f − h) in `data.qdd`, the friction τ_f
@@ -52,9 +52,7 @@ impl Dynamics {
         gravity: &[f64; 3],
         wrench: Option<&Wrench>,
     ) -> Result<&'d DVector<f64>> {
-        self.check_state(data, q, qd)?;
-        check_vector("tau", tau, self.dof())?;
-        let g = vec3("gravity", gravity)?;
+        let g = self.check_call(data, q, qd, ("tau", tau), gravity)?;
         check_wrench(wrench)?;
         self.forward_unchecked(data, q, qd, tau, &g, wrench, false)?;
         Ok(&data.qdd)
@@ -75,9 +73,7 @@ impl Dynamics {
         gravity: &[f64; 3],
         friction: bool,
     ) -> Result<()> {
-        self.check_state(data, q, qd)?;
-        check_vector("tau", tau, self.dof())?;
-        let g = vec3("gravity", gravity)?;
+        let g = self.check_call(data, q, qd, ("tau", tau), gravity)?;
         check_dt(dt)?;
         self.step_unchecked(data, q, qd, tau, dt, &g, friction)
     }

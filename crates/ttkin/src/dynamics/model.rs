@@ -277,6 +277,23 @@ impl Dynamics {
         check_vector("qd", qd, self.dof())
     }
 
+    /// [`Dynamics::check_state`], then a third per-joint vector `x` (named `what`: qdd or tau)
+    /// and the gravity vector (m/s², base frame), which it returns: the checks of every call at
+    /// one state.
+    #[inline]
+    pub(super) fn check_call(
+        &self,
+        data: &DynamicsData,
+        q: &[f64],
+        qd: &[f64],
+        (what, x): (&str, &[f64]),
+        gravity: &[f64; 3],
+    ) -> Result<Vector3<f64>> {
+        self.check_state(data, q, qd)?;
+        check_vector(what, x, self.dof())?;
+        vec3("gravity", gravity)
+    }
+
     /// Joint friction b·q̇ + f_c·sign(q̇) (N·m or N) of every joint at speeds `qd`; zero for joints
     /// without a drive.
     pub fn friction(&self, qd: &[f64]) -> Result<DVector<f64>> {

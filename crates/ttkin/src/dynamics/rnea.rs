@@ -123,9 +123,7 @@ impl Dynamics {
         gravity: &[f64; 3],
         wrench: Option<&Wrench>,
     ) -> Result<&'d DVector<f64>> {
-        self.check_state(data, q, qd)?;
-        check_vector("qdd", qdd, self.dof())?;
-        let g = vec3("gravity", gravity)?;
+        let g = self.check_call(data, q, qd, ("qdd", qdd), gravity)?;
         check_wrench(wrench)?;
         self.rnea_unchecked(data, q, qd, qdd, &g, wrench);
         Ok(&data.tau)
