@@ -51,6 +51,11 @@ pub fn non_negative(what: &str, value: f64) -> Result<f64> {
     finite_with(what, value, value >= 0.0, || "must be >= 0".to_string())
 }
 
+/// Checks that `value` is finite and at least `lo`.
+pub fn at_least(what: &str, value: f64, lo: f64) -> Result<f64> {
+    finite_with(what, value, value >= lo, || format!("must be >= {lo}"))
+}
+
 /// Checks that `value` is finite and that `ok` holds; otherwise `reason` says what it must be.
 fn finite_with(what: &str, value: f64, ok: bool, reason: impl FnOnce() -> String) -> Result<f64> {
     finite(what, value)?;

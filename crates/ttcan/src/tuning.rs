@@ -28,7 +28,7 @@
 //! The reported margins are evaluated on the full loop models (discrete current loop; speed and
 //! position loops with their filters and delays), by a logarithmic frequency sweep.
 
-use crate::error::{positive, Error, Result};
+use crate::error::{at_least, positive, Error, Result};
 use crate::motor::MotorModel;
 use crate::observer::TrackingObserver;
 use nalgebra::Complex;
@@ -132,14 +132,7 @@ pub fn tune_cascade(model: &MotorModel, periods: [f64; 3], targets: &TuningTarge
     positive("position loop period (s)", tp)?;
     let (kpc, kic) = current_gains(model, tc, targets.current_bandwidth_hz)?;
     let a_so = targets.speed_symmetric_optimum;
-    crate::error::finite("speed symmetric optimum factor", a_so)?;
-    if a_so < 2.0 {
-        return Err(Error::InvalidParameter {
-            what: "speed symmetric optimum factor".into(),
-            value: a_so,
-            reason: "must be >= 2".into(),
-        });
-    }
+    at_least("speed symmetric optimum factor", a_so, 2.0)?;
     let f_out = targets.speed_output_filter_hz;
     if f_out.is_nan() || f_out <= 0.0 {
         return Err(Error::InvalidParameter {
@@ -159,14 +152,7 @@ pub fn tune_cascade(model: &MotorModel, periods: [f64; 3], targets: &TuningTarge
         },
     )?;
     let r_pos = targets.position_ratio;
-    crate::error::finite("position ratio", r_pos)?;
-    if r_pos < 2.0 {
-        return Err(Error::InvalidParameter {
-            what: "position ratio".into(),
-            value: r_pos,
-            reason: "must be >= 2".into(),
-        });
-    }
+    at_least("position ratio", r_pos, 2.0)?;
 
     // Current loop, discrete.
     let m = &model.motor;

@@ -86,27 +86,7 @@ impl Task {
 
     /// [`Task::error`] into a slice of `dim()` values.
     pub fn error_into(&self, current: &IsometryMatrix3<f64>, target: &IsometryMatrix3<f64>, e: &mut [f64]) {
-        match self {
-            Task::Pose => {
-                let dp = target.translation.vector - current.translation.vector;
-                let dr = rotation_log(&(target.rotation * current.rotation.inverse()).into_inner());
-                e[..3].copy_from_slice(dp.as_slice());
-                e[3..6].copy_from_slice(dr.as_slice());
-            }
-            Task::Position => {
-                let dp = target.translation.vector - current.translation.vector;
-                e[..3].copy_from_slice(dp.as_slice());
-            }
-            Task::Racket { offset } => {
-                let dc = racket_centre(target, *offset) - racket_centre(current, *offset);
-                let (n, nt) = (racket_normal(current), racket_normal(target));
-                let (u1, u2) = tangent_basis(&nt);
-                let r = n.cross(&nt);
-                e[..3].copy_from_slice(dc.as_slice());
-                e[3] = u1.dot(&r);
-                e[4] = u2.dot(&r);
-            }
-        }
+        self.error_in_basis_into(current, target, target, e);
     }
 
     /// [`Task::error_into`] with the racket normal residual expressed in the tangent basis of
@@ -120,12 +100,25 @@ impl Task {
         basis: &IsometryMatrix3<f64>,
         e: &mut [f64],
     ) {
-        self.error_into(current, target, e);
-        if let Task::Racket { .. } = self {
-            let r = racket_normal(current).cross(&racket_normal(target));
-            let (u1, u2) = tangent_basis(&racket_normal(basis));
-            e[3] = u1.dot(&r);
-            e[4] = u2.dot(&r);
+        match self {
+            Task::Pose => {
+                let dp = target.translation.vector - current.translation.vector;
+                let dr = rotation_log(&(target.rotation * current.rotation.inverse()).into_inner());
+                e[..3].copy_from_slice(dp.as_slice());
+                e[3..6].copy_from_slice(dr.as_slice());
+            }
+            Task::Position => {
+                let dp = target.translation.vector - current.translation.vector;
+                e[..3].copy_from_slice(dp.as_slice());
+            }
+            Task::Racket { offset } => {
+                let dc = racket_centre(target, *offset) - racket_centre(current, *offset);
+                let r = racket_normal(current).cross(&racket_normal(target));
+                let (u1, u2) = tangent_basis(&racket_normal(basis));
+                e[..3].copy_from_slice(dc.as_slice());
+                e[3] = u1.dot(&r);
+                e[4] = u2.dot(&r);
+            }
         }
     }
 

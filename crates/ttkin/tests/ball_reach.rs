@@ -100,33 +100,59 @@ fn placeable(r: &ReachRegion, ik: &Analytic, p: &Vector3<f64>, n: &Vector3<f64>)
 /// Served balls searched for ones the racket can touch but not return (about 8 % of them).
 const N_TOUCH: usize = 80;
 
+/// What the return-shot tests share: gantry6's region, the true flight, its analytic IK and a
+/// seeded serve generator.
+struct Rig {
+    r: ReachRegion,
+    truth: Flight,
+    ik: Analytic,
+    rng: fastrand::Rng,
+}
+
+impl Rig {
+    fn new(seed: u64) -> Rig {
+        Rig {
+            r: region(),
+            truth: truth(),
+            ik: Analytic::for_chain(&ttkin::robots::gantry6()).unwrap(),
+            rng: fastrand::Rng::with_seed(seed),
+        }
+    }
+
+    /// The drag-free ball velocity (m/s) that leaves `p` and lands on `target` (x, y on the
+    /// table, m) after `tf` s: the outgoing velocity each shot of the grid asks for.
+    fn v_out(&self, p: &Vector3<f64>, target: &[f64; 2], tf: f64) -> Vector3<f64> {
+        let g = Vector3::new(0.0, 0.0, -self.truth.model.gravity);
+        let goal = Vector3::new(target[0], target[1], self.truth.model.radius);
+        (goal - p - 0.5 * g * tf * tf) / tf
+    }
+}
+
 #[test]
 fn a_ball_the_racket_can_touch_but_not_return_is_out_with_no_return_pose() {
-    let r = region();
-    let truth = truth();
-    let ik = Analytic::for_chain(&ttkin::robots::gantry6()).unwrap();
-    let g = Vector3::new(0.0, 0.0, -truth.model.gravity);
-    let mut rng = fastrand::Rng::with_seed(11);
+    let mut rig = Rig::new(11);
     let mut found = 0;
     for _ in 0..N_TOUCH {
-        let s = rally::serve(&truth, &mut rng, 40.0, 0.2);
-        let Reachability::InReach { p, t, .. } = r.classify_touch(&truth, &s, 0.23) else {
+        let s = rally::serve(&rig.truth, &mut rig.rng, 40.0, 0.2);
+        let (r, truth, ik) = (&rig.r, &rig.truth, &rig.ik);
+        let Reachability::InReach { p, t, .. } = r.classify_touch(truth, &s, 0.23) else {
             continue;
         };
-        if r.classify(&truth, &s, 0.23) != Reachability::NoReturnPose {
+        if r.classify(truth, &s, 0.23) != Reachability::NoReturnPose {
             continue;
         }
         found += 1;
         // Where the touch region places a racket, no shot of the grid has a racket pose: every
         // target and return time needs a face normal the joints cannot give there.
-        let b = at(&truth, &s, t);
+        let b = at(truth, &s, t);
         assert!((b.p - p).norm() < 1e-9);
         for target in &r.targets {
-            let goal = Vector3::new(target[0], target[1], truth.model.radius);
             for &tf in &r.return_times {
-                let v_out = (goal - b.p - 0.5 * g * tf * tf) / tf;
-                let racket = r.racket.solve(&truth.model, &b.v, &b.w, &v_out).unwrap();
-                assert!(placeable(&r, &ik, &b.p, &racket.normal).is_none(), "{target:?} {tf}");
+                let racket = r
+                    .racket
+                    .solve(&truth.model, &b.v, &b.w, &rig.v_out(&b.p, target, tf))
+                    .unwrap();
+                assert!(placeable(r, ik, &b.p, &racket.normal).is_none(), "{target:?} {tf}");
             }
         }
     }
@@ -136,25 +162,20 @@ fn a_ball_the_racket_can_touch_but_not_return_is_out_with_no_return_pose() {
 
 #[test]
 fn a_ball_in_reach_is_returned_by_a_racket_the_joints_can_place_in_time() {
-    let r = region();
-    let truth = truth();
-    let ik = Analytic::for_chain(&ttkin::robots::gantry6()).unwrap();
-    let g = Vector3::new(0.0, 0.0, -truth.model.gravity);
-    let mut rng = fastrand::Rng::with_seed(12);
+    let mut rig = Rig::new(12);
     let mut checked = 0;
     for _ in 0..30 {
-        let s = rally::serve(&truth, &mut rng, 40.0, 0.2);
-        let Reachability::InReach { p, t, min_time } = r.classify(&truth, &s, 0.23) else {
+        let s = rally::serve(&rig.truth, &mut rig.rng, 40.0, 0.2);
+        let (r, truth, ik) = (&rig.r, &rig.truth, &rig.ik);
+        let Reachability::InReach { p, t, min_time } = r.classify(truth, &s, 0.23) else {
             continue;
         };
         // Some shot of the grid at (p, t): its racket, hitting the true ball (forward impact
         // model), sends it onto the opponent's half, and the joints place that racket in time.
-        let b = at(&truth, &s, t);
+        let b = at(truth, &s, t);
         let ok = r.targets.iter().any(|target| {
-            let goal = Vector3::new(target[0], target[1], truth.model.radius);
             r.return_times.iter().any(|&tf| {
-                let v_out = (goal - p - 0.5 * g * tf * tf) / tf;
-                let Ok(racket) = r.racket.solve(&truth.model, &b.v, &b.w, &v_out) else {
+                let Ok(racket) = r.racket.solve(&truth.model, &b.v, &b.w, &rig.v_out(&p, target, tf)) else {
                     return false;
                 };
                 let (v, w) = r.racket.hit(&truth.model, &b.v, &b.w, &racket.normal, &racket.velocity);
@@ -162,7 +183,7 @@ fn a_ball_in_reach_is_returned_by_a_racket_the_joints_can_place_in_time() {
                 let lands = ev.first().is_some_and(|e| {
                     e.kind == EventKind::Table && truth.table.on_opponent_half(e.before.p.x, e.before.p.y)
                 });
-                lands && placeable(&r, &ik, &p, &racket.normal).is_some_and(|q| r.min_time(&q) <= t - 0.23)
+                lands && placeable(r, ik, &p, &racket.normal).is_some_and(|q| r.min_time(&q) <= t - 0.23)
             })
         });
         assert!(ok, "no checked return at {p:?}, t {t}");
