@@ -56,6 +56,14 @@ pub fn at_least(what: &str, value: f64, lo: f64) -> Result<f64> {
     finite_with(what, value, value >= lo, || format!("must be >= {lo}"))
 }
 
+/// Checks that a loop bandwidth `bandwidth_hz` (what: its name) is at most a sixth of the
+/// current-loop rate 1/`period` (s): the discrete designs assume it.
+pub fn sixth_of_rate(what: &str, bandwidth_hz: f64, period: f64) -> Result<f64> {
+    finite_with(what, bandwidth_hz, bandwidth_hz * period <= 1.0 / 6.0, || {
+        format!("must be at most a sixth of the current loop rate ({} Hz)", 1.0 / period)
+    })
+}
+
 /// Checks that `value` is finite and that `ok` holds; otherwise `reason` says what it must be.
 fn finite_with(what: &str, value: f64, ok: bool, reason: impl FnOnce() -> String) -> Result<f64> {
     finite(what, value)?;

@@ -22,7 +22,7 @@
 //! inertia error). The encoder's quantisation (uniform, σ = Δ/√12 for Δ rad per count) reaches the
 //! speed estimate low-pass filtered: [`TrackingObserver::speed_noise_rms`] gives the RMS.
 
-use crate::error::{finite, non_negative, positive, Error, Result};
+use crate::error::{finite, non_negative, positive, sixth_of_rate, Result};
 
 /// Tracking observer of the output position (rad) and speed (rad/s) of one axis.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -45,13 +45,7 @@ impl TrackingObserver {
         positive("observer bandwidth (Hz)", bandwidth_hz)?;
         positive("observer period (s)", period)?;
         non_negative("observer acceleration per amp (rad/s²/A)", acceleration_per_amp)?;
-        if bandwidth_hz * period > 1.0 / 6.0 {
-            return Err(Error::InvalidParameter {
-                what: "observer bandwidth (Hz)".into(),
-                value: bandwidth_hz,
-                reason: format!("must be at most a sixth of the current loop rate ({} Hz)", 1.0 / period),
-            });
-        }
+        sixth_of_rate("observer bandwidth (Hz)", bandwidth_hz, period)?;
         let p = (-2.0 * std::f64::consts::PI * bandwidth_hz * period).exp();
         let c = 1.0 - p;
         Ok(TrackingObserver {

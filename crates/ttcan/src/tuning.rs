@@ -28,7 +28,7 @@
 //! The reported margins are evaluated on the full loop models (discrete current loop; speed and
 //! position loops with their filters and delays), by a logarithmic frequency sweep.
 
-use crate::error::{at_least, positive, Error, Result};
+use crate::error::{at_least, positive, sixth_of_rate, Error, Result};
 use crate::motor::MotorModel;
 use crate::observer::TrackingObserver;
 use nalgebra::Complex;
@@ -111,13 +111,7 @@ pub fn current_gains(model: &MotorModel, period: f64, bandwidth_hz: f64) -> Resu
     model.validate()?;
     positive("current loop period (s)", period)?;
     positive("current loop bandwidth (Hz)", bandwidth_hz)?;
-    if bandwidth_hz * period > 1.0 / 6.0 {
-        return Err(Error::InvalidParameter {
-            what: "current loop bandwidth (Hz)".into(),
-            value: bandwidth_hz,
-            reason: format!("must be at most a sixth of the current loop rate ({} Hz)", 1.0 / period),
-        });
-    }
+    sixth_of_rate("current loop bandwidth (Hz)", bandwidth_hz, period)?;
     let m = &model.motor;
     let a = (-m.resistance * period / m.inductance).exp();
     let b = 1.0 - (-2.0 * PI * bandwidth_hz * period).exp();

@@ -14,7 +14,7 @@
 //! x' = x + vδt·sinc(ωδt/2)·cos(θ + ωδt/2), y' = y + vδt·sinc(ωδt/2)·sin(θ + ωδt/2), θ' = θ + ωδt;
 //! (12) is replaced by the heading increment r(Δφ_R − Δφ_L)/l of the odometry.
 
-use crate::error::{check_finite, Error, Result};
+use crate::error::{check_finite, check_positive, Error, Result};
 
 /// sin(x)/x, exact at 0 and accurate to machine precision near it (m, rad independent).
 pub fn sinc(x: f64) -> f64 {
@@ -48,11 +48,8 @@ impl DiffDrive {
     /// A base with wheel radius `wheel_radius` (m) and `track` (distance between the wheel
     /// contact points, m); no speed or acceleration limit.
     pub fn new(wheel_radius: f64, track: f64) -> Result<Self> {
-        for (what, v) in [("wheel_radius", wheel_radius), ("track", track)] {
-            if !(v > 0.0 && v.is_finite()) {
-                return Err(Error::invalid(what, format!("must be finite and > 0 m, got {v}")));
-            }
-        }
+        check_positive("wheel_radius", wheel_radius, "m")?;
+        check_positive("track", track, "m")?;
         Ok(DiffDrive {
             wheel_radius,
             track,
@@ -226,11 +223,8 @@ pub struct FourWheelBase {
 impl FourWheelBase {
     /// A 4-wheel base from its driven axle, the axle distance (m) and the follower wheel radius (m).
     pub fn new(drive: DiffDrive, wheelbase: f64, follower_radius: f64) -> Result<Self> {
-        for (what, v) in [("wheelbase", wheelbase), ("follower_radius", follower_radius)] {
-            if !(v > 0.0 && v.is_finite()) {
-                return Err(Error::invalid(what, format!("must be finite and > 0 m, got {v}")));
-            }
-        }
+        check_positive("wheelbase", wheelbase, "m")?;
+        check_positive("follower_radius", follower_radius, "m")?;
         Ok(FourWheelBase {
             drive,
             wheelbase,

@@ -76,6 +76,18 @@ impl Error {
     }
 }
 
+/// Checks that a scalar is finite and > 0; the error gives its `unit` ("m", "s", "Hz", "1/s").
+pub fn check_positive(what: &str, value: f64, unit: &str) -> Result<f64> {
+    if value > 0.0 && value.is_finite() {
+        Ok(value)
+    } else {
+        Err(Error::invalid(
+            what,
+            format!("must be finite and > 0 {unit}, got {value}"),
+        ))
+    }
+}
+
 /// Checks that `values` has `expected` elements, all finite.
 pub fn check_vector(what: &str, values: &[f64], expected: usize) -> Result<()> {
     if values.len() != expected {

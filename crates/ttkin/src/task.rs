@@ -77,6 +77,18 @@ impl Task {
         }
     }
 
+    /// Checks that a robot with `inputs` joint inputs can follow the task (at least `dim()`).
+    pub(crate) fn check_inputs(&self, inputs: usize) -> Result<()> {
+        let m = self.dim();
+        if inputs < m {
+            return Err(Error::invalid(
+                "task",
+                format!("the task has {m} rows but the robot only {inputs} inputs"),
+            ));
+        }
+        Ok(())
+    }
+
     /// Residual target − current (base-frame axes): see the module doc for each task.
     pub fn error(&self, current: &IsometryMatrix3<f64>, target: &IsometryMatrix3<f64>) -> DVector<f64> {
         let mut e = DVector::zeros(self.dim());

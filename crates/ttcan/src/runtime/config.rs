@@ -20,18 +20,11 @@ pub struct AxisEntry {
     #[serde(default)]
     pub units: Units,
     /// Following-error limit, joint units.
-    #[serde(default = "fe")]
+    #[serde(default = "super::link::default_following")]
     pub following_error_limit: f64,
     /// Largest plausible |current| from the drive, A.
-    #[serde(default = "mc")]
+    #[serde(default = "super::link::default_current")]
     pub max_current: f64,
-}
-
-fn fe() -> f64 {
-    0.05
-}
-fn mc() -> f64 {
-    10.0
 }
 
 impl AxisEntry {
@@ -139,8 +132,8 @@ impl ControllerConfig {
                         node: a as u8 + 1,
                         joint: Some(2 * c + a),
                         units: Units::default(),
-                        following_error_limit: fe(),
-                        max_current: mc(),
+                        following_error_limit: super::link::default_following(),
+                        max_current: super::link::default_current(),
                     })
                     .collect(),
             })

@@ -27,11 +27,15 @@ pub struct LinkConfig {
     pub max_current: f64,
 }
 
-fn default_following() -> f64 {
+/// Default following-error limit of an axis (joint units): [`LinkConfig`] and the configuration
+/// file's axis entries.
+pub(super) fn default_following() -> f64 {
     0.05
 }
 
-fn default_current() -> f64 {
+/// Default largest |current| accepted from a drive (A): [`LinkConfig`] and the configuration
+/// file's axis entries.
+pub(super) fn default_current() -> f64 {
     10.0
 }
 

@@ -213,9 +213,7 @@ impl<'a> Clik<'a> {
             }
         };
         if let Some(k) = options.gain {
-            if !(k > 0.0 && k.is_finite()) {
-                return Err(Error::invalid("gain", format!("must be finite and > 0 1/s, got {k}")));
-            }
+            crate::error::check_positive("gain", k, "1/s")?;
         }
         if !(options.limit_gain >= 0.0 && options.limit_gain.is_finite()) {
             return Err(Error::invalid("limit_gain", "must be finite and ≥ 0"));
@@ -227,12 +225,7 @@ impl<'a> Clik<'a> {
             return Err(Error::invalid("max_error", "must be > 0"));
         }
         let m = task.dim();
-        if nu < m {
-            return Err(Error::invalid(
-                "task",
-                format!("the task has {m} rows but the robot only {nu} inputs"),
-            ));
-        }
+        task.check_inputs(nu)?;
         Ok(Clik {
             model,
             task,

@@ -91,12 +91,7 @@ impl TaskTrajectory {
         }
         crate::error::check_vector("x0", x0, d)?;
         crate::error::check_vector("x1", x1, d)?;
-        if !(duration > 0.0 && duration.is_finite()) {
-            return Err(Error::invalid(
-                "duration",
-                format!("must be finite and > 0 s, got {duration}"),
-            ));
-        }
+        crate::error::check_positive("duration", duration, "s")?;
         let steps = (duration * rate_hz).round() as usize;
         if !(1..=100_000_000).contains(&steps) {
             return Err(Error::invalid("duration", "duration × rate must give 1..1e8 steps"));
@@ -159,11 +154,5 @@ impl TaskTrajectory {
 }
 
 fn check_rate(rate_hz: f64) -> Result<()> {
-    if !(rate_hz > 0.0 && rate_hz.is_finite()) {
-        return Err(Error::invalid(
-            "rate_hz",
-            format!("must be finite and > 0 Hz, got {rate_hz}"),
-        ));
-    }
-    Ok(())
+    crate::error::check_positive("rate_hz", rate_hz, "Hz").map(|_| ())
 }

@@ -39,12 +39,7 @@ impl<'a> WlsStep<'a> {
         damping: Damping,
     ) -> Result<Self> {
         let (m, n) = (task.dim(), model.nu());
-        if n < m {
-            return Err(Error::invalid(
-                "task",
-                format!("the task has {m} rows but the robot only {n} inputs"),
-            ));
-        }
+        task.check_inputs(n)?;
         Ok(WlsStep {
             model,
             task,
