@@ -13,6 +13,18 @@ fn state(q: Vec<f64>, qd: Vec<f64>, qdd: Vec<f64>) -> JointState {
     JointState { q, qd, qdd }
 }
 
+/// Start (moving, accelerating) and end (moving, no acceleration) states of a 6-joint quintic
+/// inside and around the limits of [`limits`].
+fn stroke_ends() -> impl Strategy<Value = (JointState, JointState)> {
+    (vecs(6, 2.0), vecs(6, 2.0), vecs(6, 3.0), vecs(6, 3.0), vecs(6, 5.0))
+        .prop_map(|(q0, q1, v0, v1, a0)| (state(q0, v0, a0), state(q1, v1, vec![0.0; 6])))
+}
+
+/// The 6-joint velocity, acceleration and jerk limits the ratio tests use.
+fn limits() -> KinematicLimits {
+    KinematicLimits::new(&[2.0; 6], &[20.0; 6], &[400.0; 6]).unwrap()
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(400))]
 
@@ -49,11 +61,9 @@ proptest! {
 
     #[test]
     fn ratio_above_is_the_exact_ratio_when_it_exceeds_the_floor(
-        q0 in vecs(6, 2.0), q1 in vecs(6, 2.0), v0 in vecs(6, 3.0), v1 in vecs(6, 3.0),
-        a0 in vecs(6, 5.0), t in 0.05..2.0f64, floor in 0.0..3.0f64,
+        (s, e) in stroke_ends(), t in 0.05..2.0f64, floor in 0.0..3.0f64,
     ) {
-        let lim = KinematicLimits::new(&[2.0; 6], &[20.0; 6], &[400.0; 6]).unwrap();
-        let (s, e) = (state(q0, v0, a0), state(q1, v1, vec![0.0; 6]));
+        let lim = limits();
         let exact = quintic_limit_ratio(&s, &e, t, &lim);
         let above = quintic_limit_ratio_above(&s, &e, t, &lim, floor);
         if exact > floor {
@@ -65,11 +75,9 @@ proptest! {
 
     #[test]
     fn ratio_below_is_the_exact_ratio_when_it_is_under_the_ceiling(
-        q0 in vecs(6, 2.0), q1 in vecs(6, 2.0), v0 in vecs(6, 3.0), v1 in vecs(6, 3.0),
-        a0 in vecs(6, 5.0), t in 0.05..2.0f64, ceiling in 0.0..3.0f64,
+        (s, e) in stroke_ends(), t in 0.05..2.0f64, ceiling in 0.0..3.0f64,
     ) {
-        let lim = KinematicLimits::new(&[2.0; 6], &[20.0; 6], &[400.0; 6]).unwrap();
-        let (s, e) = (state(q0, v0, a0), state(q1, v1, vec![0.0; 6]));
+        let lim = limits();
         let exact = quintic_limit_ratio(&s, &e, t, &lim);
         let below = quintic_limit_ratio_below(&s, &e, t, &lim, ceiling);
         if exact < ceiling {

@@ -57,11 +57,7 @@ pub fn jerk_limited(
     position: PositionLimits,
 ) -> Result<JerkLimited> {
     let stroke = Stroke::checked(start, end, limits, minimum_duration, position)?;
-    match start.q.len() {
-        6 => stroke.solve::<6>(true),
-        _ => stroke.solve::<0>(true),
-    }
-    .map(|(duration, trajectory)| JerkLimited {
+    stroke.solve_sized(true).map(|(duration, trajectory)| JerkLimited {
         trajectory: trajectory.expect("built"),
         duration,
     })
@@ -77,11 +73,7 @@ pub fn jerk_limited_duration(
     position: PositionLimits,
 ) -> Result<f64> {
     let stroke = Stroke::checked(start, end, limits, minimum_duration, position)?;
-    match start.q.len() {
-        6 => stroke.solve::<6>(false),
-        _ => stroke.solve::<0>(false),
-    }
-    .map(|(duration, _)| duration)
+    stroke.solve_sized(false).map(|(duration, _)| duration)
 }
 
 /// The arguments of [`jerk_limited`] after its checks.
@@ -138,6 +130,14 @@ impl<'a> Stroke<'a> {
     /// [`jerk_limited`] after the checks: the duration and, when `build`, the trajectory, with
     /// Ruckig's data on the stack for `N` > 0 joints (heap for `N` = 0, any count; the 6-joint
     /// solver reused per thread).
+    /// [`Stroke::solve`] on Ruckig's fixed-size solver for 6 joints, its dynamic one otherwise.
+    fn solve_sized(&self, build: bool) -> Result<(f64, Option<JointTrajectory>)> {
+        match self.start.q.len() {
+            6 => self.solve::<6>(build),
+            _ => self.solve::<0>(build),
+        }
+    }
+
     fn solve<const N: usize>(&self, build: bool) -> Result<(f64, Option<JointTrajectory>)> {
         let n = self.start.q.len();
         let dofs = if N == 0 { Some(n) } else { None };
