@@ -157,6 +157,11 @@ def _state(robot: Robot, state) -> dict:
     return {"q": state}
 
 
+def _keywords(robot: Robot, state, ready, profile: str, task: str, jerk, effort: bool) -> dict:
+    """The keywords :func:`plan_hit` and :func:`plan_hits` pass on to the planner."""
+    return dict(ready=ready, profile=profile, task=task, jerk=jerk, effort=effort, **_state(robot, state))
+
+
 def _check_hit(hit) -> Hit:
     if not isinstance(hit, Hit):
         raise TtmanipError(f"hit: expected a ttmanip.Hit, got {type(hit).__name__}")
@@ -192,12 +197,7 @@ def plan_hit(
         hit.pose,
         hit.twist,
         hit.t,
-        ready=ready,
-        profile=profile,
-        task=task,
-        jerk=jerk,
-        effort=effort,
-        **_state(robot, state),
+        **_keywords(robot, state, ready, profile, task, jerk, effort),
     )
     if raise_on_failure and not plan.ok:
         raise HitError(f"hit: {plan.status}: {plan.message}")
@@ -232,12 +232,7 @@ def plan_hits(
         poses,
         twists,
         times,
-        ready=ready,
-        profile=profile,
-        task=task,
-        jerk=jerk,
-        effort=effort,
-        **_state(robot, state),
+        **_keywords(robot, state, ready, profile, task, jerk, effort),
     )
     if raise_on_failure:
         for i, p in enumerate(plans):
