@@ -124,13 +124,12 @@ impl Axis {
             return Err(invalid("setpoint max missed", 0.0, "must be >= 1"));
         }
         non_negative("following error per speed (s)", c.following_error_per_speed)?;
-        if c.overspeed_limit.is_nan() || c.overspeed_limit <= c.max_speed {
-            return Err(invalid(
-                "overspeed limit (rad/s)",
-                c.overspeed_limit,
-                "must be > the max speed",
-            ));
-        }
+        above(
+            "overspeed limit (rad/s)",
+            c.overspeed_limit,
+            c.max_speed,
+            "the max speed",
+        )?;
         if let Some((lo, hi)) = c.position_limits {
             finite("position limit lower (rad)", lo)?;
             finite("position limit upper (rad)", hi)?;
@@ -139,13 +138,12 @@ impl Axis {
             }
         }
         positive("bus under-voltage (V)", c.bus_undervoltage)?;
-        if c.bus_overvoltage.is_nan() || c.bus_overvoltage <= m.bus_voltage {
-            return Err(invalid(
-                "bus over-voltage (V)",
-                c.bus_overvoltage,
-                "must be > the nominal bus voltage",
-            ));
-        }
+        above(
+            "bus over-voltage (V)",
+            c.bus_overvoltage,
+            m.bus_voltage,
+            "the nominal bus voltage",
+        )?;
         if c.bus_undervoltage >= m.bus_voltage {
             return Err(invalid(
                 "bus under-voltage (V)",
@@ -218,6 +216,14 @@ impl Axis {
             stop_time: 0.0,
         })
     }
+}
+
+/// Checks that `value` is above `bound` (NaN is not), which the error calls `bound_name`.
+fn above(what: &str, value: f64, bound: f64, bound_name: &str) -> Result<()> {
+    if value.is_nan() || value <= bound {
+        return Err(invalid(what, value, &format!("must be > {bound_name}")));
+    }
+    Ok(())
 }
 
 fn invalid(what: &str, value: f64, reason: &str) -> Error {
