@@ -115,36 +115,27 @@ fn batch_shape(count: usize, item: &[usize]) -> Vec<usize> {
     std::iter::once(count).chain(item.iter().copied()).collect()
 }
 
-/// What a method of three per-state arrays (q, qd and a third) computes.
-#[derive(Clone, Copy)]
-enum StateMethod {
-    /// Inverse dynamics (third array q̈), joint friction added when `friction` is true.
-    Inverse { friction: bool },
-    /// Forward dynamics (third array τ).
-    Forward,
-}
-
-/// A `#[pymethods]` block of the dynamics methods of three per-state arrays: one signature (q, qd
-/// and `third`, each (n,) or (N, n), optional gravity and wrench) and one body,
-/// [`PyRobot::state_method`]; they differ only in the [`StateMethod`].
-macro_rules! state_methods {
-    ($( $(#[$doc:meta])* $name:ident($third:ident) => $method:expr; )*) => {
+/// A `#[pymethods]` block of the inverse-dynamics methods: one signature (q, qd, qdd of shape (n,)
+/// or (N, n), optional gravity and wrench) and one body, [`PyRobot::inverse`], that differ only in
+/// whether joint friction is added.
+macro_rules! inverse_dynamics_methods {
+    ($( $(#[$doc:meta])* $name:ident => friction: $friction:expr; )*) => {
         #[ttkin_py_guard::guarded]
         #[pymethods]
         impl PyRobot {
             $(
                 $(#[$doc])*
-                #[pyo3(signature = (q, qd, $third, gravity=None, wrench=None))]
+                #[pyo3(signature = (q, qd, qdd, gravity=None, wrench=None))]
                 fn $name<'py>(
                     &self,
                     py: Python<'py>,
                     q: &Any<'py>,
                     qd: &Any<'py>,
-                    $third: &Any<'py>,
+                    qdd: &Any<'py>,
                     gravity: Option<&Any<'py>>,
                     wrench: Option<&Any<'py>>,
                 ) -> PyResult<Array<'py>> {
-                    self.state_method(py, [q, qd, $third], stringify!($third), gravity, wrench, $method)
+                    self.inverse(py, q, qd, qdd, gravity, wrench, $friction)
                 }
             )*
         }
@@ -158,18 +149,15 @@ array_getters!(PyRobot, |r| {
     masses => r.chain.masses(), [r.chain.dof()];
 });
 
-state_methods! {
+inverse_dynamics_methods! {
     /// Inverse dynamics (recursive Newton–Euler): joint torques (N·m) / forces (N) for q, qd, qdd
     /// of shape (n,) or (N, n); rigid bodies plus rotor armature, no friction (Pinocchio's rnea).
     /// `gravity` is a base-frame vector (default (0, 0, −9.81) m/s²); `wrench` [fx, fy, fz, mx, my,
     /// mz] (N, N·m) is applied to the tool by the environment, tool-frame axes, moment about the
     /// tool point.
-    rnea(qdd) => StateMethod::Inverse { friction: false };
+    rnea => friction: false;
     /// `rnea` plus joint friction b·q̇ + f_c·sign(q̇): the torques the drives must deliver.
-    inverse_dynamics(qdd) => StateMethod::Inverse { friction: true };
-    /// Forward dynamics q̈ = M⁻¹(τ − h + Jᵀw) (rad/s², m/s²) for q, qd, tau of shape (n,) or
-    /// (N, n); no friction (the inverse of `rnea`). `gravity` and `wrench` as in `rnea`.
-    forward_dynamics(tau) => StateMethod::Forward;
+    inverse_dynamics => friction: true;
 }
 
 #[ttkin_py_guard::guarded]
@@ -236,6 +224,32 @@ impl PyRobot {
             &[n],
             |dy, d| dy.nonlinear_effects(d, q, qd, &g).map(|t| t.as_slice()),
             |dy, o| dy.nonlinear_effects_batch(q, qd, &g, o),
+        )
+    }
+
+    /// Forward dynamics q̈ = M⁻¹(τ − h + Jᵀw) (rad/s², m/s²) for q, qd, tau of shape (n,) or
+    /// (N, n); no friction (the inverse of `rnea`). `gravity` and `wrench` as in `rnea`.
+    #[pyo3(signature = (q, qd, tau, gravity=None, wrench=None))]
+    fn forward_dynamics<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Any<'py>,
+        qd: &Any<'py>,
+        tau: &Any<'py>,
+        gravity: Option<&Any<'py>>,
+        wrench: Option<&Any<'py>>,
+    ) -> PyResult<Array<'py>> {
+        let g = gravity_arg(gravity)?;
+        let w = wrench_arg(wrench)?;
+        let (arrays, batch) = self.states([(q, "q"), (qd, "qd"), (tau, "tau")])?;
+        let n = self.chain.dof();
+        let (q, qd, tau) = (arrays[0].data(), arrays[1].data(), arrays[2].data());
+        self.one_or_many(
+            py,
+            batch,
+            &[n],
+            |dy, d| dy.forward_dynamics(d, q, qd, tau, &g, w.as_ref()).map(|a| a.as_slice()),
+            |dy, o| dy.forward_dynamics_batch(q, qd, tau, &g, w.as_ref(), o),
         )
     }
 
@@ -371,39 +385,42 @@ impl PyRobot {
 }
 
 impl PyRobot {
-    /// Shared body of rnea, inverse_dynamics and forward_dynamics: `arrays` are q, qd and the
-    /// third array (named `third` in errors), all (n,) or all (N, n).
-    fn state_method<'py>(
+    /// Shared body of rnea and inverse_dynamics (`friction`: add the joint friction).
+    #[allow(clippy::too_many_arguments)]
+    fn inverse<'py>(
         &self,
         py: Python<'py>,
-        arrays: [&Any<'py>; 3],
-        third: &str,
+        q: &Any<'py>,
+        qd: &Any<'py>,
+        qdd: &Any<'py>,
         gravity: Option<&Any<'py>>,
         wrench: Option<&Any<'py>>,
-        method: StateMethod,
+        friction: bool,
     ) -> PyResult<Array<'py>> {
         let g = gravity_arg(gravity)?;
         let w = wrench_arg(wrench)?;
-        let (arrays, batch) = self.states([(arrays[0], "q"), (arrays[1], "qd"), (arrays[2], third)])?;
+        let (arrays, batch) = self.states([(q, "q"), (qd, "qd"), (qdd, "qdd")])?;
         let n = self.chain.dof();
-        let (q, qd, x) = (arrays[0].data(), arrays[1].data(), arrays[2].data());
+        let (q, qd, qdd) = (arrays[0].data(), arrays[1].data(), arrays[2].data());
         let w = w.as_ref();
         self.one_or_many(
             py,
             batch,
             &[n],
             |dy, d| {
-                let out = match method {
-                    StateMethod::Inverse { friction: true } => dy.inverse_dynamics(d, q, qd, x, &g, w),
-                    StateMethod::Inverse { friction: false } => dy.rnea(d, q, qd, x, &g, w),
-                    StateMethod::Forward => dy.forward_dynamics(d, q, qd, x, &g, w),
+                let t = if friction {
+                    dy.inverse_dynamics(d, q, qd, qdd, &g, w)
+                } else {
+                    dy.rnea(d, q, qd, qdd, &g, w)
                 };
-                out.map(|t| t.as_slice())
+                t.map(|t| t.as_slice())
             },
-            |dy, o| match method {
-                StateMethod::Inverse { friction: true } => dy.inverse_dynamics_batch(q, qd, x, &g, w, o),
-                StateMethod::Inverse { friction: false } => dy.rnea_batch(q, qd, x, &g, w, o),
-                StateMethod::Forward => dy.forward_dynamics_batch(q, qd, x, &g, w, o),
+            |dy, o| {
+                if friction {
+                    dy.inverse_dynamics_batch(q, qd, qdd, &g, w, o)
+                } else {
+                    dy.rnea_batch(q, qd, qdd, &g, w, o)
+                }
             },
         )
     }
