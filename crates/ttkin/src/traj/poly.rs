@@ -79,12 +79,58 @@ fn degree(c: &Coeffs) -> usize {
 /// root, found by Newton steps safeguarded by bisection down to a few ulps (degree ≤ 2: closed form). A root where `c` only touches
 /// zero (even multiplicity) is reported when `c` is exactly zero at a critical point.
 pub fn roots_in(c: &Coeffs, lo: f64, hi: f64, out: &mut Vec<f64>) {
+    roots_into(c, lo, hi, out);
+}
+
+/// Where [`roots_into`] appends roots: a `Vec` for callers, a stack buffer inside this module.
+trait RootSink {
+    fn push_root(&mut self, r: f64);
+    fn last_root(&self) -> Option<f64>;
+}
+
+impl RootSink for Vec<f64> {
+    fn push_root(&mut self, r: f64) {
+        self.push(r);
+    }
+    fn last_root(&self) -> Option<f64> {
+        self.last().copied()
+    }
+}
+
+/// At most five roots (degree ≤ 5) on the stack: the critical points of the peak searches,
+/// which run for every stroke the planners try, without a heap allocation.
+#[derive(Default)]
+struct Roots {
+    v: [f64; 5],
+    n: usize,
+}
+
+impl Roots {
+    fn as_slice(&self) -> &[f64] {
+        &self.v[..self.n]
+    }
+}
+
+impl RootSink for Roots {
+    fn push_root(&mut self, r: f64) {
+        // A polynomial of degree d has at most d roots and `roots_into` reports each once, so
+        // five never overflow; `min` keeps an impossible sixth from indexing out of bounds.
+        self.v[self.n.min(4)] = r;
+        self.n = (self.n + 1).min(5);
+    }
+    fn last_root(&self) -> Option<f64> {
+        self.n.checked_sub(1).map(|k| self.v[k])
+    }
+}
+
+/// [`roots_in`] into any [`RootSink`].
+fn roots_into<S: RootSink>(c: &Coeffs, lo: f64, hi: f64, out: &mut S) {
     match degree(c) {
         0 => {}
         1 => {
             let r = -c[0] / c[1];
             if r > lo && r < hi {
-                out.push(r);
+                out.push_root(r);
             }
         }
         2 => {
@@ -99,21 +145,21 @@ pub fn roots_in(c: &Coeffs, lo: f64, hi: f64, out: &mut Vec<f64>) {
                 std::mem::swap(&mut r1, &mut r2);
             }
             for r in [r1, r2] {
-                if r > lo && r < hi && out.last() != Some(&r) {
-                    out.push(r);
+                if r > lo && r < hi && out.last_root() != Some(r) {
+                    out.push_root(r);
                 }
             }
         }
         _ => {
-            let mut crit = Vec::with_capacity(5);
-            roots_in(&derivative(c), lo, hi, &mut crit);
+            let mut crit = Roots::default();
+            roots_into(&derivative(c), lo, hi, &mut crit);
             let mut a = lo;
-            for b in crit.iter().copied().chain(std::iter::once(hi)) {
+            for b in crit.as_slice().iter().copied().chain(std::iter::once(hi)) {
                 let (fa, fb) = (value(c, a), value(c, b));
                 if fb == 0.0 && b < hi {
-                    out.push(b);
+                    out.push_root(b);
                 } else if fa != 0.0 && (fa < 0.0) != (fb < 0.0) {
-                    out.push(bisect(c, a, b, fa));
+                    out.push_root(bisect(c, a, b, fa));
                 }
                 a = b;
             }
@@ -216,10 +262,10 @@ impl super::JointTrajectory {
 /// The τ in [0, tf] and value of the largest |c(τ)|, exact up to rounding (endpoints and the
 /// roots of the derivative are the only candidates).
 pub fn max_abs(c: &Coeffs, tf: f64) -> (f64, f64) {
-    let mut crit = Vec::with_capacity(5);
-    roots_in(&derivative(c), 0.0, tf, &mut crit);
+    let mut crit = Roots::default();
+    roots_into(&derivative(c), 0.0, tf, &mut crit);
     let mut best = (0.0, value(c, 0.0));
-    for tau in crit.into_iter().chain(std::iter::once(tf)) {
+    for tau in crit.as_slice().iter().copied().chain(std::iter::once(tf)) {
         let v = value(c, tau);
         if v.abs() > best.1.abs() {
             best = (tau, v);
@@ -230,11 +276,11 @@ pub fn max_abs(c: &Coeffs, tf: f64) -> (f64, f64) {
 
 /// The τ in [0, tf] and value of the smallest and of the largest c(τ), exact up to rounding.
 pub fn min_max(c: &Coeffs, tf: f64) -> ((f64, f64), (f64, f64)) {
-    let mut crit = Vec::with_capacity(5);
-    roots_in(&derivative(c), 0.0, tf, &mut crit);
+    let mut crit = Roots::default();
+    roots_into(&derivative(c), 0.0, tf, &mut crit);
     let v0 = value(c, 0.0);
     let (mut lo, mut hi) = ((0.0, v0), (0.0, v0));
-    for tau in crit.into_iter().chain(std::iter::once(tf)) {
+    for tau in crit.as_slice().iter().copied().chain(std::iter::once(tf)) {
         let v = value(c, tau);
         if v < lo.1 {
             lo = (tau, v);
