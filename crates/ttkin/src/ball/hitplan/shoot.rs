@@ -5,7 +5,7 @@ use super::super::flight::{BallState, EventKind, Flight};
 use super::super::impact::RacketHit;
 use super::HitPlanner;
 use nalgebra::{Matrix3, Vector3};
-use std::cell::RefCell;
+use std::cell::Cell;
 
 impl HitPlanner {
     /// Outgoing velocity, racket and landing point returning the ball at `s` to `target` in a
@@ -18,43 +18,36 @@ impl HitPlanner {
     ) -> Option<(Vector3<f64>, RacketHit, Vector3<f64>)> {
         let f = &self.flight;
         let goal = Vector3::new(target[0], target[1], f.model.radius);
-        // Each solve starts from the previous one (the shooting iterates move v₀ a little).
-        let last: std::cell::Cell<Option<RacketHit>> = std::cell::Cell::new(None);
+        // Each solve starts from the previous one (the shooting iterates move v₀ a little); the
+        // last solved racket is kept with its v₀.
+        let last: Cell<Option<(Vector3<f64>, RacketHit)>> = Cell::new(None);
         let racket = |v: &Vector3<f64>| {
-            let guess = last.get();
+            let guess = last.get().map(|(_, h)| h);
             let hit = self
                 .racket
                 .solve_from(&f.model, &s.v, &s.w, v, guess.as_ref())
                 .or_else(|_| self.racket.solve(&f.model, &s.v, &s.w, v))
                 .ok();
-            if hit.is_some() {
-                last.set(hit);
+            if let Some(h) = hit {
+                last.set(Some((*v, h)));
             }
             hit
         };
-        // The outgoing spin follows the racket, which follows v₀: solved together. The fine
-        // stage's last flight (the one at v_out) is kept for the return check.
-        let path = RefCell::new(FinePath {
-            steps: Vec::with_capacity((tf / f.step) as usize + 2),
-            ..FinePath::default()
-        });
-        let v_out = shoot_coarse_first(f, &s.p, &goal, tf, |v| racket(v).map(|r| r.spin_out), Some(&path))?;
-        let path = path.into_inner();
-        // The racket of the last evaluation is the one at v_out (`racket` ran last for it).
-        let kept = last.get().filter(|h| path.v == v_out && path.w == h.spin_out);
-        let hit = match kept {
-            Some(h) => h,
-            None => racket(&v_out)?,
+        // The outgoing spin follows the racket, which follows v₀: solved together.
+        let v_out = shoot_coarse(f, &s.p, &goal, tf, |v| racket(v).map(|r| r.spin_out))?;
+        // The shooting's last evaluation was at v_out (Broyden returns the point it evaluated last).
+        let hit = match last.get() {
+            Some((v, h)) if v == v_out => h,
+            _ => racket(&v_out)?,
         };
         let out = BallState {
             v: v_out,
             w: hit.spin_out,
             ..*s
         };
-        // The first event only (what `run` reports first, without the flight after it), along the
-        // steps the shooting already integrated when they are those of this flight.
-        let done: &[_] = if kept.is_some() { &path.steps } else { &[] };
-        let (_, first) = f.advance_along(&out, done, s.t + tf + 0.5, None);
+        // The first event only (what `run` reports first, without the flight after it), at the
+        // flight's own step: this check, not the coarse shooting, decides the landing.
+        let (_, first) = f.advance(&out, s.t + tf + 0.5, None);
         let e = first.as_ref()?;
         let landing = e.before.p;
         let ok = e.kind == EventKind::Table
@@ -71,7 +64,7 @@ pub fn shoot<S>(f: &Flight, p: &Vector3<f64>, goal: &Vector3<f64>, tf: f64, spin
 where
     S: Fn(&Vector3<f64>) -> Option<Vector3<f64>>,
 {
-    let end = |v: &Vector3<f64>| end_point(f, f.step, p, v, tf, &spin, None) - goal;
+    let end = |v: &Vector3<f64>| end_point(f, f.step, p, v, tf, &spin) - goal;
     let (v, r, _) = broyden(
         &end,
         drag_free(f, p, goal, tf),
@@ -81,49 +74,29 @@ where
     (r.norm() < 1e-4).then_some(v)
 }
 
-/// The last fine flight of a shooting solve: its initial velocity (m/s) and spin (rad/s), and
-/// the positions and velocities after each of its full steps (world), as
-/// [`Flight::advance_along`] takes them.
-#[derive(Debug, Default)]
-struct FinePath {
-    v: Vector3<f64>,
-    w: Vector3<f64>,
-    steps: Vec<(Vector3<f64>, Vector3<f64>)>,
-}
-
-/// [`shoot`] in two stages, the result to the same tolerance at the flight's own step: Broyden's
-/// method first on the flight integrated at 4 × its step (4 times fewer RK4
-/// steps, to 0.1 mm), then continued from that velocity and inverse Jacobian at the
-/// flight's step (usually one or two evaluations, as the two integrations differ by far less than
-/// the coarse tolerance). With `path`, the last fine flight is kept there.
-fn shoot_coarse_first<S>(
-    f: &Flight,
-    p: &Vector3<f64>,
-    goal: &Vector3<f64>,
-    tf: f64,
-    spin: S,
-    path: Option<&RefCell<FinePath>>,
-) -> Option<Vector3<f64>>
+/// [`shoot`] on the flight integrated at `COARSE_FACTOR` × its step (that many times fewer RK4
+/// steps), to the same tolerance. On the hit planner's shots the coarse and the flight's own
+/// integration of the same v₀ end at most 1.3e-5 m apart at 80 ms against 10 ms (7e-7 m at 40
+/// ms; 300 random shots, spins to 150 rad/s, flights of 0.55–1.05 s; tested below), far inside the
+/// 1 mm landing check that [`HitPlanner::outgoing`] then flies at the flight's own step.
+fn shoot_coarse<S>(f: &Flight, p: &Vector3<f64>, goal: &Vector3<f64>, tf: f64, spin: S) -> Option<Vector3<f64>>
 where
     S: Fn(&Vector3<f64>) -> Option<Vector3<f64>>,
 {
-    let coarse = |v: &Vector3<f64>| end_point(f, COARSE_FACTOR * f.step, p, v, tf, &spin, None) - goal;
-    let start = drag_free(f, p, goal, tf);
-    let (v0, jinv) = match broyden(&coarse, start, Matrix3::identity() / tf, COARSE_TOLERANCE) {
-        Some((v, r, jinv)) if r.norm() < COARSE_TOLERANCE => (v, jinv),
-        _ => (start, Matrix3::identity() / tf),
-    };
-    let fine = |v: &Vector3<f64>| end_point(f, f.step, p, v, tf, &spin, path) - goal;
-    let (v, r, _) = broyden(&fine, v0, jinv, FINE_TOLERANCE)?;
+    let coarse = |v: &Vector3<f64>| end_point(f, COARSE_FACTOR * f.step, p, v, tf, &spin) - goal;
+    let (v, r, _) = broyden(
+        &coarse,
+        drag_free(f, p, goal, tf),
+        Matrix3::identity() / tf,
+        FINE_TOLERANCE,
+    )?;
     (r.norm() < 1e-4).then_some(v)
 }
 
 /// Landing tolerance (m) of the shooting solves.
 const FINE_TOLERANCE: f64 = 1e-5;
-/// Tolerance (m) of [`shoot_coarse_first`]'s coarse stage.
-const COARSE_TOLERANCE: f64 = 1e-4;
-/// Step of [`shoot_coarse_first`]'s coarse stage, in flight steps.
-const COARSE_FACTOR: f64 = 4.0;
+/// Step of [`shoot_coarse`], in flight steps.
+const COARSE_FACTOR: f64 = 8.0;
 
 /// The drag-free velocity from `p` to `goal` in `tf` s.
 fn drag_free(f: &Flight, p: &Vector3<f64>, goal: &Vector3<f64>, tf: f64) -> Vector3<f64> {
@@ -132,17 +105,8 @@ fn drag_free(f: &Flight, p: &Vector3<f64>, goal: &Vector3<f64>, tf: f64) -> Vect
 }
 
 /// Position after `tf` s of flight from `p` with velocity `v` and spin `spin(v)`, RK4 steps of at
-/// most `step` s (the last one shortened); NaN when `spin` has no answer. With `path`, the flight
-/// is kept there (its full steps only).
-fn end_point<S>(
-    f: &Flight,
-    step: f64,
-    p: &Vector3<f64>,
-    v: &Vector3<f64>,
-    tf: f64,
-    spin: &S,
-    path: Option<&RefCell<FinePath>>,
-) -> Vector3<f64>
+/// most `step` s (the last one shortened); NaN when `spin` has no answer.
+fn end_point<S>(f: &Flight, step: f64, p: &Vector3<f64>, v: &Vector3<f64>, tf: f64, spin: &S) -> Vector3<f64>
 where
     S: Fn(&Vector3<f64>) -> Option<Vector3<f64>>,
 {
@@ -155,18 +119,9 @@ where
         v: *v,
         w,
     };
-    let mut path = path.map(|c| c.borrow_mut());
-    if let Some(path) = path.as_mut() {
-        path.v = *v;
-        path.w = w;
-        path.steps.clear();
-    }
     while s.t < tf - 1e-12 {
         let h = step.min(tf - s.t);
         s = f.rk4(&s, h);
-        if let (Some(path), true) = (path.as_mut(), h == step) {
-            path.steps.push((s.p, s.v));
-        }
     }
     s.p
 }
@@ -215,13 +170,13 @@ mod tests {
     use crate::ball::flight::Flight;
 
     #[test]
-    fn coarse_first_lands_where_the_one_stage_solve_does() {
+    fn coarse_solve_lands_where_the_one_stage_solve_does() {
         let f = Flight {
             step: 0.01,
             ..Flight::default()
         };
         let mut rng = fastrand::Rng::with_seed(9);
-        let mut worst: f64 = 0.0;
+        let (mut worst, mut worst_miss): (f64, f64) = (0.0, 0.0);
         for _ in 0..200 {
             let p = Vector3::new(-1.6 - 0.4 * rng.f64(), 0.8 * (rng.f64() - 0.5), 0.05 + 0.3 * rng.f64());
             let goal = Vector3::new(0.4 + 0.8 * rng.f64(), 0.9 * (rng.f64() - 0.5), f.model.radius);
@@ -230,13 +185,20 @@ mod tests {
             let spin = |v: &Vector3<f64>| Some(w + Vector3::new(0.0, 2.0 * v.x, 0.0));
             let tf = [0.65, 0.8, 0.95][rng.usize(0..3)];
             let one = shoot(&f, &p, &goal, tf, spin).unwrap();
-            let two = shoot_coarse_first(&f, &p, &goal, tf, spin, None).unwrap();
-            // Both land within the tolerance at the flight's own step.
-            let miss = (end_point(&f, f.step, &p, &two, tf, &spin, None) - goal).norm();
-            assert!(miss < FINE_TOLERANCE, "miss {miss}");
+            let two = shoot_coarse(&f, &p, &goal, tf, spin).unwrap();
+            // The coarse solve lands within its tolerance plus the two integrations' difference
+            // (≤ 1.3e-5 m on such shots) at the flight's own step.
+            let miss = (end_point(&f, f.step, &p, &two, tf, &spin) - goal).norm();
+            assert!(miss < FINE_TOLERANCE + 2e-5, "miss {miss}");
+            worst_miss = worst_miss.max(miss);
             worst = worst.max((one - two).norm());
         }
         // 1e-5 m on a ~1 m flight of ~0.8 s: velocities agree to a few 1e-5 m/s.
         assert!(worst < 1e-4, "velocities differ by {worst} m/s");
+        // The coarse step is coarse: a solve at the flight's step would land within 1e-5 m.
+        assert!(
+            worst_miss > FINE_TOLERANCE / 10.0,
+            "coarse misses by at most {worst_miss} m"
+        );
     }
 }
