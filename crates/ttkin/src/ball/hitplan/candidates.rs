@@ -3,7 +3,7 @@
 
 use super::super::flight::{BallState, Flight};
 use super::super::reach::{walk_after_bounce, Reach};
-use super::HitPlanner;
+use super::{HitPlanner, RacketPoses};
 use nalgebra::Vector3;
 
 impl HitPlanner {
@@ -46,19 +46,15 @@ impl HitPlanner {
     /// Whether some roll of a racket with the frictionless, drag-free normal (along v_out − v_in,
     /// v_out the vacuum shot to `target` in the first return time) at the ball `s` has IK within the
     /// limits: a cheap test before the shooting solve.
-    pub(super) fn roughly_placeable(&self, s: &BallState, target: [f64; 2]) -> bool {
+    pub(super) fn roughly_placeable(&self, poses: &RacketPoses, s: &BallState, target: [f64; 2]) -> bool {
         let tf = self.return_times[0];
         let goal = Vector3::new(target[0], target[1], self.flight.model.radius);
         let g = Vector3::new(0.0, 0.0, -self.flight.model.gravity);
         let v_out = (goal - s.p - 0.5 * g * tf * tf) / tf;
         let n = (v_out - s.v).normalize();
-        self.racket_centres(&s.p, &n).iter().any(|c| {
-            self.rolls.iter().any(|&roll| {
-                self.branches(&self.base_pose_rolled(c, &n, roll), None)
-                    .next()
-                    .is_some()
-            })
-        })
+        self.racket_centres(&s.p, &n)
+            .iter()
+            .any(|c| (0..poses.rolls()).any(|k| self.branches(&poses.pose(c, &n, k), None).next().is_some()))
     }
 
     /// Landing targets (x, y, m, world) tried in order for a hit point: the requested `target`,

@@ -35,6 +35,8 @@
 
 mod candidates;
 use candidates::candidate_order;
+mod poses;
+use poses::RacketPoses;
 mod robot;
 mod shoot;
 
@@ -288,6 +290,7 @@ impl HitPlanner {
         let order = candidate_order(list.len(), self.candidates.max(1));
         let first = self.candidates.max(1).min(list.len());
         let targets = self.targets(target);
+        let poses = RacketPoses::new(self);
         let mut best: Option<Hit> = None;
         let mut any_return = false;
         let mut tried = 0;
@@ -301,7 +304,7 @@ impl HitPlanner {
         let nt = targets.len();
         let mut placeable_memo: Vec<Option<bool>> = vec![None; list.len() * nt];
         let mut placeable = |i: usize, t: usize| -> bool {
-            *placeable_memo[i * nt + t].get_or_insert_with(|| self.roughly_placeable(&list[i], targets[t]))
+            *placeable_memo[i * nt + t].get_or_insert_with(|| self.roughly_placeable(&poses, &list[i], targets[t]))
         };
         let mut attempt = |s: &BallState, goal: [f64; 2], best: &mut Option<Hit>| {
             tried += 1;
@@ -310,7 +313,7 @@ impl HitPlanner {
                     continue;
                 };
                 any_return = true;
-                if let Some(hit) = self.robot_hit(s, now, start, v_out, racket, landing) {
+                if let Some(hit) = self.robot_hit(&poses, s, now, start, v_out, racket, landing) {
                     if best.as_ref().is_none_or(|b| hit.margin > b.margin) {
                         *best = Some(hit);
                     }

@@ -5,7 +5,7 @@ use super::super::flight::BallState;
 use super::super::impact::RacketHit;
 use super::super::leg::{hit_leg_above, HitLeg};
 use super::super::reach::min_joint_time;
-use super::{Hit, HitPlanner};
+use super::{Hit, HitPlanner, RacketPoses};
 use crate::chain::JacobianFrame;
 use crate::ik::{joint_velocity, DifferentialIk, Solutions};
 use crate::traj::JointState;
@@ -14,8 +14,10 @@ use nalgebra::{IsometryMatrix3, Matrix6, Vector3, Vector6};
 impl HitPlanner {
     /// The best robot hit (largest margin) over the racket rolls `rolls` about the face normal and
     /// every IK branch within the limits, or `None` when none is feasible.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn robot_hit(
         &self,
+        poses: &RacketPoses,
         s: &BallState,
         now: f64,
         start: &JointState,
@@ -29,15 +31,11 @@ impl HitPlanner {
         let t_hit = s.t - now;
         let mut best: Option<Hit> = None;
         let centres = self.racket_centres(&s.p, &racket.normal);
-        for (k, &roll) in centres
-            .iter()
-            .enumerate()
-            .flat_map(|(k, _)| self.rolls.iter().map(move |r| (k, r)))
-        {
+        for (k, roll) in (0..centres.len()).flat_map(|k| (0..poses.rolls()).map(move |r| (k, r))) {
             if best.as_ref().is_some_and(|b| b.margin >= self.good_margin || k > 0) {
                 break;
             }
-            let pose = self.base_pose_rolled(&centres[k], &racket.normal, roll);
+            let pose = poses.pose(&centres[k], &racket.normal, roll);
             for q in self.branches(&pose, Some(&start.q)) {
                 let q = q.as_slice();
                 // Only a margin above the best so far can replace it: no solves for the rest.

@@ -212,11 +212,16 @@ impl Reach {
 /// Racket frame (world) for the face normal `n`: z = n, x (the handle) as close to world up as
 /// possible (world x when n is within 18° of vertical), then turned by `roll` (rad) about n.
 pub fn racket_rotation(n: &Vector3<f64>, roll: f64) -> Rotation3<f64> {
+    // Roll 0 (the first one tried, the most frequent) without the sin/cos: the same values.
+    racket_rotation_turned(n, if roll == 0.0 { (0.0, 1.0) } else { roll.sin_cos() })
+}
+
+/// [`racket_rotation`] for the roll given by its (sine, cosine): for callers turning many
+/// normals by the same few rolls.
+pub fn racket_rotation_turned(n: &Vector3<f64>, (sin, cos): (f64, f64)) -> Rotation3<f64> {
     let z = n.normalize();
     let hint = if z.z.abs() < 0.95 { Vector3::z() } else { Vector3::x() };
     let x0 = (hint - z * hint.dot(&z)).normalize();
-    // Roll 0 (the first one tried, the most frequent) without the sin/cos: the same values.
-    let (sin, cos) = if roll == 0.0 { (0.0, 1.0) } else { roll.sin_cos() };
     let x = cos * x0 + sin * z.cross(&x0);
     Rotation3::from_matrix_unchecked(Matrix3::from_columns(&[x, z.cross(&x), z]))
 }
