@@ -144,13 +144,17 @@ fn net_and_floor_end_the_flight() {
 }
 
 #[test]
-fn advance_along_a_prefix_of_its_steps_is_advance() {
-    let f = Flight {
+fn sampled_guards_find_the_events_of_the_short_step() {
+    // An 80 ms step with its guards sampled every 10 ms finds the first event of the 10 ms
+    // flight: same kind, and the contact within the two integrations' difference.
+    let fine = Flight {
         step: 0.01,
         ..Flight::default()
     };
+    let long = Flight { step: 0.08, ..fine };
     let mut rng = fastrand::Rng::with_seed(3);
-    for _ in 0..200 {
+    let (mut kinds, mut worst) = (std::collections::BTreeMap::new(), 0.0f64);
+    for _ in 0..300 {
         // Returns from behind the robot's end line toward the opponent's half, some into the net.
         let s = BallState::new(
             1.3 * rng.f64(),
@@ -159,21 +163,34 @@ fn advance_along_a_prefix_of_its_steps_is_advance() {
             [0.0, 150.0 * (rng.f64() - 0.5), 60.0 * (rng.f64() - 0.5)],
         );
         let t_end = s.t + 1.3;
-        let want = f.advance(&s, t_end, None);
-        // The steps integrated from t = 0 (as the shooting does): only p and v are taken.
-        let mut cur = BallState { t: 0.0, ..s };
-        let mut steps = Vec::new();
-        for _ in 0..rng.usize(0..140) {
-            cur = f.rk4(&cur, f.step);
-            steps.push((cur.p, cur.v));
-        }
-        assert_eq!(f.advance_along(&s, &steps, t_end, None), want);
-        // The prefix is used: another flight's steps (1 cm higher) give another result.
-        if !steps.is_empty() {
-            steps.iter_mut().for_each(|(p, _)| p.z += 0.01);
-            assert_ne!(f.advance_along(&s, &steps, t_end, None), want);
-        }
+        let (_, want) = fine.advance_sampled(&s, t_end, None, 1);
+        let (_, got) = long.advance_sampled(&s, t_end, None, 8);
+        let (Some(want), Some(got)) = (want, got) else {
+            assert_eq!(want.map(|e| e.kind), got.map(|e| e.kind));
+            continue;
+        };
+        assert_eq!(want.kind, got.kind, "{s:?}");
+        *kinds.entry(want.kind.name()).or_insert(0) += 1;
+        worst = worst.max((want.before.p - got.before.p).norm());
+        assert!(
+            (want.before.t - got.before.t).abs() < 1e-5,
+            "{} vs {}",
+            want.before.t,
+            got.before.t
+        );
     }
+    assert!(worst < 1e-4, "contacts {worst} m apart");
+    assert!(
+        kinds.get("table").copied().unwrap_or(0) > 50 && kinds.get("net").copied().unwrap_or(0) > 10,
+        "{kinds:?}"
+    );
+    // One sample per step is `advance`; one per 80 ms step misses contacts the samples find.
+    let s = BallState::new(0.0, [-0.3, 0.0, 0.08], [5.0, 0.0, 0.0], [0.0; 3]);
+    assert_eq!(long.advance_sampled(&s, 1.0, None, 1), long.advance(&s, 1.0, None));
+    let (_, coarse) = long.advance(&s, 1.0, None);
+    let (_, sampled) = long.advance_sampled(&s, 1.0, None, 8);
+    assert_eq!(sampled.map(|e| e.kind), Some(EventKind::Net));
+    assert_ne!(coarse.map(|e| e.kind), Some(EventKind::Net));
 }
 
 #[test]
