@@ -74,25 +74,32 @@ pub fn hit_leg_above(
     let cubic: Vec<f64> = (0..q.len())
         .map(|i| -6.0 * (q[i] - start.q[i]) / (t_hit * t_hit) + 2.0 * (start.qd[i] + 2.0 * qd[i]) / t_hit)
         .collect();
-    let mut best: Option<(f64, JointState)> = None;
+    // One end state, its accelerations rewritten for each trial.
+    let mut end = JointState {
+        q: q.to_vec(),
+        qd: qd.to_vec(),
+        qdd: vec![0.0; q.len()],
+    };
+    let mut best: Option<(f64, f64)> = None;
     for alpha in [0.0, 0.5, 1.0] {
-        let end = JointState {
-            q: q.to_vec(),
-            qd: qd.to_vec(),
-            qdd: cubic.iter().map(|a| alpha * a).collect(),
-        };
+        for (a, c) in end.qdd.iter_mut().zip(&cubic) {
+            *a = alpha * c;
+        }
         // Exact below the best so far and below 1 (a ratio above both is neither chosen nor
         // accepted); the small excess over 1 keeps a ratio of exactly 1 exact.
-        let ceiling = best.as_ref().map_or(ACCEPT_CEILING, |(r, _)| r.min(ACCEPT_CEILING));
+        let ceiling = best.map_or(ACCEPT_CEILING, |(r, _)| r.min(ACCEPT_CEILING));
         let ratio = quintic_limit_ratio_below(start, &end, t_hit, limits, ceiling);
-        if best.as_ref().is_none_or(|(r, _)| ratio < *r) {
-            best = Some((ratio, end));
+        if best.is_none_or(|(r, _)| ratio < r) {
+            best = Some((ratio, alpha));
         }
     }
-    let (ratio, end) = best.expect("three trials");
+    let (ratio, alpha) = best.expect("three trials");
     if ratio <= 1.0 {
         if 1.0 - ratio <= floor {
             return None;
+        }
+        for (a, c) in end.qdd.iter_mut().zip(&cubic) {
+            *a = alpha * c;
         }
         return Some(HitLeg {
             profile: StrokeProfile::Quintic,

@@ -170,14 +170,25 @@ fn bounded_limit_ratio(
             }
         }
     }
+    // Largest bound first, picked one at a time (the search usually stops after a few peaks, so
+    // no full sort); a picked item's bound is set to −∞.
     let items = &mut items[..count];
-    items.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
     let mut worst: f64 = 0.0;
-    for (ub, d, bound) in items.iter() {
-        if *ub <= worst {
+    loop {
+        let Some((k, ub)) = items
+            .iter()
+            .enumerate()
+            .map(|(k, it)| (k, it.0))
+            .reduce(|a, b| if b.1 > a.1 { b } else { a })
+        else {
+            break;
+        };
+        if ub <= worst {
             break;
         }
-        worst = worst.max(poly::max_abs(d, duration).1.abs() / bound);
+        let (_, d, bound) = items[k];
+        items[k].0 = f64::NEG_INFINITY;
+        worst = worst.max(poly::max_abs(&d, duration).1.abs() / bound);
         if worst >= ceiling {
             break;
         }
