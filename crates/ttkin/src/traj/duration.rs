@@ -174,15 +174,12 @@ fn bounded_limit_ratio(
     // no full sort); a picked item's bound is set to −∞.
     let items = &mut items[..count];
     let mut worst: f64 = 0.0;
-    loop {
-        let Some((k, ub)) = items
-            .iter()
-            .enumerate()
-            .map(|(k, it)| (k, it.0))
-            .reduce(|a, b| if b.1 > a.1 { b } else { a })
-        else {
-            break;
-        };
+    while let Some((k, ub)) = items
+        .iter()
+        .enumerate()
+        .map(|(k, it)| (k, it.0))
+        .reduce(|a, b| if b.1 > a.1 { b } else { a })
+    {
         if ub <= worst {
             break;
         }
