@@ -22,10 +22,17 @@ impl HitPlanner {
             lo: self.reach.lo - Vector3::repeat(margin),
             hi: self.reach.hi + Vector3::repeat(margin),
         };
-        let mut out = Vec::new();
+        let mut out: Vec<BallState> = Vec::new();
         let mut t_bounce = None;
         let bounced = walk_after_bounce(f, ball, 0.01, after_bounce, |s| {
-            t_bounce.get_or_insert(s.t);
+            let tb = *t_bounce.get_or_insert(s.t);
+            // Past the latest early hit with an early one found, the rest would be cut below.
+            if !after_bounce
+                && s.t > tb + LATEST_AFTER_BOUNCE
+                && out.first().is_some_and(|c| c.t <= tb + LATEST_AFTER_BOUNCE)
+            {
+                return false;
+            }
             if s.t >= now + self.min_stroke_time && reach.contains(&s.p) {
                 out.push(*s);
             }
