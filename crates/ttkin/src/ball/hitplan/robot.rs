@@ -98,8 +98,8 @@ impl HitPlanner {
 
     /// q̇ = J⁻¹·V (base frame) at `q` for the racket twist `twist`, or `None` where
     /// [`joint_velocity`] calls the Jacobian singular (σ_min below its default threshold): for six
-    /// joints on the stack, σ_min from the singular values alone and q̇ from an LU solve (the
-    /// same q̇ to rounding as the damped-SVD solve away from singularities).
+    /// joints on the stack, the threshold test by a Cholesky of JᵀJ − threshold²·I and q̇ from an
+    /// LU solve (the same q̇ to rounding as the damped-SVD solve away from singularities).
     pub(super) fn hit_joint_velocity(&self, q: &[f64], twist: &[f64; 6]) -> Option<Vec<f64>> {
         if q.len() != 6 {
             let jv = joint_velocity(&self.chain, q, twist).ok()?;
@@ -107,8 +107,11 @@ impl HitPlanner {
         }
         let j = self.chain.jacobian(q, JacobianFrame::Base).ok()?;
         let m = Matrix6::from_iterator(j.iter().copied());
-        let sigma_min = m.singular_values().min();
-        if !(sigma_min >= DifferentialIk::default().threshold) {
+        // σ_min ≥ t exactly when JᵀJ − t²·I is positive definite: a 6 × 6 Cholesky instead of
+        // an SVD (with t = 1e-3 the shift t² = 1e-6 is ten orders above the rounding of JᵀJ).
+        let t = DifferentialIk::default().threshold;
+        let shifted = m.transpose() * m - Matrix6::identity() * (t * t);
+        if !m.iter().all(|x| x.is_finite()) || shifted.cholesky().is_none() {
             return None;
         }
         let qdot = m.lu().solve(&Vector6::from_column_slice(twist))?;
@@ -182,14 +185,25 @@ mod tests {
         let pl = HitPlanner::new(crate::robots::gantry6(), Flight::default()).unwrap();
         let mut rng = fastrand::Rng::with_seed(7);
         let (mut regular, mut singular) = (0, 0);
+        let mut near = (0, 0);
         for k in 0..3000 {
             let mut q: Vec<f64> = pl.ready.iter().map(|x| x + 2.0 * rng.f64() - 1.0).collect();
             if k % 10 == 0 {
                 q[3] = std::f64::consts::FRAC_PI_2 + 1e-5 * (rng.f64() - 0.5); // c4 ≈ 0: singular
+            } else if k % 10 == 1 {
+                // σ_min around the threshold (1e-3) on both sides.
+                q[3] = std::f64::consts::FRAC_PI_2 + 10f64.powf(-4.0 + 2.0 * rng.f64()) * (rng.f64() - 0.5).signum();
             }
             let twist = [0.0, 1.0, 0.0, 0.0, 0.0, 0.0].map(|_| 4.0 * rng.f64() - 2.0);
             let twist = [twist[0], twist[1], twist[2], 0.0, 0.0, 0.0];
             let jv = joint_velocity(&pl.chain, &q, &twist).unwrap();
+            if (0.3e-3..3e-3).contains(&jv.sigma_min) {
+                if jv.singular {
+                    near.1 += 1;
+                } else {
+                    near.0 += 1;
+                }
+            }
             match pl.hit_joint_velocity(&q, &twist) {
                 Some(qd) => {
                     regular += 1;
@@ -207,6 +221,10 @@ mod tests {
         assert!(
             regular > 1000 && singular > 100,
             "{regular} regular, {singular} singular"
+        );
+        assert!(
+            near.0 > 20 && near.1 > 20,
+            "{near:?} regular / singular near the threshold"
         );
     }
 
