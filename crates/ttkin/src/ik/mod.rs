@@ -112,28 +112,30 @@ impl Solutions {
     /// Drops the branches outside `limits` (after shifting revolute angles by 2πk); returns why
     /// each dropped branch failed as (branch, joint, value), formatted only when no branch is left.
     fn filter(&mut self, kinds: &[JointType], limits: &[Limits]) -> Vec<(usize, usize, f64)> {
-        let mut kept = 0;
         let mut why = Vec::new();
+        self.retain_map(|b, i, q| {
+            let fitted = fit_to_limits(q, kinds[i], &limits[i]);
+            if fitted.is_none() {
+                why.push((b, i, q));
+            }
+            fitted
+        });
+        why
+    }
+
+    /// Keeps the branches whose every joint value `fit(branch, joint, value)` maps to a value, with
+    /// the mapped values (e.g. a revolute angle shifted by 2πk into its limits), in order; `fit`
+    /// is not asked for the joints after a branch's first `None`.
+    pub fn retain_map(&mut self, mut fit: impl FnMut(usize, usize, f64) -> Option<f64>) {
+        let mut kept = 0;
         for b in 0..self.count {
             let mut q = self.q[b];
-            let mut ok = true;
-            for i in 0..self.dof {
-                match fit_to_limits(q[i], kinds[i], &limits[i]) {
-                    Some(v) => q[i] = v,
-                    None => {
-                        why.push((b, i, q[i]));
-                        ok = false;
-                        break;
-                    }
-                }
-            }
-            if ok {
+            if (0..self.dof).all(|i| fit(b, i, q[i]).map(|v| q[i] = v).is_some()) {
                 self.q[kept] = q;
                 kept += 1;
             }
         }
         self.count = kept;
-        why
     }
 
     /// Applies `filter` and turns "no branch left" into [`Error::Unreachable`].

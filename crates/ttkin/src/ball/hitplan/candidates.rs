@@ -61,7 +61,7 @@ impl HitPlanner {
         let n = (v_out - s.v).normalize();
         self.racket_centres(&s.p, &n)
             .iter()
-            .any(|c| (0..poses.rolls()).any(|k| self.branches(&poses.pose(c, &n, k), None).next().is_some()))
+            .any(|c| (0..poses.rolls()).any(|k| !self.branches(&poses.pose(c, &n, k), None).is_empty()))
     }
 
     /// Landing targets (x, y, m, world) tried in order for a hit point: the requested `target`,

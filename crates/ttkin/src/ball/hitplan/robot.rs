@@ -36,8 +36,7 @@ impl HitPlanner {
                 break;
             }
             let pose = poses.pose(&centres[k], &racket.normal, roll);
-            for q in self.branches(&pose, Some(&start.q)) {
-                let q = q.as_slice();
+            for q in self.branches(&pose, Some(&start.q)).iter() {
                 // Only a margin above the best so far can replace it: no solves for the rest.
                 let floor = best.as_ref().map_or(f64::NEG_INFINITY, |b| b.margin);
                 let Some((qd, leg, margin)) = self.stroke_margin(q, start, &twist, t_hit, floor) else {
@@ -147,23 +146,14 @@ impl HitPlanner {
     /// The analytic IK branches of the racket pose `pose` (base frame) within the joint position
     /// limits, revolute angles moved by 2πk into them where that fits (the branches and values of
     /// [`LimitFilter::Enforce`], without building its error message for the dropped ones: the
-    /// search asks for thousands of poses beyond the strokes).
-    pub(super) fn branches(
-        &self,
-        pose: &IsometryMatrix3<f64>,
-        hint: Option<&[f64]>,
-    ) -> impl Iterator<Item = Vec<f64>> + '_ {
-        let sols = self
+    /// search asks for thousands of poses beyond the strokes), on the stack.
+    pub(super) fn branches(&self, pose: &IsometryMatrix3<f64>, hint: Option<&[f64]>) -> Solutions {
+        let mut sols = self
             .ik
             .solve_quiet(pose, hint)
             .unwrap_or_else(|| Solutions::empty(self.chain.dof()));
-        (0..sols.len()).filter_map(move |b| {
-            sols.get(b)
-                .iter()
-                .enumerate()
-                .map(|(i, &q)| self.fit(i, q))
-                .collect::<Option<Vec<f64>>>()
-        })
+        sols.retain_map(|_, i, q| self.fit(i, q));
+        sols
     }
 
     /// Joint `i`'s value `q` inside its position limits ([`crate::ik::fit_to_range`]).
@@ -239,7 +229,7 @@ mod tests {
             let n = Vector3::new(el.cos() * az.cos(), el.cos() * az.sin(), el.sin());
             let pose = pl.base_pose_rolled(&p, &n, 2.0 * rng.f64() - 1.0);
             let hint = pl.ready.clone();
-            let ours: Vec<Vec<f64>> = pl.branches(&pose, Some(&hint)).collect();
+            let ours: Vec<Vec<f64>> = pl.branches(&pose, Some(&hint)).iter().map(|q| q.to_vec()).collect();
             match pl.ik.solve(&pose, Some(&hint), LimitFilter::Enforce) {
                 Ok(sols) => {
                     some += 1;
