@@ -10,7 +10,7 @@ use ttkin::ball::impact::Racket;
 use ttkin::ball::model::BallModel;
 use ttkin::ball::predict::{crossing, predict, CrossingOutcome};
 use ttkin::ball::rally::{self, RallyConfig};
-use ttkin::ball::reach::ReachRegion;
+use ttkin::ball::reach::{walk_after_bounce, walk_after_bounce_clip, ReachRegion};
 use ttkin::hit::StrokeProfile;
 use ttkin::traj::duration::quintic_limit_ratio;
 use ttkin::traj::JointState;
@@ -184,13 +184,73 @@ fn sampled_guards_find_the_events_of_the_short_step() {
         kinds.get("table").copied().unwrap_or(0) > 50 && kinds.get("net").copied().unwrap_or(0) > 10,
         "{kinds:?}"
     );
-    // One sample per step is `advance`; one per 80 ms step misses contacts the samples find.
+    // One sample per step is `advance`.
     let s = BallState::new(0.0, [-0.3, 0.0, 0.08], [5.0, 0.0, 0.0], [0.0; 3]);
     assert_eq!(long.advance_sampled(&s, 1.0, None, 1), long.advance(&s, 1.0, None));
-    let (_, coarse) = long.advance(&s, 1.0, None);
-    let (_, sampled) = long.advance_sampled(&s, 1.0, None, 8);
-    assert_eq!(sampled.map(|e| e.kind), Some(EventKind::Net));
-    assert_ne!(coarse.map(|e| e.kind), Some(EventKind::Net));
+}
+
+#[test]
+fn a_fast_ball_does_not_pass_through_the_net_between_steps() {
+    // Step ends 0.1–0.4 m apart, either side of the 42 mm the net spans for the ball centre: the
+    // crossing of the net's plane is checked, so the ball hits the net (low) or flies on (high).
+    let mut rng = fastrand::Rng::with_seed(8);
+    for step in [0.01, 0.02, 0.05] {
+        let f = Flight {
+            step,
+            ..Flight::default()
+        };
+        for _ in 0..50 {
+            let vx = 8.0 + 4.0 * rng.f64();
+            let x0 = -0.5 - 0.3 * rng.f64();
+            let s = BallState::new(0.0, [x0, 0.3 * (rng.f64() - 0.5), 0.10], [vx, 0.0, 0.4], [0.0; 3]);
+            let (_, ev) = f.advance(&s, 1.0, None);
+            let e = ev.expect("an event");
+            assert_eq!(e.kind, EventKind::Net, "step {step}: {e:?}");
+            assert!(e.before.p.x.abs() < 0.03, "{:?}", e.before.p);
+            // Over the net (drag-free height there ≥ 0.2 m, the net's top 0.1525 m) toward x = 1.0 m:
+            // no net event.
+            let (z0, t_land) = (0.4, (1.0 - x0) / vx);
+            let vz = (0.02 - z0 + 4.905 * t_land * t_land) / t_land;
+            let t_net = -x0 / vx;
+            assert!(z0 + vz * t_net - 4.905 * t_net * t_net > 0.2);
+            let high = BallState::new(0.0, [x0, 0.0, z0], [vx, 0.0, vz], [0.0; 3]);
+            let (_, ev) = f.advance(&high, 1.0, None);
+            let e = ev.expect("an event");
+            assert_eq!(e.kind, EventKind::Table, "step {step}: {e:?}");
+            assert!(e.before.p.x > 0.3, "{:?}", e.before.p);
+        }
+    }
+}
+
+#[test]
+fn a_walk_flies_on_through_a_net_clip_only_within_the_clip() {
+    let f = Flight {
+        step: 0.01,
+        ..Flight::default()
+    };
+    // Flat toward the robot at 6 m/s, its centre at the net `below` m under clearing the top (it
+    // falls 12.3 mm on the way).
+    let clear = f.table.net_height + f.model.radius;
+    let ball = |below: f64| BallState::new(0.0, [0.3, 0.0, clear - below + 0.0123], [-6.0, 0.0, 0.0], [0.0; 3]);
+    let walk = |below: f64, clip: f64| {
+        let mut visited = 0;
+        let bounced = walk_after_bounce_clip(&f, &ball(below), 0.01, false, clip, |_| {
+            visited += 1;
+            true
+        });
+        (bounced, visited)
+    };
+    for below in [0.005, 0.015] {
+        assert!(
+            !walk_after_bounce(&f, &ball(below), 0.01, false, |_| true),
+            "{below}: the net stops it"
+        );
+        let (bounced, visited) = walk(below, 0.02);
+        assert!(bounced && visited > 0, "{below}: a clip within 2 cm flies on");
+        assert!(!walk(below, 0.0).0);
+    }
+    // Well into the net: stopped even with the clip.
+    assert!(!walk(0.08, 0.02).0);
 }
 
 #[test]

@@ -385,18 +385,40 @@ pub fn walk_after_bounce(
     flight: &Flight,
     ball: &BallState,
     step: f64,
+    bounced: bool,
+    visit: impl FnMut(&BallState) -> bool,
+) -> bool {
+    walk_after_bounce_clip(flight, ball, step, bounced, 0.0, visit)
+}
+
+/// [`walk_after_bounce`] where a ball that touches the net with its centre at most `clip` (m)
+/// below clearing its top (centre height net + radius) flies on as if there were no net
+/// ([`Flight::advance_without_net`]): for a prediction whose error is that large.
+pub fn walk_after_bounce_clip(
+    flight: &Flight,
+    ball: &BallState,
+    step: f64,
     mut bounced: bool,
+    clip: f64,
     mut visit: impl FnMut(&BallState) -> bool,
 ) -> bool {
     let mut cur = *ball;
     let t_end = ball.t + 2.0;
+    let clear = flight.table.net_height + flight.model.radius;
+    let mut net = true;
     while cur.t < t_end {
-        let (next, ev) = flight.advance(&cur, cur.t + step, None);
+        let (next, ev) = if net {
+            flight.advance(&cur, cur.t + step, None)
+        } else {
+            flight.advance_without_net(&cur, cur.t + step, None, 1)
+        };
         cur = next;
         if let Some(e) = ev {
             match e.kind {
                 EventKind::Table if e.before.p.x < 0.0 && !bounced => bounced = true,
                 EventKind::Table | EventKind::Edge if bounced => break,
+                // A clip: on from the state just before the contact, without the net.
+                EventKind::Net if clip > 0.0 && e.before.p.z >= clear - clip => net = false,
                 EventKind::Net | EventKind::Floor => break,
                 _ => {}
             }
