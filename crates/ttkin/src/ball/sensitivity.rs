@@ -65,6 +65,17 @@ fn sens_rate(m: &BallModel, v: &Vector3<f64>, w: &Vector3<f64>, sv: &Sens, spin:
     out
 }
 
+/// Where an offset τ falls on a [`WindowPath`]: the interval [τ_(j+1), τ_j] and the cubic
+/// Hermite weights of (value at j, rate at j, value at j+1, rate at j+1) there (rates in s).
+/// Depends only on τ and the step, so a fit computes it once per observation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Knot {
+    /// Interval index j (node j is the later end).
+    pub j: usize,
+    /// Weights of p_j, v_j, p_(j+1), v_(j+1) (the rate weights include the step, s).
+    pub c: [f64; 4],
+}
+
 impl WindowPath {
     /// Integrates backward from (p0, v0, ω) at τ = 0 over `span` (s, ≥ 0) in equal steps of at
     /// most `max_step` (s); `sens` says whether the sensitivities are wanted and `spin` whether
@@ -80,22 +91,50 @@ impl WindowPath {
         spin: bool,
         sens: bool,
     ) -> Self {
+        let mut path = WindowPath {
+            nodes: Vec::new(),
+            sens: Vec::new(),
+            step: 0.0,
+        };
+        path.integrate_into(m, p0, v0, w, span, max_step, spin, sens);
+        path
+    }
+
+    /// [`WindowPath::integrate`] into this path's buffers (kept from call to call: no allocation
+    /// once they are large enough); the sensitivities are cleared when `sens` is false.
+    #[allow(clippy::too_many_arguments)]
+    pub fn integrate_into(
+        &mut self,
+        m: &BallModel,
+        p0: &Vector3<f64>,
+        v0: &Vector3<f64>,
+        w: &Vector3<f64>,
+        span: f64,
+        max_step: f64,
+        spin: bool,
+        sens: bool,
+    ) {
         let steps = ((span / max_step).ceil() as usize).max(1);
         let step = span / steps as f64;
         let h = -step;
         let mut sv = Sens::zeros();
         sv.fixed_view_mut::<3, 3>(0, 0).copy_from(&Matrix3::identity());
         let mut sp = Sens::zeros();
-        let mut nodes = Vec::with_capacity(steps + 1);
-        let mut sens_nodes = Vec::with_capacity(if sens { steps + 1 } else { 0 });
+        self.step = step;
+        self.nodes.clear();
+        self.nodes.reserve(steps + 1);
+        self.sens.clear();
+        if sens {
+            self.sens.reserve(steps + 1);
+        }
         let mut cur = Node {
             tau: 0.0,
             p: *p0,
             v: *v0,
         };
-        nodes.push(cur);
+        self.nodes.push(cur);
         if sens {
-            sens_nodes.push((sp, sv));
+            self.sens.push((sp, sv));
         }
         for j in 1..=steps {
             let a1 = m.acceleration(&cur.v, w);
@@ -111,55 +150,58 @@ impl WindowPath {
                 let k2 = sens_rate(m, &v2, w, &sv_mid, spin);
                 sp += sv_mid * h;
                 sv += k2 * h;
-                sens_nodes.push((sp, sv));
+                self.sens.push((sp, sv));
             }
             cur = Node {
                 tau: -(j as f64) * step,
                 p: cur.p + h / 6.0 * (cur.v + 2.0 * v2 + 2.0 * v3 + v4),
                 v: cur.v + h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4),
             };
-            nodes.push(cur);
-        }
-        WindowPath {
-            nodes,
-            sens: sens_nodes,
-            step,
+            self.nodes.push(cur);
         }
     }
 
-    /// Index j of the interval [τ_(j+1), τ_j] holding `tau` and the fraction s of the way from τ_j.
-    fn interval(&self, tau: f64) -> (usize, f64) {
+    /// The interval holding `tau` (s, in [−span, 0]) and its cubic Hermite weights.
+    pub fn knot(&self, tau: f64) -> Knot {
         // −τ/|h| ≥ 0 up to rounding: the cast truncates (floors) and saturates at 0.
         let j = ((-tau / self.step) as usize).min(self.nodes.len() - 2);
-        let a = self.nodes[j].tau;
-        (j, (a - tau) / self.step)
+        let s = (self.nodes[j].tau - tau) / self.step;
+        let h = -self.step;
+        let (s2, s3) = (s * s, s * s * s);
+        Knot {
+            j,
+            c: [
+                2.0 * s3 - 3.0 * s2 + 1.0,
+                h * (s3 - 2.0 * s2 + s),
+                3.0 * s2 - 2.0 * s3,
+                h * (s3 - s2),
+            ],
+        }
+    }
+
+    /// Position (m, world) at a knot from [`WindowPath::knot`] of a path with the same span and step.
+    pub fn position_at(&self, k: &Knot) -> Vector3<f64> {
+        let (a, b) = (&self.nodes[k.j], &self.nodes[k.j + 1]);
+        a.p * k.c[0] + a.v * k.c[1] + b.p * k.c[2] + b.v * k.c[3]
+    }
+
+    /// ∂p/∂(v0, ω) at a knot, cubic Hermite between nodes; zero when not integrated.
+    pub fn sensitivity_at(&self, k: &Knot) -> Sens {
+        if self.sens.is_empty() {
+            return Sens::zeros();
+        }
+        let ((pa, va), (pb, vb)) = (&self.sens[k.j], &self.sens[k.j + 1]);
+        pa * k.c[0] + va * k.c[1] + pb * k.c[2] + vb * k.c[3]
     }
 
     /// Position (m, world) at offset `tau` (s, in [−span, 0]): cubic Hermite between nodes.
     pub fn position(&self, tau: f64) -> Vector3<f64> {
-        let (j, s) = self.interval(tau);
-        let (a, b) = (&self.nodes[j], &self.nodes[j + 1]);
-        let h = -self.step;
-        let (s2, s3) = (s * s, s * s * s);
-        a.p * (2.0 * s3 - 3.0 * s2 + 1.0)
-            + a.v * (h * (s3 - 2.0 * s2 + s))
-            + b.p * (3.0 * s2 - 2.0 * s3)
-            + b.v * (h * (s3 - s2))
+        self.position_at(&self.knot(tau))
     }
 
     /// ∂p/∂(v0, ω) at offset `tau` (s), cubic Hermite between nodes; zero when not integrated.
     pub fn sensitivity(&self, tau: f64) -> Sens {
-        if self.sens.is_empty() {
-            return Sens::zeros();
-        }
-        let (j, s) = self.interval(tau);
-        let ((pa, va), (pb, vb)) = (&self.sens[j], &self.sens[j + 1]);
-        let h = -self.step;
-        let (s2, s3) = (s * s, s * s * s);
-        pa * (2.0 * s3 - 3.0 * s2 + 1.0)
-            + va * (h * (s3 - 2.0 * s2 + s))
-            + pb * (3.0 * s2 - 2.0 * s3)
-            + vb * (h * (s3 - s2))
+        self.sensitivity_at(&self.knot(tau))
     }
 }
 #[cfg(test)]
