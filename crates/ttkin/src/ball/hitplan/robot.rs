@@ -8,6 +8,7 @@ use super::super::reach::min_joint_time;
 use super::{Hit, HitPlanner, RacketPoses};
 use crate::chain::JacobianFrame;
 use crate::ik::{joint_velocity, DifferentialIk, Solutions};
+use crate::linalg::cholesky::factor_in_place;
 use crate::traj::JointState;
 use nalgebra::{IsometryMatrix3, Matrix6, Vector3, Vector6};
 
@@ -109,8 +110,8 @@ impl HitPlanner {
         // σ_min ≥ t exactly when JᵀJ − t²·I is positive definite: a 6 × 6 Cholesky instead of
         // an SVD (with t = 1e-3 the shift t² = 1e-6 is ten orders above the rounding of JᵀJ).
         let t = DifferentialIk::default().threshold;
-        let shifted = m.transpose() * m - Matrix6::identity() * (t * t);
-        if !m.iter().all(|x| x.is_finite()) || shifted.cholesky().is_none() {
+        let mut shifted = m.transpose() * m - Matrix6::identity() * (t * t);
+        if !m.iter().all(|x| x.is_finite()) || factor_in_place(shifted.as_mut_slice(), 6).is_err() {
             return None;
         }
         let qdot = m.lu().solve(&Vector6::from_column_slice(twist))?;
