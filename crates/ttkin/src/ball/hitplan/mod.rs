@@ -2,7 +2,8 @@
 //! target on the opponent's half.
 //!
 //! 1. **Candidates** (`candidates.rs`). The ball is predicted from its state (through its
-//!    bounce on the robot's half) and every 10 ms sample inside the hitting volume ([`Reach`],
+//!    bounce on the robot's half, and on through a net contact within `NET_CLIP` = 2 cm of
+//!    clearing the net, the estimate's uncertainty) and every 10 ms sample inside the hitting volume ([`Reach`],
 //!    world frame; the same volume as the reachable region of [`super::reach`]), after the bounce
 //!    and at least `min_stroke_time` after `now`, is a candidate; `candidates` of them, evenly
 //!    spread, are tried (up to 12 when none of those is feasible). Each aims at the requested
@@ -12,10 +13,11 @@
 //!    placeable targets of every candidate (at most `FALLBACK_ATTEMPTS` shooting solves).
 //! 2. **Outgoing velocity** (`shoot.rs`). Shooting: the velocity v₀ with which the ball, spinning with its
 //!    post-impact spin, is at (x_t, y_t, r) after the return flight time T: Broyden's method on the
-//!    3×3 map v₀ ↦ p(T), started from the drag-free solution with Jacobian T·I, first on a 4×
-//!    coarser RK4 step to 0.1 mm and then at the flight's step to 0.01 mm; T from
-//!    `return_times` in order until the flight clears the net and first touches the table at the
-//!    target (within 1 mm). The post-impact spin depends on the racket, which depends on v₀: every
+//!    3×3 map v₀ ↦ p(T), started from the drag-free solution with the linearised flight's
+//!    Jacobian T·I + (T²/3)·∂a/∂v, on an 8× coarser RK4 step (80 ms; within 1.3e-5 m of the
+//!    flight's own) to 0.01 mm; T from `return_times` in order until the flight (the same
+//!    integration, guards every 10 ms) clears the net and first touches the table at the target
+//!    (within 1 mm). The post-impact spin depends on the racket, which depends on v₀: every
 //!    evaluation of the map solves the racket for its v₀ and flies the ball with that spin.
 //! 3. **Racket.** [`super::impact::Racket::solve`] gives the face normal and the racket velocity
 //!    (along the normal); the racket centre is the ball centre minus r·n (the ball touches the face

@@ -81,8 +81,8 @@ where
 /// instead of 6.4 flights per solve on 300 random shots). On the hit planner's shots the coarse
 /// and the flight's own integration of the same v₀ end at most 1.3e-5 m apart at 80 ms against 10
 /// ms (7e-7 m at 40 ms; 300 random shots, spins to 150 rad/s, flights of 0.55–1.05 s; tested
-/// below), far inside the 1 mm landing check that [`HitPlanner::outgoing`] then flies at the
-/// flight's own step.
+/// below), far inside the 1 mm landing check of [`HitPlanner::outgoing`] (the same integration,
+/// its guards sampled at the flight's own step).
 fn shoot_coarse<S>(f: &Flight, p: &Vector3<f64>, goal: &Vector3<f64>, tf: f64, spin: S) -> Option<Vector3<f64>>
 where
     S: Fn(&Vector3<f64>) -> Option<Vector3<f64>>,
