@@ -243,21 +243,9 @@ impl Flight {
         self.advance_guarded(s, t_end, plane, samples, true)
     }
 
-    /// [`Flight::advance_sampled`] without the net (no net event; table, floor and plane as
-    /// there): for a planner that prepares for a ball predicted to clip the net, which its
-    /// estimate's error cannot tell from one that clears it (a net ball ends the rally anyway).
-    pub fn advance_without_net(
-        &self,
-        s: &BallState,
-        t_end: f64,
-        plane: Option<&Plane>,
-        samples: usize,
-    ) -> (BallState, Option<Event>) {
-        self.advance_guarded(s, t_end, plane, samples, false)
-    }
-
-    /// [`Flight::advance_sampled`], the net guard armed only with `net`.
-    fn advance_guarded(
+    /// [`Flight::advance_sampled`], the net guard armed only with `net` (without it, no net event;
+    /// table, floor and plane as there): for a prediction that flies on through a net clip.
+    pub(crate) fn advance_guarded(
         &self,
         s: &BallState,
         t_end: f64,

@@ -392,8 +392,8 @@ pub fn walk_after_bounce(
 }
 
 /// [`walk_after_bounce`] where a ball that touches the net with its centre at most `clip` (m)
-/// below clearing its top (centre height net + radius) flies on as if there were no net
-/// ([`Flight::advance_without_net`]): for a prediction whose error is that large.
+/// below clearing its top (centre height net + radius) flies on as if there were no net: for a
+/// prediction whose error is that large.
 pub fn walk_after_bounce_clip(
     flight: &Flight,
     ball: &BallState,
@@ -407,11 +407,7 @@ pub fn walk_after_bounce_clip(
     let clear = flight.table.net_height + flight.model.radius;
     let mut net = true;
     while cur.t < t_end {
-        let (next, ev) = if net {
-            flight.advance(&cur, cur.t + step, None)
-        } else {
-            flight.advance_without_net(&cur, cur.t + step, None, 1)
-        };
+        let (next, ev) = flight.advance_guarded(&cur, cur.t + step, None, 1, net);
         cur = next;
         if let Some(e) = ev {
             match e.kind {
