@@ -307,6 +307,26 @@ def test_an_empty_batch_gives_an_empty_result(call, shape):
     assert call().shape == shape
 
 
+# ---------------------------------------------------------------- small arrays copied, large borrowed
+
+
+@pytest.mark.parametrize("rows", [1, 42, 43, 100])
+def test_copied_and_borrowed_inputs_give_the_same_results(rows):
+    """Arrays of at most 256 values are copied when read, larger ones borrowed (gantry6: 42 rows
+    are 252 values, 43 are 258): a batch on either side equals the rows one at a time, and the
+    caller's arrays are left as they were."""
+    rng = np.random.default_rng(rows)
+    q, qd, qdd = (rng.uniform(-0.5, 0.5, (rows, 6)) for _ in range(3))
+    before = [a.copy() for a in (q, qd, qdd)]
+    tau = G6.rnea(q, qd, qdd)
+    poses = G6.fk(q)
+    for k in range(rows):
+        assert np.array_equal(tau[k], G6.rnea(q[k], qd[k], qdd[k]))
+        assert np.array_equal(poses[k], G6.fk(q[k]))
+    for a, b in zip((q, qd, qdd), before, strict=True):
+        assert np.array_equal(a, b)
+
+
 # ---------------------------------------------------------------- files
 
 
