@@ -24,6 +24,7 @@ pub mod predict;
 pub mod rally;
 pub mod reach;
 pub mod sensitivity;
+pub mod update;
 
 pub use estimate::{estimate, Estimate, EstimateOptions};
 pub use flight::{BallState, Event, EventKind, Flight};
