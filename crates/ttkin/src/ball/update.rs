@@ -1,7 +1,7 @@
 //! An estimate updated with the observations delivered after it, through the bounce.
 //!
 //! Why. Spin about the flight direction makes no Magnus force, so the window fit of
-//! [`super::estimate`] cannot see it (its ridge prior keeps it near zero), yet the bounce turns it
+//! [`super::estimate`](mod@super::estimate) cannot see it (its ridge prior keeps it near zero), yet the bounce turns it
 //! into sideways speed (the contact point slips across the flight): the prediction after the
 //! bounce is off across the table by r·ω∥/κ ≈ 0.3 m/s for ω∥ = 40 rad/s in the rolling regime.
 //! The observations after the bounce show that sideways speed, and through the bounce model the
