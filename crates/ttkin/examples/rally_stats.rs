@@ -159,6 +159,10 @@ fn main() {
         replan_period: std::env::var("REPLAN").map_or(0.0, |r| r.parse().expect("REPLAN (s)")),
         ..RallyConfig::default()
     };
+    let cfg = RallyConfig {
+        correction_delay: std::env::var("CORRECT").map_or(cfg.correction_delay, |r| r.parse().expect("CORRECT (s)")),
+        ..cfg
+    };
     let region = ReachRegion::new(&pl.chain, pl.placement, pl.ready.clone(), truth.model.radius).expect("region");
     let clock = std::time::Instant::now();
     let out = rally::rally(&pl, &region, &truth, &cfg, n);
@@ -216,6 +220,32 @@ fn main() {
         "plan CPU time median {:.0} us, mean {:.0} us (rally wall {wall:.1} s)",
         times.get(times.len() / 2).copied().unwrap_or(f64::NAN),
         times.iter().sum::<f64>() / times.len().max(1) as f64
+    );
+    let mut corr: Vec<f64> = out
+        .iter()
+        .map(|o| o.correction_time_us)
+        .filter(|t| t.is_finite())
+        .collect();
+    corr.sort_by(f64::total_cmp);
+    let mut total: Vec<f64> = out
+        .iter()
+        .filter(|o| o.plan_time_us.is_finite())
+        .map(|o| {
+            o.plan_time_us
+                + if o.correction_time_us.is_finite() {
+                    o.correction_time_us
+                } else {
+                    0.0
+                }
+        })
+        .collect();
+    total.sort_by(f64::total_cmp);
+    println!(
+        "correction after the bounce: {} balls, {} adopted; CPU time median {:.0} us; plan + correction median {:.0} us",
+        corr.len(),
+        out.iter().filter(|o| o.replans > 0).count(),
+        corr.get(corr.len() / 2).copied().unwrap_or(f64::NAN),
+        total.get(total.len() / 2).copied().unwrap_or(f64::NAN)
     );
     let median = |f: &dyn Fn(&rally::BallOutcome) -> f64| {
         let mut v: Vec<f64> = out

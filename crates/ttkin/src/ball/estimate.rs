@@ -76,6 +76,9 @@ pub struct Estimate {
     pub covariance: [[f64; 6]; 6],
     /// Standard deviation (rad/s) of each spin component perpendicular to v (0 when not fitted).
     pub spin_std: f64,
+    /// Covariance of [p; v; ω] (m, m/s, rad/s; 9 × 9) at the same time as `covariance`, the
+    /// spin's prior included; its spin rows and columns are zero when the spin is not fitted.
+    pub full_covariance: [[f64; 9]; 9],
     /// Whether the spin was fitted (arc long enough) or left at zero.
     pub spin_fitted: bool,
     /// Robust residual scale σ (m, per axis).
@@ -236,17 +239,17 @@ fn find_bounce(idx: &[usize], p: &[[f64; 3]], opts: &EstimateOptions) -> Option<
 
 /// Prior standard deviation (rad/s) of each spin component: a ridge that keeps the component
 /// along the velocity (no Magnus force, unobservable on a straight arc) near zero.
-const SPIN_PRIOR: f64 = 40.0;
+pub(super) const SPIN_PRIOR: f64 = 40.0;
 
 /// Median of `res` / 1.538 (σ per axis of a 3-D Gaussian residual), at least `floor`; reorders `res`.
-fn robust_sigma(res: &mut [f64], floor: f64) -> f64 {
+pub(super) fn robust_sigma(res: &mut [f64], floor: f64) -> f64 {
     let n = res.len();
     let (_, median, _) = res.select_nth_unstable_by(n / 2, |a, b| a.total_cmp(b));
     (*median / 1.538).max(floor)
 }
 
 /// Huber weight of a residual `r` (m) at scale `sigma`: 1 within 3σ, 3σ/r to 6σ, 0 beyond.
-fn huber(r: f64, sigma: f64) -> f64 {
+pub(super) fn huber(r: f64, sigma: f64) -> f64 {
     if r > 6.0 * sigma {
         0.0
     } else if r > 3.0 * sigma {
@@ -477,6 +480,13 @@ fn fit_arc(t: &[f64], p: &[[f64; 3]], arc: &[usize], opts: &EstimateOptions) -> 
             *x = s2 * cov[(r, c)];
         }
     }
+    let mut full_covariance = [[0.0; 9]; 9];
+    let fitted = if with_spin { 9 } else { 6 };
+    for (r, row) in full_covariance.iter_mut().enumerate().take(fitted) {
+        for (c, x) in row.iter_mut().enumerate().take(fitted) {
+            *x = s2 * cov[(r, c)];
+        }
+    }
     let spin_std = if with_spin {
         sigma * ((cov[(6, 6)] + cov[(7, 7)] + cov[(8, 8)]) / 3.0).sqrt()
     } else {
@@ -486,6 +496,7 @@ fn fit_arc(t: &[f64], p: &[[f64; 3]], arc: &[usize], opts: &EstimateOptions) -> 
         state,
         covariance,
         spin_std,
+        full_covariance,
         spin_fitted: with_spin,
         sigma,
         used,

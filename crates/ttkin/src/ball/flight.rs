@@ -413,7 +413,7 @@ impl Flight {
 
 /// Position (m) at `tau` s after `cur` on the cubic Hermite interpolant of the step `cur` →
 /// `next` (positions and velocities at both ends).
-fn hermite(cur: &BallState, next: &BallState, tau: f64) -> Vector3<f64> {
+pub(crate) fn hermite(cur: &BallState, next: &BallState, tau: f64) -> Vector3<f64> {
     let h = next.t - cur.t;
     let s = tau / h;
     let (s2, s3) = (s * s, s * s * s);

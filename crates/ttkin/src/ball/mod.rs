@@ -9,7 +9,7 @@
 //!
 //! One concept per file: [`model`] (ball and table constants), [`flight`] (integration with events),
 //! [`contact`] (table, edge, net contacts and the bounce impulse), [`estimate`](mod@estimate) (state from
-//! observations; its path sensitivities in [`sensitivity`]), [`predict`] (positions, crossings), [`impact`] (racket impact and its inverse),
+//! observations; its path sensitivities in [`sensitivity`]; [`update`] with later observations through the bounce), [`predict`] (positions, crossings), [`impact`] (racket impact and its inverse),
 //! [`hitplan`] (where, when and how to hit), [`leg`] (the hit leg: quintic or jerk-limited), [`reach`] (the robot's reachable region,
 //! independent of the planner), [`rally`] (the closed loop in simulation).
 
@@ -24,6 +24,7 @@ pub mod predict;
 pub mod rally;
 pub mod reach;
 pub mod sensitivity;
+pub mod update;
 
 pub use estimate::{estimate, Estimate, EstimateOptions};
 pub use flight::{BallState, Event, EventKind, Flight};

@@ -18,7 +18,8 @@
 //!
 //! **Execution**: the planned stroke is executed exactly (no drive simulation): the racket follows
 //! the hit leg the planner accepted ([`super::leg`]: quintic or jerk-limited; on a re-plan the new
-//! leg from the state at that time) and then a 0.4 s quintic back to the ready configuration; the racket pose and
+//! leg from the state at that time; by default one correction 30 ms after the bounce with the
+//! estimate updated through it, [`RallyConfig::correction_delay`]) and then a 0.4 s quintic back to the ready configuration; the racket pose and
 //! velocity at the impact come from forward kinematics and the Jacobian along it. The true ball is
 //! integrated at 1 ms; the impact happens when the ball's distance to the racket plane falls to its
 //! radius (bisection) and counts when the contact point lies within the racket radius of its
@@ -33,6 +34,7 @@ use super::estimate::{estimate, EstimateOptions};
 use super::flight::{BallState, EventKind, Flight};
 use super::hitplan::{shoot, Hit, HitPlanner, HitStatus};
 use super::reach::ReachRegion;
+use super::update::update;
 use crate::chain::JacobianFrame;
 use crate::traj::{JointState, JointTrajectory};
 use nalgebra::Vector3;
@@ -93,6 +95,10 @@ pub struct RallyConfig {
     pub replan_period: f64,
     /// Longest observation window (s) of a re-plan's estimate.
     pub max_window: f64,
+    /// Time (s) after the bounce the first estimate predicts at which the stroke is corrected once:
+    /// the estimate updated with the observations delivered by then ([`update`]) and the hit
+    /// planned again from the robot's state; 0 for none.
+    pub correction_delay: f64,
 }
 
 impl Default for RallyConfig {
@@ -106,6 +112,7 @@ impl Default for RallyConfig {
             paths: 5,
             replan_period: 0.0,
             max_window: 0.25,
+            correction_delay: 0.03,
         }
     }
 }
@@ -141,8 +148,10 @@ pub struct BallOutcome {
     pub landing_error: f64,
     /// Error (m/s) of the estimated velocity at the last observation.
     pub velocity_error: f64,
-    /// Re-plans adopted during the stroke.
+    /// Re-plans adopted during the stroke (the correction after the bounce included).
     pub replans: usize,
+    /// Thread CPU time (µs) of the correction after the bounce (update and plan; NaN without one).
+    pub correction_time_us: f64,
     /// Predicted ball at the executed hit's impact (time absolute, s) and its face normal (world).
     pub planned: Option<(BallState, Vector3<f64>)>,
     /// Profile of the executed hit leg ("quintic", "jerk"; "" without a planned hit).
@@ -272,6 +281,7 @@ pub fn play(planner: &HitPlanner, region: &ReachRegion, truth: &Flight, cfg: &Ra
         landing_error: f64::NAN,
         velocity_error: f64::NAN,
         replans: 0,
+        correction_time_us: f64::NAN,
         planned: None,
         profile: "",
         path: Vec::new(),
@@ -304,19 +314,35 @@ pub fn play(planner: &HitPlanner, region: &ReachRegion, truth: &Flight, cfg: &Ra
     };
     out.status = plan.status.name().to_string();
     let keep_path = (index as usize) < cfg.paths;
-    let Some(mut hit) = plan.hit.filter(|_| plan.status == HitStatus::Ok) else {
+    let mut first_hit = plan.hit.filter(|_| plan.status == HitStatus::Ok);
+    // Once, `correction_delay` after the bounce the estimate predicts: the estimate updated with
+    // every observation delivered since (through the bounce, [`update`]) and the hit planned
+    // again from the robot's state then (from rest when the first plan had no hit).
+    let ready = JointState::rest(&planner.ready);
+    let mut motion = Motion {
+        pieces: first_hit.iter().map(|h| (now, execution(h, &ready))).collect(),
+    };
+    let mut hit_at = first_hit.as_ref().map(|h| now + h.t_hit);
+    if cfg.correction_delay > 0.0 {
+        let clock = cpu_time::ThreadTime::now();
+        let previous = first_hit.as_ref().map(|h| (h, now + h.t_hit));
+        if let Some((t_c, h)) = correct(planner, cfg, &est, &times, &obs, previous, &motion, &opts) {
+            motion.pieces.push((t_c, execution(&h, &ready)));
+            hit_at = Some(t_c + h.t_hit);
+            first_hit = Some(h);
+            out.replans += 1;
+        }
+        out.correction_time_us = clock.elapsed().as_secs_f64() * 1e6;
+    }
+    let Some(mut hit) = first_hit else {
         if keep_path {
             out.path = sample_path(truth, &s0, 1.2);
         }
         return out;
     };
     let n = hit.q_hit.len();
-    let ready = JointState::rest(&planner.ready);
     let leg = |hit: &Hit| execution(hit, &ready);
-    let mut motion = Motion {
-        pieces: vec![(now, leg(&hit))],
-    };
-    let mut hit_abs = now + hit.t_hit;
+    let mut hit_abs = hit_at.expect("a hit has its time");
     // Re-plan every `replan_period` with the newest observations (at most `max_window` s of them)
     // while the stroke has at least `replan.min_stroke_time` left. Observations are split at the
     // bounce predicted by the latest estimate: before it the arc before the bounce is used; once
@@ -462,6 +488,73 @@ pub fn play(planner: &HitPlanner, region: &ReachRegion, truth: &Flight, cfg: &Ra
         None => out.status = "return_long".into(),
     }
     out
+}
+
+/// The correction after the bounce (see [`RallyConfig::correction_delay`]): at the delivery `t_c`
+/// of the last observation at most `correction_delay` after the bounce `est` predicts, `est`
+/// updated with the observations since ([`update`]) and the hit planned again from the state of
+/// `motion` at `t_c` ([`HitPlanner::plan_near`] near the `previous` hit's time and landing point;
+/// without a previous hit, [`HitPlanner::plan_from`] from rest); the new hit and `t_c`, or `None`
+/// (no bounce predicted, less than the re-plan's shortest stroke left before the previous hit, no
+/// update or no feasible hit: the stroke goes on unchanged).
+#[allow(clippy::too_many_arguments)]
+fn correct(
+    planner: &HitPlanner,
+    cfg: &RallyConfig,
+    est: &super::estimate::Estimate,
+    times: &[f64],
+    obs: &[[f64; 3]],
+    previous: Option<(&Hit, f64)>,
+    motion: &Motion,
+    opts: &EstimateOptions,
+) -> Option<(f64, Hit)> {
+    let t_bounce = bounce_time(&planner.flight, &est.state)?;
+    let last = times.partition_point(|&t| t <= t_bounce + cfg.correction_delay);
+    if last == 0 {
+        return None;
+    }
+    let t_c = times[last - 1] + cfg.camera.latency;
+    let mut replanner = planner.clone();
+    replanner.min_stroke_time = CORRECTION_MIN_STROKE;
+    if previous.is_some_and(|(_, t)| t - t_c <= replanner.min_stroke_time) {
+        return None;
+    }
+    let from = times.partition_point(|&t| t <= est.state.t);
+    let up = update(est, &times[from..last], &obs[from..last], opts).ok()?;
+    let plan = match previous {
+        Some((hit, t_prev)) => {
+            let start = motion.state(t_c, planner.chain.dof());
+            replanner.plan_near(&up.state, t_c, &start, up.bounced, hit, t_prev)
+        }
+        None => replanner.plan_from(
+            &up.state,
+            t_c,
+            cfg.target,
+            &JointState::rest(&planner.ready),
+            up.bounced,
+        ),
+    }
+    .ok()?;
+    let hit = plan.hit.filter(|_| plan.status == HitStatus::Ok)?;
+    Some((t_c, hit))
+}
+
+/// Shortest stroke (s) of the correction after the bounce: the rest of a stroke under way.
+const CORRECTION_MIN_STROKE: f64 = 0.06;
+
+/// Time (s) of the first table bounce on the robot's half of the flight from `s` (within 1.5 s),
+/// flying no further than that.
+fn bounce_time(flight: &Flight, s: &BallState) -> Option<f64> {
+    let mut cur = *s;
+    while cur.t < s.t + 1.5 {
+        let (next, ev) = flight.advance(&cur, s.t + 1.5, None);
+        match ev {
+            Some(e) if e.kind == EventKind::Table && e.before.p.x < 0.0 => return Some(e.before.t),
+            Some(e) if e.kind.terminal() => return None,
+            _ => cur = next,
+        }
+    }
+    None
 }
 
 /// The executed stroke of `hit` (joint frame, from the stroke start): its accepted hit leg, then a

@@ -37,6 +37,7 @@
 
 mod candidates;
 use candidates::candidate_order;
+mod correct;
 mod poses;
 use poses::RacketPoses;
 mod robot;

@@ -1,0 +1,265 @@
+//! The estimate updated through the bounce (`ttkin::ball::update`) and the correction of a planned
+//! hit during its stroke (`HitPlanner::plan_near`, `RallyConfig::correction_delay`).
+
+use nalgebra::Vector3;
+use ttkin::ball::estimate::{estimate, EstimateError, EstimateOptions, Segment};
+use ttkin::ball::flight::{BallState, EventKind, Flight};
+use ttkin::ball::hitplan::{shoot, HitPlanner, HitStatus};
+use ttkin::ball::predict::predict;
+use ttkin::ball::rally::{self, RallyConfig};
+use ttkin::ball::reach::ReachRegion;
+use ttkin::ball::update::update;
+use ttkin::traj::JointState;
+
+fn truth() -> Flight {
+    Flight {
+        step: 0.001,
+        ..Flight::default()
+    }
+}
+
+/// A ball from the opponent's side to (−0.7, 0.1) on the robot's half in 0.45 s, its spin `w_along`
+/// (rad/s) about its flight direction (horizontal) plus 120 rad/s about the horizontal axis across it.
+fn corkscrew(w_along: f64) -> BallState {
+    let p = Vector3::new(1.6, -0.2, 0.25);
+    let land = Vector3::new(-0.7, 0.1, 0.02);
+    let d = Vector3::new(land.x - p.x, land.y - p.y, 0.0).normalize();
+    let w = d * w_along + Vector3::z().cross(&d) * 120.0;
+    let v = shoot(&truth(), &p, &land, 0.45, |_| Some(w)).expect("a shot");
+    BallState { t: 0.0, p, v, w }
+}
+
+/// Observations every 5 ms from 0.02 s to `t_end` (s) with noise `sigma` (m) per axis.
+fn observe(s: &BallState, t_end: f64, sigma: f64, seed: u64) -> (Vec<f64>, Vec<[f64; 3]>) {
+    let times: Vec<f64> = (0..)
+        .map(|k| 0.02 + k as f64 * 0.005)
+        .take_while(|t| *t <= t_end)
+        .collect();
+    let path = predict(&truth(), s, &times).unwrap();
+    let mut rng = fastrand::Rng::with_seed(seed);
+    let mut g = || {
+        let (u, v) = (rng.f64().max(1e-300), rng.f64());
+        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+    };
+    let p = path
+        .positions
+        .iter()
+        .map(|q| [q[0] + sigma * g(), q[1] + sigma * g(), q[2] + sigma * g()])
+        .collect();
+    (times, p)
+}
+
+fn bounce_time(s: &BallState) -> f64 {
+    let (_, ev) = truth().run(s, 1.0, None);
+    let e = ev.iter().find(|e| e.kind == EventKind::Table).unwrap();
+    e.before.t
+}
+
+fn options() -> EstimateOptions {
+    EstimateOptions {
+        flight: Flight {
+            step: 0.01,
+            ..Flight::default()
+        },
+        ..EstimateOptions::default()
+    }
+}
+
+/// The prediction error (m) at `t` (s) of the flight from `s` against the true ball `ball`.
+fn error_at(s: &BallState, ball: &BallState, t: f64) -> f64 {
+    let (a, _) = options().flight.run(s, t, None);
+    let (b, _) = truth().run(ball, t, None);
+    (a.p - b.p).norm()
+}
+
+#[test]
+fn the_update_sees_the_spin_about_the_flight_direction_through_the_bounce() {
+    // 45 rad/s about the flight direction: no Magnus force, so the first window's fit cannot see
+    // it, but the bounce turns it into sideways speed.
+    let ball = corkscrew(45.0);
+    let tb = bounce_time(&ball);
+    let t_hit = tb + 0.22;
+    let (mut before, mut after, mut spin) = (Vec::new(), Vec::new(), Vec::new());
+    for seed in 0..20 {
+        let (t, p) = observe(&ball, tb + 0.03, 0.002, seed);
+        let first = t.partition_point(|&x| x <= 0.2201);
+        let prior = estimate(&t[..first], &p[..first], &options()).unwrap();
+        assert_eq!(prior.segment, Segment::Whole);
+        let up = update(&prior, &t, &p, &options()).unwrap();
+        assert!(up.bounced);
+        assert_eq!(up.state.t, *t.last().unwrap());
+        assert_eq!(up.outliers, 0);
+        assert_eq!(up.used, t.len() - first);
+        before.push(error_at(&prior.state, &ball, t_hit));
+        after.push(error_at(&up.state, &ball, t_hit));
+        spin.push(((prior.state.w - ball.w).norm(), (up.at_prior.w - ball.w).norm()));
+    }
+    before.sort_by(f64::total_cmp);
+    after.sort_by(f64::total_cmp);
+    let (b, a) = (before[10], after[10]);
+    eprintln!(
+        "error at the hit, median (worst): prior {b} m ({}), updated {a} m ({})",
+        before[19], after[19]
+    );
+    assert!(b > 0.035, "prior's error at the hit {b} m");
+    assert!(a < 0.4 * b && a < 0.015, "updated error at the hit {a} m");
+    // The racket radius is 75 mm: the prior's prediction may miss it, the update's does not.
+    assert!(
+        before[19] > 0.075 && after[19] < 0.05,
+        "worst {} m, updated {} m",
+        before[19],
+        after[19]
+    );
+    // The spin about the flight direction, unseen by the prior's window, is estimated.
+    let mut prior_spin: Vec<f64> = spin.iter().map(|s| s.0).collect();
+    let mut updated_spin: Vec<f64> = spin.iter().map(|s| s.1).collect();
+    prior_spin.sort_by(f64::total_cmp);
+    updated_spin.sort_by(f64::total_cmp);
+    assert!(
+        prior_spin[10] > 30.0 && updated_spin[10] < 15.0,
+        "spin error median {} rad/s, updated {} rad/s",
+        prior_spin[10],
+        updated_spin[10]
+    );
+}
+
+#[test]
+fn the_update_rejects_an_outlier_and_keeps_a_ball_without_new_spin() {
+    let ball = corkscrew(0.0);
+    let tb = bounce_time(&ball);
+    let (t, mut p) = observe(&ball, tb + 0.03, 0.002, 7);
+    let first = t.partition_point(|&x| x <= 0.2201);
+    let prior = estimate(&t[..first], &p[..first], &options()).unwrap();
+    let clean = update(&prior, &t, &p, &options()).unwrap();
+    let k = t.len() - 2;
+    p[k][1] += 0.08;
+    let up = update(&prior, &t, &p, &options()).unwrap();
+    assert_eq!(up.outliers, 1);
+    assert!((up.state.p - clean.state.p).norm() < 2e-3);
+    assert!((up.state.v - clean.state.v).norm() < 0.05);
+    assert!(error_at(&up.state, &ball, tb + 0.22) < 0.02);
+}
+
+#[test]
+fn the_update_without_new_observations_is_the_prior_and_bad_input_is_an_error() {
+    let ball = corkscrew(20.0);
+    let (t, p) = observe(&ball, 0.22, 0.002, 3);
+    let prior = estimate(&t, &p, &options()).unwrap();
+    let up = update(&prior, &t, &p, &options()).unwrap();
+    assert_eq!(up.state, prior.state);
+    assert_eq!(up.at_prior, prior.state);
+    assert_eq!(up.used, 0);
+    assert!(!up.bounced);
+    assert!(matches!(
+        update(&prior, &t, &p[1..], &options()),
+        Err(EstimateError::Shape { .. })
+    ));
+    let late = [0.3, 0.3];
+    let late_p = [p[0], p[1]];
+    assert!(matches!(
+        update(&prior, &late, &late_p, &options()),
+        Err(EstimateError::Times { index: 1, .. })
+    ));
+    let mut predicted = prior.clone();
+    predicted.segment = Segment::BeforeBounce;
+    assert!(update(&predicted, &t, &p, &options()).is_err());
+}
+
+fn planner() -> HitPlanner {
+    HitPlanner::new(ttkin::robots::gantry6(), Flight::default()).unwrap()
+}
+
+#[test]
+fn a_correction_with_the_same_ball_keeps_the_hit_and_starts_from_the_stroke() {
+    let mut pl = planner();
+    let ready = JointState::rest(&pl.ready);
+    let mut rng = fastrand::Rng::with_seed(21);
+    let (mut tried, mut corrected) = (0, 0);
+    for _ in 0..40 {
+        let s = rally::serve(&pl.flight, &mut rng, 30.0, 0.2);
+        let (s, _) = pl.flight.run(&s, 0.22, None);
+        let now = 0.23;
+        pl.min_stroke_time = 0.12;
+        let Some(hit) = pl.plan(&s, now, [0.9, 0.0]).unwrap().hit else {
+            continue;
+        };
+        let t_prev = now + hit.t_hit;
+        let t_c = t_prev - 0.1;
+        if t_c <= now {
+            continue;
+        }
+        let stroke = rally::execution(&hit, &ready);
+        let n = hit.q_hit.len();
+        let (mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        stroke.sample(t_c - now, &mut q, &mut qd, &mut qdd).unwrap();
+        let start = JointState { q, qd, qdd };
+        let (ball, ev) = pl.flight.run(&s, t_c - 0.01, None);
+        let bounced = ev.iter().any(|e| e.kind == EventKind::Table);
+        // The rally's correction: strokes down to 60 ms.
+        pl.min_stroke_time = 0.06;
+        let plan = pl.plan_near(&ball, t_c, &start, bounced, &hit, t_prev).unwrap();
+        tried += 1;
+        let Some(new) = plan.hit else {
+            assert_ne!(plan.status, HitStatus::Ok);
+            continue;
+        };
+        assert_eq!(plan.status, HitStatus::Ok);
+        corrected += 1;
+        // The nearest candidate in time, to the same landing point, from the stroke's state.
+        assert!(
+            (t_c + new.t_hit - t_prev).abs() <= 0.0101,
+            "{} vs {t_prev}",
+            t_c + new.t_hit
+        );
+        assert!((new.landing - hit.landing).xy().norm() < 2e-3);
+        let (mut q0, mut qd0, mut qdd0) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        new.leg.trajectory.sample(0.0, &mut q0, &mut qd0, &mut qdd0).unwrap();
+        for i in 0..n {
+            assert!((q0[i] - start.q[i]).abs() < 1e-9 && (qd0[i] - start.qd[i]).abs() < 1e-9);
+        }
+        // The racket is where the ball will be: the same hit point within the candidates' spacing.
+        assert!((new.ball.p - hit.ball.p).norm() < 0.06);
+    }
+    eprintln!("{corrected} of {tried} corrected");
+    // From the middle of a stroke near its limits the new leg may break one where the rest of the
+    // old leg would not: most, not all, are corrected.
+    assert!(
+        corrected >= 15 && corrected * 10 >= tried * 8,
+        "{corrected} of {tried} corrected"
+    );
+}
+
+#[test]
+fn the_correction_after_the_bounce_removes_most_misses() {
+    let pl = planner();
+    let truth = truth();
+    let region = ReachRegion::new(&pl.chain, pl.placement, pl.ready.clone(), truth.model.radius).unwrap();
+    let count = |cfg: &RallyConfig| {
+        let out = rally::rally(&pl, &region, &truth, cfg, 400);
+        let in_reach: Vec<_> = out.iter().filter(|o| o.in_reach).collect();
+        let returned = in_reach.iter().filter(|o| o.returned).count();
+        let missed = in_reach.iter().filter(|o| o.status == "missed").count();
+        let corrected = out.iter().filter(|o| o.replans > 0).count();
+        let mut err: Vec<f64> = out.iter().filter(|o| o.returned).map(|o| o.racket_error).collect();
+        err.sort_by(f64::total_cmp);
+        (returned, missed, corrected, err[err.len() / 2])
+    };
+    let with = RallyConfig {
+        seed: 9,
+        ..RallyConfig::default()
+    };
+    assert!(with.correction_delay > 0.0);
+    let without = RallyConfig {
+        correction_delay: 0.0,
+        ..with
+    };
+    let (r1, m1, c1, e1) = count(&with);
+    let (r0, m0, c0, e0) = count(&without);
+    eprintln!("with the correction {r1} returned, {m1} missed, {c1} corrected, racket error {e1}; without {r0}, {m0}, {c0}, {e0}");
+    assert_eq!(c0, 0);
+    assert!(c1 > 250, "{c1} corrected");
+    assert!(m0 >= 3 && m1 * 3 <= m0, "missed {m1} with, {m0} without");
+    assert!(r1 > r0, "returned {r1} with, {r0} without");
+    // The ball still meets the racket within its radius (the branch kept may be off-centre).
+    assert!(e1 < 0.075 && e0 < 0.075, "racket-centre error {e1} with, {e0} without");
+}
