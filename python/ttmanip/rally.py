@@ -57,7 +57,9 @@ def rally(
     ``racket_error_m_median``,
     ``landing_error_m_median``, ``velocity_error_mps_median``, ``plan_time_us_median`` (per-ball
     planning in thread CPU time, from the parallel batch), ``plan_wall_time_us_median``,
-    ``statuses`` (counts of every outcome, in reach or not) and the stated simulation settings.
+    ``correction_time_us_median`` (the one correction after the bounce during the stroke: the
+    estimate updated through the bounce and the re-plan, thread CPU time, over the balls that had
+    one), ``statuses`` (counts of every outcome, in reach or not) and the stated simulation settings.
 
     ``drives`` > 0 also executes that many in-reach balls through the drives: the hit planned from
     the ball's true state (``ball.plan_return``) goes to ``plan_hit`` and ``simulate`` (coupled drive
@@ -137,6 +139,9 @@ def rally(
         "racket_error_m_median": _median(res["racket_error"][in_reach]),
         "plan_time_us_median": _median(res["plan_time_us"]),  # thread CPU time
         "plan_wall_time_us_median": _median(res["plan_wall_time_us"]),
+        # the one correction after the bounce (estimate updated through it, re-plan from the
+        # stroke's state), during the stroke: thread CPU time, balls that had one
+        "correction_time_us_median": _median(res["correction_time_us"]),
         "landing_error_m_median": _median(res["landing_error"][returned]),
         "velocity_error_mps_median": _median(res["velocity_error"]),
         "statuses": dict(sorted(statuses.items())),

@@ -291,6 +291,10 @@ fn ball_rally<'py>(
     d.set_item("racket_error", to_numpy(py, &[n], &col(&|o| o.racket_error)))?;
     d.set_item("plan_time_us", to_numpy(py, &[n], &col(&|o| o.plan_time_us)))?;
     d.set_item("plan_wall_time_us", to_numpy(py, &[n], &col(&|o| o.plan_wall_time_us)))?;
+    d.set_item(
+        "correction_time_us",
+        to_numpy(py, &[n], &col(&|o| o.correction_time_us)),
+    )?;
     d.set_item("landing_error", to_numpy(py, &[n], &col(&|o| o.landing_error)))?;
     d.set_item("velocity_error", to_numpy(py, &[n], &col(&|o| o.velocity_error)))?;
     d.set_item(

@@ -33,14 +33,7 @@ impl HitPlanner {
     ) -> Result<HitPlan> {
         let goal = [previous.landing.x, previous.landing.y];
         self.check_target(goal)?;
-        if start.check("start")? != self.chain.dof() {
-            return Err(Error::shape(
-                "start.q",
-                format!("{} values", self.chain.dof()),
-                start.q.len(),
-            ));
-        }
-        ball.validate("ball")?;
+        self.check_start(ball, start)?;
         if !(now.is_finite() && t_prev.is_finite()) {
             return Err(Error::invalid(
                 "now, t_prev",

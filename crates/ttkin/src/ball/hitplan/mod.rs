@@ -248,6 +248,19 @@ impl HitPlanner {
         self.plan_from(ball, now, target, &JointState::rest(&self.ready), false)
     }
 
+    /// Checks a re-plan's inputs: `start` a joint state of this robot, `ball` a valid ball state.
+    pub(super) fn check_start(&self, ball: &BallState, start: &JointState) -> Result<()> {
+        if start.check("start")? != self.chain.dof() {
+            return Err(Error::shape(
+                "start.q",
+                format!("{} values", self.chain.dof()),
+                start.q.len(),
+            ));
+        }
+        ball.validate("ball")?;
+        Ok(())
+    }
+
     /// [`HitPlanner::plan`] for a stroke starting from the joint state `start` at `now` (re-planning
     /// during a stroke with a newer estimate); `after_bounce` says that `ball` is already past its
     /// bounce on the robot's half (an estimate from observations after it).
@@ -260,14 +273,7 @@ impl HitPlanner {
         after_bounce: bool,
     ) -> Result<HitPlan> {
         self.check_target(target)?;
-        if start.check("start")? != self.chain.dof() {
-            return Err(Error::shape(
-                "start.q",
-                format!("{} values", self.chain.dof()),
-                start.q.len(),
-            ));
-        }
-        ball.validate("ball")?;
+        self.check_start(ball, start)?;
         if !now.is_finite() {
             return Err(Error::NonFinite {
                 what: "now".into(),
