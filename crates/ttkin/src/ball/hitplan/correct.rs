@@ -84,16 +84,7 @@ impl HitPlanner {
                 }
             }
         }
-        let status = match (&best, any_return) {
-            (Some(_), _) => HitStatus::Ok,
-            (None, true) => HitStatus::Infeasible,
-            (None, false) => HitStatus::NoReturn,
-        };
-        Ok(HitPlan {
-            status,
-            hit: best,
-            candidates: tried,
-        })
+        Ok(super::searched(best, any_return, tried))
     }
 
     /// The robot hit of the shot `shot` (outgoing velocity, racket, landing point) at the ball `s`

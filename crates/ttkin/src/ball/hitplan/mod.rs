@@ -373,21 +373,26 @@ impl HitPlanner {
                 }
             }
         }
-        let k = tried;
-        let status = match (&best, any_return) {
-            (Some(_), _) => HitStatus::Ok,
-            (None, true) => HitStatus::Infeasible,
-            (None, false) => HitStatus::NoReturn,
-        };
-        Ok(HitPlan {
-            status,
-            hit: best,
-            candidates: k,
-        })
+        Ok(searched(best, any_return, tried))
     }
 
     /// Kinematic limits of the strokes (joint order of the chain; jerk as in the module doc).
     pub fn limits(&self) -> &KinematicLimits {
         &self.limits
+    }
+}
+
+/// The plan a search ends with: its best hit (`Ok`), or `Infeasible` when some shot returned the
+/// ball but no hit was feasible, else `NoReturn`; `tried` candidates.
+pub(super) fn searched(best: Option<Hit>, any_return: bool, tried: usize) -> HitPlan {
+    let status = match (&best, any_return) {
+        (Some(_), _) => HitStatus::Ok,
+        (None, true) => HitStatus::Infeasible,
+        (None, false) => HitStatus::NoReturn,
+    };
+    HitPlan {
+        status,
+        hit: best,
+        candidates: tried,
     }
 }
