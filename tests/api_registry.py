@@ -51,6 +51,10 @@ API: dict[str, dict] = {
     # --- Robot
     "Robot": {"skip_call": "Robot() has no constructor; the factories below make robots"},
     "Robot.builtin": {"args": {"name": "robot_name"}},
+    "Robot.builtin_names": {},
+    "Robot.ready": {},
+    "Robot.with_racket": {},
+    "Robot.with_ready": {},
     "Robot.from_dh": {},
     "Robot.from_file": {},
     "Robot.from_toml": {},
@@ -314,6 +318,7 @@ API: dict[str, dict] = {
     "motor.Response.rise_time": {"args": {"target": "time"}, "may_be_inf": True},  # inf: never rises
     # --- robots
     **{f"robots.{f}": {} for f in ("arm4", "gantry6", "mobile8", "mobile8_start", "ur5")},
+    "robots.builtin": {"args": {"name": "robot_name"}},
     # --- traj
     # arc's optional arguments come in documented combinations; a missing or mixed one is a
     # TypeError, Python's answer to a wrong set of arguments

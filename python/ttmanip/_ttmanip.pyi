@@ -71,7 +71,10 @@ class Robot:
         """Robot from URDF text."""
     @staticmethod
     def builtin(name: str) -> Robot:
-        """A built-in robot: "mobile8", "gantry6", "arm4" or "ur5"."""
+        """A built-in robot: one of `Robot.builtin_names()` ("mobile8", "gantry6", "arm4", "ur5")."""
+    @staticmethod
+    def builtin_names() -> list[str]:
+        """Names of the built-in robots, in the order of `ttkin::robots::NAMES`."""
     def to_urdf(self) -> str:
         """URDF text (links base_link, link0 … linkN, tool; link i is DH frame i)."""
     def to_toml(self) -> str:
@@ -107,6 +110,13 @@ class Robot:
     @property
     def effort_limits(self) -> NDArray[np.float64]:
         """(n,) effort limits (N or N·m; inf where none)."""
+    def with_racket(self, mount: ArrayLike) -> Robot:
+        """The same robot carrying its racket at `mount` (racket frame in the tool frame, 4×4, m)."""
+    def with_ready(self, q: ArrayLike) -> Robot:
+        """The same robot with the ready (rest) configuration `q` (n,) in m or rad, within the limits."""
+    @property
+    def ready(self) -> NDArray[np.float64]:
+        """(n,) ready (rest) configuration (m or rad): where strokes start and return to."""
     @property
     def base(self) -> NDArray[np.float64]:
         """Base frame → frame 0 (4×4)."""

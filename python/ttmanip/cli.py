@@ -26,10 +26,11 @@ from pathlib import Path
 
 import numpy as np
 
+from .robots import NAMES as ROBOTS
+
 __all__ = ["CliError", "Progress", "build_parser", "main", "read_hit_file"]
 
 EXPERIMENTS = ("seed000", "seed001", "seed002")
-ROBOTS = ("mobile8", "gantry6", "arm4", "ur5")
 
 HIT_FILE_HELP = """hit file (JSON):
   {"robot": "gantry6", "hits": [{"centre": [x, y, z], "normal": [nx, ny, nz],

@@ -48,7 +48,7 @@ pub fn gantry6_demo_stroke(chain: &Chain) -> Result<DemoStroke> {
         nalgebra::Translation3::new(0.35, -0.55, 0.05),
         nalgebra::Rotation3::from_matrix_unchecked(rot),
     );
-    let ready = [0.0, 0.0, 0.0, 0.6, 0.6, 0.0];
+    let ready = chain.ready();
     let ik = Analytic::for_chain(chain).ok_or_else(|| Error::Model("gantry6 has no analytic IK".into()))?;
     let q_hit = ik.nearest(&target, &ready, LimitFilter::Enforce).map_err(ttkin_error)?;
     let v = normal.normalize() * 3.0;

@@ -22,6 +22,7 @@ pub mod coupled;
 pub mod error;
 pub mod loops;
 pub mod motor;
+pub mod noise;
 pub mod observer;
 pub mod runtime;
 pub mod schedule;

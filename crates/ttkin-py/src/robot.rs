@@ -148,10 +148,16 @@ impl PyRobot {
         ))
     }
 
-    /// A built-in robot: "mobile8", "gantry6", "arm4" or "ur5".
+    /// A built-in robot: one of `Robot.builtin_names()` ("mobile8", "gantry6", "arm4", "ur5").
     #[staticmethod]
     fn builtin(name: &str) -> PyResult<Self> {
         Ok(PyRobot::new(ttkin::robots::by_name(name).py()?))
+    }
+
+    /// Names of the built-in robots, in the order of `ttkin::robots::NAMES`.
+    #[staticmethod]
+    fn builtin_names() -> Vec<&'static str> {
+        ttkin::robots::NAMES.to_vec()
     }
 
     /// URDF text of this robot (links base_link, link0 … linkN, tool; link i is DH frame i).
@@ -174,6 +180,17 @@ impl PyRobot {
         Ok(PyRobot::new(self.chain.with_base(transform(base, "base")?).py()?))
     }
 
+    /// The same robot carrying its racket at `mount` (racket frame in the tool frame, 4×4, m).
+    fn with_racket(&self, mount: &Any<'_>) -> PyResult<Self> {
+        Ok(PyRobot::new(self.chain.with_racket(transform(mount, "mount")?).py()?))
+    }
+
+    /// The same robot with the ready (rest) configuration `q` (n,) in m or rad, within the limits.
+    fn with_ready(&self, q: &Any<'_>) -> PyResult<Self> {
+        let q = vector(q, "q", self.chain.dof())?;
+        Ok(PyRobot::new(self.chain.with_ready(&q).py()?))
+    }
+
     /// Deprecated name of `dof`.
     #[getter]
     fn n(&self, py: Python<'_>) -> PyResult<usize> {
@@ -186,6 +203,13 @@ impl PyRobot {
     fn limits<'py>(&self, py: Python<'py>) -> Array<'py> {
         let flat: Vec<f64> = self.chain.limits().iter().flat_map(|l| [l.lower, l.upper]).collect();
         to_numpy(py, &[self.chain.dof(), 2], &flat)
+    }
+
+    /// (n,) ready (rest) configuration (m or rad): where strokes start and return to; the
+    /// robot's own (robot file `ready`) or the middle of each joint range.
+    #[getter]
+    fn ready<'py>(&self, py: Python<'py>) -> Array<'py> {
+        to_numpy(py, &[self.chain.dof()], &self.chain.ready())
     }
 
     /// Base frame → frame 0 (4×4).

@@ -332,7 +332,7 @@ impl HitPlanner {
             racket: Racket::for_chain(chain),
             limits,
             effort,
-            ready: default_ready(chain),
+            ready: chain.ready(),
             options,
         })
     }
@@ -357,8 +357,8 @@ impl HitPlanner {
         &self.options
     }
 
-    /// Default rest configuration: gantry6 (0, 0, 0, 0.6, 0.6, 0), mobile8 seed 000's start,
-    /// otherwise the middle of each joint's position limits (0 where unbounded).
+    /// Default rest configuration: the chain's [`Chain::ready`] (gantry6 (0, 0, 0, 0.6, 0.6, 0),
+    /// mobile8 seed 000's start; otherwise the middle of each joint's position limits).
     pub fn default_ready(&self) -> &[f64] {
         &self.ready
     }
@@ -465,25 +465,6 @@ impl HitPlanner {
         }
         stroke::plan_stroke(self, &mut plan, data)?;
         Ok(plan)
-    }
-}
-
-/// Default rest configuration of a chain (see [`HitPlanner::default_ready`]).
-fn default_ready(chain: &Chain) -> Vec<f64> {
-    match chain.name() {
-        "gantry6" if chain.dof() == 6 => vec![0.0, 0.0, 0.0, 0.6, 0.6, 0.0],
-        "mobile8" if chain.dof() == 8 => crate::robots::mobile8_start().to_vec(),
-        _ => chain
-            .limits()
-            .iter()
-            .map(|l| {
-                if l.lower.is_finite() && l.upper.is_finite() {
-                    0.5 * (l.lower + l.upper)
-                } else {
-                    0.0f64.clamp(l.lower, l.upper)
-                }
-            })
-            .collect(),
     }
 }
 

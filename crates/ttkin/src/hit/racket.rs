@@ -3,7 +3,8 @@
 //! Racket frame (one convention for every robot): origin at the racket centre, z axis along the
 //! face normal (the hitting side), x axis along the handle (from the grip towards the centre),
 //! y = z × x. A robot's tool frame carries the racket at a fixed pose
-//! [`Racket::in_tool`] (the racket frame in the tool frame):
+//! [`Racket::in_tool`] (the racket frame in the tool frame), data of the robot
+//! ([`Chain::racket`], `racket = { xyz, rpy }` in a robot file):
 //! - `gantry6` (seed 002): the tool frame *is* the racket frame (identity);
 //! - `mobile8` (seed 000): the centre is 0.15 m along tool z and the face normal is tool x
 //!   ([`crate::task::SEED_RACKET_OFFSET`], the 5-D task of seed 000), so racket x = tool z,
@@ -24,12 +25,10 @@ pub struct Racket {
 }
 
 impl Racket {
-    /// The racket of a built-in robot, found by chain name (see the module doc); the tool frame
-    /// for any other chain.
+    /// The racket a chain carries ([`Chain::racket`], data of the robot: see the module doc).
     pub fn for_chain(chain: &Chain) -> Racket {
-        match chain.name() {
-            "mobile8" => Racket::seed000(),
-            _ => Racket::at_tool(),
+        Racket {
+            in_tool: *chain.racket(),
         }
     }
 
