@@ -125,10 +125,7 @@ impl Chain {
             &format!("racket mount of chain '{}'", self.name),
             racket.rotation.matrix().as_slice(),
         )?;
-        Ok(Chain {
-            racket,
-            ..self.clone()
-        })
+        Ok(Chain { racket, ..self.clone() })
     }
 
     /// The same chain with the ready (rest) configuration `q` (m, rad): where a stroke starts and
