@@ -5,7 +5,7 @@
 use crate::canopen::cia402::{DriveState, OpMode};
 use crate::canopen::nmt::HeartbeatConsumer;
 use crate::canopen::od;
-use crate::canopen::sdo::{SdoClient, SdoRequest};
+use crate::canopen::sdo::{SdoClient, SdoJob};
 use crate::canopen::{ProtocolError, Units};
 
 use super::watchdog::WatchdogConfig;
@@ -146,33 +146,18 @@ impl Link {
 
     /// The SDO request of configuration step `step` (device type, mode, heartbeat, following
     /// error window) for `mode` and the watchdog's heartbeat period.
-    pub(super) fn config_request(&self, step: u8, mode: OpMode, wd: &WatchdogConfig) -> SdoRequest {
+    pub(super) fn config_request(&self, step: u8, mode: OpMode, wd: &WatchdogConfig) -> SdoJob {
         match step {
-            0 => SdoRequest::Upload {
+            0 => SdoJob::Read {
                 index: od::DEVICE_TYPE,
                 sub: 0,
             },
-            1 => SdoRequest::Download {
-                index: od::MODES_OF_OPERATION,
-                sub: 0,
-                size: 1,
-                value: mode.code() as u8 as u32,
-            },
-            2 => SdoRequest::Download {
-                index: od::HEARTBEAT_TIME,
-                sub: 0,
-                size: 2,
-                value: wd.heartbeat_period_ms as u32,
-            },
+            1 => SdoJob::write_int(od::MODES_OF_OPERATION, 0, 1, mode.code() as u8 as u32),
+            2 => SdoJob::write_int(od::HEARTBEAT_TIME, 0, 2, wd.heartbeat_period_ms as u32),
             _ => {
                 let w =
                     (self.cfg.following_error_limit * self.cfg.units.increments_per_unit).clamp(1.0, i32::MAX as f64);
-                SdoRequest::Download {
-                    index: od::FOLLOWING_ERROR_WINDOW,
-                    sub: 0,
-                    size: 4,
-                    value: w as u32,
-                }
+                SdoJob::write_int(od::FOLLOWING_ERROR_WINDOW, 0, 4, w as u32)
             }
         }
     }

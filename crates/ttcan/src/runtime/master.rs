@@ -14,7 +14,7 @@ use crate::canopen::frame::{Cob, Frame, Frames};
 use crate::canopen::nmt::{encode_nmt, encode_sync, NmtCommand};
 use crate::canopen::od;
 use crate::canopen::pdo::{Rpdo, Tpdo};
-use crate::canopen::sdo::SdoResponse;
+use crate::canopen::sdo::SdoOutcome;
 use crate::canopen::ProtocolError;
 
 pub use super::link::{AxisSetpoint, ChannelCounters, Feedback, LinkConfig, SDO_RETRIES};
@@ -52,6 +52,8 @@ pub struct ChannelMaster {
     stop: Option<StopReason>,
     stopped_after: Option<u32>,
     counters: ChannelCounters,
+    /// SDO requests that answers called for (segments), sent with the next cycle.
+    sdo_out: Frames,
 }
 
 impl ChannelMaster {
@@ -78,6 +80,7 @@ impl ChannelMaster {
             stop: None,
             stopped_after: None,
             counters: ChannelCounters::default(),
+            sdo_out: Frames::new(),
         })
     }
 
@@ -234,12 +237,12 @@ impl ChannelMaster {
                     }
                 },
                 Cob::Heartbeat(_) => self.counters.malformed += u64::from(!l.heartbeat.on_frame(f)),
-                Cob::SdoTx(_) => match l.sdo.on_frame(f) {
-                    Some(Ok(SdoResponse::Uploaded {
+                Cob::SdoTx(_) => match l.sdo.on_frame(f, &mut self.sdo_out) {
+                    Some(Ok(SdoOutcome::Read {
                         index: od::DEVICE_TYPE,
-                        value,
+                        data,
                         ..
-                    })) if value & 0xFFFF != 402 => {
+                    })) if data.as_u64().unwrap_or(0) & 0xFFFF != 402 => {
                         stop = Some(StopReason::ConfigurationFailed(node));
                     }
                     Some(Ok(_)) => l.config_step += 1,
@@ -269,6 +272,10 @@ impl ChannelMaster {
                 out.push(f);
             }
         }
+        for f in self.sdo_out.as_slice() {
+            out.push(*f);
+        }
+        self.sdo_out.clear();
         self.watchdog();
         let phase = self.phase;
         let mode = self.mode;
