@@ -64,8 +64,15 @@ fn main() {
         }
         None => ControllerConfig::default_layout(),
     };
-    let loads = cfg.check("configuration").unwrap_or_else(|e| fail(e));
-    for (ch, l) in cfg.channel.iter().zip(&loads) {
+    let source = args
+        .config
+        .as_ref()
+        .map_or_else(|| "configuration".to_string(), |p| p.display().to_string());
+    let loads = cfg.check(&source).unwrap_or_else(|e| fail(e));
+    let plans: Vec<_> = (0..cfg.channel.len())
+        .map(|c| cfg.channel_plans(c, &source).unwrap_or_else(|e| fail(e)))
+        .collect();
+    for ((ch, l), plans) in cfg.channel.iter().zip(&loads).zip(&plans) {
         println!(
             "ttctl: channel {} {} axes, bus load {:.1}–{:.1} % (limit {:.0} %)",
             ch.interface,
@@ -74,6 +81,25 @@ fn main() {
             l.worst * 100.0,
             ttcan::canopen::budget::MAX_BUS_LOAD * 100.0
         );
+        for (a, p) in ch.axis.iter().zip(plans) {
+            let list = |m: &ttcan::canopen::pdo::PdoMapping| {
+                m.entries().iter().map(|e| e.to_string()).collect::<Vec<_>>().join(" ")
+            };
+            println!(
+                "ttctl: {} node {}: {}, {:?}, RPDO1 [{}] {} B, TPDO1 [{}] {} B, {} SDO steps at boot-up",
+                ch.interface,
+                a.node,
+                a.device_file
+                    .as_ref()
+                    .map_or_else(|| "ttdrive-sim.eds".to_string(), |f| f.display().to_string()),
+                p.mode,
+                list(&p.rpdo),
+                p.rpdo.len(),
+                list(&p.tpdo),
+                p.tpdo.len(),
+                p.len()
+            );
+        }
     }
     if args.check {
         return;
@@ -129,9 +155,10 @@ fn main() {
             .channel
             .iter()
             .zip(buses.iter_mut())
-            .map(|(ch, bus)| {
+            .zip(&plans)
+            .map(|((ch, bus), plans)| {
                 let links: Vec<_> = ch.axis.iter().map(|a| a.link()).collect();
-                let master = ChannelMaster::new(&links, cfg.mode, cfg.watchdog)
+                let master = ChannelMaster::with_plans(&links, plans, cfg.watchdog)
                     .unwrap_or_else(|e| fail(format!("{}: {e}", ch.interface)));
                 let mut joints = [None; MAX_AXES_PER_CHANNEL];
                 for (k, a) in ch.axis.iter().enumerate() {
