@@ -11,6 +11,8 @@ use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 use ttcan::bus::socketcan::SocketCanBus;
+use ttcan::bus::stdio::StdioBus;
+use ttcan::bus::CanBus;
 use ttcan::runtime::channel::{run_channel, ChannelPlan, ChannelReport, Shared};
 use ttcan::runtime::config::ControllerConfig;
 use ttcan::runtime::master::{ChannelMaster, StopReason, MAX_AXES_PER_CHANNEL};
@@ -139,12 +141,18 @@ fn main() {
     if let Err(w) = rt::lock_memory() {
         eprintln!("ttctl: warning: {w}");
     }
-    let mut buses = Vec::new();
+    if cfg.channel.iter().filter(|c| c.interface == "stdio").count() > 1 {
+        fail("only one channel can use the interface stdio");
+    }
+    let mut buses: Vec<Box<dyn CanBus>> = Vec::new();
     for ch in &cfg.channel {
-        buses.push(
-            SocketCanBus::open(&ch.interface)
-                .unwrap_or_else(|e| fail(format!("cannot open CAN interface {}: {e}", ch.interface))),
-        );
+        if ch.interface == "stdio" {
+            buses.push(Box::new(StdioBus::open()));
+        } else {
+            buses.push(Box::new(SocketCanBus::open(&ch.interface).unwrap_or_else(|e| {
+                fail(format!("cannot open CAN interface {}: {e}", ch.interface))
+            })));
+        }
     }
     let period_ns = (1e9 / cfg.cycle_hz).round() as u64;
     let shared = Shared::new(cfg.channel.len(), interrupt);
@@ -207,6 +215,11 @@ fn report(args: &Args, reports: &[ChannelReport]) {
         tx_full += r.tx_full;
         bad += r.counters.malformed + r.counters.out_of_range;
         skipped += r.skipped;
+        for (k, name) in r.device_names.iter().enumerate() {
+            if let Some(name) = name {
+                println!("ttctl: {} axis {k}: device name (0x1008) {name:?}", r.name);
+            }
+        }
         let reason = r.stop_reason.map(|x| x.to_string()).unwrap_or_else(|| "none".into());
         println!(
             "ttctl: {}: {} cycles, stop: {reason} (all axes stopped after {} cycles), max tracking error {:.2e}, \

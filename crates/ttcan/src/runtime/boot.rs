@@ -1,7 +1,8 @@
 //! The boot-up of one drive as CiA 301/302 masters do it, planned before the bus is touched:
 //! from the drive's device file ([`crate::canopen::eds::DeviceFile`]; `ttdrive-sim`'s shipped EDS
 //! when none is given) and the axis' bus description ([`NodeSetup`]) a fixed list of SDO steps
-//! ([`BootPlan`]): read the identity 0x1018 and compare it with the file, check the profile
+//! ([`BootPlan`]): read the identity 0x1018 and compare it with the file, read the device name
+//! 0x1008, check the profile
 //! (0x1000) and the supported modes (0x6502), write the DCF's parameter values and the SDO
 //! initialisation list, remap RPDO1 and TPDO1 (invalidate with COB-ID bit 31, sub-index 0 = 0,
 //! the entries, sub-index 0 = n, transmission type 1 = synchronous, revalidate; every other PDO
@@ -266,6 +267,10 @@ impl BootPlan {
                     ),
                 )?;
             }
+        }
+        if device.get(od::DEVICE_NAME, 0).is_some() {
+            // the name the drive gives itself, for the log (a segmented upload when > 4 bytes)
+            push(&mut plan, read(od::DEVICE_NAME, 0, None))?;
         }
         need(od::DEVICE_TYPE, 0, "device type")?;
         push(

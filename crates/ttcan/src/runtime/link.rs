@@ -5,7 +5,7 @@
 use crate::canopen::cia402::{DriveState, OpMode};
 use crate::canopen::nmt::HeartbeatConsumer;
 use crate::canopen::pdo::PdoMapping;
-use crate::canopen::sdo::SdoClient;
+use crate::canopen::sdo::{SdoClient, SdoData};
 use crate::canopen::{ProtocolError, Units};
 
 use super::watchdog::WatchdogConfig;
@@ -112,6 +112,8 @@ pub(super) struct Link {
     pub(super) started: bool,
     /// Next step of the boot plan.
     pub(super) boot_step: usize,
+    /// The device name 0x1008 read at boot-up.
+    pub(super) device_name: Option<SdoData>,
     pub(super) sdo_retries: u8,
     pub(super) state: Option<DriveState>,
     pub(super) feedback: Option<Feedback>,
@@ -150,6 +152,7 @@ impl Link {
             booted: false,
             started: false,
             boot_step: 0,
+            device_name: None,
             sdo_retries: 0,
             state: None,
             feedback: None,

@@ -156,6 +156,12 @@ impl ChannelMaster {
         self.links.get(k).copied().flatten().is_some_and(|l| l.in_step)
     }
 
+    /// The device name (0x1008) axis `k`'s drive reported at boot-up.
+    pub fn device_name(&self, k: usize) -> Option<String> {
+        let l = self.links.get(k).copied().flatten()?;
+        l.device_name.map(|d| String::from_utf8_lossy(d.bytes()).into_owned())
+    }
+
     /// Drive state of axis `k` from its last statusword.
     pub fn drive_state(&self, k: usize) -> Option<DriveState> {
         self.links.get(k).copied().flatten().and_then(|l| l.state)
@@ -285,6 +291,17 @@ impl ChannelMaster {
                                     got: data.as_u64().unwrap_or(0) as u32 & e.mask,
                                     expected: e.value,
                                 });
+                            }
+                            (
+                                SdoOutcome::Read {
+                                    index: od::DEVICE_NAME,
+                                    data,
+                                    ..
+                                },
+                                _,
+                            ) => {
+                                l.device_name = Some(data);
+                                l.boot_step += 1;
                             }
                             _ => l.boot_step += 1,
                         }
