@@ -144,6 +144,10 @@ fn main() {
 trait Port: CanBus {
     /// Waits up to `ms` for a frame.
     fn wait(&mut self, ms: u16);
+    /// True when no frame can come any more (stdio: input closed).
+    fn ended(&self) -> bool {
+        false
+    }
 }
 
 impl Port for SocketCanBus {
@@ -155,6 +159,10 @@ impl Port for SocketCanBus {
 impl Port for StdioBus {
     fn wait(&mut self, ms: u16) {
         self.wait_readable(ms);
+    }
+
+    fn ended(&self) -> bool {
+        self.closed()
     }
 }
 
@@ -257,7 +265,10 @@ fn run_on<B: Port>(
                 next_ms = now + 1_000_000; // after a stall: no burst of heartbeats
             }
         }
-        if seen && last_rx.elapsed().as_secs_f64() > args.idle_exit || start.elapsed().as_secs_f64() > args.duration {
+        if seen && last_rx.elapsed().as_secs_f64() > args.idle_exit
+            || start.elapsed().as_secs_f64() > args.duration
+            || bus.ended()
+        {
             break;
         }
         // sleep in the kernel until a frame arrives or the 1 ms time base is due

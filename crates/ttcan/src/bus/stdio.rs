@@ -76,6 +76,11 @@ impl StdioBus {
         }
     }
 
+    /// True once standard input has ended (the bridge closed it).
+    pub fn closed(&self) -> bool {
+        self.closed && self.pending.is_none()
+    }
+
     /// Input lines that were not frames.
     pub fn malformed(&self) -> u64 {
         self.malformed.load(Ordering::Relaxed)
