@@ -310,7 +310,8 @@ class EmulatedDrive:
             cob = struct.unpack("<I", self.local.get_data(0x1800, 1))[0]
             if not cob & 0x80000000:
                 self.publish()
-                payload = b"".join(self.local.get_data(i, s)[: bits // 8] for i, s, bits in self.mapping(0x1A00))
+                entries = self.mapping(0x1A00)
+                payload = b"".join(self.local.get_data(i, s)[: bits // 8] for i, s, bits in entries)
                 self.net.send_message(cob & 0x7FF, payload)
             if self.pending is not None:
                 data, self.pending, offset = self.pending, None, 0
