@@ -11,6 +11,8 @@ use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 use ttcan::bus::socketcan::SocketCanBus;
+use ttcan::bus::stdio::StdioBus;
+use ttcan::bus::CanBus;
 use ttcan::runtime::channel::{run_channel, ChannelPlan, ChannelReport, Shared};
 use ttcan::runtime::config::ControllerConfig;
 use ttcan::runtime::master::{ChannelMaster, StopReason, MAX_AXES_PER_CHANNEL};
@@ -64,8 +66,15 @@ fn main() {
         }
         None => ControllerConfig::default_layout(),
     };
-    let loads = cfg.check("configuration").unwrap_or_else(|e| fail(e));
-    for (ch, l) in cfg.channel.iter().zip(&loads) {
+    let source = args
+        .config
+        .as_ref()
+        .map_or_else(|| "configuration".to_string(), |p| p.display().to_string());
+    let loads = cfg.check(&source).unwrap_or_else(|e| fail(e));
+    let plans: Vec<_> = (0..cfg.channel.len())
+        .map(|c| cfg.channel_plans(c, &source).unwrap_or_else(|e| fail(e)))
+        .collect();
+    for ((ch, l), plans) in cfg.channel.iter().zip(&loads).zip(&plans) {
         println!(
             "ttctl: channel {} {} axes, bus load {:.1}–{:.1} % (limit {:.0} %)",
             ch.interface,
@@ -74,6 +83,25 @@ fn main() {
             l.worst * 100.0,
             ttcan::canopen::budget::MAX_BUS_LOAD * 100.0
         );
+        for (a, p) in ch.axis.iter().zip(plans) {
+            let list = |m: &ttcan::canopen::pdo::PdoMapping| {
+                m.entries().iter().map(|e| e.to_string()).collect::<Vec<_>>().join(" ")
+            };
+            println!(
+                "ttctl: {} node {}: {}, {:?}, RPDO1 [{}] {} B, TPDO1 [{}] {} B, {} SDO steps at boot-up",
+                ch.interface,
+                a.node,
+                a.device_file
+                    .as_ref()
+                    .map_or_else(|| "ttdrive-sim.eds".to_string(), |f| f.display().to_string()),
+                p.mode,
+                list(&p.rpdo),
+                p.rpdo.len(),
+                list(&p.tpdo),
+                p.tpdo.len(),
+                p.len()
+            );
+        }
     }
     if args.check {
         return;
@@ -113,12 +141,18 @@ fn main() {
     if let Err(w) = rt::lock_memory() {
         eprintln!("ttctl: warning: {w}");
     }
-    let mut buses = Vec::new();
+    if cfg.channel.iter().filter(|c| c.interface == "stdio").count() > 1 {
+        fail("only one channel can use the interface stdio");
+    }
+    let mut buses: Vec<Box<dyn CanBus>> = Vec::new();
     for ch in &cfg.channel {
-        buses.push(
-            SocketCanBus::open(&ch.interface)
-                .unwrap_or_else(|e| fail(format!("cannot open CAN interface {}: {e}", ch.interface))),
-        );
+        if ch.interface == "stdio" {
+            buses.push(Box::new(StdioBus::open()));
+        } else {
+            buses.push(Box::new(SocketCanBus::open(&ch.interface).unwrap_or_else(|e| {
+                fail(format!("cannot open CAN interface {}: {e}", ch.interface))
+            })));
+        }
     }
     let period_ns = (1e9 / cfg.cycle_hz).round() as u64;
     let shared = Shared::new(cfg.channel.len(), interrupt);
@@ -129,9 +163,10 @@ fn main() {
             .channel
             .iter()
             .zip(buses.iter_mut())
-            .map(|(ch, bus)| {
+            .zip(&plans)
+            .map(|((ch, bus), plans)| {
                 let links: Vec<_> = ch.axis.iter().map(|a| a.link()).collect();
-                let master = ChannelMaster::new(&links, cfg.mode, cfg.watchdog)
+                let master = ChannelMaster::with_plans(&links, plans, cfg.watchdog)
                     .unwrap_or_else(|e| fail(format!("{}: {e}", ch.interface)));
                 let mut joints = [None; MAX_AXES_PER_CHANNEL];
                 for (k, a) in ch.axis.iter().enumerate() {
@@ -180,6 +215,11 @@ fn report(args: &Args, reports: &[ChannelReport]) {
         tx_full += r.tx_full;
         bad += r.counters.malformed + r.counters.out_of_range;
         skipped += r.skipped;
+        for (k, name) in r.device_names.iter().enumerate() {
+            if let Some(name) = name {
+                println!("ttctl: {} axis {k}: device name (0x1008) {name:?}", r.name);
+            }
+        }
         let reason = r.stop_reason.map(|x| x.to_string()).unwrap_or_else(|| "none".into());
         println!(
             "ttctl: {}: {} cycles, stop: {reason} (all axes stopped after {} cycles), max tracking error {:.2e}, \

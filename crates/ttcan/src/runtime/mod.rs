@@ -4,6 +4,7 @@
 //! trajectories ([`trajectory`]), the configuration file ([`config`]) and the per-channel thread
 //! ([`channel`]) that drives a controller over a [`crate::bus::CanBus`].
 
+pub mod boot;
 pub mod channel;
 pub mod config;
 pub mod link;
