@@ -118,6 +118,17 @@ class Robot:
     def ready(self) -> NDArray[np.float64]:
         """(n,) ready (rest) configuration (m or rad): where strokes start and return to."""
     @property
+    def drive_effort_limits(self) -> NDArray[np.float64]:
+        """(n,) drive peak torque G·k_t·I_peak·η (N or N·m; inf where the drive data lacks it)."""
+    @property
+    def effective_effort_limits(self) -> NDArray[np.float64]:
+        """(n,) the smaller of effort_limits and drive_effort_limits: what the planners use at rest."""
+    @property
+    def effort_limit_sources(self) -> list[str]:
+        """Which limit governs each joint at rest: "robot file", "drive peak current", "drive voltage", "none"."""
+    def effort_limits_at(self, qd: ArrayLike) -> NDArray[np.float64]:
+        """Effective effort limits at joint speeds qd: (n,) or (N, n); the bus voltage lowers them with speed."""
+    @property
     def base(self) -> NDArray[np.float64]:
         """Base frame → frame 0 (4×4)."""
     @property
@@ -717,10 +728,10 @@ class HitPlan:
         """Stroke duration (s)."""
     @property
     def peak_effort(self) -> _F:
-        """(n,) largest |joint torque| at the effort check points."""
+        """(n,) largest |joint torque| over the stroke."""
     @property
     def effort_ratio(self) -> float:
-        """Largest |τ| / effort limit."""
+        """Largest |τ(t)| / effective effort limit over every instant of the stroke."""
     @property
     def violations(self) -> list[dict[str, Any]]:
         """Kinematic limit violations."""

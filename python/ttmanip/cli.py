@@ -425,10 +425,16 @@ def _info(args: argparse.Namespace) -> int:
     print(robot)
     rows = []
     drives = _actuators(robot)
+    drive_peak, effective = robot.drive_effort_limits, robot.effective_effort_limits
+    sources = robot.effort_limit_sources
     columns = zip(robot.joint_names, robot.joint_types, robot.limits, strict=True)
     for j, (name, kind, (lo, hi)) in enumerate(columns):
         v, a, e = robot.velocity_limits[j], robot.acceleration_limits[j], robot.effort_limits[j]
-        print(f"  {name:10s} {kind:9s} [{lo: .4f}, {hi: .4f}]  v {v:g}  a {a:g}  effort {e:g}")
+        d, eff, src = drive_peak[j], effective[j], sources[j]
+        print(
+            f"  {name:10s} {kind:9s} [{lo: .4f}, {hi: .4f}]  v {v:g}  a {a:g}  effort {e:g}"
+            f"  drive peak {d:.4g}  -> {eff:.4g} ({src} governs)"
+        )
         if drives is not None:
             print(f"  {'':10s} drive: {drive_line(drives[j])}")
         rows.append(
@@ -440,6 +446,9 @@ def _info(args: argparse.Namespace) -> int:
                 "velocity": v,
                 "acceleration": a,
                 "effort": e,
+                "drive_effort": d,
+                "effective_effort": eff,
+                "effort_source": src,
                 "drive": None if drives is None else drives[j],
             }
         )

@@ -47,7 +47,8 @@ value_getters!(PyHitPlan, |h| {
     return_duration: f64 => h.plan.return_duration;
     /// Total stroke duration (s); NaN when no stroke.
     duration: f64 => h.plan.trajectory.as_ref().map_or(f64::NAN, |t| t.duration());
-    /// Largest |τ|/effort limit over joints and check points.
+    /// Largest |τ(t)|/effective effort limit over joints and every instant of the stroke
+    /// (certified to the planner's effort tolerance, 1e-4).
     effort_ratio: f64 => h.plan.effort_ratio;
     /// The stroke as a `JointTrajectory` (None when no stroke was planned).
     trajectory: Option<PyJointTrajectory> => h.plan.trajectory.clone().map(|inner| PyJointTrajectory { inner });
@@ -64,7 +65,7 @@ array_getters!(PyHitPlan, |h| {
     start => h.plan.start.q, [h.plan.start.q.len()];
     /// (n,) ready (rest) configuration the stroke returns to (m, rad).
     ready => h.plan.ready, [h.plan.ready.len()];
-    /// (n,) largest |joint torque| (N·m or N, friction included) at the effort check points.
+    /// (n,) largest |joint torque| (N·m or N, friction included) over the stroke.
     peak_effort => h.plan.peak_effort, [h.plan.peak_effort.len()];
 });
 

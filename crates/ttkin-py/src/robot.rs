@@ -237,6 +237,18 @@ impl PyRobot {
         }
     }
 
+    /// Effective effort limits (N or N·m) at joint speeds `qd` (m/s or rad/s): (n,) for qd of
+    /// shape (n,), (N, n) for (N, n); the drive's bus voltage lowers them with speed.
+    fn effort_limits_at<'py>(&self, py: Python<'py>, qd: &Any<'py>) -> PyResult<Array<'py>> {
+        let (a, batch) = self.configs(qd, "qd")?;
+        let n = self.chain.dof();
+        let limits = ttkin::effort::EffortLimits::of(&self.chain).at_rows(a.data());
+        Ok(match batch {
+            None => to_numpy(py, &[n], &limits),
+            Some(count) => to_numpy(py, &[count, n], &limits),
+        })
+    }
+
     /// Every link frame in the base frame (tool transform not applied): (n, 4, 4) or (N, n, 4, 4).
     fn fk_all<'py>(&self, py: Python<'py>, q: &Any<'py>) -> PyResult<Array<'py>> {
         let (a, batch) = self.configs(q, "q")?;
@@ -291,6 +303,12 @@ array_getters!(PyRobot, |r| {
     acceleration_limits => r.chain.limit_column(|l| l.acceleration), [r.chain.dof()];
     /// (n,) effort limits (N or N·m; inf where none).
     effort_limits => r.chain.limit_column(|l| l.effort), [r.chain.dof()];
+    /// (n,) what each joint's drive delivers at peak current, G·k_t·I_peak·η (N or N·m; inf where
+    /// the drive data lacks it).
+    drive_effort_limits => ttkin::effort::EffortLimits::of(&r.chain).drive_peaks(), [r.chain.dof()];
+    /// (n,) effective effort limits at standstill: the smaller of `effort_limits` and
+    /// `drive_effort_limits` (N or N·m; inf where neither); the limit the planners use.
+    effective_effort_limits => ttkin::effort::EffortLimits::of(&r.chain).at_rest(), [r.chain.dof()];
 });
 
 value_getters!(PyRobot, |r| {
@@ -300,6 +318,9 @@ value_getters!(PyRobot, |r| {
     name: String => r.chain.name().to_string();
     /// Joint names, base to tool.
     joint_names: Vec<String> => r.chain.joints().iter().map(|j| j.name().to_string()).collect();
+    /// Which limit governs each joint's effective effort limit at standstill: "robot file",
+    /// "drive peak current", "drive voltage" or "none".
+    effort_limit_sources: Vec<&'static str> => ttkin::effort::EffortLimits::of(&r.chain).sources_at_rest();
     /// Joint types, "revolute" or "prismatic".
     joint_types: Vec<&'static str> => r.chain.joints().iter().map(|j| j.kind().name()).collect();
 });

@@ -15,6 +15,7 @@ pub mod description;
 pub mod dh;
 pub mod diffdrive;
 pub mod dynamics;
+pub mod effort;
 pub mod error;
 pub mod hit;
 pub mod ik;

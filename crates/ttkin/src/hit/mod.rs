@@ -15,8 +15,10 @@
 //! 3. the stroke: current state → (q, q̇, q̈ = 0) at the hit time → rest at the ready pose, a
 //!    quintic or a jerk-limited time-optimal trajectory ([`crate::traj::jerk`]), whichever meets
 //!    the hit time within the limits ([`StrokeProfile::Auto`]);
-//! 4. torques by inverse dynamics with joint friction (the drives' feed-forward) at check points,
-//!    against the effort limits.
+//! 4. torques by inverse dynamics with joint friction (the drives' feed-forward) against the
+//!    effective effort limits ([`crate::effort`]: the robot file's or the drive's, whichever is
+//!    smaller, falling with speed where the drive's bus voltage limits it) at every instant: a
+//!    certified bound of the peak, not check points ([`crate::dynamics::peak`]).
 //!
 //! Infeasible requests give a [`HitStatus`], not an error: too early (the plan is made for the
 //! earliest feasible hit time, [`HitPlan::earliest_t_hit`]), unreachable, singular, a hit speed
@@ -32,6 +34,7 @@ use rayon::prelude::*;
 
 use crate::chain::Chain;
 use crate::dynamics::{Dynamics, DynamicsData};
+use crate::effort::EffortLimits;
 use crate::error::{check_finite, check_vector, Error, Result};
 use crate::ik::Analytic;
 use crate::traj::limits::{KinematicLimits, Violation};
@@ -161,14 +164,16 @@ pub struct HitOptions {
     pub gravity: [f64; 3],
     /// Check (and retime for) the effort limits by inverse dynamics; off: kinematic limits only.
     pub check_effort: bool,
-    /// Evenly spaced instants per leg at which torques are checked against the effort limits (≥ 2).
-    pub effort_points: usize,
+    /// Tolerance (ratio units) of the reported [`HitPlan::effort_ratio`]: the certified bound of
+    /// the peak |τ|/limit is within it of the ratio reported (> 0; the feasibility decision itself
+    /// is exact, [`crate::dynamics::peak`]).
+    pub effort_tolerance: f64,
     /// Latest hit time (s) the earliest-feasible search tries.
     pub max_t_hit: f64,
 }
 
 impl Default for HitOptions {
-    /// Auto profile and task, default jerk limits, standard gravity, 12 effort points per leg,
+    /// Auto profile and task, default jerk limits, standard gravity, effort ratio to 1e-4,
     /// search up to 10 s.
     fn default() -> Self {
         HitOptions {
@@ -177,7 +182,7 @@ impl Default for HitOptions {
             jerk: None,
             gravity: GRAVITY,
             check_effort: true,
-            effort_points: 12,
+            effort_tolerance: 1e-4,
             max_t_hit: 10.0,
         }
     }
@@ -258,9 +263,14 @@ pub struct HitPlan {
     pub return_duration: f64,
     /// Kinematic limit violations of the trajectory (exact peaks), empty when within limits.
     pub violations: Vec<Violation>,
-    /// Largest |joint torque| (N·m or N, with friction) per joint at the effort check points.
+    /// Largest |joint torque| (N·m or N, with friction) per joint over the stroke (at the instants
+    /// the certified peak search evaluated; within the effort tolerance of the true peak for the
+    /// joints whose limit does not depend on speed).
     pub peak_effort: Vec<f64>,
-    /// Largest |τ|/effort limit over joints and check points (0 without dynamics or limits).
+    /// Largest |τ(t)|/effective effort limit over joints and the whole stroke, every instant
+    /// ([`crate::effort`]: the robot file's limit or the drive's, whichever is smaller at q̇(t)):
+    /// a value the stroke takes, within `effort_tolerance` of the certified peak (0 without
+    /// dynamics or limits).
     pub effort_ratio: f64,
 }
 
@@ -280,7 +290,7 @@ pub struct HitPlanner {
     analytic: Option<Analytic>,
     racket: Racket,
     limits: KinematicLimits,
-    effort: Vec<f64>,
+    effort: EffortLimits,
     options: HitOptions,
     ready: Vec<f64>,
 }
@@ -315,12 +325,15 @@ impl HitPlanner {
             None => accel.iter().map(|a| a * DEFAULT_JERK_PER_ACCELERATION).collect(),
         };
         let limits = KinematicLimits::from_chain(chain, Some(&jerk))?;
-        if options.effort_points < 2 {
-            return Err(Error::invalid("effort_points", "need at least 2 check points per leg"));
+        if !(options.effort_tolerance > 0.0 && options.effort_tolerance.is_finite()) {
+            return Err(Error::invalid(
+                "effort_tolerance",
+                format!("need a finite tolerance > 0, got {}", options.effort_tolerance),
+            ));
         }
         check_finite("gravity", &options.gravity)?;
         crate::traj::check_duration("max_t_hit", options.max_t_hit)?;
-        let effort = lim.iter().map(|l| l.effort.unwrap_or(f64::INFINITY)).collect();
+        let effort = EffortLimits::of(chain);
         Ok(HitPlanner {
             chain: chain.clone(),
             dynamics: if options.check_effort {
@@ -350,6 +363,11 @@ impl HitPlanner {
     /// Kinematic limits used (position, speed, acceleration, jerk).
     pub fn limits(&self) -> &KinematicLimits {
         &self.limits
+    }
+
+    /// Effective effort limits used ([`crate::effort`]).
+    pub fn effort_limits(&self) -> &EffortLimits {
+        &self.effort
     }
 
     /// The options.

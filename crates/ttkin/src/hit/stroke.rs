@@ -11,30 +11,37 @@
 //! the position limits or exceed an effort limit.
 //! T* is computed on demand ([`super::HitPlanner::earliest_t_hit`]) when planning did not need it.
 //! A leg that leaves the position limits is replanned jerk-limited with position limits.
-//! When the torques at the check points exceed an effort limit, the return leg is slowed, and
-//! the hit time is moved later (growth by 10 %, then bisection to 0.1 %) until they do not.
+//! When the torques exceed an effective effort limit ([`crate::effort`]) at any instant, the
+//! return leg is slowed, and the hit time is moved later (growth by 10 %, then bisection to
+//! 0.1 %) until they do not. "At any instant" is certified, not sampled: the branch-and-bound
+//! bound of [`crate::dynamics::peak`] decides each leg ([`PeakStop::Decide`]), and the reported
+//! `effort_ratio` is the refined peak of the legs planned ([`PeakStop::Refine`] to the options'
+//! `effort_tolerance`). The final trajectory's speed, acceleration and jerk are checked exactly
+//! as well ([`JointTrajectory::rate_violations`]; Ruckig's legs and the accepted quintics are
+//! within them by construction, so this only catches a start state beyond the limits).
 //!
 //! Cost (gantry6, about 190k instructions per on-time plan): every check of a leg is made once
 //! (a leg knows whether it is inside the position limits and its torques at the check points
 //! until it is replaced); quintic limit ratios and position ranges are first bounded by the
 //! polynomials' Bernstein coefficients ([`crate::traj::poly::bounds`]) and the exact extrema are
 //! found only where a bound can change the answer, so plans are the same numbers bit for bit.
-//! What is left is mostly the 24 inverse-dynamics evaluations (12 per leg, about half) and the
-//! SVD of J⁻¹V.
+//! The certified effort check costs more than the 24 sampled inverse dynamics it replaced
+//! (docs/hit_pipeline.md has the numbers): a leg far below its limits is decided by the first
+//! eight interval enclosures, a leg near them by a few tens.
 
 use super::{HitPlan, HitPlanner, HitStatus, StrokeProfile};
-use crate::dynamics::DynamicsData;
+use crate::dynamics::{DynamicsData, EffortPeak, PeakStop};
 use crate::error::Result;
 use crate::traj::duration;
 use crate::traj::jerk::{jerk_limited, PositionLimits};
-use crate::traj::limits::{KinematicLimits, LIMIT_TOLERANCE};
+use crate::traj::limits::{KinematicLimits, Quantity, LIMIT_TOLERANCE};
 use crate::traj::{JointState, JointTrajectory};
 
 /// Relative precision of the earliest hit time under effort limits.
 const EFFORT_SEARCH_PRECISION: f64 = 1e-3;
 
 /// The two legs, their hit-leg profile, and what is already known of each: inside the position
-/// limits, and its effort (ratio and peaks at the check points). Replacing a leg resets both.
+/// limits. Replacing a leg resets it.
 struct Legs {
     hit: JointTrajectory,
     back: JointTrajectory,
@@ -47,7 +54,6 @@ struct Legs {
 #[derive(Default)]
 struct Known {
     inside: bool,
-    effort: Option<(f64, Vec<f64>)>,
 }
 
 impl Legs {
@@ -130,17 +136,10 @@ pub(super) fn plan_stroke(p: &HitPlanner, plan: &mut HitPlan, mut data: Option<&
     }
     let t_hit = legs.t_hit();
     if let Some(d) = data {
-        let m = p.options.effort_points;
-        let (r1, p1) = match legs.hit_known.effort.take() {
-            Some(e) => e,
-            None => effort(p, d, &legs.hit, 0.0, t_hit, m),
-        };
-        let (r2, p2) = match legs.back_known.effort.take() {
-            Some(e) => e,
-            None => effort(p, d, &legs.back, 0.0, legs.back.duration(), m),
-        };
-        plan.effort_ratio = r1.max(r2);
-        plan.peak_effort = p1.iter().zip(&p2).map(|(a, b)| a.max(*b)).collect();
+        let refine = PeakStop::Refine(p.options.effort_tolerance);
+        let (e1, e2) = (effort(p, d, &legs.hit, refine), effort(p, d, &legs.back, refine));
+        plan.effort_ratio = e1.ratio.max(e2.ratio);
+        plan.peak_effort = e1.peak.iter().zip(&e2.peak).map(|(a, b)| a.max(*b)).collect();
     }
     if t_hit > t_req * (1.0 + 1e-12) {
         if plan.status == HitStatus::Ok {
@@ -155,18 +154,25 @@ pub(super) fn plan_stroke(p: &HitPlanner, plan: &mut HitPlan, mut data: Option<&
     plan.profile = legs.profile;
     plan.return_duration = legs.back.duration();
     // Speed, acceleration and jerk hold by construction (Ruckig's profiles; quintics accepted only
-    // when their exact peaks are within the limits): only the position limits are left to check.
+    // when their exact peaks are within the limits) from a start within the limits; checked
+    // exactly all the same (cheap bounds first), with the position limits.
     if !legs.hit_known.inside {
         plan.violations = legs.hit.position_violations(&p.limits, 0.0);
     }
     if !legs.back_known.inside {
         plan.violations.extend(legs.back.position_violations(&p.limits, t_hit));
     }
+    plan.violations.extend(legs.hit.rate_violations(&p.limits, 0.0));
+    plan.violations.extend(legs.back.rate_violations(&p.limits, t_hit));
     let trajectory = legs.hit.append(legs.back);
     plan.trajectory = Some(trajectory);
     if matches!(plan.status, HitStatus::Ok | HitStatus::TooEarly) && !plan.violations.is_empty() {
         let v = &plan.violations[0];
-        plan.status = HitStatus::PositionLimit;
+        plan.status = if v.quantity == Quantity::Position {
+            HitStatus::PositionLimit
+        } else {
+            HitStatus::NoStroke
+        };
         plan.message = format!(
             "joint '{}' {} {:.4} beyond its limit {:.4} at {:.4} s",
             p.chain.joints()[v.joint].name(),
@@ -300,51 +306,33 @@ fn within_position_limits(
     Ok(legs)
 }
 
-/// Largest |τ|/effort over `points` evenly spaced instants of [t0, t1] and the peak |τ| per joint
-/// (inverse dynamics with friction, gravity of the options).
-fn effort(
-    p: &HitPlanner,
-    data: &mut DynamicsData,
-    traj: &JointTrajectory,
-    t0: f64,
-    t1: f64,
-    points: usize,
-) -> (f64, Vec<f64>) {
-    let n = p.chain.dof();
+/// The certified effort peak of `traj` against the planner's effective effort limits (inverse
+/// dynamics with friction, gravity of the options), stopping as `stop` says.
+fn effort(p: &HitPlanner, data: &mut DynamicsData, traj: &JointTrajectory, stop: PeakStop) -> EffortPeak {
     let dynamics = p.dynamics.as_ref().expect("effort data exists only with dynamics");
-    let (mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-    let mut peak = vec![0.0f64; n];
-    let mut ratio: f64 = 0.0;
     let gravity = nalgebra::Vector3::from(p.options.gravity);
-    for k in 0..points {
-        let t = t0 + (t1 - t0) * k as f64 / (points - 1) as f64;
-        traj.sample_unchecked(t.min(traj.duration()), &mut q, &mut qd, &mut qdd);
-        // What `Dynamics::inverse_dynamics` would reject (data, shapes and gravity are right here).
-        if !q.iter().chain(&qd).chain(&qdd).all(|v| v.is_finite()) {
-            return (f64::INFINITY, peak);
-        }
-        let fixed = <&[f64; 6]>::try_from(&q[..])
-            .ok()
-            .zip(<&[f64; 6]>::try_from(&qd[..]).ok())
-            .zip(<&[f64; 6]>::try_from(&qdd[..]).ok())
-            .and_then(|((q, qd), qdd)| dynamics.inverse_dynamics_fixed::<6>(data, q, qd, qdd, &gravity));
-        let tau: &[f64] = match &fixed {
-            Some(t) => t,
-            None => dynamics
-                .inverse_dynamics_unchecked(data, &q, &qd, &qdd, &gravity)
-                .as_slice(),
-        };
-        for j in 0..n {
-            peak[j] = peak[j].max(tau[j].abs());
-            ratio = ratio.max(tau[j].abs() / p.effort[j]);
-        }
-    }
-    (ratio, peak)
+    dynamics.effort_peak(data, traj, &p.effort, &gravity, stop)
 }
 
-/// Makes both legs respect the effort limits at their check points: the return leg slowed by
-/// factors of 1.25 (up to 10 times), the hit leg moved later (growth, then bisection). An error
-/// message when no hit time up to `max_t_hit` is enough.
+/// The decision of a leg: within the effort limits at every instant, or not (a peak within
+/// [`EFFORT_DECISION`] below the limit may be called above it: the hit time search then settles
+/// at most that much later).
+const DECIDE: PeakStop = PeakStop::Decide {
+    threshold: 1.0 + LIMIT_TOLERANCE,
+    tolerance: EFFORT_DECISION,
+};
+
+/// Bracket (ratio units) at which an effort decision errs on the safe side.
+const EFFORT_DECISION: f64 = 1e-3;
+
+/// Whether a decided peak is within the limits (its certified bound at most the limit).
+fn fits(e: &EffortPeak) -> bool {
+    e.bound <= 1.0 + LIMIT_TOLERANCE
+}
+
+/// Makes both legs respect the effort limits at every instant: the return leg slowed by factors
+/// of 1.25 (up to 10 times), the hit leg moved later (growth, then bisection). An error message
+/// when no hit time up to `max_t_hit` is enough.
 fn within_effort_limits(
     p: &HitPlanner,
     data: &mut DynamicsData,
@@ -354,14 +342,17 @@ fn within_effort_limits(
     legs: &mut Legs,
 ) -> std::result::Result<(), String> {
     let lim = &p.limits;
-    let m = p.options.effort_points;
-    let name = |ratio: f64, leg: &str| {
-        format!("the {leg} leg needs {ratio:.2}× the effort limit of some joint at every duration tried")
+    let name = |e: &EffortPeak, leg: &str| {
+        format!(
+            "the {leg} leg needs {:.2}× the effort limit of joint '{}' at every duration tried",
+            e.ratio.max(1.0),
+            p.chain.joints()[e.joint].name()
+        )
     };
-    let mut e_back = effort(p, data, &legs.back, 0.0, legs.back.duration(), m);
+    let mut e_back = effort(p, data, &legs.back, DECIDE);
     let mut d = legs.back.duration();
     for _ in 0..10 {
-        if e_back.0 <= 1.0 {
+        if fits(&e_back) {
             break;
         }
         d *= 1.25;
@@ -369,53 +360,45 @@ fn within_effort_limits(
             break;
         };
         legs.set_back(b.trajectory);
-        e_back = effort(p, data, &legs.back, 0.0, legs.back.duration(), m);
+        e_back = effort(p, data, &legs.back, DECIDE);
     }
-    let r_back = e_back.0;
-    legs.back_known.effort = Some(e_back);
-    if r_back > 1.0 {
-        return Err(name(r_back, "return"));
+    if !fits(&e_back) {
+        return Err(name(&e_back, "return"));
     }
 
-    let e_hit = effort(p, data, &legs.hit, 0.0, legs.t_hit(), m);
-    let r_hit = e_hit.0;
-    if r_hit <= 1.0 {
-        legs.hit_known.effort = Some(e_hit);
+    let e_hit = effort(p, data, &legs.hit, DECIDE);
+    if fits(&e_hit) {
         return Ok(());
     }
-    // The hit leg at hit time t (jerk-limited, position limits respected).
-    let leg_at = |t: f64, data: &mut DynamicsData| -> Option<(JointTrajectory, (f64, Vec<f64>))> {
+    // The hit leg at hit time t (jerk-limited, position limits respected) when it fits.
+    let leg_at = |t: f64, data: &mut DynamicsData| -> Option<JointTrajectory> {
         let j = jerk_limited(start, hit, lim, Some(t), PositionLimits::Respect).ok()?;
-        let e = effort(p, data, &j.trajectory, 0.0, j.duration, m);
-        Some((j.trajectory, e))
+        fits(&effort(p, data, &j.trajectory, DECIDE)).then_some(j.trajectory)
     };
     let (mut lo, mut hi) = (legs.t_hit(), legs.t_hit() * 1.1);
     let mut good = None;
     while hi <= p.options.max_t_hit {
-        if let Some((traj, e)) = leg_at(hi, data) {
-            if e.0 <= 1.0 {
-                good = Some((traj, e));
-                break;
-            }
+        if let Some(traj) = leg_at(hi, data) {
+            good = Some(traj);
+            break;
         }
         lo = hi;
         hi *= 1.1;
     }
     let Some(mut best) = good else {
-        return Err(name(r_hit, "hit"));
+        return Err(name(&e_hit, "hit"));
     };
     while hi - lo > EFFORT_SEARCH_PRECISION * hi {
         let mid = 0.5 * (lo + hi);
         match leg_at(mid, data) {
-            Some((traj, e)) if e.0 <= 1.0 => {
-                best = (traj, e);
+            Some(traj) => {
+                best = traj;
                 hi = mid;
             }
-            _ => lo = mid,
+            None => lo = mid,
         }
     }
-    legs.set_hit(best.0);
-    legs.hit_known.effort = Some(best.1);
+    legs.set_hit(best);
     legs.profile = StrokeProfile::Jerk;
     Ok(())
 }

@@ -288,6 +288,55 @@ impl JointTrajectory {
         out
     }
 
+    /// Every joint's worst excess of its velocity, acceleration and jerk limits (to
+    /// [`LIMIT_TOLERANCE`]), exactly, with times shifted by `t0` s; `limits` must have
+    /// `self.dof()` joints. Cheap bounds first ([`poly::bound_abs`] per segment): the exact peaks
+    /// only for the joints and orders they cannot clear.
+    pub fn rate_violations(&self, limits: &KinematicLimits, t0: f64) -> Vec<Violation> {
+        let mut out = Vec::new();
+        for (order, quantity, bound) in [
+            (1, Quantity::Velocity, &limits.velocity),
+            (2, Quantity::Acceleration, &limits.acceleration),
+            (3, Quantity::Jerk, &limits.jerk),
+        ] {
+            for j in 0..self.dof() {
+                let limit = bound[j] * (1.0 + LIMIT_TOLERANCE);
+                let mut worst = Peak { time: 0.0, value: 0.0 };
+                let mut clear = true;
+                for k in 0..self.segments() {
+                    let (start, h) = (self.knots()[k], self.knots()[k + 1] - self.knots()[k]);
+                    let mut c = self.coefficients(k, j).expect("segment and joint in range");
+                    for _ in 0..order {
+                        c = poly::derivative(&c);
+                    }
+                    if poly::bound_abs(&c, h) <= limit {
+                        continue;
+                    }
+                    let (tau, v) = poly::max_abs(&c, h);
+                    if v.abs() > limit {
+                        clear = false;
+                        if v.abs() > worst.value.abs() {
+                            worst = Peak {
+                                time: start + tau,
+                                value: v,
+                            };
+                        }
+                    }
+                }
+                if !clear {
+                    out.push(Violation {
+                        joint: j,
+                        quantity,
+                        time: t0 + worst.time,
+                        value: worst.value,
+                        limit: bound[j],
+                    });
+                }
+            }
+        }
+        out
+    }
+
     /// Every joint's worst violation of each limit (position, velocity, acceleration, jerk), found
     /// exactly; empty when the trajectory respects all limits (to [`LIMIT_TOLERANCE`]).
     pub fn check_limits(&self, limits: &KinematicLimits) -> Result<Vec<Violation>> {
