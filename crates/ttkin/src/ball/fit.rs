@@ -800,7 +800,7 @@ pub struct SpinPrior {
 }
 
 /// Prediction error of one flight under a fixed model.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct PredictionError {
     /// Frames the state was fitted on.
     pub window: usize,
@@ -813,6 +813,8 @@ pub struct PredictionError {
     pub rms: f64,
     /// Largest distance (m) over the predicted frames.
     pub max: f64,
+    /// The predicted positions (m) at every frame of the segment (the window's included).
+    pub path: Vec<[f64; 3]>,
 }
 
 /// The prediction error of `fm` on `recording` (see the module doc): its state fitted on the
@@ -854,6 +856,7 @@ pub fn prediction_error(
         rms_after_bounce: rms(&d[(b + 1 - window)..]),
         rms: rms(&d),
         max: d.iter().copied().fold(0.0, f64::max),
+        path: path.iter().map(|p| (*p).into()).collect(),
     })
 }
 
