@@ -359,7 +359,6 @@ fn ball_fit<'py>(
     }
     let e = py
         .detach(|| fit::experiment(&recs, window, period, &FitOptions::default()))
-        .map_err(ttkin::Error::from)
         .py()?;
     let c = &e.calibration;
     let d = PyDict::new(py);
