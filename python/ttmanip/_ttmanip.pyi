@@ -789,6 +789,13 @@ def ball_crossing(
 def ball_plan_return(
     state: ArrayLike, now: float, target: ArrayLike, model: str = "default"
 ) -> dict[str, Any]: ...
+def ball_fit(
+    names: list[str],
+    positions: list[ArrayLike],
+    velocities: list[ArrayLike] | None = None,
+    window: int = 20,
+    period: float | None = None,
+) -> dict[str, Any]: ...
 def ball_rally(
     n: int,
     seed: int = 0,

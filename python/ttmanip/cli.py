@@ -596,6 +596,9 @@ def build_parser() -> argparse.ArgumentParser:
     from . import rally_cli  # issue 13
 
     rally_cli.add_parser(sub)
+    from . import ball_cli  # issue 28
+
+    ball_cli.add_parser(sub)
     return parser
 
 

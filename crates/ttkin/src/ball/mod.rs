@@ -15,6 +15,7 @@
 
 pub mod contact;
 pub mod estimate;
+pub mod fit;
 pub mod flight;
 pub mod hitplan;
 pub mod impact;
