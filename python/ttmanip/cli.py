@@ -586,6 +586,9 @@ def build_parser() -> argparse.ArgumentParser:
     from . import rally_cli  # issue 13
 
     rally_cli.add_parser(sub)
+    from . import sweep_cli  # issue 31
+
+    sweep_cli.add_parser(sub)
     return parser
 
 
