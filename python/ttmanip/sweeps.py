@@ -36,7 +36,7 @@ __all__ = ["sweep", "STUDIES"]
 
 #: Study name -> (its parameters with their defaults, trials per point by default, trials per task).
 STUDIES: dict[str, tuple[dict[str, float], int, int]] = {
-    "hits": ({"base_x": 0.0, "base_y": 0.0, "speed": 3.0}, 4000, 2000),
+    "hits": ({"base_x": 0.0, "base_y": 0.0, "speed": 3.0}, 10000, 10000),
     "rally": ({"target_x": 0.9, "target_y": 0.0, "max_spin_rps": 40.0}, 400, 200),
 }
 

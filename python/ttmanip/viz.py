@@ -181,23 +181,21 @@ class Recording:
             self.rec.reset_time()
 
 
-def record_hit(path: str | Path, robot, plan, sim, *, root: str | None = None, rec: Recording | None = None):
-    """A planned and simulated hit (``plan_hit`` + ``simulate``): the robot from the simulated joint
-    positions, the racket, the hit point, q / q_ref / torque / current. gantry6 stands at its rally
-    place by the table; another robot stands alone at the origin."""
-    own = rec is None
-    rec = rec or Recording(path)
-    name = root or f"world/{robot.name}"
+def record_hit(rec: Recording, robot, plan, sim, *, t0: float = 0.0) -> None:
+    """A planned and simulated hit (``plan_hit`` + ``simulate``) from ``t0`` (s) on the timeline:
+    the robot from the simulated joint positions, the racket, the hit point, q / q_ref / torque /
+    current. gantry6 stands at its rally place by the table (``world/gantry6``); another robot
+    stands alone (``<name>``, its base frame at the origin)."""
     at_table = robot.name == "gantry6"
     if at_table:
         rec.table()
+    root = f"world/{robot.name}" if at_table else robot.name
     a = sim.arrays
+    t = t0 + np.asarray(a["t"], dtype=float)
     scalars = {k: a[k] for k in ("q", "q_ref", "torque", "current") if k in a}
-    rec.robot(
-        name, robot, a["t"], a["q"], world_from_base=WORLD_FROM_GANTRY6 if at_table else None, scalars=scalars
-    )
-    rec.racket(name, a["t"], sim.racket_pose, plan.hit_pose[:3, 3])
-    return rec.close() if own else rec
+    base = WORLD_FROM_GANTRY6 if at_table else None
+    rec.robot(root, robot, t, a["q"], world_from_base=base, scalars=scalars)
+    rec.racket(root, t, sim.racket_pose, plan.hit_pose[:3, 3])
 
 
 def record_rally(path: str | Path, summary: dict, balls: int = 10) -> Path:
