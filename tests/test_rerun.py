@@ -154,3 +154,11 @@ def test_telemetry_converts(tmp_path, capsys):
     bad.write_text("a,b\n1,2\n")
     assert main(["telemetry", str(bad), "--rerun", str(tmp_path / "x.rrd")]) == 2
     assert "not a ttctl telemetry CSV" in capsys.readouterr().err
+
+
+def test_snapshot_draws_a_frame_from_the_recording(demo, tmp_path):
+    from ttmanip.viz import snapshot
+
+    out, _ = demo
+    png = snapshot(out / "demo.rrd", 0.35, tmp_path / "frame.png")
+    assert png.stat().st_size > 20_000

@@ -24,7 +24,7 @@ import numpy as np
 
 from . import _ttmanip as _t
 
-__all__ = ["Recording", "WORLD_FROM_GANTRY6", "record_hit", "record_rally", "record_telemetry"]
+__all__ = ["Recording", "WORLD_FROM_GANTRY6", "record_hit", "record_rally", "record_telemetry", "snapshot"]
 
 #: gantry6's base frame in the world (table) frame of the rally: origin (−2.0, 0, 0.15) m, yaw
 #: 90° (``ttkin::ball::reach::Placement::default``).
@@ -262,4 +262,110 @@ def record_telemetry(telemetry: str | Path, path: str | Path) -> Path:
                         f"telemetry/{channel}/axis{a}/{quantity}", t, rec.rr.Scalars.columns(scalars=v)
                     )
                 a += 1
+    return Path(path)
+
+
+def snapshot(recording: str | Path, t: float, path: str | Path, *, title: str = "") -> Path:
+    """A matplotlib 3-D picture of a recording at time ``t`` (s), drawn from the logged data read
+    back with Rerun's reader: table, net, robot skeletons, racket centres, hit points, balls. A
+    stand-in for a viewer screenshot where no viewer can run (no display, no GPU)."""
+    rr = _rerun()
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import pyarrow as pa
+
+    data: dict[str, dict[str, list]] = {}
+    for chunk in rr.chunk.RrdReader(str(recording)).stream().to_chunks():
+        batch = chunk.to_record_batch()
+        cols = data.setdefault(chunk.entity_path, {})
+        for name in batch.schema.names:
+            col = batch.column(name)
+            if pa.types.is_duration(col.type) or pa.types.is_timestamp(col.type):
+                col = col.cast(pa.int64())
+            cols.setdefault(name, []).extend(col.to_pylist())
+
+    def at(entity: str, column: str):
+        """The latest value of ``column`` at or before t (static values have no time)."""
+        c = data.get(entity, {})
+        if column not in c:
+            return None
+        if "time" not in c:
+            return c[column][-1]
+        times = np.array(c["time"], dtype=float) / 1e9
+        before = np.flatnonzero(times <= t + 1e-12)
+        return None if before.size == 0 else c[column][before[np.argmax(times[before])]]
+
+    def world_from(entity: str) -> np.ndarray:
+        """The entity's parent chain of Transform3D (static or at t), composed into the world."""
+        parts = entity.strip("/").split("/")
+        m = np.eye(4)
+        for k in range(1, len(parts) + 1):
+            e = "/" + "/".join(parts[:k])
+            tr, rot = at(e, "Transform3D:translation"), at(e, "Transform3D:mat3x3")
+            if tr is not None:
+                step = np.eye(4)
+                step[:3, 3] = tr[0]
+                if rot is not None:
+                    step[:3, :3] = np.array(rot[0]).reshape(3, 3).T  # stored column-major
+                m = m @ step
+        return m
+
+    fig = plt.figure(figsize=(8, 6), constrained_layout=True)
+    ax = fig.add_subplot(projection="3d")
+    half = at("/world/table", "Boxes3D:half_sizes")
+    if half is not None:
+        hx, hy, _ = half[0]
+        xs, ys = np.meshgrid([-hx, min(hx, 0.3)], [-hy, hy])  # drawn up to the figure's edge
+        ax.plot_surface(xs, ys, np.zeros_like(xs), color="#1f4e8c", alpha=0.5)
+        net = at("/world/net", "Boxes3D:half_sizes")
+        if net is not None:
+            _, ny, nz = net[0]
+            ax.plot_surface(np.zeros((2, 2)), *np.meshgrid([-ny, ny], [0, 2 * nz]), color="0.85", alpha=0.7)
+    for entity in sorted(e for e in data if e.startswith("/world/") and e.endswith("/skeleton")):
+        strips = at(entity, "LineStrips3D:strips")
+        if strips:
+            m = world_from(entity.rsplit("/", 1)[0])
+            p = np.array(strips[0], dtype=float) @ m[:3, :3].T + m[:3, 3]
+            ax.plot(*p.T, "-o", color="#f0a028", lw=4, ms=4, label=entity.split("/")[-2] + " links")
+    for entity in sorted(e for e in data if e.startswith("/world/") and e.endswith("/racket")):
+        if at(entity, "Transform3D:translation") is not None:
+            m = world_from(entity)
+            u = np.linspace(0, 2 * np.pi, 40)
+            blade = np.c_[0.08 * np.cos(u), 0.075 * np.sin(u), 0 * u] @ m[:3, :3].T + m[:3, 3]
+            ax.plot(*blade.T, color="#c81e1e", lw=2, label="racket")
+            c = data[entity]
+            times = np.array(c["time"], dtype=float) / 1e9
+            past = np.array([row[0] for row in c["Transform3D:translation"]], dtype=float)[times <= t]
+            base = world_from(entity.rsplit("/", 1)[0])
+            trail = past[np.argsort(times[times <= t])] @ base[:3, :3].T + base[:3, 3]
+            ax.plot(*trail.T, ":", color="#c81e1e", lw=1, label="racket path so far")
+    for entity in sorted(e for e in data if e.startswith("/world/") and e.endswith("/hit")):
+        m = world_from(entity.rsplit("/", 1)[0])
+        p = np.array(at(entity, "Points3D:positions")[0], dtype=float) @ m[:3, :3].T + m[:3, 3]
+        ax.scatter(*p.T, color="gold", s=60, edgecolor="k", label="planned hit point")
+    for entity in sorted(e for e in data if e.startswith("/world/ball") and e.count("/") == 2):
+        p = at(entity, "Points3D:positions")
+        if p is not None:
+            ax.scatter(*np.array(p, dtype=float).T, color="darkorange", s=30)
+        pr = at(entity + "/predicted", "LineStrips3D:strips")
+        if pr:
+            ax.plot(*np.array(pr[0], dtype=float).T, color="orange", lw=1, alpha=0.6)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_zlabel("z [m]")
+    limits = np.array([[-2.6, 0.3], [-0.9, 0.9], [-0.1, 0.6]])  # the robot's end of the table, m
+    # (the table is drawn up to x = 0.3 m, matplotlib does not clip surfaces)
+    ax.set_xlim(*limits[0])
+    ax.set_ylim(*limits[1])
+    ax.set_zlim(*limits[2])
+    ax.set_box_aspect(np.diff(limits, axis=1).ravel())  # equal scale on every axis
+    ax.view_init(elev=25, azim=-55)
+    handles, labels = ax.get_legend_handles_labels()
+    unique = dict(zip(labels, handles, strict=True))
+    ax.legend(unique.values(), unique.keys(), loc="upper left", fontsize=8)
+    ax.set_title(title or f"{Path(recording).name} at t = {t:.3f} s (drawn from the recording's data)")
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
     return Path(path)
