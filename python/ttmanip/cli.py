@@ -240,7 +240,7 @@ def _demo(args: argparse.Namespace) -> int:
     out = _out_dir(args.out)
     bar = Progress(8 if not args.no_workspace else 7)
     try:
-        summary = run(out, progress=bar, workspace=not args.no_workspace)
+        summary = run(out, progress=bar, workspace=not args.no_workspace, rerun=args.rerun)
     finally:
         bar.close()
     _print_summary(
@@ -373,6 +373,12 @@ def _simulate(args: argparse.Namespace) -> int:
         raise CliError(f"--noise: expected a current-sense noise >= 0 A, got {args.noise}")
     results = []
     bar = Progress(4 * len(spec["hits"]))
+    rec = None
+    if args.rerun:
+        from .viz import Recording
+
+        rec = Recording(args.rerun, "ttmanip-simulate")
+    t0 = 0.0
     try:
         for i, hit in enumerate(spec["hits"]):
             results.append(
@@ -386,10 +392,15 @@ def _simulate(args: argparse.Namespace) -> int:
                     noise=args.noise,
                     setpoint_rate=args.setpoint_rate,
                     progress=bar,
+                    recording=rec,
+                    t0=t0,
                 )
             )
+            t0 += (results[-1].get("stroke_duration") or 0.0) + 0.5  # the hits one after the other
     finally:
         bar.close()
+        if rec is not None:
+            print(f"wrote {rec.close()}")
     _write_json(out / "summary.json", {"robot": spec["robot"].name, "hits": results})
     for i, r in enumerate(results):
         err = r.get("racket_position_error_m", float("nan"))
@@ -483,6 +494,13 @@ def _export(args: argparse.Namespace) -> int:
     return 0
 
 
+def _telemetry(args: argparse.Namespace) -> int:
+    from .viz import record_telemetry
+
+    print(f"wrote {record_telemetry(args.file, args.rerun)}")
+    return 0
+
+
 def _arg(*flags: str, **options) -> tuple[tuple[str, ...], dict]:
     """One argument of a subcommand: the flags and options of ``add_argument``."""
     return flags, options
@@ -516,6 +534,7 @@ def build_parser() -> argparse.ArgumentParser:
         "summary.json.\n\nexample:\n  ttmanip demo --out out/demo",
         _arg("--out", default="out/demo", help="output folder (default: out/demo)"),
         _arg("--no-workspace", action="store_true", help="skip the workspace figures"),
+        _arg("--rerun", metavar="FILE.rrd", help="also write a Rerun recording (needs ttmanip[viz])"),
     )
     _command(
         sub,
@@ -570,6 +589,7 @@ def build_parser() -> argparse.ArgumentParser:
         _arg("--noise", type=float, help="current-sense noise (A, DriveSim's default if unset)"),
         _arg("--setpoint-rate", type=float, default=1000.0, help="setpoint rate to the drives (Hz)"),
         _arg("--gif", action="store_true", help="also write a GIF of each stroke"),
+        _arg("--rerun", metavar="FILE.rrd", help="also write a Rerun recording (needs ttmanip[viz])"),
     )
 
     _command(
@@ -599,6 +619,19 @@ def build_parser() -> argparse.ArgumentParser:
     from . import ball_cli  # issue 28
 
     ball_cli.add_parser(sub)
+    from . import sweep_cli  # issue 31
+
+    sweep_cli.add_parser(sub)
+    _command(
+        sub,
+        "telemetry",
+        _telemetry,
+        "convert a ttctl telemetry CSV to a Rerun recording",
+        "Writes q, q_ref and current of every axis and the cycle latency of every channel as "
+        "time series (needs ttmanip[viz]).\n\nexample:\n  ttmanip telemetry tele.csv --rerun tele.rrd",
+        _arg("file", help="telemetry CSV written by ttctl --telemetry"),
+        _arg("--rerun", metavar="FILE.rrd", required=True, help="the recording to write"),
+    )
     return parser
 
 

@@ -18,6 +18,11 @@ def add_parser(sub) -> argparse.ArgumentParser:
         default=20,
         help="in-reach balls also executed through the drive simulation (default 20)",
     )
+    p.add_argument(
+        "--rerun",
+        metavar="FILE.rrd",
+        help="also a Rerun recording of the first 10 balls (needs ttmanip[viz])",
+    )
     p.set_defaults(func=run)
     return p
 
@@ -34,6 +39,10 @@ def run(args: argparse.Namespace) -> int:
     except TtmanipError as e:
         print(f"ttmanip rally: {e}", file=sys.stderr)
         return 2
+    if args.rerun:
+        from .viz import record_rally
+
+        print(f"wrote {record_rally(args.rerun, summary)}", file=sys.stderr)
     summary.pop("results")
     print(json.dumps({k: v for k, v in summary.items() if k != "figures"}, indent=2))
     print(f"wrote {args.out}/summary.json")

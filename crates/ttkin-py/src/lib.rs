@@ -21,6 +21,8 @@ mod args;
 mod guard;
 // issue 13
 mod ball;
+// issue 31: pickle and copy
+mod pickle;
 
 /// The native extension module `ttmanip._ttmanip`.
 #[pymodule]

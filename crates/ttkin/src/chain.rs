@@ -26,7 +26,7 @@ pub enum JacobianFrame {
 const BATCH_CHUNK: usize = 256;
 
 /// A serial chain of revolute and prismatic joints between a base frame and a tool frame.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Chain {
     name: String,
     joints: Vec<Joint>,

@@ -48,7 +48,7 @@ pub struct Dh {
 }
 
 /// Where the joint sits relative to the previous link frame.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Geometry {
     /// A DH row in the given convention.
     Dh(DhConvention, Dh),
@@ -334,7 +334,7 @@ impl Drive {
 }
 
 /// One joint and the link it moves.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Joint {
     name: String,
     kind: JointType,

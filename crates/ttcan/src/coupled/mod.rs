@@ -53,7 +53,7 @@ use winding::{open_winding_step, winding_step, Winding};
 /// 20 kHz): its trace keeps every tick (about 100 bytes per tick and axis).
 pub const MAX_RUN_TICKS: u64 = 1_000_000;
 /// Options of a [`CoupledSim`].
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CoupledOptions {
     /// Gravity in the base frame, m/s² (zero to switch it off).
     pub gravity: [f64; 3],

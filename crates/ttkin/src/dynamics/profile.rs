@@ -11,7 +11,7 @@ use crate::error::Result;
 
 /// Torques along a planned motion: joint side (rigid body + armature + friction), motor side and
 /// current, with the effort-limit check of the patent's step S105.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct TorqueProfile {
     /// Number of joints n.
     pub dof: usize,
@@ -36,7 +36,7 @@ impl TorqueProfile {
 }
 
 /// One sample at which a joint needs more than its effort limit.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct EffortViolation {
     /// Index of the sample in the trajectory.
     pub sample: usize,

@@ -49,7 +49,7 @@ pub const GRAVITY: [f64; 3] = [0.0, 0.0, -9.81];
 pub const DEFAULT_JERK_PER_ACCELERATION: f64 = 200.0;
 
 /// Hit parameters: where the racket is, how it moves, and when.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Hit {
     /// Racket pose at the hit: racket frame (origin at the centre, z = face normal) in the base
     /// frame (m).
@@ -104,7 +104,7 @@ impl Hit {
 }
 
 /// The family of the hit leg of a stroke.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum StrokeProfile {
     /// The quintic when it meets the hit time within the limits, else the jerk-limited stroke.
     Auto,
@@ -139,7 +139,7 @@ impl StrokeProfile {
 }
 
 /// Which part of the racket pose the hit prescribes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum HitTask {
     /// Full pose for a chain of ≤ 6 joints, the 5-D racket task for a redundant chain.
     Auto,
@@ -151,7 +151,7 @@ pub enum HitTask {
 }
 
 /// Planner settings.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct HitOptions {
     /// Family of the hit leg.
     pub profile: StrokeProfile,
@@ -189,7 +189,7 @@ impl Default for HitOptions {
 }
 
 /// How a plan came out.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum HitStatus {
     /// On time and within every limit.
     Ok,
@@ -228,7 +228,7 @@ impl HitStatus {
 }
 
 /// Every product of planning one hit. Joint values in rad or m, times in s from now.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct HitPlan {
     /// The request.
     pub hit: Hit,

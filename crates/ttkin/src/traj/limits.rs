@@ -132,7 +132,7 @@ impl KinematicLimits {
 }
 
 /// The quantity a limit bounds.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Quantity {
     /// Joint position (rad or m).
     Position,
@@ -157,7 +157,7 @@ impl Quantity {
 }
 
 /// The worst excess of one quantity of one joint over its limit.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Violation {
     /// Joint index.
     pub joint: usize,

@@ -34,7 +34,7 @@ const TIME_SLACK: f64 = 1e-9;
 
 /// A joint state: positions (rad or m), velocities (per s) and accelerations (per s²), one entry
 /// per joint.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct JointState {
     /// Joint positions (rad or m).
     pub q: Vec<f64>,
@@ -152,7 +152,7 @@ pub fn check_duration(what: &str, duration: f64) -> Result<()> {
 
 /// Joint-space trajectory: for each of `segments()` time intervals [t_k, t_{k+1}] and each joint, a
 /// polynomial of degree ≤ 5 in τ = t − t_k (s). Immutable once built; sampling allocates nothing.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct JointTrajectory {
     dof: usize,
     /// Segment boundaries (s), strictly increasing, `knots[0] = 0`.
