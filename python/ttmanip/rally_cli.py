@@ -33,7 +33,7 @@ def run(args: argparse.Namespace) -> int:
         summary = rally(args.n, args.seed, out=args.out, progress=True, drives=args.drives)
     except TtmanipError as e:
         print(f"ttmanip rally: {e}", file=sys.stderr)
-        return 2
+        return 1  # bad input (ttmanip.cli.EXIT_BAD_INPUT)
     summary.pop("results")
     print(json.dumps({k: v for k, v in summary.items() if k != "figures"}, indent=2))
     print(f"wrote {args.out}/summary.json")
