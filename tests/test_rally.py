@@ -67,7 +67,7 @@ def test_rally_cli_writes_summary_and_figures(tmp_path, capsys):
     assert list(summary["reach"]) == list(REACH) and sum(summary["reach"].values()) == 30
     for f in summary["figures"]:
         assert (tmp_path / f).exists() or __import__("pathlib").Path(f).exists()
-    assert cli.main(["rally", "--n", "0", "--out", str(out)]) == 2
+    assert cli.main(["rally", "--n", "0", "--out", str(out)]) == 1
 
 
 def test_planned_hits_executed_through_the_drives_stay_on_the_plan():

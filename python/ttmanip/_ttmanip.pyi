@@ -706,6 +706,11 @@ class HitPlan:
     def branches(self) -> int:
         """IK branches within the limits."""
     @property
+    def robot_name(self) -> str:
+        """Name of the robot this plan was made for."""
+    def made_for(self, robot: Robot) -> bool:
+        """Whether this plan was made for ``robot`` (the same chain)."""
+    @property
     def hit_pose(self) -> _F:
         """(4, 4) requested racket pose."""
     @property
@@ -776,6 +781,12 @@ def hit_plan_batch(
 ) -> list[HitPlan]: ...
 def racket_frame(normal: ArrayLike, handle: ArrayLike | None = None) -> _F: ...
 def racket_mount(robot: Robot) -> _F: ...
+def hit_check(pose: ArrayLike, twist: ArrayLike, t: float) -> None: ...
+
+# issue 29: the one array conversion, the rally's bound
+def real_array(obj: ArrayLike, what: str) -> _F: ...
+
+MAX_RALLY_BALLS: int
 
 # issue 13: ball flight, estimation, prediction, hit planning, rally (ttkin::ball)
 def ball_estimate(t: ArrayLike, p: ArrayLike, model: str = "default") -> dict[str, Any]: ...

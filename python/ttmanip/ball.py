@@ -124,8 +124,9 @@ def state(p: ArrayLike, v: ArrayLike, w: ArrayLike = (0.0, 0.0, 0.0), t: float =
     parts = [np.array([_finite_scalar(t, "t")])]
     for name, value in (("p", p), ("v", v), ("w", w)):
         try:
-            a = np.asarray(value, dtype=float)
-        except (TypeError, ValueError):
+            # The bindings' one conversion: complex, bool, string and object data are refused.
+            a = _t.real_array(value, name)
+        except TypeError:
             raise _t.TtmanipError(f"{name}: expected 3 real numbers, got {type(value).__name__}") from None
         if a.shape != (3,) or not np.isfinite(a).all():
             raise _t.TtmanipError(f"{name}: expected 3 finite numbers, got shape {a.shape}: {value!r}")

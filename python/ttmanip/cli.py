@@ -1,8 +1,9 @@
 """The ``ttmanip`` command line: the hit pipeline, the seed experiments, kinematics and robot files.
 
-Every subcommand takes ``--out DIR`` and writes its products there (PNG, CSV, JSON). User errors
-(bad file, unwritable folder, bad value, missing key, unreachable hit) end the command with exit
-status 2 (1 for a hit that cannot be planned) and one line ``ttmanip: error: KEY: problem``.
+Every subcommand takes ``--out DIR`` and writes its products there (PNG, CSV, JSON). Exit status,
+shared with ``ttctl`` and ``ttdrive-sim``: 0 done; 1 bad input (usage error, bad file, unwritable
+folder, bad value, missing or unknown key), with one line ``ttmanip: error: KEY: problem``; 2 not
+done (a hit that cannot be planned, a simulated run that faulted).
 
 examples:
   ttmanip demo --out out/demo
@@ -38,7 +39,15 @@ HIT_FILE_HELP = """hit file (JSON):
 in m, m/s, s (base frame). A hit may instead give "pose" (4x4) and "twist" (6); optional per
 hit: "omega" (rad/s), "handle"; optional top level: "units" ({"length": "m", "time": "s",
 "angle": "rad"}), "state" ({"q": [...], "qd": [...]}), "ready" ([...]), "profile" ("auto",
-"quintic", "jerk"). A single hit may stand at the top level instead of "hits"."""
+"quintic", "jerk"). A single hit may stand at the top level instead of "hits". Unknown keys
+are refused (as in robot files); at most 16 MiB, UTF-8, nested at most 64 deep."""
+
+#: Exit statuses shared with ``ttctl`` and ``ttdrive-sim`` (``ttcan::runtime::exit``).
+EXIT_SUCCESS, EXIT_BAD_INPUT, EXIT_NOT_DONE = 0, 1, 2
+
+#: Largest hit file read (bytes) and deepest JSON nesting accepted.
+MAX_HIT_FILE_BYTES = 16 << 20
+MAX_JSON_DEPTH = 64
 
 
 class CliError(Exception):
@@ -137,6 +146,16 @@ def _hit(entry, where: str):
     unknown = sorted(set(entry) - allowed)
     if unknown:
         raise CliError(f"{where}.{unknown[0]}: unknown key (expected one of {sorted(allowed)})")
+    if "centre" in entry and "center" in entry:
+        raise CliError(f"{where}.center: give the centre once ('centre' or 'center', not both)")
+    if "pose" in entry:
+        extra = sorted(set(entry) & {"centre", "center", "normal", "velocity", "omega", "handle"})
+        if extra:
+            raise CliError(
+                f"{where}.{extra[0]}: a hit gives 'pose' and 'twist' or centre/normal/velocity, not both"
+            )
+    elif "twist" in entry:
+        raise CliError(f"{where}.twist: goes with 'pose' (give centre/normal/velocity otherwise)")
     if "t" not in entry:
         raise CliError(f"{where}.t: missing key (hit time in s)")
     t = entry["t"]
@@ -169,15 +188,35 @@ def read_hit_file(path: str) -> dict:
     if p.suffix.lower() in (".yaml", ".yml"):
         raise CliError(f"{path}: YAML hit files need PyYAML, which ttmanip does not depend on; use JSON")
     try:
-        text = p.read_text()
+        # Read no further than the limit: a device such as /dev/zero never ends.
+        with p.open("rb") as f:
+            raw = f.read(MAX_HIT_FILE_BYTES + 1)
     except OSError as e:
         raise CliError(f"{path}: cannot read the hit file: {e.strerror or e}") from e
+    if len(raw) > MAX_HIT_FILE_BYTES:
+        raise CliError(f"{path}: larger than {MAX_HIT_FILE_BYTES} bytes (16 MiB), the most a hit file may be")
     try:
-        data = json.loads(text)
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise CliError(f"{path}: not UTF-8 text: invalid byte at offset {e.start}") from None
+    depth = _json_depth(text)
+    if depth > MAX_JSON_DEPTH:
+        raise CliError(f"{path}: JSON nested {depth} deep, at most {MAX_JSON_DEPTH}")
+    try:
+        # Integers as floats: a 401-digit integer is inf (refused as non-finite), not a traceback.
+        data = json.loads(text, parse_int=float)
     except json.JSONDecodeError as e:
         raise CliError(f"{path}: not valid JSON (line {e.lineno}, column {e.colno}: {e.msg})") from e
+    except (ValueError, RecursionError) as e:
+        raise CliError(f"{path}: not a readable JSON hit file ({e})") from None
     if not isinstance(data, dict):
         raise CliError(f"{path}: expected a JSON object at the top level")
+    top = {"robot", "units", "state", "ready", "profile"}
+    hit_keys = {"centre", "center", "normal", "velocity", "t", "omega", "handle", "pose", "twist"}
+    allowed = top | ({"hits"} if "hits" in data else hit_keys)
+    unknown = sorted(set(data) - allowed)
+    if unknown:
+        raise CliError(f"{unknown[0]}: unknown key (expected one of {sorted(allowed)})")
     units = data.get("units", {})
     if not isinstance(units, dict):
         raise CliError(f"units: expected an object like {_UNITS}, got {units!r}")
@@ -187,7 +226,7 @@ def read_hit_file(path: str) -> dict:
         if value != _UNITS[key]:
             raise CliError(f"units.{key}: only '{_UNITS[key]}' (SI) is accepted, got '{value}'")
     robot_name = data.get("robot", "gantry6")
-    if robot_name not in ROBOTS:
+    if not isinstance(robot_name, str) or robot_name not in ROBOTS:
         raise CliError(f"robot: unknown robot '{robot_name}' (expected one of {list(ROBOTS)})")
     if "hits" in data:
         entries = data["hits"]
@@ -207,12 +246,30 @@ def read_hit_file(path: str) -> dict:
         s = data["state"]
         if not isinstance(s, dict) or "q" not in s:
             raise CliError("state.q: missing key (the start configuration)")
+        unknown = sorted(set(s) - {"q", "qd", "qdd"})
+        if unknown:
+            raise CliError(f"state.{unknown[0]}: unknown key (expected 'q', 'qd', 'qdd')")
         state = {k: _vector(s, k, "state", robot.dof) for k in ("q", "qd", "qdd") if k in s}
     ready = _vector(data, "ready", "file", robot.dof, required=False)
     profile = data.get("profile", "auto")
     if profile not in ("auto", "quintic", "jerk"):
         raise CliError(f"profile: expected 'auto', 'quintic' or 'jerk', got {profile!r}")
     return {"robot": robot, "hits": hits, "state": state, "ready": ready, "profile": profile}
+
+
+def _json_depth(text: str) -> int:
+    """Deepest nesting of ``[`` and ``{`` in JSON ``text`` (strings skipped), without recursing."""
+    import re
+
+    depth = deepest = 0
+    for m in re.finditer(r'"(?:[^"\\]|\\.)*"|[\[\]{}]', text):
+        c = m.group()
+        if c in "[{":
+            depth += 1
+            deepest = max(deepest, depth)
+        elif c in "]}":
+            depth -= 1
+    return deepest
 
 
 def _plans(spec: dict):
@@ -228,7 +285,7 @@ def _fail_unplanned(plans) -> int:
     i, p = bad[0]
     more = f" (and {len(bad) - 1} more)" if len(bad) > 1 else ""
     print(f"ttmanip: error: hits[{i}]: {p.status}: {p.message}{more}", file=sys.stderr)
-    return 1
+    return EXIT_NOT_DONE
 
 
 # -- subcommands -------------------------------------------------------------------------------
@@ -414,7 +471,7 @@ def _simulate(args: argparse.Namespace) -> int:
     if bad:
         i, r = bad[0]
         print(f"ttmanip: error: hits[{i}]: {r['status']}: {r['message']}", file=sys.stderr)
-        return 1
+        return EXIT_NOT_DONE
     return 0
 
 
@@ -639,15 +696,19 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``ttmanip`` command: user errors become one line on stderr."""
     from . import TtmanipError
 
-    args = build_parser().parse_args(argv)
+    try:
+        args = build_parser().parse_args(argv)
+    except SystemExit as e:
+        # argparse exits 2 on a usage error; here 2 means "not done": a usage error is bad input.
+        return EXIT_BAD_INPUT if e.code not in (0, None) else EXIT_SUCCESS
     try:
         return args.func(args)
     except (CliError, TtmanipError) as e:
         print(f"ttmanip: error: {e}", file=sys.stderr)
-        return 2
+        return EXIT_BAD_INPUT
     except OSError as e:
         print(f"ttmanip: error: {e.filename or ''}: {e.strerror or e}", file=sys.stderr)
-        return 2
+        return EXIT_BAD_INPUT
 
 
 if __name__ == "__main__":

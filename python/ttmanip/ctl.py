@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import TtmanipError
+from . import _ttmanip as _t
 
 __all__ = ["write_trajectory", "write_stroke"]
 
@@ -25,11 +26,16 @@ class TrajectoryFileError(TtmanipError, ValueError):
     """A trajectory handed to :func:`write_trajectory` is malformed."""
 
 
-def _matrix(name: str, a: ArrayLike, k: int, n: int | None) -> np.ndarray:
+def _real(name: str, a: ArrayLike) -> np.ndarray:
+    """``a`` as float64 by the bindings' one conversion (complex, bool, string data refused)."""
     try:
-        m = np.asarray(a, dtype=float)
+        return _t.real_array(a, name)
     except (TypeError, ValueError) as e:
-        raise TrajectoryFileError(f"{name}: not an array of numbers ({e})") from None
+        raise TrajectoryFileError(f"{name}: not an array of real numbers ({e})") from None
+
+
+def _matrix(name: str, a: ArrayLike, k: int, n: int | None) -> np.ndarray:
+    m = _real(name, a)
     if m.ndim == 1 and n in (None, 1) and m.shape[0] == k:
         m = m[:, None]
     if m.ndim != 2 or m.shape[0] != k or (n is not None and m.shape[1] != n):
@@ -51,10 +57,7 @@ def write_trajectory(
     """Writes a joint trajectory for ``ttctl``: times ``t`` (K,) s strictly increasing, positions
     ``q``, velocities ``qd``, accelerations ``qdd`` and torque feed-forward ``tau_ff`` (K, n) in
     SI (rad or m, N·m or N; ``tau_ff`` zero when omitted). Returns the path."""
-    try:
-        tt = np.asarray(t, dtype=float).reshape(-1)
-    except (TypeError, ValueError) as e:
-        raise TrajectoryFileError(f"t: not an array of numbers ({e})") from None
+    tt = _real("t", t).reshape(-1)
     k = tt.shape[0]
     if k < 2:
         raise TrajectoryFileError(f"t: {k} samples, a trajectory needs at least 2")

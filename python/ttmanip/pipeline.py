@@ -64,8 +64,9 @@ def _array(value: Any, shape: tuple[int, ...], what: str, flat: bool = False) ->
     numbers, reshaped); :class:`ShapeError` or :class:`NonFiniteError` naming ``what`` otherwise."""
     expected = f"{int(np.prod(shape))} numbers" if flat else f"numbers of shape {shape}"
     try:
-        a = np.array(value, dtype=float)
-    except (TypeError, ValueError) as e:
+        # The bindings' one conversion: complex, bool, string and object data are refused.
+        a = _ttmanip.real_array(value, what)
+    except TypeError as e:
         raise ShapeError(f"{what}: expected {expected}, got {value!r}") from e
     if flat:
         if a.size != np.prod(shape):
@@ -97,6 +98,8 @@ class Hit:
             raise TtmanipError(f"hit.t: expected a time in s, got {self.t!r}") from e
         if not (np.isfinite(t) and t > 0.0):
             raise TtmanipError(f"hit.t: the hit time must be finite and > 0 s, got {t}")
+        # The planner's own check (rigid pose, hit time within the longest stroke), at construction.
+        _ttmanip.hit_check(self.pose, self.twist, t)
         object.__setattr__(self, "t", t)
 
     @classmethod
@@ -317,6 +320,11 @@ def simulate(
 
     if not isinstance(plan, HitPlan):
         raise TtmanipError(f"plan: expected a ttmanip.HitPlan, got {type(plan).__name__}")
+    if not plan.made_for(robot):
+        raise TtmanipError(
+            f"plan: made for robot '{plan.robot_name}' ({len(plan.start)} joints), not for "
+            f"'{robot.name}' ({robot.dof} joints): plan the hit for the robot you simulate"
+        )
     if plan.trajectory is None:
         raise HitError(f"plan: nothing to simulate (status '{plan.status}': {plan.message})")
     t, q, qd, qdd = plan.sample(rate)

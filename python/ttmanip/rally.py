@@ -69,6 +69,10 @@ def rally(
     """
     if not isinstance(n, (int, np.integer)) or isinstance(n, bool) or n < 1:
         raise _t.TtmanipError(f"n: must be a positive integer, got {n!r}")
+    if n > _t.MAX_RALLY_BALLS:
+        # Checked before the first chunk: the chunks would otherwise step around the binding's
+        # limit (rally(10**12) ran for ever).
+        raise _t.TtmanipError(f"n: at most {_t.MAX_RALLY_BALLS} balls per rally, got {n}")
     if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
         raise _t.TtmanipError(f"seed: must be a non-negative integer, got {seed!r}")
     if not isinstance(chunk, (int, np.integer)) or isinstance(chunk, bool) or chunk < 1:

@@ -38,7 +38,7 @@ def run(args: argparse.Namespace) -> int:
         summary = rally(args.n, args.seed, out=args.out, progress=True, drives=args.drives)
     except TtmanipError as e:
         print(f"ttmanip rally: {e}", file=sys.stderr)
-        return 2
+        return 1  # bad input (ttmanip.cli.EXIT_BAD_INPUT)
     if args.rerun:
         from .viz import record_rally
 

@@ -255,6 +255,19 @@ impl Plant {
         model.validate()?;
         positive("plant time step (s)", dt)?;
         let (phi, gamma) = discretise(model, dt);
+        if !(phi.iter().chain(gamma.iter()).all(|v| v.is_finite())) {
+            // Rates such as R/L·dt = 1e296 (an inductance of 1e-300 H) overflow the exact step:
+            // refused here rather than simulated as NaN currents.
+            return Err(crate::Error::InvalidParameter {
+                what: "motor inductance (H)".into(),
+                value: model.motor.inductance,
+                reason: format!(
+                    "the exact step of {dt} s overflows (R/L·dt = {:e}, K/J·dt = {:e}): parameters this                      far apart cannot be simulated",
+                    model.motor.resistance / model.motor.inductance * dt,
+                    model.motor.torque_constant / model.motor_side_inertia() * dt
+                ),
+            });
+        }
         Ok(Plant {
             model: *model,
             dt,

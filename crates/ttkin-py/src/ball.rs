@@ -235,9 +235,9 @@ fn ball_rally<'py>(
     let seed: u64 = args::unsigned(seed, "seed")?;
     let start: u64 = args::unsigned(start, "start")?;
     let paths: usize = args::unsigned(paths, "paths")?;
-    if start.checked_add(n as u64).is_none() {
+    if start.checked_add(n as u64).is_none_or(|end| end > MAX_RALLY_BALLS) {
         return Err(TtmanipError::new_err(format!(
-            "start: {start} + n ({n}) overflows the ball index"
+            "n: balls {start}..{start} + {n} go past the {MAX_RALLY_BALLS} balls a rally may have"
         )));
     }
     let planner = HitPlanner::new(ttkin::robots::gantry6(), Flight::default()).py()?;
@@ -267,12 +267,15 @@ fn ball_rally<'py>(
         truth.model.radius,
     )
     .py()?;
-    let out: Vec<rally::BallOutcome> = py.detach(|| {
+    // Ctrl-C stops the rally within one ball per thread (issue 29).
+    let out: Vec<rally::BallOutcome> = crate::interrupt::detach_interruptible(py, |cancel| {
         (start..start + n as u64)
             .into_par_iter()
-            .map(|i| rally::play(&planner, &region, &truth, &cfg, i))
+            .filter_map(|i| {
+                (!crate::interrupt::cancelled(cancel)).then(|| rally::play(&planner, &region, &truth, &cfg, i))
+            })
             .collect()
-    });
+    })?;
     let d = PyDict::new(py);
     let col = |f: &dyn Fn(&rally::BallOutcome) -> f64| out.iter().map(f).collect::<Vec<f64>>();
     d.set_item(
@@ -316,7 +319,11 @@ fn ball_rally<'py>(
     Ok(d)
 }
 
-/// Adds the ball functions to the module.
+/// Most balls one rally may play (about a minute of work on two cores); `ttmanip.rally`
+/// checks its `n` against it before the first chunk.
+pub const MAX_RALLY_BALLS: u64 = 1_000_000;
+
+/// (N, 3) rows of `obj` (named `what` in errors) as triples.
 fn rows3(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<[f64; 3]>> {
     let a = rows_array(obj, what, "N", &[3])?;
     Ok(a.data().chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
@@ -437,8 +444,10 @@ fn ball_fit<'py>(
     Ok(d)
 }
 
+/// Adds the ball functions to the module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ball_fit, m)?)?;
+    m.add("MAX_RALLY_BALLS", MAX_RALLY_BALLS)?;
     m.add_function(wrap_pyfunction!(ball_estimate, m)?)?;
     m.add_function(wrap_pyfunction!(ball_predict, m)?)?;
     m.add_function(wrap_pyfunction!(ball_predict_batch, m)?)?;

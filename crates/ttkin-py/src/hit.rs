@@ -126,6 +126,17 @@ impl PyHitPlan {
         self.torques(py, 1000.0)
     }
 
+    /// Name of the robot this plan was made for.
+    #[getter]
+    fn robot_name(&self) -> &str {
+        self.planner.chain().name()
+    }
+
+    /// Whether this plan was made for `robot` (the same chain: joints, geometry, limits, masses).
+    fn made_for(&self, robot: &PyRobot) -> bool {
+        *self.planner.chain() == *robot.chain
+    }
+
     fn __repr__(&self) -> String {
         format!(
             "HitPlan(status='{}', t_hit={:.4}, earliest_t_hit={:.4}, profile='{}')",
@@ -339,6 +350,18 @@ fn racket_frame<'py>(
     Ok(to_numpy(py, &[3, 3], &rows).into_any())
 }
 
+/// Checks hit parameters as the planner will: pose (4, 4) rigid, twist (6,) finite, t (s) finite,
+/// > 0 and at most `ttkin::traj::duration::MAX_DURATION`; the one check of `ttmanip.Hit`.
+#[ttkin_py_guard::guarded]
+#[pyfunction]
+fn hit_check(pose: &Bound<'_, PyAny>, twist: &Bound<'_, PyAny>, t: f64) -> PyResult<()> {
+    let pose = transform(pose, "hit.pose")?;
+    let tw = vector(twist, "hit.twist", 6)?;
+    Hit::new(pose, [tw[0], tw[1], tw[2], tw[3], tw[4], tw[5]], t)
+        .map_err(|e| TtmanipError::new_err(format!("hit.{e}")))?;
+    Ok(())
+}
+
 /// (4, 4) racket frame in the tool frame for `robot` (m): where its racket is mounted.
 #[ttkin_py_guard::guarded]
 #[pyfunction]
@@ -381,5 +404,6 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(hit_plan_batch, m)?)?;
     m.add_function(wrap_pyfunction!(racket_frame, m)?)?;
     m.add_function(wrap_pyfunction!(racket_mount, m)?)?;
+    m.add_function(wrap_pyfunction!(hit_check, m)?)?;
     Ok(())
 }

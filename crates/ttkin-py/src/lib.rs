@@ -19,6 +19,8 @@ mod traj;
 // issue 14: argument validation and the boundary panic guard
 mod args;
 mod guard;
+// issue 29: long calls that Ctrl-C stops
+mod interrupt;
 // issue 13
 mod ball;
 // issue 31: pickle and copy
@@ -39,5 +41,6 @@ fn _ttmanip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     hit::register(m)?;
     drives::register(m)?;
     ball::register(m)?;
+    m.add_function(wrap_pyfunction!(convert::real_array, m)?)?;
     Ok(())
 }

@@ -59,6 +59,10 @@ fn to_dict<'py, T: Serialize>(py: Python<'py>, value: &T) -> PyResult<Bound<'py,
 }
 
 fn trace_dict<'py>(py: Python<'py>, t: Trace, fault: Option<ttcan::Fault>) -> PyResult<Bound<'py, PyDict>> {
+    // A non-finite signal from finite parameters is refused, never returned (issue 29).
+    for signal in [&t.time, &t.current, &t.duty, &t.speed, &t.position] {
+        crate::convert::check_finite_output(signal)?;
+    }
     let d = PyDict::new(py);
     d.set_item("time", PyArray1::from_vec(py, t.time))?;
     d.set_item("current", PyArray1::from_vec(py, t.current))?;

@@ -154,10 +154,7 @@ impl Units {
 /// Reads a robot file from disk.
 pub fn load(path: impl AsRef<Path>) -> Result<Chain> {
     let path = path.as_ref();
-    let text = std::fs::read_to_string(path).map_err(|e| Error::File {
-        path: path.display().to_string(),
-        reason: e.to_string(),
-    })?;
+    let text = crate::budget::read_text(path)?;
     from_toml_str(&text, &path.display().to_string())
 }
 
@@ -167,6 +164,13 @@ pub fn from_toml_str(text: &str, origin: &str) -> Result<Chain> {
         path: origin.to_string(),
         reason,
     };
+    if text.len() as u64 > crate::budget::MAX_FILE_BYTES {
+        return Err(file_err(format!(
+            "{} bytes, more than the {} bytes (16 MiB) a robot file may be",
+            text.len(),
+            crate::budget::MAX_FILE_BYTES
+        )));
+    }
     let f: RobotFile = toml::from_str(text).map_err(|e| file_err(e.to_string()))?;
     let u = &f.units;
     let mut joints = Vec::with_capacity(f.joint.len());

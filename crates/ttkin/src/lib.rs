@@ -9,6 +9,7 @@
 // `!(x > 0.0)` is how this crate rejects NaN together with the out-of-range values: keep it.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod budget;
 pub mod chain;
 pub mod clik;
 pub mod description;

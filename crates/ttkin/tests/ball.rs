@@ -580,3 +580,33 @@ fn wide_balls_are_returned_to_another_target_or_off_the_racket_centre() {
         "{moved_target} other targets, {off_centre} off centre"
     );
 }
+
+// Issue 29: a flight's work is bounded before it starts, and its clock must advance.
+
+#[test]
+fn flights_far_from_t0_or_too_long_are_refused_not_run() {
+    let f = Flight::default();
+    // At t = 1e17 s, t + 2 ms == t: the flight loop never ended.
+    let far = BallState::new(1e17, [0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0; 3]);
+    let e = predict(&f, &far, &[1e17 + 1e3]).unwrap_err().to_string();
+    assert!(e.contains("nearer origin"), "{e}");
+    // A ball at z = 1e9 m for 1e7 s: 5e9 steps.
+    let high = BallState::new(0.0, [0.0, 0.0, 1e9], [0.0; 3], [0.0; 3]);
+    assert!(predict(&f, &high, &[1.0]).is_err());
+    let high = BallState::new(0.0, [0.0, 0.0, 1e3], [0.0; 3], [0.0; 3]);
+    let e = predict(&f, &high, &[1e7]).unwrap_err().to_string();
+    assert!(e.contains("steps"), "{e}");
+    let plane = Plane {
+        point: Vector3::zeros(),
+        normal: Vector3::x(),
+    };
+    assert!(crossing(&f, &far, &plane, 1e17 + 1.0).is_err());
+    // 1e200 m/s gave NaN positions without an event.
+    let fast = BallState::new(0.0, [0.0, 0.0, 1.0], [1e200, 0.0, 0.0], [0.0; 3]);
+    let e = predict(&f, &fast, &[0.1]).unwrap_err().to_string();
+    assert!(e.contains("velocity"), "{e}");
+    // Unix-epoch times still fly.
+    let unix = BallState::new(1.7e9, [-1.0, 0.0, 1.0], [5.0, 0.0, 0.0], [0.0; 3]);
+    let p = predict(&f, &unix, &[1.7e9 + 0.1]).unwrap();
+    assert!(p.positions[0].iter().all(|v| v.is_finite()));
+}

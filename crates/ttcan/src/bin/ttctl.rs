@@ -3,9 +3,9 @@
 //! per channel that boots, configures and enables the CiA 402 drives and then follows a joint
 //! trajectory file (written by `ttmanip.ctl.write_trajectory`) or the built-in demo motion.
 //! SIGINT/SIGTERM bring every axis to a controlled stop. Prints and saves latency statistics,
-//! writes telemetry CSV. Exit status: 0 motion completed, 2 stopped by a fault, 1 bad input.
+//! writes telemetry CSV. Exit status (`ttcan::runtime::exit`): 0 motion completed, 1 bad input
+//! (usage errors included), 2 stopped by a fault.
 
-use clap::Parser;
 use std::io::Write;
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
@@ -21,7 +21,7 @@ use ttcan::runtime::stats::CycleStats;
 use ttcan::runtime::trajectory::Trajectory;
 
 /// Embedded controller: CiA 402 drives over SocketCAN, one real-time thread per channel.
-#[derive(Parser, Debug)]
+#[derive(clap::Parser, Debug)]
 #[command(name = "ttctl", version)]
 struct Args {
     /// Controller configuration (TOML: cycle_hz, bitrate, mode, approach_s, priority, a watchdog
@@ -54,11 +54,20 @@ struct Args {
 
 fn fail(msg: impl std::fmt::Display) -> ! {
     eprintln!("ttctl: {msg}");
-    std::process::exit(1)
+    std::process::exit(ttcan::runtime::exit::BAD_INPUT)
 }
 
 fn main() {
-    let args = Args::parse();
+    let args: Args = ttcan::runtime::exit::parse_args();
+    if !(args.amplitude.is_finite() && args.amplitude.abs() <= 1e3) {
+        fail(format!(
+            "--amplitude {}: must be finite, |a| ≤ 1000 joint units",
+            args.amplitude
+        ));
+    }
+    if !(args.max_seconds.is_finite() && args.max_seconds > 0.0) {
+        fail(format!("--max-seconds {}: must be finite and > 0", args.max_seconds));
+    }
     let cfg = match &args.config {
         Some(p) => {
             let text = std::fs::read_to_string(p).unwrap_or_else(|e| fail(format!("{}: {e}", p.display())));
@@ -280,7 +289,7 @@ fn report(args: &Args, reports: &[ChannelReport]) {
         }
     }
     if fault.is_some() {
-        std::process::exit(2);
+        std::process::exit(ttcan::runtime::exit::NOT_DONE);
     }
 }
 

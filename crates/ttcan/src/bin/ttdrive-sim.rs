@@ -6,7 +6,6 @@
 //! `stdio` carries the frames as text lines on standard input/output (`ttcan::bus::stdio`, for
 //! bridges to other CAN stacks).
 
-use clap::Parser;
 use std::time::{Duration, Instant};
 use ttcan::bus::socketcan::SocketCanBus;
 use ttcan::bus::stdio::StdioBus;
@@ -17,7 +16,7 @@ use ttcan::vdrive::{Failure, VirtualDrive};
 use ttcan::{AxisConfig, MotorModel};
 
 /// Virtual CiA 402 drives (drive layer + motor model) on SocketCAN interfaces.
-#[derive(Parser, Debug)]
+#[derive(clap::Parser, Debug)]
 #[command(name = "ttdrive-sim", version)]
 struct Args {
     /// A channel: INTERFACE:NODE[,NODE...], e.g. vcan0:1,2 (repeat for more channels); the
@@ -56,7 +55,7 @@ struct Injection {
 
 fn fail(msg: impl std::fmt::Display) -> ! {
     eprintln!("ttdrive-sim: {msg}");
-    std::process::exit(1)
+    std::process::exit(ttcan::runtime::exit::BAD_INPUT)
 }
 
 fn parse_channel(s: &str) -> (String, Vec<u8>) {
@@ -108,8 +107,27 @@ fn parse_fail(s: &str) -> Injection {
 }
 
 fn main() {
-    let args = Args::parse();
+    let args: Args = ttcan::runtime::exit::parse_args();
     let channels: Vec<_> = args.channels.iter().map(|s| parse_channel(s)).collect();
+    for (c, (iface, nodes)) in channels.iter().enumerate() {
+        if channels[..c].iter().any(|(other, _)| other == iface) {
+            fail(format!(
+                "--channel {iface}: interface given twice; list its nodes once (IFACE:1,2)"
+            ));
+        }
+        if let Some(n) = nodes
+            .iter()
+            .enumerate()
+            .find_map(|(k, n)| nodes[..k].contains(n).then_some(n))
+        {
+            fail(format!("--channel {iface}: node {n} given twice"));
+        }
+    }
+    for (flag, v) in [("--duration", args.duration), ("--idle-exit", args.idle_exit)] {
+        if !(v.is_finite() && v > 0.0) {
+            fail(format!("{flag} {v}: must be finite and > 0 s"));
+        }
+    }
     let injections: Vec<_> = args.fail.iter().map(|s| parse_fail(s)).collect();
     for i in &injections {
         if !channels.iter().any(|(c, n)| *c == i.interface && n.contains(&i.node)) {

@@ -233,6 +233,15 @@ impl ControllerConfig {
         }
         let mut loads = Vec::new();
         for (c, ch) in self.channel.iter().enumerate() {
+            // One interface is one bus: its axes in one [[channel]] entry, so that the bus budget
+            // counts all of them (split over two entries each half passed at 49–60 % where the
+            // bus carried 94–114 %) and one thread owns the bus.
+            if let Some(first) = self.channel[..c].iter().position(|o| o.interface == ch.interface) {
+                return Err(invalid(format!(
+                    "channel[{c}].interface = \"{}\": already channel[{first}]'s; give an interface's axes in one [[channel]]",
+                    ch.interface
+                )));
+            }
             if ch.axis.is_empty() || ch.axis.len() > MAX_AXES_PER_CHANNEL {
                 return Err(invalid(format!(
                     "channel[{c}] ({}): {} axes, 1..={MAX_AXES_PER_CHANNEL} allowed",
@@ -263,6 +272,13 @@ impl ControllerConfig {
                 if ax.units.validate().is_err() {
                     return Err(invalid(format!(
                         "channel[{c}].axis[{a}].units: every factor must be finite and > 0"
+                    )));
+                }
+                if !(ax.max_current.is_finite() && ax.max_current > 0.0) {
+                    // NaN compared false and disabled the run-time current check.
+                    return Err(invalid(format!(
+                        "channel[{c}].axis[{a}].max_current = {}: must be finite and > 0 A",
+                        ax.max_current
                     )));
                 }
                 if !(ax.following_error_limit.is_finite() && ax.following_error_limit > 0.0) {
@@ -341,6 +357,19 @@ mod tests {
         let loads = ControllerConfig::default_layout().check("default").unwrap();
         assert_eq!(loads.len(), 4);
         assert!(loads.iter().all(|l| l.worst < 0.6));
+    }
+
+    #[test]
+    fn nan_or_negative_currents_and_a_split_interface_are_refused() {
+        for v in ["nan", "-1.0", "0.0", "inf"] {
+            let text = format!("[[channel]]\ninterface = \"can0\"\n[[channel.axis]]\nnode = 1\nmax_current = {v}\n");
+            let e = ControllerConfig::from_toml(&text, "ctl.toml").unwrap_err().to_string();
+            assert!(e.contains("max_current"), "{v}: {e}");
+        }
+        let split = "[[channel]]\ninterface = \"can0\"\n[[channel.axis]]\nnode = 1\n[[channel.axis]]\nnode = 2\n\
+                     [[channel]]\ninterface = \"can0\"\n[[channel.axis]]\nnode = 3\n";
+        let e = ControllerConfig::from_toml(split, "ctl.toml").unwrap_err().to_string();
+        assert!(e.contains("already channel[0]'s"), "{e}");
     }
 
     #[test]

@@ -7,6 +7,7 @@
 pub mod boot;
 pub mod channel;
 pub mod config;
+pub mod exit;
 pub mod link;
 pub mod master;
 pub mod rt;

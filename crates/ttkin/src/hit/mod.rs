@@ -62,12 +62,21 @@ pub struct Hit {
 
 impl Hit {
     /// A hit from its racket pose (base frame, m), racket-centre twist (base axes, m/s, rad/s) and
-    /// hit time (s from now); checks finiteness and t > 0.
+    /// hit time (s from now); checks finiteness and 0 < t ≤ [`crate::traj::duration::MAX_DURATION`].
     pub fn new(pose: IsometryMatrix3<f64>, twist: [f64; 6], t: f64) -> Result<Hit> {
         check_finite("twist", &twist)?;
         check_finite("pose", pose.translation.vector.as_slice())?;
         check_finite("pose", pose.rotation.matrix().as_slice())?;
         crate::traj::check_duration("t", t)?;
+        let max = crate::traj::duration::MAX_DURATION;
+        if t > max {
+            // A later hit cannot be planned (no stroke is longer); refused here, not as an effort
+            // limit with an infinite ratio or a sample count of the stroke.
+            return Err(crate::Error::invalid(
+                "t",
+                format!("the hit time must be at most {max} s from now (the longest stroke), got {t} s"),
+            ));
+        }
         Ok(Hit { pose, twist, t })
     }
 

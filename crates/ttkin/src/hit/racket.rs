@@ -95,9 +95,19 @@ pub fn racket_frame(normal: &Vector3<f64>, handle: &Vector3<f64>) -> Result<Rota
     if !(nn > 1e-12) {
         return Err(Error::invalid("normal", "the face normal must be a nonzero vector"));
     }
-    let z = normal / nn;
+    // Scaled by the largest component before normalising: |normal| of 1e300 components is inf
+    // (z was then the zero vector and the frame rank 1), and a subnormal one underflows.
+    let unit = |v: &Vector3<f64>| {
+        let m = v.amax();
+        if m > 0.0 {
+            (v / m).normalize()
+        } else {
+            *v
+        }
+    };
+    let z = unit(normal);
     let mut x = Vector3::zeros();
-    for h in [*handle, Vector3::z(), Vector3::x()] {
+    for h in [unit(handle), Vector3::z(), Vector3::x()] {
         let c = h - z * z.dot(&h);
         if c.norm() > 1e-6 * h.norm().max(1e-300) {
             x = c.normalize();
@@ -114,6 +124,19 @@ pub fn racket_frame(normal: &Vector3<f64>, handle: &Vector3<f64>) -> Result<Rota
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn racket_frame_of_huge_or_tiny_vectors_is_a_rotation() {
+        for (n, h) in [
+            (Vector3::new(1e300, -1e300, 1e300), Vector3::z()),
+            (Vector3::new(0.3, -1.0, -0.2), Vector3::new(1e308, 1e308, 0.0)),
+            (Vector3::new(0.0, 0.0, 1e308), Vector3::new(1e-310, 0.0, 0.0)),
+        ] {
+            let m = *racket_frame(&n, &h).unwrap().matrix();
+            assert!((m.determinant() - 1.0).abs() < 1e-12, "{n:?} {h:?}");
+            assert!((m.transpose() * m - Matrix3::identity()).norm() < 1e-12);
+        }
+    }
 
     #[test]
     fn racket_frame_is_a_rotation_with_z_along_the_normal() {

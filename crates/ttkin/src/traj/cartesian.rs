@@ -390,6 +390,9 @@ impl CartesianTrajectory {
 
     /// States at a control rate of `hz` (times as in [`rate_times`]).
     pub fn sample_rate(&self, hz: f64) -> Result<Vec<CartesianState>> {
+        if hz > 0.0 {
+            crate::budget::check_bytes("hz", self.duration * hz + 2.0, std::mem::size_of::<CartesianState>())?;
+        }
         rate_times(self.duration, hz)?
             .into_iter()
             .map(|t| self.sample(t))

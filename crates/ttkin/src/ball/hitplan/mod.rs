@@ -296,6 +296,7 @@ impl HitPlanner {
                 value: now,
             });
         }
+        self.flight.check_span("now", ball, now)?;
         let (list, bounced) = self.candidate_states(&self.flight, ball, now, self.search_margin, after_bounce);
         if !bounced {
             return Ok(HitPlan {
