@@ -85,6 +85,14 @@ impl Racket {
 /// pointing up, as a player holds a shake-hand racket at the hit.
 pub const DEFAULT_HANDLE: [f64; 3] = [0.0, 0.0, 1.0];
 
+/// The racket frame (base axes) of the unit face normal `z` with the handle x along the part of
+/// `handle` orthogonal to `z` (Gram–Schmidt): columns [x, z × x, z]. The one construction every
+/// racket frame uses; `handle` must not be parallel to `z` ([`racket_frame`] checks and falls back).
+pub fn racket_axes(z: &Vector3<f64>, handle: &Vector3<f64>) -> Rotation3<f64> {
+    let x = (handle - z * z.dot(handle)).normalize();
+    Rotation3::from_matrix_unchecked(Matrix3::from_columns(&[x, z.cross(&x), *z]))
+}
+
 /// The racket orientation (base axes) whose z axis is the face `normal` and whose x axis (the
 /// handle) is as close as possible to `handle` (base axes; any vector not parallel to the
 /// normal). When `handle` is (nearly) parallel to the normal, base +z, then base +x, is used.
@@ -106,19 +114,11 @@ pub fn racket_frame(normal: &Vector3<f64>, handle: &Vector3<f64>) -> Result<Rota
         }
     };
     let z = unit(normal);
-    let mut x = Vector3::zeros();
-    for h in [unit(handle), Vector3::z(), Vector3::x()] {
-        let c = h - z * z.dot(&h);
-        if c.norm() > 1e-6 * h.norm().max(1e-300) {
-            x = c.normalize();
-            break;
-        }
-    }
-    Ok(Rotation3::from_matrix_unchecked(Matrix3::from_columns(&[
-        x,
-        z.cross(&x),
-        z,
-    ])))
+    let h = [unit(handle), Vector3::z(), Vector3::x()]
+        .into_iter()
+        .find(|h| (h - z * z.dot(h)).norm() > 1e-6 * h.norm().max(1e-300))
+        .unwrap_or_else(Vector3::zeros);
+    Ok(racket_axes(&z, &h))
 }
 
 #[cfg(test)]
