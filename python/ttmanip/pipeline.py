@@ -247,16 +247,9 @@ def plan_hits(
 def racket_states(robot: Robot, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, ...]:
     """Racket poses (K, 4, 4), centres (K, 3), normals (K, 3) and centre velocities (K, 3), base
     frame, for joint states ``q``, ``qd`` (K, n)."""
-    q = np.atleast_2d(np.asarray(q, float))
-    qd = np.atleast_2d(np.asarray(qd, float))
-    mount = racket_mount(robot)
-    tool = robot.fk(q)
-    poses = tool @ mount
-    jac = robot.jacobian(q)
-    twist = np.einsum("kij,kj->ki", jac, qd)
-    lever = np.einsum("kij,j->ki", tool[:, :3, :3], mount[:3, 3])
-    v = twist[:, :3] + np.cross(twist[:, 3:], lever)
-    return poses, poses[:, :3, 3], poses[:, :3, 2], v
+    states = _ttmanip.racket_states(robot, np.atleast_2d(q), np.atleast_2d(qd))  # ttkin::hit::racket
+    poses = states[:, :16].reshape(-1, 4, 4)
+    return poses, poses[:, :3, 3], poses[:, :3, 2], states[:, 16:19]
 
 
 @dataclass

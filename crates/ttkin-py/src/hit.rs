@@ -10,7 +10,9 @@ use ttkin::hit::{self, Hit, HitOptions, HitPlan, HitPlanner, HitTask, StrokeProf
 use ttkin::traj::JointState;
 use ttkin::Dynamics;
 
-use crate::convert::{array_getters, f64_array, pose_to_numpy, to_numpy, transform, value_getters, vector};
+use crate::convert::{
+    array_getters, f64_array, filled_without_gil, pose_to_numpy, to_numpy, transform, value_getters, vector,
+};
 use crate::errors::{PyResultExt, ShapeError, TtmanipError};
 use crate::robot::PyRobot;
 use crate::traj::{samples_to_py, violations_to_py, PyJointTrajectory};
@@ -362,6 +364,32 @@ fn hit_check(pose: &Bound<'_, PyAny>, twist: &Bound<'_, PyAny>, t: f64) -> PyRes
     Ok(())
 }
 
+/// (N, 22) racket states of joint states `q`, `qd` (N, n): per row the racket pose (base frame,
+/// m; row-major 4×4) then the racket-centre twist [v (m/s); ω (rad/s)] (base axes).
+#[ttkin_py_guard::guarded]
+#[pyfunction]
+fn racket_states<'py>(
+    py: Python<'py>,
+    robot: &PyRobot,
+    q: &Bound<'py, PyAny>,
+    qd: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let (qa, batch) = robot.configs(q, "q")?;
+    let (qda, batch_d) = robot.configs(qd, "qd")?;
+    let count = batch.unwrap_or(1);
+    if batch_d.unwrap_or(1) != count {
+        return Err(ShapeError::new_err(format!(
+            "qd: expected as many rows as q ({count}), got {}",
+            qda.shape_str()
+        )));
+    }
+    let (qs, qds, chain) = (qa.data(), qda.data(), &*robot.chain);
+    Ok(filled_without_gil(py, &[count, hit::RACKET_STATE_LEN], |o| {
+        hit::racket_state_batch(chain, qs, qds, o)
+    })?
+    .into_any())
+}
+
 /// (4, 4) racket frame in the tool frame for `robot` (m): where its racket is mounted.
 #[ttkin_py_guard::guarded]
 #[pyfunction]
@@ -404,6 +432,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(hit_plan_batch, m)?)?;
     m.add_function(wrap_pyfunction!(racket_frame, m)?)?;
     m.add_function(wrap_pyfunction!(racket_mount, m)?)?;
+    m.add_function(wrap_pyfunction!(racket_states, m)?)?;
     m.add_function(wrap_pyfunction!(hit_check, m)?)?;
     Ok(())
 }

@@ -39,7 +39,7 @@ use crate::error::{check_finite, check_vector, Error, Result};
 use crate::ik::Analytic;
 use crate::traj::limits::{KinematicLimits, Violation};
 use crate::traj::{JointState, JointTrajectory};
-pub use racket::{racket_axes, racket_frame, Racket, DEFAULT_HANDLE};
+pub use racket::{racket_axes, racket_frame, racket_state_batch, Racket, DEFAULT_HANDLE, RACKET_STATE_LEN};
 
 /// Standard gravity (m/s², base frame: base z up).
 pub const GRAVITY: [f64; 3] = [0.0, 0.0, -9.81];

@@ -121,6 +121,53 @@ pub fn racket_frame(normal: &Vector3<f64>, handle: &Vector3<f64>) -> Result<Rota
     Ok(racket_axes(&z, &h))
 }
 
+/// Values per joint state in [`racket_state_batch`]: the racket pose (16, row-major 4×4) and the
+/// racket-centre twist (6).
+pub const RACKET_STATE_LEN: usize = 22;
+
+/// Racket states of a chain's joint states: for each of the N rows of `qs` (positions, m or rad)
+/// and `qds` (velocities), `out` receives the racket pose (base frame, m; row-major 4×4) and the
+/// racket-centre twist [v (m/s); ω (rad/s)] (base axes): N × [`RACKET_STATE_LEN`] values, in
+/// parallel. The racket is the one the chain carries ([`Chain::racket`]).
+pub fn racket_state_batch(chain: &Chain, qs: &[f64], qds: &[f64], out: &mut [f64]) -> Result<()> {
+    use rayon::prelude::*;
+    let n = chain.dof();
+    if qs.len() % n != 0 || qds.len() != qs.len() {
+        return Err(Error::shape(
+            "q, qd",
+            format!("two N × {n} arrays of the same N"),
+            format!("{} and {} values", qs.len(), qds.len()),
+        ));
+    }
+    check_finite("q", qs)?;
+    check_finite("qd", qds)?;
+    if out.len() != qs.len() / n * RACKET_STATE_LEN {
+        return Err(Error::shape(
+            "output buffer",
+            qs.len() / n * RACKET_STATE_LEN,
+            out.len(),
+        ));
+    }
+    let racket = Racket::for_chain(chain);
+    const CHUNK: usize = 64;
+    out.par_chunks_mut(RACKET_STATE_LEN * CHUNK)
+        .zip(qs.par_chunks(n * CHUNK).zip(qds.par_chunks(n * CHUNK)))
+        .for_each(|(o, (q, qd))| {
+            let mut jac = nalgebra::Matrix6xX::zeros(n);
+            for ((oi, qi), qdi) in o
+                .chunks_exact_mut(RACKET_STATE_LEN)
+                .zip(q.chunks_exact(n))
+                .zip(qd.chunks_exact(n))
+            {
+                let tool = chain.jacobian_into(qi, crate::chain::JacobianFrame::Base, &mut jac);
+                let twist = &jac * nalgebra::DVector::from_column_slice(qdi);
+                crate::transform::write_row_major(&racket.racket_pose(&tool), &mut oi[..16]);
+                oi[16..].copy_from_slice(&racket.racket_twist(&tool, twist.as_slice()));
+            }
+        });
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
