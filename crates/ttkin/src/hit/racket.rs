@@ -132,7 +132,7 @@ pub const RACKET_STATE_LEN: usize = 22;
 pub fn racket_state_batch(chain: &Chain, qs: &[f64], qds: &[f64], out: &mut [f64]) -> Result<()> {
     use rayon::prelude::*;
     let n = chain.dof();
-    if qs.len() % n != 0 || qds.len() != qs.len() {
+    if !qs.len().is_multiple_of(n) || qds.len() != qs.len() {
         return Err(Error::shape(
             "q, qd",
             format!("two N × {n} arrays of the same N"),
