@@ -35,6 +35,8 @@ __all__ = [
 
 MODELS = ("default", "muelling", "mpi", "tt3d", "vacuum")
 
+_TABLE = _t.ball_table()  # ttkin::ball::model::Table::default(), the one source of the numbers
+
 
 @dataclass(frozen=True)
 class BallModel:
@@ -54,13 +56,15 @@ class BallModel:
 
 @dataclass(frozen=True)
 class Table:
-    """ITTF table geometry (m) in the world frame: surface at z = 0, centred at the origin."""
+    """ITTF table geometry (m) in the world frame: surface at z = 0, centred at the origin; the
+    defaults are the Rust core's (``ttkin::ball::model::Table``: 2.74 × 1.525 m, 0.76 m high, net
+    0.1525 m high and overhanging as much)."""
 
-    length: float = 2.74
-    width: float = 1.525
-    height: float = 0.76
-    net_height: float = 0.1525
-    net_overhang: float = 0.1525
+    length: float = _TABLE["length"]
+    width: float = _TABLE["width"]
+    height: float = _TABLE["height"]
+    net_height: float = _TABLE["net_height"]
+    net_overhang: float = _TABLE["net_overhang"]
 
     def __post_init__(self):
         for name in ("length", "width", "height", "net_height", "net_overhang"):

@@ -199,12 +199,14 @@ def _drive_check(res: dict, in_reach: np.ndarray, count: int) -> dict:
 
 
 def _table(ax) -> None:
-    ax.add_patch(
-        __import__("matplotlib.patches", fromlist=["Rectangle"]).Rectangle(
-            (-1.37, -0.7625), 2.74, 1.525, fill=False
-        )
-    )
-    ax.plot([0, 0], [-0.915, 0.915], "k-", lw=2)
+    from matplotlib.patches import Rectangle
+
+    from .ball import Table
+
+    t = Table()
+    ax.add_patch(Rectangle((-t.length / 2, -t.width / 2), t.length, t.width, fill=False))
+    net = t.width / 2 + t.net_overhang
+    ax.plot([0, 0], [-net, net], "k-", lw=2)
 
 
 def _figures(res: dict, in_reach: np.ndarray, returned: np.ndarray, target, out: Path) -> list[str]:

@@ -9,10 +9,10 @@ use ttkin::ball::estimate::{estimate, EstimateOptions, Segment};
 use ttkin::ball::fit::{self, Bounce, FitOptions, Recording};
 use ttkin::ball::flight::{BallState, Flight, Plane};
 use ttkin::ball::hitplan::HitPlanner;
-use ttkin::ball::model::BallModel;
+use ttkin::ball::model::{BallModel, Table};
 use ttkin::ball::predict::{crossing, predict, CrossingOutcome};
 use ttkin::ball::rally::{self, RallyConfig};
-use ttkin::ball::reach::ReachRegion;
+use ttkin::ball::reach::{Placement, ReachRegion};
 
 use crate::args;
 use crate::convert::{filled_without_gil_nan_allowed, pose_to_numpy, rows_array, to_numpy, vector};
@@ -323,6 +323,34 @@ fn ball_rally<'py>(
 /// checks its `n` against it before the first chunk.
 pub const MAX_RALLY_BALLS: u64 = 1_000_000;
 
+/// The ITTF table of `ttkin::ball::model::Table::default()` (m): length, width, height (surface
+/// above the floor), thickness, net_height, net_overhang.
+#[ttkin_py_guard::guarded]
+#[pyfunction]
+fn ball_table(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    let t = Table::default();
+    let d = PyDict::new(py);
+    for (k, v) in [
+        ("length", t.length),
+        ("width", t.width),
+        ("height", t.height),
+        ("thickness", t.thickness),
+        ("net_height", t.net_height),
+        ("net_overhang", t.net_overhang),
+    ] {
+        d.set_item(k, v)?;
+    }
+    Ok(d)
+}
+
+/// (4, 4) base frame of the rally's robot in the world (table) frame, m
+/// (`ttkin::ball::reach::Placement::default()`).
+#[ttkin_py_guard::guarded]
+#[pyfunction]
+fn ball_placement(py: Python<'_>) -> Bound<'_, PyAny> {
+    pose_to_numpy(py, &Placement::default().world_from_base()).into_any()
+}
+
 /// (N, 3) rows of `obj` (named `what` in errors) as triples.
 fn rows3(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<[f64; 3]>> {
     let a = rows_array(obj, what, "N", &[3])?;
@@ -448,6 +476,8 @@ fn ball_fit<'py>(
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ball_fit, m)?)?;
     m.add("MAX_RALLY_BALLS", MAX_RALLY_BALLS)?;
+    m.add_function(wrap_pyfunction!(ball_table, m)?)?;
+    m.add_function(wrap_pyfunction!(ball_placement, m)?)?;
     m.add_function(wrap_pyfunction!(ball_estimate, m)?)?;
     m.add_function(wrap_pyfunction!(ball_predict, m)?)?;
     m.add_function(wrap_pyfunction!(ball_predict_batch, m)?)?;
