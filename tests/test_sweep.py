@@ -101,3 +101,14 @@ def test_cli_sweep(tmp_path, capsys):
     assert "expected NAME=VALUES" in capsys.readouterr().err
     assert main(["sweep", "hits", "--random", "3", "--param", "speed=1,2", "--scheduler", "serial"]) == 2
     assert "expected low:high" in capsys.readouterr().err
+
+
+def test_a_running_scheduler_by_address(serial):
+    import distributed  # the sweep extra, part of the test extra
+
+    with distributed.LocalCluster(
+        n_workers=1, threads_per_worker=1, processes=False, protocol="tcp", dashboard_address=None
+    ) as c:
+        remote = ttmanip.sweep("hits", GRID, n=24, chunk=8, seed=3, scheduler=c.scheduler_address)
+        assert remote["workers"] == 1 and remote["rows"] == serial["rows"]
+        assert c.scheduler_address.startswith("tcp://")
