@@ -22,6 +22,8 @@ import numpy as np
 import pytest
 import ttmanip
 from api_registry import PICKLE_PROBES, public_classes, public_exceptions
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from test_api_fuzz import sample_objects
 
 PROTOCOLS = range(2, pickle.HIGHEST_PROTOCOL + 1)
@@ -198,3 +200,25 @@ def test_plan_hits_on_a_dask_local_cluster():
         ]
         remote = client.gather(futures)
     _plans_equal(local, remote[0] + remote[1])
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    st.integers(1, 7).flatmap(
+        lambda n: st.tuples(
+            *[
+                st.lists(st.floats(-2.0, 2.0, allow_subnormal=False), min_size=n, max_size=n)
+                for _ in range(5)
+            ],
+            st.text("RP", min_size=n, max_size=n),
+            st.sampled_from(["standard", "modified"]),
+        )
+    )
+)
+def test_any_dh_robot_round_trips_bit_for_bit(params):
+    a, alpha, d, theta, q, types, convention = params
+    robot = ttmanip.Robot.from_dh(a, alpha, d, theta, types=types, convention=convention)
+    twin = pickle.loads(pickle.dumps(robot))
+    assert twin.to_toml() == robot.to_toml()
+    np.testing.assert_array_equal(twin.fk_all(q), robot.fk_all(q))
+    np.testing.assert_array_equal(twin.jacobian(q), robot.jacobian(q))
