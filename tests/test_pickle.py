@@ -45,7 +45,11 @@ def _samples() -> dict[str, list[object]]:
     t = np.linspace(0.0, 0.01, 11)
     q = np.full((11, 6), 0.2)
     reset.run(t, q, np.zeros_like(q), np.zeros_like(q))
-    out["DriveSim"] += [ran, reset]
+    failed = ttmanip.DriveSim(g6)  # a run that failed is journaled and replays alike
+    with pytest.raises(ttmanip.TtmanipError):
+        failed.run(t[::-1], q, np.zeros_like(q), np.zeros_like(q))
+    failed.tick(7)
+    out["DriveSim"] += [ran, reset, failed]
     out["IkResult"].append(g6.ik(np.array([g6.fk(np.full(6, 0.1)), g6.fk(np.full(6, 0.2))])))
     unreachable = ttmanip.Hit.from_normal([5.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 0.0, 0.0], 0.3)
     out["HitPlan"].append(ttmanip.plan_hit(g6, unreachable))  # no stroke: NaNs and None
