@@ -144,7 +144,7 @@ class Recording:
 
     def racket(self, root: str, t, poses, hit_centre=None) -> None:
         """The racket frame ``poses`` (K, 4, 4, parent frame of ``root``) over ``t`` with a blade,
-        and the planned hit centre."""
+        and the planned hit centre (from ``t[0]`` on: each stroke shows its own)."""
         rr = self.rr
         t, poses = np.asarray(t, dtype=float), np.asarray(poses, dtype=float)
         pick = np.unique(np.linspace(0, len(t) - 1, min(len(t), _MAX_FRAMES)).round().astype(int))
@@ -159,9 +159,9 @@ class Recording:
             static=True,
         )
         if hit_centre is not None:
-            self.rec.log(
-                f"{root}/hit", rr.Points3D([hit_centre], radii=0.025, colors=[[255, 220, 0]]), static=True
-            )
+            self.rec.set_time("time", duration=float(t[0]))
+            self.rec.log(f"{root}/hit", rr.Points3D([hit_centre], radii=0.025, colors=[[255, 220, 0]]))
+            self.rec.reset_time()
 
     def ball(self, t, positions, predicted=None, *, entity: str = "world/ball") -> None:
         """The ball at ``positions`` (K, 3, world) over ``t``; ``predicted`` (M, 3) its predicted
@@ -342,16 +342,22 @@ def snapshot(recording: str | Path, t: float, path: str | Path, *, title: str = 
             trail = past[np.argsort(times[times <= t])] @ base[:3, :3].T + base[:3, 3]
             ax.plot(*trail.T, ":", color="#c81e1e", lw=1, label="racket path so far")
     for entity in sorted(e for e in data if e.startswith("/world/") and e.endswith("/hit")):
-        m = world_from(entity.rsplit("/", 1)[0])
-        p = np.array(at(entity, "Points3D:positions")[0], dtype=float) @ m[:3, :3].T + m[:3, 3]
-        ax.scatter(*p.T, color="gold", s=60, edgecolor="k", label="planned hit point")
+        hit = at(entity, "Points3D:positions")
+        if hit is not None:
+            m = world_from(entity.rsplit("/", 1)[0])
+            p = np.array(hit[0], dtype=float) @ m[:3, :3].T + m[:3, 3]
+            ax.scatter(*p.T, color="gold", s=60, edgecolor="k", label="planned hit point")
     for entity in sorted(e for e in data if e.startswith("/world/ball") and e.count("/") == 2):
         p = at(entity, "Points3D:positions")
         if p is not None:
-            ax.scatter(*np.array(p, dtype=float).T, color="darkorange", s=30)
+            ax.scatter(
+                *np.array(p, dtype=float).T, color="white", edgecolor="k", s=45, label="ball", zorder=5
+            )
         pr = at(entity + "/predicted", "LineStrips3D:strips")
         if pr:
-            ax.plot(*np.array(pr[0], dtype=float).T, color="orange", lw=1, alpha=0.6)
+            ax.plot(
+                *np.array(pr[0], dtype=float).T, color="orange", lw=1, alpha=0.8, label="predicted flight"
+            )
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.set_zlabel("z [m]")
