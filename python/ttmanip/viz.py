@@ -55,6 +55,38 @@ class Recording:
         self.rec.save(str(self.path))
         self.rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
 
+    def layout(self, robot, quantities: tuple[str, ...] = ("q", "current")) -> None:
+        """The viewer's layout (a Rerun blueprint): the 3-D world on the left, ``robot``'s joint
+        ``quantities`` as plots on the right, the timeline below."""
+        import rerun.blueprint as rrb
+
+        plots = [
+            rrb.TimeSeriesView(
+                origin=f"/joints/{k}",
+                contents=[f"/joints/{k}/{n}" for n in robot.joint_names],
+                name=f"{robot.name} joints: {k}",
+            )
+            for k in quantities
+        ]
+        self.rec.send_blueprint(
+            rrb.Blueprint(
+                rrb.Horizontal(
+                    rrb.Spatial3DView(
+                        origin="/world",
+                        name="world",
+                        # looking at the robot's end of the table from the side, over the net
+                        eye_controls=rrb.EyeControls3D(
+                            position=[0.2, -1.9, 1.0], look_target=[-1.3, 0.1, 0.1], eye_up=[0.0, 0.0, 1.0]
+                        ),
+                    ),
+                    rrb.Vertical(*plots),
+                    column_shares=[3, 2],
+                ),
+                rrb.TimePanel(timeline="time"),
+                collapse_panels=True,
+            )
+        )
+
     def close(self) -> Path:
         """Flushes and closes the file; returns its path."""
         self.rec.flush()
@@ -189,6 +221,7 @@ def record_hit(rec: Recording, robot, plan, sim, *, t0: float = 0.0) -> None:
     at_table = robot.name == "gantry6"
     if at_table:
         rec.table()
+        rec.layout(robot, ("q", "current"))
     root = f"world/{robot.name}" if at_table else robot.name
     a = sim.arrays
     t = t0 + np.asarray(a["t"], dtype=float)
@@ -210,6 +243,7 @@ def record_rally(path: str | Path, summary: dict, balls: int = 10) -> Path:
     robot = robots.gantry6()
     with Recording(path, "ttmanip-rally") as rec:
         rec.table()
+        rec.layout(robot, ("q", "torque"))
         offset = 0.0
         for k in range(min(balls, len(res["incoming"]))):
             state = np.asarray(res["incoming"][k], dtype=float)
