@@ -22,6 +22,8 @@ import numpy as np
 import pytest
 import ttmanip
 from api_registry import PICKLE_PROBES, public_classes, public_exceptions
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from test_api_fuzz import sample_objects
 
 PROTOCOLS = range(2, pickle.HIGHEST_PROTOCOL + 1)
@@ -43,7 +45,11 @@ def _samples() -> dict[str, list[object]]:
     t = np.linspace(0.0, 0.01, 11)
     q = np.full((11, 6), 0.2)
     reset.run(t, q, np.zeros_like(q), np.zeros_like(q))
-    out["DriveSim"] += [ran, reset]
+    failed = ttmanip.DriveSim(g6)  # a run that failed is journaled and replays alike
+    with pytest.raises(ttmanip.TtmanipError):
+        failed.run(t[::-1], q, np.zeros_like(q), np.zeros_like(q))
+    failed.tick(7)
+    out["DriveSim"] += [ran, reset, failed]
     out["IkResult"].append(g6.ik(np.array([g6.fk(np.full(6, 0.1)), g6.fk(np.full(6, 0.2))])))
     unreachable = ttmanip.Hit.from_normal([5.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 0.0, 0.0], 0.3)
     out["HitPlan"].append(ttmanip.plan_hit(g6, unreachable))  # no stroke: NaNs and None
@@ -198,3 +204,25 @@ def test_plan_hits_on_a_dask_local_cluster():
         ]
         remote = client.gather(futures)
     _plans_equal(local, remote[0] + remote[1])
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    st.integers(1, 7).flatmap(
+        lambda n: st.tuples(
+            *[
+                st.lists(st.floats(-2.0, 2.0, allow_subnormal=False), min_size=n, max_size=n)
+                for _ in range(5)
+            ],
+            st.text("RP", min_size=n, max_size=n),
+            st.sampled_from(["standard", "modified"]),
+        )
+    )
+)
+def test_any_dh_robot_round_trips_bit_for_bit(params):
+    a, alpha, d, theta, q, types, convention = params
+    robot = ttmanip.Robot.from_dh(a, alpha, d, theta, types=types, convention=convention)
+    twin = pickle.loads(pickle.dumps(robot))
+    assert twin.to_toml() == robot.to_toml()
+    np.testing.assert_array_equal(twin.fk_all(q), robot.fk_all(q))
+    np.testing.assert_array_equal(twin.jacobian(q), robot.jacobian(q))

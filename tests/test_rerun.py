@@ -162,3 +162,19 @@ def test_snapshot_draws_a_frame_from_the_recording(demo, tmp_path):
     out, _ = demo
     png = snapshot(out / "demo.rrd", 0.35, tmp_path / "frame.png")
     assert png.stat().st_size > 20_000
+
+
+def test_rally_ball_meets_the_planned_hit_point(rally):
+    summary, rec = rally
+    incoming = summary["results"]["incoming"][0]
+    d = ttmanip.ball.plan_return(incoming, 0.23)
+    assert d["status"] == "ok"
+    t_hit = 0.23 + d["t_hit"]  # ball 0 starts at 0 s on the timeline
+    hit = rec["/world/gantry6/hit"]
+    first = int(np.argmin(seconds(hit["time"])))  # ball 0's stroke is the first logged
+    centre = np.r_[np.array(hit["Points3D:positions"][first][0]), 1.0]
+    world = (WORLD_FROM_GANTRY6 @ centre)[:3]
+    ball = ttmanip.ball.predict(incoming, [t_hit])[0]
+    # the ball touches the racket face at the hit: centres one ball radius (20 mm) apart, which
+    # also checks WORLD_FROM_GANTRY6 against the rally's own placement (float32 storage: 1e-6 m)
+    assert abs(np.linalg.norm(ball - world) - 0.020) < 1e-5, (ball, world)

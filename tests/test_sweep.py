@@ -101,3 +101,29 @@ def test_cli_sweep(tmp_path, capsys):
     assert "expected NAME=VALUES" in capsys.readouterr().err
     assert main(["sweep", "hits", "--random", "3", "--param", "speed=1,2", "--scheduler", "serial"]) == 2
     assert "expected low:high" in capsys.readouterr().err
+
+
+def test_a_running_scheduler_by_address(serial):
+    import distributed  # the sweep extra, part of the test extra
+
+    with distributed.LocalCluster(
+        n_workers=1, threads_per_worker=1, processes=False, protocol="tcp", dashboard_address=None
+    ) as c:
+        remote = ttmanip.sweep("hits", GRID, n=24, chunk=8, seed=3, scheduler=c.scheduler_address)
+        assert remote["workers"] == 1 and remote["rows"] == serial["rows"]
+        assert c.scheduler_address.startswith("tcp://")
+
+
+def test_drive_scale_scales_the_limits_and_helps_fast_hits():
+    from ttmanip.sweeps import _scaled_drives
+
+    g6 = ttmanip.robots.gantry6()
+    big = _scaled_drives(g6, 1.5)
+    for limits in ("velocity_limits", "acceleration_limits", "effort_limits"):
+        assert (getattr(big, limits) == 1.5 * getattr(g6, limits)).all(), limits
+    assert (big.limits == g6.limits).all()
+    r = ttmanip.sweep("hits", {"speed": [4.0], "drive_scale": [1.0, 1.5]}, n=40, chunk=20, scheduler="serial")
+    weak, strong = r["rows"]
+    assert strong["ok"] > weak["ok"] and weak["hit_speed_limit"] > strong["hit_speed_limit"]
+    with pytest.raises(ttmanip.TtmanipError, match="drive_scale: expected a finite factor > 0"):
+        ttmanip.sweep("hits", {"drive_scale": [0.0]}, n=2, scheduler="serial")

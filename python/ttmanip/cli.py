@@ -318,6 +318,8 @@ def _demo(args: argparse.Namespace) -> int:
         f"{summary['mobile8'].get('racket_position_error_m', float('nan')):.2e} m"
     )
     print(f"wrote {out / 'summary.json'}")
+    if "rerun" in summary:
+        print(f"wrote {summary['rerun']} (open it with: rerun {summary['rerun']})")
     return 0
 
 

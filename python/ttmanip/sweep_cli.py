@@ -10,8 +10,9 @@ EXAMPLE = """examples:
   ttmanip sweep hits --param speed=2,6 --scheduler tcp://10.0.0.5:8786
 
 --param NAME=v1,v2,...   grid values;  NAME=low:high:count  evenly spaced grid values;
---param NAME=low:high    a range for --random.  Parameters: hits: base_x, base_y (m), speed (m/s);
-rally: target_x, target_y (m), max_spin_rps (rev/s)."""
+--param NAME=low:high    a range for --random.
+Parameters: hits: base_x, base_y (m), speed (m/s), drive_scale (x the joints' velocity,
+acceleration and effort limits); rally: target_x, target_y (m), max_spin_rps (rev/s)."""
 
 
 def add_parser(sub) -> argparse.ArgumentParser:

@@ -10,7 +10,8 @@ with ``scheduler="serial"`` (no Dask, in this process).
 
 Studies (all maths in Rust; this module only makes inputs and counts outcomes):
 
-- ``hits``: gantry6 with its base moved by ``base_x``, ``base_y`` (m, base frame), random hits
+- ``hits``: gantry6 with its base moved by ``base_x``, ``base_y`` (m, base frame) and drives
+  ``drive_scale`` times as capable (velocity, acceleration and effort limits), random hits
   around the demo hit (centre ± 0.15 m, face normal ± 0.2, time 0.3–0.6 s) with racket speed
   ``speed`` (m/s, ± 10 %); rate = share of ``plan_hits`` plans that are ok.
 - ``rally``: the simulated rally (``ttmanip.rally``) with return target ``target_x``, ``target_y``
@@ -36,7 +37,7 @@ __all__ = ["sweep", "STUDIES"]
 
 #: Study name -> (its parameters with their defaults, trials per point by default, trials per task).
 STUDIES: dict[str, tuple[dict[str, float], int, int]] = {
-    "hits": ({"base_x": 0.0, "base_y": 0.0, "speed": 3.0}, 10000, 10000),
+    "hits": ({"base_x": 0.0, "base_y": 0.0, "speed": 3.0, "drive_scale": 1.0}, 10000, 10000),
     "rally": ({"target_x": 0.9, "target_y": 0.0, "max_spin_rps": 40.0}, 400, 200),
 }
 
@@ -46,10 +47,27 @@ UNITS = {
     "base_x": "m",
     "base_y": "m",
     "speed": "m/s",
+    "drive_scale": "×",
     "target_x": "m",
     "target_y": "m",
     "max_spin_rps": "rev/s",
 }
+
+
+def _scaled_drives(robot, scale: float):
+    """``robot`` with drives ``scale`` times as capable: its robot file with every joint's velocity,
+    acceleration and effort limit multiplied by ``scale`` (> 0)."""
+    import re
+
+    from . import Robot
+
+    if not (np.isfinite(scale) and scale > 0):
+        raise _t.TtmanipError(f"drive_scale: expected a finite factor > 0, got {scale}")
+
+    def times(m: re.Match) -> str:
+        return f"{m[1]} = {float(m[2]) * scale!r}"
+
+    return Robot.from_toml(re.sub(r"(?m)^(velocity|acceleration|effort) = (\S+)$", times, robot.to_toml()))
 
 
 def _hits_task(p: dict[str, float], count: int, seed: list[int]) -> dict[str, float]:
@@ -59,6 +77,8 @@ def _hits_task(p: dict[str, float], count: int, seed: list[int]) -> dict[str, fl
 
     rng = np.random.default_rng(np.random.SeedSequence(seed))
     robot = robots.gantry6()
+    if p["drive_scale"] != 1.0:
+        robot = _scaled_drives(robot, p["drive_scale"])
     shift = np.eye(4)
     shift[:2, 3] = p["base_x"], p["base_y"]
     robot = robot.with_base(shift @ robot.base)
@@ -275,8 +295,9 @@ def _write(rows: list[dict], study: str, out: Path) -> dict[str, str]:
 
 
 def figure(rows: list[dict], study: str, path: str | Path) -> Path:
-    """The rate over the design: a heat map over the two most varied parameters (mean over the
-    others), a line for one, markers sized by rate for a random design."""
+    """The rate over the design. A grid: a heat map over the two most varied parameters, one panel
+    per value of a third (up to 4 panels; the mean over any further one); one parameter: a line;
+    a random design: markers coloured by rate."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -284,41 +305,48 @@ def figure(rows: list[dict], study: str, path: str | Path) -> Path:
 
     names = [k for k in STUDIES[study][0] if len({r[k] for r in rows}) > 1]
     names.sort(key=lambda k: -len({r[k] for r in rows}))
-    rate = np.array([r["rate"] for r in rows])
-    fig, ax = plt.subplots(figsize=(6.4, 4.8), constrained_layout=True)
     label = "return rate (in reach)" if study == "rally" else "share of ok plans"
-    if len(names) >= 2:
-        xs, ys = sorted({r[names[0]] for r in rows}), sorted({r[names[1]] for r in rows})
-        if len(xs) * len(ys) <= len(rows):  # a grid
+    title = f"ttmanip sweep: {study}, {len(rows)} points, {rows[0]['trials']} trials each"
+    values = [sorted({r[k] for r in rows}) for k in names]
+    is_grid = int(np.prod([len(v) for v in values])) == len(rows) if names else False
+    panels = values[2][:4] if is_grid and len(names) >= 3 else [None]
+    fig, axes = plt.subplots(
+        1, len(panels), figsize=(1.0 + 5.0 * len(panels), 4.6), squeeze=False, constrained_layout=True
+    )
+    for ax, panel in zip(axes[0], panels, strict=True):
+        sel = [r for r in rows if panel is None or r[names[2]] == panel]
+        rate = np.array([r["rate"] for r in sel])
+        if len(names) >= 2 and is_grid:
+            xs, ys = values[0], values[1]
             grid = np.full((len(ys), len(xs)), np.nan)
             for y_i, y in enumerate(ys):
                 for x_i, x in enumerate(xs):
-                    vals = [r["rate"] for r in rows if r[names[0]] == x and r[names[1]] == y]
-                    grid[y_i, x_i] = np.mean(vals)
-            im = ax.pcolormesh(xs, ys, grid, shading="nearest", vmin=0, vmax=1, cmap="viridis")
-            for y_i, y in enumerate(ys):
-                for x_i, x in enumerate(xs):
+                    grid[y_i, x_i] = np.mean(
+                        [r["rate"] for r in sel if r[names[0]] == x and r[names[1]] == y]
+                    )
                     v = grid[y_i, x_i]
                     ax.text(
                         x, y, f"{v:.2f}", ha="center", va="center", fontsize=9, color="k" if v > 0.6 else "w"
                     )
+            im = ax.pcolormesh(xs, ys, grid, shading="nearest", vmin=0, vmax=1, cmap="viridis")
+        elif len(names) >= 2:
+            im = ax.scatter(
+                [r[names[0]] for r in sel], [r[names[1]] for r in sel], c=rate, vmin=0, vmax=1, s=80
+            )
+        elif names:
+            order = np.argsort([r[names[0]] for r in sel])
+            ax.plot(np.array([r[names[0]] for r in sel])[order], rate[order], "o-")
+            ax.set_ylim(0, 1.05)
         else:
-            x = [r[names[0]] for r in rows]
-            y = [r[names[1]] for r in rows]
-            im = ax.scatter(x, y, c=rate, vmin=0, vmax=1, s=80, cmap="viridis")
-        fig.colorbar(im, ax=ax, label=label)
-        ax.set_xlabel(f"{names[0]} [{UNITS[names[0]]}]")
-        ax.set_ylabel(f"{names[1]} [{UNITS[names[1]]}]")
-    elif names:
-        order = np.argsort([r[names[0]] for r in rows])
-        ax.plot(np.array([r[names[0]] for r in rows])[order], rate[order], "o-")
-        ax.set_xlabel(f"{names[0]} [{UNITS[names[0]]}]")
-        ax.set_ylabel(label)
-        ax.set_ylim(0, 1.05)
-    else:
-        ax.bar([0], [rate.mean()])
-        ax.set_ylabel(label)
-    ax.set_title(f"ttmanip sweep: {study}, {len(rows)} points, {rows[0]['trials']} trials each")
+            ax.bar([0], [rate.mean()])
+        if names:
+            ax.set_xlabel(f"{names[0]} [{UNITS[names[0]]}]")
+        ax.set_ylabel(f"{names[1]} [{UNITS[names[1]]}]" if len(names) >= 2 else label)
+        if panel is not None:
+            ax.set_title(f"{names[2]} = {panel:g} {UNITS[names[2]]}")
+    if len(names) >= 2:
+        fig.colorbar(im, ax=axes[0].tolist(), label=label)
+    fig.suptitle(title)
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return Path(path)

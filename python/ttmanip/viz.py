@@ -55,6 +55,38 @@ class Recording:
         self.rec.save(str(self.path))
         self.rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
 
+    def layout(self, robot, quantities: tuple[str, ...] = ("q", "current")) -> None:
+        """The viewer's layout (a Rerun blueprint): the 3-D world on the left, ``robot``'s joint
+        ``quantities`` as plots on the right, the timeline below."""
+        import rerun.blueprint as rrb
+
+        plots = [
+            rrb.TimeSeriesView(
+                origin=f"/joints/{k}",
+                contents=[f"/joints/{k}/{n}" for n in robot.joint_names],
+                name=f"{robot.name} joints: {k}",
+            )
+            for k in quantities
+        ]
+        self.rec.send_blueprint(
+            rrb.Blueprint(
+                rrb.Horizontal(
+                    rrb.Spatial3DView(
+                        origin="/world",
+                        name="world",
+                        # looking at the robot's end of the table from the side, over the net
+                        eye_controls=rrb.EyeControls3D(
+                            position=[0.2, -1.9, 1.0], look_target=[-1.3, 0.1, 0.1], eye_up=[0.0, 0.0, 1.0]
+                        ),
+                    ),
+                    rrb.Vertical(*plots),
+                    column_shares=[3, 2],
+                ),
+                rrb.TimePanel(timeline="time"),
+                collapse_panels=True,
+            )
+        )
+
     def close(self) -> Path:
         """Flushes and closes the file; returns its path."""
         self.rec.flush()
@@ -144,7 +176,7 @@ class Recording:
 
     def racket(self, root: str, t, poses, hit_centre=None) -> None:
         """The racket frame ``poses`` (K, 4, 4, parent frame of ``root``) over ``t`` with a blade,
-        and the planned hit centre."""
+        and the planned hit centre (from ``t[0]`` on: each stroke shows its own)."""
         rr = self.rr
         t, poses = np.asarray(t, dtype=float), np.asarray(poses, dtype=float)
         pick = np.unique(np.linspace(0, len(t) - 1, min(len(t), _MAX_FRAMES)).round().astype(int))
@@ -159,9 +191,9 @@ class Recording:
             static=True,
         )
         if hit_centre is not None:
-            self.rec.log(
-                f"{root}/hit", rr.Points3D([hit_centre], radii=0.025, colors=[[255, 220, 0]]), static=True
-            )
+            self.rec.set_time("time", duration=float(t[0]))
+            self.rec.log(f"{root}/hit", rr.Points3D([hit_centre], radii=0.025, colors=[[255, 220, 0]]))
+            self.rec.reset_time()
 
     def ball(self, t, positions, predicted=None, *, entity: str = "world/ball") -> None:
         """The ball at ``positions`` (K, 3, world) over ``t``; ``predicted`` (M, 3) its predicted
@@ -189,6 +221,7 @@ def record_hit(rec: Recording, robot, plan, sim, *, t0: float = 0.0) -> None:
     at_table = robot.name == "gantry6"
     if at_table:
         rec.table()
+        rec.layout(robot, ("q", "current"))
     root = f"world/{robot.name}" if at_table else robot.name
     a = sim.arrays
     t = t0 + np.asarray(a["t"], dtype=float)
@@ -210,6 +243,7 @@ def record_rally(path: str | Path, summary: dict, balls: int = 10) -> Path:
     robot = robots.gantry6()
     with Recording(path, "ttmanip-rally") as rec:
         rec.table()
+        rec.layout(robot, ("q", "torque"))
         offset = 0.0
         for k in range(min(balls, len(res["incoming"]))):
             state = np.asarray(res["incoming"][k], dtype=float)
@@ -342,16 +376,22 @@ def snapshot(recording: str | Path, t: float, path: str | Path, *, title: str = 
             trail = past[np.argsort(times[times <= t])] @ base[:3, :3].T + base[:3, 3]
             ax.plot(*trail.T, ":", color="#c81e1e", lw=1, label="racket path so far")
     for entity in sorted(e for e in data if e.startswith("/world/") and e.endswith("/hit")):
-        m = world_from(entity.rsplit("/", 1)[0])
-        p = np.array(at(entity, "Points3D:positions")[0], dtype=float) @ m[:3, :3].T + m[:3, 3]
-        ax.scatter(*p.T, color="gold", s=60, edgecolor="k", label="planned hit point")
+        hit = at(entity, "Points3D:positions")
+        if hit is not None:
+            m = world_from(entity.rsplit("/", 1)[0])
+            p = np.array(hit[0], dtype=float) @ m[:3, :3].T + m[:3, 3]
+            ax.scatter(*p.T, color="gold", s=60, edgecolor="k", label="planned hit point")
     for entity in sorted(e for e in data if e.startswith("/world/ball") and e.count("/") == 2):
         p = at(entity, "Points3D:positions")
         if p is not None:
-            ax.scatter(*np.array(p, dtype=float).T, color="darkorange", s=30)
+            ax.scatter(
+                *np.array(p, dtype=float).T, color="white", edgecolor="k", s=45, label="ball", zorder=5
+            )
         pr = at(entity + "/predicted", "LineStrips3D:strips")
         if pr:
-            ax.plot(*np.array(pr[0], dtype=float).T, color="orange", lw=1, alpha=0.6)
+            ax.plot(
+                *np.array(pr[0], dtype=float).T, color="orange", lw=1, alpha=0.8, label="predicted flight"
+            )
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.set_zlabel("z [m]")

@@ -69,10 +69,14 @@ impl DriveSim {
         let mut sim = Self::build(&chain, options, journal.reset.as_ref())?;
         for call in &journal.calls {
             match call {
-                Call::Setpoint(q, qd, qdd, tau) => sim.set_setpoint(q, qd, qdd, tau.as_deref()).py()?,
+                // a call that failed was journaled too (it may have changed the state before
+                // failing): its replay fails alike, at the same point
+                Call::Setpoint(q, qd, qdd, tau) => {
+                    let _ = sim.set_setpoint(q, qd, qdd, tau.as_deref());
+                }
                 Call::Tick(n) => sim.tick_n(*n),
                 Call::Run(t, q, qd, qdd, tau) => {
-                    sim.run(t, q, qd, qdd, tau.as_deref(), setpoint_period).py()?;
+                    let _ = sim.run(t, q, qd, qdd, tau.as_deref(), setpoint_period);
                 }
             }
         }
@@ -160,9 +164,9 @@ impl DriveSim {
             .transpose()?
             .unwrap_or_else(|| zeros.clone());
         let tau = tau_ff.map(|v| vector(v, "tau_ff", n)).transpose()?;
-        self.sim.set_setpoint(&q, &qd, &qdd, tau.as_deref()).py()?;
-        self.journal.calls.push(Call::Setpoint(q, qd, qdd, tau));
-        Ok(())
+        let result = self.sim.set_setpoint(&q, &qd, &qdd, tau.as_deref());
+        self.journal.calls.push(Call::Setpoint(q, qd, qdd, tau)); // failed or not (see from_state)
+        result.py()
     }
 
     /// Advances `n` current-loop periods.
@@ -238,10 +242,9 @@ impl DriveSim {
         let times = t.data().to_vec();
         let period = self.setpoint_period;
         let sim = &mut self.sim;
-        let tr = py
-            .detach(|| sim.run(&times, &q, &qd, &qdd, tau.as_deref(), period))
-            .py()?;
-        self.journal.calls.push(Call::Run(times, q, qd, qdd, tau));
+        let tr = py.detach(|| sim.run(&times, &q, &qd, &qdd, tau.as_deref(), period));
+        self.journal.calls.push(Call::Run(times, q, qd, qdd, tau)); // failed or not (see from_state)
+        let tr = tr.py()?;
         let rows = tr.len();
         let d = PyDict::new(py);
         d.set_item("t", to_numpy(py, &[rows], &tr.t))?;
