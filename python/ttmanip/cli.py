@@ -438,6 +438,11 @@ def _simulate(args: argparse.Namespace) -> int:
 
         rec = Recording(args.rerun, "ttmanip-simulate")
     t0 = 0.0
+    # The rally's robot (the same model, whatever its name) stands at its rally place by the table.
+    from . import _ttmanip
+
+    rally_robot = spec["robot"].to_toml() == _ttmanip.Robot.builtin("gantry6").to_toml()
+    at_table = _ttmanip.ball_placement() if rally_robot else None
     try:
         for i, hit in enumerate(spec["hits"]):
             results.append(
@@ -453,6 +458,7 @@ def _simulate(args: argparse.Namespace) -> int:
                     progress=bar,
                     recording=rec,
                     t0=t0,
+                    world_from_base=at_table,
                 )
             )
             t0 += (results[-1].get("stroke_duration") or 0.0) + 0.5  # the hits one after the other

@@ -27,6 +27,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from . import motor, plots, robots  # noqa: E402
+from . import _ttmanip as _t  # noqa: E402
 from ._ttmanip import Robot  # noqa: E402
 from .pipeline import DEMO_HIT, Hit, plan_hit, racket_states, simulate  # noqa: E402
 
@@ -101,6 +102,7 @@ def run_hit(
     progress=None,
     recording=None,
     t0: float = 0.0,
+    world_from_base=None,
 ) -> dict:
     """Plans and simulates ``hit`` on ``robot``; writes figures and CSVs named ``prefix_*`` into
     ``out``; returns the JSON-ready summary. With ``recording`` (a ``ttmanip.viz.Recording``) the
@@ -139,7 +141,7 @@ def run_hit(
     if recording is not None:
         from . import viz
 
-        viz.record_hit(recording, robot, plan, sim, t0=t0)
+        viz.record_hit(recording, robot, plan, sim, t0=t0, world_from_base=world_from_base)
     step("figures")
     figures = [
         *plots.hit_figures(
@@ -190,7 +192,10 @@ def run(out: Path, progress=None, workspace: bool = True, rerun: str | Path | No
         from . import viz
 
         rec = viz.Recording(rerun, "ttmanip-demo")
-    summary = run_hit(robots.gantry6(), DEMO_HIT, out, "gantry6", progress=step, recording=rec)
+    # gantry6 stands where the rally places it (ttkin::ball::reach::Placement::default)
+    summary = run_hit(
+        robots.gantry6(), DEMO_HIT, out, "gantry6", progress=step, recording=rec, world_from_base=_t.ball_placement()
+    )
     summary["mobile8"] = run_hit(
         robots.mobile8(), mobile8_hit(), out, "mobile8", gif=False, progress=step, recording=rec
     )

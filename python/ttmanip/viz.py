@@ -26,11 +26,9 @@ from . import _ttmanip as _t
 
 __all__ = ["Recording", "WORLD_FROM_GANTRY6", "record_hit", "record_rally", "record_telemetry", "snapshot"]
 
-#: gantry6's base frame in the world (table) frame of the rally: origin (−2.0, 0, 0.15) m, yaw
-#: 90° (``ttkin::ball::reach::Placement::default``).
-WORLD_FROM_GANTRY6 = np.array(
-    [[0.0, -1.0, 0.0, -2.0], [1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.15], [0.0, 0.0, 0.0, 1.0]]
-)
+#: gantry6's base frame in the world (table) frame of the rally (4×4, m): origin (−2.0, 0, 0.15) m,
+#: yaw 90°, read from the Rust core (``ttkin::ball::reach::Placement::default``).
+WORLD_FROM_GANTRY6 = _t.ball_placement()
 _MAX_FRAMES = 300  # 3D frames per stroke (the scalars keep every sample)
 
 
@@ -213,12 +211,12 @@ class Recording:
             self.rec.reset_time()
 
 
-def record_hit(rec: Recording, robot, plan, sim, *, t0: float = 0.0) -> None:
+def record_hit(rec: Recording, robot, plan, sim, *, t0: float = 0.0, world_from_base=None) -> None:
     """A planned and simulated hit (``plan_hit`` + ``simulate``) from ``t0`` (s) on the timeline:
     the robot from the simulated joint positions, the racket, the hit point, q / q_ref / torque /
-    current. gantry6 stands at its rally place by the table (``world/gantry6``); another robot
-    stands alone (``<name>``, its base frame at the origin)."""
-    at_table = robot.name == "gantry6"
+    current. With ``world_from_base`` (4×4, e.g. :data:`WORLD_FROM_GANTRY6`) the robot stands
+    there by the table (``world/<name>``); without, it stands alone (``<name>``, base at the origin)."""
+    at_table = world_from_base is not None
     if at_table:
         rec.table()
         rec.layout(robot, ("q", "current"))
@@ -226,7 +224,7 @@ def record_hit(rec: Recording, robot, plan, sim, *, t0: float = 0.0) -> None:
     a = sim.arrays
     t = t0 + np.asarray(a["t"], dtype=float)
     scalars = {k: a[k] for k in ("q", "q_ref", "torque", "current") if k in a}
-    base = WORLD_FROM_GANTRY6 if at_table else None
+    base = np.asarray(world_from_base, dtype=float) if at_table else None
     rec.robot(root, robot, t, a["q"], world_from_base=base, scalars=scalars)
     rec.racket(root, t, sim.racket_pose, plan.hit_pose[:3, 3])
 
