@@ -818,3 +818,13 @@ def ball_rally(
     max_spin_rps: float = 40.0,
     paths: int = 5,
 ) -> dict[str, Any]: ...
+
+# issue 26: the controller's datagram format (ttcan::online::wire)
+WIRE_VERSION: int
+WIRE_MAX_LEN: int
+
+def wire_hit(
+    id: int, stroke: int, t_hit: float, pose: ArrayLike, twist: ArrayLike, seq: int, sent: float
+) -> bytes: ...
+def wire_observation(id: int, camera_time: float, position: ArrayLike, seq: int, sent: float) -> bytes: ...
+def wire_decode(data: bytes) -> dict[str, Any]: ...

@@ -24,6 +24,7 @@ pub mod loops;
 pub mod motor;
 pub mod noise;
 pub mod observer;
+pub mod online;
 pub mod runtime;
 pub mod schedule;
 pub mod setpoint;

@@ -13,6 +13,7 @@ mod hit;
 mod ik;
 mod mobile;
 mod motor;
+mod online;
 mod profile;
 mod robot;
 mod traj;
@@ -41,6 +42,7 @@ fn _ttmanip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     hit::register(m)?;
     drives::register(m)?;
     ball::register(m)?;
+    online::register(m)?;
     m.add_function(wrap_pyfunction!(convert::real_array, m)?)?;
     Ok(())
 }
