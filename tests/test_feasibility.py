@@ -7,7 +7,6 @@ drive simulation."""
 from __future__ import annotations
 
 import numpy as np
-import pytest
 import ttmanip
 from ttmanip import robots
 
@@ -113,7 +112,7 @@ def test_no_feasible_plan_exceeds_a_limit_at_10_khz_and_effort_ratio_is_the_dens
     assert ok >= 300 and moving >= 100 and jerk_legs >= 40 and ok - jerk_legs >= 50, (ok, moving, jerk_legs)
     assert worst_gap <= 1e-3, worst_gap
     print(f"{ok} feasible plans ({jerk_legs} jerk-limited, {moving} from a moving start); effort_ratio")
-    print(f"within {worst_gap:.1e} of the dense peak; {stepped_over} peaks stepped over by the 10 kHz samples")
+    print(f"within {worst_gap:.1e} of the dense peak; {stepped_over} peaks between the 10 kHz samples")
 
 
 def test_issue_example_is_not_ok_with_an_effort_above_its_limit():
@@ -175,7 +174,9 @@ def test_ok_plans_track_within_the_racket_bound_in_the_coupled_simulation():
         if plan.status != "ok":
             continue
         sim = ttmanip.simulate(GANTRY, plan)
-        errors = np.array([sim.racket_position_error_m, sim.racket_normal_error_deg, sim.racket_velocity_error_rel])
+        errors = np.array(
+            [sim.racket_position_error_m, sim.racket_normal_error_deg, sim.racket_velocity_error_rel]
+        )
         worst = np.maximum(worst, errors)
         assert sim.faults == [""] * 6, (checked, sim.faults)
         assert (errors <= RACKET_BOUND).all(), (checked, errors)

@@ -13,7 +13,9 @@
 //! A leg that leaves the position limits is replanned jerk-limited with position limits.
 //! When the torques exceed an effective effort limit ([`crate::effort`]) at any instant, the
 //! return leg is slowed, and the hit time is moved later (growth by 10 %, then bisection to
-//! 0.1 %) until they do not. "At any instant" is certified, not sampled: the branch-and-bound
+//! 0.1 %) until they do not, with the quintic hit leg at each time tried when it is within the
+//! kinematic limits, else the jerk-limited one (`Auto`; `Quintic` and `Jerk` keep their family) (a time-optimal leg stretched in time keeps its
+//! bang-bang torques: gantry6's demo hit needs 1.03 s jerk-limited, 0.50 s as a quintic). "At any instant" is certified, not sampled: the branch-and-bound
 //! bound of [`crate::dynamics::peak`] decides each leg, and the reported `effort_ratio` is the
 //! refined peak of the legs planned (to the options' `effort_tolerance`). The hit-time search
 //! screens its legs by the torques at 33 instants (a necessary test, cheap) and certifies only
@@ -431,42 +433,60 @@ fn within_effort_limits(
             ));
         }
     }
-    // The hit leg at hit time t (jerk-limited, position limits respected).
-    let leg_at = |t: f64| {
-        jerk_limited(start, hit, lim, Some(t), PositionLimits::Respect)
-            .ok()
-            .map(|j| j.trajectory)
+    // The hit legs at hit time t: the quintic when it is within the kinematic and position
+    // limits (smoother torques than a stretched time-optimal leg, which keeps its bang-bang
+    // shape), and the jerk-limited leg with position limits respected.
+    let legs_at = |t: f64| {
+        let quintic = (p.options.profile != StrokeProfile::Jerk
+            && duration::quintic_limit_ratio_above(start, hit, t, lim, 1.0 + LIMIT_TOLERANCE) <= 1.0 + LIMIT_TOLERANCE)
+            .then(|| JointTrajectory::quintic_unchecked(start, hit, t))
+            .filter(|q| inside(p, q))
+            .map(|q| (q, StrokeProfile::Quintic));
+        let jerk = move || {
+            jerk_limited(start, hit, lim, Some(t), PositionLimits::Respect)
+                .ok()
+                .map(|j| (j.trajectory, StrokeProfile::Jerk))
+        };
+        quintic.into_iter().chain(std::iter::from_fn({
+            let mut once = (p.options.profile != StrokeProfile::Quintic).then_some(jerk);
+            move || once.take().and_then(|f| f())
+        }))
     };
     // The search for the earliest hit time screens each leg by its torques at instants (cheap,
     // necessary); the leg it settles on is then certified. When that fails (a peak between the
     // instants), the search runs again from there with every leg certified.
     let screened =
-        |t: f64, data: &mut DynamicsData| leg_at(t).filter(|traj| screen(p, data, traj, SCREEN_POINTS) <= 1.0);
+        |t: f64, data: &mut DynamicsData| legs_at(t).find(|(traj, _)| screen(p, data, traj, SCREEN_POINTS) <= 1.0);
     let t0 = legs.t_hit();
-    let Some((hi, best)) = earliest(t0, p.options.max_t_hit, data, screened) else {
+    let Some((hi, (best, profile))) = earliest(t0, p.options.max_t_hit, data, screened) else {
         return Err(name(&e_hit, "hit"));
     };
     let e = effort(p, data, &best, refine_hit);
     if fits(&e) {
         legs.set_hit(best);
         legs.hit_known.effort = Some(e);
-        legs.profile = StrokeProfile::Jerk;
+        legs.profile = profile;
         return Ok(());
     }
-    let certified = |t: f64, data: &mut DynamicsData| leg_at(t).filter(|traj| fits(&effort(p, data, traj, DECIDE)));
-    let Some((_, best)) = earliest(hi, p.options.max_t_hit, data, certified) else {
+    let certified = |t: f64, data: &mut DynamicsData| legs_at(t).find(|(traj, _)| fits(&effort(p, data, traj, DECIDE)));
+    let Some((_, (best, profile))) = earliest(hi, p.options.max_t_hit, data, certified) else {
         return Err(name(&e, "hit"));
     };
     legs.set_hit(best);
-    legs.profile = StrokeProfile::Jerk;
+    legs.profile = profile;
     Ok(())
 }
 
 /// The earliest hit time after `lo` s (not accepted) up to `max` s at which `accept` gives a leg,
-/// to [`EFFORT_SEARCH_PRECISION`]: growth by 10 %, then bisection. The time and the leg.
-fn earliest<F>(mut lo: f64, max: f64, data: &mut DynamicsData, mut accept: F) -> Option<(f64, JointTrajectory)>
+/// to [`EFFORT_SEARCH_PRECISION`]: growth by 10 %, then bisection. The time and the leg with its profile.
+fn earliest<F>(
+    mut lo: f64,
+    max: f64,
+    data: &mut DynamicsData,
+    mut accept: F,
+) -> Option<(f64, (JointTrajectory, StrokeProfile))>
 where
-    F: FnMut(f64, &mut DynamicsData) -> Option<JointTrajectory>,
+    F: FnMut(f64, &mut DynamicsData) -> Option<(JointTrajectory, StrokeProfile)>,
 {
     let mut hi = lo * 1.1;
     let mut best = loop {
