@@ -46,7 +46,11 @@ fn demo_hit_is_met_on_time_within_every_limit() {
     assert!(earliest > 0.25 && earliest < 0.55, "{earliest}");
     let late = p.plan(&demo_hit(0.35), None, None).unwrap();
     assert_eq!(late.status, HitStatus::TooEarly, "{}", late.message);
-    assert!(late.t_hit > 0.5 && late.t_hit < 0.55 && late.effort_ratio <= 1.0, "{}", late.t_hit);
+    assert!(
+        late.t_hit > 0.5 && late.t_hit < 0.55 && late.effort_ratio <= 1.0,
+        "{}",
+        late.t_hit
+    );
     let (pe, te) = hit_errors(&p, &plan);
     assert!(pe < 1e-9 && te < 1e-8, "pose {pe}, twist {te}");
     assert!(plan.violations.is_empty());
