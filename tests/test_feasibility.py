@@ -182,3 +182,4 @@ def test_ok_plans_track_within_the_racket_bound_in_the_coupled_simulation():
         assert (errors <= RACKET_BOUND).all(), (checked, errors)
         checked += 1
     assert checked == 100
+    print(f"worst of 100 ok plans: {1e3 * worst[0]:.3f} mm, {worst[1]:.4f} deg, {100 * worst[2]:.3f} %")
