@@ -7,7 +7,6 @@ drive simulation."""
 from __future__ import annotations
 
 import numpy as np
-import pytest
 import ttmanip
 from ttmanip import robots
 
@@ -45,9 +44,27 @@ def random_problem(rng: np.random.Generator):
 def dense_excess(plan) -> dict[str, float]:
     """The largest ratio of each quantity to its limit over a 10 kHz sample of the stroke
     (position: the largest excess over the range in m or rad, 0 inside; jerk from differences
-    of the sampled accelerations, a mean over each sample step, never above the true peak)."""
+    of the sampled accelerations, a mean over each sample step, never above the true peak).
+    "effort_knots" adds the stroke's knots and both sides of every zero crossing of a joint's
+    speed to the instants: a jerk-limited leg's torque has a kink where its jerk switches, and
+    the Coulomb friction steps where a speed crosses zero, and a peak there falls between 10 kHz
+    samples by up to |dτ/dt|·50 µs (6e-3 of the limit seen)."""
     t, q, qd, qdd = plan.sample(RATE)
     tau = plan.torques(RATE)
+    traj = plan.trajectory
+    # Where a joint's speed crosses zero the Coulomb friction steps: the supremum is a one-sided
+    # limit the samples step over. The crossings, bisected to 1e-8 s, evaluated 1e-8 s beyond either side.
+    k, j = np.nonzero(np.sign(qd[:-1]) * np.sign(qd[1:]) < 0)
+    lo, hi = t[k], t[k + 1]
+    for _ in range(24):
+        mid = 0.5 * (lo + hi)
+        same = np.sign(traj.sample(mid)[1][np.arange(len(k)), j]) == np.sign(qd[k, j])
+        lo, hi = np.where(same, mid, lo), np.where(same, hi, mid)
+    side = np.concatenate([lo - 1e-8, hi + 1e-8]).clip(0.0, traj.duration)
+    times = np.concatenate([traj.knots, side])
+    kq, kqd, kqdd = traj.sample(times)
+    ktau = GANTRY.inverse_dynamics(kq, kqd, kqdd)
+    at_knots = float(np.max(np.abs(ktau) / GANTRY.effort_limits_at(kqd)))
     lo, hi = GANTRY.limits.T
     jerk = np.diff(qdd, axis=0) * RATE
     j_lim = JERK_PER_ACCELERATION * GANTRY.acceleration_limits
@@ -57,6 +74,7 @@ def dense_excess(plan) -> dict[str, float]:
         "acceleration": float(np.max(np.abs(qdd) / GANTRY.acceleration_limits)),
         "jerk": float(np.max(np.abs(jerk) / j_lim)),
         "effort": float(np.max(np.abs(tau) / GANTRY.effort_limits_at(qd))),
+        "effort_knots": max(float(np.max(np.abs(tau) / GANTRY.effort_limits_at(qd))), at_knots),
     }
 
 
@@ -67,16 +85,21 @@ def plans(count: int, seed: int):
         yield ttmanip.plan_hit(GANTRY, hit, state, profile=profile), state is not None
 
 
-def test_no_ok_plan_exceeds_a_limit_at_10_khz_and_effort_ratio_is_the_dense_peak():
-    ok, moving, jerk_legs, worst_gap = 0, 0, 0, 0.0
+def test_no_feasible_plan_exceeds_a_limit_at_10_khz_and_effort_ratio_is_the_dense_peak():
+    """Every `ok` or `too_early` plan (a stroke the planner calls feasible, on time or late) of
+    1,000 random hits is within every limit at every 10 kHz sample."""
+    ok, moving, jerk_legs, worst_gap, stepped_over = 0, 0, 0, 0.0, 0
     for plan, moved in plans(1000, seed=28):
         if plan.trajectory is None:
             continue
         e = dense_excess(plan)
-        # The certified peak: a value the stroke takes, within 1e-3 of the 10 kHz sample.
-        worst_gap = max(worst_gap, abs(plan.effort_ratio - e["effort"]))
-        assert abs(plan.effort_ratio - e["effort"]) <= 1e-3, (plan, plan.effort_ratio, e)
-        if plan.status != "ok":
+        # The certified peak: a value the stroke takes, within 1e-3 of the 10 kHz sample with
+        # the knots, and never below it by more than the planner's tolerance (1e-4).
+        gap = plan.effort_ratio - e["effort_knots"]
+        stepped_over += e["effort_knots"] - e["effort"] > 1e-3
+        worst_gap = max(worst_gap, abs(gap))
+        assert -1.1e-4 <= gap <= 1e-3, (plan, plan.effort_ratio, e)
+        if plan.status not in ("ok", "too_early"):
             continue
         ok += 1
         moving += moved
@@ -86,8 +109,10 @@ def test_no_ok_plan_exceeds_a_limit_at_10_khz_and_effort_ratio_is_the_dense_peak
             assert e[name] <= 1 + 1e-9, (plan, name, e)
         assert plan.effort_ratio <= 1.0 + 1e-9
     # Enough of every kind of ok plan for the claim to mean something.
-    assert ok >= 300 and moving >= 100 and jerk_legs >= 50 and ok - jerk_legs >= 50, (ok, moving, jerk_legs)
-    assert worst_gap <= 1e-3
+    assert ok >= 300 and moving >= 100 and jerk_legs >= 40 and ok - jerk_legs >= 50, (ok, moving, jerk_legs)
+    assert worst_gap <= 1e-3, worst_gap
+    print(f"{ok} feasible plans ({jerk_legs} jerk-limited, {moving} from a moving start); effort_ratio")
+    print(f"within {worst_gap:.1e} of the dense peak; {stepped_over} peaks between the 10 kHz samples")
 
 
 def test_issue_example_is_not_ok_with_an_effort_above_its_limit():
@@ -149,9 +174,12 @@ def test_ok_plans_track_within_the_racket_bound_in_the_coupled_simulation():
         if plan.status != "ok":
             continue
         sim = ttmanip.simulate(GANTRY, plan)
-        errors = np.array([sim.racket_position_error_m, sim.racket_normal_error_deg, sim.racket_velocity_error_rel])
+        errors = np.array(
+            [sim.racket_position_error_m, sim.racket_normal_error_deg, sim.racket_velocity_error_rel]
+        )
         worst = np.maximum(worst, errors)
         assert sim.faults == [""] * 6, (checked, sim.faults)
         assert (errors <= RACKET_BOUND).all(), (checked, errors)
         checked += 1
     assert checked == 100
+    print(f"worst of 100 ok plans: {1e3 * worst[0]:.3f} mm, {worst[1]:.4f} deg, {100 * worst[2]:.3f} %")

@@ -125,9 +125,9 @@ class Robot:
         """(n,) the smaller of effort_limits and drive_effort_limits: what the planners use at rest."""
     @property
     def effort_limit_sources(self) -> list[str]:
-        """Which limit governs each joint at rest: "robot file", "drive peak current", "drive voltage", "none"."""
+        """Which limit governs each joint at rest: "robot file", "drive peak current", "drive voltage"."""
     def effort_limits_at(self, qd: ArrayLike) -> NDArray[np.float64]:
-        """Effective effort limits at joint speeds qd: (n,) or (N, n); the bus voltage lowers them with speed."""
+        """Effective effort limits at joint speeds qd: (n,) or (N, n); they fall with speed."""
     @property
     def base(self) -> NDArray[np.float64]:
         """Base frame → frame 0 (4×4)."""

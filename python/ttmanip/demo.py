@@ -164,6 +164,7 @@ def run_hit(
         {
             "peak_torques": np.abs(tau).max(axis=0).tolist(),
             "effort_limits": np.asarray(robot.effort_limits).tolist(),
+            "effective_effort_limits": np.asarray(robot.effective_effort_limits).tolist(),
             "stroke_duration": plan.duration,
             "figures": [str(p) for p in figures],
         }

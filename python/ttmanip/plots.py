@@ -69,7 +69,7 @@ def joint_figure(
     lower, upper = _limits(robot)
     vmax = _named(robot, "velocity_limits", n)
     amax = _named(robot, "acceleration_limits", n)
-    emax = _named(robot, "effort_limits", n)
+    emax = _named(robot, "effective_effort_limits", n)  # what the planners use (at rest)
     kinds = list(robot.joint_types)
     for j in range(n):
         u = "m" if kinds[j] == "prismatic" else "rad"

@@ -114,12 +114,36 @@ impl Neg for Iv {
     }
 }
 
+/// The smaller of two numbers (one `minsd`; the enclosures hold no NaN unless an input did,
+/// and a NaN input makes the caller's bound NaN, which it treats as unbounded).
+#[inline(always)]
+fn lesser(a: f64, b: f64) -> f64 {
+    if a < b {
+        a
+    } else {
+        b
+    }
+}
+
+/// The larger of two numbers (one `maxsd`).
+#[inline(always)]
+fn greater(a: f64, b: f64) -> f64 {
+    if a > b {
+        a
+    } else {
+        b
+    }
+}
+
 impl Mul for Iv {
     type Output = Iv;
     #[inline(always)]
     fn mul(self, o: Iv) -> Iv {
         let (a, b, c, d) = (self.lo * o.lo, self.lo * o.hi, self.hi * o.lo, self.hi * o.hi);
-        Iv::new(a.min(b).min(c.min(d)), a.max(b).max(c.max(d)))
+        Iv::new(
+            lesser(lesser(a, b), lesser(c, d)),
+            greater(greater(a, b), greater(c, d)),
+        )
     }
 }
 

@@ -16,8 +16,8 @@
 //!
 //! Every interval gets a lower value (the ratio at its midpoint, an instant of the trajectory)
 //! and an upper bound per joint; the interval with the largest gap is bisected until the gap is
-//! below the tolerance everywhere ([`PeakStop::Refine`]), or until the peak is known to be above
-//! or below a threshold, or too close to it to matter ([`PeakStop::Decide`]). Intervals shorter than [`MIN_WIDTH`] of the
+//! below the tolerance everywhere ([`PeakStop::refine`]), or until the peak is known to be above
+//! or below a threshold, or too close to it to matter ([`PeakStop::decide`]). Intervals shorter than [`MIN_WIDTH`] of the
 //! duration are not split further (their bound stays in the result): then `bound` is still an
 //! upper bound, only a looser one.
 
@@ -33,7 +33,7 @@ use crate::joint::{JointType, COULOMB_DEADBAND};
 use crate::traj::{poly, JointTrajectory};
 
 /// Intervals at the start of a search (evenly spaced over the trajectory).
-const START_INTERVALS: usize = 8;
+const START_INTERVALS: usize = 4;
 
 /// Shortest interval the search splits, as a fraction of the trajectory's duration.
 pub const MIN_WIDTH: f64 = 1e-7;
@@ -45,22 +45,52 @@ const MAX_EVALUATIONS: usize = 4000;
 /// ([`super::interval`]).
 const ROUNDING: f64 = 1e-12;
 
-/// When the search may stop.
+/// When the search may stop (ratios |τ|/limit, dimensionless): when every interval's bound is
+/// within `tolerance` of the larger of the best value found and `floor`, when a value above
+/// `above` is found, or when the bound is at most `below`.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum PeakStop {
-    /// Once the bound is within `tolerance` (ratio units) of the largest value found (over all
-    /// joints: the other joints' peaks are not refined).
-    Refine(f64),
-    /// Once the peak ratio is known to be above `threshold` (a value above it found), at most
-    /// `threshold` (the bound at most it), or bracketed within `tolerance` (ratio units) with the
-    /// bound above `threshold`: a peak that close to the threshold is called above it, which
-    /// errs on the safe side (a caller deciding feasibility by `bound ≤ threshold` rejects it).
-    Decide {
-        /// The ratio to decide against (1 + [`crate::traj::limits::LIMIT_TOLERANCE`] for a limit).
-        threshold: f64,
-        /// Width of the bracket at which the search gives up deciding.
-        tolerance: f64,
-    },
+pub struct PeakStop {
+    /// Width of the bracket that ends the search.
+    pub tolerance: f64,
+    /// Values up to it need no refinement (another part of a motion already reaches it).
+    pub floor: f64,
+    /// A value found above it ends the search (+∞: never).
+    pub above: f64,
+    /// A bound at most it ends the search (−∞: never).
+    pub below: f64,
+}
+
+impl PeakStop {
+    /// Refine the peak to `tolerance`: the bound is then within it of the ratio found.
+    pub fn refine(tolerance: f64) -> Self {
+        PeakStop {
+            tolerance,
+            floor: 0.0,
+            above: f64::INFINITY,
+            below: f64::NEG_INFINITY,
+        }
+    }
+
+    /// Refine to `tolerance` unless a value above `threshold` turns up (then a decision only).
+    pub fn refine_below(tolerance: f64, threshold: f64) -> Self {
+        PeakStop {
+            above: threshold,
+            ..PeakStop::refine(tolerance)
+        }
+    }
+
+    /// Decide whether the peak is above `threshold` (a value above it found) or at most it (the
+    /// bound at most it); a peak bracketed within `tolerance` with the bound above `threshold`
+    /// is left undecided, and a caller deciding feasibility by `bound ≤ threshold` rejects it,
+    /// which errs on the safe side.
+    pub fn decide(threshold: f64, tolerance: f64) -> Self {
+        PeakStop {
+            tolerance,
+            floor: 0.0,
+            above: threshold,
+            below: threshold,
+        }
+    }
 }
 
 /// The effort peak of a trajectory: ratios |τ|/limit (dimensionless), torques N·m or N, times s.
@@ -200,11 +230,15 @@ impl Dynamics {
         }
         let zero = T::cst(0.0);
         let (mut om, mut v, mut dom) = ([zero; 3], [zero; 3], [zero; 3]);
+        // x × p, with p a constant for a revolute joint (constants times numbers are cheap).
+        let cross_p = |w: &Work<T>, i: usize, x: &[T; 3]| match self.kinds[i] {
+            JointType::Revolute => cross_c(&self.fixed[i].translation.vector, x).map(|c| -c),
+            JointType::Prismatic => cross(x, &w.pos[i]),
+        };
         let mut dv = [T::cst(-gravity.x), T::cst(-gravity.y), T::cst(-gravity.z)];
         for i in 0..n {
-            let p = w.pos[i];
-            let dv_parent = add(dv, cross(&dom, &p));
-            let v_parent = add(v, cross(&om, &p));
+            let dv_parent = add(dv, cross_p(w, i, &dom));
+            let v_parent = add(v, cross_p(w, i, &om));
             om = self.rot_t(w, i, &om);
             v = self.rot_t(w, i, &v_parent);
             dom = self.rot_t(w, i, &dom);
@@ -244,7 +278,7 @@ impl Dynamics {
             out[i] = axis + qdd[i].scale(self.armature[i]) + qd[i].scale(viscous);
             if i > 0 {
                 let f = self.rot(w, i, &w.force[i]);
-                let m = add(self.rot(w, i, &w.moment[i]), cross(&w.pos[i], &f));
+                let m = add(self.rot(w, i, &w.moment[i]), cross_p(w, i, &f).map(|c| -c));
                 w.force[i - 1] = add(w.force[i - 1], f);
                 w.moment[i - 1] = add(w.moment[i - 1], m);
             }
@@ -421,8 +455,14 @@ impl<'a> Search<'a> {
 
     fn run(mut self, data: &mut DynamicsData, stop: PeakStop) -> EffortPeak {
         let d = self.traj.duration();
-        self.point(data, 0.0);
-        self.point(data, d);
+        // The instants first (cheap): a leg above the threshold there needs no enclosure.
+        for k in 0..=2 * START_INTERVALS {
+            self.point(data, d * k as f64 / (2 * START_INTERVALS) as f64);
+        }
+        if self.best.0 > stop.above {
+            let best = self.best.0;
+            return self.result(best);
+        }
         let mut active: Vec<Interval> = (0..START_INTERVALS)
             .map(|k| {
                 let (a, b) = (
@@ -440,22 +480,18 @@ impl<'a> Search<'a> {
                 let mut key = f64::NEG_INFINITY;
                 for j in 0..self.n {
                     bound = bound.max(iv.upper[j]);
-                    key = key.max(match stop {
-                        PeakStop::Refine(_) => iv.upper[j] - self.best.0,
-                        PeakStop::Decide { .. } => iv.upper[j],
-                    });
+                    key = key.max(iv.upper[j]);
                 }
                 if pick.is_none_or(|(_, k)| key > k) {
                     pick = Some((idx, key));
                 }
             }
-            let done = match (stop, pick) {
-                (_, None) => true,
-                (PeakStop::Refine(tol), Some((_, key))) => key <= tol,
-                (PeakStop::Decide { threshold, tolerance }, _) => {
-                    self.best.0 > threshold || bound <= threshold || bound - self.best.0 <= tolerance
-                }
-            };
+            let reached = self.best.0.max(stop.floor);
+            let done = match pick {
+                None => true,
+                Some((_, key)) => key - reached <= stop.tolerance,
+            } || self.best.0 > stop.above
+                || bound <= stop.below;
             if done || self.evaluations >= MAX_EVALUATIONS || !self.best.0.is_finite() {
                 return self.result(bound);
             }
@@ -621,7 +657,7 @@ mod tests {
                 .unwrap()
                 .trajectory
             };
-            let peak = dy.effort_peak(&mut data, &traj, &lim, &g, PeakStop::Refine(1e-4));
+            let peak = dy.effort_peak(&mut data, &traj, &lim, &g, PeakStop::refine(1e-4));
             let reference = dense(&dy, &traj, &lim, 10_000);
             if !reference.is_finite() {
                 // Faster than a drive's no-load speed somewhere: no torque left there.
@@ -647,16 +683,7 @@ mod tests {
                 "{k}: {} vs dense {reference}",
                 peak.ratio
             );
-            let decide = dy.effort_peak(
-                &mut data,
-                &traj,
-                &lim,
-                &g,
-                PeakStop::Decide {
-                    threshold: 1.0,
-                    tolerance: 1e-3,
-                },
-            );
+            let decide = dy.effort_peak(&mut data, &traj, &lim, &g, PeakStop::decide(1.0, 1e-3));
             decisions.push(decide.evaluations);
             if decide.bound <= 1.0 {
                 assert!(

@@ -13,10 +13,13 @@
 //! A leg that leaves the position limits is replanned jerk-limited with position limits.
 //! When the torques exceed an effective effort limit ([`crate::effort`]) at any instant, the
 //! return leg is slowed, and the hit time is moved later (growth by 10 %, then bisection to
-//! 0.1 %) until they do not. "At any instant" is certified, not sampled: the branch-and-bound
-//! bound of [`crate::dynamics::peak`] decides each leg ([`PeakStop::Decide`]), and the reported
-//! `effort_ratio` is the refined peak of the legs planned ([`PeakStop::Refine`] to the options'
-//! `effort_tolerance`). The final trajectory's speed, acceleration and jerk are checked exactly
+//! 0.1 %) until they do not, with the quintic hit leg at each time tried when it is within the
+//! kinematic limits, else the jerk-limited one (`Auto`; `Quintic` and `Jerk` keep their family) (a time-optimal leg stretched in time keeps its
+//! bang-bang torques: gantry6's demo hit needs 1.03 s jerk-limited, 0.50 s as a quintic). "At any instant" is certified, not sampled: the branch-and-bound
+//! bound of [`crate::dynamics::peak`] decides each leg, and the reported `effort_ratio` is the
+//! refined peak of the legs planned (to the options' `effort_tolerance`). The hit-time search
+//! screens its legs by the torques at 33 instants (a necessary test, cheap) and certifies only
+//! the leg it settles on; when that fails, it searches on from there certifying every leg. The final trajectory's speed, acceleration and jerk are checked exactly
 //! as well ([`JointTrajectory::rate_violations`]; Ruckig's legs and the accepted quintics are
 //! within them by construction, so this only catches a start state beyond the limits).
 //!
@@ -50,10 +53,11 @@ struct Legs {
     back_known: Known,
 }
 
-/// What was already computed of one leg.
+/// What was already computed of one leg: inside the position limits, its refined effort peak.
 #[derive(Default)]
 struct Known {
     inside: bool,
+    effort: Option<EffortPeak>,
 }
 
 impl Legs {
@@ -136,8 +140,21 @@ pub(super) fn plan_stroke(p: &HitPlanner, plan: &mut HitPlan, mut data: Option<&
     }
     let t_hit = legs.t_hit();
     if let Some(d) = data {
-        let refine = PeakStop::Refine(p.options.effort_tolerance);
-        let (e1, e2) = (effort(p, d, &legs.hit, refine), effort(p, d, &legs.back, refine));
+        let refine = PeakStop::refine(p.options.effort_tolerance);
+        let e2 = legs
+            .back_known
+            .effort
+            .take()
+            .unwrap_or_else(|| effort(p, d, &legs.back, refine));
+        let refine_hit = PeakStop {
+            floor: e2.ratio,
+            ..refine
+        };
+        let e1 = legs
+            .hit_known
+            .effort
+            .take()
+            .unwrap_or_else(|| effort(p, d, &legs.hit, refine_hit));
         plan.effort_ratio = e1.ratio.max(e2.ratio);
         plan.peak_effort = e1.peak.iter().zip(&e2.peak).map(|(a, b)| a.max(*b)).collect();
     }
@@ -314,16 +331,41 @@ fn effort(p: &HitPlanner, data: &mut DynamicsData, traj: &JointTrajectory, stop:
     dynamics.effort_peak(data, traj, &p.effort, &gravity, stop)
 }
 
-/// The decision of a leg: within the effort limits at every instant, or not (a peak within
-/// [`EFFORT_DECISION`] below the limit may be called above it: the hit time search then settles
-/// at most that much later).
-const DECIDE: PeakStop = PeakStop::Decide {
-    threshold: 1.0 + LIMIT_TOLERANCE,
-    tolerance: EFFORT_DECISION,
-};
+/// Instants per leg at which the hit-time search screens the torques before certifying a leg.
+const SCREEN_POINTS: usize = 33;
 
-/// Bracket (ratio units) at which an effort decision errs on the safe side.
-const EFFORT_DECISION: f64 = 1e-3;
+/// Largest |τ|/effective limit at `points` evenly spaced instants of `traj` (inverse dynamics
+/// with friction, gravity of the options): a lower bound of the peak, a cheap necessary test.
+fn screen(p: &HitPlanner, data: &mut DynamicsData, traj: &JointTrajectory, points: usize) -> f64 {
+    (0..points)
+        .map(|k| ratio_at(p, data, traj, traj.duration() * k as f64 / (points - 1) as f64))
+        .fold(0.0, f64::max)
+}
+
+/// Largest |τ|/effective limit over the joints at time `t` of `traj`.
+fn ratio_at(p: &HitPlanner, data: &mut DynamicsData, traj: &JointTrajectory, t: f64) -> f64 {
+    let n = p.chain.dof();
+    let dynamics = p.dynamics.as_ref().expect("effort data exists only with dynamics");
+    let (mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    traj.sample_unchecked(t.min(traj.duration()), &mut q, &mut qd, &mut qdd);
+    if !q.iter().chain(&qd).chain(&qdd).all(|v| v.is_finite()) {
+        return f64::INFINITY;
+    }
+    let gravity = nalgebra::Vector3::from(p.options.gravity);
+    let tau = dynamics.inverse_dynamics_unchecked(data, &q, &qd, &qdd, &gravity);
+    let mut ratio: f64 = 0.0;
+    for j in 0..n {
+        let limit = p.effort.at(j, qd[j]);
+        if tau[j] != 0.0 {
+            ratio = ratio.max(if limit > 0.0 {
+                tau[j].abs() / limit
+            } else {
+                f64::INFINITY
+            });
+        }
+    }
+    ratio
+}
 
 /// Whether a decided peak is within the limits (its certified bound at most the limit).
 fn fits(e: &EffortPeak) -> bool {
@@ -349,7 +391,11 @@ fn within_effort_limits(
             p.chain.joints()[e.joint].name()
         )
     };
-    let mut e_back = effort(p, data, &legs.back, DECIDE);
+    // The legs as first planned are usually the final ones: refined at once (which decides them
+    // too, conservatively within the tolerance), not decided then refined.
+    let threshold = 1.0 + LIMIT_TOLERANCE;
+    let refine = PeakStop::refine_below(p.options.effort_tolerance, threshold);
+    let mut e_back = effort(p, data, &legs.back, refine);
     let mut d = legs.back.duration();
     for _ in 0..10 {
         if fits(&e_back) {
@@ -360,37 +406,102 @@ fn within_effort_limits(
             break;
         };
         legs.set_back(b.trajectory);
-        e_back = effort(p, data, &legs.back, DECIDE);
+        e_back = effort(p, data, &legs.back, refine);
     }
     if !fits(&e_back) {
         return Err(name(&e_back, "return"));
     }
+    // The hit leg's peak needs refining only above the return leg's.
+    let refine_hit = PeakStop {
+        floor: e_back.ratio,
+        ..refine
+    };
+    legs.back_known.effort = Some(e_back);
 
-    let e_hit = effort(p, data, &legs.hit, DECIDE);
+    let e_hit = effort(p, data, &legs.hit, refine_hit);
     if fits(&e_hit) {
+        legs.hit_known.effort = Some(e_hit);
         return Ok(());
     }
-    // The hit leg at hit time t (jerk-limited, position limits respected) when it fits.
-    let leg_at = |t: f64, data: &mut DynamicsData| -> Option<JointTrajectory> {
-        let j = jerk_limited(start, hit, lim, Some(t), PositionLimits::Respect).ok()?;
-        fits(&effort(p, data, &j.trajectory, DECIDE)).then_some(j.trajectory)
+    // The torques at the start and at the hit depend on those states alone: when either is
+    // beyond a limit, no hit time can help.
+    for (at, what) in [(0.0, "start"), (legs.t_hit(), "hit")] {
+        let r = ratio_at(p, data, &legs.hit, at);
+        if r > threshold {
+            return Err(format!(
+                "the {what} state needs {r:.2}× the effort limit of some joint: no hit time can help"
+            ));
+        }
+    }
+    // The hit legs at hit time t: the quintic when it is within the kinematic and position
+    // limits (smoother torques than a stretched time-optimal leg, which keeps its bang-bang
+    // shape), and the jerk-limited leg with position limits respected.
+    let legs_at = |t: f64| {
+        let quintic = (p.options.profile != StrokeProfile::Jerk
+            && duration::quintic_limit_ratio_above(start, hit, t, lim, 1.0 + LIMIT_TOLERANCE) <= 1.0 + LIMIT_TOLERANCE)
+            .then(|| JointTrajectory::quintic_unchecked(start, hit, t))
+            .filter(|q| inside(p, q))
+            .map(|q| (q, StrokeProfile::Quintic));
+        let jerk = move || {
+            jerk_limited(start, hit, lim, Some(t), PositionLimits::Respect)
+                .ok()
+                .map(|j| (j.trajectory, StrokeProfile::Jerk))
+        };
+        quintic.into_iter().chain(std::iter::from_fn({
+            let mut once = (p.options.profile != StrokeProfile::Quintic).then_some(jerk);
+            move || once.take().and_then(|f| f())
+        }))
     };
-    let (mut lo, mut hi) = (legs.t_hit(), legs.t_hit() * 1.1);
-    let mut good = None;
-    while hi <= p.options.max_t_hit {
-        if let Some(traj) = leg_at(hi, data) {
-            good = Some(traj);
-            break;
+    // The search for the earliest hit time screens each leg by its torques at instants (cheap,
+    // necessary); the leg it settles on is then certified. When that fails (a peak between the
+    // instants), the search runs again from there with every leg certified.
+    let screened =
+        |t: f64, data: &mut DynamicsData| legs_at(t).find(|(traj, _)| screen(p, data, traj, SCREEN_POINTS) <= 1.0);
+    let t0 = legs.t_hit();
+    let Some((hi, (best, profile))) = earliest(t0, p.options.max_t_hit, data, screened) else {
+        return Err(name(&e_hit, "hit"));
+    };
+    let e = effort(p, data, &best, refine_hit);
+    if fits(&e) {
+        legs.set_hit(best);
+        legs.hit_known.effort = Some(e);
+        legs.profile = profile;
+        return Ok(());
+    }
+    let certified = |t: f64, data: &mut DynamicsData| legs_at(t).find(|(traj, _)| fits(&effort(p, data, traj, DECIDE)));
+    let Some((_, (best, profile))) = earliest(hi, p.options.max_t_hit, data, certified) else {
+        return Err(name(&e, "hit"));
+    };
+    legs.set_hit(best);
+    legs.profile = profile;
+    Ok(())
+}
+
+/// The earliest hit time after `lo` s (not accepted) up to `max` s at which `accept` gives a leg,
+/// to [`EFFORT_SEARCH_PRECISION`]: growth by 10 %, then bisection. The time and the leg with its profile.
+fn earliest<F>(
+    mut lo: f64,
+    max: f64,
+    data: &mut DynamicsData,
+    mut accept: F,
+) -> Option<(f64, (JointTrajectory, StrokeProfile))>
+where
+    F: FnMut(f64, &mut DynamicsData) -> Option<(JointTrajectory, StrokeProfile)>,
+{
+    let mut hi = lo * 1.1;
+    let mut best = loop {
+        if hi > max {
+            return None;
+        }
+        if let Some(traj) = accept(hi, data) {
+            break traj;
         }
         lo = hi;
         hi *= 1.1;
-    }
-    let Some(mut best) = good else {
-        return Err(name(&e_hit, "hit"));
     };
     while hi - lo > EFFORT_SEARCH_PRECISION * hi {
         let mid = 0.5 * (lo + hi);
-        match leg_at(mid, data) {
+        match accept(mid, data) {
             Some(traj) => {
                 best = traj;
                 hi = mid;
@@ -398,7 +509,14 @@ fn within_effort_limits(
             None => lo = mid,
         }
     }
-    legs.set_hit(best);
-    legs.profile = StrokeProfile::Jerk;
-    Ok(())
+    Some((hi, best))
 }
+
+/// A certified decision of a leg: within the effort limits at every instant, or not (a peak
+/// within 1e-3 below the limit may be called above it, which only moves the hit a little later).
+const DECIDE: PeakStop = PeakStop {
+    tolerance: 1e-3,
+    floor: 0.0,
+    above: 1.0 + LIMIT_TOLERANCE,
+    below: 1.0 + LIMIT_TOLERANCE,
+};

@@ -299,8 +299,8 @@ impl JointTrajectory {
             (2, Quantity::Acceleration, &limits.acceleration),
             (3, Quantity::Jerk, &limits.jerk),
         ] {
-            for j in 0..self.dof() {
-                let limit = bound[j] * (1.0 + LIMIT_TOLERANCE);
+            for (j, &bound) in bound.iter().enumerate() {
+                let limit = bound * (1.0 + LIMIT_TOLERANCE);
                 let mut worst = Peak { time: 0.0, value: 0.0 };
                 let mut clear = true;
                 for k in 0..self.segments() {
@@ -329,7 +329,7 @@ impl JointTrajectory {
                         quantity,
                         time: t0 + worst.time,
                         value: worst.value,
-                        limit: bound[j],
+                        limit: bound,
                     });
                 }
             }

@@ -112,10 +112,7 @@ impl HitPlanner {
         let rot_bw = self.placement.world_from_base().rotation.inverse();
         let gravity = rot_bw * Vector3::from(crate::hit::GRAVITY);
         let threshold = 1.0 + LIMIT_TOLERANCE;
-        let stop = PeakStop::Decide {
-            threshold,
-            tolerance: 1e-3,
-        };
+        let stop = PeakStop::decide(threshold, 1e-3);
         let peak = dynamics.effort_peak(&mut data, leg, &self.effort, &gravity, stop);
         peak.bound <= threshold
     }
