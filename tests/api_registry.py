@@ -148,6 +148,8 @@ API: dict[str, dict] = {
             "violations",
         )
     },
+    "HitPlan.robot_name": {},
+    "HitPlan.made_for": {},  # robot drawn from all four: pairs of different robots (issue 29)
     "HitPlan.sample": {"args": {"rate": "rate"}},
     "HitPlan.torques": {"args": {"rate": "rate"}},
     "SimResult": {"skip_call": "made by simulate only"},

@@ -84,7 +84,7 @@ def rally(
     try:
         target = tuple(float(v) for v in np.asarray(target, dtype=float).reshape(-1))
         max_spin_rps = float(np.asarray(max_spin_rps, dtype=float))
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise _t.TtmanipError(
             f"target, max_spin_rps: expected (x, y) in m and a number in rev/s, got {target!r}, "
             f"{max_spin_rps!r}"

@@ -29,6 +29,7 @@ from ._ttmanip import (
     JointTrajectory,
     Robot,
     ShapeError,
+    real_array,
     traj_cubic,
     traj_minimal_duration,
     traj_quintic,
@@ -127,8 +128,9 @@ class Stroke:
 def _float_array(x: Any, what: str) -> np.ndarray:
     """``x`` as a float array; ragged or non-numeric data is a ShapeError naming ``what``."""
     try:
-        return np.asarray(x, dtype=float)
-    except (TypeError, ValueError) as e:
+        # The bindings' one conversion: complex, bool, string and object data are refused.
+        return real_array(x, what)
+    except (TypeError, OverflowError) as e:
         raise ShapeError(f"{what}: expected an array of real numbers ({e})") from None
 
 
