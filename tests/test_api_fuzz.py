@@ -129,12 +129,11 @@ class Draw:
                 ]
             )
         )
-        if how == "bool":
-            self.refuse = True  # docs/boundary.md: refused, never cast
-            return np.asarray(a) > 0.0
-        if how == "complex":
-            self.refuse = True
-            return np.asarray(a).astype(complex)
+        if how in ("bool", "complex"):
+            # docs/boundary.md: arrays of them are refused, never cast (a 0-d one becomes a numpy
+            # scalar, which converts to a float as Python's bool does)
+            self.refuse |= np.ndim(a) > 0
+            return np.asarray(a) > 0.0 if how == "bool" else np.asarray(a).astype(complex)
         if how == "unaligned":
             buf = bytearray(a.nbytes + 1)
             u = np.ndarray(a.shape, np.float64, buf, offset=1)
@@ -571,7 +570,8 @@ def run_one(d: Draw, key: str, obj):
         ) from e
     finally:
         faulthandler.cancel_dump_traceback_later()
-    if d.refuse and not d.loose:  # (a loose parameter may be a plain record field, checked later)
+    # (a loose parameter or a record's field may be stored and checked later)
+    if d.refuse and not d.loose and not spec.get("record"):
         raise AssertionError(f"{key}({args!r}, {kwargs!r}) accepted a boolean or complex array")
     check(key, result, d, kwargs, ctx)
 

@@ -246,8 +246,8 @@ def plan_hits(
 def racket_states(robot: Robot, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, ...]:
     """Racket poses (K, 4, 4), centres (K, 3), normals (K, 3) and centre velocities (K, 3), base
     frame, for joint states ``q``, ``qd`` (K, n)."""
-    q = np.atleast_2d(np.asarray(q, float))
-    qd = np.atleast_2d(np.asarray(qd, float))
+    q = np.atleast_2d(_ttmanip.real_array(q, "q"))
+    qd = np.atleast_2d(_ttmanip.real_array(qd, "qd"))
     mount = racket_mount(robot)
     tool = robot.fk(q)
     poses = tool @ mount

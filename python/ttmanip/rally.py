@@ -82,8 +82,8 @@ def rally(
     if not isinstance(progress, (bool, np.bool_)):
         raise _t.TtmanipError(f"progress: must be True or False, got {progress!r}")
     try:
-        target = tuple(float(v) for v in np.asarray(target, dtype=float).reshape(-1))
-        max_spin_rps = float(np.asarray(max_spin_rps, dtype=float))
+        target = tuple(float(v) for v in _t.real_array(target, "target").reshape(-1))
+        max_spin_rps = float(_t.real_array(max_spin_rps, "max_spin_rps"))
     except (TypeError, ValueError, OverflowError):
         raise _t.TtmanipError(
             f"target, max_spin_rps: expected (x, y) in m and a number in rev/s, got {target!r}, "

@@ -189,14 +189,14 @@ def stroke(
         lower, upper = lim[:, 0].copy(), lim[:, 1].copy()
     else:
         vel, acc = inf, inf
-    vel = vel if velocity is None else np.asarray(velocity, dtype=float)
-    acc = acc if acceleration is None else np.asarray(acceleration, dtype=float)
-    jrk = inf if jerk is None else np.asarray(jerk, dtype=float)
-    q_hit = np.asarray(q_hit, dtype=float)
+    vel = vel if velocity is None else _float_array(velocity, "velocity")
+    acc = acc if acceleration is None else _float_array(acceleration, "acceleration")
+    jrk = inf if jerk is None else _float_array(jerk, "jerk")
+    q_hit = _float_array(q_hit, "q_hit")
     hit = (
         q_hit,
-        np.asarray(qd_hit, dtype=float),
-        np.zeros_like(q_hit) if qdd_hit is None else np.asarray(qdd_hit, dtype=float),
+        _float_array(qd_hit, "qd_hit"),
+        np.zeros_like(q_hit) if qdd_hit is None else _float_array(qdd_hit, "qdd_hit"),
     )
     traj, t, back, violations = traj_stroke(
         (q0, qd0, qdd0), hit, t_hit, ready, vel, acc, jrk, lower, upper, return_duration
