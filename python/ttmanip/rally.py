@@ -83,7 +83,10 @@ def rally(
         raise _t.TtmanipError(f"progress: must be True or False, got {progress!r}")
     try:
         target = tuple(float(v) for v in _t.real_array(target, "target").reshape(-1))
-        max_spin_rps = float(_t.real_array(max_spin_rps, "max_spin_rps"))
+        spin = _t.real_array(max_spin_rps, "max_spin_rps").reshape(-1)
+        if spin.size != 1:
+            raise TypeError("max_spin_rps: one number")
+        max_spin_rps = float(spin[0])
     except (TypeError, ValueError, OverflowError):
         raise _t.TtmanipError(
             f"target, max_spin_rps: expected (x, y) in m and a number in rev/s, got {target!r}, "
