@@ -7,6 +7,11 @@ counts as a success only if it also finished within 1 ms. Prints success rate an
 time per solver and case, plus ttmanip's batch throughput and the analytic gantry6 IK (every
 branch) per pose.
 
+Single start (issue 29): every solver from the same start (ur5's home, mobile8's start pose) with
+no restart and no time limit (ttmanip ``max_restarts=0``, Robotics Toolbox ``slimit=1``,
+Pinocchio's CLIK loop, which never restarts), on ``--single-count`` targets per seed: the basin of
+one descent, "reached" counted alike for all.
+
 Run: ``.venv/bin/python benches/bench_ik.py [--count 10000] [--peer-count 1000]``, peers from
 ``pip install roboticstoolbox-python pin ikpy optik-py``. Not part of CI. The peers get fewer
 targets by default because the slow ones take seconds per hundred solves.
@@ -72,8 +77,9 @@ def run(label: str, solve, robot, targets, task) -> tuple[str, str, float, float
     return label, f"{n}", 100.0 * ok / n, 100.0 * hit / n, med, p99
 
 
-def peers(robot: ttmanip.Robot, q0: np.ndarray, urdf: str):
-    """(label, solve) for every installed peer."""
+def peers(robot: ttmanip.Robot, q0: np.ndarray, urdf: str, single: bool = False):
+    """(label, solve) for every installed peer; ``single``: one start, no restart, no time limit
+    (Robotics Toolbox and Pinocchio only)."""
     out = []
     try:
         import roboticstoolbox as rtb
@@ -83,7 +89,7 @@ def peers(robot: ttmanip.Robot, q0: np.ndarray, urdf: str):
         ets = rtb.Robot(links, name=rname).ets(start="base_link", end="tool")
 
         def rtb_solve(t):
-            sol = ets.ik_LM(t, q0=q0, ilimit=30, slimit=100, tol=1e-12, joint_limits=True)
+            sol = ets.ik_LM(t, q0=q0, ilimit=30, slimit=1 if single else 100, tol=1e-12, joint_limits=True)
             return sol.q if sol.success else None
 
         out.append(("rtb ETS ik_LM (C++)", rtb_solve))
@@ -115,6 +121,8 @@ def peers(robot: ttmanip.Robot, q0: np.ndarray, urdf: str):
         out.append(("pinocchio CLIK loop", pin_clik))
     except ImportError:
         pass
+    if single:
+        return out
     try:
         import ikpy.chain
 
@@ -158,6 +166,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--count", type=int, default=10_000, help="targets for ttmanip")
     ap.add_argument("--peer-count", type=int, default=1_000, help="targets for each peer")
+    ap.add_argument("--single-count", type=int, default=200, help="targets per seed, single start")
+    ap.add_argument("--only-single", action="store_true", help="only the single-start case")
     args = ap.parse_args()
     ur5_start = np.array([0.0, -np.pi / 2, np.pi / 2, 0.0, np.pi / 2, 0.0])
     cases = [
@@ -165,7 +175,9 @@ def main() -> None:
         ("mobile8", "pose", ttmanip.robots.mobile8_start()),
         ("mobile8", "racket5", ttmanip.robots.mobile8_start()),
     ]
-    rows = []
+    rows = single_start(cases[:2], args.single_count)
+    if args.only_single:
+        return report(rows)
     for name, task, q0 in cases:
         robot = ttmanip.Robot.builtin(name)
         qs = random_configurations(robot, args.count)
@@ -208,6 +220,32 @@ def main() -> None:
     single = (time.perf_counter() - t0) / 1e4 * 1e6
     rows.append(("gantry6 ik_all", "analytic single", "10000", 100.0, 100.0, single, float("nan")))
 
+    report(rows)
+
+
+def single_start(cases, count: int) -> list:
+    """The single-start rows: each solver's basin from one start, two seeds of targets."""
+    rows = []
+    for name, task, q0 in cases:
+        robot = ttmanip.Robot.builtin(name)
+        for seed in (0, 1):
+            targets = robot.fk(random_configurations(robot, count, seed=seed))
+            label = f"{name} 1-start s{seed}"
+
+            def ours(t, robot=robot, q0=q0, task=task):
+                return robot.ik(t, q0, task=task, method="numeric", max_restarts=0, time_budget=None).q
+
+            rows.append((label, *run("ttmanip ik", ours, robot, targets, task)))
+            with tempfile.TemporaryDirectory() as tmp:
+                urdf = os.path.join(tmp, f"{name}.urdf")
+                with open(urdf, "w") as f:
+                    f.write(robot.to_urdf())
+                for plabel, solve in peers(robot, q0, urdf, single=True):
+                    rows.append((label, *run(plabel, solve, robot, targets, task)))
+    return rows
+
+
+def report(rows) -> None:
     head = f"{'case':16s} {'solver':22s} {'targets':>8s} {'success%':>9s} {'reached%':>9s}"
     print(f"{head} {'median µs':>10s} {'p99 µs':>10s}")
     for case, solver, n, succ, hit, med, p99 in rows:

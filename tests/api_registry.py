@@ -14,7 +14,9 @@ default. :data:`API` lists every name once, with what the fuzzer needs beyond th
 - ``args``: per-parameter strategy names overriding the by-name choice;
 - ``type_error``: messages of TypeErrors the call documents for a wrong *set* of arguments;
 - ``os_error``: the call writes a file; an unwritable path is an ``OSError`` (Python's file error);
-- ``skip_call``: why the entry is not called (a class without a Python constructor).
+- ``skip_call``: why the entry is not called (a class without a Python constructor);
+- ``record``: a plain parameter record (a dataclass checked where it is used, e.g. by ``Servo``),
+  which may hold a boolean or complex array without refusing it.
 
 ``test_registry_covers_the_public_api`` fails when a public callable is missing here.
 """
@@ -156,6 +158,8 @@ API: dict[str, dict] = {
             "violations",
         )
     },
+    "HitPlan.robot_name": {},
+    "HitPlan.made_for": {},  # robot drawn from all four: pairs of different robots (issue 29)
     "HitPlan.sample": {"args": {"rate": "rate"}},
     "HitPlan.torques": {"args": {"rate": "rate"}},
     "SimResult": {"skip_call": "made by simulate only"},
@@ -251,10 +255,10 @@ API: dict[str, dict] = {
         "os_error": True,
     },
     # --- motor
-    "motor.DcMotor": {},
-    "motor.Drive": {},
-    "motor.Gearbox": {},
-    "motor.Load": {},
+    "motor.DcMotor": {"record": True},
+    "motor.Drive": {"record": True},
+    "motor.Gearbox": {"record": True},
+    "motor.Load": {"record": True},
     "motor.Loops": {},
     "motor.Response": {"skip_call": "made by Servo.step_response only"},
     "motor.Servo": {

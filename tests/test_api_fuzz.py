@@ -4,12 +4,18 @@ Each example picks a registry entry (tests/api_registry.py), makes the receiver 
 and draws every argument from a strategy chosen by the parameter's name: arrays of random shape
 (mostly the shapes the call accepts), dtype (float64/32/16, int, uint), byte order, alignment
 (buffers at an odd offset), strides, Fortran order, read-only, or a list; values finite, huge
-(1e160–1e300), NaN, ±inf, empty. The call must either
+(1e160–1e308), magnitudes across the whole double range (10^k, k in −308..308), subnormals,
+absolute times far from zero (1e9–1e17 s), NaN, ±inf, empty; boolean and complex arrays (which
+must be refused); integers huge (2^64, 10^30) and negative; robots and objects (a plan, a robot)
+drawn independently, so that pairs from different robots meet. The call must either
 
 - return a result whose floating arrays are float64, of the documented shape (``shape`` in the
   registry), and finite whenever every input was finite (unless ``may_be_inf``); or
 - raise a ``ttmanip.TtmanipError`` subclass. Anything else (another exception, PyO3's
   ``PanicException`` — a ``BaseException`` — or a silent NaN) fails the test.
+
+A call that hangs ends the run: ``faulthandler`` dumps the stacks and exits after
+``TTMANIP_FUZZ_CALL_SECONDS`` (120 s) of one call, so a hang is a failure, not a stuck CI job.
 
 CI (``CI=true``) runs a fixed, derandomized set of examples (``ci`` profile in conftest.py);
 ``TTMANIP_FUZZ_EXAMPLES=10000`` runs a long local campaign.
@@ -17,6 +23,7 @@ CI (``CI=true``) runs a fixed, derandomized set of examples (``ci`` profile in c
 
 from __future__ import annotations
 
+import faulthandler
 import functools
 import inspect
 import math
@@ -36,7 +43,28 @@ TMP = tempfile.mkdtemp(prefix="ttmanip-fuzz-")
 
 # ---------------------------------------------------------------- values and array layouts
 
-SPECIAL = [np.nan, np.inf, -np.inf, 1e300, -1e300, 1e160, -1e200, 1e-300, 0.0, -0.0]
+SPECIAL = [
+    np.nan,
+    np.inf,
+    -np.inf,
+    1e300,
+    -1e300,
+    1e160,
+    -1e200,
+    1e-300,
+    0.0,
+    -0.0,
+    1.7976931348623157e308,  # the largest double
+    -1e308,
+    5e-324,  # the smallest subnormal
+    -2.5e-320,
+    2.2250738585072014e-308,  # the smallest normal
+    1e9,  # absolute times: Unix epoch ...
+    1.7e9,
+    1e15,  # ... and times where a millisecond step is lost in rounding
+    1e17,
+]
+CALL_SECONDS = float(os.environ.get("TTMANIP_FUZZ_CALL_SECONDS", "120"))
 finite_special = [v for v in SPECIAL if math.isfinite(v)]
 
 
@@ -47,17 +75,20 @@ class Draw:
         self.data = data
         self.finite = True
         self.loose = False  # a value of possibly the wrong Python type was drawn
+        self.refuse = False  # a boolean or complex array was drawn: the call must refuse it
 
     def __call__(self, strategy):
         return self.data.draw(strategy)
 
     def value(self) -> float:
         """A float: mostly ordinary, sometimes huge, tiny, NaN or infinite."""
-        kind = self(st.integers(0, 9))
+        kind = self(st.integers(0, 10))
         if kind < 6:
             v = self(st.floats(-3.0, 3.0, allow_nan=False))
         elif kind < 8:
             v = self(st.sampled_from(finite_special))
+        elif kind < 9:  # a magnitude anywhere in the double range
+            v = self(st.sampled_from([1.0, -1.0])) * 10.0 ** self(st.integers(-308, 308))
         else:
             v = self(st.sampled_from(SPECIAL))
         self.finite &= math.isfinite(v)
@@ -93,9 +124,16 @@ class Draw:
                     "float32",
                     "int",
                     "list",
+                    "bool",
+                    "complex",
                 ]
             )
         )
+        if how in ("bool", "complex"):
+            # docs/boundary.md: arrays of them are refused, never cast (a 0-d one becomes a numpy
+            # scalar, which converts to a float as Python's bool does)
+            self.refuse |= np.ndim(a) > 0
+            return np.asarray(a) > 0.0 if how == "bool" else np.asarray(a).astype(complex)
         if how == "unaligned":
             buf = bytearray(a.nbytes + 1)
             u = np.ndarray(a.shape, np.float64, buf, offset=1)
@@ -398,7 +436,9 @@ def argument(d: Draw, pname: str, ctx: dict, override: str | None, default=inspe
     if pname in CHOICES and d(st.integers(0, 9)) < 8:
         return d(st.sampled_from(CHOICES[pname]))
     if pname in INTS:
-        return d(st.one_of(st.integers(-3, 40), st.sampled_from([-(2**40), 2**64, 0])))
+        return d(
+            st.one_of(st.integers(-3, 40), st.sampled_from([-(2**40), 2**64, 0, 10**30, -(10**30), 2**126]))
+        )
     if pname in BOOLS:
         return d(st.booleans())
     if pname in PATH_NAMES:
@@ -508,6 +548,7 @@ def run_one(d: Draw, key: str, obj):
         return
     target, receiver, attr, args, kwargs, ctx = make_call(d, key, obj)
     ctx["receiver"] = receiver
+    faulthandler.dump_traceback_later(CALL_SECONDS, exit=True)  # a hang ends the run, with stacks
     try:
         if target is None:
             result = getattr(receiver, attr)
@@ -527,6 +568,11 @@ def run_one(d: Draw, key: str, obj):
         raise AssertionError(
             f"{key}({args!r}, {kwargs!r}) raised {type(e).__module__}.{type(e).__name__}: {e}"
         ) from e
+    finally:
+        faulthandler.cancel_dump_traceback_later()
+    # (a loose parameter or a record's field may be stored and checked later)
+    if d.refuse and not d.loose and not spec.get("record"):
+        raise AssertionError(f"{key}({args!r}, {kwargs!r}) accepted a boolean or complex array")
     check(key, result, d, kwargs, ctx)
 
 

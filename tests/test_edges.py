@@ -101,6 +101,17 @@ def test_ball_flights_are_bounded_in_steps():
     refused("ttmanip.ball.predict(ttmanip.ball.state([0, 0, 1e3], [0, 0, 0]), [1e7])", "steps")
 
 
+def test_batch_results_are_bounded_in_bytes_before_allocating():
+    # 1e5 balls × 1e5 times × 3 floats is 240 GB: refused, not an aborted allocation.
+    refused(
+        """
+s = np.tile(ttmanip.ball.state([-1, 0, 0.3], [4, 0, 1]), (100000, 1))
+ttmanip.ball.predict_batch(s, np.linspace(0.0, 0.1, 100000))
+""",
+        "result of shape (100000, 100000, 3)",
+    )
+
+
 def test_rally_n_is_checked_before_the_first_chunk():
     with pytest.raises(TtmanipError, match="at most"):
         ttmanip.rally(10**12)

@@ -80,7 +80,7 @@ def _finite_scalar(v, what: str, positive: bool = False) -> float:
     """A finite real number (> 0 when ``positive``), else a TtmanipError naming ``what``."""
     try:
         f = float(v)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise _t.TtmanipError(f"{what}: expected a real number, got {type(v).__name__}") from None
     if not np.isfinite(f) or (positive and not f > 0.0):
         raise _t.TtmanipError(f"{what}: expected a finite{' positive' if positive else ''} number, got {v!r}")

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._ttmanip import ShapeError, TorqueProfile, TtmanipError
+from ._ttmanip import ShapeError, TorqueProfile, TtmanipError, real_array
 
 __all__ = ["EARTH_GRAVITY", "MOBILE8_GRAVITY", "TorqueProfile", "gantry6_example", "torque_figure"]
 
@@ -44,7 +44,7 @@ def torque_figure(robot, t, profile: TorqueProfile, path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    t = np.asarray(t, dtype=float)
+    t = real_array(t, "t")  # the bindings' one conversion: complex and bool refused
     n = robot.dof
     if t.shape != (profile.joint.shape[0],) or profile.joint.shape[1] != n:
         raise ShapeError(

@@ -94,7 +94,7 @@ class Hit:
         object.__setattr__(self, "twist", _array(self.twist, (6,), "hit.twist"))
         try:
             t = float(self.t)
-        except (TypeError, ValueError) as e:
+        except (TypeError, ValueError, OverflowError) as e:
             raise TtmanipError(f"hit.t: expected a time in s, got {self.t!r}") from e
         if not (np.isfinite(t) and t > 0.0):
             raise TtmanipError(f"hit.t: the hit time must be finite and > 0 s, got {t}")
@@ -227,10 +227,9 @@ def plan_hits(
             f"hits: expected a list or tuple of ttmanip.Hit, got {type(hits).__name__} (one hit: plan_hit)"
         )
     hits = [_check_hit(h) for h in hits]
-    if not hits:
-        return []
-    poses = np.stack([h.pose for h in hits])
-    twists = np.stack([h.twist for h in hits])
+    # An empty list still has its other arguments checked (by the planner, on no hits).
+    poses = np.stack([h.pose for h in hits]) if hits else np.zeros((0, 4, 4))
+    twists = np.stack([h.twist for h in hits]) if hits else np.zeros((0, 6))
     times = np.array([h.t for h in hits])
     plans = _ttmanip.hit_plan_batch(
         robot,

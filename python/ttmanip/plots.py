@@ -16,6 +16,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from . import _ttmanip  # noqa: E402
 from .ball import Table  # noqa: E402
 
 __all__ = [
@@ -41,8 +42,9 @@ TABLE_PLACEMENT = {"near_end_centre": (0.0, -0.3), "surface_z": -0.25}
 
 def robot_points(robot, q) -> np.ndarray:
     """Base origin, every link frame origin and the tool point (n + 2, 3) at ``q`` (base frame)."""
-    frames = robot.fk_all(np.asarray(q, float))
-    return np.vstack([robot.base[:3, 3], frames[:, :3, 3], robot.fk(np.asarray(q, float))[:3, 3]])
+    q = _ttmanip.real_array(q, "q")  # the bindings' one conversion: complex and bool refused
+    frames = robot.fk_all(q)
+    return np.vstack([robot.base[:3, 3], frames[:, :3, 3], robot.fk(q)[:3, 3]])
 
 
 def _limits(robot):

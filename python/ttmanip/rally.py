@@ -82,9 +82,12 @@ def rally(
     if not isinstance(progress, (bool, np.bool_)):
         raise _t.TtmanipError(f"progress: must be True or False, got {progress!r}")
     try:
-        target = tuple(float(v) for v in np.asarray(target, dtype=float).reshape(-1))
-        max_spin_rps = float(np.asarray(max_spin_rps, dtype=float))
-    except (TypeError, ValueError):
+        target = tuple(float(v) for v in _t.real_array(target, "target").reshape(-1))
+        spin = _t.real_array(max_spin_rps, "max_spin_rps").reshape(-1)
+        if spin.size != 1:
+            raise TypeError("max_spin_rps: one number")
+        max_spin_rps = float(spin[0])
+    except (TypeError, ValueError, OverflowError):
         raise _t.TtmanipError(
             f"target, max_spin_rps: expected (x, y) in m and a number in rev/s, got {target!r}, "
             f"{max_spin_rps!r}"

@@ -29,6 +29,7 @@ from ._ttmanip import (
     JointTrajectory,
     Robot,
     ShapeError,
+    real_array,
     traj_cubic,
     traj_minimal_duration,
     traj_quintic,
@@ -127,8 +128,9 @@ class Stroke:
 def _float_array(x: Any, what: str) -> np.ndarray:
     """``x`` as a float array; ragged or non-numeric data is a ShapeError naming ``what``."""
     try:
-        return np.asarray(x, dtype=float)
-    except (TypeError, ValueError) as e:
+        # The bindings' one conversion: complex, bool, string and object data are refused.
+        return real_array(x, what)
+    except (TypeError, OverflowError) as e:
         raise ShapeError(f"{what}: expected an array of real numbers ({e})") from None
 
 
@@ -187,14 +189,14 @@ def stroke(
         lower, upper = lim[:, 0].copy(), lim[:, 1].copy()
     else:
         vel, acc = inf, inf
-    vel = vel if velocity is None else np.asarray(velocity, dtype=float)
-    acc = acc if acceleration is None else np.asarray(acceleration, dtype=float)
-    jrk = inf if jerk is None else np.asarray(jerk, dtype=float)
-    q_hit = np.asarray(q_hit, dtype=float)
+    vel = vel if velocity is None else _float_array(velocity, "velocity")
+    acc = acc if acceleration is None else _float_array(acceleration, "acceleration")
+    jrk = inf if jerk is None else _float_array(jerk, "jerk")
+    q_hit = _float_array(q_hit, "q_hit")
     hit = (
         q_hit,
-        np.asarray(qd_hit, dtype=float),
-        np.zeros_like(q_hit) if qdd_hit is None else np.asarray(qdd_hit, dtype=float),
+        _float_array(qd_hit, "qd_hit"),
+        np.zeros_like(q_hit) if qdd_hit is None else _float_array(qdd_hit, "qdd_hit"),
     )
     traj, t, back, violations = traj_stroke(
         (q0, qd0, qdd0), hit, t_hit, ready, vel, acc, jrk, lower, upper, return_duration

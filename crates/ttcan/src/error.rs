@@ -20,7 +20,7 @@ pub enum Error {
         value: f64,
     },
     /// A parameter is finite but not physical or not allowed (negative resistance, zero inertia, ...).
-    #[error("{what} = {value}: {reason}")]
+    #[error("{what} = {}: {reason}", number(*.value))]
     InvalidParameter {
         /// Name of the parameter, with its unit.
         what: String,
@@ -103,5 +103,15 @@ pub(crate) fn ttkin_reason(e: ttkin::Error) -> String {
     match e {
         ttkin::Error::InvalidArgument { reason, .. } => reason,
         other => other.to_string(),
+    }
+}
+
+/// A parameter's value as a message prints it: plainly in an ordinary range, in scientific
+/// notation beyond it (1e300 rather than its 301 digits).
+fn number(v: f64) -> String {
+    if v != 0.0 && v.is_finite() && !(1e-4..1e6).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
     }
 }

@@ -129,7 +129,16 @@ pub fn step_metrics(t: &[f64], y: &[f64], target: f64) -> Result<(f64, f64)> {
             reason: "must be ≠ 0".into(),
         });
     }
-    Ok((rise_time(t, y, target), overshoot(y, target)))
+    let o = overshoot(y, target);
+    if o.is_infinite() {
+        // |y / target| beyond the double range (a subnormal target): refused, not returned as inf.
+        return Err(Error::InvalidParameter {
+            what: "step target".into(),
+            value: target,
+            reason: "too small for the signal's scale: the overshoot ratio overflows".into(),
+        });
+    }
+    Ok((rise_time(t, y, target), o))
 }
 
 /// One axis controlling one simulated actuator.

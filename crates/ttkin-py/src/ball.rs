@@ -15,7 +15,7 @@ use ttkin::ball::rally::{self, RallyConfig};
 use ttkin::ball::reach::{Placement, ReachRegion};
 
 use crate::args;
-use crate::convert::{filled_without_gil_nan_allowed, pose_to_numpy, rows_array, to_numpy, vector};
+use crate::convert::{pose_to_numpy, rows_array, to_numpy, vector};
 use crate::errors::{PyResultExt, TtmanipError};
 
 fn flight(model: &str) -> PyResult<Flight> {
@@ -123,19 +123,38 @@ fn ball_predict_batch<'py>(
     let ts = ta.data().to_vec();
     let f = flight(model)?;
     let k = ts.len();
-    filled_without_gil_nan_allowed(py, &[list.len(), k, 3], |out| {
-        out.par_chunks_mut((3 * k).max(1))
-            .zip(list.par_iter())
-            .enumerate()
-            .try_for_each(|(i, (o, s))| {
-                let pred =
-                    predict(&f, s, &ts).map_err(|e| ttkin::Error::invalid(format!("states[{i}]"), e.to_string()))?;
-                for (dst, p) in o.chunks_exact_mut(3).zip(&pred.positions) {
-                    dst.copy_from_slice(p);
-                }
-                Ok(())
-            })
-    })
+    crate::convert::check_result_size(&[list.len(), k, 3])?;
+    let out = crate::convert::zeros(py, &[list.len(), k, 3]);
+    // Ctrl-C stops the batch within one ball per thread (issue 29).
+    crate::convert::fill_fresh(&out, |o| {
+        crate::interrupt::detach_interruptible(py, |cancel| predict_rows(&f, &list, &ts, o, cancel))?.py()
+    })?;
+    Ok(out)
+}
+
+/// The rows of `ball_predict_batch`: ball i's positions at `ts` into `out[i]`, stopping when
+/// `cancel` is set.
+fn predict_rows(
+    f: &Flight,
+    list: &[BallState],
+    ts: &[f64],
+    out: &mut [f64],
+    cancel: &std::sync::atomic::AtomicBool,
+) -> ttkin::Result<()> {
+    let k = ts.len();
+    out.par_chunks_mut((3 * k).max(1))
+        .zip(list.par_iter())
+        .enumerate()
+        .try_for_each(|(i, (o, s))| {
+            if crate::interrupt::cancelled(cancel) {
+                return Err(ttkin::Error::invalid("states", "prediction stopped"));
+            }
+            let pred = predict(f, s, ts).map_err(|e| ttkin::Error::invalid(format!("states[{i}]"), e.to_string()))?;
+            for (dst, p) in o.chunks_exact_mut(3).zip(&pred.positions) {
+                dst.copy_from_slice(p);
+            }
+            Ok(())
+        })
 }
 
 /// Where and when the ball from `state` crosses the plane through `point` with normal `normal`

@@ -361,32 +361,26 @@ pub fn fill_fresh<R>(out: &Bound<'_, PyArrayDyn<f64>>, fill: impl FnOnce(&mut [f
     fill(o)
 }
 
+/// Checks that a float64 result of `shape` fits in `ttkin::budget::MAX_BYTES` before it is
+/// allocated (N states × K times of a batch could ask for terabytes and abort the process).
+pub fn check_result_size(shape: &[usize]) -> PyResult<()> {
+    let count: f64 = shape.iter().map(|&d| d as f64).product();
+    ttkin::budget::check_bytes(&format!("result of shape {}", shape_str(shape)), count, 8).py()?;
+    Ok(())
+}
+
 /// A new float64 array of `shape` filled by `fill` with the GIL released (batch work); a
 /// non-finite result is refused with `NumericalError`.
 pub fn filled_without_gil<'py, F>(py: Python<'py>, shape: &[usize], fill: F) -> PyResult<Bound<'py, PyArrayDyn<f64>>>
 where
     F: FnOnce(&mut [f64]) -> ttkin::Result<()> + Send,
 {
+    check_result_size(shape)?;
     let out = zeros(py, shape);
     fill_fresh(&out, |o| {
         py.detach(|| fill(o)).py()?;
         check_finite_output(o)
     })?;
-    Ok(out)
-}
-
-/// [`filled_without_gil`] for results in which NaN is a documented value (a ball's positions after
-/// its flight ended at the net or the floor): nothing is refused.
-pub fn filled_without_gil_nan_allowed<'py, F>(
-    py: Python<'py>,
-    shape: &[usize],
-    fill: F,
-) -> PyResult<Bound<'py, PyArrayDyn<f64>>>
-where
-    F: FnOnce(&mut [f64]) -> ttkin::Result<()> + Send,
-{
-    let out = zeros(py, shape);
-    fill_fresh(&out, |o| py.detach(|| fill(o)).py())?;
     Ok(out)
 }
 

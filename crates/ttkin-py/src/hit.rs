@@ -319,9 +319,13 @@ fn hit_plan_batch(
         effort,
     };
     let (state, ready, planner) = keywords.prepare(robot)?;
-    let plans = py
-        .detach(|| planner.plan_batch(&hits, state.as_ref(), ready.as_deref()))
-        .py()?;
+    // Ctrl-C stops the batch within one hit per thread (issue 29).
+    let plans = crate::interrupt::detach_interruptible(py, |cancel| {
+        planner.plan_batch_until(&hits, state.as_ref(), ready.as_deref(), &|| {
+            crate::interrupt::cancelled(cancel)
+        })
+    })?
+    .py()?;
     Ok(plans
         .into_iter()
         .map(|plan| PyHitPlan {

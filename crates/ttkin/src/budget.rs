@@ -30,26 +30,31 @@ pub const MAX_URDF_JOINTS: usize = 4096;
 /// Reads the text file at `path`, refusing more than [`MAX_FILE_BYTES`] (read no further: a
 /// device such as `/dev/zero` ends the read) and bytes that are not UTF-8 (with their offset).
 pub fn read_text(path: &std::path::Path) -> Result<String> {
-    use std::io::Read;
-    let file_err = |reason: String| Error::File {
+    read_text_limited(path).map_err(|reason| Error::File {
         path: path.display().to_string(),
         reason,
-    };
-    let f = std::fs::File::open(path).map_err(|e| file_err(e.to_string()))?;
+    })
+}
+
+/// [`read_text`] with the reason of a failure as text (for readers of other files: the
+/// controller's configuration and trajectory files).
+pub fn read_text_limited(path: &std::path::Path) -> std::result::Result<String, String> {
+    use std::io::Read;
+    let f = std::fs::File::open(path).map_err(|e| e.to_string())?;
     let mut bytes = Vec::new();
     f.take(MAX_FILE_BYTES + 1)
         .read_to_end(&mut bytes)
-        .map_err(|e| file_err(e.to_string()))?;
+        .map_err(|e| e.to_string())?;
     if bytes.len() as u64 > MAX_FILE_BYTES {
-        return Err(file_err(format!(
-            "larger than {MAX_FILE_BYTES} bytes (16 MiB), the most a robot file may be"
-        )));
+        return Err(format!(
+            "larger than {MAX_FILE_BYTES} bytes (16 MiB), the most a file may be"
+        ));
     }
     String::from_utf8(bytes).map_err(|e| {
-        file_err(format!(
+        format!(
             "not UTF-8 text: invalid byte at offset {}",
             e.utf8_error().valid_up_to()
-        ))
+        )
     })
 }
 

@@ -47,7 +47,8 @@ struct Args {
     /// Stop (controlled) after this many seconds whatever happens.
     #[arg(long, default_value_t = 60.0)]
     max_seconds: f64,
-    /// Only check the configuration (syntax, values, bus budget), print the bus loads and exit.
+    /// Only check the configuration (syntax, values, bus budget) and the trajectory file if given,
+    /// print the bus loads and exit.
     #[arg(long)]
     check: bool,
 }
@@ -70,7 +71,7 @@ fn main() {
     }
     let cfg = match &args.config {
         Some(p) => {
-            let text = std::fs::read_to_string(p).unwrap_or_else(|e| fail(format!("{}: {e}", p.display())));
+            let text = ttkin::budget::read_text_limited(p).unwrap_or_else(|e| fail(format!("{}: {e}", p.display())));
             ControllerConfig::from_toml(&text, &p.display().to_string()).unwrap_or_else(|e| fail(e))
         }
         None => ControllerConfig::default_layout(),
@@ -112,12 +113,9 @@ fn main() {
             );
         }
     }
-    if args.check {
-        return;
-    }
     let traj = match &args.trajectory {
         Some(p) => {
-            let text = std::fs::read_to_string(p).unwrap_or_else(|e| fail(format!("{}: {e}", p.display())));
+            let text = ttkin::budget::read_text_limited(p).unwrap_or_else(|e| fail(format!("{}: {e}", p.display())));
             Trajectory::parse(&text).unwrap_or_else(|e| fail(format!("{}: {e}", p.display())))
         }
         None if args.demo => {
@@ -130,6 +128,7 @@ fn main() {
                 .map_or(1, |j| j + 1);
             Trajectory::demo(n, args.amplitude, 2.0)
         }
+        None if args.check => return,
         None => fail("give --trajectory FILE or --demo"),
     };
     if let Some(n) = cfg.joints {
@@ -140,6 +139,10 @@ fn main() {
                 cfg.robot.as_deref().unwrap_or("")
             ));
         }
+    }
+    if args.check {
+        // The configuration, and the trajectory when one is given, are fine: nothing is moved.
+        return;
     }
     let interrupt = Arc::new(AtomicBool::new(false));
     for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {

@@ -58,7 +58,7 @@ impl BallState {
             if !(v.norm() <= max) {
                 return Err(Error::invalid(
                     what,
-                    format!("|{part}| = {:e} {unit}, at most {max:e} {unit} for a ball", v.norm()),
+                    format!("‖{part}‖ = {:e} {unit}, at most {max:e} {unit} for a ball", v.norm()),
                 ));
             }
         }

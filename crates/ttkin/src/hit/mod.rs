@@ -415,11 +415,28 @@ impl HitPlanner {
 
     /// [`Self::plan`] for many hits from the same state, in parallel.
     pub fn plan_batch(&self, hits: &[Hit], state: Option<&JointState>, ready: Option<&[f64]>) -> Result<Vec<HitPlan>> {
+        self.plan_batch_until(hits, state, ready, &|| false)
+    }
+
+    /// [`HitPlanner::plan_batch`] that stops early when `stop()` turns true (checked before each
+    /// hit; a caller's cancellation, e.g. Ctrl-C seen by the Python binding): then an error.
+    pub fn plan_batch_until(
+        &self,
+        hits: &[Hit],
+        state: Option<&JointState>,
+        ready: Option<&[f64]>,
+        stop: &(dyn Fn() -> bool + Sync),
+    ) -> Result<Vec<HitPlan>> {
         let (start, ready) = self.start_and_ready(state, ready)?;
         hits.par_iter()
             .map_init(
                 || self.dynamics.as_ref().map(DynamicsData::new),
-                |data, hit| self.plan_with(hit, Some(&start), Some(&ready), data.as_mut()),
+                |data, hit| {
+                    if stop() {
+                        return Err(crate::Error::invalid("hits", "planning stopped before this hit"));
+                    }
+                    self.plan_with(hit, Some(&start), Some(&ready), data.as_mut())
+                },
             )
             .collect()
     }
