@@ -26,8 +26,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from . import motor, plots, robots  # noqa: E402
 from . import _ttmanip as _t  # noqa: E402
+from . import motor, plots, robots  # noqa: E402
 from ._ttmanip import Robot  # noqa: E402
 from .pipeline import DEMO_HIT, Hit, plan_hit, racket_states, simulate  # noqa: E402
 
@@ -194,8 +194,9 @@ def run(out: Path, progress=None, workspace: bool = True, rerun: str | Path | No
 
         rec = viz.Recording(rerun, "ttmanip-demo")
     # gantry6 stands where the rally places it (ttkin::ball::reach::Placement::default)
+    at_table = _t.ball_placement()
     summary = run_hit(
-        robots.gantry6(), DEMO_HIT, out, "gantry6", progress=step, recording=rec, world_from_base=_t.ball_placement()
+        robots.gantry6(), DEMO_HIT, out, "gantry6", progress=step, recording=rec, world_from_base=at_table
     )
     summary["mobile8"] = run_hit(
         robots.mobile8(), mobile8_hit(), out, "mobile8", gif=False, progress=step, recording=rec
