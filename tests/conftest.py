@@ -28,3 +28,14 @@ def random_q(robot: ttmanip.Robot, count: int, seed: int = 0) -> np.ndarray:
 @pytest.fixture(params=BUILTINS)
 def robot(request) -> ttmanip.Robot:
     return ttmanip.Robot.builtin(request.param)
+
+
+def built_binary(name: str) -> str | None:
+    """The newest build of the ttcan binary ``name`` (target/release or target/debug), or None.
+    The newest, not the first found: a stale release build must not stand in for a fresh debug one."""
+    import os
+
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    found = [os.path.join(root, "target", p, name) for p in ("release", "debug")]
+    found = [p for p in found if os.path.exists(p)]
+    return max(found, key=os.path.getmtime) if found else None

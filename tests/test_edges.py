@@ -7,7 +7,6 @@ could kill the interpreter or run unbounded runs in a subprocess with a time and
 from __future__ import annotations
 
 import json
-import os
 import signal
 import subprocess
 import sys
@@ -316,12 +315,9 @@ def test_unknown_keys_in_hit_files_are_refused(tmp_path, data, key):
 
 
 def _binary(name: str) -> str | None:
-    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    for profile in ("release", "debug"):
-        p = os.path.join(root, "target", profile, name)
-        if os.path.exists(p):
-            return p
-    return None
+    from conftest import built_binary
+
+    return built_binary(name)
 
 
 @pytest.mark.parametrize(

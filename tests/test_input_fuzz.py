@@ -227,11 +227,9 @@ def test_mutated_trajectory_files_are_checked_by_ttctl(tmp_path):
 
 
 def _binary(name: str) -> str | None:
-    for profile in ("release", "debug"):
-        p = ROOT / "target" / profile / name
-        if p.exists():
-            return str(p)
-    return None
+    from conftest import built_binary
+
+    return built_binary(name)
 
 
 def _value(rng: random.Random) -> str:

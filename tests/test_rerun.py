@@ -152,7 +152,7 @@ def test_telemetry_converts(tmp_path, capsys):
     assert "/telemetry/can0/axis1/current" in rec
     bad = tmp_path / "bad.csv"
     bad.write_text("a,b\n1,2\n")
-    assert main(["telemetry", str(bad), "--rerun", str(tmp_path / "x.rrd")]) == 2
+    assert main(["telemetry", str(bad), "--rerun", str(tmp_path / "x.rrd")]) == 1
     assert "not a ttctl telemetry CSV" in capsys.readouterr().err
 
 

@@ -97,9 +97,9 @@ def test_cli_sweep(tmp_path, capsys):
     text = capsys.readouterr()
     assert "4 tasks on 1 workers" in text.out and "sweep [" in text.err
     assert (out / "sweep.csv").exists() and (out / "sweep.png").exists()
-    assert main(["sweep", "hits", "--param", "speed", "--scheduler", "serial"]) == 2
+    assert main(["sweep", "hits", "--param", "speed", "--scheduler", "serial"]) == 1
     assert "expected NAME=VALUES" in capsys.readouterr().err
-    assert main(["sweep", "hits", "--random", "3", "--param", "speed=1,2", "--scheduler", "serial"]) == 2
+    assert main(["sweep", "hits", "--random", "3", "--param", "speed=1,2", "--scheduler", "serial"]) == 1
     assert "expected low:high" in capsys.readouterr().err
 
 
