@@ -679,3 +679,21 @@ fn wrong_identity_is_refused_before_nmt_start() {
         assert_eq!(d.node().nmt_state(), ttcan::canopen::nmt::NmtState::PreOperational);
     }
 }
+
+/// Issue 27: a boot-up message lost on the way: the controller resets the drive again after an
+/// SDO timeout and the boot-up completes.
+#[test]
+fn lost_boot_up_message_is_answered_by_a_second_reset() {
+    let mut r = rig();
+    r.drop_frames(&[0x702]);
+    for _ in 0..10 {
+        r.step(0.0);
+    }
+    r.bus.set_faults(Faults::default());
+    let c = r.enable();
+    assert!(
+        c > WatchdogConfig::default().sdo_cycles as u64,
+        "enabled after {c} cycles"
+    );
+    assert_eq!(r.master.stop_reason(), None);
+}

@@ -305,6 +305,8 @@ impl ChannelMaster {
                             }
                             _ => l.boot_step += 1,
                         }
+                        // the retries are per transfer
+                        l.sdo_retries = 0;
                     }
                     Some(Err(SdoError::Aborted { index, sub, code })) => {
                         self.counters.sdo_failures += 1;
@@ -347,8 +349,16 @@ impl ChannelMaster {
             // boot-up: reset communication, boot-up message, SDO steps one at a time, NMT Start
             let steps = self.plans[k].map_or(0, |p| p.len());
             if phase == Phase::Configure {
+                if l.reset_sent && !l.booted {
+                    // a boot-up message lost on the way: reset again after an SDO timeout
+                    l.reset_wait += 1;
+                    if l.reset_wait > wd.sdo_cycles {
+                        l.reset_sent = false;
+                    }
+                }
                 let cmd = if !l.reset_sent {
                     l.reset_sent = true;
+                    l.reset_wait = 0;
                     Some(NmtCommand::ResetCommunication)
                 } else if l.booted && l.boot_step >= steps && !l.started {
                     l.started = true;
