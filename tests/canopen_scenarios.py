@@ -35,8 +35,12 @@ def python_master(net: canopen.Network) -> dict:
     """Scenario (a) on a connected network with `ttdrive-sim` node 5 on it; returns measures."""
     node = canopen.RemoteNode(5, str(EDS))
     net.add_node(node)
-    node.nmt.send_command(0x82)  # reset communication
-    node.nmt.wait_for_bootup(10)
+    # reset communication and wait for the boot-up message (listening before the command: the
+    # drive may answer before python-canopen's wait_for_bootup starts waiting)
+    booted = threading.Event()
+    net.subscribe(0x705, lambda can_id, data, timestamp: data[:1] == b"\x00" and booted.set())
+    node.nmt.send_command(0x82)
+    assert booted.wait(10), "no boot-up message"
     node.sdo.RESPONSE_TIMEOUT = 2.0
 
     # SDO: segmented upload (33 bytes) and download (42 bytes), read back

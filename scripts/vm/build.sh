@@ -97,9 +97,10 @@ copy_with_libs "$ROOT/target/release/ttdrive-sim" "$IR/usr/bin/ttdrive-sim"
 # modules: copy the CAN ones, build modules.dep with depmod on the copy
 MD=$IR/lib/modules/$KVER
 mkdir -p "$MD"
-# 9p over virtio (issue 27: the guest runs the host's Python with python-canopen from a read-only
+# can-bcm (python-can's periodic sends on SocketCAN: python-canopen's heartbeat) and 9p over virtio
+# (issue 27: the guest runs the host's Python with python-canopen from a read-only
 # share of the host's filesystem) and what it depends on
-for m in net/can/can.ko net/can/can-raw.ko drivers/net/can/dev/can-dev.ko drivers/net/can/vcan.ko \
+for m in net/can/can.ko net/can/can-raw.ko net/can/can-bcm.ko drivers/net/can/dev/can-dev.ko drivers/net/can/vcan.ko \
          drivers/net/can/sja1000/sja1000.ko drivers/net/can/sja1000/kvaser_pci.ko \
          drivers/virtio/virtio.ko drivers/virtio/virtio_ring.ko drivers/virtio/virtio_pci.ko \
          drivers/virtio/virtio_pci_legacy_dev.ko drivers/virtio/virtio_pci_modern_dev.ko \

@@ -127,7 +127,7 @@ interop() {  # interop NAME SCENARIO IFACE
     r=$(echo "$out" | grep "^RESULT " | tail -1 | cut -c8-)
     if [ $rc = 0 ]; then pass "$1" "$r"; else failed "$1" "rc $rc: $r"; fi
 }
-if modprobe virtio_pci && modprobe 9pnet_virtio && modprobe 9p && mkdir -p /host \
+if modprobe can_bcm && modprobe virtio_pci && modprobe 9pnet_virtio && modprobe 9p && mkdir -p /host \
     && mount -t 9p -o trans=virtio,version=9p2000.L,ro hostfs /host \
     && mount -t proc proc /host/proc && mount -t sysfs sys /host/sys && mount -t devtmpfs dev /host/dev \
     && mount -t tmpfs tmp /host/tmp; then

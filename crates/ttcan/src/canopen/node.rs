@@ -435,9 +435,12 @@ impl DriveNode {
                 self.command.fresh = false;
                 self.emcy(emcy::COMMAND_RANGE, out);
             }
-        } else {
+        } else if self.nmt == NmtState::Operational {
             self.counters.missed_rpdo += 1;
             self.missed_in_row += 1;
+            self.command.fresh = false;
+        } else {
+            // PDOs only flow in Operational: none is missing before
             self.command.fresh = false;
         }
         self.refresh_statusword();
