@@ -169,6 +169,13 @@ fn two_drives_boot_enable_and_track_a_motion() {
     assert_eq!(r.master.stop_reason(), None);
     assert!(worst < 0.02, "tracking error {worst} rad");
     assert_eq!(r.master.counters().missed_feedback, 0);
+    for (_, d) in &r.drives {
+        assert_eq!(
+            d.node().counters().missed_rpdo,
+            0,
+            "every SYNC in Operational has its RPDO"
+        );
+    }
     let err = (r.drives[1].1.position() - (-Rig::motion(1.0))).abs();
     assert!(err < 0.02, "final error {err}");
 }

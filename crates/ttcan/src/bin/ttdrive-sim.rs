@@ -219,8 +219,19 @@ fn run_on<B: Port>(
                         first_sync = Some(Instant::now());
                     }
                     for d in drives.iter_mut() {
+                        let missed = d.node().counters().missed_rpdo;
                         d.on_frame(&frame, &mut out);
                         send(&mut bus, &mut out);
+                        let now = d.node().counters().missed_rpdo;
+                        if now > missed && now <= 3 {
+                            eprintln!(
+                                "ttdrive-sim: {iface} node {}: SYNC period {} without RPDO ({:?}, {:?})",
+                                d.node().node(),
+                                d.cycles(),
+                                d.node().nmt_state(),
+                                d.node().cia402.state()
+                            );
+                        }
                     }
                 }
                 Ok(Some(BusEvent::Fault(f))) => eprintln!("ttdrive-sim: {iface}: bus fault {f:?}"),
