@@ -269,13 +269,16 @@ impl ChannelMaster {
                 },
                 Cob::Heartbeat(_) => {
                     if let Ok((_, NmtState::BootUp)) = decode_heartbeat(f) {
+                        // a boot-up message is no heartbeat: the consumer starts with the first
+                        // heartbeat after it (as CANopenNode's heartbeat consumer does)
                         if l.started {
                             stop = Some(StopReason::Rebooted(node));
                         } else if l.reset_sent {
                             l.booted = true;
                         }
+                    } else {
+                        self.counters.malformed += u64::from(!l.heartbeat.on_frame(f));
                     }
-                    self.counters.malformed += u64::from(!l.heartbeat.on_frame(f));
                 }
                 Cob::SdoTx(_) => match l.sdo.on_frame(f, &mut self.sdo_out) {
                     Some(Ok(outcome)) => {
