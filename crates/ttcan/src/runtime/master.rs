@@ -282,7 +282,10 @@ impl ChannelMaster {
                 }
                 Cob::SdoTx(_) => match l.sdo.on_frame(f, &mut self.sdo_out) {
                     Some(Ok(outcome)) => {
-                        let expect = self.plans[k].and_then(|p| p.step(l.boot_step)).and_then(|s| s.expect);
+                        let expect = self.plans[k]
+                            .as_ref()
+                            .and_then(|p| p.step(l.boot_step))
+                            .and_then(|s| s.expect);
                         match (outcome, expect) {
                             (SdoOutcome::Read { index, sub, data }, Some(e))
                                 if data.as_u64().unwrap_or(u64::MAX) as u32 & e.mask != e.value =>
@@ -350,7 +353,7 @@ impl ChannelMaster {
             let Some(mut l) = self.links[k] else { continue };
             let mode = l.mode;
             // boot-up: reset communication, boot-up message, SDO steps one at a time, NMT Start
-            let steps = self.plans[k].map_or(0, |p| p.len());
+            let steps = self.plans[k].as_ref().map_or(0, |p| p.len());
             if phase == Phase::Configure {
                 if l.reset_sent && !l.booted {
                     // a boot-up message lost on the way: reset again after an SDO timeout
@@ -373,7 +376,7 @@ impl ChannelMaster {
                     out.push(f);
                 }
                 if l.booted && l.boot_step < steps && !l.sdo.busy() {
-                    if let Some(step) = self.plans[k].and_then(|p| p.step(l.boot_step)) {
+                    if let Some(step) = self.plans[k].as_ref().and_then(|p| p.step(l.boot_step)) {
                         if let Some(f) = l.sdo.start(step.job) {
                             out.push(f);
                         }
