@@ -292,7 +292,7 @@ fn run_on<B: Port>(
     for d in &drives {
         let c = d.node().counters();
         println!(
-            "ttdrive-sim: {iface} node {}: state {:?}, position {:.6}, max tracking error {:.3e}, SYNC periods {}, missed RPDO {}, refused {}, malformed {}",
+            "ttdrive-sim: {iface} node {}: state {:?}, position {:.6}, max tracking error {:.3e}, SYNC periods {}, missed RPDO {}, refused {}, malformed {}, RPDO replaced before its SYNC {}",
             d.node().node(),
             d.node().cia402.state(),
             d.position(),
@@ -300,7 +300,8 @@ fn run_on<B: Port>(
             d.cycles(),
             c.missed_rpdo,
             c.out_of_range,
-            c.malformed
+            c.malformed,
+            c.replaced_rpdo
         );
     }
 }
