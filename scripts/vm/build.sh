@@ -3,7 +3,9 @@
 # (apt-get download + dpkg-deb -x, never installed), its CAN modules with a depmod'ed modules.dep,
 # and an initramfs with busybox, iproute2's ip, can-utils' candump/cangen, the release binaries
 # ttctl and ttdrive-sim (with every library ldd names), their configurations, the gantry6 stroke
-# written by ttmanip.ctl and the guest scenario script tests/vm/guest.sh.
+# written by ttmanip.ctl and the guest scenario script tests/vm/guest.sh; the 9p modules with which
+# the guest mounts the host's filesystem (scripts/vm/run.sh shares it read-only) to run the
+# python-canopen scenarios (tests/vm/interop.py) with the host's Python.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 ROOT=$PWD
@@ -75,7 +77,7 @@ IR=$VM/initramfs
 rm -rf "$IR"
 mkdir -p "$IR"/{bin,sbin,etc,proc,sys,dev,tmp,lib,lib64,usr/bin,ttmanip}
 cp "$BUSYBOX" "$IR/bin/busybox"
-for app in sh mount mkdir cat echo sleep poweroff modprobe insmod grep sed awk kill ls seq wc tail head cut tr date true false test printf; do
+for app in sh mount mkdir cat echo sleep poweroff modprobe insmod grep sed awk kill ls seq wc tail head cut tr date true false test printf chroot; do
     ln -sf busybox "$IR/bin/$app"
 done
 copy_with_libs() {  # copy binary $1 to $2 and every library ldd names
@@ -95,8 +97,14 @@ copy_with_libs "$ROOT/target/release/ttdrive-sim" "$IR/usr/bin/ttdrive-sim"
 # modules: copy the CAN ones, build modules.dep with depmod on the copy
 MD=$IR/lib/modules/$KVER
 mkdir -p "$MD"
-for m in net/can/can.ko net/can/can-raw.ko drivers/net/can/dev/can-dev.ko drivers/net/can/vcan.ko \
-         drivers/net/can/sja1000/sja1000.ko drivers/net/can/sja1000/kvaser_pci.ko; do
+# can-bcm (python-can's periodic sends on SocketCAN: python-canopen's heartbeat) and 9p over virtio
+# (issue 27: the guest runs the host's Python with python-canopen from a read-only
+# share of the host's filesystem) and what it depends on
+for m in net/can/can.ko net/can/can-raw.ko net/can/can-bcm.ko drivers/net/can/dev/can-dev.ko drivers/net/can/vcan.ko \
+         drivers/net/can/sja1000/sja1000.ko drivers/net/can/sja1000/kvaser_pci.ko \
+         drivers/virtio/virtio.ko drivers/virtio/virtio_ring.ko drivers/virtio/virtio_pci.ko \
+         drivers/virtio/virtio_pci_legacy_dev.ko drivers/virtio/virtio_pci_modern_dev.ko \
+         net/9p/9pnet.ko net/9p/9pnet_virtio.ko fs/netfs/netfs.ko fs/fscache/fscache.ko fs/9p/9p.ko; do
     src=$(ls "$VM/kernel/lib/modules/$KVER/kernel/$m"* | head -1)
     mkdir -p "$MD/kernel/$(dirname "$m")"
     cp "$src" "$MD/kernel/$(dirname "$m")/"
@@ -106,6 +114,11 @@ cp "$VM/kernel/lib/modules/$KVER/modules.order" "$MD/" 2>/dev/null || true
 depmod -b "$IR" "$KVER"
 cp "$VM/stroke.csv" "$IR/ttmanip/stroke.csv"
 cp "$ROOT"/tests/vm/*.toml "$IR/ttmanip/"
+# the interoperability scenarios run the host's Python (with python-canopen, from the test extra)
+# and these paths in a chroot on the host's filesystem
+[ -x "$ROOT/.venv/bin/python" ] && "$ROOT/.venv/bin/python" -c "import canopen" \
+    || { echo "vm/build: python-canopen not installed in .venv (scripts/setup.sh)"; exit 1; }
+printf 'HOST_ROOT=%s\nHOST_PY=%s\n' "$ROOT" "$ROOT/.venv/bin/python" > "$IR/ttmanip/interop.env"
 cp "$ROOT/tests/vm/guest.sh" "$IR/init"
 chmod +x "$IR/init"
 (cd "$IR" && find . | cpio -o -H newc --quiet | gzip -1 > "$VM/initramfs.cpio.gz")

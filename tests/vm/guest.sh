@@ -1,6 +1,7 @@
 #!/bin/sh
 # /init of the CAN test VM (scripts/vm/run.sh): loads the CAN modules, creates vcan0..3 and sets
-# the emulated Kvaser pair can0/can1 to 1 Mbit/s, runs the scenarios, prints one
+# the emulated Kvaser pair can0/can1 to 1 Mbit/s, runs the scenarios (the last two, with
+# python-canopen, on vcan4/5 in a chroot on the host's filesystem shared over 9p), prints one
 # "VMTEST <name> PASS|FAIL" line each, the statistics, and "VMTEST-EXIT <failures>", powers off.
 export PATH=/bin:/sbin:/usr/bin
 # busybox's sh prefers its own applets: call iproute2's ip by path (busybox ip cannot make vcan)
@@ -59,11 +60,16 @@ VCAN_DRIVES="--channel vcan0:1,2 --channel vcan1:1,2 --channel vcan2:1,2 --chann
 if run vcan-stroke 0 $VCAN_DRIVES -- --config /ttmanip/vcan.toml --trajectory /ttmanip/stroke.csv; then
     s=/tmp/vcan-stroke.stats
     e=$(drive_err /tmp/vcan-stroke.drives); l=$(val frames_lost $s); b=$(val bad_frames $s); m=$(val missed_feedback $s)
-    r=$(grep -c "missed RPDO 0," /tmp/vcan-stroke.drives)
+    # per drive "missed replaced": a SYNC without RPDO whose RPDO came right after it (vcan can
+    # reorder frames of a thread that changes CPU, docs/can.md) is replaced before the next SYNC;
+    # an RPDO lost on the way is missed and never replaced
+    mr=$(sed -n 's/.*missed RPDO \([0-9]*\),.*replaced before its SYNC \([0-9]*\).*/\1 \2/p' /tmp/vcan-stroke.drives)
+    r=$(echo "$mr" | awk '$1 == $2 { n++ } END { print n + 0 }')
+    o=$(echo "$mr" | awk '{ n += $2 } END { print n + 0 }')
     if [ "$(val completed $s)" = 1 ] && lt "$e" "$TRACK_BOUND" && [ "$l" = 0 ] && [ "$b" = 0 ] && [ "$r" = 8 ]; then
-        pass vcan-stroke "8 axes, max tracking error $e (< $TRACK_BOUND), TPDOs lost $l, RPDOs missed 0 on $r/8 drives, bad frames $b, late feedback $m"
+        pass vcan-stroke "8 axes, max tracking error $e (< $TRACK_BOUND), TPDOs lost $l, RPDOs lost 0 on $r/8 drives ($o reordered after their SYNC), bad frames $b, late feedback $m"
     else
-        failed vcan-stroke "completed $(val completed $s), tracking error $e, TPDOs lost $l, drives without missed RPDO $r/8, bad frames $b"
+        failed vcan-stroke "completed $(val completed $s), tracking error $e, TPDOs lost $l, drives without lost RPDO $r/8 ($o reordered), bad frames $b"
     fi
     echo "VMSTATS vcan-stroke $(tr '\n' ' ' < $s)"
 fi
@@ -115,6 +121,27 @@ printf '[[channel]]\ninterface = "can0"\n[[channel.axis]]\nnode = 1\n[[channel.a
 msg=$(ttctl --config /tmp/over.toml --check 2>&1); rc=$?
 echo "[budget] $msg"
 if [ $rc = 1 ] && echo "$msg" | grep -q "can0: 3 axes"; then pass budget-refused "rc 1"; else failed budget-refused "rc $rc"; fi
+
+# 7. interoperability with python-canopen (a stack no one here wrote), issue 27: the host's
+# filesystem is shared read-only over 9p (scripts/vm/run.sh); its Python with python-canopen and
+# the release binaries run in a chroot on it, on vcan4/vcan5 with SocketCAN on both sides.
+. /ttmanip/interop.env   # HOST_ROOT, HOST_PY (written by scripts/vm/build.sh)
+interop() {  # interop NAME SCENARIO IFACE
+    out=$(chroot /host "$HOST_PY" "$HOST_ROOT/tests/vm/interop.py" "$2" "$3" "$HOST_ROOT/target/release" 2>&1); rc=$?
+    echo "$out" | grep -v "^CAN " | sed "s/^/[$1] /"
+    r=$(echo "$out" | grep "^RESULT " | tail -1 | cut -c8-)
+    if [ $rc = 0 ]; then pass "$1" "$r"; else failed "$1" "rc $rc: $r"; fi
+}
+if modprobe can_bcm && modprobe virtio_pci && modprobe 9pnet_virtio && modprobe 9p && mkdir -p /host \
+    && mount -t 9p -o trans=virtio,version=9p2000.L,ro hostfs /host \
+    && mount -t proc proc /host/proc && mount -t sysfs sys /host/sys && mount -t devtmpfs dev /host/dev \
+    && mount -t tmpfs tmp /host/tmp; then
+    for i in 4 5; do $IP link add dev "vcan$i" type vcan && $IP link set "vcan$i" txqueuelen 1000 up || failed "vcan$i" ""; done
+    interop interop-python-master python-master vcan4
+    interop interop-ttctl-master ttctl-master vcan5
+else
+    failed interop-9p "cannot mount the host's filesystem over 9p"
+fi
 
 echo "VMTEST-EXIT $fails"
 poweroff -f

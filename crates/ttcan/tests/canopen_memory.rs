@@ -169,6 +169,13 @@ fn two_drives_boot_enable_and_track_a_motion() {
     assert_eq!(r.master.stop_reason(), None);
     assert!(worst < 0.02, "tracking error {worst} rad");
     assert_eq!(r.master.counters().missed_feedback, 0);
+    for (_, d) in &r.drives {
+        assert_eq!(
+            d.node().counters().missed_rpdo,
+            0,
+            "every SYNC in Operational has its RPDO"
+        );
+    }
     let err = (r.drives[1].1.position() - (-Rig::motion(1.0))).abs();
     assert!(err < 0.02, "final error {err}");
 }
@@ -678,4 +685,22 @@ fn wrong_identity_is_refused_before_nmt_start() {
     for (_, d) in &r.drives {
         assert_eq!(d.node().nmt_state(), ttcan::canopen::nmt::NmtState::PreOperational);
     }
+}
+
+/// Issue 27: a boot-up message lost on the way: the controller resets the drive again after an
+/// SDO timeout and the boot-up completes.
+#[test]
+fn lost_boot_up_message_is_answered_by_a_second_reset() {
+    let mut r = rig();
+    r.drop_frames(&[0x702]);
+    for _ in 0..10 {
+        r.step(0.0);
+    }
+    r.bus.set_faults(Faults::default());
+    let c = r.enable();
+    assert!(
+        c > WatchdogConfig::default().sdo_cycles as u64,
+        "enabled after {c} cycles"
+    );
+    assert_eq!(r.master.stop_reason(), None);
 }

@@ -237,8 +237,19 @@ fn run_on<B: Port>(
                         first_sync = Some(Instant::now());
                     }
                     for d in drives.iter_mut() {
+                        let missed = d.node().counters().missed_rpdo;
                         d.on_frame(&frame, &mut out);
                         send(&mut bus, &mut out);
+                        let now = d.node().counters().missed_rpdo;
+                        if now > missed && now <= 3 {
+                            eprintln!(
+                                "ttdrive-sim: {iface} node {}: SYNC period {} without RPDO ({:?}, {:?})",
+                                d.node().node(),
+                                d.cycles(),
+                                d.node().nmt_state(),
+                                d.node().cia402.state()
+                            );
+                        }
                     }
                 }
                 Ok(Some(BusEvent::Fault(f))) => eprintln!("ttdrive-sim: {iface}: bus fault {f:?}"),
@@ -299,7 +310,7 @@ fn run_on<B: Port>(
     for d in &drives {
         let c = d.node().counters();
         println!(
-            "ttdrive-sim: {iface} node {}: state {:?}, position {:.6}, max tracking error {:.3e}, SYNC periods {}, missed RPDO {}, refused {}, malformed {}",
+            "ttdrive-sim: {iface} node {}: state {:?}, position {:.6}, max tracking error {:.3e}, SYNC periods {}, missed RPDO {}, refused {}, malformed {}, RPDO replaced before its SYNC {}",
             d.node().node(),
             d.node().cia402.state(),
             d.position(),
@@ -307,7 +318,8 @@ fn run_on<B: Port>(
             d.cycles(),
             c.missed_rpdo,
             c.out_of_range,
-            c.malformed
+            c.malformed,
+            c.replaced_rpdo
         );
     }
 }

@@ -52,6 +52,18 @@ impl EdsAccess {
         })
     }
 
+    /// The CiA 306 name (`ro`, `rw`, …).
+    pub fn name(self) -> &'static str {
+        match self {
+            EdsAccess::Ro => "ro",
+            EdsAccess::Wo => "wo",
+            EdsAccess::Rw => "rw",
+            EdsAccess::Rwr => "rwr",
+            EdsAccess::Rww => "rww",
+            EdsAccess::Const => "const",
+        }
+    }
+
     /// May be read over SDO / sent in a TPDO.
     pub fn readable(self) -> bool {
         self != EdsAccess::Wo

@@ -67,6 +67,9 @@ pub struct NodeCounters {
     pub out_of_range: u32,
     /// SDO requests served.
     pub sdo: u32,
+    /// RPDOs replaced by a newer one before a SYNC took them (an RPDO that arrived after its
+    /// SYNC: the SYNC before it counted as missed).
+    pub replaced_rpdo: u32,
 }
 
 /// The identifiers CiA 301 §7.3.5 reserves (a PDO may not use them).
@@ -241,6 +244,9 @@ impl DriveNode {
     pub fn on_frame(&mut self, f: &Frame, out: &mut Frames) -> NodeEvent {
         if self.nmt == NmtState::Operational && self.pdo_id(od::RPDO1_COMM) == Some(f.id()) {
             if f.len() == self.rpdo_map.len() {
+                if self.pending.is_some() {
+                    self.counters.replaced_rpdo += 1;
+                }
                 self.pending = Some(*f);
             } else {
                 self.counters.malformed += 1;
@@ -435,9 +441,12 @@ impl DriveNode {
                 self.command.fresh = false;
                 self.emcy(emcy::COMMAND_RANGE, out);
             }
-        } else {
+        } else if self.nmt == NmtState::Operational {
             self.counters.missed_rpdo += 1;
             self.missed_in_row += 1;
+            self.command.fresh = false;
+        } else {
+            // PDOs only flow in Operational: none is missing before
             self.command.fresh = false;
         }
         self.refresh_statusword();
@@ -634,6 +643,17 @@ mod tests {
         // malformed RPDO
         n.on_frame(&Frame::new(0x203, &[1, 2]).unwrap(), &mut out);
         assert_eq!(n.counters().malformed, 1);
+        // two RPDOs before one SYNC: the first is replaced, and counted
+        let r = Rpdo {
+            target: 10,
+            torque_offset: 0,
+            controlword: CW_ENABLE_OPERATION,
+        }
+        .encode(3)
+        .unwrap();
+        n.on_frame(&r, &mut out);
+        n.on_frame(&r, &mut out);
+        assert_eq!(n.counters().replaced_rpdo, 1);
     }
 
     #[test]

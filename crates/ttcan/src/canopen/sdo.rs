@@ -1146,6 +1146,20 @@ mod tests {
         ));
     }
 
+    proptest::proptest! {
+        /// Any value of 1–40 bytes goes through client and server and reads back the same.
+        #[test]
+        fn any_string_round_trips_through_client_and_server(bytes in proptest::collection::vec(proptest::prelude::any::<u8>(), 1..=40)) {
+            let mut d = Dict { word: 0, text: SdoData::default() };
+            let job = SdoJob::Write { index: 0x1008, sub: 0, data: SdoData::from_bytes(&bytes).unwrap() };
+            proptest::prop_assert_eq!(run(job, &mut d).unwrap(), SdoOutcome::Written { index: 0x1008, sub: 0 });
+            let SdoOutcome::Read { data, .. } = run(SdoJob::Read { index: 0x1008, sub: 0 }, &mut d).unwrap() else {
+                panic!("not a read")
+            };
+            proptest::prop_assert_eq!(data.bytes(), &bytes[..]);
+        }
+    }
+
     #[test]
     fn server_aborts_block_transfers_wrong_toggles_and_stray_segments() {
         let mut d = Dict {

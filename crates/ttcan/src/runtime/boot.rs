@@ -204,7 +204,7 @@ impl BootPlan {
             if !e.access.writable() {
                 return Err(refuse(
                     at(index, sub),
-                    format!("{} is {:?} in {file}, not writable", e.name, e.access),
+                    format!("{} is {} in {file}, not writable", e.name, e.access.name()),
                 ));
             }
             let data = match (value, e.data_type.size()) {
@@ -359,7 +359,11 @@ impl BootPlan {
                 if rx && !e.access.writable() || !rx && !e.access.readable() {
                     return Err(refuse(
                         at(index, sub),
-                        format!("{} is {:?} in {file}: cannot be mapped to an {what}", e.name, e.access),
+                        format!(
+                            "{} is {} in {file}: cannot be mapped to an {what}",
+                            e.name,
+                            e.access.name()
+                        ),
                     ));
                 }
                 if rx && !RPDO_OBJECTS.contains(&index) {
@@ -583,7 +587,7 @@ mod tests {
         let mut s = setup();
         s.rpdo = Some(vec![(0x6040, 0), (0x6041, 0)]);
         assert!(
-            err(s).starts_with("node 3: 0x6041:0: Statusword is Ro in ttdrive-sim.eds: cannot be mapped to an RPDO1")
+            err(s).starts_with("node 3: 0x6041:0: Statusword is ro in ttdrive-sim.eds: cannot be mapped to an RPDO1")
         );
         let mut s = setup();
         s.rpdo = Some(vec![(0x6040, 0), (0x60FF, 0)]);
@@ -606,7 +610,7 @@ mod tests {
         }];
         assert_eq!(
             err(s),
-            "node 3: 0x1008:0: Manufacturer device name is Const in ttdrive-sim.eds, not writable"
+            "node 3: 0x1008:0: Manufacturer device name is const in ttdrive-sim.eds, not writable"
         );
     }
 }

@@ -108,6 +108,8 @@ pub(super) struct Link {
     pub(super) tpdo: PdoMapping,
     /// NMT Reset Communication sent; boot-up message seen; NMT Start sent.
     pub(super) reset_sent: bool,
+    /// Cycles since the reset was sent without a boot-up message.
+    pub(super) reset_wait: u32,
     pub(super) booted: bool,
     pub(super) started: bool,
     /// Next step of the boot plan.
@@ -128,7 +130,7 @@ pub(super) struct Link {
     pub(super) last_target: f64,
 }
 
-/// SDO timeouts tolerated per drive during configuration (frames can be lost: retry).
+/// SDO timeouts tolerated per transfer during configuration (frames can be lost: retry).
 pub const SDO_RETRIES: u8 = 3;
 
 impl Link {
@@ -149,6 +151,7 @@ impl Link {
             rpdo,
             tpdo,
             reset_sent: false,
+            reset_wait: 0,
             booted: false,
             started: false,
             boot_step: 0,

@@ -269,17 +269,23 @@ impl ChannelMaster {
                 },
                 Cob::Heartbeat(_) => {
                     if let Ok((_, NmtState::BootUp)) = decode_heartbeat(f) {
+                        // a boot-up message is no heartbeat: the consumer starts with the first
+                        // heartbeat after it (as CANopenNode's heartbeat consumer does)
                         if l.started {
                             stop = Some(StopReason::Rebooted(node));
                         } else if l.reset_sent {
                             l.booted = true;
                         }
+                    } else {
+                        self.counters.malformed += u64::from(!l.heartbeat.on_frame(f));
                     }
-                    self.counters.malformed += u64::from(!l.heartbeat.on_frame(f));
                 }
                 Cob::SdoTx(_) => match l.sdo.on_frame(f, &mut self.sdo_out) {
                     Some(Ok(outcome)) => {
-                        let expect = self.plans[k].and_then(|p| p.step(l.boot_step)).and_then(|s| s.expect);
+                        let expect = self.plans[k]
+                            .as_ref()
+                            .and_then(|p| p.step(l.boot_step))
+                            .and_then(|s| s.expect);
                         match (outcome, expect) {
                             (SdoOutcome::Read { index, sub, data }, Some(e))
                                 if data.as_u64().unwrap_or(u64::MAX) as u32 & e.mask != e.value =>
@@ -305,6 +311,8 @@ impl ChannelMaster {
                             }
                             _ => l.boot_step += 1,
                         }
+                        // the retries are per transfer
+                        l.sdo_retries = 0;
                     }
                     Some(Err(SdoError::Aborted { index, sub, code })) => {
                         self.counters.sdo_failures += 1;
@@ -345,10 +353,18 @@ impl ChannelMaster {
             let Some(mut l) = self.links[k] else { continue };
             let mode = l.mode;
             // boot-up: reset communication, boot-up message, SDO steps one at a time, NMT Start
-            let steps = self.plans[k].map_or(0, |p| p.len());
+            let steps = self.plans[k].as_ref().map_or(0, |p| p.len());
             if phase == Phase::Configure {
+                if l.reset_sent && !l.booted {
+                    // a boot-up message lost on the way: reset again after an SDO timeout
+                    l.reset_wait += 1;
+                    if l.reset_wait > wd.sdo_cycles {
+                        l.reset_sent = false;
+                    }
+                }
                 let cmd = if !l.reset_sent {
                     l.reset_sent = true;
+                    l.reset_wait = 0;
                     Some(NmtCommand::ResetCommunication)
                 } else if l.booted && l.boot_step >= steps && !l.started {
                     l.started = true;
@@ -360,7 +376,7 @@ impl ChannelMaster {
                     out.push(f);
                 }
                 if l.booted && l.boot_step < steps && !l.sdo.busy() {
-                    if let Some(step) = self.plans[k].and_then(|p| p.step(l.boot_step)) {
+                    if let Some(step) = self.plans[k].as_ref().and_then(|p| p.step(l.boot_step)) {
                         if let Some(f) = l.sdo.start(step.job) {
                             out.push(f);
                         }
