@@ -33,16 +33,19 @@ __all__ = [
     "state",
 ]
 
-MODELS = ("default", "muelling", "mpi", "tt3d", "vacuum")
+MODELS = ("default", "measured", "aero", "muelling", "mpi", "tt3d", "vacuum")
 
 
 @dataclass(frozen=True)
 class BallModel:
     """A named flight model: a = g − k_d·|v|·v + k_m·(ω × v).
 
-    ``default``: ρ = 1.184 kg/m³, C_D = 0.5, C_L = rω/|v| → k_d = 0.1377 /m, k_m = 0.00551;
+    ``default`` (= ``measured``): fitted on the measured flights of the MPI PAM setup
+    (``ttmanip ball fit``, docs/ball.md): k_d = 0.1229 /m, k_m = 0.00159, table restitution
+    0.964, friction 0.25. Presets (table restitution 0.93, friction 0.25): ``aero`` (the previous
+    default, ρ = 1.184 kg/m³, C_D = 0.5, C_L = rω/|v| → k_d = 0.1377 /m, k_m = 0.00551),
     ``muelling`` (k_d 0.1414, k_m 0.001), ``mpi`` (0.129, 0.00807), ``tt3d`` (0.141, 0.0018),
-    ``vacuum`` (no air). Ball 2.7 g, 40 mm; table restitution 0.93, friction 0.25.
+    ``vacuum`` (no air). Ball 2.7 g, 40 mm.
     """
 
     name: str = "default"
