@@ -25,7 +25,9 @@ def test_vacuum_flight_is_the_parabola(v, w):
     np.testing.assert_allclose(p, exact, atol=1e-9)
 
 
-@pytest.mark.parametrize("model, e", [("default", 0.964), ("measured", 0.964), ("aero", 0.93), ("tt3d", 0.93)])
+@pytest.mark.parametrize(
+    "model, e", [("default", 0.964), ("measured", 0.964), ("aero", 0.93), ("tt3d", 0.93)]
+)
 def test_bounce_reverses_normal_speed_with_restitution(model, e):
     # The default's restitution is measured (docs/ball.md, Calibration); the presets keep 0.93.
     s = ball.state([-0.5, 0.0, 0.3], [-2.0, 0.0, 0.0])

@@ -782,4 +782,6 @@ def ball_rally(
     target: tuple[float, float] = (0.9, 0.0),
     max_spin_rps: float = 40.0,
     paths: int = 5,
+    world: bool = False,
+    incoming: ArrayLike | None = None,
 ) -> dict[str, Any]: ...

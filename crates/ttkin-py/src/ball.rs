@@ -221,7 +221,8 @@ fn ball_plan_return<'py>(
 /// Plays balls `start`..`start + n` of a simulated rally (see `ttkin::ball::rally`) in parallel.
 #[ttkin_py_guard::guarded]
 #[pyfunction]
-#[pyo3(signature = (n, seed = 0, start = 0, target = (0.9, 0.0), max_spin_rps = 40.0, paths = 5))]
+#[pyo3(signature = (n, seed = 0, start = 0, target = (0.9, 0.0), max_spin_rps = 40.0, paths = 5, world = false, incoming = None))]
+#[allow(clippy::too_many_arguments)]
 fn ball_rally<'py>(
     py: Python<'py>,
     n: i128,
@@ -230,6 +231,8 @@ fn ball_rally<'py>(
     target: (f64, f64),
     max_spin_rps: f64,
     paths: i128,
+    world: bool,
+    incoming: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let n: usize = args::sample_count(n, "n")?;
     let seed: u64 = args::unsigned(seed, "seed")?;
@@ -258,7 +261,26 @@ fn ball_rally<'py>(
         max_spin_rps,
         seed,
         paths,
+        world: world.then(rally::WorldSpread::measured),
         ..RallyConfig::default()
+    };
+    let given: Option<Vec<BallState>> = match incoming {
+        Some(a) => {
+            let a = rows_array(a, "incoming", "N", &[10])?;
+            let states: Vec<BallState> = a.data().chunks_exact(10).map(state_from).collect();
+            if (start as usize).saturating_add(n) > states.len() {
+                return Err(TtmanipError::new_err(format!(
+                    "incoming: {} states, balls {start}..{} asked",
+                    states.len(),
+                    start as usize + n
+                )));
+            }
+            for (i, s) in states.iter().enumerate() {
+                s.validate(&format!("incoming[{i}]")).py()?;
+            }
+            Some(states)
+        }
+        None => None,
     };
     let region = ReachRegion::new(
         &planner.chain,
@@ -270,7 +292,10 @@ fn ball_rally<'py>(
     let out: Vec<rally::BallOutcome> = py.detach(|| {
         (start..start + n as u64)
             .into_par_iter()
-            .map(|i| rally::play(&planner, &region, &truth, &cfg, i))
+            .map(|i| {
+                let s = given.as_ref().map(|g| &g[i as usize]);
+                rally::play_with(&planner, &region, &truth, &cfg, i, s)
+            })
             .collect()
     });
     let d = PyDict::new(py);

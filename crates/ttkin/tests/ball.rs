@@ -591,3 +591,52 @@ fn wide_balls_are_returned_to_another_target_or_off_the_racket_centre() {
         "{moved_target} other targets, {off_centre} off centre"
     );
 }
+
+#[test]
+fn mismatched_world_keeps_the_balls_and_draws_their_physics() {
+    use ttkin::ball::rally::WorldSpread;
+    let pl = planner();
+    let region = ReachRegion::new(&pl.chain, pl.placement, pl.ready.clone(), pl.flight.model.radius).unwrap();
+    let truth = Flight {
+        step: 0.001,
+        ..Flight::default()
+    };
+    let cfg = RallyConfig {
+        paths: 0,
+        ..RallyConfig::default()
+    };
+    let mis = RallyConfig {
+        world: Some(WorldSpread::measured()),
+        ..cfg
+    };
+    let a: Vec<_> = (0..12).map(|i| rally::play(&pl, &region, &truth, &cfg, i)).collect();
+    let b: Vec<_> = (0..12).map(|i| rally::play(&pl, &region, &truth, &mis, i)).collect();
+    // The same incoming balls, another flight: the estimates differ.
+    for (x, y) in a.iter().zip(&b) {
+        assert_eq!(x.incoming, y.incoming);
+    }
+    let differ = a.iter().zip(&b).filter(|(x, y)| x.estimate != y.estimate).count();
+    assert!(differ >= 10, "{differ} of 12 estimates differ");
+    // Given incoming balls are played as given.
+    let given: Vec<BallState> = a.iter().map(|o| o.incoming).collect();
+    let c = rally::rally_from(&pl, &region, &truth, &cfg, &given);
+    assert!(c
+        .iter()
+        .zip(&a)
+        .all(|(x, y)| x.incoming == y.incoming && x.in_reach == y.in_reach));
+    assert!(c.iter().filter(|o| o.returned).count() + 2 >= a.iter().filter(|o| o.returned).count());
+    // The draws: spreads as stated (2000 draws, within 10 %).
+    let w = WorldSpread::measured();
+    let m = BallModel::default();
+    let mut rng = fastrand::Rng::with_seed(1);
+    let d: Vec<BallModel> = (0..2000).map(|_| w.draw(&m, &mut rng)).collect();
+    let sd = |f: &dyn Fn(&BallModel) -> f64| {
+        let mean = d.iter().map(f).sum::<f64>() / d.len() as f64;
+        (d.iter().map(|x| (f(x) - mean).powi(2)).sum::<f64>() / d.len() as f64).sqrt()
+    };
+    assert!((sd(&|x| x.k_drag) / (w.k_drag * m.k_drag) - 1.0).abs() < 0.1);
+    assert!((sd(&|x| x.table_restitution) / w.restitution - 1.0).abs() < 0.1);
+    assert!(d
+        .iter()
+        .all(|x| x.k_magnus >= 0.0 && x.table_restitution <= 1.0 && x.table_friction >= 0.0));
+}

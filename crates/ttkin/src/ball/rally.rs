@@ -33,6 +33,7 @@
 use super::estimate::{estimate, EstimateOptions};
 use super::flight::{BallState, EventKind, Flight};
 use super::hitplan::{shoot, Hit, HitPlanner, HitStatus};
+use super::model::BallModel;
 use super::reach::ReachRegion;
 use super::update::update;
 use crate::chain::JacobianFrame;
@@ -74,6 +75,53 @@ impl Default for Camera {
     }
 }
 
+/// How the simulated world departs from the planner's model, drawn anew for every ball (from its
+/// own random stream, so the incoming balls are the same with and without it): the true ball's
+/// drag and Magnus constants scaled by (1 + σ·N(0, 1)), its table restitution and friction moved
+/// by σ·N(0, 1) (clamped to their physical ranges), and the camera's time stamps off by a constant
+/// uniform in ±`latency_jitter` for the ball (the delivery latency differs from the one the
+/// planner assumes).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WorldSpread {
+    /// Relative standard deviation of k_d.
+    pub k_drag: f64,
+    /// Relative standard deviation of k_m.
+    pub k_magnus: f64,
+    /// Standard deviation of the table restitution.
+    pub restitution: f64,
+    /// Standard deviation of the table friction.
+    pub friction: f64,
+    /// Largest time-stamp error (s) of the observations.
+    pub latency_jitter: f64,
+}
+
+impl WorldSpread {
+    /// The spreads between the calibrations of the four ball-gun groups of the PAM flights
+    /// (docs/ball.md, "The world the planner does not know"): k_d 4 %, k_m 45 % (0.00064–0.00235),
+    /// restitution 0.008; friction 0.05 and ±3 ms of latency jitter are assumed, not measured (the
+    /// flights do not identify μ and carry no time stamps).
+    pub fn measured() -> Self {
+        WorldSpread {
+            k_drag: 0.04,
+            k_magnus: 0.45,
+            restitution: 0.008,
+            friction: 0.05,
+            latency_jitter: 0.003,
+        }
+    }
+
+    /// The ball model of one ball's world: `model` with its constants drawn with `rng`.
+    pub fn draw(&self, model: &BallModel, rng: &mut fastrand::Rng) -> BallModel {
+        BallModel {
+            k_drag: (model.k_drag * (1.0 + self.k_drag * gauss(rng))).max(0.0),
+            k_magnus: (model.k_magnus * (1.0 + self.k_magnus * gauss(rng))).max(0.0),
+            table_restitution: (model.table_restitution + self.restitution * gauss(rng)).clamp(0.0, 1.0),
+            table_friction: (model.table_friction + self.friction * gauss(rng)).max(0.0),
+            ..*model
+        }
+    }
+}
+
 /// Rally settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RallyConfig {
@@ -99,6 +147,8 @@ pub struct RallyConfig {
     /// the estimate updated with the observations delivered by then ([`update`]) and the hit
     /// planned again from the robot's state; 0 for none.
     pub correction_delay: f64,
+    /// The world's departure from the planner's model per ball; `None`: the world is the model.
+    pub world: Option<WorldSpread>,
 }
 
 impl Default for RallyConfig {
@@ -113,6 +163,7 @@ impl Default for RallyConfig {
             replan_period: 0.0,
             max_window: 0.25,
             correction_delay: 0.03,
+            world: None,
         }
     }
 }
@@ -236,15 +287,49 @@ impl Motion {
 /// Plays ball `index` of the rally: serve, observe, classify against `region`, plan, re-plan,
 /// execute, score.
 pub fn play(planner: &HitPlanner, region: &ReachRegion, truth: &Flight, cfg: &RallyConfig, index: u64) -> BallOutcome {
+    play_with(planner, region, truth, cfg, index, None)
+}
+
+/// [`play`] with the incoming ball given (`incoming`, e.g. a recorded shot; time stamps from its
+/// `t`, re-based to 0) instead of served. With [`RallyConfig::world`] the ball flies in its own
+/// world (constants drawn around `truth`'s, see [`WorldSpread`]) while the planner keeps its model.
+pub fn play_with(
+    planner: &HitPlanner,
+    region: &ReachRegion,
+    truth: &Flight,
+    cfg: &RallyConfig,
+    index: u64,
+    incoming: Option<&BallState>,
+) -> BallOutcome {
     let mut rng = fastrand::Rng::with_seed(
         cfg.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ index.wrapping_mul(0xD1B5_4A32_D192_ED03),
     );
-    let s0 = serve(truth, &mut rng, cfg.max_spin_rps, cfg.corkscrew);
+    let s0 = match incoming {
+        Some(s) => BallState { t: 0.0, ..*s },
+        None => serve(truth, &mut rng, cfg.max_spin_rps, cfg.corkscrew),
+    };
+    // The ball's own world, from a stream of its own (the serve and the camera noise unchanged).
+    let mut world_rng = fastrand::Rng::with_seed(
+        cfg.seed.wrapping_mul(0xA076_1D64_78BD_642F) ^ index.wrapping_mul(0xE703_7ED1_A0B4_28DB) ^ 0x5EED,
+    );
+    let (world, stamp_error) = match &cfg.world {
+        Some(w) => (
+            Flight {
+                model: w.draw(&truth.model, &mut world_rng),
+                ..*truth
+            },
+            w.latency_jitter * (2.0 * world_rng.f64() - 1.0),
+        ),
+        None => (*truth, 0.0),
+    };
+    let truth = &world;
     let cam = &cfg.camera;
     // The camera runs for the whole incoming flight; each plan sees what was delivered by then.
     let count = (1.2 * cam.rate) as usize;
-    let times: Vec<f64> = (0..count).map(|k| cam.start + k as f64 / cam.rate).collect();
-    let truth_path = super::predict::predict(truth, &s0, &times).expect("valid times");
+    let exposures: Vec<f64> = (0..count).map(|k| cam.start + k as f64 / cam.rate).collect();
+    let truth_path = super::predict::predict(truth, &s0, &exposures).expect("valid times");
+    // The time stamps the planner sees: the exposures, off by the ball's latency error.
+    let times: Vec<f64> = exposures.iter().map(|t| t + stamp_error).collect();
     let obs: Vec<[f64; 3]> = truth_path
         .positions
         .iter()
@@ -263,7 +348,7 @@ pub fn play(planner: &HitPlanner, region: &ReachRegion, truth: &Flight, cfg: &Ra
     let first = (cam.window * cam.rate).round() as usize + 1;
     let t_last = times[first - 1];
     let now = t_last + cam.latency;
-    let (truth_at_last, _) = truth.run(&s0, t_last, None);
+    let (truth_at_last, _) = truth.run(&s0, exposures[first - 1], None);
     let reach = region.classify(truth, &s0, now);
     let mut out = BallOutcome {
         incoming: s0,
@@ -578,6 +663,22 @@ fn sample_path(flight: &Flight, s: &BallState, duration: f64) -> Vec<[f64; 3]> {
         .collect();
     let pred = super::predict::predict(flight, s, &times).expect("valid times");
     pred.positions.into_iter().filter(|p| p[0].is_finite()).collect()
+}
+
+/// Plays the balls `incoming` (states at the opponent's hit, e.g. recorded shots; ball `i` is
+/// `incoming[i]`) in parallel; see [`play_with`].
+pub fn rally_from(
+    planner: &HitPlanner,
+    region: &ReachRegion,
+    truth: &Flight,
+    cfg: &RallyConfig,
+    incoming: &[BallState],
+) -> Vec<BallOutcome> {
+    incoming
+        .par_iter()
+        .enumerate()
+        .map(|(i, s)| play_with(planner, region, truth, cfg, i as u64, Some(s)))
+        .collect()
 }
 
 /// Plays balls 0..`n` in parallel.
