@@ -784,4 +784,5 @@ def ball_rally(
     paths: int = 5,
     world: bool = False,
     incoming: ArrayLike | None = None,
+    drives: bool = False,
 ) -> dict[str, Any]: ...

@@ -45,6 +45,7 @@ def rally(
     world: bool = False,
     incoming: np.ndarray | None = None,
     compare_world: bool = False,
+    drive_execution: bool = False,
 ) -> dict:
     """Plays ``n`` balls (deterministic in ``seed``); returns the summary (and writes
     ``summary.json`` and figures into ``out`` when given).
@@ -77,7 +78,10 @@ def rally(
     ``incoming`` (N, 10) gives the balls (``[t, p, v, w]`` at the opponent's hit, e.g. recorded
     shots; ``n`` ≤ N) instead of drawing them. ``compare_world=True`` plays the same balls in both
     worlds and adds ``world_comparison`` (return rates side by side) to the summary, whose other
-    keys are those of the world asked for.
+    keys are those of the world asked for. ``drive_execution=True`` executes every planned stroke
+    through the coupled drive simulation (``ttcan::coupled::execute``: a fresh simulation per
+    stroke, inverse-dynamics feed-forward, setpoints at 1 kHz) instead of exactly; the racket meets
+    the ball where the driven joints put it.
     """
     if not isinstance(n, (int, np.integer)) or isinstance(n, bool) or n < 1:
         raise _t.TtmanipError(f"n: must be a positive integer, got {n!r}")
@@ -87,7 +91,11 @@ def rally(
         raise _t.TtmanipError(f"chunk: must be a positive integer, got {chunk!r}")
     if not isinstance(drives, (int, np.integer)) or isinstance(drives, bool) or drives < 0:
         raise _t.TtmanipError(f"drives: must be a non-negative integer, got {drives!r}")
-    for what, flag in (("world", world), ("compare_world", compare_world)):
+    for what, flag in (
+        ("world", world),
+        ("compare_world", compare_world),
+        ("drive_execution", drive_execution),
+    ):
         if not isinstance(flag, (bool, np.bool_)):
             raise _t.TtmanipError(f"{what}: must be True or False, got {flag!r}")
     if not isinstance(progress, (bool, np.bool_)):
@@ -134,6 +142,7 @@ def rally(
                 5 if start == 0 else 0,
                 bool(world),
                 incoming,
+                bool(drive_execution),
             )
         )
         if progress:
@@ -188,8 +197,12 @@ def rally(
             "outliers": 0.02,
             "window_s": 0.20,
         },
-        "stroke_execution": "planned hit leg (quintic, else jerk-limited) executed exactly; "
-        "drive_* keys: a subset through plan_hit + simulate (coupled drive simulation)",
+        "stroke_execution": (
+            "every stroke through the coupled drive simulation (ttcan::coupled::execute)"
+            if drive_execution
+            else "planned hit leg (quintic, else jerk-limited) executed exactly"
+        )
+        + "; drive_* keys: a subset through plan_hit + simulate (coupled drive simulation)",
         "world": "per-ball constants drawn around the planner's (WorldSpread::measured) and camera "
         "time-stamp error up to +-3 ms"
         if world

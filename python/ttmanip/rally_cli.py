@@ -33,6 +33,12 @@ def add_parser(sub) -> argparse.ArgumentParser:
         help="incoming balls from a file: one row per ball, t px py pz vx vy vz wx wy wz "
         "(s, m, m/s, rad/s, world frame; comma or space separated, # comments); --n defaults to its rows",
     )
+    p.add_argument(
+        "--execution",
+        choices=("ideal", "drives"),
+        default="ideal",
+        help="strokes executed exactly (default) or through the coupled drive simulation",
+    )
     p.set_defaults(func=run)
     return p
 
@@ -74,6 +80,7 @@ def run(args: argparse.Namespace) -> int:
             world=args.world != "model",
             incoming=incoming,
             compare_world=args.world == "both",
+            drive_execution=args.execution == "drives",
         )
     except TtmanipError as e:
         print(f"ttmanip rally: {e}", file=sys.stderr)

@@ -221,7 +221,7 @@ fn ball_plan_return<'py>(
 /// Plays balls `start`..`start + n` of a simulated rally (see `ttkin::ball::rally`) in parallel.
 #[ttkin_py_guard::guarded]
 #[pyfunction]
-#[pyo3(signature = (n, seed = 0, start = 0, target = (0.9, 0.0), max_spin_rps = 40.0, paths = 5, world = false, incoming = None))]
+#[pyo3(signature = (n, seed = 0, start = 0, target = (0.9, 0.0), max_spin_rps = 40.0, paths = 5, world = false, incoming = None, drives = false))]
 #[allow(clippy::too_many_arguments)]
 fn ball_rally<'py>(
     py: Python<'py>,
@@ -233,6 +233,7 @@ fn ball_rally<'py>(
     paths: i128,
     world: bool,
     incoming: Option<&Bound<'py, PyAny>>,
+    drives: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let n: usize = args::sample_count(n, "n")?;
     let seed: u64 = args::unsigned(seed, "seed")?;
@@ -289,12 +290,18 @@ fn ball_rally<'py>(
         truth.model.radius,
     )
     .py()?;
+    let executor = if drives {
+        Some(ttcan::coupled::execute::DriveExecutor::new(&planner.chain, ttcan::CoupledOptions::default(), 1e-3).py()?)
+    } else {
+        None
+    };
     let out: Vec<rally::BallOutcome> = py.detach(|| {
         (start..start + n as u64)
             .into_par_iter()
             .map(|i| {
                 let s = given.as_ref().map(|g| &g[i as usize]);
-                rally::play_with(&planner, &region, &truth, &cfg, i, s)
+                let ex = executor.as_ref().map(|e| e as &dyn rally::Executor);
+                rally::play_with(&planner, &region, &truth, &cfg, i, s, ex)
             })
             .collect()
     });

@@ -640,3 +640,50 @@ fn mismatched_world_keeps_the_balls_and_draws_their_physics() {
         .iter()
         .all(|x| x.k_magnus >= 0.0 && x.table_restitution <= 1.0 && x.table_friction >= 0.0));
 }
+
+/// An executor that does exactly what it is told (the reference at 1 ms): the rally with it
+/// plays as without one, up to the linear interpolation between its samples.
+struct Exact;
+
+impl rally::Executor for Exact {
+    fn execute(&self, times: &[f64], q: &[f64], qd: &[f64], _qdd: &[f64]) -> Option<rally::Executed> {
+        Some(rally::Executed {
+            dof: q.len() / times.len(),
+            t: times.to_vec(),
+            q: q.to_vec(),
+            qd: qd.to_vec(),
+        })
+    }
+}
+
+#[test]
+fn an_exact_executor_plays_as_the_ideal_execution() {
+    let pl = planner();
+    let region = ReachRegion::new(&pl.chain, pl.placement, pl.ready.clone(), pl.flight.model.radius).unwrap();
+    let truth = Flight {
+        step: 0.001,
+        ..Flight::default()
+    };
+    let cfg = RallyConfig {
+        paths: 0,
+        ..RallyConfig::default()
+    };
+    let mut same = 0;
+    for i in 0..16 {
+        let a = rally::play(&pl, &region, &truth, &cfg, i);
+        let b = rally::play_with(&pl, &region, &truth, &cfg, i, None, Some(&Exact));
+        assert_eq!(a.incoming, b.incoming);
+        if a.returned == b.returned {
+            same += 1;
+        }
+        if a.contact && b.contact {
+            assert!(
+                (a.racket_error - b.racket_error).abs() < 2e-3,
+                "{} vs {}",
+                a.racket_error,
+                b.racket_error
+            );
+        }
+    }
+    assert!(same >= 15, "{same} of 16 alike");
+}

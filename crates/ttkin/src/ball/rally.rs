@@ -255,6 +255,51 @@ pub fn serve(flight: &Flight, rng: &mut fastrand::Rng, max_spin_rps: f64, corksc
     }
 }
 
+/// What the robot actually did for a commanded stroke: joint positions and velocities at times
+/// `t` (s from the stroke's start), `dof` columns, row-major.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Executed {
+    /// Joints.
+    pub dof: usize,
+    /// Sample times (s from the stroke's start, increasing).
+    pub t: Vec<f64>,
+    /// Joint positions (rad or m), K × dof.
+    pub q: Vec<f64>,
+    /// Joint speeds (rad/s or m/s), K × dof.
+    pub qd: Vec<f64>,
+}
+
+/// Executes a stroke on the robot (the rally's execution hook; `ttcan` implements it with the
+/// coupled drive simulation, since `ttkin` may not depend on `ttcan`). The reference: samples at
+/// `times` (s from the stroke's start, increasing, uniform) of q, q̇, q̈ (K × n, row-major), the
+/// robot at rest at the first sample; `None` when the execution failed (a drive fault).
+pub trait Executor: Sync {
+    /// The executed motion for the reference (see the trait doc).
+    fn execute(&self, times: &[f64], q: &[f64], qd: &[f64], qdd: &[f64]) -> Option<Executed>;
+}
+
+impl Executed {
+    /// Joint state at `t` (s from the start): linear interpolation, held beyond the ends.
+    fn sample(&self, t: f64, q: &mut [f64], qd: &mut [f64]) {
+        let n = self.dof;
+        let k = self.t.partition_point(|&x| x <= t).clamp(1, self.t.len().max(2) - 1);
+        let (t0, t1) = (self.t[k - 1], self.t[k.min(self.t.len() - 1)]);
+        let s = if t1 > t0 {
+            ((t - t0) / (t1 - t0)).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let k1 = k.min(self.t.len() - 1);
+        for j in 0..n {
+            q[j] = self.q[(k - 1) * n + j] + s * (self.q[k1 * n + j] - self.q[(k - 1) * n + j]);
+            qd[j] = self.qd[(k - 1) * n + j] + s * (self.qd[k1 * n + j] - self.qd[(k - 1) * n + j]);
+        }
+    }
+}
+
+/// Sample period (s) of the reference handed to an [`Executor`].
+const EXECUTION_PERIOD: f64 = 0.001;
+
 /// A stroke made of pieces: each re-plan replaces the motion from its start time (s, absolute).
 struct Motion {
     pieces: Vec<(f64, JointTrajectory)>,
@@ -287,12 +332,14 @@ impl Motion {
 /// Plays ball `index` of the rally: serve, observe, classify against `region`, plan, re-plan,
 /// execute, score.
 pub fn play(planner: &HitPlanner, region: &ReachRegion, truth: &Flight, cfg: &RallyConfig, index: u64) -> BallOutcome {
-    play_with(planner, region, truth, cfg, index, None)
+    play_with(planner, region, truth, cfg, index, None, None)
 }
 
 /// [`play`] with the incoming ball given (`incoming`, e.g. a recorded shot; time stamps from its
 /// `t`, re-based to 0) instead of served. With [`RallyConfig::world`] the ball flies in its own
 /// world (constants drawn around `truth`'s, see [`WorldSpread`]) while the planner keeps its model.
+/// With an `executor` the stroke (as planned, re-plans included) is executed by it from the
+/// planning time to 60 ms after the hit, and the racket follows the executed motion.
 pub fn play_with(
     planner: &HitPlanner,
     region: &ReachRegion,
@@ -300,6 +347,7 @@ pub fn play_with(
     cfg: &RallyConfig,
     index: u64,
     incoming: Option<&BallState>,
+    executor: Option<&dyn Executor>,
 ) -> BallOutcome {
     let mut rng = fastrand::Rng::with_seed(
         cfg.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ index.wrapping_mul(0xD1B5_4A32_D192_ED03),
@@ -475,9 +523,39 @@ pub fn play_with(
     out.planned = Some((hit.ball, hit.racket.normal));
     let world = planner.placement.world_from_base();
     let (mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    // The executed motion, when an executor runs the stroke: from its start to 60 ms past the hit.
+    let t_start = motion.pieces[0].0;
+    let executed = match executor {
+        Some(ex) => {
+            let k = ((hit_abs + 0.06 - t_start) / EXECUTION_PERIOD).ceil() as usize + 1;
+            let times: Vec<f64> = (0..k).map(|i| i as f64 * EXECUTION_PERIOD).collect();
+            let (mut rq, mut rqd, mut rqdd) = (
+                Vec::with_capacity(k * n),
+                Vec::with_capacity(k * n),
+                Vec::with_capacity(k * n),
+            );
+            for &t in &times {
+                motion.sample(t_start + t, &mut q, &mut qd, &mut qdd);
+                rq.extend_from_slice(&q);
+                rqd.extend_from_slice(&qd);
+                rqdd.extend_from_slice(&qdd);
+            }
+            match ex.execute(&times, &rq, &rqd, &rqdd) {
+                Some(e) => Some(e),
+                None => {
+                    out.status = "execution_failed".into();
+                    return out;
+                }
+            }
+        }
+        None => None,
+    };
     // Racket centre, normal, velocity and angular velocity (world) at time t (s, absolute).
     let mut racket_at = |t: f64| {
-        motion.sample(t, &mut q, &mut qd, &mut qdd);
+        match &executed {
+            Some(e) => e.sample(t - t_start, &mut q, &mut qd),
+            None => motion.sample(t, &mut q, &mut qd, &mut qdd),
+        }
         let pose = world * planner.chain.fk(&q).expect("sizes match");
         let jac = planner.chain.jacobian(&q, JacobianFrame::Base).expect("sizes match");
         let tw = jac * nalgebra::DVector::from_column_slice(&qd);
@@ -677,7 +755,7 @@ pub fn rally_from(
     incoming
         .par_iter()
         .enumerate()
-        .map(|(i, s)| play_with(planner, region, truth, cfg, i as u64, Some(s)))
+        .map(|(i, s)| play_with(planner, region, truth, cfg, i as u64, Some(s), None))
         .collect()
 }
 
