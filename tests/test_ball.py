@@ -121,3 +121,33 @@ def test_bad_state_and_model_are_errors():
         ball.BallModel("unknown")
     with pytest.raises(ttmanip.TtmanipError, match="events"):
         ball.predict(np.zeros(10), [0.1], events=np.zeros(2))
+
+
+def test_racket_hit_reverses_the_relative_normal_speed():
+    # Head-on, no spin: the relative normal speed reverses with the rubber's restitution 0.85.
+    s = ball.state([-1.8, 0.0, 0.2], [-5.0, 0.0, 0.0])
+    out = ball.racket_hit(s, [1.0, 0.0, 0.0], [3.0, 0.0, 0.0])
+    assert out[4] == pytest.approx(3.0 + 0.85 * 8.0, rel=1e-12)
+    np.testing.assert_allclose(out[[0, 1, 2, 3, 5, 6, 7, 8, 9]], s[[0, 1, 2, 3, 5, 6, 7, 8, 9]], atol=1e-12)
+    # Oblique with spin: the tangential impulse turns spin into speed and back (rolling cap).
+    s2 = ball.state([-1.8, 0.0, 0.2], [-5.0, 1.0, 0.0], [0.0, 0.0, 100.0])
+    out2 = ball.racket_hit(s2, [1.0, 0.0, 0.0], [0.0, 0.0, 0.0])
+    assert out2[4] > 0 and out2[9] != 100.0
+    with pytest.raises(ttmanip.TtmanipError, match="unit"):
+        ball.racket_hit(s, [2.0, 0.0, 0.0], [0.0, 0.0, 0.0])
+
+
+def test_update_through_the_bounce_follows_the_true_ball():
+    s = ball.state([1.6, 0.1, 0.25], [-5.0, -0.2, 0.8], [0.0, 60.0, 0.0])
+    t = 0.02 + 0.005 * np.arange(41)
+    p = ball.predict(s, t)
+    _, events = ball.predict(s, [1.0], events=True)
+    tb = next(e for e in events if e["kind"] == "table")["before"][0]
+    t_new = np.arange(t[-1] + 0.005, tb + 0.04, 0.005)
+    p_new = ball.predict(s, t_new)
+    up = ball.update(t, p, t_new, p_new)
+    # (observations right at the bounce are not used)
+    assert up["bounced"] and len(t_new) - 3 <= up["used"] <= len(t_new)
+    assert t_new[-4] <= up["state"][0] <= t_new[-1]
+    np.testing.assert_allclose(up["state"][1:4], ball.predict(s, [up["state"][0]])[0], atol=2e-3)
+    assert np.asarray(up["covariance"]).shape == (9, 9)

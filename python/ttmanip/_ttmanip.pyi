@@ -775,6 +775,12 @@ def ball_fit(
     window: int = 20,
     period: float | None = None,
 ) -> dict[str, Any]: ...
+def ball_racket_hit(
+    state: ArrayLike, normal: ArrayLike, velocity: ArrayLike, model: str = "default"
+) -> NDArray[np.float64]: ...
+def ball_update(
+    t: ArrayLike, p: ArrayLike, t_new: ArrayLike, p_new: ArrayLike, model: str = "default"
+) -> dict[str, Any]: ...
 def ball_rally(
     n: int,
     seed: int = 0,

@@ -30,7 +30,9 @@ __all__ = [
     "plan_return",
     "predict",
     "predict_batch",
+    "racket_hit",
     "state",
+    "update",
 ]
 
 MODELS = ("default", "measured", "aero", "muelling", "mpi", "tt3d", "vacuum")
@@ -210,3 +212,23 @@ def plan_return(
             }
         )
     return d
+
+
+def racket_hit(
+    state: ArrayLike, normal: ArrayLike, velocity: ArrayLike, model: BallModel | str = "default"
+) -> NDArray[np.float64]:
+    """The racket impact model: the ball ``state`` (10,) just before, the racket's unit face
+    ``normal`` (3,) and its face velocity (3,, m/s) at the contact (world frame) in; the ball state
+    (10,) just after out (``ttkin::ball::impact::Racket``: restitution 0.85, friction 0.9 with the
+    rolling cap, Nakashima's impulse relative to the racket)."""
+    return _t.ball_racket_hit(state, normal, velocity, _model(model))
+
+
+def update(
+    t: ArrayLike, p: ArrayLike, t_new: ArrayLike, p_new: ArrayLike, model: BallModel | str = "default"
+) -> dict:
+    """The estimate of observations ``p`` (N, 3) at ``t`` (N,) updated with later observations
+    ``p_new`` (M, 3) at ``t_new`` (M,), through a bounce between them (``ttkin::ball::update``):
+    ``state`` (10,) at the last new observation, ``at_prior`` (10,), ``covariance`` (9, 9) of
+    [p; v; ω] at the prior's time, ``used``, ``outliers``, ``bounced``."""
+    return _t.ball_update(t, p, t_new, p_new, _model(model))

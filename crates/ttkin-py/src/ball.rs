@@ -349,6 +349,81 @@ fn ball_rally<'py>(
 }
 
 /// Adds the ball functions to the module.
+/// The ball after a racket impact (`ttkin::ball::impact::Racket::hit` with the default racket):
+/// `state` (10,) just before, the racket's unit face `normal` (3,) and the face point's
+/// `velocity` (3,, m/s, world); returns the state (10,) just after.
+#[ttkin_py_guard::guarded]
+#[pyfunction]
+#[pyo3(signature = (state, normal, velocity, model = "default"))]
+fn ball_racket_hit<'py>(
+    py: Python<'py>,
+    state: &Bound<'py, PyAny>,
+    normal: &Bound<'py, PyAny>,
+    velocity: &Bound<'py, PyAny>,
+    model: &str,
+) -> PyResult<Bound<'py, PyAny>> {
+    let s = state_arg(state, "state")?;
+    s.validate("state").py()?;
+    let n = vector(normal, "normal", 3)?;
+    let rv = vector(velocity, "velocity", 3)?;
+    let n = nalgebra::Vector3::new(n[0], n[1], n[2]);
+    let rv = nalgebra::Vector3::new(rv[0], rv[1], rv[2]);
+    let unit = (n.norm() - 1.0).abs() < 1e-6;
+    if !unit || !rv.iter().all(|x| x.is_finite()) {
+        return Err(ttkin::Error::invalid(
+            "normal, velocity",
+            format!(
+                "the normal must be a unit vector (norm {}) and the velocity finite",
+                n.norm()
+            ),
+        ))
+        .py();
+    }
+    let f = flight(model)?;
+    let (v, w) = ttkin::ball::impact::Racket::default().hit(&f.model, &s.v, &s.w, &n, &rv);
+    let out = BallState { v, w, ..s };
+    Ok(to_numpy(py, &[10], &state_vec(&out)).into_any())
+}
+
+/// The estimate from the observations `t` (N,), `p` (N, 3) updated with later ones `t_new`
+/// (M,), `p_new` (M, 3), through a bounce between them (`ttkin::ball::update`).
+#[ttkin_py_guard::guarded]
+#[pyfunction]
+#[pyo3(signature = (t, p, t_new, p_new, model = "default"))]
+fn ball_update<'py>(
+    py: Python<'py>,
+    t: &Bound<'py, PyAny>,
+    p: &Bound<'py, PyAny>,
+    t_new: &Bound<'py, PyAny>,
+    p_new: &Bound<'py, PyAny>,
+    model: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    let times = rows_array(t, "t", "N", &[])?.data().to_vec();
+    let obs = rows3(p, "p")?;
+    let times_new = rows_array(t_new, "t_new", "M", &[])?.data().to_vec();
+    let obs_new = rows3(p_new, "p_new")?;
+    let opts = EstimateOptions {
+        flight: flight(model)?,
+        ..EstimateOptions::default()
+    };
+    let up = py
+        .detach(|| {
+            let est = estimate(&times, &obs, &opts)?;
+            ttkin::ball::update::update(&est, &times_new, &obs_new, &opts)
+        })
+        .map_err(ttkin::Error::from)
+        .py()?;
+    let d = PyDict::new(py);
+    d.set_item("state", to_numpy(py, &[10], &state_vec(&up.state)))?;
+    d.set_item("at_prior", to_numpy(py, &[10], &state_vec(&up.at_prior)))?;
+    let cov: Vec<f64> = up.covariance.iter().flatten().copied().collect();
+    d.set_item("covariance", to_numpy(py, &[9, 9], &cov))?;
+    d.set_item("used", up.used)?;
+    d.set_item("outliers", up.outliers)?;
+    d.set_item("bounced", up.bounced)?;
+    Ok(d)
+}
+
 fn rows3(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<[f64; 3]>> {
     let a = rows_array(obj, what, "N", &[3])?;
     Ok(a.data().chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
@@ -471,6 +546,8 @@ fn ball_fit<'py>(
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ball_fit, m)?)?;
+    m.add_function(wrap_pyfunction!(ball_racket_hit, m)?)?;
+    m.add_function(wrap_pyfunction!(ball_update, m)?)?;
     m.add_function(wrap_pyfunction!(ball_estimate, m)?)?;
     m.add_function(wrap_pyfunction!(ball_predict, m)?)?;
     m.add_function(wrap_pyfunction!(ball_predict_batch, m)?)?;
