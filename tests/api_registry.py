@@ -188,6 +188,7 @@ API: dict[str, dict] = {
     "ball.state": {},
     "ball.racket_hit": {"args": {"model": "ball_model_name"}},
     "ball.update": {"args": {"model": "ball_model_name"}},
+    "ball.plan_correct": {"args": {"model": "ball_model_name"}},
     # --- IkResult (made by Robot.ik)
     "IkResult": {"skip_call": "made by Robot.ik only"},
     "IkResult.q": {},

@@ -151,3 +151,17 @@ def test_update_through_the_bounce_follows_the_true_ball():
     assert t_new[-4] <= up["state"][0] <= t_new[-1]
     np.testing.assert_allclose(up["state"][1:4], ball.predict(s, [up["state"][0]])[0], atol=2e-3)
     assert np.asarray(up["covariance"]).shape == (9, 9)
+
+
+def test_plan_correct_replans_near_the_first_hit_from_the_moving_stroke():
+    incoming = ttmanip.rally(8, seed=0)["results"]["incoming"]
+    s = next(b for b in incoming if ball.plan_return(b, 0.23, [0.9, 0.0])["status"] == "ok")
+    # The same ball, known better 80 ms into the stroke: the corrected hit is near the first.
+    r = ball.plan_correct(s, 0.23, [0.9, 0.0], s, 0.31, False)
+    assert r["first"]["status"] == "ok" and r["corrected"]["status"] == "ok"
+    t1 = 0.23 + r["first"]["t_hit"]
+    t2 = 0.31 + r["corrected"]["t_hit"]
+    assert abs(t1 - t2) < 0.05
+    np.testing.assert_allclose(r["corrected"]["landing"][:2], r["first"]["landing"][:2], atol=0.05)
+    with pytest.raises(ttmanip.TtmanipError, match="now"):
+        ball.plan_correct(s, 0.23, [0.9, 0.0], s, t1 - 0.01, False)

@@ -778,6 +778,15 @@ def ball_fit(
 def ball_racket_hit(
     state: ArrayLike, normal: ArrayLike, velocity: ArrayLike, model: str = "default"
 ) -> NDArray[np.float64]: ...
+def ball_plan_correct(
+    state: ArrayLike,
+    now: float,
+    target: ArrayLike,
+    state_new: ArrayLike,
+    t_c: float,
+    after_bounce: bool,
+    model: str = "default",
+) -> dict[str, Any]: ...
 def ball_update(
     t: ArrayLike, p: ArrayLike, t_new: ArrayLike, p_new: ArrayLike, model: str = "default"
 ) -> dict[str, Any]: ...

@@ -27,6 +27,7 @@ __all__ = [
     "Table",
     "crossing",
     "estimate",
+    "plan_correct",
     "plan_return",
     "predict",
     "predict_batch",
@@ -232,3 +233,25 @@ def update(
     ``state`` (10,) at the last new observation, ``at_prior`` (10,), ``covariance`` (9, 9) of
     [p; v; ω] at the prior's time, ``used``, ``outliers``, ``bounced``."""
     return _t.ball_update(t, p, t_new, p_new, _model(model))
+
+
+def plan_correct(
+    state: ArrayLike,
+    now: float,
+    target: ArrayLike,
+    state_new: ArrayLike,
+    t_c: float,
+    after_bounce: bool,
+    model: BallModel | str = "default",
+) -> dict:
+    """The correction of a planned hit, as the rally makes it after the bounce: gantry6's return
+    of ``state`` planned for a stroke from rest at ``now`` (s) landing at ``target`` (x, y, m),
+    then, that stroke under way, planned again at ``t_c`` (s) for the ball ``state_new`` (e.g.
+    :func:`update`'s state; ``after_bounce`` when past its bounce) near the first hit
+    (``HitPlanner::plan_near`` from the stroke's joint state at ``t_c``). Returns ``first`` and
+    ``corrected``, plan dicts as :func:`plan_return`'s (``status`` and the hit's items)."""
+    if not isinstance(after_bounce, (bool, np.bool_)):
+        raise _t.TtmanipError(f"after_bounce: must be True or False, got {after_bounce!r}")
+    now = _finite_scalar(now, "now")
+    t_c = _finite_scalar(t_c, "t_c")
+    return _t.ball_plan_correct(state, now, target, state_new, t_c, bool(after_bounce), _model(model))

@@ -702,6 +702,39 @@ fn correct(
     Some((t_c, hit))
 }
 
+/// The correction of a planned hit, as the rally makes it after the bounce: the stroke of `first`
+/// (planned at `t_first`, s absolute, from rest at the planner's ready configuration) is under
+/// way; at `now` (s) the hit is planned again for the ball `ball` (e.g. the estimate updated
+/// through the bounce, [`update`]; `after_bounce` when it is past its bounce) from the stroke's
+/// joint state then, near `first` ([`HitPlanner::plan_near`], shortest stroke 60 ms). An error
+/// when `now` is before `t_first` or less than 60 ms before the first hit.
+pub fn correct_hit(
+    planner: &HitPlanner,
+    first: &Hit,
+    t_first: f64,
+    ball: &BallState,
+    now: f64,
+    after_bounce: bool,
+) -> crate::error::Result<super::hitplan::HitPlan> {
+    let t_prev = t_first + first.t_hit;
+    if !(now >= t_first && t_prev - now > CORRECTION_MIN_STROKE) {
+        return Err(crate::error::Error::invalid(
+            "now",
+            format!(
+                "a correction at {now} s needs the stroke under way (started {t_first} s) and at least \
+                 {CORRECTION_MIN_STROKE} s before the first hit at {t_prev} s"
+            ),
+        ));
+    }
+    let motion = Motion {
+        pieces: vec![(t_first, execution(first, &JointState::rest(&planner.ready)))],
+    };
+    let start = motion.state(now, planner.chain.dof());
+    let mut replanner = planner.clone();
+    replanner.min_stroke_time = CORRECTION_MIN_STROKE;
+    replanner.plan_near(ball, now, &start, after_bounce, first, t_prev)
+}
+
 /// Shortest stroke (s) of the correction after the bounce: the rest of a stroke under way.
 const CORRECTION_MIN_STROKE: f64 = 0.06;
 
