@@ -51,6 +51,10 @@ API: dict[str, dict] = {
     # --- Robot
     "Robot": {"skip_call": "Robot() has no constructor; the factories below make robots"},
     "Robot.builtin": {"args": {"name": "robot_name"}},
+    "Robot.builtin_names": {},
+    "Robot.ready": {},
+    "Robot.with_racket": {},
+    "Robot.with_ready": {},
     "Robot.from_dh": {},
     "Robot.from_file": {},
     "Robot.from_toml": {},
@@ -59,6 +63,10 @@ API: dict[str, dict] = {
     "Robot.acceleration_limits": {"may_be_inf": True},
     "Robot.velocity_limits": {"may_be_inf": True},
     "Robot.effort_limits": {"may_be_inf": True},
+    "Robot.drive_effort_limits": {"may_be_inf": True},
+    "Robot.effective_effort_limits": {"may_be_inf": True},
+    "Robot.effort_limit_sources": {},
+    "Robot.effort_limits_at": {"shape": _batched("n"), "may_be_inf": True},
     "Robot.limits": {"may_be_inf": True},
     "Robot.analytic_ik": {},
     "Robot.armature": {},
@@ -172,6 +180,8 @@ API: dict[str, dict] = {
         "os_error": True,
         "args": {"n": "tiny_count", "drives": "tiny_count", "out": "out_dir", "chunk": "small_count"},
     },
+    # --- design sweeps (issue 31); tests/test_sweep.py runs them (serial and on a LocalCluster)
+    "sweep": {"skip_call": "starts a Dask cluster per call; tests/test_sweep.py checks it"},
     # --- ball (issue 13); positions after a flight ends at the net or the floor are NaN (documented)
     "ball.BallModel": {"args": {"name": "ball_model_name"}},
     "ball.BallModel.name": {},
@@ -317,6 +327,7 @@ API: dict[str, dict] = {
     "motor.Response.rise_time": {"args": {"target": "time"}, "may_be_inf": True},  # inf: never rises
     # --- robots
     **{f"robots.{f}": {} for f in ("arm4", "gantry6", "mobile8", "mobile8_start", "ur5")},
+    "robots.builtin": {"args": {"name": "robot_name"}},
     # --- traj
     # arc's optional arguments come in documented combinations; a missing or mixed one is a
     # TypeError, Python's answer to a wrong set of arguments
@@ -382,3 +393,75 @@ def public_callables() -> dict[str, object]:
             elif callable(v):
                 found[f"{prefix}{name}"] = v
     return found
+
+
+# --- pickle and copy (issue 31)
+#: Every public class -> the calls whose results must be equal on an object and on its pickled or
+#: copied twin (besides every public property, which tests/test_pickle.py compares anyway).
+#: ``test_every_class_has_a_pickle_probe`` fails when a public class is missing here.
+_G6_Q = np.array([0.1, -0.2, 0.3, 0.4, -0.5, 0.6])
+PICKLE_PROBES: dict[str, object] = {
+    "Robot": lambda r: (
+        r.fk(_G6_Q[: r.dof]),
+        r.fk_all(_G6_Q[: r.dof]),
+        r.jacobian(_G6_Q[: r.dof]),
+        r.mass_matrix(_G6_Q[: r.dof]),
+        r.rnea(_G6_Q[: r.dof], _G6_Q[: r.dof], _G6_Q[: r.dof]),
+        r.ik(r.fk(_G6_Q[: r.dof])).q,
+        r.to_toml(),
+        r.to_urdf(),
+    ),
+    "Hit": lambda h: (h.pose, h.twist, h.t),
+    "HitPlan": lambda p: (p.sample(500.0), p.torques(500.0), p.earliest_t_hit),
+    "SimResult": lambda s: (s.summary(), s.arrays, s.racket_pose),
+    "DriveSim": lambda s: (s.tick(40), s.q, s.qd, s.current, s.current_ref, s.t),
+    "IkResult": lambda r: (r.q, r.status, bool(r)),
+    "DiffDrive": lambda d: (d.wheel_speeds(0.3, 0.2), d.integrate([0.0, 0.0, 0.1], [1.0, 2.0], 0.5)),
+    "TrackResult": lambda t: (len(t), t.q, t.qd, t.x, t.joint_names),
+    "ball.BallModel": lambda m: ttmanip.ball.predict(
+        ttmanip.ball.state([-1.0, 0.0, 0.3], [4.0, 0.0, 1.0], [0.0, 50.0, 0.0]), [0.1, 0.2], model=m
+    ),
+    "ball.Estimate": lambda e: (e.state, e.covariance, e.bounce_time, e.extra),
+    "ball.Table": lambda t: t.on_opponent_half(0.5, 0.1),
+    "dynamics.TorqueProfile": lambda p: (p.joint, p.motor, p.current, p.peak, p.violations),
+    "motor.DcMotor": lambda m: ttmanip.motor.Servo(motor=m).tuning,
+    "motor.Drive": lambda d: ttmanip.motor.Servo(drive=d).tuning,
+    "motor.Gearbox": lambda g: ttmanip.motor.Servo(gearbox=g).tuning,
+    "motor.Load": lambda load: ttmanip.motor.Servo(load=load).tuning,
+    "motor.Loops": lambda lo: ttmanip.motor.Servo(loops=lo).tuning,
+    "motor.Response": lambda r: (r.rise_time("position", 0.01), r.overshoot("position", 0.01)),
+    "motor.Servo": lambda s: s.step_response("position", 0.01, 0.02),
+    "motor.ServoSim": lambda s: (s.step("velocity", 1.0, 0.01), s.params, s.plant_params),
+    "traj.CartesianTrajectory": lambda c: (c.sample(0.2), c.sample_rate(100.0)),
+    "traj.JointTrajectory": lambda j: (j.sample(np.linspace(0.0, j.duration, 7)), j.coefficients, j.knots),
+    "traj.Stroke": lambda s: (s.trajectory.sample(0.1), s.on_time, s.feasible),
+}
+
+
+def public_classes() -> dict[str, type]:
+    """Every public class of ttmanip, its submodules and the extension ``ttmanip._ttmanip``
+    (exceptions apart): registry key -> class. A class of the extension that the package does not
+    re-export is keyed by the submodule that uses it (``motor.ServoSim``)."""
+    found = {k: v for k, v in public_callables().items() if inspect.isclass(v)}
+    known = {id(v) for v in found.values()}
+    native = ttmanip._ttmanip
+    for name in dir(native):
+        v = getattr(native, name)
+        if inspect.isclass(v) and not issubclass(v, BaseException) and id(v) not in known:
+            homes = [m for m in MODULES if getattr(getattr(ttmanip, m), name, None) is v]
+            found[f"{homes[0]}.{name}" if homes else f"_ttmanip.{name}"] = v
+    return found
+
+
+def public_exceptions() -> dict[str, type]:
+    """Every public exception class of ttmanip and the extension: name -> class."""
+    spaces = [ttmanip, ttmanip._ttmanip] + [getattr(ttmanip, m) for m in MODULES]
+    return {
+        f"{v.__module__}.{v.__qualname__}": v
+        for mod in spaces
+        for v in vars(mod).values()
+        if inspect.isclass(v)
+        and issubclass(v, BaseException)
+        and not v.__name__.startswith("_")
+        and v.__module__.startswith("ttmanip")
+    }

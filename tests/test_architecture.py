@@ -185,3 +185,156 @@ def test_the_cycle_finder_finds_a_planted_cycle():
     graph = {("a",): {("b",)}, ("b",): {("c",)}, ("c",): {("a",)}, ("d",): set()}
     assert _cycle(graph) is not None
     assert _cycle({("a",): {("b",)}, ("b",): set()}) is None
+
+
+# ---------------------------------------------------------------------------------------------
+# Invariants (issue 30): each check is a function of its inputs, run on the tree and on a planted
+# violation so that it is shown to fail.
+
+RUST_CRATES = {
+    "ttkin": "crates/ttkin",
+    "ttcan": "crates/ttcan",
+    "ttkin_py": "crates/ttkin-py",
+    "ttkin_py_guard": "crates/ttkin-py-guard",
+}
+
+
+def _source_modules() -> list[tuple[str, str]]:
+    """(module path, file) of every source module: Rust files under crates/*/src and Python files
+    of the package. Crate roots, package roots and unit-test files (`tests.rs`) are their parent's."""
+    out = []
+    for crate, d in RUST_CRATES.items():
+        src = ROOT / d / "src"
+        for f in sorted(src.rglob("*.rs")):
+            rel = f.relative_to(src).with_suffix("").parts
+            if rel[-1] in ("lib", "main") or rel[-1] == "tests":
+                continue
+            if rel[-1] == "mod":
+                rel = rel[:-1]
+            out.append(("::".join((crate, *rel)), str(f.relative_to(ROOT))))
+    for f in sorted((ROOT / PY_PACKAGE).rglob("*.py")):
+        rel = f.relative_to(ROOT / "python").with_suffix("").parts
+        if rel[-1] == "__init__":
+            rel = rel[:-1]
+        if len(rel) > 1:
+            out.append((".".join(rel), str(f.relative_to(ROOT))))
+    return out
+
+
+def _unnamed(modules: list[tuple[str, str]], page: str) -> list[str]:
+    names = set(re.findall(r"`([^`\s]+)`", page))
+    return [m for m, f in modules if m not in names and f not in names]
+
+
+def test_every_source_module_is_named():
+    page = PAGE.read_text()
+    missing = _unnamed(_source_modules(), page)
+    assert not missing, f"modules without their line in ARCHITECTURE.md's code map: {missing}"
+    # A module added without its line is found.
+    planted = [*_source_modules(), ("ttkin::brand_new", "crates/ttkin/src/brand_new.rs")]
+    assert _unnamed(planted, page) == ["ttkin::brand_new"]
+
+
+FORBIDDEN_IN_TTKIN = {
+    # Python
+    "pyo3", "pyo3-ffi", "pyo3-build-config", "numpy", "pythonize",
+    # buses and devices
+    "socketcan", "embedded-can", "neli", "nix",
+    # the crates above it
+    "ttcan", "ttkin-py",
+}
+
+
+def _metadata() -> dict:
+    import json
+    import subprocess
+
+    out = subprocess.run(
+        ["cargo", "metadata", "--format-version", "1", "--manifest-path", str(ROOT / "Cargo.toml")],
+        capture_output=True, text=True, check=True,
+    )
+    return json.loads(out.stdout)
+
+
+def _normal_closure(meta: dict, root_name: str) -> set[str]:
+    """Names of the packages `root_name` depends on at build or run time (not dev-dependencies),
+    transitively, from `cargo metadata`'s resolve graph."""
+    by_id = {p["id"]: p["name"] for p in meta["packages"]}
+    nodes = {n["id"]: n for n in meta["resolve"]["nodes"]}
+    root = next(i for i, name in by_id.items() if name == root_name and i in nodes)
+    seen, todo = set(), [root]
+    while todo:
+        for dep in nodes[todo.pop()]["deps"]:
+            if any(k["kind"] in (None, "build") for k in dep["dep_kinds"]) and dep["pkg"] not in seen:
+                seen.add(dep["pkg"])
+                todo.append(dep["pkg"])
+    return {by_id[i] for i in seen}
+
+
+def test_ttkin_has_no_bus_no_python_and_no_unsafe():
+    meta = _metadata()
+    bad = _normal_closure(meta, "ttkin") & FORBIDDEN_IN_TTKIN
+    assert not bad, f"ttkin (maths) depends on {sorted(bad)}: a bus, Python or a crate above it"
+    assert not (_normal_closure(meta, "ttcan") & {"pyo3", "numpy", "ttkin-py"}), "ttcan knows no Python"
+    lib = (ROOT / "crates/ttkin/src/lib.rs").read_text()
+    assert "#![forbid(unsafe_code)]" in lib
+    # The check finds a planted dependency of ttkin on socketcan.
+    ttkin_id = next(p["id"] for p in meta["packages"] if p["name"] == "ttkin")
+    sock = {"id": "socketcan-planted", "name": "socketcan"}
+    planted = {
+        "packages": [*meta["packages"], sock],
+        "resolve": {
+            "nodes": [
+                {**n, "deps": [*n["deps"], {"pkg": sock["id"], "dep_kinds": [{"kind": None}]}]}
+                if n["id"] == ttkin_id
+                else n
+                for n in meta["resolve"]["nodes"]
+            ]
+            + [{"id": sock["id"], "deps": []}]
+        },
+    }
+    assert "socketcan" in _normal_closure(planted, "ttkin")
+
+
+def _builtin_names() -> list[str]:
+    text = (ROOT / "crates/ttkin/src/robots.rs").read_text()
+    m = re.search(r"pub const NAMES: \[&str; \d+\] = \[([^\]]*)\]", text)
+    assert m, "ttkin::robots::NAMES lists the built-in robots"
+    return re.findall(r'"(\w+)"', m.group(1))
+
+
+def _name_matches(text: str, names: list[str], rust: bool) -> list[str]:
+    """Lines of `text` (comments and Rust unit tests dropped) that decide something by comparing
+    with a built-in robot's name: a match arm `"gantry6" =>` or a comparison `== "gantry6"`."""
+    if rust:
+        text = text.split("#[cfg(test)]")[0]
+        text = re.sub(r"//[^\n]*", "", text)
+    else:
+        text = re.sub(r"#[^\n]*", "", text)
+    alt = "|".join(map(re.escape, names))
+    lit = rf"[\"']({alt})[\"']"
+    pat = rf"{lit}\s*(=>|==|!=|\|)|(==|!=)\s*{lit}|\bin\s*[(\[{{][^)\]}}]*{lit}"
+    return [line.strip() for line in text.splitlines() if re.search(pat, line)]
+
+
+def test_no_robot_name_match_outside_the_robots_room():
+    """Robot facts (racket mount, ready pose, analytic IK) are data on the robot or found from its
+    structure; only the robots' room (`ttkin::robots`, `ttmanip.robots`) maps names to robots."""
+    names = _builtin_names()
+    rooms = {ROOT / "crates/ttkin/src/robots.rs", ROOT / PY_PACKAGE / "robots.py"}
+    found = []
+    for f in [*ROOT.glob("crates/*/src/**/*.rs"), *(ROOT / PY_PACKAGE).rglob("*.py")]:
+        if f in rooms or "robots" in f.relative_to(ROOT).parts[:-1]:
+            continue
+        for line in _name_matches(f.read_text(), names, rust=f.suffix == ".rs"):
+            found.append(f"{f.relative_to(ROOT)}: {line}")
+    assert not found, "decisions by robot name outside the robots' room:\n" + "\n".join(found)
+    # The check finds the pattern it forbids.
+    planted = (
+        'fn ready(c: &Chain) -> f64 {\n    match c.name() {\n        "gantry6" => 0.6,\n'
+        "        _ => 0.0,\n    }\n}"
+    )
+    assert _name_matches(planted, names, rust=True) == ['"gantry6" => 0.6,']
+    assert _name_matches("if robot.name == 'mobile8':\n    pass", names, rust=False)
+    assert _name_matches("if name in ('ur5', 'arm4'):", names, rust=False)
+    assert not _name_matches('summary["gantry6"] = run(robots.gantry6())  # gantry6 ==', names, rust=False)

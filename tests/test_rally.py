@@ -67,7 +67,7 @@ def test_rally_cli_writes_summary_and_figures(tmp_path, capsys):
     assert list(summary["reach"]) == list(REACH) and sum(summary["reach"].values()) == 30
     for f in summary["figures"]:
         assert (tmp_path / f).exists() or __import__("pathlib").Path(f).exists()
-    assert cli.main(["rally", "--n", "0", "--out", str(out)]) == 2
+    assert cli.main(["rally", "--n", "0", "--out", str(out)]) == 1
 
 
 def test_planned_hits_executed_through_the_drives_stay_on_the_plan():
@@ -97,5 +97,5 @@ def test_mismatched_world_on_the_same_balls_and_balls_from_a_file(tmp_path, caps
     with pytest.raises(ttmanip.TtmanipError, match="incoming"):
         ttmanip.rally(5, incoming=np.zeros((3, 10)))
     (tmp_path / "bad.csv").write_text("1 2 3\n")
-    assert cli.main(["rally", "--balls", str(tmp_path / "bad.csv"), "--out", str(out)]) == 2
+    assert cli.main(["rally", "--balls", str(tmp_path / "bad.csv"), "--out", str(out)]) == 1
     capsys.readouterr()

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 import ttmanip
 from conftest import BUILTINS, random_q
+from ttmanip.pipeline import racket_mount
 
 
 @pytest.mark.parametrize("name", BUILTINS)
@@ -219,7 +220,7 @@ def test_cli_export_and_info(tmp_path, capsys):
     np.testing.assert_allclose(
         back.fk([0.1, 0.2, 0.3, 0.4]), ttmanip.robots.arm4().fk([0.1, 0.2, 0.3, 0.4]), atol=1e-12
     )
-    assert main(["export", "arm4", "--out", str(tmp_path / "arm4.json")]) == 2
+    assert main(["export", "arm4", "--out", str(tmp_path / "arm4.json")]) == 1
     assert main(["info", "gantry6"]) == 0
     assert "theta6" in capsys.readouterr().out
 
@@ -234,3 +235,27 @@ def test_urdf_round_trip_of_a_robot_without_any_limits():
     np.testing.assert_allclose(back.fk(q), arm.fk(q), atol=1e-14)
     assert np.all(np.isinf(back.limits)) and np.all(np.isinf(back.velocity_limits))
     assert np.all(np.isinf(back.effort_limits))
+
+
+def test_racket_mount_and_ready_pose_are_data_of_the_robot(tmp_path):
+    """Issue 30: what a robot carries is read from its file, never looked up by its name."""
+    m8 = ttmanip.robots.mobile8()
+    np.testing.assert_array_equal(m8.ready, ttmanip.robots.mobile8_start())
+    np.testing.assert_array_equal(ttmanip.robots.gantry6().ready, [0, 0, 0, 0.6, 0.6, 0])
+    renamed = ttmanip.Robot.from_toml(m8.to_toml().replace('name = "mobile8"', 'name = "copy"', 1))
+    assert renamed.name == "copy"
+    np.testing.assert_allclose(racket_mount(renamed), racket_mount(m8), atol=1e-15)
+    np.testing.assert_array_equal(renamed.ready, m8.ready)
+    # URDF carries neither: the tool frame and the mid range, until the robot is given them.
+    from_urdf = ttmanip.Robot.from_urdf_string(m8.to_urdf(), "base_link", "tool")
+    np.testing.assert_array_equal(racket_mount(from_urdf), np.eye(4))
+    again = from_urdf.with_racket(racket_mount(m8)).with_ready(m8.ready)
+    np.testing.assert_array_equal(racket_mount(again), racket_mount(m8))
+    np.testing.assert_array_equal(again.ready, m8.ready)
+    lo, hi = m8.limits.T
+    with pytest.raises(ttmanip.TtmanipError, match="ready"):
+        m8.with_ready(np.where(np.isfinite(hi), hi + 1.0, 0.0))
+    with pytest.raises(ttmanip.ShapeError, match="q"):
+        m8.with_ready([0.0, 1.0])
+    assert ttmanip.robots.NAMES == ("mobile8", "gantry6", "arm4", "ur5")
+    assert all(ttmanip.robots.builtin(n).name == n for n in ttmanip.robots.NAMES)

@@ -17,6 +17,8 @@ def _stub_names() -> tuple[set[str], dict[str, set[str]]]:
     for node in tree.body:
         if isinstance(node, ast.FunctionDef):
             functions.add(node.name)
+        elif isinstance(node, ast.AnnAssign) and isinstance(node.target, ast.Name):
+            functions.add(node.target.id)  # a module constant (MAX_RALLY_BALLS: int)
         elif isinstance(node, ast.ClassDef):
             classes[node.name] = {n.name for n in node.body if isinstance(n, ast.FunctionDef)}
     return functions, classes

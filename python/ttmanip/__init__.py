@@ -28,6 +28,7 @@ from ._ttmanip import (  # issue 14: overflow, caught panics
 from .mobile import DiffDrive, TrackResult, task_line, track, wls_step
 from .pipeline import DEMO_HIT, Hit, HitError, HitPlan, SimResult, plan_hit, plan_hits, simulate
 from .rally import rally  # issue 13
+from .sweeps import sweep  # issue 31
 
 __all__ = [
     "DEMO_HIT",
@@ -58,6 +59,7 @@ __all__ = [
     "rally",
     "robots",
     "simulate",
+    "sweep",
     "task_line",
     "track",
     "traj",

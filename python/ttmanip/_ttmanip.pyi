@@ -71,7 +71,10 @@ class Robot:
         """Robot from URDF text."""
     @staticmethod
     def builtin(name: str) -> Robot:
-        """A built-in robot: "mobile8", "gantry6", "arm4" or "ur5"."""
+        """A built-in robot: one of `Robot.builtin_names()` ("mobile8", "gantry6", "arm4", "ur5")."""
+    @staticmethod
+    def builtin_names() -> list[str]:
+        """Names of the built-in robots, in the order of `ttkin::robots::NAMES`."""
     def to_urdf(self) -> str:
         """URDF text (links base_link, link0 … linkN, tool; link i is DH frame i)."""
     def to_toml(self) -> str:
@@ -107,6 +110,24 @@ class Robot:
     @property
     def effort_limits(self) -> NDArray[np.float64]:
         """(n,) effort limits (N or N·m; inf where none)."""
+    def with_racket(self, mount: ArrayLike) -> Robot:
+        """The same robot carrying its racket at `mount` (racket frame in the tool frame, 4×4, m)."""
+    def with_ready(self, q: ArrayLike) -> Robot:
+        """The same robot with the ready (rest) configuration `q` (n,) in m or rad, within the limits."""
+    @property
+    def ready(self) -> NDArray[np.float64]:
+        """(n,) ready (rest) configuration (m or rad): where strokes start and return to."""
+    @property
+    def drive_effort_limits(self) -> NDArray[np.float64]:
+        """(n,) drive peak torque G·k_t·I_peak·η (N or N·m; inf where the drive data lacks it)."""
+    @property
+    def effective_effort_limits(self) -> NDArray[np.float64]:
+        """(n,) the smaller of effort_limits and drive_effort_limits: what the planners use at rest."""
+    @property
+    def effort_limit_sources(self) -> list[str]:
+        """Which limit governs each joint at rest: "robot file", "drive peak current", "drive voltage"."""
+    def effort_limits_at(self, qd: ArrayLike) -> NDArray[np.float64]:
+        """Effective effort limits at joint speeds qd: (n,) or (N, n); they fall with speed."""
     @property
     def base(self) -> NDArray[np.float64]:
         """Base frame → frame 0 (4×4)."""
@@ -685,6 +706,11 @@ class HitPlan:
     def branches(self) -> int:
         """IK branches within the limits."""
     @property
+    def robot_name(self) -> str:
+        """Name of the robot this plan was made for."""
+    def made_for(self, robot: Robot) -> bool:
+        """Whether this plan was made for ``robot`` (the same chain)."""
+    @property
     def hit_pose(self) -> _F:
         """(4, 4) requested racket pose."""
     @property
@@ -707,10 +733,10 @@ class HitPlan:
         """Stroke duration (s)."""
     @property
     def peak_effort(self) -> _F:
-        """(n,) largest |joint torque| at the effort check points."""
+        """(n,) largest |joint torque| over the stroke."""
     @property
     def effort_ratio(self) -> float:
-        """Largest |τ| / effort limit."""
+        """Largest |τ(t)| / effective effort limit over every instant of the stroke."""
     @property
     def violations(self) -> list[dict[str, Any]]:
         """Kinematic limit violations."""
@@ -755,8 +781,17 @@ def hit_plan_batch(
 ) -> list[HitPlan]: ...
 def racket_frame(normal: ArrayLike, handle: ArrayLike | None = None) -> _F: ...
 def racket_mount(robot: Robot) -> _F: ...
+def racket_states(robot: Robot, q: ArrayLike, qd: ArrayLike) -> _F: ...
+def hit_check(pose: ArrayLike, twist: ArrayLike, t: float) -> None: ...
+
+# issue 29: the one array conversion, the rally's bound
+def real_array(obj: ArrayLike, what: str) -> _F: ...
+
+MAX_RALLY_BALLS: int
 
 # issue 13: ball flight, estimation, prediction, hit planning, rally (ttkin::ball)
+def ball_table() -> dict[str, float]: ...
+def ball_placement() -> _F: ...
 def ball_estimate(t: ArrayLike, p: ArrayLike, model: str = "default") -> dict[str, Any]: ...
 def ball_predict(state: ArrayLike, times: ArrayLike, model: str = "default") -> dict[str, Any]: ...
 def ball_predict_batch(
@@ -801,3 +836,13 @@ def ball_rally(
     incoming: ArrayLike | None = None,
     drives: bool = False,
 ) -> dict[str, Any]: ...
+
+# issue 26: the controller's datagram format (ttcan::online::wire)
+WIRE_VERSION: int
+WIRE_MAX_LEN: int
+
+def wire_hit(
+    id: int, stroke: int, t_hit: float, pose: ArrayLike, twist: ArrayLike, seq: int, sent: float
+) -> bytes: ...
+def wire_observation(id: int, camera_time: float, position: ArrayLike, seq: int, sent: float) -> bytes: ...
+def wire_decode(data: bytes) -> dict[str, Any]: ...

@@ -38,6 +38,8 @@ __all__ = [
 
 MODELS = ("default", "measured", "aero", "muelling", "mpi", "tt3d", "vacuum")
 
+_TABLE = _t.ball_table()  # ttkin::ball::model::Table::default(), the one source of the numbers
+
 
 @dataclass(frozen=True)
 class BallModel:
@@ -60,13 +62,15 @@ class BallModel:
 
 @dataclass(frozen=True)
 class Table:
-    """ITTF table geometry (m) in the world frame: surface at z = 0, centred at the origin."""
+    """ITTF table geometry (m) in the world frame: surface at z = 0, centred at the origin; the
+    defaults are the Rust core's (``ttkin::ball::model::Table``: 2.74 × 1.525 m, 0.76 m high, net
+    0.1525 m high and overhanging as much)."""
 
-    length: float = 2.74
-    width: float = 1.525
-    height: float = 0.76
-    net_height: float = 0.1525
-    net_overhang: float = 0.1525
+    length: float = _TABLE["length"]
+    width: float = _TABLE["width"]
+    height: float = _TABLE["height"]
+    net_height: float = _TABLE["net_height"]
+    net_overhang: float = _TABLE["net_overhang"]
 
     def __post_init__(self):
         for name in ("length", "width", "height", "net_height", "net_overhang"):
@@ -130,8 +134,9 @@ def state(p: ArrayLike, v: ArrayLike, w: ArrayLike = (0.0, 0.0, 0.0), t: float =
     parts = [np.array([_finite_scalar(t, "t")])]
     for name, value in (("p", p), ("v", v), ("w", w)):
         try:
-            a = np.asarray(value, dtype=float)
-        except (TypeError, ValueError):
+            # The bindings' one conversion: complex, bool, string and object data are refused.
+            a = _t.real_array(value, name)
+        except TypeError:
             raise _t.TtmanipError(f"{name}: expected 3 real numbers, got {type(value).__name__}") from None
         if a.shape != (3,) or not np.isfinite(a).all():
             raise _t.TtmanipError(f"{name}: expected 3 finite numbers, got shape {a.shape}: {value!r}")

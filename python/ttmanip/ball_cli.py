@@ -39,7 +39,7 @@ def run_fit(args: argparse.Namespace) -> int:
         s = run(args.data, args.out, window=args.window, period=args.period)
     except (TtmanipError, ValueError, FileNotFoundError) as e:
         print(f"ttmanip ball fit: {e}", file=sys.stderr)
-        return 2
+        return 1  # bad input (ttmanip.cli.EXIT_BAD_INPUT)
     short = {
         "flights": s["flights"],
         "held_out_flights": s["held_out_flights"],

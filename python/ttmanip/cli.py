@@ -1,8 +1,9 @@
 """The ``ttmanip`` command line: the hit pipeline, the seed experiments, kinematics and robot files.
 
-Every subcommand takes ``--out DIR`` and writes its products there (PNG, CSV, JSON). User errors
-(bad file, unwritable folder, bad value, missing key, unreachable hit) end the command with exit
-status 2 (1 for a hit that cannot be planned) and one line ``ttmanip: error: KEY: problem``.
+Every subcommand takes ``--out DIR`` and writes its products there (PNG, CSV, JSON). Exit status,
+shared with ``ttctl`` and ``ttdrive-sim``: 0 done; 1 bad input (usage error, bad file, unwritable
+folder, bad value, missing or unknown key), with one line ``ttmanip: error: KEY: problem``; 2 not
+done (a hit that cannot be planned, a simulated run that faulted).
 
 examples:
   ttmanip demo --out out/demo
@@ -26,10 +27,11 @@ from pathlib import Path
 
 import numpy as np
 
+from .robots import NAMES as ROBOTS
+
 __all__ = ["CliError", "Progress", "build_parser", "main", "read_hit_file"]
 
 EXPERIMENTS = ("seed000", "seed001", "seed002")
-ROBOTS = ("mobile8", "gantry6", "arm4", "ur5")
 
 HIT_FILE_HELP = """hit file (JSON):
   {"robot": "gantry6", "hits": [{"centre": [x, y, z], "normal": [nx, ny, nz],
@@ -37,7 +39,15 @@ HIT_FILE_HELP = """hit file (JSON):
 in m, m/s, s (base frame). A hit may instead give "pose" (4x4) and "twist" (6); optional per
 hit: "omega" (rad/s), "handle"; optional top level: "units" ({"length": "m", "time": "s",
 "angle": "rad"}), "state" ({"q": [...], "qd": [...]}), "ready" ([...]), "profile" ("auto",
-"quintic", "jerk"). A single hit may stand at the top level instead of "hits"."""
+"quintic", "jerk"). A single hit may stand at the top level instead of "hits". Unknown keys
+are refused (as in robot files); at most 16 MiB, UTF-8, nested at most 64 deep."""
+
+#: Exit statuses shared with ``ttctl`` and ``ttdrive-sim`` (``ttcan::runtime::exit``).
+EXIT_SUCCESS, EXIT_BAD_INPUT, EXIT_NOT_DONE = 0, 1, 2
+
+#: Largest hit file read (bytes) and deepest JSON nesting accepted.
+MAX_HIT_FILE_BYTES = 16 << 20
+MAX_JSON_DEPTH = 64
 
 
 class CliError(Exception):
@@ -136,6 +146,16 @@ def _hit(entry, where: str):
     unknown = sorted(set(entry) - allowed)
     if unknown:
         raise CliError(f"{where}.{unknown[0]}: unknown key (expected one of {sorted(allowed)})")
+    if "centre" in entry and "center" in entry:
+        raise CliError(f"{where}.center: give the centre once ('centre' or 'center', not both)")
+    if "pose" in entry:
+        extra = sorted(set(entry) & {"centre", "center", "normal", "velocity", "omega", "handle"})
+        if extra:
+            raise CliError(
+                f"{where}.{extra[0]}: a hit gives 'pose' and 'twist' or centre/normal/velocity, not both"
+            )
+    elif "twist" in entry:
+        raise CliError(f"{where}.twist: goes with 'pose' (give centre/normal/velocity otherwise)")
     if "t" not in entry:
         raise CliError(f"{where}.t: missing key (hit time in s)")
     t = entry["t"]
@@ -168,15 +188,35 @@ def read_hit_file(path: str) -> dict:
     if p.suffix.lower() in (".yaml", ".yml"):
         raise CliError(f"{path}: YAML hit files need PyYAML, which ttmanip does not depend on; use JSON")
     try:
-        text = p.read_text()
+        # Read no further than the limit: a device such as /dev/zero never ends.
+        with p.open("rb") as f:
+            raw = f.read(MAX_HIT_FILE_BYTES + 1)
     except OSError as e:
         raise CliError(f"{path}: cannot read the hit file: {e.strerror or e}") from e
+    if len(raw) > MAX_HIT_FILE_BYTES:
+        raise CliError(f"{path}: larger than {MAX_HIT_FILE_BYTES} bytes (16 MiB), the most a hit file may be")
     try:
-        data = json.loads(text)
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise CliError(f"{path}: not UTF-8 text: invalid byte at offset {e.start}") from None
+    depth = _json_depth(text)
+    if depth > MAX_JSON_DEPTH:
+        raise CliError(f"{path}: JSON nested {depth} deep, at most {MAX_JSON_DEPTH}")
+    try:
+        # Integers as floats: a 401-digit integer is inf (refused as non-finite), not a traceback.
+        data = json.loads(text, parse_int=float)
     except json.JSONDecodeError as e:
         raise CliError(f"{path}: not valid JSON (line {e.lineno}, column {e.colno}: {e.msg})") from e
+    except (ValueError, RecursionError) as e:
+        raise CliError(f"{path}: not a readable JSON hit file ({e})") from None
     if not isinstance(data, dict):
         raise CliError(f"{path}: expected a JSON object at the top level")
+    top = {"robot", "units", "state", "ready", "profile"}
+    hit_keys = {"centre", "center", "normal", "velocity", "t", "omega", "handle", "pose", "twist"}
+    allowed = top | ({"hits"} if "hits" in data else hit_keys)
+    unknown = sorted(set(data) - allowed)
+    if unknown:
+        raise CliError(f"{unknown[0]}: unknown key (expected one of {sorted(allowed)})")
     units = data.get("units", {})
     if not isinstance(units, dict):
         raise CliError(f"units: expected an object like {_UNITS}, got {units!r}")
@@ -186,7 +226,7 @@ def read_hit_file(path: str) -> dict:
         if value != _UNITS[key]:
             raise CliError(f"units.{key}: only '{_UNITS[key]}' (SI) is accepted, got '{value}'")
     robot_name = data.get("robot", "gantry6")
-    if robot_name not in ROBOTS:
+    if not isinstance(robot_name, str) or robot_name not in ROBOTS:
         raise CliError(f"robot: unknown robot '{robot_name}' (expected one of {list(ROBOTS)})")
     if "hits" in data:
         entries = data["hits"]
@@ -206,12 +246,30 @@ def read_hit_file(path: str) -> dict:
         s = data["state"]
         if not isinstance(s, dict) or "q" not in s:
             raise CliError("state.q: missing key (the start configuration)")
+        unknown = sorted(set(s) - {"q", "qd", "qdd"})
+        if unknown:
+            raise CliError(f"state.{unknown[0]}: unknown key (expected 'q', 'qd', 'qdd')")
         state = {k: _vector(s, k, "state", robot.dof) for k in ("q", "qd", "qdd") if k in s}
     ready = _vector(data, "ready", "file", robot.dof, required=False)
     profile = data.get("profile", "auto")
     if profile not in ("auto", "quintic", "jerk"):
         raise CliError(f"profile: expected 'auto', 'quintic' or 'jerk', got {profile!r}")
     return {"robot": robot, "hits": hits, "state": state, "ready": ready, "profile": profile}
+
+
+def _json_depth(text: str) -> int:
+    """Deepest nesting of ``[`` and ``{`` in JSON ``text`` (strings skipped), without recursing."""
+    import re
+
+    depth = deepest = 0
+    for m in re.finditer(r'"(?:[^"\\]|\\.)*"|[\[\]{}]', text):
+        c = m.group()
+        if c in "[{":
+            depth += 1
+            deepest = max(deepest, depth)
+        elif c in "]}":
+            depth -= 1
+    return deepest
 
 
 def _plans(spec: dict):
@@ -227,7 +285,7 @@ def _fail_unplanned(plans) -> int:
     i, p = bad[0]
     more = f" (and {len(bad) - 1} more)" if len(bad) > 1 else ""
     print(f"ttmanip: error: hits[{i}]: {p.status}: {p.message}{more}", file=sys.stderr)
-    return 1
+    return EXIT_NOT_DONE
 
 
 # -- subcommands -------------------------------------------------------------------------------
@@ -239,7 +297,7 @@ def _demo(args: argparse.Namespace) -> int:
     out = _out_dir(args.out)
     bar = Progress(8 if not args.no_workspace else 7)
     try:
-        summary = run(out, progress=bar, workspace=not args.no_workspace)
+        summary = run(out, progress=bar, workspace=not args.no_workspace, rerun=args.rerun)
     finally:
         bar.close()
     _print_summary(
@@ -260,6 +318,8 @@ def _demo(args: argparse.Namespace) -> int:
         f"{summary['mobile8'].get('racket_position_error_m', float('nan')):.2e} m"
     )
     print(f"wrote {out / 'summary.json'}")
+    if "rerun" in summary:
+        print(f"wrote {summary['rerun']} (open it with: rerun {summary['rerun']})")
     return 0
 
 
@@ -372,6 +432,17 @@ def _simulate(args: argparse.Namespace) -> int:
         raise CliError(f"--noise: expected a current-sense noise >= 0 A, got {args.noise}")
     results = []
     bar = Progress(4 * len(spec["hits"]))
+    rec = None
+    if args.rerun:
+        from .viz import Recording
+
+        rec = Recording(args.rerun, "ttmanip-simulate")
+    t0 = 0.0
+    # The rally's robot (the same model, whatever its name) stands at its rally place by the table.
+    from . import _ttmanip
+
+    rally_robot = spec["robot"].to_toml() == _ttmanip.Robot.builtin("gantry6").to_toml()
+    at_table = _ttmanip.ball_placement() if rally_robot else None
     try:
         for i, hit in enumerate(spec["hits"]):
             results.append(
@@ -385,10 +456,16 @@ def _simulate(args: argparse.Namespace) -> int:
                     noise=args.noise,
                     setpoint_rate=args.setpoint_rate,
                     progress=bar,
+                    recording=rec,
+                    t0=t0,
+                    world_from_base=at_table,
                 )
             )
+            t0 += (results[-1].get("stroke_duration") or 0.0) + 0.5  # the hits one after the other
     finally:
         bar.close()
+        if rec is not None:
+            print(f"wrote {rec.close()}")
     _write_json(out / "summary.json", {"robot": spec["robot"].name, "hits": results})
     for i, r in enumerate(results):
         err = r.get("racket_position_error_m", float("nan"))
@@ -402,7 +479,7 @@ def _simulate(args: argparse.Namespace) -> int:
     if bad:
         i, r = bad[0]
         print(f"ttmanip: error: hits[{i}]: {r['status']}: {r['message']}", file=sys.stderr)
-        return 1
+        return EXIT_NOT_DONE
     return 0
 
 
@@ -424,10 +501,16 @@ def _info(args: argparse.Namespace) -> int:
     print(robot)
     rows = []
     drives = _actuators(robot)
+    drive_peak, effective = robot.drive_effort_limits, robot.effective_effort_limits
+    sources = robot.effort_limit_sources
     columns = zip(robot.joint_names, robot.joint_types, robot.limits, strict=True)
     for j, (name, kind, (lo, hi)) in enumerate(columns):
         v, a, e = robot.velocity_limits[j], robot.acceleration_limits[j], robot.effort_limits[j]
-        print(f"  {name:10s} {kind:9s} [{lo: .4f}, {hi: .4f}]  v {v:g}  a {a:g}  effort {e:g}")
+        d, eff, src = drive_peak[j], effective[j], sources[j]
+        print(
+            f"  {name:10s} {kind:9s} [{lo: .4f}, {hi: .4f}]  v {v:g}  a {a:g}  effort {e:g}"
+            f"  drive peak {d:.4g}  -> {eff:.4g} ({src} governs)"
+        )
         if drives is not None:
             print(f"  {'':10s} drive: {drive_line(drives[j])}")
         rows.append(
@@ -439,6 +522,9 @@ def _info(args: argparse.Namespace) -> int:
                 "velocity": v,
                 "acceleration": a,
                 "effort": e,
+                "drive_effort": d,
+                "effective_effort": eff,
+                "effort_source": src,
                 "drive": None if drives is None else drives[j],
             }
         )
@@ -470,6 +556,13 @@ def _export(args: argparse.Namespace) -> int:
         except OSError as e:
             raise CliError(f"--out: cannot write '{path}': {e.strerror or e}") from e
         print(f"wrote {path}")
+    return 0
+
+
+def _telemetry(args: argparse.Namespace) -> int:
+    from .viz import record_telemetry
+
+    print(f"wrote {record_telemetry(args.file, args.rerun)}")
     return 0
 
 
@@ -506,6 +599,7 @@ def build_parser() -> argparse.ArgumentParser:
         "summary.json.\n\nexample:\n  ttmanip demo --out out/demo",
         _arg("--out", default="out/demo", help="output folder (default: out/demo)"),
         _arg("--no-workspace", action="store_true", help="skip the workspace figures"),
+        _arg("--rerun", metavar="FILE.rrd", help="also write a Rerun recording (needs ttmanip[viz])"),
     )
     _command(
         sub,
@@ -560,6 +654,7 @@ def build_parser() -> argparse.ArgumentParser:
         _arg("--noise", type=float, help="current-sense noise (A, DriveSim's default if unset)"),
         _arg("--setpoint-rate", type=float, default=1000.0, help="setpoint rate to the drives (Hz)"),
         _arg("--gif", action="store_true", help="also write a GIF of each stroke"),
+        _arg("--rerun", metavar="FILE.rrd", help="also write a Rerun recording (needs ttmanip[viz])"),
     )
 
     _command(
@@ -589,6 +684,19 @@ def build_parser() -> argparse.ArgumentParser:
     from . import ball_cli  # issue 28
 
     ball_cli.add_parser(sub)
+    from . import sweep_cli  # issue 31
+
+    sweep_cli.add_parser(sub)
+    _command(
+        sub,
+        "telemetry",
+        _telemetry,
+        "convert a ttctl telemetry CSV to a Rerun recording",
+        "Writes q, q_ref and current of every axis and the cycle latency of every channel as "
+        "time series (needs ttmanip[viz]).\n\nexample:\n  ttmanip telemetry tele.csv --rerun tele.rrd",
+        _arg("file", help="telemetry CSV written by ttctl --telemetry"),
+        _arg("--rerun", metavar="FILE.rrd", required=True, help="the recording to write"),
+    )
     return parser
 
 
@@ -596,15 +704,19 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``ttmanip`` command: user errors become one line on stderr."""
     from . import TtmanipError
 
-    args = build_parser().parse_args(argv)
+    try:
+        args = build_parser().parse_args(argv)
+    except SystemExit as e:
+        # argparse exits 2 on a usage error; here 2 means "not done": a usage error is bad input.
+        return EXIT_BAD_INPUT if e.code not in (0, None) else EXIT_SUCCESS
     try:
         return args.func(args)
     except (CliError, TtmanipError) as e:
         print(f"ttmanip: error: {e}", file=sys.stderr)
-        return 2
+        return EXIT_BAD_INPUT
     except OSError as e:
         print(f"ttmanip: error: {e.filename or ''}: {e.strerror or e}", file=sys.stderr)
-        return 2
+        return EXIT_BAD_INPUT
 
 
 if __name__ == "__main__":

@@ -6,30 +6,42 @@ follows it (CSP targets ``q``, torque offset 0x60B2 from ``tau``).
 
 ``python -m ttmanip.ctl OUT.csv`` writes the gantry6 hitting stroke of ``ttmanip.pipeline``'s
 default hit request (the one the VM test runs).
+
+:class:`Link` speaks the controller's datagram format (``ttcan::online::wire``, ``docs/online.md``)
+over UDP: hits and ball observations out, plan status and telemetry back.
 """
 
 from __future__ import annotations
 
+import itertools
+import socket
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from . import TtmanipError
+from . import _ttmanip as _t
 
-__all__ = ["write_trajectory", "write_stroke"]
+__all__ = ["Link", "write_trajectory", "write_stroke"]
 
 
 class TrajectoryFileError(TtmanipError, ValueError):
     """A trajectory handed to :func:`write_trajectory` is malformed."""
 
 
-def _matrix(name: str, a: ArrayLike, k: int, n: int | None) -> np.ndarray:
+def _real(name: str, a: ArrayLike) -> np.ndarray:
+    """``a`` as float64 by the bindings' one conversion (complex, bool, string data refused)."""
     try:
-        m = np.asarray(a, dtype=float)
+        return _t.real_array(a, name)
     except (TypeError, ValueError) as e:
-        raise TrajectoryFileError(f"{name}: not an array of numbers ({e})") from None
+        raise TrajectoryFileError(f"{name}: not an array of real numbers ({e})") from None
+
+
+def _matrix(name: str, a: ArrayLike, k: int, n: int | None) -> np.ndarray:
+    m = _real(name, a)
     if m.ndim == 1 and n in (None, 1) and m.shape[0] == k:
         m = m[:, None]
     if m.ndim != 2 or m.shape[0] != k or (n is not None and m.shape[1] != n):
@@ -51,10 +63,7 @@ def write_trajectory(
     """Writes a joint trajectory for ``ttctl``: times ``t`` (K,) s strictly increasing, positions
     ``q``, velocities ``qd``, accelerations ``qdd`` and torque feed-forward ``tau_ff`` (K, n) in
     SI (rad or m, N·m or N; ``tau_ff`` zero when omitted). Returns the path."""
-    try:
-        tt = np.asarray(t, dtype=float).reshape(-1)
-    except (TypeError, ValueError) as e:
-        raise TrajectoryFileError(f"t: not an array of numbers ({e})") from None
+    tt = _real("t", t).reshape(-1)
     k = tt.shape[0]
     if k < 2:
         raise TrajectoryFileError(f"t: {k} samples, a trajectory needs at least 2")
@@ -85,6 +94,57 @@ def write_stroke(path: str | Path, rate_hz: float = 1000.0) -> Path:
     plan = pipeline.plan_hit(robot, pipeline.DEMO_HIT, raise_on_failure=True)
     t, q, qd, qdd = plan.sample(rate_hz)
     return write_trajectory(path, t, q, qd, qdd)
+
+
+class Link:
+    """A UDP link to a controller at ``address`` (host, port): sends hits and ball observations in
+    the controller's datagram format (version ``_ttmanip.WIRE_VERSION``), numbered by one sequence
+    counter, and receives its status and telemetry datagrams as dicts. ::
+
+        link = ttmanip.ctl.Link(("192.168.1.20", 5005))
+        link.hit(ttmanip.DEMO_HIT, t_hit=12.5, id=1)
+        print(link.receive(timeout=0.5))     # {'kind': 'status', 'id': 1, 'status': 'Accepted', ...}
+    """
+
+    def __init__(self, address: tuple[str, int], bind: tuple[str, int] = ("", 0)):
+        self.address = address
+        self._sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self._sock.bind(bind)
+        self._seq = itertools.count(1)
+
+    def hit(self, hit, t_hit: float, id: int, stroke: int = 0) -> bytes:
+        """Sends ``hit`` (a :class:`ttmanip.Hit`: racket pose and twist) for the hit time ``t_hit``
+        (s, controller clock); a newer hit with the same ``stroke`` replaces an older one."""
+        data = _t.wire_hit(id, stroke, t_hit, hit.pose, hit.twist, next(self._seq), time.monotonic())
+        self._sock.sendto(data, self.address)
+        return data
+
+    def observation(self, id: int, camera_time: float, position: ArrayLike) -> bytes:
+        """Sends one camera observation of ball ``id``: its centre ``position`` (m, world frame)
+        at ``camera_time`` (s, camera clock)."""
+        data = _t.wire_observation(id, camera_time, position, next(self._seq), time.monotonic())
+        self._sock.sendto(data, self.address)
+        return data
+
+    def receive(self, timeout: float | None = None) -> dict | None:
+        """The next datagram from the controller, decoded (``None`` after ``timeout`` s); a
+        malformed one raises :class:`ttmanip.TtmanipError` saying why."""
+        self._sock.settimeout(timeout)
+        try:
+            data, _ = self._sock.recvfrom(_t.WIRE_MAX_LEN + 1)
+        except TimeoutError:
+            return None
+        return _t.wire_decode(data)
+
+    def close(self) -> None:
+        """Closes the socket."""
+        self._sock.close()
+
+    def __enter__(self) -> Link:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
 
 
 if __name__ == "__main__":  # pragma: no cover - exercised by scripts/vm/build.sh

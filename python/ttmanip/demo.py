@@ -27,6 +27,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from . import motor, plots, robots  # noqa: E402
+from . import _ttmanip as _t  # noqa: E402
 from ._ttmanip import Robot  # noqa: E402
 from .pipeline import DEMO_HIT, Hit, plan_hit, racket_states, simulate  # noqa: E402
 
@@ -99,9 +100,13 @@ def run_hit(
     noise=None,
     setpoint_rate: float = 1000.0,
     progress=None,
+    recording=None,
+    t0: float = 0.0,
+    world_from_base=None,
 ) -> dict:
     """Plans and simulates ``hit`` on ``robot``; writes figures and CSVs named ``prefix_*`` into
-    ``out``; returns the JSON-ready summary."""
+    ``out``; returns the JSON-ready summary. With ``recording`` (a ``ttmanip.viz.Recording``) the
+    simulated stroke is also logged there from ``t0`` (s) on its timeline."""
     step = progress or (lambda _msg: None)
     step("plan")
     plan = plan_hit(robot, hit, state)
@@ -133,6 +138,10 @@ def run_hit(
         out / f"{prefix}_sim.csv",
         {"t": ex["t"], "q": ex["q"], "qd": ex["qd"], "current": ex["current"], "torque": ex["torque"]},
     )
+    if recording is not None:
+        from . import viz
+
+        viz.record_hit(recording, robot, plan, sim, t0=t0, world_from_base=world_from_base)
     step("figures")
     figures = [
         *plots.hit_figures(
@@ -155,6 +164,7 @@ def run_hit(
         {
             "peak_torques": np.abs(tau).max(axis=0).tolist(),
             "effort_limits": np.asarray(robot.effort_limits).tolist(),
+            "effective_effort_limits": np.asarray(robot.effective_effort_limits).tolist(),
             "stroke_duration": plan.duration,
             "figures": [str(p) for p in figures],
         }
@@ -172,13 +182,26 @@ def mobile8_hit() -> Hit:
     return Hit.from_normal(c[0] + [0.02, -0.04, -0.07], n[0], [-0.29, 0.19, 0.25], 1.5)
 
 
-def run(out: Path, progress=None, workspace: bool = True) -> dict:
-    """Runs the demo, writes the figures, CSVs and ``summary.json`` into ``out``; returns the summary."""
+def run(out: Path, progress=None, workspace: bool = True, rerun: str | Path | None = None) -> dict:
+    """Runs the demo, writes the figures, CSVs and ``summary.json`` into ``out``; returns the summary.
+    ``rerun``: also a Rerun recording (.rrd) of both strokes (``ttmanip.viz``)."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     step = progress or (lambda _msg: None)
-    summary = run_hit(robots.gantry6(), DEMO_HIT, out, "gantry6", progress=step)
-    summary["mobile8"] = run_hit(robots.mobile8(), mobile8_hit(), out, "mobile8", gif=False, progress=step)
+    rec = None
+    if rerun is not None:
+        from . import viz
+
+        rec = viz.Recording(rerun, "ttmanip-demo")
+    # gantry6 stands where the rally places it (ttkin::ball::reach::Placement::default)
+    summary = run_hit(
+        robots.gantry6(), DEMO_HIT, out, "gantry6", progress=step, recording=rec, world_from_base=_t.ball_placement()
+    )
+    summary["mobile8"] = run_hit(
+        robots.mobile8(), mobile8_hit(), out, "mobile8", gif=False, progress=step, recording=rec
+    )
+    if rec is not None:
+        summary["rerun"] = str(rec.close())
     step("drive: θ5 case")
     summary.update(motor.theta5_ripple_case())  # issue 10's current-chatter case
     motor.theta5_figure(out / "drive_theta5.png")

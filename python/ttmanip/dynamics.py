@@ -52,7 +52,7 @@ def torque_figure(robot, t, profile: TorqueProfile, path) -> None:
             f"{profile.joint.shape[1]} joints for this {n}-joint robot, got {t.shape}"
         )
     fig, axes = plt.subplots(n, 2, figsize=(10, 1.8 * n), sharex=True, squeeze=False)
-    limits = robot.effort_limits
+    limits = robot.effective_effort_limits  # the robot file's or the drive's, whichever is smaller
     for i, name in enumerate(robot.joint_names):
         unit = "N" if robot.joint_types[i] == "prismatic" else "N·m"
         ax = axes[i, 0]

@@ -16,6 +16,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from .ball import Table  # noqa: E402
+
 __all__ = [
     "TABLE",
     "TABLE_PLACEMENT",
@@ -27,8 +29,10 @@ __all__ = [
     "robot_points",
 ]
 
-#: Table dimensions (m): length, width, surface height above the floor, net height.
-TABLE = {"length": 2.74, "width": 1.525, "height": 0.76, "net": 0.1525}
+#: Table dimensions (m): length, width, surface height above the floor, net height (the Rust
+#: core's table, ``ttmanip.ball.Table``).
+_T = Table()
+TABLE = {"length": _T.length, "width": _T.width, "height": _T.height, "net": _T.net_height}
 
 #: Where the table sits in the robot's base frame (m): the centre of its near end line and the
 #: height of its surface; the table extends along −y (towards the opponent).
@@ -65,7 +69,7 @@ def joint_figure(
     lower, upper = _limits(robot)
     vmax = _named(robot, "velocity_limits", n)
     amax = _named(robot, "acceleration_limits", n)
-    emax = _named(robot, "effort_limits", n)
+    emax = _named(robot, "effective_effort_limits", n)  # what the planners use (at rest)
     kinds = list(robot.joint_types)
     for j in range(n):
         u = "m" if kinds[j] == "prismatic" else "rad"
@@ -117,9 +121,9 @@ def _draw_table(ax) -> None:
     ys = [y0, y0, y0 - length, y0 - length, y0]
     ax.plot(xs, ys, [z] * 5, color="darkgreen", lw=1.5, label="table")
     ax.plot([x0, x0], [y0, y0 - length], [z, z], color="white", lw=0.8)
-    yn = y0 - length / 2
+    yn, o = y0 - length / 2, _T.net_overhang
     ax.plot(
-        [x0 - w / 2 - 0.15, x0 + w / 2 + 0.15, x0 + w / 2 + 0.15, x0 - w / 2 - 0.15, x0 - w / 2 - 0.15],
+        [x0 - w / 2 - o, x0 + w / 2 + o, x0 + w / 2 + o, x0 - w / 2 - o, x0 - w / 2 - o],
         [yn] * 5,
         [z, z, z + net, z + net, z],
         color="gray",

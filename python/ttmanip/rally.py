@@ -85,6 +85,10 @@ def rally(
     """
     if not isinstance(n, (int, np.integer)) or isinstance(n, bool) or n < 1:
         raise _t.TtmanipError(f"n: must be a positive integer, got {n!r}")
+    if n > _t.MAX_RALLY_BALLS:
+        # Checked before the first chunk: the chunks would otherwise step around the binding's
+        # limit (rally(10**12) ran for ever).
+        raise _t.TtmanipError(f"n: at most {_t.MAX_RALLY_BALLS} balls per rally, got {n}")
     if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
         raise _t.TtmanipError(f"seed: must be a non-negative integer, got {seed!r}")
     if not isinstance(chunk, (int, np.integer)) or isinstance(chunk, bool) or chunk < 1:
@@ -257,12 +261,14 @@ def _drive_check(res: dict, in_reach: np.ndarray, count: int) -> dict:
 
 
 def _table(ax) -> None:
-    ax.add_patch(
-        __import__("matplotlib.patches", fromlist=["Rectangle"]).Rectangle(
-            (-1.37, -0.7625), 2.74, 1.525, fill=False
-        )
-    )
-    ax.plot([0, 0], [-0.915, 0.915], "k-", lw=2)
+    from matplotlib.patches import Rectangle
+
+    from .ball import Table
+
+    t = Table()
+    ax.add_patch(Rectangle((-t.length / 2, -t.width / 2), t.length, t.width, fill=False))
+    net = t.width / 2 + t.net_overhang
+    ax.plot([0, 0], [-net, net], "k-", lw=2)
 
 
 def _figures(res: dict, in_reach: np.ndarray, returned: np.ndarray, target, out: Path) -> list[str]:

@@ -39,6 +39,11 @@ def add_parser(sub) -> argparse.ArgumentParser:
         default="ideal",
         help="strokes executed exactly (default) or through the coupled drive simulation",
     )
+    p.add_argument(
+        "--rerun",
+        metavar="FILE.rrd",
+        help="also a Rerun recording of the first 10 balls (needs ttmanip[viz])",
+    )
     p.set_defaults(func=run)
     return p
 
@@ -61,14 +66,14 @@ def run(args: argparse.Namespace) -> int:
             incoming = np.loadtxt(text.splitlines(), ndmin=2)
         except (OSError, ValueError) as e:
             print(f"ttmanip rally: --balls {args.balls}: {e}", file=sys.stderr)
-            return 2
+            return 1  # bad input (ttmanip.cli.EXIT_BAD_INPUT)
         if incoming.shape[1] != 10:
             print(
                 f"ttmanip rally: --balls {args.balls}: rows must have 10 numbers "
                 f"(t px py pz vx vy vz wx wy wz), got {incoming.shape[1]}",
                 file=sys.stderr,
             )
-            return 2
+            return 1  # bad input
         n = min(args.n, len(incoming)) if args.n is not None else len(incoming)
     try:
         summary = rally(
@@ -84,7 +89,11 @@ def run(args: argparse.Namespace) -> int:
         )
     except TtmanipError as e:
         print(f"ttmanip rally: {e}", file=sys.stderr)
-        return 2
+        return 1  # bad input (ttmanip.cli.EXIT_BAD_INPUT)
+    if args.rerun:
+        from .viz import record_rally
+
+        print(f"wrote {record_rally(args.rerun, summary)}", file=sys.stderr)
     summary.pop("results")
     print(json.dumps({k: v for k, v in summary.items() if k != "figures"}, indent=2))
     print(f"wrote {args.out}/summary.json")

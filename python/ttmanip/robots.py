@@ -10,7 +10,15 @@ import numpy as np
 
 from ._ttmanip import Robot
 
-__all__ = ["arm4", "gantry6", "mobile8", "mobile8_start", "ur5"]
+__all__ = ["NAMES", "arm4", "builtin", "gantry6", "mobile8", "mobile8_start", "ur5"]
+
+#: Names of the built-in robots (``ttkin::robots::NAMES``).
+NAMES: tuple[str, ...] = tuple(Robot.builtin_names())
+
+
+def builtin(name: str) -> Robot:
+    """The built-in robot called ``name`` (one of :data:`NAMES`)."""
+    return Robot.builtin(name)
 
 
 def mobile8() -> Robot:
@@ -19,8 +27,9 @@ def mobile8() -> Robot:
 
 
 def mobile8_start() -> np.ndarray:
-    """Seed 000's start configuration [0.26 m, 200°, 90°, 80°, 250°, 105°, 180°, 135°] in m and rad."""
-    return np.array([0.26, *np.deg2rad([200.0, 90.0, 80.0, 250.0, 105.0, 180.0, 135.0])])
+    """Seed 000's start configuration [0.26 m, 200°, 90°, 80°, 250°, 105°, 180°, 135°] in m and rad:
+    mobile8's ready configuration (``mobile8().ready``)."""
+    return mobile8().ready
 
 
 def gantry6() -> Robot:

@@ -9,7 +9,7 @@
 //! [`ISSUE_THETA5_ARMATURE`], so the case does not move when gantry6's drives change), no gravity
 //! (as in the demo).
 
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
 use ttkin::ik::{Analytic, LimitFilter};
 use ttkin::traj::limits::KinematicLimits;
 use ttkin::traj::{stroke::stroke, JointState, JointTrajectory};
@@ -33,22 +33,12 @@ fn ttkin_error(e: ttkin::Error) -> Error {
     Error::Model(e.to_string())
 }
 
-/// Racket rotation whose z axis is the face `normal` and whose x axis is nearest to `hint`.
-fn racket_rotation(normal: Vector3<f64>, hint: Vector3<f64>) -> Matrix3<f64> {
-    let z = normal.normalize();
-    let x = (hint - z * hint.dot(&z)).normalize();
-    Matrix3::from_columns(&[x, z.cross(&x), z])
-}
-
 /// Plans the demo stroke of gantry6 (the default hit request of `ttmanip.pipeline`).
 pub fn gantry6_demo_stroke(chain: &Chain) -> Result<DemoStroke> {
     let normal = Vector3::new(0.3, -1.0, -0.2);
-    let rot = racket_rotation(normal, Vector3::z());
-    let target = nalgebra::IsometryMatrix3::from_parts(
-        nalgebra::Translation3::new(0.35, -0.55, 0.05),
-        nalgebra::Rotation3::from_matrix_unchecked(rot),
-    );
-    let ready = [0.0, 0.0, 0.0, 0.6, 0.6, 0.0];
+    let rot = ttkin::hit::racket_axes(&normal.normalize(), &Vector3::z());
+    let target = nalgebra::IsometryMatrix3::from_parts(nalgebra::Translation3::new(0.35, -0.55, 0.05), rot);
+    let ready = chain.ready();
     let ik = Analytic::for_chain(chain).ok_or_else(|| Error::Model("gantry6 has no analytic IK".into()))?;
     let q_hit = ik.nearest(&target, &ready, LimitFilter::Enforce).map_err(ttkin_error)?;
     let v = normal.normalize() * 3.0;

@@ -96,3 +96,12 @@ pub fn in_range(what: &str, value: f64, lo: f64, hi: f64) -> Result<f64> {
         format!("must be in ({lo}, {hi}]")
     })
 }
+
+/// The reason of a `ttkin` argument error without its argument name (the caller names the
+/// parameter its own way, with its unit).
+pub(crate) fn ttkin_reason(e: ttkin::Error) -> String {
+    match e {
+        ttkin::Error::InvalidArgument { reason, .. } => reason,
+        other => other.to_string(),
+    }
+}

@@ -21,6 +21,7 @@
 //! inertia, as in maxon's own sizing rules).
 
 use crate::error::{in_range, non_negative, positive, Result};
+use crate::noise::Gaussian;
 use nalgebra::{SMatrix, SVector};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
@@ -245,7 +246,7 @@ pub struct Plant {
     encoder_offset: i64,
     current_offset: f64,
     bus_voltage: f64,
-    rng: SplitMix64,
+    rng: Gaussian,
 }
 
 impl Plant {
@@ -254,6 +255,19 @@ impl Plant {
         model.validate()?;
         positive("plant time step (s)", dt)?;
         let (phi, gamma) = discretise(model, dt);
+        if !(phi.iter().chain(gamma.iter()).all(|v| v.is_finite())) {
+            // Rates such as R/L·dt = 1e296 (an inductance of 1e-300 H) overflow the exact step:
+            // refused here rather than simulated as NaN currents.
+            return Err(crate::Error::InvalidParameter {
+                what: "motor inductance (H)".into(),
+                value: model.motor.inductance,
+                reason: format!(
+                    "the exact step of {dt} s overflows (R/L·dt = {:e}, K/J·dt = {:e}): parameters this                      far apart cannot be simulated",
+                    model.motor.resistance / model.motor.inductance * dt,
+                    model.motor.torque_constant / model.motor_side_inertia() * dt
+                ),
+            });
+        }
         Ok(Plant {
             model: *model,
             dt,
@@ -265,7 +279,7 @@ impl Plant {
             encoder_offset: 0,
             current_offset: 0.0,
             bus_voltage: model.bus_voltage,
-            rng: SplitMix64(0x5eed_0007),
+            rng: Gaussian::new(0x5eed_0007),
         })
     }
 
@@ -308,7 +322,7 @@ impl Plant {
 
     /// Seeds the current-sense noise generator.
     pub fn seed_noise(&mut self, seed: u64) {
-        self.rng = SplitMix64(seed);
+        self.rng = Gaussian::new(seed);
     }
 
     /// Fault injection: adds `counts` to every later encoder reading (a glitch, a lost index).
@@ -450,28 +464,4 @@ fn discretise(model: &MotorModel, dt: f64) -> (SMatrix<f64, 3, 3>, SMatrix<f64, 
         e.fixed_view::<3, 3>(0, 0).into_owned(),
         e.fixed_view::<3, 2>(0, 3).into_owned(),
     )
-}
-
-/// SplitMix64 with a Box–Muller transform: a tiny seeded normal generator for sensor noise.
-#[derive(Debug, Clone)]
-struct SplitMix64(u64);
-
-impl SplitMix64 {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in (0, 1].
-    fn uniform(&mut self) -> f64 {
-        ((self.next_u64() >> 11) as f64 + 1.0) / (1u64 << 53) as f64
-    }
-
-    fn normal(&mut self) -> f64 {
-        let r = (-2.0 * self.uniform().ln()).sqrt();
-        r * (2.0 * PI * self.uniform()).cos()
-    }
 }

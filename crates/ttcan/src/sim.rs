@@ -275,7 +275,19 @@ impl Simulation {
                 reason: "must be finite and >= 0".into(),
             });
         }
-        Ok((duration / self.plant.dt()).round() as usize)
+        // Bounded before anything is allocated or run: the trace keeps nine f64 signals and a
+        // state byte a period, within `ttkin::budget::MAX_BYTES` and `MAX_STEPS` (a 1e4 s step
+        // response at 20 kHz asked for 16 GB and aborted the process; so did a 1e12 Hz loop).
+        let periods = (duration / self.plant.dt()).round();
+        let limit = |reason: String| Error::InvalidParameter {
+            what: "duration (s)".into(),
+            value: duration,
+            reason,
+        };
+        ttkin::budget::check_bytes("duration", periods, 9 * 8 + 1).map_err(|e| limit(crate::error::ttkin_reason(e)))?;
+        ttkin::budget::check_steps("duration", duration, self.plant.dt())
+            .map_err(|e| limit(crate::error::ttkin_reason(e)))?;
+        Ok(periods as usize)
     }
 
     /// Appends the present signals to `t` (what [`Simulation::run`] records every period).

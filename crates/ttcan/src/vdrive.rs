@@ -28,7 +28,7 @@ use crate::canopen::cia402::{DriveState, OpMode, SW_FOLLOWS_COMMAND, SW_TARGET_R
 use crate::canopen::emcy;
 use crate::canopen::frame::{Frame, Frames};
 use crate::canopen::node::{DriveNode, NodeEvent};
-use crate::canopen::pdo::Tpdo;
+use crate::canopen::od;
 use crate::canopen::Units;
 use crate::error::Result;
 use crate::motor::MotorModel;
@@ -83,6 +83,11 @@ pub struct VirtualDrive {
     failure: Option<Failure>,
     cycles: u64,
     max_tracking_error: f64,
+    /// The node's state at the end of the last period (a change made over SDO in between, such
+    /// as a quick stop by controlword, is seen at the next SYNC).
+    last_state: DriveState,
+    /// A SYNC arrived since the last reset (the SYNC watchdog is armed only then).
+    sync_seen: bool,
 }
 
 impl VirtualDrive {
@@ -120,12 +125,17 @@ impl VirtualDrive {
             failure: None,
             cycles: 0,
             max_tracking_error: 0.0,
+            last_state: DriveState::SwitchOnDisabled,
+            sync_seen: false,
         })
     }
 
     /// Injects `failure` from now on.
     pub fn inject(&mut self, failure: Failure, _out: &mut Frames) {
         self.failure = Some(failure);
+        if failure == Failure::OutOfRange {
+            self.node.statusword_override = Some(0x0001);
+        }
         if failure == Failure::Emcy {
             // Through the drive layer: the sensed current is beyond the trip level.
             let trip = self.sim.axis.config().overcurrent_trip;
@@ -140,6 +150,11 @@ impl VirtualDrive {
     /// The protocol node (state, counters, dictionary).
     pub fn node(&self) -> &DriveNode {
         &self.node
+    }
+
+    /// The protocol node, mutable (tests and tools that change the dictionary directly).
+    pub fn node_mut(&mut self) -> &mut DriveNode {
+        &mut self.node
     }
 
     /// The drive layer's axis (state, brake, references).
@@ -171,11 +186,14 @@ impl VirtualDrive {
         match self.node.on_frame(f, out) {
             NodeEvent::Sync => {
                 self.ms_since_sync = 0;
+                self.sync_seen = true;
                 self.period_step(out);
             }
             NodeEvent::Reset => {
                 self.sim.axis.disable();
                 self.prev_target = None;
+                self.sync_seen = false;
+                self.last_state = self.node.cia402.state();
             }
             NodeEvent::None => {}
         }
@@ -189,7 +207,7 @@ impl VirtualDrive {
         }
         self.node.tick_ms(out);
         self.ms_since_sync = self.ms_since_sync.saturating_add(1);
-        if self.ms_since_sync > self.sync_timeout_ms && self.node.cia402.state().torque_on() {
+        if self.sync_seen && self.ms_since_sync > self.sync_timeout_ms && self.node.cia402.state().torque_on() {
             if self.node.cia402.state() == DriveState::OperationEnabled {
                 self.node.emcy(emcy::SYNC_TIMEOUT, out);
                 self.begin_stop();
@@ -225,8 +243,10 @@ impl VirtualDrive {
             .unwrap_or(if q > 0.0 { i32::MAX } else { i32::MIN });
         let current = self.units.current_to_permille(self.sim.plant.current()).unwrap_or(0);
         let max_step = (self.sim.axis.config().max_speed * self.period * 2.0 * self.units.increments_per_unit) as i64;
+        let speed = self.units.velocity_to_increments(self.sim.axis.speed()).unwrap_or(0);
+        self.node.od.set(od::VELOCITY_ACTUAL, 0, speed as i64);
         let mut local = Frames::new();
-        let before = self.node.cia402.state();
+        let before = self.last_state;
         let cmd = self.node.on_sync(position, current, extra, max_step, &mut local);
         for f in local.as_slice() {
             out.push(self.tamper(*f));
@@ -258,6 +278,7 @@ impl VirtualDrive {
             }
         }
         self.advance(out);
+        self.last_state = self.node.cia402.state();
     }
 
     fn apply(&mut self, mode: OpMode, target: i32, torque_offset: i16) {
@@ -363,18 +384,11 @@ impl VirtualDrive {
     }
 
     fn tamper(&self, f: Frame) -> Frame {
-        let is_tpdo = (0x181..=0x1FF).contains(&f.id());
+        let tpdo_id = self.node.od.get(od::TPDO1_COMM, 1).unwrap_or(0) & 0x7FF;
         match self.failure {
-            Some(Failure::Malformed) if is_tpdo => Frame::new(f.id(), &f.data()[..3]).unwrap_or(f),
-            Some(Failure::OutOfRange) if is_tpdo => match Tpdo::decode(&f) {
-                Ok((n, t)) => Tpdo {
-                    statusword: 0x0001,
-                    ..t
-                }
-                .encode(n)
-                .unwrap_or(f),
-                Err(_) => f,
-            },
+            Some(Failure::Malformed) if i64::from(f.id()) == tpdo_id => {
+                Frame::new(f.id(), &f.data()[..3.min(f.len())]).unwrap_or(f)
+            }
             _ => f,
         }
     }

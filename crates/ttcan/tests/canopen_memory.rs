@@ -573,3 +573,109 @@ fn controlled_stop_engages_the_holding_brake_before_bridge_off() {
         assert!((d.position() - p[k]).abs() < 1e-3, "drive {k} moved after the stop");
     }
 }
+
+/// The boot-up plans of both axes for `setup` (node set per axis) on `device`.
+fn plans(
+    device: &ttcan::canopen::eds::DeviceFile,
+    setup: &ttcan::runtime::boot::NodeSetup,
+) -> Vec<ttcan::runtime::boot::BootPlan> {
+    (1..=2)
+        .map(|n| {
+            let s = ttcan::runtime::boot::NodeSetup {
+                node: n,
+                ..setup.clone()
+            };
+            ttcan::runtime::boot::BootPlan::build(&s, device).unwrap()
+        })
+        .collect()
+}
+
+fn setup() -> ttcan::runtime::boot::NodeSetup {
+    ttcan::runtime::boot::NodeSetup {
+        node: 1,
+        mode: OpMode::Csp,
+        rpdo: None,
+        tpdo: None,
+        sdo: vec![],
+        heartbeat_ms: 100,
+        following_window: 5000,
+        cycle_s: 1e-3,
+    }
+}
+
+/// Issue 27: the controller remaps both PDOs of the drives over SDO (6-byte RPDO controlword +
+/// target, 6-byte TPDO statusword + position, no current) and runs the motion on them.
+#[test]
+fn remapped_pdos_boot_enable_and_track() {
+    let mut r = rig();
+    let s = ttcan::runtime::boot::NodeSetup {
+        rpdo: Some(vec![(0x6040, 0), (0x607A, 0)]),
+        tpdo: Some(vec![(0x6041, 0), (0x6064, 0)]),
+        sdo: vec![ttcan::runtime::boot::SdoInit {
+            index: 0x2000,
+            sub: 0,
+            value: ttcan::runtime::boot::SdoValue::Text("shoulder pitch, left arm".into()),
+        }],
+        ..setup()
+    };
+    let p = plans(&ttcan::runtime::boot::default_device(), &s);
+    r.master = ChannelMaster::with_plans(&channel::two_links(), &p, WatchdogConfig::default()).unwrap();
+    let c = r.enable();
+    assert!(c < 60, "enabled after {c} cycles");
+    for (_, d) in &r.drives {
+        assert_eq!(d.node().rpdo_mapping(), p[0].rpdo);
+        assert_eq!(d.node().tpdo_mapping().len(), 6);
+        assert_eq!(
+            d.node().od.text(0x2000, 0),
+            Some(&b"shoulder pitch, left arm"[..]),
+            "segmented download"
+        );
+        assert_eq!(d.node().od.get(0x60C2, 1), Some(1));
+    }
+    let worst = r.run(1000, None);
+    assert_eq!(r.master.stop_reason(), None);
+    assert!(worst < 0.02, "tracking error {worst} rad");
+    assert_eq!(r.master.counters().malformed, 0);
+}
+
+/// Issue 27: a device file whose identity is not the drive's is refused at boot-up, before NMT
+/// Start: the drives stay in Pre-operational, nothing moves.
+#[test]
+fn wrong_identity_is_refused_before_nmt_start() {
+    let mut r = rig();
+    let vendor = ttcan::canopen::eds::DeviceFile::load(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/vendor-402.eds"
+    )))
+    .unwrap();
+    r.master = ChannelMaster::with_plans(
+        &channel::two_links(),
+        &plans(&vendor, &setup()),
+        WatchdogConfig::default(),
+    )
+    .unwrap();
+    for _ in 0..50 {
+        r.step(0.0);
+    }
+    let reason = r.master.stop_reason().unwrap();
+    assert!(
+        matches!(
+            reason,
+            StopReason::Mismatch {
+                index: 0x1018,
+                sub: 1,
+                got: 0,
+                expected: 0x1234_5678,
+                ..
+            }
+        ),
+        "{reason:?}"
+    );
+    assert!(
+        reason.to_string().contains("0x1018:1 reads 0x0, expected 0x12345678"),
+        "{reason}"
+    );
+    for (_, d) in &r.drives {
+        assert_eq!(d.node().nmt_state(), ttcan::canopen::nmt::NmtState::PreOperational);
+    }
+}

@@ -9,10 +9,10 @@ use ttkin::ball::estimate::{estimate, EstimateOptions, Segment};
 use ttkin::ball::fit::{self, Bounce, FitOptions, Recording};
 use ttkin::ball::flight::{BallState, Flight, Plane};
 use ttkin::ball::hitplan::HitPlanner;
-use ttkin::ball::model::BallModel;
+use ttkin::ball::model::{BallModel, Table};
 use ttkin::ball::predict::{crossing, predict, CrossingOutcome};
 use ttkin::ball::rally::{self, RallyConfig};
-use ttkin::ball::reach::ReachRegion;
+use ttkin::ball::reach::{Placement, ReachRegion};
 
 use crate::args;
 use crate::convert::{filled_without_gil_nan_allowed, pose_to_numpy, rows_array, to_numpy, vector};
@@ -298,9 +298,9 @@ fn ball_rally<'py>(
     let seed: u64 = args::unsigned(seed, "seed")?;
     let start: u64 = args::unsigned(start, "start")?;
     let paths: usize = args::unsigned(paths, "paths")?;
-    if start.checked_add(n as u64).is_none() {
+    if start.checked_add(n as u64).is_none_or(|end| end > MAX_RALLY_BALLS) {
         return Err(TtmanipError::new_err(format!(
-            "start: {start} + n ({n}) overflows the ball index"
+            "n: balls {start}..{start} + {n} go past the {MAX_RALLY_BALLS} balls a rally may have"
         )));
     }
     let planner = HitPlanner::new(ttkin::robots::gantry6(), Flight::default()).py()?;
@@ -354,16 +354,18 @@ fn ball_rally<'py>(
     } else {
         None
     };
-    let out: Vec<rally::BallOutcome> = py.detach(|| {
+    // Ctrl-C stops the rally within one ball per thread (issue 29).
+    let out: Vec<rally::BallOutcome> = crate::interrupt::detach_interruptible(py, |cancel| {
         (start..start + n as u64)
             .into_par_iter()
-            .map(|i| {
+            .filter_map(|i| {
                 let s = given.as_ref().map(|g| &g[i as usize]);
                 let ex = executor.as_ref().map(|e| e as &dyn rally::Executor);
-                rally::play_with(&planner, &region, &truth, &cfg, i, s, ex)
+                (!crate::interrupt::cancelled(cancel))
+                    .then(|| rally::play_with(&planner, &region, &truth, &cfg, i, s, ex))
             })
             .collect()
-    });
+    })?;
     let d = PyDict::new(py);
     let col = |f: &dyn Fn(&rally::BallOutcome) -> f64| out.iter().map(f).collect::<Vec<f64>>();
     d.set_item(
@@ -407,7 +409,6 @@ fn ball_rally<'py>(
     Ok(d)
 }
 
-/// Adds the ball functions to the module.
 /// The ball after a racket impact (`ttkin::ball::impact::Racket::hit` with the default racket):
 /// `state` (10,) just before, the racket's unit face `normal` (3,) and the face point's
 /// `velocity` (3,, m/s, world); returns the state (10,) just after.
@@ -483,6 +484,39 @@ fn ball_update<'py>(
     Ok(d)
 }
 
+/// Most balls one rally may play (about a minute of work on two cores); `ttmanip.rally`
+/// checks its `n` against it before the first chunk.
+pub const MAX_RALLY_BALLS: u64 = 1_000_000;
+
+/// The ITTF table of `ttkin::ball::model::Table::default()` (m): length, width, height (surface
+/// above the floor), thickness, net_height, net_overhang.
+#[ttkin_py_guard::guarded]
+#[pyfunction]
+fn ball_table(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    let t = Table::default();
+    let d = PyDict::new(py);
+    for (k, v) in [
+        ("length", t.length),
+        ("width", t.width),
+        ("height", t.height),
+        ("thickness", t.thickness),
+        ("net_height", t.net_height),
+        ("net_overhang", t.net_overhang),
+    ] {
+        d.set_item(k, v)?;
+    }
+    Ok(d)
+}
+
+/// (4, 4) base frame of the rally's robot in the world (table) frame, m
+/// (`ttkin::ball::reach::Placement::default()`).
+#[ttkin_py_guard::guarded]
+#[pyfunction]
+fn ball_placement(py: Python<'_>) -> Bound<'_, PyAny> {
+    pose_to_numpy(py, &Placement::default().world_from_base()).into_any()
+}
+
+/// (N, 3) rows of `obj` (named `what` in errors) as triples.
 fn rows3(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<[f64; 3]>> {
     let a = rows_array(obj, what, "N", &[3])?;
     Ok(a.data().chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
@@ -603,11 +637,15 @@ fn ball_fit<'py>(
     Ok(d)
 }
 
+/// Adds the ball functions to the module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ball_fit, m)?)?;
     m.add_function(wrap_pyfunction!(ball_racket_hit, m)?)?;
     m.add_function(wrap_pyfunction!(ball_update, m)?)?;
     m.add_function(wrap_pyfunction!(ball_plan_correct, m)?)?;
+    m.add("MAX_RALLY_BALLS", MAX_RALLY_BALLS)?;
+    m.add_function(wrap_pyfunction!(ball_table, m)?)?;
+    m.add_function(wrap_pyfunction!(ball_placement, m)?)?;
     m.add_function(wrap_pyfunction!(ball_estimate, m)?)?;
     m.add_function(wrap_pyfunction!(ball_predict, m)?)?;
     m.add_function(wrap_pyfunction!(ball_predict_batch, m)?)?;

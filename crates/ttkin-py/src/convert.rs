@@ -453,3 +453,13 @@ macro_rules! value_getters {
     };
 }
 pub(crate) use value_getters;
+
+/// `obj` as a fresh float64 numpy array of its own shape, by the one conversion every binding
+/// uses ([`f64_array`]: complex, boolean, string and object data refused with `ShapeError` naming
+/// `what`); the Python layer's array arguments go through it too.
+#[ttkin_py_guard::guarded]
+#[pyfunction]
+pub fn real_array<'py>(py: Python<'py>, obj: &Bound<'py, PyAny>, what: &str) -> PyResult<Array<'py>> {
+    let a = f64_array(obj, what)?;
+    Ok(to_numpy(py, a.shape(), a.data()))
+}

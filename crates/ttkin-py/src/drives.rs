@@ -20,6 +20,74 @@ pub struct DriveSim {
     /// The cyclic setpoint period the drives interpolate, s (1 / `setpoint_rate`).
     setpoint_period: f64,
     sim: CoupledSim,
+    /// What made `sim` from a fresh `from_chain` (issue 31): the last reset and every call
+    /// since, replayed by unpickling (the simulation is deterministic, so the copy is exact).
+    journal: Journal,
+}
+
+/// The calls that changed a `DriveSim` since it was built or reset (its pickle state).
+#[derive(Clone, Default, serde::Serialize, serde::Deserialize)]
+struct Journal {
+    /// `reset(q0, qd0)`'s arguments; None: still at the constructor's rest at q = 0.
+    reset: Option<(Vec<f64>, Option<Vec<f64>>)>,
+    /// The calls since, in order.
+    calls: Vec<Call>,
+}
+
+/// One call that advanced or commanded the simulation.
+#[derive(Clone, serde::Serialize, serde::Deserialize)]
+enum Call {
+    /// `set_setpoint(q, qd, qdd, tau_ff)`.
+    Setpoint(Vec<f64>, Vec<f64>, Vec<f64>, Option<Vec<f64>>),
+    /// `tick(n)`; consecutive ticks merge.
+    Tick(u64),
+    /// `run(t, q, qd, qdd, tau_ff)` with the setpoint period.
+    Run(Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Option<Vec<f64>>),
+}
+
+impl DriveSim {
+    /// A fresh simulation of `chain` at rest at q0.
+    fn build(
+        chain: &ttkin::Chain,
+        options: CoupledOptions,
+        reset: Option<&(Vec<f64>, Option<Vec<f64>>)>,
+    ) -> PyResult<CoupledSim> {
+        match reset {
+            None => CoupledSim::from_chain(chain, &vec![0.0; chain.dof()], options).py(),
+            Some((q0, qd0)) => {
+                let mut sim = CoupledSim::from_chain(chain, q0, options).py()?;
+                sim.reset(q0, qd0.as_deref()).py()?;
+                Ok(sim)
+            }
+        }
+    }
+
+    /// The simulator back from `__reduce__`'s state: rebuilt, then the journal replayed.
+    pub fn from_state(state: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let (chain, options, setpoint_period, journal): (ttkin::Chain, CoupledOptions, f64, Journal) =
+            crate::pickle::from_state(state, "DriveSim")?;
+        let mut sim = Self::build(&chain, options, journal.reset.as_ref())?;
+        for call in &journal.calls {
+            match call {
+                // a call that failed was journaled too (it may have changed the state before
+                // failing): its replay fails alike, at the same point
+                Call::Setpoint(q, qd, qdd, tau) => {
+                    let _ = sim.set_setpoint(q, qd, qdd, tau.as_deref());
+                }
+                Call::Tick(n) => sim.tick_n(*n),
+                Call::Run(t, q, qd, qdd, tau) => {
+                    let _ = sim.run(t, q, qd, qdd, tau.as_deref(), setpoint_period);
+                }
+            }
+        }
+        Ok(DriveSim {
+            chain: std::sync::Arc::new(chain),
+            options,
+            setpoint_period,
+            sim,
+            journal,
+        })
+    }
 }
 
 #[ttkin_py_guard::guarded]
@@ -56,6 +124,7 @@ impl DriveSim {
             options,
             setpoint_period,
             sim,
+            journal: Journal::default(),
         })
     }
 
@@ -65,9 +134,12 @@ impl DriveSim {
         let n = self.sim.dof();
         let q0 = vector(q0, "q0", n)?;
         let qd0 = qd0.map(|v| vector(v, "qd0", n)).transpose()?;
-        let mut sim = CoupledSim::from_chain(&self.chain, &q0, self.options).py()?;
-        sim.reset(&q0, qd0.as_deref()).py()?;
-        self.sim = sim;
+        let start = (q0, qd0);
+        self.sim = Self::build(&self.chain, self.options, Some(&start))?;
+        self.journal = Journal {
+            reset: Some(start),
+            calls: Vec::new(),
+        };
         Ok(())
     }
 
@@ -92,7 +164,9 @@ impl DriveSim {
             .transpose()?
             .unwrap_or_else(|| zeros.clone());
         let tau = tau_ff.map(|v| vector(v, "tau_ff", n)).transpose()?;
-        self.sim.set_setpoint(&q, &qd, &qdd, tau.as_deref()).py()
+        let result = self.sim.set_setpoint(&q, &qd, &qdd, tau.as_deref());
+        self.journal.calls.push(Call::Setpoint(q, qd, qdd, tau)); // failed or not (see from_state)
+        result.py()
     }
 
     /// Advances `n` current-loop periods.
@@ -107,6 +181,10 @@ impl DriveSim {
         }
         let sim = &mut self.sim;
         py.detach(|| sim.tick_n(n));
+        match self.journal.calls.last_mut() {
+            Some(Call::Tick(m)) => *m += n,
+            _ => self.journal.calls.push(Call::Tick(n)),
+        }
         Ok(())
     }
 
@@ -164,9 +242,9 @@ impl DriveSim {
         let times = t.data().to_vec();
         let period = self.setpoint_period;
         let sim = &mut self.sim;
-        let tr = py
-            .detach(|| sim.run(&times, &q, &qd, &qdd, tau.as_deref(), period))
-            .py()?;
+        let tr = py.detach(|| sim.run(&times, &q, &qd, &qdd, tau.as_deref(), period));
+        self.journal.calls.push(Call::Run(times, q, qd, qdd, tau)); // failed or not (see from_state)
+        let tr = tr.py()?;
         let rows = tr.len();
         let d = PyDict::new(py);
         d.set_item("t", to_numpy(py, &[rows], &tr.t))?;
@@ -178,6 +256,12 @@ impl DriveSim {
         d.set_item("torque", to_numpy(py, &[rows, n], &tr.torque))?;
         d.set_item("faults", tr.faults)?;
         Ok(d)
+    }
+
+    /// Pickle and copy: the robot's chain, the options and the journal of calls (issue 31).
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyTuple>> {
+        let state = (&*self.chain, &self.options, self.setpoint_period, &self.journal);
+        crate::pickle::reduce(py, "_unpickle_drive_sim", crate::pickle::to_state(py, &state)?)
     }
 
     fn __repr__(&self) -> String {
@@ -203,8 +287,16 @@ fn step_metrics(t: &Bound<'_, PyAny>, y: &Bound<'_, PyAny>, target: f64) -> PyRe
     ttcan::sim::step_metrics(t.data(), &y, target).py()
 }
 
+/// Rebuilds a `DriveSim` from its pickle state (`DriveSim.__reduce__`; not meant to be called directly).
+#[ttkin_py_guard::guarded]
+#[pyfunction]
+fn _unpickle_drive_sim(state: &Bound<'_, PyAny>) -> PyResult<DriveSim> {
+    DriveSim::from_state(state)
+}
+
 /// Adds `DriveSim`, `drive_theta5_case`, `actuators` and `step_metrics` to the module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(_unpickle_drive_sim, m)?)?;
     m.add_class::<DriveSim>()?;
     m.add_function(wrap_pyfunction!(actuators, m)?)?;
     m.add_function(wrap_pyfunction!(step_metrics, m)?)?;

@@ -10,7 +10,9 @@ use ttkin::hit::{self, Hit, HitOptions, HitPlan, HitPlanner, HitTask, StrokeProf
 use ttkin::traj::JointState;
 use ttkin::Dynamics;
 
-use crate::convert::{array_getters, f64_array, pose_to_numpy, to_numpy, transform, value_getters, vector};
+use crate::convert::{
+    array_getters, f64_array, filled_without_gil, pose_to_numpy, to_numpy, transform, value_getters, vector,
+};
 use crate::errors::{PyResultExt, ShapeError, TtmanipError};
 use crate::robot::PyRobot;
 use crate::traj::{samples_to_py, violations_to_py, PyJointTrajectory};
@@ -47,7 +49,8 @@ value_getters!(PyHitPlan, |h| {
     return_duration: f64 => h.plan.return_duration;
     /// Total stroke duration (s); NaN when no stroke.
     duration: f64 => h.plan.trajectory.as_ref().map_or(f64::NAN, |t| t.duration());
-    /// Largest |τ|/effort limit over joints and check points.
+    /// Largest |τ(t)|/effective effort limit over joints and every instant of the stroke
+    /// (certified to the planner's effort tolerance, 1e-4).
     effort_ratio: f64 => h.plan.effort_ratio;
     /// The stroke as a `JointTrajectory` (None when no stroke was planned).
     trajectory: Option<PyJointTrajectory> => h.plan.trajectory.clone().map(|inner| PyJointTrajectory { inner });
@@ -64,7 +67,7 @@ array_getters!(PyHitPlan, |h| {
     start => h.plan.start.q, [h.plan.start.q.len()];
     /// (n,) ready (rest) configuration the stroke returns to (m, rad).
     ready => h.plan.ready, [h.plan.ready.len()];
-    /// (n,) largest |joint torque| (N·m or N, friction included) at the effort check points.
+    /// (n,) largest |joint torque| (N·m or N, friction included) over the stroke.
     peak_effort => h.plan.peak_effort, [h.plan.peak_effort.len()];
 });
 
@@ -123,6 +126,17 @@ impl PyHitPlan {
     #[getter]
     fn tau<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         self.torques(py, 1000.0)
+    }
+
+    /// Name of the robot this plan was made for.
+    #[getter]
+    fn robot_name(&self) -> &str {
+        self.planner.chain().name()
+    }
+
+    /// Whether this plan was made for `robot` (the same chain: joints, geometry, limits, masses).
+    fn made_for(&self, robot: &PyRobot) -> bool {
+        *self.planner.chain() == *robot.chain
     }
 
     fn __repr__(&self) -> String {
@@ -338,6 +352,44 @@ fn racket_frame<'py>(
     Ok(to_numpy(py, &[3, 3], &rows).into_any())
 }
 
+/// Checks hit parameters as the planner will: pose (4, 4) rigid, twist (6,) finite, t (s) finite,
+/// > 0 and at most `ttkin::traj::duration::MAX_DURATION`; the one check of `ttmanip.Hit`.
+#[ttkin_py_guard::guarded]
+#[pyfunction]
+fn hit_check(pose: &Bound<'_, PyAny>, twist: &Bound<'_, PyAny>, t: f64) -> PyResult<()> {
+    let pose = transform(pose, "hit.pose")?;
+    let tw = vector(twist, "hit.twist", 6)?;
+    Hit::new(pose, [tw[0], tw[1], tw[2], tw[3], tw[4], tw[5]], t)
+        .map_err(|e| TtmanipError::new_err(format!("hit.{e}")))?;
+    Ok(())
+}
+
+/// (N, 22) racket states of joint states `q`, `qd` (N, n): per row the racket pose (base frame,
+/// m; row-major 4×4) then the racket-centre twist [v (m/s); ω (rad/s)] (base axes).
+#[ttkin_py_guard::guarded]
+#[pyfunction]
+fn racket_states<'py>(
+    py: Python<'py>,
+    robot: &PyRobot,
+    q: &Bound<'py, PyAny>,
+    qd: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let (qa, batch) = robot.configs(q, "q")?;
+    let (qda, batch_d) = robot.configs(qd, "qd")?;
+    let count = batch.unwrap_or(1);
+    if batch_d.unwrap_or(1) != count {
+        return Err(ShapeError::new_err(format!(
+            "qd: expected as many rows as q ({count}), got {}",
+            qda.shape_str()
+        )));
+    }
+    let (qs, qds, chain) = (qa.data(), qda.data(), &*robot.chain);
+    Ok(filled_without_gil(py, &[count, hit::RACKET_STATE_LEN], |o| {
+        hit::racket_state_batch(chain, qs, qds, o)
+    })?
+    .into_any())
+}
+
 /// (4, 4) racket frame in the tool frame for `robot` (m): where its racket is mounted.
 #[ttkin_py_guard::guarded]
 #[pyfunction]
@@ -346,11 +398,41 @@ fn racket_mount<'py>(py: Python<'py>, robot: &PyRobot) -> Bound<'py, PyAny> {
 }
 
 /// Adds `HitPlan` and the hit functions to the module.
+/// Pickle and copy: the planner's chain and options and the plan, in their serde forms (issue 31);
+/// the planner is rebuilt from the first two (`HitPlanner::new` is deterministic).
+#[ttkin_py_guard::guarded]
+#[pymethods]
+impl PyHitPlan {
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyTuple>> {
+        let state = (self.planner.chain(), self.planner.options(), &self.plan);
+        crate::pickle::reduce(py, "_unpickle_hit_plan", crate::pickle::to_state(py, &state)?)
+    }
+}
+
+impl PyHitPlan {
+    /// The plan back from `__reduce__`'s state.
+    pub fn from_state(state: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let (chain, options, plan): (ttkin::Chain, HitOptions, HitPlan) = crate::pickle::from_state(state, "HitPlan")?;
+        let planner = Arc::new(HitPlanner::new(&chain, options).py()?);
+        Ok(PyHitPlan { plan, planner })
+    }
+}
+
+/// Rebuilds a `HitPlan` from its pickle state (`HitPlan.__reduce__`; not meant to be called directly).
+#[ttkin_py_guard::guarded]
+#[pyfunction]
+fn _unpickle_hit_plan(state: &Bound<'_, PyAny>) -> PyResult<PyHitPlan> {
+    PyHitPlan::from_state(state)
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(_unpickle_hit_plan, m)?)?;
     m.add_class::<PyHitPlan>()?;
     m.add_function(wrap_pyfunction!(hit_plan, m)?)?;
     m.add_function(wrap_pyfunction!(hit_plan_batch, m)?)?;
     m.add_function(wrap_pyfunction!(racket_frame, m)?)?;
     m.add_function(wrap_pyfunction!(racket_mount, m)?)?;
+    m.add_function(wrap_pyfunction!(racket_states, m)?)?;
+    m.add_function(wrap_pyfunction!(hit_check, m)?)?;
     Ok(())
 }

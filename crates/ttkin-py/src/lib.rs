@@ -13,14 +13,19 @@ mod hit;
 mod ik;
 mod mobile;
 mod motor;
+mod online;
 mod profile;
 mod robot;
 mod traj;
 // issue 14: argument validation and the boundary panic guard
 mod args;
 mod guard;
+// issue 29: long calls that Ctrl-C stops
+mod interrupt;
 // issue 13
 mod ball;
+// issue 31: pickle and copy
+mod pickle;
 
 /// The native extension module `ttmanip._ttmanip`.
 #[pymodule]
@@ -37,5 +42,7 @@ fn _ttmanip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     hit::register(m)?;
     drives::register(m)?;
     ball::register(m)?;
+    online::register(m)?;
+    m.add_function(wrap_pyfunction!(convert::real_array, m)?)?;
     Ok(())
 }

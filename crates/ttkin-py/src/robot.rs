@@ -148,10 +148,16 @@ impl PyRobot {
         ))
     }
 
-    /// A built-in robot: "mobile8", "gantry6", "arm4" or "ur5".
+    /// A built-in robot: one of `Robot.builtin_names()` ("mobile8", "gantry6", "arm4", "ur5").
     #[staticmethod]
     fn builtin(name: &str) -> PyResult<Self> {
         Ok(PyRobot::new(ttkin::robots::by_name(name).py()?))
+    }
+
+    /// Names of the built-in robots, in the order of `ttkin::robots::NAMES`.
+    #[staticmethod]
+    fn builtin_names() -> Vec<&'static str> {
+        ttkin::robots::NAMES.to_vec()
     }
 
     /// URDF text of this robot (links base_link, link0 … linkN, tool; link i is DH frame i).
@@ -174,6 +180,17 @@ impl PyRobot {
         Ok(PyRobot::new(self.chain.with_base(transform(base, "base")?).py()?))
     }
 
+    /// The same robot carrying its racket at `mount` (racket frame in the tool frame, 4×4, m).
+    fn with_racket(&self, mount: &Any<'_>) -> PyResult<Self> {
+        Ok(PyRobot::new(self.chain.with_racket(transform(mount, "mount")?).py()?))
+    }
+
+    /// The same robot with the ready (rest) configuration `q` (n,) in m or rad, within the limits.
+    fn with_ready(&self, q: &Any<'_>) -> PyResult<Self> {
+        let q = vector(q, "q", self.chain.dof())?;
+        Ok(PyRobot::new(self.chain.with_ready(&q).py()?))
+    }
+
     /// Deprecated name of `dof`.
     #[getter]
     fn n(&self, py: Python<'_>) -> PyResult<usize> {
@@ -186,6 +203,13 @@ impl PyRobot {
     fn limits<'py>(&self, py: Python<'py>) -> Array<'py> {
         let flat: Vec<f64> = self.chain.limits().iter().flat_map(|l| [l.lower, l.upper]).collect();
         to_numpy(py, &[self.chain.dof(), 2], &flat)
+    }
+
+    /// (n,) ready (rest) configuration (m or rad): where strokes start and return to; the
+    /// robot's own (robot file `ready`) or the middle of each joint range.
+    #[getter]
+    fn ready<'py>(&self, py: Python<'py>) -> Array<'py> {
+        to_numpy(py, &[self.chain.dof()], &self.chain.ready())
     }
 
     /// Base frame → frame 0 (4×4).
@@ -211,6 +235,18 @@ impl PyRobot {
                 filled_without_gil(py, &[count, 4, 4], |o| chain.fk_batch(qs, o))
             }
         }
+    }
+
+    /// Effective effort limits (N or N·m) at joint speeds `qd` (m/s or rad/s): (n,) for qd of
+    /// shape (n,), (N, n) for (N, n); the drive's bus voltage lowers them with speed.
+    fn effort_limits_at<'py>(&self, py: Python<'py>, qd: &Any<'py>) -> PyResult<Array<'py>> {
+        let (a, batch) = self.configs(qd, "qd")?;
+        let n = self.chain.dof();
+        let limits = ttkin::effort::EffortLimits::of(&self.chain).at_rows(a.data());
+        Ok(match batch {
+            None => to_numpy(py, &[n], &limits),
+            Some(count) => to_numpy(py, &[count, n], &limits),
+        })
     }
 
     /// Every link frame in the base frame (tool transform not applied): (n, 4, 4) or (N, n, 4, 4).
@@ -267,6 +303,12 @@ array_getters!(PyRobot, |r| {
     acceleration_limits => r.chain.limit_column(|l| l.acceleration), [r.chain.dof()];
     /// (n,) effort limits (N or N·m; inf where none).
     effort_limits => r.chain.limit_column(|l| l.effort), [r.chain.dof()];
+    /// (n,) what each joint's drive delivers at peak current, G·k_t·I_peak·η (N or N·m; inf where
+    /// the drive data lacks it).
+    drive_effort_limits => ttkin::effort::EffortLimits::of(&r.chain).drive_peaks(), [r.chain.dof()];
+    /// (n,) effective effort limits at standstill: the smaller of `effort_limits` and
+    /// `drive_effort_limits` (N or N·m; inf where neither); the limit the planners use.
+    effective_effort_limits => ttkin::effort::EffortLimits::of(&r.chain).at_rest(), [r.chain.dof()];
 });
 
 value_getters!(PyRobot, |r| {
@@ -276,12 +318,39 @@ value_getters!(PyRobot, |r| {
     name: String => r.chain.name().to_string();
     /// Joint names, base to tool.
     joint_names: Vec<String> => r.chain.joints().iter().map(|j| j.name().to_string()).collect();
+    /// Which limit governs each joint's effective effort limit at standstill: "robot file",
+    /// "drive peak current", "drive voltage" or "none".
+    effort_limit_sources: Vec<&'static str> => ttkin::effort::EffortLimits::of(&r.chain).sources_at_rest();
     /// Joint types, "revolute" or "prismatic".
     joint_types: Vec<&'static str> => r.chain.joints().iter().map(|j| j.kind().name()).collect();
 });
 
 /// Adds `Robot` to the module.
+/// Pickle and copy: the chain in its serde form (issue 31).
+#[ttkin_py_guard::guarded]
+#[pymethods]
+impl PyRobot {
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyTuple>> {
+        crate::pickle::reduce(py, "_unpickle_robot", crate::pickle::to_state(py, &*self.chain)?)
+    }
+}
+
+impl PyRobot {
+    /// The robot back from `__reduce__`'s state.
+    pub fn from_state(state: &Any<'_>) -> PyResult<Self> {
+        Ok(PyRobot::new(crate::pickle::from_state(state, "Robot")?))
+    }
+}
+
+/// Rebuilds a `Robot` from its pickle state (`Robot.__reduce__`; not meant to be called directly).
+#[ttkin_py_guard::guarded]
+#[pyfunction]
+fn _unpickle_robot(state: &Bound<'_, PyAny>) -> PyResult<PyRobot> {
+    PyRobot::from_state(state)
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(_unpickle_robot, m)?)?;
     m.add_class::<PyRobot>()?;
     let _ = shape_str;
     Ok(())

@@ -26,7 +26,7 @@ pub enum JacobianFrame {
 const BATCH_CHUNK: usize = 256;
 
 /// A serial chain of revolute and prismatic joints between a base frame and a tool frame.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Chain {
     name: String,
     joints: Vec<Joint>,
@@ -35,6 +35,10 @@ pub struct Chain {
     /// fixed[0] = base·pre_0, fixed[i] = post_{i−1}·pre_i, fixed[n] = post_{n−1}·tool.
     fixed: Vec<IsometryMatrix3<f64>>,
     kinds: Vec<JointType>,
+    /// Racket frame in the tool frame (m); identity unless the robot mounts its racket elsewhere.
+    racket: IsometryMatrix3<f64>,
+    /// Ready (rest) configuration (m, rad), within the limits; `None`: [`Chain::mid_range`].
+    ready: Option<Vec<f64>>,
 }
 
 impl Chain {
@@ -82,17 +86,91 @@ impl Chain {
             tool,
             fixed,
             kinds,
+            racket: IsometryMatrix3::identity(),
+            ready: None,
         })
+    }
+
+    /// The same robot with other joints, base or tool: its racket mount and ready configuration
+    /// are kept (the ready configuration is checked against the new joints' limits).
+    pub fn with_joints(
+        &self,
+        joints: Vec<Joint>,
+        base: IsometryMatrix3<f64>,
+        tool: IsometryMatrix3<f64>,
+    ) -> Result<Self> {
+        let c = Chain::new(self.name.clone(), joints, base, tool)?.with_racket(self.racket)?;
+        match &self.ready {
+            Some(r) => c.with_ready(r),
+            None => Ok(c),
+        }
     }
 
     /// The same chain with another tool transform (last link frame → tool frame).
     pub fn with_tool(&self, tool: IsometryMatrix3<f64>) -> Result<Self> {
-        Chain::new(self.name.clone(), self.joints.clone(), self.base, tool)
+        self.with_joints(self.joints.clone(), self.base, tool)
     }
 
     /// The same chain with another base transform (base frame → chain frame 0).
     pub fn with_base(&self, base: IsometryMatrix3<f64>) -> Result<Self> {
-        Chain::new(self.name.clone(), self.joints.clone(), base, self.tool)
+        self.with_joints(self.joints.clone(), base, self.tool)
+    }
+
+    /// The same chain carrying its racket at `racket`: the racket frame (origin at the centre,
+    /// z = face normal, x = handle; `crate::hit::racket`) in the tool frame, m.
+    pub fn with_racket(&self, racket: IsometryMatrix3<f64>) -> Result<Self> {
+        let v = racket.translation.vector;
+        crate::error::check_finite(&format!("racket mount of chain '{}'", self.name), &[v.x, v.y, v.z])?;
+        crate::error::check_finite(
+            &format!("racket mount of chain '{}'", self.name),
+            racket.rotation.matrix().as_slice(),
+        )?;
+        Ok(Chain { racket, ..self.clone() })
+    }
+
+    /// The same chain with the ready (rest) configuration `q` (m, rad): where a stroke starts and
+    /// returns to. Refused unless it has one finite value per joint within the joint limits.
+    pub fn with_ready(&self, q: &[f64]) -> Result<Self> {
+        check_vector("ready", q, self.dof())?;
+        for (i, (v, l)) in q.iter().zip(self.limits()).enumerate() {
+            if *v < l.lower || *v > l.upper {
+                return Err(Error::Model(format!(
+                    "chain '{}': ready[{i}] = {v} is outside joint '{}''s limits [{}, {}]",
+                    self.name,
+                    self.joints[i].name(),
+                    l.lower,
+                    l.upper
+                )));
+            }
+        }
+        Ok(Chain {
+            ready: Some(q.to_vec()),
+            ..self.clone()
+        })
+    }
+
+    /// Racket frame in the tool frame (m): where this robot carries its racket.
+    pub fn racket(&self) -> &IsometryMatrix3<f64> {
+        &self.racket
+    }
+
+    /// The ready (rest) configuration (m, rad): the robot's own if it has one, else
+    /// [`Chain::mid_range`] clamped into the limits.
+    pub fn ready(&self) -> Vec<f64> {
+        match &self.ready {
+            Some(q) => q.clone(),
+            None => self
+                .mid_range()
+                .iter()
+                .zip(self.limits())
+                .map(|(v, l)| v.clamp(l.lower, l.upper))
+                .collect(),
+        }
+    }
+
+    /// True when the robot gives its own ready configuration (not the mid range).
+    pub fn has_ready(&self) -> bool {
+        self.ready.is_some()
     }
 
     /// An upper bound (m) on the distance from the base-frame origin of joint 1's frame

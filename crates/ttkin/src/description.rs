@@ -6,6 +6,8 @@
 //! convention = "standard"              # DH convention of the rows: "standard" or "modified"
 //! units = { length = "mm", angle = "deg" }   # of DH rows, origins and position/speed limits
 //! tool = { xyz = [0, 0, 50], rpy = [0, 0, 0] }
+//! racket = { xyz = [0, 0, 150], rpy = [0, -90, 180] }   # racket frame in the tool frame (default: the tool frame)
+//! ready = [0]                           # rest configuration, one value per joint (default: mid range)
 //!
 //! [[joint]]
 //! name = "shoulder"
@@ -46,6 +48,10 @@ struct RobotFile {
     base: Option<PoseEntry>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     tool: Option<PoseEntry>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    racket: Option<PoseEntry>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    ready: Option<Vec<f64>>,
     joint: Vec<JointEntry>,
 }
 
@@ -148,10 +154,7 @@ impl Units {
 /// Reads a robot file from disk.
 pub fn load(path: impl AsRef<Path>) -> Result<Chain> {
     let path = path.as_ref();
-    let text = std::fs::read_to_string(path).map_err(|e| Error::File {
-        path: path.display().to_string(),
-        reason: e.to_string(),
-    })?;
+    let text = crate::budget::read_text(path)?;
     from_toml_str(&text, &path.display().to_string())
 }
 
@@ -161,6 +164,13 @@ pub fn from_toml_str(text: &str, origin: &str) -> Result<Chain> {
         path: origin.to_string(),
         reason,
     };
+    if text.len() as u64 > crate::budget::MAX_FILE_BYTES {
+        return Err(file_err(format!(
+            "{} bytes, more than the {} bytes (16 MiB) a robot file may be",
+            text.len(),
+            crate::budget::MAX_FILE_BYTES
+        )));
+    }
     let f: RobotFile = toml::from_str(text).map_err(|e| file_err(e.to_string()))?;
     let u = &f.units;
     let mut joints = Vec::with_capacity(f.joint.len());
@@ -231,7 +241,29 @@ pub fn from_toml_str(text: &str, origin: &str) -> Result<Chain> {
     let id = IsometryMatrix3::identity();
     let base = f.base.as_ref().map_or(id, |p| u.pose(p));
     let tool = f.tool.as_ref().map_or(id, |p| u.pose(p));
-    Chain::new(f.name, joints, base, tool)
+    let mut chain = Chain::new(f.name, joints, base, tool)?;
+    if let Some(r) = &f.racket {
+        chain = chain.with_racket(u.pose(r))?;
+    }
+    if let Some(q) = &f.ready {
+        if q.len() != chain.dof() {
+            return Err(file_err(format!(
+                "ready: expected {} values (one per joint), got {}",
+                chain.dof(),
+                q.len()
+            )));
+        }
+        let si: Vec<f64> = q
+            .iter()
+            .zip(chain.joints())
+            .map(|(v, j)| match j.kind() {
+                JointType::Revolute => v * u.ang(),
+                JointType::Prismatic => v * u.len(),
+            })
+            .collect();
+        chain = chain.with_ready(&si).map_err(|e| file_err(format!("ready: {e}")))?;
+    }
+    Ok(chain)
 }
 
 fn pose_entry(t: &IsometryMatrix3<f64>) -> Option<PoseEntry> {
@@ -289,6 +321,8 @@ pub fn to_toml(chain: &Chain) -> String {
         units: Units::default(),
         base: pose_entry(chain.base()),
         tool: pose_entry(chain.tool()),
+        racket: pose_entry(chain.racket()),
+        ready: chain.has_ready().then(|| chain.ready()),
         joint,
     };
     toml::to_string(&f).expect("a robot file of finite values always serialises")

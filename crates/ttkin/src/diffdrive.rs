@@ -36,7 +36,7 @@ pub fn arc_step(pose: [f64; 3], v: f64, omega: f64, dt: f64) -> [f64; 3] {
 }
 
 /// A differential-drive base: two driven wheels on one axle, with optional wheel limits.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct DiffDrive {
     wheel_radius: f64,
     track: f64,

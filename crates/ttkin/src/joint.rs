@@ -48,7 +48,7 @@ pub struct Dh {
 }
 
 /// Where the joint sits relative to the previous link frame.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Geometry {
     /// A DH row in the given convention.
     Dh(DhConvention, Dh),
@@ -334,7 +334,7 @@ impl Drive {
 }
 
 /// One joint and the link it moves.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Joint {
     name: String,
     kind: JointType,
@@ -464,6 +464,10 @@ fn split(g: &Geometry, name: &str) -> Result<(IsometryMatrix3<f64>, IsometryMatr
         Geometry::Origin { origin, axis } => {
             let o = origin.translation.vector;
             crate::error::check_finite(&format!("origin of joint '{name}'"), &[o.x, o.y, o.z])?;
+            crate::error::check_finite(
+                &format!("origin rotation of joint '{name}'"),
+                origin.rotation.matrix().as_slice(),
+            )?;
             let a = axis.into_inner();
             if !(a.iter().all(|v| v.is_finite()) && (a.norm() - 1.0).abs() < 1e-9) {
                 return Err(Error::Model(format!(

@@ -9,12 +9,14 @@
 // `!(x > 0.0)` is how this crate rejects NaN together with the out-of-range values: keep it.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod budget;
 pub mod chain;
 pub mod clik;
 pub mod description;
 pub mod dh;
 pub mod diffdrive;
 pub mod dynamics;
+pub mod effort;
 pub mod error;
 pub mod hit;
 pub mod ik;

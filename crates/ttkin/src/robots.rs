@@ -115,6 +115,8 @@ pub fn mobile8() -> Chain {
         IsometryMatrix3::identity(),
     )
     .and_then(mobile8_dynamics)
+    .and_then(|c| c.with_racket(crate::hit::Racket::seed000().in_tool))
+    .and_then(|c| c.with_ready(&mobile8_start()))
     .expect("built-in mobile8 is valid")
 }
 
@@ -173,7 +175,12 @@ pub fn gantry6_with(l: GantryLengths) -> Result<Chain> {
         IsometryMatrix3::identity(),
     )
     .and_then(gantry6_dynamics)
+    .and_then(|c| c.with_ready(&GANTRY6_READY))
 }
+
+/// gantry6's ready pose (m, rad): carriages centred, θ4 = θ5 = 0.6 rad, the racket face up in
+/// front of the robot.
+pub const GANTRY6_READY: [f64; 6] = [0.0, 0.0, 0.0, 0.6, 0.6, 0.0];
 
 /// Lengths of the 4-DOF arm of seed 001 (m). The seed prints no values; these are documented
 /// choices of a small desktop arm.
@@ -270,10 +277,13 @@ pub fn by_name(name: &str) -> Result<Chain> {
         "ur5" => Ok(ur5()),
         other => Err(crate::error::Error::invalid(
             "robot",
-            format!("unknown built-in robot '{other}'; choose mobile8, gantry6, arm4 or ur5"),
+            format!("unknown built-in robot '{other}'; choose one of {}", NAMES.join(", ")),
         )),
     }
 }
+
+/// Names of the built-in robots ([`by_name`]).
+pub const NAMES: [&str; 4] = ["mobile8", "gantry6", "arm4", "ur5"];
 
 // ---------------------------------------------------------------------------------------------
 // Inertial and drive estimates of the built-in robots.
@@ -373,7 +383,7 @@ fn with_dynamics(chain: Chain, links: Vec<Inertial>, drives: Vec<Drive>) -> Resu
         .zip(drives)
         .map(|((j, l), d)| j.clone().with_inertial(l)?.with_drive(d))
         .collect::<Result<Vec<_>>>()?;
-    Chain::new(chain.name(), joints, *chain.base(), *chain.tool())
+    chain.with_joints(joints, *chain.base(), *chain.tool())
 }
 
 /// A drive from (gear ratio, rotor inertia kg·m², viscous, Coulomb, torque constant N·m/A).

@@ -127,7 +127,7 @@ impl Chain {
             .zip(items)
             .map(|(j, x)| f(j.clone(), x))
             .collect::<Result<Vec<_>>>()?;
-        Chain::new(self.name(), joints, *self.base(), *self.tool())
+        self.with_joints(joints, *self.base(), *self.tool())
     }
 }
 

@@ -14,6 +14,7 @@ use std::collections::HashMap;
 
 use nalgebra::{IsometryMatrix3, Unit, Vector3};
 
+use crate::budget::{MAX_URDF_JOINTS, MAX_XML_DEPTH};
 use crate::chain::Chain;
 use crate::error::{Error, Result};
 use crate::inertial::Inertial;
@@ -27,11 +28,7 @@ pub const TOOL_LINK: &str = "tool";
 
 /// Reads the serial chain from `base_link` to `tip_link` of a URDF file.
 pub fn load(path: impl AsRef<std::path::Path>, base_link: &str, tip_link: &str) -> Result<Chain> {
-    let path = path.as_ref();
-    let text = std::fs::read_to_string(path).map_err(|e| Error::File {
-        path: path.display().to_string(),
-        reason: e.to_string(),
-    })?;
+    let text = crate::budget::read_text(path.as_ref())?;
     from_urdf_str(&text, base_link, tip_link)
 }
 
@@ -39,14 +36,83 @@ fn pose(p: &urdf_rs::Pose) -> IsometryMatrix3<f64> {
     from_xyz_rpy(p.xyz.0, p.rpy.0)
 }
 
-fn link_inertial(link: &urdf_rs::Link) -> Option<Inertial> {
+/// The link's inertia in its frame; None for a massless link (URDF's default: mass 0). A
+/// negative or non-finite mass or a non-physical inertia is refused, as the robot-file reader
+/// refuses it.
+fn link_inertial(link: &urdf_rs::Link) -> Result<Option<Inertial>> {
     let i = &link.inertial;
-    if i.mass.value <= 0.0 {
-        return None;
-    }
     let t = &i.inertia;
+    let values = [i.mass.value, t.ixx, t.iyy, t.izz, t.ixy, t.ixz, t.iyz];
+    if i.mass.value == 0.0 && values.iter().all(|v| v.is_finite()) {
+        // A massless link (URDF's default, and common for frames such as `world` or `tool`).
+        return Ok(None);
+    }
     let local = Inertial::new(i.mass.value, [0.0; 3], [t.ixx, t.iyy, t.izz, t.ixy, t.ixz, t.iyz]);
-    Some(local.transformed(&pose(&i.origin)))
+    local.validate(&link.name).map_err(|e| Error::Urdf(e.to_string()))?;
+    let origin = pose(&i.origin);
+    check_pose(&format!("inertial origin of link '{}'", link.name), &origin)?;
+    Ok(Some(local.transformed(&origin)))
+}
+
+/// Checks that a pose read from the URDF is finite (xyz and rpy).
+fn check_pose(what: &str, t: &IsometryMatrix3<f64>) -> Result<()> {
+    let v = t.translation.vector;
+    crate::error::check_finite(what, &[v.x, v.y, v.z]).map_err(|e| Error::Urdf(e.to_string()))?;
+    crate::error::check_finite(what, t.rotation.matrix().as_slice()).map_err(|e| Error::Urdf(e.to_string()))
+}
+
+/// Checks the XML's element nesting before it is parsed: at most [`MAX_XML_DEPTH`] levels (the
+/// parser recurses once a level, and a document nested thousands deep would overflow the stack).
+/// Comments, CDATA, declarations and quoted attribute values are skipped.
+fn check_xml_depth(text: &str) -> Result<()> {
+    let b = text.as_bytes();
+    let skip_to = |from: usize, end: &[u8]| -> usize {
+        b[from..]
+            .windows(end.len())
+            .position(|w| w == end)
+            .map_or(b.len(), |k| from + k + end.len())
+    };
+    let (mut i, mut depth) = (0usize, 0usize);
+    while i < b.len() {
+        if b[i] != b'<' {
+            i += 1;
+            continue;
+        }
+        let rest = &b[i..];
+        if rest.starts_with(b"<!--") {
+            i = skip_to(i + 4, b"-->");
+        } else if rest.starts_with(b"<![CDATA[") {
+            i = skip_to(i + 9, b"]]>");
+        } else if rest.starts_with(b"<?") {
+            i = skip_to(i + 2, b"?>");
+        } else if rest.starts_with(b"<!") || rest.starts_with(b"</") {
+            depth = depth.saturating_sub(usize::from(rest.starts_with(b"</")));
+            i = skip_to(i + 2, b">");
+        } else {
+            // An opening tag: to its '>' outside quotes; "/>" closes it at once.
+            let mut j = i + 1;
+            let mut quote = None;
+            while j < b.len() {
+                match (quote, b[j]) {
+                    (None, q @ (b'"' | b'\'')) => quote = Some(q),
+                    (Some(q), c) if c == q => quote = None,
+                    (None, b'>') => break,
+                    _ => {}
+                }
+                j += 1;
+            }
+            if !(j > 0 && j < b.len() && b[j - 1] == b'/') {
+                depth += 1;
+                if depth > MAX_XML_DEPTH {
+                    return Err(Error::Urdf(format!(
+                        "elements nested more than {MAX_XML_DEPTH} deep (a URDF is 4 deep): not a robot description"
+                    )));
+                }
+            }
+            i = j + 1;
+        }
+    }
+    Ok(())
 }
 
 fn add_body(acc: &mut Option<Inertial>, body: Option<Inertial>) {
@@ -66,7 +132,14 @@ fn parent_joints<'a>(
     links: &HashMap<&str, &urdf_rs::Link>,
 ) -> Result<HashMap<&'a str, &'a urdf_rs::Joint>> {
     let mut by_child: HashMap<&str, &urdf_rs::Joint> = HashMap::new();
+    let mut names = std::collections::HashSet::new();
     for j in &robot.joints {
+        if !names.insert(j.name.as_str()) {
+            return Err(Error::Urdf(format!(
+                "two joints are named '{}': joint names must be unique",
+                j.name
+            )));
+        }
         for end in [&j.parent.link, &j.child.link] {
             if !links.contains_key(end.as_str()) {
                 return Err(Error::Urdf(format!(
@@ -82,22 +155,31 @@ fn parent_joints<'a>(
             )));
         }
     }
-    // With one parent per link, walking up from any link either ends at a root or, within as many
-    // steps as there are joints, repeats a link: a loop.
-    for start in by_child.keys() {
-        let mut link = *start;
-        let mut seen = vec![link];
+    // With one parent per link, walking up from any link either ends at a root or repeats a link:
+    // a loop. Each link is walked once (linear time): a walk stops at a link an earlier walk
+    // already proved to lead to a root.
+    let mut rooted: std::collections::HashSet<&str> = std::collections::HashSet::new();
+    let mut starts: Vec<&str> = by_child.keys().copied().collect();
+    starts.sort_unstable();
+    for start in starts {
+        let mut link = start;
+        let mut walk = vec![link];
+        let mut on_walk: std::collections::HashSet<&str> = std::collections::HashSet::from([link]);
         while let Some(j) = by_child.get(link) {
+            if rooted.contains(link) {
+                break;
+            }
             link = j.parent.link.as_str();
-            if seen.contains(&link) {
-                seen.push(link);
+            walk.push(link);
+            if !on_walk.insert(link) {
+                let first = walk.iter().position(|&l| l == link).unwrap_or(0);
                 return Err(Error::Urdf(format!(
                     "joints form a loop ({}): a URDF's links must form a tree",
-                    seen.iter().rev().copied().collect::<Vec<_>>().join(" → ")
+                    walk[first..].iter().rev().copied().collect::<Vec<_>>().join(" → ")
                 )));
             }
-            seen.push(link);
         }
+        rooted.extend(walk);
     }
     Ok(by_child)
 }
@@ -108,8 +190,30 @@ fn parent_joints<'a>(
 /// transform after the last one); the inertias of links fixed to a moving link are lumped into it.
 /// Links that hang off the path are ignored. Continuous joints become unbounded revolute joints.
 pub fn from_urdf_str(text: &str, base_link: &str, tip_link: &str) -> Result<Chain> {
+    if text.len() as u64 > crate::budget::MAX_FILE_BYTES {
+        return Err(Error::Urdf(format!(
+            "{} bytes, more than the {} bytes (16 MiB) a URDF may be",
+            text.len(),
+            crate::budget::MAX_FILE_BYTES
+        )));
+    }
+    check_xml_depth(text)?;
+    let joints_declared = text.matches("<joint").count();
+    if joints_declared > MAX_URDF_JOINTS {
+        return Err(Error::Urdf(format!(
+            "{joints_declared} joints, more than the {MAX_URDF_JOINTS} a URDF may declare"
+        )));
+    }
     let robot = urdf_rs::read_from_string(text).map_err(|e| Error::Urdf(format!("cannot parse: {e}")))?;
-    let links: HashMap<&str, &urdf_rs::Link> = robot.links.iter().map(|l| (l.name.as_str(), l)).collect();
+    let mut links: HashMap<&str, &urdf_rs::Link> = HashMap::new();
+    for l in &robot.links {
+        if links.insert(l.name.as_str(), l).is_some() {
+            return Err(Error::Urdf(format!(
+                "two links are named '{}': link names must be unique",
+                l.name
+            )));
+        }
+    }
     for name in [base_link, tip_link] {
         if !links.contains_key(name) {
             let mut known: Vec<&str> = links.keys().copied().collect();
@@ -143,17 +247,16 @@ pub fn from_urdf_str(text: &str, base_link: &str, tip_link: &str) -> Result<Chai
     let mut body: Option<Inertial> = None;
     for uj in path {
         let origin = pose(&uj.origin);
+        check_pose(&format!("origin of joint '{}'", uj.name), &origin)?;
         let kind = match uj.joint_type {
             urdf_rs::JointType::Fixed => {
                 pending *= origin;
                 if !joints.is_empty() {
-                    add_body(
-                        &mut body,
-                        links
-                            .get(uj.child.link.as_str())
-                            .and_then(|l| link_inertial(l))
-                            .map(|i| i.transformed(&pending)),
-                    );
+                    let child = match links.get(uj.child.link.as_str()) {
+                        Some(l) => link_inertial(l)?,
+                        None => None,
+                    };
+                    add_body(&mut body, child.map(|i| i.transformed(&pending)));
                 }
                 continue;
             }
@@ -191,10 +294,41 @@ pub fn from_urdf_str(text: &str, base_link: &str, tip_link: &str) -> Result<Chai
         )
         .map_err(|e| Error::Urdf(e.to_string()))?;
         let l = &uj.limit;
-        let bounded = uj.joint_type != urdf_rs::JointType::Continuous
-            && l.lower.is_finite()
-            && l.upper.is_finite()
-            && l.lower < l.upper;
+        // URDF's <limit> defaults every value to 0; lower = upper = 0 (or a continuous joint)
+        // means no position limits, and a rate of 0 means none given. What the robot-file reader
+        // refuses is refused here too: lower > upper, a negative or non-finite value.
+        let bad = |what: &str, v: f64| {
+            Error::Urdf(format!(
+                "joint '{}': limit {what} = {v}: must be finite{}",
+                uj.name,
+                if what == "lower" || what == "upper" {
+                    ""
+                } else {
+                    " and ≥ 0"
+                }
+            ))
+        };
+        for (what, v) in [("lower", l.lower), ("upper", l.upper)] {
+            if !v.is_finite() {
+                return Err(bad(what, v));
+            }
+        }
+        for (what, v) in [("velocity", l.velocity), ("effort", l.effort)] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(bad(what, v));
+            }
+        }
+        // urdf-rs reads a missing acceleration as +inf (none).
+        if !(l.acceleration >= 0.0) {
+            return Err(bad("acceleration", l.acceleration));
+        }
+        if uj.joint_type != urdf_rs::JointType::Continuous && l.lower > l.upper {
+            return Err(Error::Urdf(format!(
+                "joint '{}': limit lower = {} is above upper = {}",
+                uj.name, l.lower, l.upper
+            )));
+        }
+        let bounded = uj.joint_type != urdf_rs::JointType::Continuous && l.lower < l.upper;
         let positive = |v: f64| (v.is_finite() && v > 0.0).then_some(v);
         j = j
             .with_limits(Limits {
@@ -218,7 +352,10 @@ pub fn from_urdf_str(text: &str, base_link: &str, tip_link: &str) -> Result<Chai
         }
         joints.push(j);
         pending = IsometryMatrix3::identity();
-        body = links.get(uj.child.link.as_str()).and_then(|l| link_inertial(l));
+        body = match links.get(uj.child.link.as_str()) {
+            Some(l) => link_inertial(l)?,
+            None => None,
+        };
     }
     if joints.is_empty() {
         return Err(Error::Urdf(format!(

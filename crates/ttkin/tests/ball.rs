@@ -505,8 +505,9 @@ fn rally_returns_most_balls_in_reach() {
     // fallback targets and off-centre contacts 83 %, with them 91 % of this sample.
     assert!(in_reach >= 95, "{in_reach}");
     assert!(returned as f64 >= RALLY_RATE * in_reach as f64, "{returned}/{in_reach}");
-    // Some of the returns were executed through a jerk-limited hit leg.
-    assert!(out.iter().any(|o| o.returned && o.profile == "jerk"));
+    // With the measured ball model (issue 28) and the drive-limited effort no stroke of this
+    // sample needs a jerk-limited hit leg (before, some returns did); the jerk-limited planning and
+    // execution of a ball beyond the quintic is tested in the next test.
 }
 
 #[test]
@@ -686,4 +687,34 @@ fn an_exact_executor_plays_as_the_ideal_execution() {
         }
     }
     assert!(same >= 15, "{same} of 16 alike");
+}
+
+// Issue 29: a flight's work is bounded before it starts, and its clock must advance.
+
+#[test]
+fn flights_far_from_t0_or_too_long_are_refused_not_run() {
+    let f = Flight::default();
+    // At t = 1e17 s, t + 2 ms == t: the flight loop never ended.
+    let far = BallState::new(1e17, [0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0; 3]);
+    let e = predict(&f, &far, &[1e17 + 1e3]).unwrap_err().to_string();
+    assert!(e.contains("nearer origin"), "{e}");
+    // A ball at z = 1e9 m for 1e7 s: 5e9 steps.
+    let high = BallState::new(0.0, [0.0, 0.0, 1e9], [0.0; 3], [0.0; 3]);
+    assert!(predict(&f, &high, &[1.0]).is_err());
+    let high = BallState::new(0.0, [0.0, 0.0, 1e3], [0.0; 3], [0.0; 3]);
+    let e = predict(&f, &high, &[1e7]).unwrap_err().to_string();
+    assert!(e.contains("steps"), "{e}");
+    let plane = Plane {
+        point: Vector3::zeros(),
+        normal: Vector3::x(),
+    };
+    assert!(crossing(&f, &far, &plane, 1e17 + 1.0).is_err());
+    // 1e200 m/s gave NaN positions without an event.
+    let fast = BallState::new(0.0, [0.0, 0.0, 1.0], [1e200, 0.0, 0.0], [0.0; 3]);
+    let e = predict(&f, &fast, &[0.1]).unwrap_err().to_string();
+    assert!(e.contains("velocity"), "{e}");
+    // Unix-epoch times still fly.
+    let unix = BallState::new(1.7e9, [-1.0, 0.0, 1.0], [5.0, 0.0, 0.0], [0.0; 3]);
+    let p = predict(&f, &unix, &[1.7e9 + 0.1]).unwrap();
+    assert!(p.positions[0].iter().all(|v| v.is_finite()));
 }

@@ -62,3 +62,54 @@ fn robot_file_errors_name_the_problem() {
         Err(Error::File { .. })
     ));
 }
+
+#[test]
+fn robot_facts_are_data_that_robot_files_carry() {
+    // The racket mount and the ready configuration belong to the robot, not to a name match.
+    let m8 = ttkin::robots::mobile8();
+    assert_eq!(*m8.racket(), ttkin::hit::Racket::seed000().in_tool);
+    assert_eq!(m8.ready(), ttkin::robots::mobile8_start().to_vec());
+    assert_eq!(ttkin::robots::gantry6().ready(), ttkin::robots::GANTRY6_READY.to_vec());
+    for chain in robots() {
+        let back = description::from_toml_str(&description::to_toml(&chain), "test").unwrap();
+        assert!(pose_diff(back.racket(), chain.racket()) < 1e-15, "{}", chain.name());
+        assert_eq!(back.ready(), chain.ready(), "{}", chain.name());
+        assert_eq!(back.has_ready(), chain.has_ready(), "{}", chain.name());
+        // A renamed copy keeps them: nothing is looked up by name.
+        let renamed = description::from_toml_str(
+            &description::to_toml(&chain).replacen(&format!("name = \"{}\"", chain.name()), "name = \"copy\"", 1),
+            "test",
+        )
+        .unwrap();
+        assert!(pose_diff(renamed.racket(), chain.racket()) < 1e-15);
+        assert_eq!(renamed.ready(), chain.ready());
+        let planner = ttkin::hit::HitPlanner::new(&renamed, Default::default()).unwrap();
+        assert_eq!(planner.default_ready(), &chain.ready()[..]);
+        assert!(pose_diff(&planner.racket().in_tool, chain.racket()) < 1e-15);
+    }
+    // Units as typed; a ready pose outside the limits or of the wrong length is refused.
+    let text = r#"
+        name = "one"
+        units = { angle = "deg" }
+        racket = { xyz = [0, 0, 0.1], rpy = [0, 90, 0] }
+        ready = [30]
+        [[joint]]
+        name = "j"
+        type = "revolute"
+        dh = { a = 0.3 }
+        convention = "standard"
+        limits = { lower = -90, upper = 90 }
+    "#;
+    let c = description::from_toml_str(text, "one").unwrap();
+    assert!((c.ready()[0] - 30f64.to_radians()).abs() < 1e-15);
+    assert!((c.racket().translation.vector.z - 0.1).abs() < 1e-15);
+    let e = description::from_toml_str(&text.replace("ready = [30]", "ready = [120]"), "one").unwrap_err();
+    assert!(
+        e.to_string().contains("ready") && e.to_string().contains("limits"),
+        "{e}"
+    );
+    let e = description::from_toml_str(&text.replace("ready = [30]", "ready = [1, 2]"), "one").unwrap_err();
+    assert!(e.to_string().contains("ready"), "{e}");
+    let e = description::from_toml_str(&text.replace("ready = [30]", "ready = [nan]"), "one").unwrap_err();
+    assert!(e.to_string().contains("ready"), "{e}");
+}

@@ -3,14 +3,16 @@
 //! per channel that boots, configures and enables the CiA 402 drives and then follows a joint
 //! trajectory file (written by `ttmanip.ctl.write_trajectory`) or the built-in demo motion.
 //! SIGINT/SIGTERM bring every axis to a controlled stop. Prints and saves latency statistics,
-//! writes telemetry CSV. Exit status: 0 motion completed, 2 stopped by a fault, 1 bad input.
+//! writes telemetry CSV. Exit status (`ttcan::runtime::exit`): 0 motion completed, 1 bad input
+//! (usage errors included), 2 stopped by a fault.
 
-use clap::Parser;
 use std::io::Write;
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 use ttcan::bus::socketcan::SocketCanBus;
+use ttcan::bus::stdio::StdioBus;
+use ttcan::bus::CanBus;
 use ttcan::runtime::channel::{run_channel, ChannelPlan, ChannelReport, Shared};
 use ttcan::runtime::config::ControllerConfig;
 use ttcan::runtime::master::{ChannelMaster, StopReason, MAX_AXES_PER_CHANNEL};
@@ -19,7 +21,7 @@ use ttcan::runtime::stats::CycleStats;
 use ttcan::runtime::trajectory::Trajectory;
 
 /// Embedded controller: CiA 402 drives over SocketCAN, one real-time thread per channel.
-#[derive(Parser, Debug)]
+#[derive(clap::Parser, Debug)]
 #[command(name = "ttctl", version)]
 struct Args {
     /// Controller configuration (TOML: cycle_hz, bitrate, mode, approach_s, priority, a watchdog
@@ -52,11 +54,20 @@ struct Args {
 
 fn fail(msg: impl std::fmt::Display) -> ! {
     eprintln!("ttctl: {msg}");
-    std::process::exit(1)
+    std::process::exit(ttcan::runtime::exit::BAD_INPUT)
 }
 
 fn main() {
-    let args = Args::parse();
+    let args: Args = ttcan::runtime::exit::parse_args();
+    if !(args.amplitude.is_finite() && args.amplitude.abs() <= 1e3) {
+        fail(format!(
+            "--amplitude {}: must be finite, |a| ≤ 1000 joint units",
+            args.amplitude
+        ));
+    }
+    if !(args.max_seconds.is_finite() && args.max_seconds > 0.0) {
+        fail(format!("--max-seconds {}: must be finite and > 0", args.max_seconds));
+    }
     let cfg = match &args.config {
         Some(p) => {
             let text = std::fs::read_to_string(p).unwrap_or_else(|e| fail(format!("{}: {e}", p.display())));
@@ -64,8 +75,15 @@ fn main() {
         }
         None => ControllerConfig::default_layout(),
     };
-    let loads = cfg.check("configuration").unwrap_or_else(|e| fail(e));
-    for (ch, l) in cfg.channel.iter().zip(&loads) {
+    let source = args
+        .config
+        .as_ref()
+        .map_or_else(|| "configuration".to_string(), |p| p.display().to_string());
+    let loads = cfg.check(&source).unwrap_or_else(|e| fail(e));
+    let plans: Vec<_> = (0..cfg.channel.len())
+        .map(|c| cfg.channel_plans(c, &source).unwrap_or_else(|e| fail(e)))
+        .collect();
+    for ((ch, l), plans) in cfg.channel.iter().zip(&loads).zip(&plans) {
         println!(
             "ttctl: channel {} {} axes, bus load {:.1}–{:.1} % (limit {:.0} %)",
             ch.interface,
@@ -74,6 +92,25 @@ fn main() {
             l.worst * 100.0,
             ttcan::canopen::budget::MAX_BUS_LOAD * 100.0
         );
+        for (a, p) in ch.axis.iter().zip(plans) {
+            let list = |m: &ttcan::canopen::pdo::PdoMapping| {
+                m.entries().iter().map(|e| e.to_string()).collect::<Vec<_>>().join(" ")
+            };
+            println!(
+                "ttctl: {} node {}: {}, {:?}, RPDO1 [{}] {} B, TPDO1 [{}] {} B, {} SDO steps at boot-up",
+                ch.interface,
+                a.node,
+                a.device_file
+                    .as_ref()
+                    .map_or_else(|| "ttdrive-sim.eds".to_string(), |f| f.display().to_string()),
+                p.mode,
+                list(&p.rpdo),
+                p.rpdo.len(),
+                list(&p.tpdo),
+                p.tpdo.len(),
+                p.len()
+            );
+        }
     }
     if args.check {
         return;
@@ -113,12 +150,18 @@ fn main() {
     if let Err(w) = rt::lock_memory() {
         eprintln!("ttctl: warning: {w}");
     }
-    let mut buses = Vec::new();
+    if cfg.channel.iter().filter(|c| c.interface == "stdio").count() > 1 {
+        fail("only one channel can use the interface stdio");
+    }
+    let mut buses: Vec<Box<dyn CanBus>> = Vec::new();
     for ch in &cfg.channel {
-        buses.push(
-            SocketCanBus::open(&ch.interface)
-                .unwrap_or_else(|e| fail(format!("cannot open CAN interface {}: {e}", ch.interface))),
-        );
+        if ch.interface == "stdio" {
+            buses.push(Box::new(StdioBus::open()));
+        } else {
+            buses.push(Box::new(SocketCanBus::open(&ch.interface).unwrap_or_else(|e| {
+                fail(format!("cannot open CAN interface {}: {e}", ch.interface))
+            })));
+        }
     }
     let period_ns = (1e9 / cfg.cycle_hz).round() as u64;
     let shared = Shared::new(cfg.channel.len(), interrupt);
@@ -129,9 +172,10 @@ fn main() {
             .channel
             .iter()
             .zip(buses.iter_mut())
-            .map(|(ch, bus)| {
+            .zip(&plans)
+            .map(|((ch, bus), plans)| {
                 let links: Vec<_> = ch.axis.iter().map(|a| a.link()).collect();
-                let master = ChannelMaster::new(&links, cfg.mode, cfg.watchdog)
+                let master = ChannelMaster::with_plans(&links, plans, cfg.watchdog)
                     .unwrap_or_else(|e| fail(format!("{}: {e}", ch.interface)));
                 let mut joints = [None; MAX_AXES_PER_CHANNEL];
                 for (k, a) in ch.axis.iter().enumerate() {
@@ -180,6 +224,11 @@ fn report(args: &Args, reports: &[ChannelReport]) {
         tx_full += r.tx_full;
         bad += r.counters.malformed + r.counters.out_of_range;
         skipped += r.skipped;
+        for (k, name) in r.device_names.iter().enumerate() {
+            if let Some(name) = name {
+                println!("ttctl: {} axis {k}: device name (0x1008) {name:?}", r.name);
+            }
+        }
         let reason = r.stop_reason.map(|x| x.to_string()).unwrap_or_else(|| "none".into());
         println!(
             "ttctl: {}: {} cycles, stop: {reason} (all axes stopped after {} cycles), max tracking error {:.2e}, \
@@ -240,7 +289,7 @@ fn report(args: &Args, reports: &[ChannelReport]) {
         }
     }
     if fault.is_some() {
-        std::process::exit(2);
+        std::process::exit(ttcan::runtime::exit::NOT_DONE);
     }
 }
 

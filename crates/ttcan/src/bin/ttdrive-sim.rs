@@ -2,11 +2,13 @@
 //! axis cascade with sensing and fault machine) on the maxon RE 25 + GP 26 A motor model behind
 //! the CANopen node of `ttcan::vdrive`; physics advance one period per SYNC. One thread per
 //! interface. `--fail` injects faults. Exits after `--idle-exit` seconds without traffic (once
-//! traffic was seen) or after `--duration`; prints every drive's final state.
+//! traffic was seen) or after `--duration`; prints every drive's final state. The interface
+//! `stdio` carries the frames as text lines on standard input/output (`ttcan::bus::stdio`, for
+//! bridges to other CAN stacks).
 
-use clap::Parser;
 use std::time::{Duration, Instant};
 use ttcan::bus::socketcan::SocketCanBus;
+use ttcan::bus::stdio::StdioBus;
 use ttcan::bus::{BusEvent, CanBus};
 use ttcan::canopen::{Frames, Units};
 use ttcan::runtime::rt;
@@ -14,10 +16,11 @@ use ttcan::vdrive::{Failure, VirtualDrive};
 use ttcan::{AxisConfig, MotorModel};
 
 /// Virtual CiA 402 drives (drive layer + motor model) on SocketCAN interfaces.
-#[derive(Parser, Debug)]
+#[derive(clap::Parser, Debug)]
 #[command(name = "ttdrive-sim", version)]
 struct Args {
-    /// A channel: INTERFACE:NODE[,NODE...], e.g. vcan0:1,2 (repeat for more channels).
+    /// A channel: INTERFACE:NODE[,NODE...], e.g. vcan0:1,2 (repeat for more channels); the
+    /// interface `stdio` reads and writes frames as `CAN <id>#<hex>` lines on stdin/stdout.
     #[arg(long = "channel", required = true)]
     channels: Vec<String>,
     /// Inject a fault: KIND:INTERFACE:NODE@SECONDS (seconds after that channel's first SYNC);
@@ -52,7 +55,7 @@ struct Injection {
 
 fn fail(msg: impl std::fmt::Display) -> ! {
     eprintln!("ttdrive-sim: {msg}");
-    std::process::exit(1)
+    std::process::exit(ttcan::runtime::exit::BAD_INPUT)
 }
 
 fn parse_channel(s: &str) -> (String, Vec<u8>) {
@@ -104,8 +107,27 @@ fn parse_fail(s: &str) -> Injection {
 }
 
 fn main() {
-    let args = Args::parse();
+    let args: Args = ttcan::runtime::exit::parse_args();
     let channels: Vec<_> = args.channels.iter().map(|s| parse_channel(s)).collect();
+    for (c, (iface, nodes)) in channels.iter().enumerate() {
+        if channels[..c].iter().any(|(other, _)| other == iface) {
+            fail(format!(
+                "--channel {iface}: interface given twice; list its nodes once (IFACE:1,2)"
+            ));
+        }
+        if let Some(n) = nodes
+            .iter()
+            .enumerate()
+            .find_map(|(k, n)| nodes[..k].contains(n).then_some(n))
+        {
+            fail(format!("--channel {iface}: node {n} given twice"));
+        }
+    }
+    for (flag, v) in [("--duration", args.duration), ("--idle-exit", args.idle_exit)] {
+        if !(v.is_finite() && v > 0.0) {
+            fail(format!("{flag} {v}: must be finite and > 0 s"));
+        }
+    }
     let injections: Vec<_> = args.fail.iter().map(|s| parse_fail(s)).collect();
     for i in &injections {
         if !channels.iter().any(|(c, n)| *c == i.interface && n.contains(&i.node)) {
@@ -136,7 +158,52 @@ fn main() {
     });
 }
 
+/// A bus the drive loop can sleep on until a frame arrives.
+trait Port: CanBus {
+    /// Waits up to `ms` for a frame.
+    fn wait(&mut self, ms: u16);
+    /// True when no frame can come any more (stdio: input closed).
+    fn ended(&self) -> bool {
+        false
+    }
+}
+
+impl Port for SocketCanBus {
+    fn wait(&mut self, ms: u16) {
+        self.wait_readable(ms);
+    }
+}
+
+impl Port for StdioBus {
+    fn wait(&mut self, ms: u16) {
+        self.wait_readable(ms);
+    }
+
+    fn ended(&self) -> bool {
+        self.closed()
+    }
+}
+
 fn run(
+    iface: &str,
+    nodes: &[u8],
+    inj: Vec<&Injection>,
+    model: &MotorModel,
+    config: &AxisConfig,
+    units: Units,
+    args: &Args,
+) {
+    if iface == "stdio" {
+        run_on(StdioBus::open(), iface, nodes, inj, model, config, units, args)
+    } else {
+        let bus = SocketCanBus::open(iface).unwrap_or_else(|e| fail(format!("cannot open CAN interface {iface}: {e}")));
+        run_on(bus, iface, nodes, inj, model, config, units, args)
+    }
+}
+
+#[allow(clippy::too_many_arguments)] // the channel's whole setup, passed once
+fn run_on<B: Port>(
+    mut bus: B,
     iface: &str,
     nodes: &[u8],
     mut inj: Vec<&Injection>,
@@ -145,7 +212,6 @@ fn run(
     units: Units,
     args: &Args,
 ) {
-    let mut bus = SocketCanBus::open(iface).unwrap_or_else(|e| fail(format!("cannot open CAN interface {iface}: {e}")));
     let mut out = Frames::new();
     let mut drives: Vec<VirtualDrive> = nodes
         .iter()
@@ -217,14 +283,17 @@ fn run(
                 next_ms = now + 1_000_000; // after a stall: no burst of heartbeats
             }
         }
-        if seen && last_rx.elapsed().as_secs_f64() > args.idle_exit || start.elapsed().as_secs_f64() > args.duration {
+        if seen && last_rx.elapsed().as_secs_f64() > args.idle_exit
+            || start.elapsed().as_secs_f64() > args.duration
+            || bus.ended()
+        {
             break;
         }
         // sleep in the kernel until a frame arrives or the 1 ms time base is due
         // (poll has 1 ms resolution: the time base may run up to 1 ms late, which only delays
         // a heartbeat or the SYNC watchdog)
         if rt::now_ns() < next_ms {
-            bus.wait_readable(1);
+            bus.wait(1);
         }
     }
     for d in &drives {
@@ -243,7 +312,7 @@ fn run(
     }
 }
 
-fn send(bus: &mut SocketCanBus, out: &mut Frames) {
+fn send<B: CanBus>(bus: &mut B, out: &mut Frames) {
     for f in out.as_slice() {
         if let Err(e) = bus.send(f) {
             eprintln!("ttdrive-sim: send {:#05x}: {e}", f.id());

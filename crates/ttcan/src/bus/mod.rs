@@ -1,10 +1,12 @@
-//! CAN buses behind one small trait: send a frame, poll for the next event, never block. Two
-//! implementations: [`memory`] (in-process, for tests, with fault injection) and `socketcan`
-//! (Linux SocketCAN via the `socketcan` crate, exercised in the VM test).
+//! CAN buses behind one small trait: send a frame, poll for the next event, never block. Three
+//! implementations: [`memory`] (in-process, for tests, with fault injection), `socketcan`
+//! (Linux SocketCAN via the `socketcan` crate, exercised in the VM test) and [`stdio`] (frames as
+//! text lines, for bridges to other CAN stacks).
 
 pub mod memory;
 #[cfg(target_os = "linux")]
 pub mod socketcan;
+pub mod stdio;
 
 use crate::canopen::Frame;
 
@@ -59,4 +61,14 @@ pub trait CanBus: Send {
     fn send(&mut self, frame: &Frame) -> Result<(), BusError>;
     /// Returns the next received event, `None` when nothing is waiting. Never blocks.
     fn poll(&mut self) -> Result<Option<BusEvent>, BusError>;
+}
+
+impl<B: CanBus + ?Sized> CanBus for Box<B> {
+    fn send(&mut self, frame: &Frame) -> Result<(), BusError> {
+        (**self).send(frame)
+    }
+
+    fn poll(&mut self) -> Result<Option<BusEvent>, BusError> {
+        (**self).poll()
+    }
 }

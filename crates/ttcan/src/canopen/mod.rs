@@ -11,6 +11,7 @@
 
 pub mod budget;
 pub mod cia402;
+pub mod eds;
 pub mod emcy;
 pub mod frame;
 pub mod nmt;

@@ -1,15 +1,35 @@
-//! The drive's protocol node (sans-I/O): NMT slave, heartbeat producer, SDO server on the object
-//! dictionary, RPDO reception with validation, SYNC-triggered TPDO, EMCY producer and the CiA 402
-//! state machine. The physics behind it (the drive layer) is not here: see `crate::vdrive`.
+//! The drive's protocol node (sans-I/O), a CiA 402 device as CiA 301 describes one: NMT slave
+//! (boot-up in Pre-operational, the CiA 402 state machine already in Switch On Disabled),
+//! heartbeat producer, SDO server (expedited and segmented) on the object dictionary with the
+//! controlword and statusword reachable over SDO as over PDO, RPDO1/TPDO1 with mappings that a
+//! master may change over SDO under the CiA 301 rules, SYNC-triggered TPDO, EMCY producer. The
+//! physics behind it (the drive layer) is not here: see `crate::vdrive`.
+//!
+//! PDO rules (CiA 301 §7.5.2.35–38; the abort codes as CANopenNode's `CO_PDO.c` uses them): a
+//! mapping entry or the number of entries may only be written while the PDO is invalid (COB-ID
+//! bit 31 set), entries only while the number is 0 (else abort 0x06010000); an entry must name an
+//! existing (0x06020000), mappable object of its direction and length (0x06040041); the number
+//! of entries is checked against the 8 bytes of a PDO (0x06040042); the CAN identifier of a valid
+//! PDO cannot change, 29-bit identifiers and the reserved identifiers of CiA 301 §7.3.5 are
+//! refused (0x06090030). Transmission types: RPDO 0–240, 254, 255 (every received RPDO takes
+//! effect at the next SYNC, as the cyclic synchronous modes require); TPDO 0–240 (synchronous,
+//! every n-th SYNC; event-driven types are refused with 0x06090030). NMT Reset Communication
+//! restores 0x1000–0x1FFF to their defaults, Reset Node the whole dictionary.
 
 use super::cia402::{Cia402, DriveState, OpMode};
 use super::emcy::{self, Emcy};
 use super::frame::{Cob, Frame, Frames};
 use super::nmt::{decode_nmt, decode_sync, HeartbeatProducer, NmtCommand, NmtState};
-use super::od::{self, ObjectDictionary};
-use super::pdo::{Rpdo, Tpdo};
-use super::sdo::{SdoRequest, SdoResponse, ABORT_COMMAND};
+use super::od::{self, Access, ObjectDictionary};
+use super::pdo::{MapEntry, PdoMapping, MAX_MAP_ENTRIES};
+use super::sdo::{SdoRequest, SdoResponse, SdoServer, SdoTarget, ABORT_COMMAND, SDO_BUFFER};
+use super::sdo::{ABORT_NOT_MAPPABLE, ABORT_NO_OBJECT, ABORT_PDO_LENGTH, ABORT_RANGE, ABORT_UNSUPPORTED};
 use super::ProtocolError;
+
+/// COB-ID bit 31: the PDO does not exist (is invalid).
+pub const COB_INVALID: u32 = 1 << 31;
+/// COB-ID bit 29: 29-bit identifier (not supported).
+const COB_EXTENDED: u32 = 1 << 29;
 
 /// What a received frame meant to the node.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -31,7 +51,8 @@ pub struct DriveCommand {
     pub target: i32,
     /// Torque offset, ‰ rated torque.
     pub torque_offset: i16,
-    /// True when the RPDO of this cycle arrived (false: the previous command is held).
+    /// True when the RPDO of this cycle arrived (false: the previous command is held). Without a
+    /// valid RPDO the targets come from SDO writes and every SYNC takes them.
     pub fresh: bool,
 }
 
@@ -48,6 +69,11 @@ pub struct NodeCounters {
     pub sdo: u32,
 }
 
+/// The identifiers CiA 301 §7.3.5 reserves (a PDO may not use them).
+fn restricted_id(id: u32) -> bool {
+    matches!(id, 0x000..=0x07F | 0x101..=0x180 | 0x581..=0x5FF | 0x601..=0x67F | 0x6E0..=0x6FF | 0x701..=0x77F | 0x780..=0x7FF)
+}
+
 /// Protocol state of one virtual drive.
 #[derive(Debug, Clone)]
 pub struct DriveNode {
@@ -58,23 +84,33 @@ pub struct DriveNode {
     /// The object dictionary.
     pub od: ObjectDictionary,
     heartbeat: HeartbeatProducer,
-    pending: Option<Rpdo>,
+    sdo: SdoServer,
+    pending: Option<Frame>,
     command: DriveCommand,
     counters: NodeCounters,
     missed_in_row: u32,
+    extra_status: u16,
+    /// A statusword the TPDO carries instead of the true one (fault injection).
+    pub statusword_override: Option<u16>,
+    rpdo_map: PdoMapping,
+    tpdo_map: PdoMapping,
+    syncs_since_tpdo: u32,
 }
 
 impl DriveNode {
-    /// A node with id `node` (1–127), in Pre-operational after sending its boot-up message.
+    /// A node with id `node` (1–127), in Pre-operational after sending its boot-up message, its
+    /// state machine in Switch On Disabled.
     pub fn new(node: u8, out: &mut Frames) -> Result<Self, ProtocolError> {
-        let od = ObjectDictionary::drive();
+        super::frame::check_node(node)?;
+        let od = ObjectDictionary::drive(node);
         let hb_ms = od.get(od::HEARTBEAT_TIME, 0).unwrap_or(0) as u32;
-        let n = DriveNode {
+        let mut n = DriveNode {
             node,
             nmt: NmtState::PreOperational,
             cia402: Cia402::new(),
             od,
             heartbeat: HeartbeatProducer::new(node, hb_ms)?,
+            sdo: SdoServer::new(),
             pending: None,
             command: DriveCommand {
                 mode: OpMode::Csp,
@@ -84,7 +120,15 @@ impl DriveNode {
             },
             counters: NodeCounters::default(),
             missed_in_row: 0,
+            extra_status: 0,
+            statusword_override: None,
+            rpdo_map: PdoMapping::default(),
+            tpdo_map: PdoMapping::default(),
+            syncs_since_tpdo: 0,
         };
+        n.rpdo_map = n.mapping(od::RPDO1_MAP).unwrap_or_default();
+        n.tpdo_map = n.mapping(od::TPDO1_MAP).unwrap_or_default();
+        n.refresh_statusword();
         out.push(super::nmt::encode_heartbeat(node, NmtState::BootUp)?);
         Ok(n)
     }
@@ -114,8 +158,96 @@ impl DriveNode {
         self.command
     }
 
+    /// The RPDO1 mapping in force.
+    pub fn rpdo_mapping(&self) -> PdoMapping {
+        self.rpdo_map
+    }
+
+    /// The TPDO1 mapping in force.
+    pub fn tpdo_mapping(&self) -> PdoMapping {
+        self.tpdo_map
+    }
+
+    /// The COB-ID of the PDO whose communication object is `comm` when valid.
+    fn pdo_id(&self, comm: u16) -> Option<u16> {
+        let v = self.od.get(comm, 1)? as u32;
+        (v & COB_INVALID == 0).then_some((v & 0x7FF) as u16)
+    }
+
+    /// True while RPDO1 is valid (commands come by PDO).
+    pub fn rpdo_valid(&self) -> bool {
+        self.pdo_id(od::RPDO1_COMM).is_some()
+    }
+
+    /// The mapping stored in mapping object `map` (entries 1..=sub 0).
+    fn mapping(&self, map: u16) -> Result<PdoMapping, u32> {
+        let n = self.od.get(map, 0).unwrap_or(0) as usize;
+        self.mapping_of(map, n)
+    }
+
+    fn mapping_of(&self, map: u16, n: usize) -> Result<PdoMapping, u32> {
+        if n > MAX_MAP_ENTRIES {
+            return Err(ABORT_PDO_LENGTH);
+        }
+        let mut e = [MapEntry::default(); MAX_MAP_ENTRIES];
+        for (k, slot) in e.iter_mut().enumerate().take(n) {
+            let w = self.od.get(map, k as u8 + 1).unwrap_or(0) as u32;
+            *slot = MapEntry::from_word(w);
+            self.check_entry(map, *slot)?;
+        }
+        PdoMapping::new(&e[..n]).map_err(|_| ABORT_PDO_LENGTH)
+    }
+
+    /// Checks that `e` names an existing object mappable in the direction of `map`, of its length.
+    fn check_entry(&self, map: u16, e: MapEntry) -> Result<(), u32> {
+        let en = self.od.entry(e.index, e.sub).map_err(|_| ABORT_NO_OBJECT)?;
+        let direction_ok = if map == od::RPDO1_MAP {
+            en.access == Access::Rw
+        } else {
+            true
+        };
+        match en.data_type.size() {
+            Some(n) if en.mappable && direction_ok && e.bits == 8 * n => Ok(()),
+            _ => Err(ABORT_NOT_MAPPABLE),
+        }
+    }
+
+    fn refresh_statusword(&mut self) {
+        let sw = self.cia402.statusword(self.extra_status);
+        self.od.set(od::STATUSWORD, 0, sw as i64);
+    }
+
+    /// Restores the communication area 0x1000–0x1FFF (`all`: the whole dictionary) to defaults.
+    fn restore_defaults(&mut self, all: bool) {
+        let fresh = ObjectDictionary::drive(self.node);
+        if all {
+            self.od = fresh;
+        } else {
+            for en in fresh.entries() {
+                if en.index < 0x2000 {
+                    if let Some(v) = fresh.get(en.index, en.sub) {
+                        self.od.set(en.index, en.sub, v);
+                    }
+                }
+            }
+        }
+        self.rpdo_map = self.mapping(od::RPDO1_MAP).unwrap_or_default();
+        self.tpdo_map = self.mapping(od::TPDO1_MAP).unwrap_or_default();
+        let ms = self.od.get(od::HEARTBEAT_TIME, 0).unwrap_or(0) as u32;
+        self.heartbeat.set_period(ms);
+    }
+
     /// Handles one received frame; answers (SDO) go to `out`.
     pub fn on_frame(&mut self, f: &Frame, out: &mut Frames) -> NodeEvent {
+        if self.nmt == NmtState::Operational && self.pdo_id(od::RPDO1_COMM) == Some(f.id()) {
+            if f.len() == self.rpdo_map.len() {
+                self.pending = Some(*f);
+            } else {
+                self.counters.malformed += 1;
+                self.emcy(emcy::PDO_LENGTH, out);
+            }
+            return NodeEvent::None;
+        }
         match Cob::classify(f.id()) {
             Some(Cob::Nmt) => match decode_nmt(f) {
                 Ok((cmd, n)) if n == 0 || n == self.node => return self.on_nmt(cmd, out),
@@ -126,19 +258,13 @@ impl DriveNode {
                 Ok(_) => return NodeEvent::Sync,
                 Err(_) => self.counters.malformed += 1,
             },
-            Some(Cob::SdoRx(n)) if n == self.node => {
+            Some(Cob::SdoRx(n)) if n == self.node && self.nmt != NmtState::Stopped => {
                 let resp = match SdoRequest::decode(f) {
                     Ok((_, req)) => {
                         self.counters.sdo += 1;
-                        let r = self.od.serve(&req);
-                        if let SdoRequest::Download {
-                            index: od::HEARTBEAT_TIME,
-                            ..
-                        } = req
-                        {
-                            let ms = self.od.get(od::HEARTBEAT_TIME, 0).unwrap_or(0) as u32;
-                            self.heartbeat.set_period(ms);
-                        }
+                        let mut server = self.sdo;
+                        let r = server.serve(&req, self);
+                        self.sdo = server;
                         r
                     }
                     Err(_) => {
@@ -149,24 +275,17 @@ impl DriveNode {
                         } else {
                             (0, 0)
                         };
-                        SdoResponse::Abort {
+                        Some(SdoResponse::Abort {
                             index,
                             sub,
                             code: ABORT_COMMAND,
-                        }
+                        })
                     }
                 };
-                if let Ok(fr) = resp.encode(self.node) {
+                if let Some(Ok(fr)) = resp.map(|r| r.encode(self.node)) {
                     out.push(fr);
                 }
             }
-            Some(Cob::Rpdo1(n)) if n == self.node && self.nmt == NmtState::Operational => match Rpdo::decode(f) {
-                Ok((_, r)) => self.pending = Some(r),
-                Err(_) => {
-                    self.counters.malformed += 1;
-                    self.emcy(emcy::PDO_LENGTH, out);
-                }
-            },
             _ => {}
         }
         NodeEvent::None
@@ -181,6 +300,11 @@ impl DriveNode {
                 self.nmt = NmtState::PreOperational;
                 self.cia402 = Cia402::new();
                 self.pending = None;
+                self.sdo = SdoServer::new();
+                self.syncs_since_tpdo = 0;
+                self.missed_in_row = 0;
+                self.restore_defaults(cmd == NmtCommand::ResetNode);
+                self.refresh_statusword();
                 if let Ok(f) = super::nmt::encode_heartbeat(self.node, NmtState::BootUp) {
                     out.push(f);
                 }
@@ -206,10 +330,11 @@ impl DriveNode {
         }
     }
 
-    /// At a SYNC: sends the TPDO with the feedback sampled now (if Operational), then takes the
-    /// RPDO received since the last SYNC: the controlword drives the state machine, the target is
-    /// checked against the software position limits and `max_step` (largest change of a CSP
-    /// target per cycle, increments) and refused (EMCY, previous command held) when out of range.
+    /// At a SYNC: sends the TPDO (if Operational and due) with the feedback sampled now, then
+    /// takes the RPDO received since the last SYNC (or, without a valid RPDO, the targets written
+    /// over SDO): the controlword drives the state machine, the target of the mode is checked
+    /// against the software position limits and `max_step` (largest change of a CSP target per
+    /// cycle, increments) and refused (EMCY, previous command held) when out of range.
     pub fn on_sync(
         &mut self,
         position: i32,
@@ -219,57 +344,103 @@ impl DriveNode {
         out: &mut Frames,
     ) -> DriveCommand {
         self.od.set(od::POSITION_ACTUAL, 0, position as i64);
-        if self.nmt == NmtState::Operational {
-            let sw = self.cia402.statusword(extra_status);
-            self.od.set(od::STATUSWORD, 0, sw as i64);
-            if let Ok(f) = (Tpdo {
-                position,
-                current,
-                statusword: sw,
-            })
-            .encode(self.node)
-            {
-                out.push(f);
-            }
-        }
+        self.od.set(od::CURRENT_ACTUAL, 0, current as i64);
+        self.extra_status = extra_status;
         let mode = OpMode::from_code(self.od.get(od::MODES_OF_OPERATION, 0).unwrap_or(8) as i8).unwrap_or(OpMode::Csp);
         self.od.set(od::MODES_DISPLAY, 0, mode.code() as i64);
-        match self.pending.take() {
-            Some(r) => {
-                self.missed_in_row = 0;
-                self.cia402.on_controlword(r.controlword);
-                self.od.set(od::CONTROLWORD, 0, r.controlword as i64);
-                let lo = self.od.get(od::SOFTWARE_POSITION_LIMIT, 1).unwrap_or(i32::MIN as i64);
-                let hi = self.od.get(od::SOFTWARE_POSITION_LIMIT, 2).unwrap_or(i32::MAX as i64);
-                let max_torque = self.od.get(od::MAX_TORQUE, 0).unwrap_or(0);
-                let enabled = self.cia402.state() == DriveState::OperationEnabled;
-                let in_range = match mode {
-                    OpMode::Csp => {
-                        let t = r.target as i64;
-                        (lo..=hi).contains(&t) && (!enabled || (t - position as i64).abs() <= max_step)
+        self.refresh_statusword();
+        if self.nmt == NmtState::Operational {
+            if let Some(id) = self.pdo_id(od::TPDO1_COMM) {
+                self.syncs_since_tpdo += 1;
+                let every = (self.od.get(od::TPDO1_COMM, 2).unwrap_or(1) as u32).max(1);
+                if self.syncs_since_tpdo >= every {
+                    self.syncs_since_tpdo = 0;
+                    let (od_, sw) = (&self.od, self.statusword_override);
+                    let packed = self.tpdo_map.pack(id, |e| match (e.index, sw) {
+                        (od::STATUSWORD, Some(s)) => s as i64,
+                        _ => od_.get(e.index, e.sub).unwrap_or(0),
+                    });
+                    if let Ok(f) = packed {
+                        out.push(f);
                     }
-                    OpMode::Csv => true,
-                    OpMode::Cst => (r.target as i64).abs() <= max_torque,
-                } && (r.torque_offset as i64).abs() <= max_torque;
-                if in_range {
-                    self.command = DriveCommand {
-                        mode,
-                        target: r.target,
-                        torque_offset: r.torque_offset,
-                        fresh: true,
-                    };
-                } else {
-                    self.counters.out_of_range += 1;
-                    self.command.fresh = false;
-                    self.emcy(emcy::COMMAND_RANGE, out);
                 }
             }
-            None => {
-                self.counters.missed_rpdo += 1;
-                self.missed_in_row += 1;
-                self.command.fresh = false;
+        }
+        let frame = self.pending.take();
+        let by_pdo = self.rpdo_valid();
+        let mut staged = [(MapEntry::default(), 0i64); MAX_MAP_ENTRIES];
+        let mut n_staged = 0;
+        if let Some(f) = frame {
+            if let Ok(values) = self.rpdo_map.unpack(&f) {
+                for (e, raw) in values.iter().take(self.rpdo_map.entries().len()) {
+                    let Ok(en) = self.od.entry(e.index, e.sub) else {
+                        continue;
+                    };
+                    let v = en.data_type.extend(*raw);
+                    if e.index == od::CONTROLWORD && e.sub == 0 {
+                        self.od.set(od::CONTROLWORD, 0, v);
+                        self.cia402.on_controlword(v as u16);
+                    } else {
+                        staged[n_staged] = (*e, v);
+                        n_staged += 1;
+                    }
+                }
             }
         }
+        let value = |index: u16, staged: &[(MapEntry, i64)], od_: &ObjectDictionary| {
+            staged
+                .iter()
+                .find(|(e, _)| e.index == index && e.sub == 0)
+                .map(|x| x.1)
+                .or_else(|| od_.get(index, 0))
+                .unwrap_or(0)
+        };
+        if frame.is_some() || !by_pdo {
+            self.missed_in_row = 0;
+            let staged = &staged[..n_staged];
+            let lo = self.od.get(od::SOFTWARE_POSITION_LIMIT, 1).unwrap_or(i32::MIN as i64);
+            let hi = self.od.get(od::SOFTWARE_POSITION_LIMIT, 2).unwrap_or(i32::MAX as i64);
+            let max_torque = self.od.get(od::MAX_TORQUE, 0).unwrap_or(0);
+            let enabled = self.cia402.state() == DriveState::OperationEnabled;
+            let target = match mode {
+                OpMode::Csp => value(od::TARGET_POSITION, staged, &self.od),
+                OpMode::Csv => value(od::TARGET_VELOCITY, staged, &self.od),
+                OpMode::Cst => value(od::TARGET_TORQUE, staged, &self.od),
+            };
+            let offset = value(od::TORQUE_OFFSET, staged, &self.od);
+            let in_range = match mode {
+                OpMode::Csp => {
+                    (lo..=hi).contains(&target) && (!enabled || (target - position as i64).abs() <= max_step)
+                }
+                OpMode::Csv => true,
+                OpMode::Cst => target.abs() <= max_torque,
+            } && offset.abs() <= max_torque
+                && staged.iter().all(|(e, v)| {
+                    self.od
+                        .entry(e.index, e.sub)
+                        .is_ok_and(|en| (en.min..=en.max).contains(v))
+                });
+            if in_range {
+                for (e, v) in staged {
+                    self.od.set(e.index, e.sub, *v);
+                }
+                self.command = DriveCommand {
+                    mode,
+                    target: target as i32,
+                    torque_offset: offset as i16,
+                    fresh: true,
+                };
+            } else {
+                self.counters.out_of_range += 1;
+                self.command.fresh = false;
+                self.emcy(emcy::COMMAND_RANGE, out);
+            }
+        } else {
+            self.counters.missed_rpdo += 1;
+            self.missed_in_row += 1;
+            self.command.fresh = false;
+        }
+        self.refresh_statusword();
         self.command.mode = mode;
         self.command
     }
@@ -280,6 +451,92 @@ impl DriveNode {
             out.push(f);
         }
     }
+
+    /// The CiA 301 rules of the PDO communication and mapping objects for a write of `v` to
+    /// `index:sub`.
+    fn check_pdo_write(&self, index: u16, sub: u8, v: i64) -> Result<(), u32> {
+        let (comm, map) = match index {
+            od::RPDO1_COMM | od::RPDO1_MAP => (od::RPDO1_COMM, od::RPDO1_MAP),
+            od::TPDO1_COMM | od::TPDO1_MAP => (od::TPDO1_COMM, od::TPDO1_MAP),
+            _ => return Ok(()),
+        };
+        let valid = self.pdo_id(comm).is_some();
+        let v = v as u32;
+        match (index == comm, sub) {
+            (true, 1) => {
+                let id = v & 0x7FF;
+                if v & COB_EXTENDED != 0 || restricted_id(id) {
+                    return Err(ABORT_RANGE);
+                }
+                let old = self.od.get(comm, 1).unwrap_or(0) as u32;
+                if valid && v & COB_INVALID == 0 && id != old & 0x7FF {
+                    return Err(ABORT_RANGE);
+                }
+                Ok(())
+            }
+            (true, 2) => {
+                let ok = if comm == od::RPDO1_COMM {
+                    v <= 240 || v >= 254
+                } else {
+                    v <= 240
+                };
+                if ok {
+                    Ok(())
+                } else {
+                    Err(ABORT_RANGE)
+                }
+            }
+            (true, _) => Ok(()),
+            (false, 0) => {
+                if valid {
+                    return Err(ABORT_UNSUPPORTED);
+                }
+                self.mapping_of(map, v as usize).map(|_| ())
+            }
+            (false, _) => {
+                if valid || self.od.get(map, 0).unwrap_or(0) != 0 {
+                    return Err(ABORT_UNSUPPORTED);
+                }
+                if v != 0 {
+                    self.check_entry(map, MapEntry::from_word(v))?;
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+impl SdoTarget for DriveNode {
+    fn sdo_read(&mut self, index: u16, sub: u8, out: &mut [u8; SDO_BUFFER]) -> Result<usize, u32> {
+        if index == od::STATUSWORD {
+            self.refresh_statusword();
+        }
+        self.od.read(index, sub, out)
+    }
+
+    fn sdo_check_write(&mut self, index: u16, sub: u8) -> Result<(), u32> {
+        match self.od.entry(index, sub)?.access {
+            Access::Rw => Ok(()),
+            _ => Err(super::sdo::ABORT_READ_ONLY),
+        }
+    }
+
+    fn sdo_write(&mut self, index: u16, sub: u8, data: &[u8]) -> Result<(), u32> {
+        let v = self.od.check_write(index, sub, data)?;
+        self.check_pdo_write(index, sub, v)?;
+        self.od.write(index, sub, data)?;
+        match index {
+            od::RPDO1_MAP if sub == 0 => self.rpdo_map = self.mapping(od::RPDO1_MAP).unwrap_or_default(),
+            od::TPDO1_MAP if sub == 0 => self.tpdo_map = self.mapping(od::TPDO1_MAP).unwrap_or_default(),
+            od::HEARTBEAT_TIME => self.heartbeat.set_period(v as u32),
+            od::CONTROLWORD => {
+                self.cia402.on_controlword(v as u16);
+                self.refresh_statusword();
+            }
+            _ => {}
+        }
+        Ok(())
+    }
 }
 
 #[cfg(test)]
@@ -287,6 +544,38 @@ mod tests {
     use super::*;
     use crate::canopen::cia402::{CW_ENABLE_OPERATION, CW_SHUTDOWN, CW_SWITCH_ON};
     use crate::canopen::nmt::{encode_nmt, encode_sync};
+    use crate::canopen::pdo::Rpdo;
+    use crate::canopen::sdo::ABORT_READ_ONLY;
+
+    /// One SDO request to `n`; returns its response.
+    fn sdo(n: &mut DriveNode, req: SdoRequest) -> SdoResponse {
+        let mut out = Frames::new();
+        n.on_frame(&req.encode(n.node()).unwrap(), &mut out);
+        SdoResponse::decode(&out.as_slice()[0]).unwrap().1
+    }
+
+    fn write(n: &mut DriveNode, index: u16, sub: u8, size: u8, value: u32) -> Result<(), u32> {
+        match sdo(
+            n,
+            SdoRequest::Download {
+                index,
+                sub,
+                size,
+                value,
+            },
+        ) {
+            SdoResponse::Downloaded { .. } => Ok(()),
+            SdoResponse::Abort { code, .. } => Err(code),
+            r => panic!("{r:?}"),
+        }
+    }
+
+    fn read(n: &mut DriveNode, index: u16, sub: u8) -> u32 {
+        match sdo(n, SdoRequest::Upload { index, sub }) {
+            SdoResponse::Uploaded { value, .. } => value,
+            r => panic!("{r:?}"),
+        }
+    }
 
     #[test]
     fn node_boots_starts_enables_and_refuses_out_of_range_targets() {
@@ -345,5 +634,104 @@ mod tests {
         // malformed RPDO
         n.on_frame(&Frame::new(0x203, &[1, 2]).unwrap(), &mut out);
         assert_eq!(n.counters().malformed, 1);
+    }
+
+    #[test]
+    fn state_machine_over_sdo_from_switch_on_disabled_right_after_boot_up() {
+        let mut out = Frames::new();
+        let mut n = DriveNode::new(5, &mut out).unwrap();
+        // Switch On Disabled (0x40) with remote (bit 9), before any SYNC or NMT Start
+        assert_eq!(read(&mut n, od::STATUSWORD, 0), 0x0240);
+        for (cw, state) in [
+            (CW_SHUTDOWN, DriveState::ReadyToSwitchOn),
+            (CW_SWITCH_ON, DriveState::SwitchedOn),
+            (CW_ENABLE_OPERATION, DriveState::OperationEnabled),
+        ] {
+            write(&mut n, od::CONTROLWORD, 0, 2, cw as u32).unwrap();
+            let sw = read(&mut n, od::STATUSWORD, 0) as u16;
+            assert_eq!(DriveState::from_statusword(sw).unwrap(), state, "{sw:#06x}");
+        }
+        assert_eq!(read(&mut n, od::CONTROLWORD, 0), CW_ENABLE_OPERATION as u32);
+        assert_eq!(write(&mut n, od::STATUSWORD, 0, 2, 0), Err(ABORT_READ_ONLY));
+        assert_eq!(read(&mut n, od::SUPPORTED_MODES, 0), 0x380);
+        assert_eq!(read(&mut n, od::IDENTITY, 2), od::IDENTITY_VALUES[1]);
+        // without RPDO the targets written over SDO are the command at every SYNC
+        write(&mut n, od::RPDO1_COMM, 1, 4, COB_INVALID | 0x205).unwrap();
+        write(&mut n, od::TARGET_POSITION, 0, 4, 40).unwrap();
+        n.on_frame(&encode_nmt(NmtCommand::Start, 0).unwrap(), &mut out);
+        let c = n.on_sync(0, 0, 0, 100, &mut out);
+        assert!(c.fresh && c.target == 40, "{c:?}");
+        assert_eq!(n.missed_in_row(), 0);
+    }
+
+    #[test]
+    fn pdo_remapping_follows_the_cia_301_rules() {
+        let mut out = Frames::new();
+        let mut n = DriveNode::new(2, &mut out).unwrap();
+        // valid PDO: mapping cannot change
+        assert_eq!(write(&mut n, od::RPDO1_MAP, 0, 1, 0), Err(ABORT_UNSUPPORTED));
+        write(&mut n, od::RPDO1_COMM, 1, 4, COB_INVALID | 0x202).unwrap();
+        // entries only while the number is 0
+        assert_eq!(write(&mut n, od::RPDO1_MAP, 1, 4, 0x6040_0010), Err(ABORT_UNSUPPORTED));
+        write(&mut n, od::RPDO1_MAP, 0, 1, 0).unwrap();
+        // not mappable, wrong length, read-only in an RPDO, absent
+        assert_eq!(write(&mut n, od::RPDO1_MAP, 1, 4, 0x6065_0020), Err(ABORT_NOT_MAPPABLE));
+        assert_eq!(write(&mut n, od::RPDO1_MAP, 1, 4, 0x6040_0020), Err(ABORT_NOT_MAPPABLE));
+        assert_eq!(write(&mut n, od::RPDO1_MAP, 1, 4, 0x6041_0010), Err(ABORT_NOT_MAPPABLE));
+        assert_eq!(write(&mut n, od::RPDO1_MAP, 1, 4, 0x2345_0010), Err(ABORT_NO_OBJECT));
+        // controlword first, then the target: 6 bytes
+        write(&mut n, od::RPDO1_MAP, 1, 4, 0x6040_0010).unwrap();
+        write(&mut n, od::RPDO1_MAP, 2, 4, 0x607A_0020).unwrap();
+        write(&mut n, od::RPDO1_MAP, 3, 4, 0x60FF_0020).unwrap();
+        assert_eq!(write(&mut n, od::RPDO1_MAP, 0, 1, 3), Err(ABORT_PDO_LENGTH), "10 bytes");
+        write(&mut n, od::RPDO1_MAP, 0, 1, 2).unwrap();
+        // a reserved identifier and a 29-bit one are refused
+        assert_eq!(write(&mut n, od::RPDO1_COMM, 1, 4, 0x602), Err(ABORT_RANGE));
+        assert_eq!(write(&mut n, od::RPDO1_COMM, 1, 4, (1 << 29) | 0x202), Err(ABORT_RANGE));
+        write(&mut n, od::RPDO1_COMM, 1, 4, 0x302).unwrap();
+        // the CAN-ID of a valid PDO cannot change
+        assert_eq!(write(&mut n, od::RPDO1_COMM, 1, 4, 0x303), Err(ABORT_RANGE));
+        // TPDO: statusword and position only, every 2nd SYNC; event-driven types refused
+        write(&mut n, od::TPDO1_COMM, 1, 4, COB_INVALID | 0x182).unwrap();
+        write(&mut n, od::TPDO1_MAP, 0, 1, 0).unwrap();
+        write(&mut n, od::TPDO1_MAP, 1, 4, 0x6041_0010).unwrap();
+        write(&mut n, od::TPDO1_MAP, 2, 4, 0x6064_0020).unwrap();
+        write(&mut n, od::TPDO1_MAP, 0, 1, 2).unwrap();
+        assert_eq!(write(&mut n, od::TPDO1_COMM, 2, 1, 255), Err(ABORT_RANGE));
+        write(&mut n, od::TPDO1_COMM, 2, 1, 2).unwrap();
+        write(&mut n, od::TPDO1_COMM, 1, 4, 0x182).unwrap();
+        n.on_frame(&encode_nmt(NmtCommand::Start, 0).unwrap(), &mut out);
+        out.clear();
+        let mut sent = Vec::new();
+        for (k, cw) in [CW_SHUTDOWN, CW_SWITCH_ON, CW_ENABLE_OPERATION, CW_ENABLE_OPERATION]
+            .into_iter()
+            .enumerate()
+        {
+            let mut d = [0u8; 6];
+            d[..2].copy_from_slice(&cw.to_le_bytes());
+            d[2..].copy_from_slice(&(7 * k as i32).to_le_bytes());
+            n.on_frame(&Frame::new(0x302, &d).unwrap(), &mut out);
+            let c = n.on_sync(7 * k as i32, 0, 0, 100, &mut out);
+            assert!(c.fresh && c.target == 7 * k as i32, "{c:?}");
+            sent.extend(out.as_slice().iter().copied());
+            out.clear();
+        }
+        assert_eq!(n.cia402.state(), DriveState::OperationEnabled);
+        // the old identifier is no RPDO any more
+        n.on_frame(&Rpdo::default().encode(2).unwrap(), &mut out);
+        assert!(!n.on_sync(0, 0, 0, 100, &mut out).fresh);
+        assert_eq!(sent.len(), 2, "every 2nd SYNC: {sent:?}");
+        assert_eq!(sent[1].id(), 0x182);
+        assert_eq!(
+            sent[1].data()[..2],
+            0x0237u16.to_le_bytes(),
+            "Operation Enabled, voltage, remote"
+        );
+        assert_eq!(sent[1].data()[2..], 21i32.to_le_bytes(), "sampled at the 4th SYNC");
+        // reset communication restores the default mappings
+        n.on_frame(&encode_nmt(NmtCommand::ResetCommunication, 2).unwrap(), &mut out);
+        assert_eq!(n.rpdo_mapping(), PdoMapping::default_rpdo(OpMode::Csp));
+        assert_eq!(n.tpdo_mapping(), PdoMapping::default_tpdo());
+        assert_eq!(read(&mut n, od::RPDO1_COMM, 1), 0x202);
     }
 }

@@ -44,6 +44,7 @@ mod trace;
 mod winding;
 use crate::error::{Error, Result};
 use crate::motor::Measurement;
+use crate::noise::Gaussian;
 use crate::schedule::Scheduler;
 pub use drives::axis_configs_from_chain;
 pub use trace::CoupledTrace;
@@ -53,7 +54,7 @@ use winding::{open_winding_step, winding_step, Winding};
 /// 20 kHz): its trace keeps every tick (about 100 bytes per tick and axis).
 pub const MAX_RUN_TICKS: u64 = 1_000_000;
 /// Options of a [`CoupledSim`].
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CoupledOptions {
     /// Gravity in the base frame, m/s² (zero to switch it off).
     pub gravity: [f64; 3],
@@ -118,8 +119,7 @@ pub struct CoupledSim {
     chol: Option<Cholesky<f64, Dyn>>,
     rhs: DVector<f64>,
     energy: EnergyBalance,
-    rng: u64,
-    spare_normal: Option<f64>,
+    rng: Gaussian,
 }
 
 pub(crate) fn model_error(e: ttkin::Error) -> Error {
@@ -203,8 +203,7 @@ impl CoupledSim {
             chol: None,
             rhs: DVector::zeros(n),
             energy: EnergyBalance::default(),
-            rng: options.seed ^ 0x5eed_c0de,
-            spare_normal: None,
+            rng: Gaussian::new(options.seed ^ 0x5eed_c0de),
         };
         sim.reset(&vec![0.0; n], None)?;
         Ok(sim)
@@ -237,8 +236,7 @@ impl CoupledSim {
         self.time = 0.0;
         self.ticks = 0;
         self.energy = EnergyBalance::default();
-        self.rng = self.options.seed ^ 0x5eed_c0de;
-        self.spare_normal = None;
+        self.rng = Gaussian::new(self.options.seed ^ 0x5eed_c0de);
         let rates = *self.axes[0].rates();
         self.scheduler = Scheduler::new(&rates);
         for k in 0..n {
@@ -290,7 +288,7 @@ impl CoupledSim {
         for k in 0..n {
             let w = self.windings[k];
             let noise = if w.current_noise > 0.0 {
-                w.current_noise * self.normal()
+                w.current_noise * self.rng.normal()
             } else {
                 0.0
             };
@@ -350,25 +348,6 @@ impl CoupledSim {
         for _ in 0..n {
             self.tick();
         }
-    }
-
-    /// Standard normal sample (SplitMix64 + Box–Muller, both values of each pair used).
-    fn normal(&mut self) -> f64 {
-        if let Some(v) = self.spare_normal.take() {
-            return v;
-        }
-        let mut next = || {
-            self.rng = self.rng.wrapping_add(0x9e37_79b9_7f4a_7c15);
-            let mut z = self.rng;
-            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-            (((z ^ (z >> 31)) >> 11) as f64 + 1.0) / (1u64 << 53) as f64
-        };
-        let (a, b) = (next(), next());
-        let r = (-2.0 * a.ln()).sqrt();
-        let (sin, cos) = (2.0 * std::f64::consts::PI * b).sin_cos();
-        self.spare_normal = Some(r * sin);
-        r * cos
     }
 
     /// Hands every axis a position setpoint (joint space: rad or m, per s, per s²) and a

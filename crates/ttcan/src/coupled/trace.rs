@@ -156,18 +156,28 @@ impl CoupledSim {
         let ticks_per_setpoint = (setpoint_period / self.period).round().max(1.0) as u64;
         let t0 = times[0];
         let duration = times[k - 1] - t0;
-        let total = (duration / self.period).round() as u64 + 1;
-        if total > MAX_RUN_TICKS {
+        for (i, &t) in [(0, &times[0]), (k - 1, &times[k - 1])] {
+            ttkin::budget::check_clock("t", t, self.period).map_err(|e| Error::InvalidParameter {
+                what: format!("t[{i}]"),
+                value: t,
+                reason: crate::error::ttkin_reason(e),
+            })?;
+        }
+        // Counted in f64 and compared before the cast: 1e15 s at 20 kHz is 2e19 ticks, which
+        // saturated u64 and wrapped to 0 rows when one was added.
+        let total = (duration / self.period).round() + 1.0;
+        if total.is_nan() || total > MAX_RUN_TICKS as f64 {
             return Err(Error::InvalidParameter {
                 what: "t".into(),
                 value: duration,
                 reason: format!(
-                    "a run of {duration} s is {total} ticks at {} Hz; at most {MAX_RUN_TICKS} ticks \
+                    "a run of {duration} s is {total:.3e} ticks at {} Hz; at most {MAX_RUN_TICKS} ticks \
                      (the trace keeps every tick): run it in pieces",
                     1.0 / self.period
                 ),
             });
         }
+        let total = total as u64;
         let mut trace = CoupledTrace::with_capacity(total as usize, n);
         let mut buf = vec![0.0; 4 * n];
         let lead = if self.axes[0].config().setpoint_period.is_some() {

@@ -99,6 +99,8 @@ pub struct ChannelReport {
     pub skipped: u64,
     /// True when the trajectory ran to its end.
     pub completed: bool,
+    /// The device name (0x1008) of each axis' drive, as read at boot-up.
+    pub device_names: Vec<Option<String>>,
 }
 
 fn phase_code(p: Phase) -> u8 {
@@ -289,5 +291,6 @@ pub fn run_channel<B: CanBus>(
         tx_full,
         skipped,
         completed,
+        device_names: (0..n).map(|k| master.device_name(k)).collect(),
     }
 }

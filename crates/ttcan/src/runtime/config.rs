@@ -1,15 +1,23 @@
 //! The controller's configuration file (TOML): cycle rate, bit rate, mode, watchdog, and the
-//! channels with their axes (node id, trajectory joint, scaling, limits). Checked once at load:
-//! syntax and unknown keys (the `toml` error names the line and the key), node ids, joint indices,
-//! and the bus budget of every channel ([`crate::canopen::budget`]).
+//! channels with their axes (node id, trajectory joint, scaling, limits) and each drive's bus
+//! description (device file, mode, RPDO/TPDO mapping lists, SDO initialisation list, heartbeat;
+//! the project's defaults when absent). Checked once at load, before the bus is touched: syntax
+//! and unknown keys (the `toml` error names the line and the key), node ids, joint indices, the
+//! device files (malformed lines named), every drive's boot-up plan
+//! ([`super::boot::BootPlan`]: mapped objects exist, are mappable and fit 8 bytes; written
+//! objects exist, are writable, values fit), and the bus budget of every channel from the real
+//! mappings ([`crate::canopen::budget`]).
 
-use super::master::{LinkConfig, WatchdogConfig, MAX_AXES_PER_CHANNEL};
+use super::boot::{default_device, BootError, BootPlan, NodeSetup, SdoInit};
+use super::master::{following_window, LinkConfig, WatchdogConfig, MAX_AXES_PER_CHANNEL};
 use crate::canopen::budget::{check_channel, BusLoad, ChannelTraffic};
 use crate::canopen::cia402::OpMode;
+use crate::canopen::eds::{DeviceFile, DeviceFileError};
 use crate::canopen::Units;
+use std::path::PathBuf;
 
 /// One axis of a channel.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize)]
+#[derive(Debug, Clone, PartialEq, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct AxisEntry {
     /// CANopen node id (1–127).
@@ -25,6 +33,27 @@ pub struct AxisEntry {
     /// Largest plausible |current| from the drive, A.
     #[serde(default = "super::link::default_current")]
     pub max_current: f64,
+    /// The drive's device file (EDS or DCF), relative to the configuration file; absent:
+    /// `ttdrive-sim`'s (`crates/ttcan/devices/ttdrive-sim.eds`).
+    #[serde(default)]
+    pub device_file: Option<PathBuf>,
+    /// Mode of this drive; absent: the configuration's `mode`.
+    #[serde(default)]
+    pub mode: Option<OpMode>,
+    /// RPDO1 objects as `[index, sub-index]` pairs; absent: target, 0x60B2, 0x6040.
+    #[serde(default)]
+    pub rpdo: Option<Vec<(u16, u8)>>,
+    /// TPDO1 objects; absent: 0x6064, 0x6078, 0x6041.
+    #[serde(default)]
+    pub tpdo: Option<Vec<(u16, u8)>>,
+    /// SDO initialisation list (`{ index, sub, value }`, value a number or a text), written in
+    /// order at boot-up after a DCF's parameter values.
+    #[serde(default)]
+    pub sdo: Vec<SdoInit>,
+    /// Producer heartbeat time the drive is given (0x1017), ms; absent: the watchdog's
+    /// `heartbeat_period_ms`.
+    #[serde(default)]
+    pub heartbeat_ms: Option<u16>,
 }
 
 impl AxisEntry {
@@ -79,6 +108,9 @@ pub struct ControllerConfig {
     pub watchdog: WatchdogConfig,
     /// The channels.
     pub channel: Vec<ChannelEntry>,
+    /// Directory that device files are relative to (the configuration file's).
+    #[serde(skip)]
+    pub base_dir: PathBuf,
 }
 
 fn hz() -> f64 {
@@ -119,6 +151,12 @@ pub enum ConfigError {
     /// A channel over the bus budget.
     #[error("{source_name}: {0}", source_name = .1)]
     Budget(crate::canopen::budget::OverBudget, String),
+    /// A device file is missing or malformed (the message names file and line).
+    #[error("{source_name}: channel {channel} {0}", source_name = .1, channel = .2)]
+    DeviceFile(DeviceFileError, String, String),
+    /// A drive's bus description does not fit its device file (node, object, reason).
+    #[error("{source_name}: channel {channel}: {0}", source_name = .1, channel = .2)]
+    Boot(BootError, String, String),
 }
 
 impl ControllerConfig {
@@ -134,6 +172,12 @@ impl ControllerConfig {
                         units: Units::default(),
                         following_error_limit: super::link::default_following(),
                         max_current: super::link::default_current(),
+                        device_file: None,
+                        mode: None,
+                        rpdo: None,
+                        tpdo: None,
+                        sdo: Vec::new(),
+                        heartbeat_ms: None,
                     })
                     .collect(),
             })
@@ -148,15 +192,20 @@ impl ControllerConfig {
             priority: prio(),
             watchdog: WatchdogConfig::default(),
             channel,
+            base_dir: PathBuf::new(),
         }
     }
 
     /// Parses and checks a configuration; `source_name` names the file in messages.
     pub fn from_toml(text: &str, source_name: &str) -> Result<Self, ConfigError> {
-        let c: ControllerConfig = toml::from_str(text).map_err(|e| ConfigError::Parse {
+        let mut c: ControllerConfig = toml::from_str(text).map_err(|e| ConfigError::Parse {
             source_name: source_name.to_string(),
             message: e.to_string(),
         })?;
+        c.base_dir = std::path::Path::new(source_name)
+            .parent()
+            .map(|p| p.to_path_buf())
+            .unwrap_or_default();
         c.check(source_name)?;
         Ok(c)
     }
@@ -184,6 +233,15 @@ impl ControllerConfig {
         }
         let mut loads = Vec::new();
         for (c, ch) in self.channel.iter().enumerate() {
+            // One interface is one bus: its axes in one [[channel]] entry, so that the bus budget
+            // counts all of them (split over two entries each half passed at 49–60 % where the
+            // bus carried 94–114 %) and one thread owns the bus.
+            if let Some(first) = self.channel[..c].iter().position(|o| o.interface == ch.interface) {
+                return Err(invalid(format!(
+                    "channel[{c}].interface = \"{}\": already channel[{first}]'s; give an interface's axes in one [[channel]]",
+                    ch.interface
+                )));
+            }
             if ch.axis.is_empty() || ch.axis.len() > MAX_AXES_PER_CHANNEL {
                 return Err(invalid(format!(
                     "channel[{c}] ({}): {} axes, 1..={MAX_AXES_PER_CHANNEL} allowed",
@@ -216,23 +274,77 @@ impl ControllerConfig {
                         "channel[{c}].axis[{a}].units: every factor must be finite and > 0"
                     )));
                 }
+                if !(ax.max_current.is_finite() && ax.max_current > 0.0) {
+                    // NaN compared false and disabled the run-time current check.
+                    return Err(invalid(format!(
+                        "channel[{c}].axis[{a}].max_current = {}: must be finite and > 0 A",
+                        ax.max_current
+                    )));
+                }
                 if !(ax.following_error_limit.is_finite() && ax.following_error_limit > 0.0) {
                     return Err(invalid(format!(
                         "channel[{c}].axis[{a}].following_error_limit must be > 0"
                     )));
                 }
             }
-            let traffic = ChannelTraffic {
-                axes: ch.axis.len() as u32,
-                cycle_hz: self.cycle_hz,
-                bitrate: self.bitrate,
-                heartbeat_period: self.watchdog.heartbeat_period_ms as f64 / 1000.0,
-            };
+            let plans = self.channel_plans(c, source_name)?;
+            let mut traffic = ChannelTraffic::eight_byte_pdos(ch.axis.len() as u32, self.cycle_hz, self.bitrate, 0.0);
+            traffic.pdo_frames = [0; 9];
+            for p in &plans {
+                traffic.pdo_frames[p.rpdo.len()] += 1;
+                traffic.pdo_frames[p.tpdo.len()] += 1;
+            }
+            // the fastest heartbeat of the channel, for every drive (conservative)
+            let hb = ch
+                .axis
+                .iter()
+                .map(|a| a.heartbeat_ms.unwrap_or(self.watchdog.heartbeat_period_ms))
+                .filter(|&ms| ms > 0)
+                .min()
+                .unwrap_or(0);
+            traffic.heartbeat_period = hb as f64 / 1000.0;
             loads.push(
                 check_channel(&ch.interface, &traffic).map_err(|e| ConfigError::Budget(e, source_name.to_string()))?,
             );
         }
         Ok(loads)
+    }
+
+    /// The boot-up plans of channel `c`'s drives (device files read, bus descriptions checked).
+    pub fn channel_plans(&self, c: usize, source_name: &str) -> Result<Vec<BootPlan>, ConfigError> {
+        let ch = &self.channel[c];
+        let mut default = None;
+        ch.axis
+            .iter()
+            .map(|a| {
+                let device = match &a.device_file {
+                    Some(p) => {
+                        let path = self.base_dir.join(p);
+                        DeviceFile::load(&path).map_err(|e| {
+                            ConfigError::DeviceFile(
+                                e,
+                                source_name.to_string(),
+                                format!("{} node {}:", ch.interface, a.node),
+                            )
+                        })?
+                    }
+                    None => default.get_or_insert_with(default_device).clone(),
+                };
+                let link = a.link();
+                let setup = NodeSetup {
+                    node: a.node,
+                    mode: a.mode.unwrap_or(self.mode),
+                    rpdo: a.rpdo.clone(),
+                    tpdo: a.tpdo.clone(),
+                    sdo: a.sdo.clone(),
+                    heartbeat_ms: a.heartbeat_ms.unwrap_or(self.watchdog.heartbeat_period_ms),
+                    following_window: following_window(&link),
+                    cycle_s: 1.0 / self.cycle_hz,
+                };
+                BootPlan::build(&setup, &device)
+                    .map_err(|e| ConfigError::Boot(e, source_name.to_string(), ch.interface.clone()))
+            })
+            .collect()
     }
 }
 
@@ -245,6 +357,19 @@ mod tests {
         let loads = ControllerConfig::default_layout().check("default").unwrap();
         assert_eq!(loads.len(), 4);
         assert!(loads.iter().all(|l| l.worst < 0.6));
+    }
+
+    #[test]
+    fn nan_or_negative_currents_and_a_split_interface_are_refused() {
+        for v in ["nan", "-1.0", "0.0", "inf"] {
+            let text = format!("[[channel]]\ninterface = \"can0\"\n[[channel.axis]]\nnode = 1\nmax_current = {v}\n");
+            let e = ControllerConfig::from_toml(&text, "ctl.toml").unwrap_err().to_string();
+            assert!(e.contains("max_current"), "{v}: {e}");
+        }
+        let split = "[[channel]]\ninterface = \"can0\"\n[[channel.axis]]\nnode = 1\n[[channel.axis]]\nnode = 2\n\
+                     [[channel]]\ninterface = \"can0\"\n[[channel.axis]]\nnode = 3\n";
+        let e = ControllerConfig::from_toml(split, "ctl.toml").unwrap_err().to_string();
+        assert!(e.contains("already channel[0]'s"), "{e}");
     }
 
     #[test]

@@ -4,8 +4,8 @@
 
 use crate::canopen::cia402::{DriveState, OpMode};
 use crate::canopen::nmt::HeartbeatConsumer;
-use crate::canopen::od;
-use crate::canopen::sdo::{SdoClient, SdoRequest};
+use crate::canopen::pdo::PdoMapping;
+use crate::canopen::sdo::{SdoClient, SdoData};
 use crate::canopen::{ProtocolError, Units};
 
 use super::watchdog::WatchdogConfig;
@@ -95,13 +95,25 @@ pub struct Feedback {
     pub received_cycle: u64,
 }
 
-/// One axis' controller-side state: configuration, protocol clients, last feedback, hold.
+/// One axis' controller-side state: configuration, protocol clients, boot-up progress, last
+/// feedback, hold.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Link {
     pub(super) cfg: LinkConfig,
     pub(super) heartbeat: HeartbeatConsumer,
     pub(super) sdo: SdoClient,
-    pub(super) config_step: u8,
+    /// Mode of operation and the PDO mappings the boot-up configures.
+    pub(super) mode: OpMode,
+    pub(super) rpdo: PdoMapping,
+    pub(super) tpdo: PdoMapping,
+    /// NMT Reset Communication sent; boot-up message seen; NMT Start sent.
+    pub(super) reset_sent: bool,
+    pub(super) booted: bool,
+    pub(super) started: bool,
+    /// Next step of the boot plan.
+    pub(super) boot_step: usize,
+    /// The device name 0x1008 read at boot-up.
+    pub(super) device_name: Option<SdoData>,
     pub(super) sdo_retries: u8,
     pub(super) state: Option<DriveState>,
     pub(super) feedback: Option<Feedback>,
@@ -116,21 +128,31 @@ pub(super) struct Link {
     pub(super) last_target: f64,
 }
 
-/// Number of SDO configuration steps ([`Link::config_request`]).
-pub(super) const CONFIG_STEPS: u8 = 4;
-
 /// SDO timeouts tolerated per drive during configuration (frames can be lost: retry).
 pub const SDO_RETRIES: u8 = 3;
 
 impl Link {
     /// A link for axis `cfg` not yet configured, its clients timed by the watchdog `wd`.
-    pub(super) fn new(cfg: LinkConfig, wd: &WatchdogConfig) -> Result<Link, ProtocolError> {
+    pub(super) fn new(
+        cfg: LinkConfig,
+        wd: &WatchdogConfig,
+        mode: OpMode,
+        rpdo: PdoMapping,
+        tpdo: PdoMapping,
+    ) -> Result<Link, ProtocolError> {
         cfg.units.validate()?;
         Ok(Link {
             cfg,
             heartbeat: HeartbeatConsumer::new(cfg.node, wd.heartbeat_cycles)?,
             sdo: SdoClient::new(cfg.node, wd.sdo_cycles)?,
-            config_step: 0,
+            mode,
+            rpdo,
+            tpdo,
+            reset_sent: false,
+            booted: false,
+            started: false,
+            boot_step: 0,
+            device_name: None,
             sdo_retries: 0,
             state: None,
             feedback: None,
@@ -142,38 +164,5 @@ impl Link {
             hold: 0.0,
             last_target: 0.0,
         })
-    }
-
-    /// The SDO request of configuration step `step` (device type, mode, heartbeat, following
-    /// error window) for `mode` and the watchdog's heartbeat period.
-    pub(super) fn config_request(&self, step: u8, mode: OpMode, wd: &WatchdogConfig) -> SdoRequest {
-        match step {
-            0 => SdoRequest::Upload {
-                index: od::DEVICE_TYPE,
-                sub: 0,
-            },
-            1 => SdoRequest::Download {
-                index: od::MODES_OF_OPERATION,
-                sub: 0,
-                size: 1,
-                value: mode.code() as u8 as u32,
-            },
-            2 => SdoRequest::Download {
-                index: od::HEARTBEAT_TIME,
-                sub: 0,
-                size: 2,
-                value: wd.heartbeat_period_ms as u32,
-            },
-            _ => {
-                let w =
-                    (self.cfg.following_error_limit * self.cfg.units.increments_per_unit).clamp(1.0, i32::MAX as f64);
-                SdoRequest::Download {
-                    index: od::FOLLOWING_ERROR_WINDOW,
-                    sub: 0,
-                    size: 4,
-                    value: w as u32,
-                }
-            }
-        }
     }
 }

@@ -1,8 +1,10 @@
 //! The controller's side of one channel, sans-I/O (read → update → write once per cycle, after
 //! ros2_control): events in ([`ChannelMaster::on_event`]), then [`ChannelMaster::cycle`] with the
-//! joint setpoints writes the RPDOs and the SYNC. It boots the drives (NMT Start), configures them
-//! over SDO (mode 0x6060, heartbeat 0x1017, device type 0x1000 checked), enables them through the
-//! CiA 402 state machine holding their present position, and watches them: missing feedback for
+//! joint setpoints writes the RPDOs and the SYNC. It boots the drives as CiA 302 masters do (NMT
+//! Reset Communication, boot-up message, then the SDO steps of each drive's
+//! [`super::boot::BootPlan`]: identity and profile checked, SDO list, PDO remapping, 0x60C2,
+//! 0x6060, 0x6065, 0x1017; then NMT Start), enables them through the CiA 402 state machine
+//! holding their present position, and watches them: missing feedback for
 //! k cycles, an EMCY, bus-off, a following error, heartbeat loss, a drive leaving Operation
 //! Enabled, a malformed or out-of-range frame from a drive: each brings every axis to a controlled
 //! stop (controlword Quick Stop), with the reason kept. Fixed capacity, no allocation.
@@ -11,14 +13,14 @@ use crate::bus::{BusEvent, BusFault};
 use crate::canopen::cia402::{controlword_towards_enabled, DriveState, OpMode, CW_QUICK_STOP};
 use crate::canopen::emcy::Emcy;
 use crate::canopen::frame::{Cob, Frame, Frames};
-use crate::canopen::nmt::{encode_nmt, encode_sync, NmtCommand};
+use crate::canopen::nmt::{decode_heartbeat, encode_nmt, encode_sync, NmtCommand, NmtState};
 use crate::canopen::od;
-use crate::canopen::pdo::{Rpdo, Tpdo};
-use crate::canopen::sdo::SdoResponse;
+use crate::canopen::sdo::{SdoError, SdoOutcome};
 use crate::canopen::ProtocolError;
 
+use super::boot::{default_device, BootPlan, NodeSetup};
+use super::link::Link;
 pub use super::link::{AxisSetpoint, ChannelCounters, Feedback, LinkConfig, SDO_RETRIES};
-use super::link::{Link, CONFIG_STEPS};
 pub use super::watchdog::{StopReason, WatchdogConfig};
 
 /// Most axes on one channel (the bus budget allows 2 at 1 kHz and 1 Mbit/s).
@@ -27,7 +29,7 @@ pub const MAX_AXES_PER_CHANNEL: usize = 4;
 /// Lifecycle of a channel.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Phase {
-    /// NMT Start sent, SDO configuration running.
+    /// Boot-up: NMT Reset Communication, boot-up messages, SDO steps, NMT Start, first feedback.
     Configure,
     /// Stepping the drives to Operation Enabled.
     Enable,
@@ -43,41 +45,67 @@ pub enum Phase {
 #[derive(Debug, Clone)]
 pub struct ChannelMaster {
     links: [Option<Link>; MAX_AXES_PER_CHANNEL],
+    plans: [Option<BootPlan>; MAX_AXES_PER_CHANNEL],
     n: usize,
-    mode: OpMode,
     wd: WatchdogConfig,
     phase: Phase,
     phase_cycles: u32,
-    started: bool,
     stop: Option<StopReason>,
     stopped_after: Option<u32>,
     counters: ChannelCounters,
+    /// SDO requests that answers called for (segments), sent with the next cycle.
+    sdo_out: Frames,
 }
 
 impl ChannelMaster {
-    /// A controller for `axes` (≤ [`MAX_AXES_PER_CHANNEL`]) in `mode`.
+    /// A controller for `axes` (≤ [`MAX_AXES_PER_CHANNEL`]) in `mode`, each drive booted as
+    /// `ttdrive-sim`'s device file describes it with the project's default PDO mappings (the
+    /// interpolation period 0x60C2 set for a 1 kHz cycle; [`ChannelMaster::with_plans`] for
+    /// other drives and cycles).
     pub fn new(axes: &[LinkConfig], mode: OpMode, wd: WatchdogConfig) -> Result<Self, ProtocolError> {
-        if axes.len() > MAX_AXES_PER_CHANNEL || axes.is_empty() {
+        let device = default_device();
+        let mut plans = Vec::with_capacity(axes.len());
+        for a in axes {
+            let setup = NodeSetup {
+                node: a.node,
+                mode,
+                rpdo: None,
+                tpdo: None,
+                sdo: Vec::new(),
+                heartbeat_ms: wd.heartbeat_period_ms,
+                following_window: following_window(a),
+                cycle_s: 1e-3,
+            };
+            plans.push(BootPlan::build(&setup, &device).map_err(|_| ProtocolError::BadNode(a.node))?);
+        }
+        Self::with_plans(axes, &plans, wd)
+    }
+
+    /// A controller for `axes` booted by `plans` (one per axis, same order).
+    pub fn with_plans(axes: &[LinkConfig], plans: &[BootPlan], wd: WatchdogConfig) -> Result<Self, ProtocolError> {
+        if axes.len() > MAX_AXES_PER_CHANNEL || axes.is_empty() || plans.len() != axes.len() {
             return Err(ProtocolError::OutOfRange {
                 what: "axes per channel",
                 value: axes.len() as i64,
             });
         }
         let mut links = [None; MAX_AXES_PER_CHANNEL];
-        for (k, a) in axes.iter().enumerate() {
-            links[k] = Some(Link::new(*a, &wd)?);
+        let mut boot = [None; MAX_AXES_PER_CHANNEL];
+        for (k, (a, p)) in axes.iter().zip(plans).enumerate() {
+            links[k] = Some(Link::new(*a, &wd, p.mode, p.rpdo, p.tpdo)?);
+            boot[k] = Some(*p);
         }
         Ok(ChannelMaster {
             links,
+            plans: boot,
             n: axes.len(),
-            mode,
             wd,
             phase: Phase::Configure,
             phase_cycles: 0,
-            started: false,
             stop: None,
             stopped_after: None,
             counters: ChannelCounters::default(),
+            sdo_out: Frames::new(),
         })
     }
 
@@ -126,6 +154,12 @@ impl ChannelMaster {
     /// [`ChannelMaster::cycle`].
     pub fn feedback_in_step(&self, k: usize) -> bool {
         self.links.get(k).copied().flatten().is_some_and(|l| l.in_step)
+    }
+
+    /// The device name (0x1008) axis `k`'s drive reported at boot-up.
+    pub fn device_name(&self, k: usize) -> Option<String> {
+        let l = self.links.get(k).copied().flatten()?;
+        l.device_name.map(|d| String::from_utf8_lossy(d.bytes()).into_owned())
     }
 
     /// Drive state of axis `k` from its last statusword.
@@ -190,8 +224,8 @@ impl ChannelMaster {
         {
             let Some(l) = self.links[k].as_mut() else { return };
             match cob {
-                Cob::Tpdo1(_) => match Tpdo::decode(f) {
-                    Ok((_, t)) => match DriveState::from_statusword(t.statusword) {
+                Cob::Tpdo1(_) => match decode_feedback(l, f) {
+                    Ok(t) => match DriveState::from_statusword(t.statusword) {
                         Ok(s) => {
                             let current = l.cfg.units.permille_to_current(t.current);
                             if current.abs() > l.cfg.max_current {
@@ -233,16 +267,49 @@ impl ChannelMaster {
                         stop = Some(StopReason::BadFrame(node));
                     }
                 },
-                Cob::Heartbeat(_) => self.counters.malformed += u64::from(!l.heartbeat.on_frame(f)),
-                Cob::SdoTx(_) => match l.sdo.on_frame(f) {
-                    Some(Ok(SdoResponse::Uploaded {
-                        index: od::DEVICE_TYPE,
-                        value,
-                        ..
-                    })) if value & 0xFFFF != 402 => {
-                        stop = Some(StopReason::ConfigurationFailed(node));
+                Cob::Heartbeat(_) => {
+                    if let Ok((_, NmtState::BootUp)) = decode_heartbeat(f) {
+                        if l.started {
+                            stop = Some(StopReason::Rebooted(node));
+                        } else if l.reset_sent {
+                            l.booted = true;
+                        }
                     }
-                    Some(Ok(_)) => l.config_step += 1,
+                    self.counters.malformed += u64::from(!l.heartbeat.on_frame(f));
+                }
+                Cob::SdoTx(_) => match l.sdo.on_frame(f, &mut self.sdo_out) {
+                    Some(Ok(outcome)) => {
+                        let expect = self.plans[k].and_then(|p| p.step(l.boot_step)).and_then(|s| s.expect);
+                        match (outcome, expect) {
+                            (SdoOutcome::Read { index, sub, data }, Some(e))
+                                if data.as_u64().unwrap_or(u64::MAX) as u32 & e.mask != e.value =>
+                            {
+                                stop = Some(StopReason::Mismatch {
+                                    node,
+                                    index,
+                                    sub,
+                                    got: data.as_u64().unwrap_or(0) as u32 & e.mask,
+                                    expected: e.value,
+                                });
+                            }
+                            (
+                                SdoOutcome::Read {
+                                    index: od::DEVICE_NAME,
+                                    data,
+                                    ..
+                                },
+                                _,
+                            ) => {
+                                l.device_name = Some(data);
+                                l.boot_step += 1;
+                            }
+                            _ => l.boot_step += 1,
+                        }
+                    }
+                    Some(Err(SdoError::Aborted { index, sub, code })) => {
+                        self.counters.sdo_failures += 1;
+                        stop = Some(StopReason::SdoAborted(node, index, sub, code));
+                    }
                     Some(Err(_)) => {
                         self.counters.sdo_failures += 1;
                         stop = Some(StopReason::ConfigurationFailed(node));
@@ -263,15 +330,12 @@ impl ChannelMaster {
     pub fn cycle(&mut self, setpoints: &[AxisSetpoint], out: &mut Frames) {
         self.counters.cycles += 1;
         self.phase_cycles = self.phase_cycles.saturating_add(1);
-        if !self.started {
-            self.started = true;
-            if let Ok(f) = encode_nmt(NmtCommand::Start, 0) {
-                out.push(f);
-            }
+        for f in self.sdo_out.as_slice() {
+            out.push(*f);
         }
+        self.sdo_out.clear();
         self.watchdog();
         let phase = self.phase;
-        let mode = self.mode;
         let wd = self.wd;
         let mut all_configured = true;
         let mut all_enabled = true;
@@ -279,11 +343,28 @@ impl ChannelMaster {
         let mut bad_setpoint = None;
         for k in 0..self.n {
             let Some(mut l) = self.links[k] else { continue };
-            // SDO configuration, one transfer at a time per node
-            if phase == Phase::Configure && l.config_step < CONFIG_STEPS && !l.sdo.busy() {
-                let req = l.config_request(l.config_step, mode, &wd);
-                if let Some(f) = l.sdo.start(req) {
+            let mode = l.mode;
+            // boot-up: reset communication, boot-up message, SDO steps one at a time, NMT Start
+            let steps = self.plans[k].map_or(0, |p| p.len());
+            if phase == Phase::Configure {
+                let cmd = if !l.reset_sent {
+                    l.reset_sent = true;
+                    Some(NmtCommand::ResetCommunication)
+                } else if l.booted && l.boot_step >= steps && !l.started {
+                    l.started = true;
+                    Some(NmtCommand::Start)
+                } else {
+                    None
+                };
+                if let Some(Ok(f)) = cmd.map(|c| encode_nmt(c, l.cfg.node)) {
                     out.push(f);
+                }
+                if l.booted && l.boot_step < steps && !l.sdo.busy() {
+                    if let Some(step) = self.plans[k].and_then(|p| p.step(l.boot_step)) {
+                        if let Some(f) = l.sdo.start(step.job) {
+                            out.push(f);
+                        }
+                    }
                 }
             }
             if l.sdo.tick().is_some() {
@@ -294,7 +375,7 @@ impl ChannelMaster {
                     bad_setpoint.get_or_insert(StopReason::ConfigurationFailed(l.cfg.node));
                 }
             }
-            all_configured &= l.config_step >= CONFIG_STEPS && l.feedback.is_some();
+            all_configured &= l.started && l.feedback.is_some();
             let state = l.state.unwrap_or(DriveState::NotReadyToSwitchOn);
             let (cw, target_q) = match phase {
                 Phase::Configure => (0, l.feedback.map(|f| f.q).unwrap_or(0.0)),
@@ -327,13 +408,13 @@ impl ChannelMaster {
             };
             match (encoded, offset) {
                 (Ok(target), Ok(torque_offset)) => {
-                    if let Ok(f) = (Rpdo {
-                        target,
-                        torque_offset,
-                        controlword: cw,
-                    })
-                    .encode(l.cfg.node)
-                    {
+                    let packed = l.rpdo.pack(Cob::Rpdo1(l.cfg.node).id(), |e| match e.index {
+                        od::CONTROLWORD => cw as i64,
+                        od::TORQUE_OFFSET => torque_offset as i64,
+                        od::MODES_OF_OPERATION => mode.code() as i64,
+                        _ => target as i64,
+                    });
+                    if let Ok(f) = packed {
                         out.push(f);
                     }
                     l.last_target = target_q;
@@ -363,7 +444,12 @@ impl ChannelMaster {
                 self.phase_cycles = 0;
             }
             Phase::Configure | Phase::Enable if self.phase_cycles > wd.enable_cycles => {
-                self.request_stop(StopReason::EnableTimeout)
+                let silent = self.links[..self.n].iter().flatten().find(|l| !l.booted);
+                let reason = match (self.phase, silent) {
+                    (Phase::Configure, Some(l)) => StopReason::NoBootUp(l.cfg.node),
+                    _ => StopReason::EnableTimeout,
+                };
+                self.request_stop(reason)
             }
             Phase::Stopping if all_stopped || self.phase_cycles > wd.stop_cycles => {
                 self.stopped_after = Some(self.phase_cycles);
@@ -419,4 +505,34 @@ impl ChannelMaster {
             self.request_stop(r);
         }
     }
+}
+
+/// Following-error window of an axis for 0x6065, increments.
+pub fn following_window(a: &LinkConfig) -> u32 {
+    (a.following_error_limit * a.units.increments_per_unit).clamp(1.0, i32::MAX as f64) as u32
+}
+
+/// The fields of a TPDO the controller uses, by the link's mapping (current 0 when not mapped).
+struct TpdoFields {
+    position: i32,
+    current: i16,
+    statusword: u16,
+}
+
+fn decode_feedback(l: &Link, f: &Frame) -> Result<TpdoFields, ProtocolError> {
+    let values = l.tpdo.unpack(f)?;
+    let mut t = TpdoFields {
+        position: 0,
+        current: 0,
+        statusword: 0,
+    };
+    for (e, raw) in values.iter().take(l.tpdo.entries().len()) {
+        match (e.index, e.sub) {
+            (od::POSITION_ACTUAL, 0) => t.position = *raw as u32 as i32,
+            (od::CURRENT_ACTUAL, 0) => t.current = *raw as u16 as i16,
+            (od::STATUSWORD, 0) => t.statusword = *raw as u16,
+            _ => {}
+        }
+    }
+    Ok(t)
 }

@@ -4,8 +4,10 @@
 //! trajectories ([`trajectory`]), the configuration file ([`config`]) and the per-channel thread
 //! ([`channel`]) that drives a controller over a [`crate::bus::CanBus`].
 
+pub mod boot;
 pub mod channel;
 pub mod config;
+pub mod exit;
 pub mod link;
 pub mod master;
 pub mod rt;

@@ -156,9 +156,7 @@ pub fn approach(from: f64, to: f64, duration: f64, t: f64) -> (f64, f64) {
     if duration <= 0.0 {
         return (to, 0.0);
     }
-    let s = (t / duration).clamp(0.0, 1.0);
-    let p = s * s * s * (10.0 - 15.0 * s + 6.0 * s * s);
-    let v = 30.0 * s * s * (1.0 - s) * (1.0 - s) / duration;
+    let [p, v, _, _] = ttkin::traj::cartesian::TimeLaw::Quintic.eval(t, duration);
     (from + (to - from) * p, (to - from) * v)
 }
 

@@ -78,8 +78,28 @@ pub enum StopReason {
     LeftOperationEnabled(u8),
     /// `node` sent a malformed or out-of-range frame.
     BadFrame(u8),
-    /// Configuration of `node` over SDO failed.
+    /// Configuration of `node` over SDO failed (no answer after the retries, or out of sequence).
     ConfigurationFailed(u8),
+    /// `node` aborted the boot-up SDO transfer of `index:sub` with this abort code.
+    SdoAborted(u8, u16, u8, u32),
+    /// `node` read `got` from `index:sub` where the device file or the profile says `expected`
+    /// (identity 0x1018, device type 0x1000, supported modes 0x6502).
+    Mismatch {
+        /// Node.
+        node: u8,
+        /// Object index.
+        index: u16,
+        /// Sub-index.
+        sub: u8,
+        /// Value read (the compared bits).
+        got: u32,
+        /// Value expected.
+        expected: u32,
+    },
+    /// `node` sent no boot-up message after NMT Reset Communication.
+    NoBootUp(u8),
+    /// `node` sent a boot-up message after its configuration: it was reset and lost it.
+    Rebooted(u8),
     /// The drives did not all reach Operation Enabled in time.
     EnableTimeout,
     /// A setpoint could not be encoded (NaN, or outside the integer range).
@@ -99,6 +119,23 @@ impl std::fmt::Display for StopReason {
             StopReason::LeftOperationEnabled(n) => write!(f, "node {n}: left Operation Enabled"),
             StopReason::BadFrame(n) => write!(f, "node {n}: malformed or out-of-range frame"),
             StopReason::ConfigurationFailed(n) => write!(f, "node {n}: SDO configuration failed"),
+            StopReason::SdoAborted(n, i, s, c) => write!(
+                f,
+                "node {n}: SDO {i:#06x}:{s} aborted at boot-up with code {c:#010x} ({})",
+                crate::canopen::sdo::abort_text(c)
+            ),
+            StopReason::Mismatch {
+                node,
+                index,
+                sub,
+                got,
+                expected,
+            } => write!(
+                f,
+                "node {node}: {index:#06x}:{sub} reads {got:#x}, expected {expected:#x} (wrong drive or device file)"
+            ),
+            StopReason::NoBootUp(n) => write!(f, "node {n}: no boot-up message after NMT Reset Communication"),
+            StopReason::Rebooted(n) => write!(f, "node {n}: boot-up message while running (the drive was reset)"),
             StopReason::EnableTimeout => write!(f, "drives not enabled in time"),
             StopReason::BadSetpoint(n) => write!(f, "node {n}: setpoint not encodable"),
         }

@@ -175,6 +175,23 @@ pub fn estimate(t: &[f64], p: &[[f64; 3]], opts: &EstimateOptions) -> Result<Est
             idx.push(i);
         }
     }
+    if let (Some(&a), Some(&b)) = (idx.first(), idx.last()) {
+        // The fit integrates the window in steps of at most `step`, a node and its sensitivities
+        // each: bounded before allocating, and the clock must carry the step at both ends.
+        let node =
+            std::mem::size_of::<super::sensitivity::Node>() + 2 * std::mem::size_of::<super::sensitivity::Sens>();
+        let limit = |e: crate::Error| EstimateError::Option {
+            what: "t",
+            message: match e {
+                crate::Error::InvalidArgument { reason, .. } => reason,
+                other => other.to_string(),
+            },
+        };
+        crate::budget::check_bytes("t", (t[b] - t[a]) / opts.step + 2.0, node).map_err(limit)?;
+        for i in [a, b] {
+            crate::budget::check_clock("t", t[i], opts.step).map_err(limit)?;
+        }
+    }
     let nonfinite = t.len() - idx.len();
     if idx.len() < need {
         return Err(EstimateError::TooFew {

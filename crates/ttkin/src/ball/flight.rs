@@ -45,8 +45,28 @@ impl BallState {
         }
     }
 
-    /// Checks that every component is finite; `what` names the argument.
+    /// Checks that every component is finite and within the ball's physical range
+    /// ([`MAX_POSITION`], [`MAX_SPEED`], [`MAX_SPIN`]: beyond them the drag and Magnus terms
+    /// overflow or the flight is not a table-tennis ball's); `what` names the argument.
     pub fn validate(&self, what: &str) -> Result<()> {
+        self.validate_finite(what)?;
+        for (part, v, max, unit) in [
+            ("position", &self.p, MAX_POSITION, "m"),
+            ("velocity", &self.v, MAX_SPEED, "m/s"),
+            ("spin", &self.w, MAX_SPIN, "rad/s"),
+        ] {
+            if !(v.norm() <= max) {
+                return Err(Error::invalid(
+                    what,
+                    format!("|{part}| = {:e} {unit}, at most {max:e} {unit} for a ball", v.norm()),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Checks that every component is finite; `what` names the argument.
+    fn validate_finite(&self, what: &str) -> Result<()> {
         let all = [self.t]
             .into_iter()
             .chain(self.p.iter().copied())
@@ -64,6 +84,13 @@ impl BallState {
         Ok(())
     }
 }
+
+/// Largest distance of a ball from the world origin (m) a flight accepts.
+pub const MAX_POSITION: f64 = 1e4;
+/// Largest ball speed (m/s) a flight accepts (the fastest smash is about 35 m/s).
+pub const MAX_SPEED: f64 = 1e3;
+/// Largest ball spin (rad/s) a flight accepts (a strong loop is about 1000 rad/s).
+pub const MAX_SPIN: f64 = 1e5;
 
 /// What happened at an event.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -172,6 +199,16 @@ impl Flight {
         Ok(())
     }
 
+    /// Checks that a flight from `s` up to the time `t_end` (s) is bounded work: its clock advances
+    /// by this flight's step at both ends ([`crate::budget::check_clock`]) and it takes at most
+    /// [`crate::budget::MAX_STEPS`] steps. `what` names the argument that sets `t_end`.
+    pub fn check_span(&self, what: &str, s: &BallState, t_end: f64) -> Result<()> {
+        crate::budget::check_clock("state.t", s.t, self.step)?;
+        crate::budget::check_clock(what, t_end, self.step)?;
+        crate::budget::check_steps(what, (t_end - s.t).max(0.0), self.step)?;
+        Ok(())
+    }
+
     /// One RK4 step of length `h` (s) without events (spin constant).
     pub fn rk4(&self, s: &BallState, h: f64) -> BallState {
         let m = &self.model;
@@ -267,6 +304,11 @@ impl Flight {
         while cur.t < t_end {
             let h = self.step.min(t_end - cur.t);
             let next = self.rk4(&cur, h);
+            if !(next.t > cur.t) {
+                // The clock no longer advances (|t| so large that t + h == t; the entry points
+                // refuse such times, see `check_span`): stop rather than loop for ever.
+                return (cur, None);
+            }
             let (mut lo, mut p_lo) = (0.0, cur.p);
             for j in 1..=samples {
                 let (tau, p) = if j == samples {

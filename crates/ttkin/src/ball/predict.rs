@@ -47,6 +47,9 @@ pub fn predict(flight: &Flight, state: &BallState, times: &[f64]) -> Result<Pred
     flight.validate()?;
     state.validate("state")?;
     check_times(times, state.t)?;
+    if let Some(&last) = times.last() {
+        flight.check_span("times", state, last)?;
+    }
     let mut cur = *state;
     let mut events = Vec::new();
     let mut end = None;
@@ -95,6 +98,7 @@ pub fn crossing(flight: &Flight, state: &BallState, plane: &Plane, t_max: f64) -
             value: t_max,
         });
     }
+    flight.check_span("t_max", state, t_max)?;
     let (_, events) = flight.run(state, t_max, Some(plane));
     let mut bounces = Vec::new();
     for e in events {

@@ -70,7 +70,7 @@ impl Default for ClikOptions {
 }
 
 /// How a tracked motion ended.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum ClikStatus {
     /// Every sample tracked with the full task velocity.
     Completed,
@@ -123,7 +123,7 @@ impl std::fmt::Display for ClikStatus {
 }
 
 /// Arrays of a tracked motion, row-major, one row per sample (N rows).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ClikResult {
     /// Sample times (s), N.
     pub time: Vec<f64>,

@@ -3,6 +3,7 @@
 
 use crate::error::{check_finite, Error, Result};
 use crate::task::Task;
+use crate::traj::cartesian::TimeLaw;
 
 /// A task trajectory sampled at the control rate: task coordinates ([`Task::coordinates`]) and
 /// their rates per sample, row-major N × dim each.
@@ -99,9 +100,7 @@ impl TaskTrajectory {
         let mut x = Vec::with_capacity((steps + 1) * d);
         let mut xdot = Vec::with_capacity((steps + 1) * d);
         for k in 0..=steps {
-            let tau = k as f64 / steps as f64;
-            let s = tau * tau * tau * (10.0 - 15.0 * tau + 6.0 * tau * tau);
-            let sd = 30.0 * tau * tau * (1.0 - tau) * (1.0 - tau) / duration;
+            let [s, sd, _, _] = TimeLaw::Quintic.eval(k as f64 / steps as f64 * duration, duration);
             for i in 0..d {
                 x.push(x0[i] + s * (x1[i] - x0[i]));
                 xdot.push(sd * (x1[i] - x0[i]));

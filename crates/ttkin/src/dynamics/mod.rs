@@ -30,7 +30,9 @@ pub mod cache;
 pub mod crba;
 pub mod energy;
 pub mod forward;
+pub mod interval;
 pub mod model;
+pub mod peak;
 pub mod profile;
 pub mod rnea;
 
@@ -38,6 +40,7 @@ use nalgebra::Vector3;
 
 pub use cache::DynamicsCache;
 pub use model::{Dynamics, DynamicsData};
+pub use peak::{EffortPeak, PeakStop};
 pub use profile::{EffortViolation, TorqueProfile};
 
 /// Standard gravity in a z-up base frame, m/s².

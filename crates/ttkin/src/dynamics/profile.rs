@@ -6,11 +6,12 @@
 
 use super::model::Dynamics;
 use super::Wrench;
+use crate::effort::EffortLimits;
 use crate::error::Result;
 
 /// Torques along a planned motion: joint side (rigid body + armature + friction), motor side and
 /// current, with the effort-limit check of the patent's step S105.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct TorqueProfile {
     /// Number of joints n.
     pub dof: usize,
@@ -22,7 +23,8 @@ pub struct TorqueProfile {
     pub current: Vec<f64>,
     /// Largest |joint torque| per joint over the profile (N·m or N).
     pub peak: Vec<f64>,
-    /// Every (sample, joint) whose |joint torque| exceeds the joint's effort limit.
+    /// Every (sample, joint) whose |joint torque| exceeds the joint's effective effort limit at
+    /// the sample's speed ([`crate::effort`]).
     pub violations: Vec<EffortViolation>,
 }
 
@@ -34,7 +36,7 @@ impl TorqueProfile {
 }
 
 /// One sample at which a joint needs more than its effort limit.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct EffortViolation {
     /// Index of the sample in the trajectory.
     pub sample: usize,
@@ -42,14 +44,16 @@ pub struct EffortViolation {
     pub joint: usize,
     /// Required joint torque (N·m) or force (N).
     pub torque: f64,
-    /// The joint's effort limit (N·m or N).
+    /// The joint's effective effort limit at the sample's speed (N·m or N).
     pub limit: f64,
 }
 
 impl Dynamics {
     /// Torque profile of a planned motion sampled at N instants: `q`, `qd`, `qdd` are N × n
     /// row-major. Joint torques include friction; motor torques are τ/G; currents τ_motor/k_t.
-    /// Every |τ| above a joint's effort limit is listed (not an error: the plan is infeasible).
+    /// Every |τ| above a joint's effective effort limit at the sample's speed is listed (not an
+    /// error: the plan is infeasible). Only the samples are checked: for a bound over every
+    /// instant of a trajectory see [`Dynamics::effort_peak`].
     pub fn torque_profile(
         &self,
         q: &[f64],
@@ -66,7 +70,7 @@ impl Dynamics {
         let mut current = vec![f64::NAN; joint.len()];
         let mut peak = vec![0.0f64; n];
         let mut violations = Vec::new();
-        let limits = self.chain.limits();
+        let limits = EffortLimits::of(&self.chain);
         for k in 0..count {
             for i in 0..n {
                 let idx = k * n + i;
@@ -82,15 +86,14 @@ impl Dynamics {
                 }
                 let t = joint[idx];
                 peak[i] = peak[i].max(t.abs());
-                if let Some(limit) = limits[i].effort {
-                    if t.abs() > limit {
-                        violations.push(EffortViolation {
-                            sample: k,
-                            joint: i,
-                            torque: t,
-                            limit,
-                        });
-                    }
+                let limit = limits.at(i, qd[idx]);
+                if limit.is_finite() && t.abs() > limit {
+                    violations.push(EffortViolation {
+                        sample: k,
+                        joint: i,
+                        torque: t,
+                        limit,
+                    });
                 }
             }
         }

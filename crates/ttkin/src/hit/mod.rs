@@ -15,8 +15,10 @@
 //! 3. the stroke: current state → (q, q̇, q̈ = 0) at the hit time → rest at the ready pose, a
 //!    quintic or a jerk-limited time-optimal trajectory ([`crate::traj::jerk`]), whichever meets
 //!    the hit time within the limits ([`StrokeProfile::Auto`]);
-//! 4. torques by inverse dynamics with joint friction (the drives' feed-forward) at check points,
-//!    against the effort limits.
+//! 4. torques by inverse dynamics with joint friction (the drives' feed-forward) against the
+//!    effective effort limits ([`crate::effort`]: the robot file's or the drive's, whichever is
+//!    smaller, falling with speed where the drive's bus voltage limits it) at every instant: a
+//!    certified bound of the peak, not check points ([`crate::dynamics::peak`]).
 //!
 //! Infeasible requests give a [`HitStatus`], not an error: too early (the plan is made for the
 //! earliest feasible hit time, [`HitPlan::earliest_t_hit`]), unreachable, singular, a hit speed
@@ -32,11 +34,12 @@ use rayon::prelude::*;
 
 use crate::chain::Chain;
 use crate::dynamics::{Dynamics, DynamicsData};
+use crate::effort::EffortLimits;
 use crate::error::{check_finite, check_vector, Error, Result};
 use crate::ik::Analytic;
 use crate::traj::limits::{KinematicLimits, Violation};
 use crate::traj::{JointState, JointTrajectory};
-pub use racket::{racket_frame, Racket, DEFAULT_HANDLE};
+pub use racket::{racket_axes, racket_frame, racket_state_batch, Racket, DEFAULT_HANDLE, RACKET_STATE_LEN};
 
 /// Standard gravity (m/s², base frame: base z up).
 pub const GRAVITY: [f64; 3] = [0.0, 0.0, -9.81];
@@ -46,7 +49,7 @@ pub const GRAVITY: [f64; 3] = [0.0, 0.0, -9.81];
 pub const DEFAULT_JERK_PER_ACCELERATION: f64 = 200.0;
 
 /// Hit parameters: where the racket is, how it moves, and when.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Hit {
     /// Racket pose at the hit: racket frame (origin at the centre, z = face normal) in the base
     /// frame (m).
@@ -59,12 +62,21 @@ pub struct Hit {
 
 impl Hit {
     /// A hit from its racket pose (base frame, m), racket-centre twist (base axes, m/s, rad/s) and
-    /// hit time (s from now); checks finiteness and t > 0.
+    /// hit time (s from now); checks finiteness and 0 < t ≤ [`crate::traj::duration::MAX_DURATION`].
     pub fn new(pose: IsometryMatrix3<f64>, twist: [f64; 6], t: f64) -> Result<Hit> {
         check_finite("twist", &twist)?;
         check_finite("pose", pose.translation.vector.as_slice())?;
         check_finite("pose", pose.rotation.matrix().as_slice())?;
         crate::traj::check_duration("t", t)?;
+        let max = crate::traj::duration::MAX_DURATION;
+        if t > max {
+            // A later hit cannot be planned (no stroke is longer); refused here, not as an effort
+            // limit with an infinite ratio or a sample count of the stroke.
+            return Err(crate::Error::invalid(
+                "t",
+                format!("the hit time must be at most {max} s from now (the longest stroke), got {t} s"),
+            ));
+        }
         Ok(Hit { pose, twist, t })
     }
 
@@ -101,7 +113,7 @@ impl Hit {
 }
 
 /// The family of the hit leg of a stroke.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum StrokeProfile {
     /// The quintic when it meets the hit time within the limits, else the jerk-limited stroke.
     Auto,
@@ -136,7 +148,7 @@ impl StrokeProfile {
 }
 
 /// Which part of the racket pose the hit prescribes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum HitTask {
     /// Full pose for a chain of ≤ 6 joints, the 5-D racket task for a redundant chain.
     Auto,
@@ -148,7 +160,7 @@ pub enum HitTask {
 }
 
 /// Planner settings.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct HitOptions {
     /// Family of the hit leg.
     pub profile: StrokeProfile,
@@ -161,14 +173,16 @@ pub struct HitOptions {
     pub gravity: [f64; 3],
     /// Check (and retime for) the effort limits by inverse dynamics; off: kinematic limits only.
     pub check_effort: bool,
-    /// Evenly spaced instants per leg at which torques are checked against the effort limits (≥ 2).
-    pub effort_points: usize,
+    /// Tolerance (ratio units) of the reported [`HitPlan::effort_ratio`]: the certified bound of
+    /// the peak |τ|/limit is within it of the ratio reported (> 0; the feasibility decision itself
+    /// is exact, [`crate::dynamics::peak`]).
+    pub effort_tolerance: f64,
     /// Latest hit time (s) the earliest-feasible search tries.
     pub max_t_hit: f64,
 }
 
 impl Default for HitOptions {
-    /// Auto profile and task, default jerk limits, standard gravity, 12 effort points per leg,
+    /// Auto profile and task, default jerk limits, standard gravity, effort ratio to 1e-4,
     /// search up to 10 s.
     fn default() -> Self {
         HitOptions {
@@ -177,14 +191,14 @@ impl Default for HitOptions {
             jerk: None,
             gravity: GRAVITY,
             check_effort: true,
-            effort_points: 12,
+            effort_tolerance: 1e-4,
             max_t_hit: 10.0,
         }
     }
 }
 
 /// How a plan came out.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum HitStatus {
     /// On time and within every limit.
     Ok,
@@ -223,7 +237,7 @@ impl HitStatus {
 }
 
 /// Every product of planning one hit. Joint values in rad or m, times in s from now.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct HitPlan {
     /// The request.
     pub hit: Hit,
@@ -258,9 +272,14 @@ pub struct HitPlan {
     pub return_duration: f64,
     /// Kinematic limit violations of the trajectory (exact peaks), empty when within limits.
     pub violations: Vec<Violation>,
-    /// Largest |joint torque| (N·m or N, with friction) per joint at the effort check points.
+    /// Largest |joint torque| (N·m or N, with friction) per joint over the stroke (at the instants
+    /// the certified peak search evaluated; within the effort tolerance of the true peak for the
+    /// joints whose limit does not depend on speed).
     pub peak_effort: Vec<f64>,
-    /// Largest |τ|/effort limit over joints and check points (0 without dynamics or limits).
+    /// Largest |τ(t)|/effective effort limit over joints and the whole stroke, every instant
+    /// ([`crate::effort`]: the robot file's limit or the drive's, whichever is smaller at q̇(t)):
+    /// a value the stroke takes, within `effort_tolerance` of the certified peak (0 without
+    /// dynamics or limits).
     pub effort_ratio: f64,
 }
 
@@ -280,7 +299,7 @@ pub struct HitPlanner {
     analytic: Option<Analytic>,
     racket: Racket,
     limits: KinematicLimits,
-    effort: Vec<f64>,
+    effort: EffortLimits,
     options: HitOptions,
     ready: Vec<f64>,
 }
@@ -315,12 +334,15 @@ impl HitPlanner {
             None => accel.iter().map(|a| a * DEFAULT_JERK_PER_ACCELERATION).collect(),
         };
         let limits = KinematicLimits::from_chain(chain, Some(&jerk))?;
-        if options.effort_points < 2 {
-            return Err(Error::invalid("effort_points", "need at least 2 check points per leg"));
+        if !(options.effort_tolerance > 0.0 && options.effort_tolerance.is_finite()) {
+            return Err(Error::invalid(
+                "effort_tolerance",
+                format!("need a finite tolerance > 0, got {}", options.effort_tolerance),
+            ));
         }
         check_finite("gravity", &options.gravity)?;
         crate::traj::check_duration("max_t_hit", options.max_t_hit)?;
-        let effort = lim.iter().map(|l| l.effort.unwrap_or(f64::INFINITY)).collect();
+        let effort = EffortLimits::of(chain);
         Ok(HitPlanner {
             chain: chain.clone(),
             dynamics: if options.check_effort {
@@ -332,7 +354,7 @@ impl HitPlanner {
             racket: Racket::for_chain(chain),
             limits,
             effort,
-            ready: default_ready(chain),
+            ready: chain.ready(),
             options,
         })
     }
@@ -352,13 +374,18 @@ impl HitPlanner {
         &self.limits
     }
 
+    /// Effective effort limits used ([`crate::effort`]).
+    pub fn effort_limits(&self) -> &EffortLimits {
+        &self.effort
+    }
+
     /// The options.
     pub fn options(&self) -> &HitOptions {
         &self.options
     }
 
-    /// Default rest configuration: gantry6 (0, 0, 0, 0.6, 0.6, 0), mobile8 seed 000's start,
-    /// otherwise the middle of each joint's position limits (0 where unbounded).
+    /// Default rest configuration: the chain's [`Chain::ready`] (gantry6 (0, 0, 0, 0.6, 0.6, 0),
+    /// mobile8 seed 000's start; otherwise the middle of each joint's position limits).
     pub fn default_ready(&self) -> &[f64] {
         &self.ready
     }
@@ -465,25 +492,6 @@ impl HitPlanner {
         }
         stroke::plan_stroke(self, &mut plan, data)?;
         Ok(plan)
-    }
-}
-
-/// Default rest configuration of a chain (see [`HitPlanner::default_ready`]).
-fn default_ready(chain: &Chain) -> Vec<f64> {
-    match chain.name() {
-        "gantry6" if chain.dof() == 6 => vec![0.0, 0.0, 0.0, 0.6, 0.6, 0.0],
-        "mobile8" if chain.dof() == 8 => crate::robots::mobile8_start().to_vec(),
-        _ => chain
-            .limits()
-            .iter()
-            .map(|l| {
-                if l.lower.is_finite() && l.upper.is_finite() {
-                    0.5 * (l.lower + l.upper)
-                } else {
-                    0.0f64.clamp(l.lower, l.upper)
-                }
-            })
-            .collect(),
     }
 }
 

@@ -3,7 +3,8 @@
 //! Racket frame (one convention for every robot): origin at the racket centre, z axis along the
 //! face normal (the hitting side), x axis along the handle (from the grip towards the centre),
 //! y = z × x. A robot's tool frame carries the racket at a fixed pose
-//! [`Racket::in_tool`] (the racket frame in the tool frame):
+//! [`Racket::in_tool`] (the racket frame in the tool frame), data of the robot
+//! ([`Chain::racket`], `racket = { xyz, rpy }` in a robot file):
 //! - `gantry6` (seed 002): the tool frame *is* the racket frame (identity);
 //! - `mobile8` (seed 000): the centre is 0.15 m along tool z and the face normal is tool x
 //!   ([`crate::task::SEED_RACKET_OFFSET`], the 5-D task of seed 000), so racket x = tool z,
@@ -24,12 +25,10 @@ pub struct Racket {
 }
 
 impl Racket {
-    /// The racket of a built-in robot, found by chain name (see the module doc); the tool frame
-    /// for any other chain.
+    /// The racket a chain carries ([`Chain::racket`], data of the robot: see the module doc).
     pub fn for_chain(chain: &Chain) -> Racket {
-        match chain.name() {
-            "mobile8" => Racket::seed000(),
-            _ => Racket::at_tool(),
+        Racket {
+            in_tool: *chain.racket(),
         }
     }
 
@@ -86,6 +85,14 @@ impl Racket {
 /// pointing up, as a player holds a shake-hand racket at the hit.
 pub const DEFAULT_HANDLE: [f64; 3] = [0.0, 0.0, 1.0];
 
+/// The racket frame (base axes) of the unit face normal `z` with the handle x along the part of
+/// `handle` orthogonal to `z` (Gram–Schmidt): columns [x, z × x, z]. The one construction every
+/// racket frame uses; `handle` must not be parallel to `z` ([`racket_frame`] checks and falls back).
+pub fn racket_axes(z: &Vector3<f64>, handle: &Vector3<f64>) -> Rotation3<f64> {
+    let x = (handle - z * z.dot(handle)).normalize();
+    Rotation3::from_matrix_unchecked(Matrix3::from_columns(&[x, z.cross(&x), *z]))
+}
+
 /// The racket orientation (base axes) whose z axis is the face `normal` and whose x axis (the
 /// handle) is as close as possible to `handle` (base axes; any vector not parallel to the
 /// normal). When `handle` is (nearly) parallel to the normal, base +z, then base +x, is used.
@@ -96,25 +103,87 @@ pub fn racket_frame(normal: &Vector3<f64>, handle: &Vector3<f64>) -> Result<Rota
     if !(nn > 1e-12) {
         return Err(Error::invalid("normal", "the face normal must be a nonzero vector"));
     }
-    let z = normal / nn;
-    let mut x = Vector3::zeros();
-    for h in [*handle, Vector3::z(), Vector3::x()] {
-        let c = h - z * z.dot(&h);
-        if c.norm() > 1e-6 * h.norm().max(1e-300) {
-            x = c.normalize();
-            break;
+    // Scaled by the largest component before normalising: |normal| of 1e300 components is inf
+    // (z was then the zero vector and the frame rank 1), and a subnormal one underflows.
+    let unit = |v: &Vector3<f64>| {
+        let m = v.amax();
+        if m > 0.0 {
+            (v / m).normalize()
+        } else {
+            *v
         }
+    };
+    let z = unit(normal);
+    let h = [unit(handle), Vector3::z(), Vector3::x()]
+        .into_iter()
+        .find(|h| (h - z * z.dot(h)).norm() > 1e-6 * h.norm().max(1e-300))
+        .unwrap_or_else(Vector3::zeros);
+    Ok(racket_axes(&z, &h))
+}
+
+/// Values per joint state in [`racket_state_batch`]: the racket pose (16, row-major 4×4) and the
+/// racket-centre twist (6).
+pub const RACKET_STATE_LEN: usize = 22;
+
+/// Racket states of a chain's joint states: for each of the N rows of `qs` (positions, m or rad)
+/// and `qds` (velocities), `out` receives the racket pose (base frame, m; row-major 4×4) and the
+/// racket-centre twist [v (m/s); ω (rad/s)] (base axes): N × [`RACKET_STATE_LEN`] values, in
+/// parallel. The racket is the one the chain carries ([`Chain::racket`]).
+pub fn racket_state_batch(chain: &Chain, qs: &[f64], qds: &[f64], out: &mut [f64]) -> Result<()> {
+    use rayon::prelude::*;
+    let n = chain.dof();
+    if !qs.len().is_multiple_of(n) || qds.len() != qs.len() {
+        return Err(Error::shape(
+            "q, qd",
+            format!("two N × {n} arrays of the same N"),
+            format!("{} and {} values", qs.len(), qds.len()),
+        ));
     }
-    Ok(Rotation3::from_matrix_unchecked(Matrix3::from_columns(&[
-        x,
-        z.cross(&x),
-        z,
-    ])))
+    check_finite("q", qs)?;
+    check_finite("qd", qds)?;
+    if out.len() != qs.len() / n * RACKET_STATE_LEN {
+        return Err(Error::shape(
+            "output buffer",
+            qs.len() / n * RACKET_STATE_LEN,
+            out.len(),
+        ));
+    }
+    let racket = Racket::for_chain(chain);
+    const CHUNK: usize = 64;
+    out.par_chunks_mut(RACKET_STATE_LEN * CHUNK)
+        .zip(qs.par_chunks(n * CHUNK).zip(qds.par_chunks(n * CHUNK)))
+        .for_each(|(o, (q, qd))| {
+            let mut jac = nalgebra::Matrix6xX::zeros(n);
+            for ((oi, qi), qdi) in o
+                .chunks_exact_mut(RACKET_STATE_LEN)
+                .zip(q.chunks_exact(n))
+                .zip(qd.chunks_exact(n))
+            {
+                let tool = chain.jacobian_into(qi, crate::chain::JacobianFrame::Base, &mut jac);
+                let twist = &jac * nalgebra::DVector::from_column_slice(qdi);
+                crate::transform::write_row_major(&racket.racket_pose(&tool), &mut oi[..16]);
+                oi[16..].copy_from_slice(&racket.racket_twist(&tool, twist.as_slice()));
+            }
+        });
+    Ok(())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn racket_frame_of_huge_or_tiny_vectors_is_a_rotation() {
+        for (n, h) in [
+            (Vector3::new(1e300, -1e300, 1e300), Vector3::z()),
+            (Vector3::new(0.3, -1.0, -0.2), Vector3::new(1e308, 1e308, 0.0)),
+            (Vector3::new(0.0, 0.0, 1e308), Vector3::new(1e-310, 0.0, 0.0)),
+        ] {
+            let m = *racket_frame(&n, &h).unwrap().matrix();
+            assert!((m.determinant() - 1.0).abs() < 1e-12, "{n:?} {h:?}");
+            assert!((m.transpose() * m - Matrix3::identity()).norm() < 1e-12);
+        }
+    }
 
     #[test]
     fn racket_frame_is_a_rotation_with_z_along_the_normal() {

@@ -11,30 +11,40 @@
 //! the position limits or exceed an effort limit.
 //! T* is computed on demand ([`super::HitPlanner::earliest_t_hit`]) when planning did not need it.
 //! A leg that leaves the position limits is replanned jerk-limited with position limits.
-//! When the torques at the check points exceed an effort limit, the return leg is slowed, and
-//! the hit time is moved later (growth by 10 %, then bisection to 0.1 %) until they do not.
+//! When the torques exceed an effective effort limit ([`crate::effort`]) at any instant, the
+//! return leg is slowed, and the hit time is moved later (growth by 10 %, then bisection to
+//! 0.1 %) until they do not, with the quintic hit leg at each time tried when it is within the
+//! kinematic limits, else the jerk-limited one (`Auto`; `Quintic` and `Jerk` keep their family) (a time-optimal leg stretched in time keeps its
+//! bang-bang torques: gantry6's demo hit needs 1.03 s jerk-limited, 0.50 s as a quintic). "At any instant" is certified, not sampled: the branch-and-bound
+//! bound of [`crate::dynamics::peak`] decides each leg, and the reported `effort_ratio` is the
+//! refined peak of the legs planned (to the options' `effort_tolerance`). The hit-time search
+//! screens its legs by the torques at 33 instants (a necessary test, cheap) and certifies only
+//! the leg it settles on; when that fails, it searches on from there certifying every leg. The final trajectory's speed, acceleration and jerk are checked exactly
+//! as well ([`JointTrajectory::rate_violations`]; Ruckig's legs and the accepted quintics are
+//! within them by construction, so this only catches a start state beyond the limits).
 //!
 //! Cost (gantry6, about 190k instructions per on-time plan): every check of a leg is made once
 //! (a leg knows whether it is inside the position limits and its torques at the check points
 //! until it is replaced); quintic limit ratios and position ranges are first bounded by the
 //! polynomials' Bernstein coefficients ([`crate::traj::poly::bounds`]) and the exact extrema are
 //! found only where a bound can change the answer, so plans are the same numbers bit for bit.
-//! What is left is mostly the 24 inverse-dynamics evaluations (12 per leg, about half) and the
-//! SVD of J⁻¹V.
+//! The certified effort check costs more than the 24 sampled inverse dynamics it replaced
+//! (docs/hit_pipeline.md has the numbers): a leg far below its limits is decided by the first
+//! eight interval enclosures, a leg near them by a few tens.
 
 use super::{HitPlan, HitPlanner, HitStatus, StrokeProfile};
-use crate::dynamics::DynamicsData;
+use crate::dynamics::{DynamicsData, EffortPeak, PeakStop};
 use crate::error::Result;
 use crate::traj::duration;
 use crate::traj::jerk::{jerk_limited, PositionLimits};
-use crate::traj::limits::{KinematicLimits, LIMIT_TOLERANCE};
+use crate::traj::limits::{KinematicLimits, Quantity, LIMIT_TOLERANCE};
 use crate::traj::{JointState, JointTrajectory};
 
 /// Relative precision of the earliest hit time under effort limits.
 const EFFORT_SEARCH_PRECISION: f64 = 1e-3;
 
 /// The two legs, their hit-leg profile, and what is already known of each: inside the position
-/// limits, and its effort (ratio and peaks at the check points). Replacing a leg resets both.
+/// limits. Replacing a leg resets it.
 struct Legs {
     hit: JointTrajectory,
     back: JointTrajectory,
@@ -43,11 +53,11 @@ struct Legs {
     back_known: Known,
 }
 
-/// What was already computed of one leg.
+/// What was already computed of one leg: inside the position limits, its refined effort peak.
 #[derive(Default)]
 struct Known {
     inside: bool,
-    effort: Option<(f64, Vec<f64>)>,
+    effort: Option<EffortPeak>,
 }
 
 impl Legs {
@@ -130,17 +140,23 @@ pub(super) fn plan_stroke(p: &HitPlanner, plan: &mut HitPlan, mut data: Option<&
     }
     let t_hit = legs.t_hit();
     if let Some(d) = data {
-        let m = p.options.effort_points;
-        let (r1, p1) = match legs.hit_known.effort.take() {
-            Some(e) => e,
-            None => effort(p, d, &legs.hit, 0.0, t_hit, m),
+        let refine = PeakStop::refine(p.options.effort_tolerance);
+        let e2 = legs
+            .back_known
+            .effort
+            .take()
+            .unwrap_or_else(|| effort(p, d, &legs.back, refine));
+        let refine_hit = PeakStop {
+            floor: e2.ratio,
+            ..refine
         };
-        let (r2, p2) = match legs.back_known.effort.take() {
-            Some(e) => e,
-            None => effort(p, d, &legs.back, 0.0, legs.back.duration(), m),
-        };
-        plan.effort_ratio = r1.max(r2);
-        plan.peak_effort = p1.iter().zip(&p2).map(|(a, b)| a.max(*b)).collect();
+        let e1 = legs
+            .hit_known
+            .effort
+            .take()
+            .unwrap_or_else(|| effort(p, d, &legs.hit, refine_hit));
+        plan.effort_ratio = e1.ratio.max(e2.ratio);
+        plan.peak_effort = e1.peak.iter().zip(&e2.peak).map(|(a, b)| a.max(*b)).collect();
     }
     if t_hit > t_req * (1.0 + 1e-12) {
         if plan.status == HitStatus::Ok {
@@ -155,18 +171,25 @@ pub(super) fn plan_stroke(p: &HitPlanner, plan: &mut HitPlan, mut data: Option<&
     plan.profile = legs.profile;
     plan.return_duration = legs.back.duration();
     // Speed, acceleration and jerk hold by construction (Ruckig's profiles; quintics accepted only
-    // when their exact peaks are within the limits): only the position limits are left to check.
+    // when their exact peaks are within the limits) from a start within the limits; checked
+    // exactly all the same (cheap bounds first), with the position limits.
     if !legs.hit_known.inside {
         plan.violations = legs.hit.position_violations(&p.limits, 0.0);
     }
     if !legs.back_known.inside {
         plan.violations.extend(legs.back.position_violations(&p.limits, t_hit));
     }
+    plan.violations.extend(legs.hit.rate_violations(&p.limits, 0.0));
+    plan.violations.extend(legs.back.rate_violations(&p.limits, t_hit));
     let trajectory = legs.hit.append(legs.back);
     plan.trajectory = Some(trajectory);
     if matches!(plan.status, HitStatus::Ok | HitStatus::TooEarly) && !plan.violations.is_empty() {
         let v = &plan.violations[0];
-        plan.status = HitStatus::PositionLimit;
+        plan.status = if v.quantity == Quantity::Position {
+            HitStatus::PositionLimit
+        } else {
+            HitStatus::NoStroke
+        };
         plan.message = format!(
             "joint '{}' {} {:.4} beyond its limit {:.4} at {:.4} s",
             p.chain.joints()[v.joint].name(),
@@ -300,51 +323,58 @@ fn within_position_limits(
     Ok(legs)
 }
 
-/// Largest |τ|/effort over `points` evenly spaced instants of [t0, t1] and the peak |τ| per joint
-/// (inverse dynamics with friction, gravity of the options).
-fn effort(
-    p: &HitPlanner,
-    data: &mut DynamicsData,
-    traj: &JointTrajectory,
-    t0: f64,
-    t1: f64,
-    points: usize,
-) -> (f64, Vec<f64>) {
+/// The certified effort peak of `traj` against the planner's effective effort limits (inverse
+/// dynamics with friction, gravity of the options), stopping as `stop` says.
+fn effort(p: &HitPlanner, data: &mut DynamicsData, traj: &JointTrajectory, stop: PeakStop) -> EffortPeak {
+    let dynamics = p.dynamics.as_ref().expect("effort data exists only with dynamics");
+    let gravity = nalgebra::Vector3::from(p.options.gravity);
+    dynamics.effort_peak(data, traj, &p.effort, &gravity, stop)
+}
+
+/// Instants per leg at which the hit-time search screens the torques before certifying a leg.
+const SCREEN_POINTS: usize = 33;
+
+/// Largest |τ|/effective limit at `points` evenly spaced instants of `traj` (inverse dynamics
+/// with friction, gravity of the options): a lower bound of the peak, a cheap necessary test.
+fn screen(p: &HitPlanner, data: &mut DynamicsData, traj: &JointTrajectory, points: usize) -> f64 {
+    (0..points)
+        .map(|k| ratio_at(p, data, traj, traj.duration() * k as f64 / (points - 1) as f64))
+        .fold(0.0, f64::max)
+}
+
+/// Largest |τ|/effective limit over the joints at time `t` of `traj`.
+fn ratio_at(p: &HitPlanner, data: &mut DynamicsData, traj: &JointTrajectory, t: f64) -> f64 {
     let n = p.chain.dof();
     let dynamics = p.dynamics.as_ref().expect("effort data exists only with dynamics");
     let (mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-    let mut peak = vec![0.0f64; n];
-    let mut ratio: f64 = 0.0;
+    traj.sample_unchecked(t.min(traj.duration()), &mut q, &mut qd, &mut qdd);
+    if !q.iter().chain(&qd).chain(&qdd).all(|v| v.is_finite()) {
+        return f64::INFINITY;
+    }
     let gravity = nalgebra::Vector3::from(p.options.gravity);
-    for k in 0..points {
-        let t = t0 + (t1 - t0) * k as f64 / (points - 1) as f64;
-        traj.sample_unchecked(t.min(traj.duration()), &mut q, &mut qd, &mut qdd);
-        // What `Dynamics::inverse_dynamics` would reject (data, shapes and gravity are right here).
-        if !q.iter().chain(&qd).chain(&qdd).all(|v| v.is_finite()) {
-            return (f64::INFINITY, peak);
-        }
-        let fixed = <&[f64; 6]>::try_from(&q[..])
-            .ok()
-            .zip(<&[f64; 6]>::try_from(&qd[..]).ok())
-            .zip(<&[f64; 6]>::try_from(&qdd[..]).ok())
-            .and_then(|((q, qd), qdd)| dynamics.inverse_dynamics_fixed::<6>(data, q, qd, qdd, &gravity));
-        let tau: &[f64] = match &fixed {
-            Some(t) => t,
-            None => dynamics
-                .inverse_dynamics_unchecked(data, &q, &qd, &qdd, &gravity)
-                .as_slice(),
-        };
-        for j in 0..n {
-            peak[j] = peak[j].max(tau[j].abs());
-            ratio = ratio.max(tau[j].abs() / p.effort[j]);
+    let tau = dynamics.inverse_dynamics_unchecked(data, &q, &qd, &qdd, &gravity);
+    let mut ratio: f64 = 0.0;
+    for j in 0..n {
+        let limit = p.effort.at(j, qd[j]);
+        if tau[j] != 0.0 {
+            ratio = ratio.max(if limit > 0.0 {
+                tau[j].abs() / limit
+            } else {
+                f64::INFINITY
+            });
         }
     }
-    (ratio, peak)
+    ratio
 }
 
-/// Makes both legs respect the effort limits at their check points: the return leg slowed by
-/// factors of 1.25 (up to 10 times), the hit leg moved later (growth, then bisection). An error
-/// message when no hit time up to `max_t_hit` is enough.
+/// Whether a decided peak is within the limits (its certified bound at most the limit).
+fn fits(e: &EffortPeak) -> bool {
+    e.bound <= 1.0 + LIMIT_TOLERANCE
+}
+
+/// Makes both legs respect the effort limits at every instant: the return leg slowed by factors
+/// of 1.25 (up to 10 times), the hit leg moved later (growth, then bisection). An error message
+/// when no hit time up to `max_t_hit` is enough.
 fn within_effort_limits(
     p: &HitPlanner,
     data: &mut DynamicsData,
@@ -354,14 +384,21 @@ fn within_effort_limits(
     legs: &mut Legs,
 ) -> std::result::Result<(), String> {
     let lim = &p.limits;
-    let m = p.options.effort_points;
-    let name = |ratio: f64, leg: &str| {
-        format!("the {leg} leg needs {ratio:.2}× the effort limit of some joint at every duration tried")
+    let name = |e: &EffortPeak, leg: &str| {
+        format!(
+            "the {leg} leg needs {:.2}× the effort limit of joint '{}' at every duration tried",
+            e.ratio.max(1.0),
+            p.chain.joints()[e.joint].name()
+        )
     };
-    let mut e_back = effort(p, data, &legs.back, 0.0, legs.back.duration(), m);
+    // The legs as first planned are usually the final ones: refined at once (which decides them
+    // too, conservatively within the tolerance), not decided then refined.
+    let threshold = 1.0 + LIMIT_TOLERANCE;
+    let refine = PeakStop::refine_below(p.options.effort_tolerance, threshold);
+    let mut e_back = effort(p, data, &legs.back, refine);
     let mut d = legs.back.duration();
     for _ in 0..10 {
-        if e_back.0 <= 1.0 {
+        if fits(&e_back) {
             break;
         }
         d *= 1.25;
@@ -369,53 +406,117 @@ fn within_effort_limits(
             break;
         };
         legs.set_back(b.trajectory);
-        e_back = effort(p, data, &legs.back, 0.0, legs.back.duration(), m);
+        e_back = effort(p, data, &legs.back, refine);
     }
-    let r_back = e_back.0;
+    if !fits(&e_back) {
+        return Err(name(&e_back, "return"));
+    }
+    // The hit leg's peak needs refining only above the return leg's.
+    let refine_hit = PeakStop {
+        floor: e_back.ratio,
+        ..refine
+    };
     legs.back_known.effort = Some(e_back);
-    if r_back > 1.0 {
-        return Err(name(r_back, "return"));
-    }
 
-    let e_hit = effort(p, data, &legs.hit, 0.0, legs.t_hit(), m);
-    let r_hit = e_hit.0;
-    if r_hit <= 1.0 {
+    let e_hit = effort(p, data, &legs.hit, refine_hit);
+    if fits(&e_hit) {
         legs.hit_known.effort = Some(e_hit);
         return Ok(());
     }
-    // The hit leg at hit time t (jerk-limited, position limits respected).
-    let leg_at = |t: f64, data: &mut DynamicsData| -> Option<(JointTrajectory, (f64, Vec<f64>))> {
-        let j = jerk_limited(start, hit, lim, Some(t), PositionLimits::Respect).ok()?;
-        let e = effort(p, data, &j.trajectory, 0.0, j.duration, m);
-        Some((j.trajectory, e))
+    // The torques at the start and at the hit depend on those states alone: when either is
+    // beyond a limit, no hit time can help.
+    for (at, what) in [(0.0, "start"), (legs.t_hit(), "hit")] {
+        let r = ratio_at(p, data, &legs.hit, at);
+        if r > threshold {
+            return Err(format!(
+                "the {what} state needs {r:.2}× the effort limit of some joint: no hit time can help"
+            ));
+        }
+    }
+    // The hit legs at hit time t: the quintic when it is within the kinematic and position
+    // limits (smoother torques than a stretched time-optimal leg, which keeps its bang-bang
+    // shape), and the jerk-limited leg with position limits respected.
+    let legs_at = |t: f64| {
+        let quintic = (p.options.profile != StrokeProfile::Jerk
+            && duration::quintic_limit_ratio_above(start, hit, t, lim, 1.0 + LIMIT_TOLERANCE) <= 1.0 + LIMIT_TOLERANCE)
+            .then(|| JointTrajectory::quintic_unchecked(start, hit, t))
+            .filter(|q| inside(p, q))
+            .map(|q| (q, StrokeProfile::Quintic));
+        let jerk = move || {
+            jerk_limited(start, hit, lim, Some(t), PositionLimits::Respect)
+                .ok()
+                .map(|j| (j.trajectory, StrokeProfile::Jerk))
+        };
+        quintic.into_iter().chain(std::iter::from_fn({
+            let mut once = (p.options.profile != StrokeProfile::Quintic).then_some(jerk);
+            move || once.take().and_then(|f| f())
+        }))
     };
-    let (mut lo, mut hi) = (legs.t_hit(), legs.t_hit() * 1.1);
-    let mut good = None;
-    while hi <= p.options.max_t_hit {
-        if let Some((traj, e)) = leg_at(hi, data) {
-            if e.0 <= 1.0 {
-                good = Some((traj, e));
-                break;
-            }
+    // The search for the earliest hit time screens each leg by its torques at instants (cheap,
+    // necessary); the leg it settles on is then certified. When that fails (a peak between the
+    // instants), the search runs again from there with every leg certified.
+    let screened =
+        |t: f64, data: &mut DynamicsData| legs_at(t).find(|(traj, _)| screen(p, data, traj, SCREEN_POINTS) <= 1.0);
+    let t0 = legs.t_hit();
+    let Some((hi, (best, profile))) = earliest(t0, p.options.max_t_hit, data, screened) else {
+        return Err(name(&e_hit, "hit"));
+    };
+    let e = effort(p, data, &best, refine_hit);
+    if fits(&e) {
+        legs.set_hit(best);
+        legs.hit_known.effort = Some(e);
+        legs.profile = profile;
+        return Ok(());
+    }
+    let certified = |t: f64, data: &mut DynamicsData| legs_at(t).find(|(traj, _)| fits(&effort(p, data, traj, DECIDE)));
+    let Some((_, (best, profile))) = earliest(hi, p.options.max_t_hit, data, certified) else {
+        return Err(name(&e, "hit"));
+    };
+    legs.set_hit(best);
+    legs.profile = profile;
+    Ok(())
+}
+
+/// The earliest hit time after `lo` s (not accepted) up to `max` s at which `accept` gives a leg,
+/// to [`EFFORT_SEARCH_PRECISION`]: growth by 10 %, then bisection. The time and the leg with its profile.
+fn earliest<F>(
+    mut lo: f64,
+    max: f64,
+    data: &mut DynamicsData,
+    mut accept: F,
+) -> Option<(f64, (JointTrajectory, StrokeProfile))>
+where
+    F: FnMut(f64, &mut DynamicsData) -> Option<(JointTrajectory, StrokeProfile)>,
+{
+    let mut hi = lo * 1.1;
+    let mut best = loop {
+        if hi > max {
+            return None;
+        }
+        if let Some(traj) = accept(hi, data) {
+            break traj;
         }
         lo = hi;
         hi *= 1.1;
-    }
-    let Some(mut best) = good else {
-        return Err(name(r_hit, "hit"));
     };
     while hi - lo > EFFORT_SEARCH_PRECISION * hi {
         let mid = 0.5 * (lo + hi);
-        match leg_at(mid, data) {
-            Some((traj, e)) if e.0 <= 1.0 => {
-                best = (traj, e);
+        match accept(mid, data) {
+            Some(traj) => {
+                best = traj;
                 hi = mid;
             }
-            _ => lo = mid,
+            None => lo = mid,
         }
     }
-    legs.set_hit(best.0);
-    legs.hit_known.effort = Some(best.1);
-    legs.profile = StrokeProfile::Jerk;
-    Ok(())
+    Some((hi, best))
 }
+
+/// A certified decision of a leg: within the effort limits at every instant, or not (a peak
+/// within 1e-3 below the limit may be called above it, which only moves the hit a little later).
+const DECIDE: PeakStop = PeakStop {
+    tolerance: 1e-3,
+    floor: 0.0,
+    above: 1.0 + LIMIT_TOLERANCE,
+    below: 1.0 + LIMIT_TOLERANCE,
+};

@@ -36,12 +36,21 @@ fn hit_errors(p: &HitPlanner, plan: &HitPlan) -> (f64, f64) {
 #[test]
 fn demo_hit_is_met_on_time_within_every_limit() {
     let p = planner();
-    let plan = p.plan(&demo_hit(0.35), None, None).unwrap();
+    // 0.55 s: the stroke within gantry6's drives (its quintic needs 0.503 s; issue 28 moved the
+    // demo from 0.35 s, which needs 1.01× d2's force limit and 1.3× θ3's drive peak).
+    let plan = p.plan(&demo_hit(0.55), None, None).unwrap();
     assert!(plan.ok(), "{:?}: {}", plan.status, plan.message);
-    assert_eq!(plan.t_hit, 0.35);
+    assert_eq!(plan.t_hit, 0.55);
     assert!(plan.earliest_t_hit.is_nan());
     let earliest = p.earliest_t_hit(&plan);
-    assert!(earliest > 0.25 && earliest < 0.35, "{earliest}");
+    assert!(earliest > 0.25 && earliest < 0.55, "{earliest}");
+    let late = p.plan(&demo_hit(0.35), None, None).unwrap();
+    assert_eq!(late.status, HitStatus::TooEarly, "{}", late.message);
+    assert!(
+        late.t_hit > 0.5 && late.t_hit < 0.55 && late.effort_ratio <= 1.0,
+        "{}",
+        late.t_hit
+    );
     let (pe, te) = hit_errors(&p, &plan);
     assert!(pe < 1e-9 && te < 1e-8, "pose {pe}, twist {te}");
     assert!(plan.violations.is_empty());
@@ -72,10 +81,14 @@ fn too_early_hit_is_planned_at_the_earliest_feasible_time() {
 #[test]
 fn auto_profile_prefers_the_quintic_when_it_is_on_time() {
     let p = planner();
-    let slow = p.plan(&demo_hit(1.0), None, None).unwrap();
+    // A hit whose time-optimal stroke is within the drives (the demo's is not).
+    let n = Vector3::new(0.3, -1.0, -0.2).normalize() * 3.0;
+    let at = |t| Hit::from_normal([0.1, -0.5, 0.0], [0.3, -1.0, -0.2], [n.x, n.y, n.z], t, None, None).unwrap();
+    let slow = p.plan(&at(1.0), None, None).unwrap();
     assert!(slow.ok());
     assert_eq!(slow.profile, StrokeProfile::Quintic);
-    let fast = p.plan(&demo_hit(p.earliest_t_hit(&slow) * 1.01), None, None).unwrap();
+    let earliest = p.plan(&at(0.01), None, None).unwrap().t_hit;
+    let fast = p.plan(&at(earliest * 1.01), None, None).unwrap();
     assert!(fast.ok(), "{}", fast.message);
     assert_eq!(fast.profile, StrokeProfile::Jerk);
 }

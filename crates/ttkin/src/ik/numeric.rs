@@ -345,11 +345,14 @@ impl IkSolver {
                     s.lhs[(i, i)] += lambda;
                 }
             }
-            if !cholesky_solve(&mut s.lhs, &mut s.dq) {
+            // The crate's one Cholesky (`linalg::cholesky`); the symmetric column-major `lhs` is its
+            // own row-major transpose.
+            if crate::linalg::cholesky::factor_in_place(s.lhs.as_mut_slice(), n).is_err() {
                 lambda *= nu;
                 nu *= 2.0;
                 continue;
             }
+            crate::linalg::cholesky::solve_in_place(s.lhs.as_slice(), n, s.dq.as_mut_slice());
             for i in 0..n {
                 s.q_trial[i] = (s.q[i] + s.dq[i]).clamp(s.lower[i], s.upper[i]);
                 s.dq[i] = s.q_trial[i] - s.q[i];
@@ -444,43 +447,4 @@ fn random_in(rng: &mut fastrand::Rng, lower: f64, upper: f64, kind: JointType) -
             centre + half * (2.0 * u - 1.0)
         }
     }
-}
-
-/// Solves `m·x = b` in place for a symmetric positive-definite `m` (overwritten by its Cholesky
-/// factor); `b` becomes `x`. False if `m` is not positive definite.
-fn cholesky_solve(m: &mut DMatrix<f64>, b: &mut DVector<f64>) -> bool {
-    let n = m.nrows();
-    for j in 0..n {
-        let mut d = m[(j, j)];
-        for k in 0..j {
-            d -= m[(j, k)] * m[(j, k)];
-        }
-        if !(d > 0.0) {
-            return false;
-        }
-        let d = d.sqrt();
-        m[(j, j)] = d;
-        for i in j + 1..n {
-            let mut v = m[(i, j)];
-            for k in 0..j {
-                v -= m[(i, k)] * m[(j, k)];
-            }
-            m[(i, j)] = v / d;
-        }
-    }
-    for i in 0..n {
-        let mut v = b[i];
-        for k in 0..i {
-            v -= m[(i, k)] * b[k];
-        }
-        b[i] = v / m[(i, i)];
-    }
-    for i in (0..n).rev() {
-        let mut v = b[i];
-        for k in i + 1..n {
-            v -= m[(k, i)] * b[k];
-        }
-        b[i] = v / m[(i, i)];
-    }
-    true
 }

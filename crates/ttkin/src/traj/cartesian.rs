@@ -12,7 +12,7 @@ use super::{check_duration, rate_times, Samples};
 use crate::error::{check_finite, Error, Result};
 
 /// Time law s(t): the path parameter from 0 at t = 0 to 1 at the duration, at rest at both ends.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum TimeLaw {
     /// s = 3τ² − 2τ³ with τ = t/T (rest-to-rest cubic).
     Cubic,
@@ -92,7 +92,7 @@ impl TimeLaw {
 }
 
 /// Geometric path of the tool origin, parameterised by s ∈ [0, 1]; base frame, m.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Path {
     /// Straight segment from `start` to `end`.
     Line {
@@ -188,7 +188,7 @@ impl CartesianState {
 
 /// Tool pose over time: a [`Path`] for the origin, slerp from the start to the end orientation,
 /// one [`TimeLaw`] for both.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CartesianTrajectory {
     path: Path,
     law: TimeLaw,
@@ -390,6 +390,9 @@ impl CartesianTrajectory {
 
     /// States at a control rate of `hz` (times as in [`rate_times`]).
     pub fn sample_rate(&self, hz: f64) -> Result<Vec<CartesianState>> {
+        if hz > 0.0 {
+            crate::budget::check_bytes("hz", self.duration * hz + 2.0, std::mem::size_of::<CartesianState>())?;
+        }
         rate_times(self.duration, hz)?
             .into_iter()
             .map(|t| self.sample(t))

@@ -132,7 +132,7 @@ impl KinematicLimits {
 }
 
 /// The quantity a limit bounds.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Quantity {
     /// Joint position (rad or m).
     Position,
@@ -157,7 +157,7 @@ impl Quantity {
 }
 
 /// The worst excess of one quantity of one joint over its limit.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Violation {
     /// Joint index.
     pub joint: usize,
@@ -281,6 +281,55 @@ impl JointTrajectory {
                         time: t0 + peak.time,
                         value: peak.value,
                         limit,
+                    });
+                }
+            }
+        }
+        out
+    }
+
+    /// Every joint's worst excess of its velocity, acceleration and jerk limits (to
+    /// [`LIMIT_TOLERANCE`]), exactly, with times shifted by `t0` s; `limits` must have
+    /// `self.dof()` joints. Cheap bounds first ([`poly::bound_abs`] per segment): the exact peaks
+    /// only for the joints and orders they cannot clear.
+    pub fn rate_violations(&self, limits: &KinematicLimits, t0: f64) -> Vec<Violation> {
+        let mut out = Vec::new();
+        for (order, quantity, bound) in [
+            (1, Quantity::Velocity, &limits.velocity),
+            (2, Quantity::Acceleration, &limits.acceleration),
+            (3, Quantity::Jerk, &limits.jerk),
+        ] {
+            for (j, &bound) in bound.iter().enumerate() {
+                let limit = bound * (1.0 + LIMIT_TOLERANCE);
+                let mut worst = Peak { time: 0.0, value: 0.0 };
+                let mut clear = true;
+                for k in 0..self.segments() {
+                    let (start, h) = (self.knots()[k], self.knots()[k + 1] - self.knots()[k]);
+                    let mut c = self.coefficients(k, j).expect("segment and joint in range");
+                    for _ in 0..order {
+                        c = poly::derivative(&c);
+                    }
+                    if poly::bound_abs(&c, h) <= limit {
+                        continue;
+                    }
+                    let (tau, v) = poly::max_abs(&c, h);
+                    if v.abs() > limit {
+                        clear = false;
+                        if v.abs() > worst.value.abs() {
+                            worst = Peak {
+                                time: start + tau,
+                                value: v,
+                            };
+                        }
+                    }
+                }
+                if !clear {
+                    out.push(Violation {
+                        joint: j,
+                        quantity,
+                        time: t0 + worst.time,
+                        value: worst.value,
+                        limit: bound,
                     });
                 }
             }

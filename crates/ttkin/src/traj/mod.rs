@@ -34,7 +34,7 @@ const TIME_SLACK: f64 = 1e-9;
 
 /// A joint state: positions (rad or m), velocities (per s) and accelerations (per s²), one entry
 /// per joint.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct JointState {
     /// Joint positions (rad or m).
     pub q: Vec<f64>,
@@ -127,7 +127,7 @@ pub fn rate_times(duration: f64, hz: f64) -> Result<Vec<f64>> {
             format!("{hz} Hz over {duration} s gives more than 1e8 samples"),
         ));
     }
-    let n = n as usize;
+    let n = crate::budget::check_bytes("hz", n + 2.0, std::mem::size_of::<f64>())? - 2;
     let mut t: Vec<f64> = (0..=n).map(|k| (k as f64 / hz).min(duration)).collect();
     if duration - t[n] > TIME_SLACK * duration {
         t.push(duration);
@@ -152,7 +152,7 @@ pub fn check_duration(what: &str, duration: f64) -> Result<()> {
 
 /// Joint-space trajectory: for each of `segments()` time intervals [t_k, t_{k+1}] and each joint, a
 /// polynomial of degree ≤ 5 in τ = t − t_k (s). Immutable once built; sampling allocates nothing.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct JointTrajectory {
     dof: usize,
     /// Segment boundaries (s), strictly increasing, `knots[0] = 0`.
@@ -356,6 +356,7 @@ impl JointTrajectory {
 
     /// Samples at the given times (s, each in [0, duration]).
     pub fn sample_times(&self, times: &[f64]) -> Result<Samples> {
+        crate::budget::check_bytes("times", times.len() as f64, 8 * (1 + 3 * self.dof))?;
         let m = times.len() * self.dof;
         let mut s = Samples {
             dof: self.dof,
@@ -391,6 +392,10 @@ impl JointTrajectory {
     /// Samples at a control rate of `hz`: times k/hz while ≤ duration, plus the end time if the grid
     /// misses it (see [`rate_times`]).
     pub fn sample_rate(&self, hz: f64) -> Result<Samples> {
+        // The times and q, qd, qdd: 1 + 3·dof float64 values a sample, bounded before allocating.
+        if hz > 0.0 {
+            crate::budget::check_bytes("hz", self.duration() * hz + 2.0, 8 * (1 + 3 * self.dof))?;
+        }
         self.sample_times(&rate_times(self.duration(), hz)?)
     }
 

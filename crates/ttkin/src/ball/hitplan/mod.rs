@@ -30,12 +30,18 @@
 //!    jerk-limited (Ruckig) leg that reaches the hit state exactly at the hit time inside the
 //!    position limits. Jerk limits: the robot files carry none, so
 //!    [`crate::hit::DEFAULT_JERK_PER_ACCELERATION`] × the acceleration limits, as `plan_hit` uses.
+//!    With `check_effort` (the default) the leg's torques (inverse dynamics with friction, world
+//!    gravity) must also stay within the effective effort limits ([`crate::effort`]) at every
+//!    instant, certified by [`crate::dynamics::peak`], checked last and only for a leg that
+//!    would replace the best so far.
 //! 5. **Choice.** Among feasible candidates, the one with the largest margin: the smallest of the
 //!    joints' normalised distance to their position limits at the hit and the leg's margin
 //!    (1 − peak/limit ratio for a quintic, 1 − fastest duration / hit time for a jerk-limited leg). Candidates are tried from the middle of the spread outward and the search
 //!    stops at the first with a margin ≥ `good_margin` (0.25), which bounds the planning time.
 
 mod candidates;
+use crate::dynamics::Dynamics;
+use crate::effort::EffortLimits;
 use candidates::candidate_order;
 mod correct;
 mod poses;
@@ -164,6 +170,11 @@ pub struct HitPlanner {
     /// Rolls (rad) of the racket about its face normal tried in order (0: handle up); the ball
     /// does not see the roll, the joints do.
     pub rolls: Vec<f64>,
+    /// Check the hit leg's torques against the effective effort limits at every instant (on by
+    /// default; without inertials there is no dynamics and no check).
+    pub check_effort: bool,
+    dynamics: Option<Dynamics>,
+    effort: EffortLimits,
 }
 
 impl HitPlanner {
@@ -180,6 +191,7 @@ impl HitPlanner {
             .map(|l| l.acceleration.unwrap_or(f64::INFINITY) * crate::hit::DEFAULT_JERK_PER_ACCELERATION)
             .collect();
         let limits = KinematicLimits::from_chain(&chain, Some(&jerk))?;
+        let (dynamics, effort) = (Dynamics::new(&chain).ok(), EffortLimits::of(&chain));
         let mut planner = HitPlanner {
             ready: vec![0.0; chain.dof()],
             chain,
@@ -196,6 +208,9 @@ impl HitPlanner {
             good_margin: 0.25,
             contact_offset: 0.03,
             rolls: [0.0, 30.0, -30.0].iter().map(|d: &f64| d.to_radians()).collect(),
+            check_effort: true,
+            dynamics,
+            effort,
         };
         // Ready: racket facing forward 0.48 m behind the end line, across the table's centre line,
         // at mid-height of the band, so that a stroke accelerates forward into the hit.
@@ -281,6 +296,7 @@ impl HitPlanner {
                 value: now,
             });
         }
+        self.flight.check_span("now", ball, now)?;
         let (list, bounced) = self.candidate_states(&self.flight, ball, now, self.search_margin, after_bounce);
         if !bounced {
             return Ok(HitPlan {

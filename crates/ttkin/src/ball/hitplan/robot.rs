@@ -7,9 +7,11 @@ use super::super::leg::{hit_leg_above, HitLeg};
 use super::super::reach::min_joint_time;
 use super::{Hit, HitPlanner, RacketPoses};
 use crate::chain::JacobianFrame;
+use crate::dynamics::{DynamicsData, PeakStop};
 use crate::ik::{joint_velocity, DifferentialIk, Solutions};
 use crate::linalg::cholesky::factor_in_place;
-use crate::traj::JointState;
+use crate::traj::limits::LIMIT_TOLERANCE;
+use crate::traj::{JointState, JointTrajectory};
 use nalgebra::{IsometryMatrix3, Matrix6, Vector3, Vector6};
 
 impl HitPlanner {
@@ -92,8 +94,27 @@ impl HitPlanner {
             return None;
         }
         let leg = hit_leg_above(start, q, &qdot, t_hit, &self.limits, floor)?;
+        if !self.within_effort(&leg.trajectory) {
+            return None;
+        }
         let margin = pos_margin.min(leg.margin);
         Some((qdot, leg, margin))
+    }
+
+    /// Whether `leg`'s torques (inverse dynamics with friction under world gravity, in the base
+    /// frame) stay within the effective effort limits at every instant (certified,
+    /// [`crate::dynamics::peak`]); true without dynamics or with `check_effort` off.
+    pub(super) fn within_effort(&self, leg: &JointTrajectory) -> bool {
+        let Some(dynamics) = self.dynamics.as_ref().filter(|_| self.check_effort) else {
+            return true;
+        };
+        let mut data = DynamicsData::new(dynamics);
+        let rot_bw = self.placement.world_from_base().rotation.inverse();
+        let gravity = rot_bw * Vector3::from(crate::hit::GRAVITY);
+        let threshold = 1.0 + LIMIT_TOLERANCE;
+        let stop = PeakStop::decide(threshold, 1e-3);
+        let peak = dynamics.effort_peak(&mut data, leg, &self.effort, &gravity, stop);
+        peak.bound <= threshold
     }
 
     /// q̇ = J⁻¹·V (base frame) at `q` for the racket twist `twist`, or `None` where

@@ -221,8 +221,9 @@ pub fn racket_rotation(n: &Vector3<f64>, roll: f64) -> Rotation3<f64> {
 pub fn racket_rotation_turned(n: &Vector3<f64>, (sin, cos): (f64, f64)) -> Rotation3<f64> {
     let z = n.normalize();
     let hint = if z.z.abs() < 0.95 { Vector3::z() } else { Vector3::x() };
-    let x0 = (hint - z * hint.dot(&z)).normalize();
-    let x = cos * x0 + sin * z.cross(&x0);
+    let r0 = crate::hit::racket_axes(&z, &hint);
+    let (x0, y0) = (r0.matrix().column(0), r0.matrix().column(1));
+    let x = cos * x0 + sin * y0;
     Rotation3::from_matrix_unchecked(Matrix3::from_columns(&[x, z.cross(&x), z]))
 }
 

@@ -1,0 +1,351 @@
+"""Issue 29: no input crashes, hangs or lies. Every example of the issue, each standing for a class
+(work bounded before it starts, clocks that stop, parsers without limits, validation by entry
+point, results that do not match their inputs, lenient files, binaries, messages). A case that
+could kill the interpreter or run unbounded runs in a subprocess with a time and memory cap
+(``capped``): an abort, a segfault, a hang or a traceback fails it."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
+import numpy as np
+import pytest
+import ttmanip
+import ttmanip.ctl
+from ttmanip import TtmanipError
+from ttmanip.pipeline import racket_frame
+
+#: Per case: seconds and address space (bytes) a capped case may use.
+CAP_SECONDS = 60
+CAP_BYTES = 3 << 30
+
+
+def _limits():
+    import resource
+
+    resource.setrlimit(resource.RLIMIT_AS, (CAP_BYTES, CAP_BYTES))
+    resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
+
+
+def capped(code: str, timeout: float = CAP_SECONDS) -> subprocess.CompletedProcess:
+    """Runs ``code`` in a fresh interpreter under the caps; returns it (failing on a hang)."""
+    try:
+        return subprocess.run(
+            [sys.executable, "-c", textwrap.dedent(code)],
+            capture_output=True,
+            text=True,
+            timeout=timeout,
+            preexec_fn=_limits,
+        )
+    except subprocess.TimeoutExpired:
+        pytest.fail(f"hung for more than {timeout} s:\n{code}")
+
+
+def refused(code: str, *fragments: str) -> str:
+    """``code`` (which calls something that must be refused) raises a TtmanipError naming
+    ``fragments``: no abort, segfault, hang or other exception."""
+    wrapped = f"""
+import ttmanip, numpy as np
+try:
+{textwrap.indent(textwrap.dedent(code), "    ")}
+except ttmanip.TtmanipError as e:
+    print("REFUSED", type(e).__name__, e)
+else:
+    print("ACCEPTED")
+"""
+    r = capped(wrapped)
+    assert r.returncode == 0, f"exit {r.returncode}\n{r.stderr[-2000:]}"
+    assert "REFUSED" in r.stdout, r.stdout + r.stderr
+    for f in fragments:
+        assert f in r.stdout, r.stdout
+    return r.stdout
+
+
+# -- 1. work bounded before it starts -----------------------------------------------------------
+
+
+def test_sampling_is_bounded_in_bytes_before_allocating():
+    refused(
+        """
+plan = ttmanip.plan_hit(ttmanip.robots.gantry6(), ttmanip.DEMO_HIT)
+plan.sample(0.99e8 / plan.duration)
+""",
+        "hz",
+        "bytes",
+    )
+
+
+def test_servo_runs_are_bounded_before_allocating():
+    refused("ttmanip.motor.Servo().step_response('current', 1.0, 1e4)", "duration")
+    refused("ttmanip.motor.Servo().step_response('current', 1.0, 1e300)", "duration")
+
+
+def test_estimation_window_is_bounded():
+    refused(
+        """
+t = np.array([0.0, 1.0, 2.0, 3.0, 1e6])
+p = np.column_stack([t * 0.0, t * 0.0, t * 0.0 + 1.0])
+ttmanip.ball.estimate(t, p)
+""",
+        "t",
+    )
+
+
+def test_ball_flights_are_bounded_in_steps():
+    refused("ttmanip.ball.predict(ttmanip.ball.state([0, 0, 1e3], [0, 0, 0]), [1e7])", "steps")
+
+
+def test_rally_n_is_checked_before_the_first_chunk():
+    with pytest.raises(TtmanipError, match="at most"):
+        ttmanip.rally(10**12)
+
+
+def test_a_long_rally_stops_on_ctrl_c_within_a_second():
+    code = """
+import ttmanip, time, sys
+print("start", flush=True)
+t0 = time.time()
+try:
+    ttmanip._ttmanip.ball_rally(100000, 0, 0)
+except KeyboardInterrupt:
+    print("interrupted %.3f" % (time.time() - t0), flush=True)
+"""
+    p = subprocess.Popen(
+        [sys.executable, "-c", code],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=_limits,
+    )
+    try:
+        assert p.stdout.readline().strip() == "start"
+        time.sleep(1.0)
+        sent = time.time()
+        p.send_signal(signal.SIGINT)
+        out, err = p.communicate(timeout=30)
+        waited = time.time() - sent
+    finally:
+        if p.poll() is None:
+            p.kill()
+    assert "interrupted" in out, out + err
+    # Generous under load (the issue asks for about half a second on an idle machine); a rally that
+    # ignored the signal would run for minutes.
+    assert waited < 10.0, waited
+
+
+# -- 2. clocks that stop ------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("t0", [1e15, 1e17])
+def test_flights_far_from_t0_are_refused(t0):
+    refused(
+        f"ttmanip.ball.predict(ttmanip.ball.state([0, 0, 1], [1, 0, 0], t={t0}), [{t0} + 1e3])",
+        "nearer origin",
+    )
+
+
+def test_drive_runs_far_from_t0_or_too_long_are_refused():
+    refused(
+        """
+sim = ttmanip.DriveSim(ttmanip.robots.gantry6())
+z = np.zeros((2, 6))
+sim.run(np.array([0.0, 1e15]), z, z, z)
+""",
+        "nearer origin",
+    )
+    refused(
+        """
+sim = ttmanip.DriveSim(ttmanip.robots.gantry6())
+z = np.zeros((2, 6))
+sim.run(np.array([0.0, 1e4]), z, z, z)
+""",
+        "ticks",
+    )
+
+
+# -- 3. parsers with limits ---------------------------------------------------------------------
+
+
+def test_deep_and_huge_urdf_are_refused(tmp_path):
+    deep = tmp_path / "deep.urdf"
+    deep.write_text("<robot name='r'>" + "<a>" * 20000 + "</a>" * 20000 + "</robot>")
+    refused(f"ttmanip.Robot.from_urdf({str(deep)!r}, 'a', 'b')", "nested")
+
+
+def test_cli_reads_no_further_than_the_limit():
+    r = subprocess.run(
+        [sys.executable, "-m", "ttmanip.cli", "plan", "/dev/zero"],
+        capture_output=True,
+        text=True,
+        timeout=CAP_SECONDS,
+        preexec_fn=_limits,
+    )
+    assert r.returncode == 1 and "16 MiB" in r.stderr and "Traceback" not in r.stderr, r.stderr
+
+
+@pytest.mark.parametrize(
+    "text, fragment",
+    [
+        (
+            '{"robot": "gantry6", "hits": [{"centre": [1' + "0" * 400 + ', 0, 0], "normal": [0, -1, 0], '
+            '"velocity": [0, -1, 0], "t": 0.3}]}',
+            "finite",
+        ),
+        (b'{"robot": "gantry6\xff"}', "UTF-8"),
+        ("[" * 100000 + "]" * 100000, "nested"),
+    ],
+)
+def test_hit_files_with_huge_ints_bad_bytes_or_deep_nesting_are_one_line_errors(tmp_path, text, fragment):
+    path = tmp_path / "hit.json"
+    if isinstance(text, bytes):
+        path.write_bytes(text)
+    else:
+        path.write_text(text)
+    r = subprocess.run(
+        [sys.executable, "-m", "ttmanip.cli", "plan", str(path), "--out", str(tmp_path / "out")],
+        capture_output=True,
+        text=True,
+        timeout=CAP_SECONDS,
+        preexec_fn=_limits,
+    )
+    assert r.returncode == 1, r.stderr
+    assert "Traceback" not in r.stderr and fragment in r.stderr, r.stderr
+
+
+# -- 4. one validation everywhere ---------------------------------------------------------------
+
+
+@pytest.mark.parametrize("bad", [np.array([0.3, -1.0, -0.2], dtype=complex), np.array([True, False, True])])
+def test_complex_and_bool_arrays_are_refused_everywhere(bad):
+    with pytest.raises(ttmanip.ShapeError):
+        ttmanip.Hit.from_normal([0.35, -0.55, 0.05], bad, [0.86, -2.87, -0.57], 0.35)
+    with pytest.raises(ttmanip.ShapeError):
+        ttmanip.Hit(np.eye(4).astype(bad.dtype), np.zeros(6), 0.3)
+    with pytest.raises(ttmanip.ShapeError):
+        ttmanip.ball.state(bad, [1, 0, 0])
+    with pytest.raises(TtmanipError):
+        ttmanip.ctl.write_trajectory(
+            "/tmp/never.csv", [0.0, 1.0], np.stack([bad[:2], bad[:2]]), np.zeros((2, 2)), np.zeros((2, 2))
+        )
+
+
+def test_racket_frame_of_huge_vectors_is_a_rotation():
+    r = racket_frame([1e300, -1e300, 1e300])
+    assert np.allclose(r.T @ r, np.eye(3), atol=1e-12) and abs(np.linalg.det(r) - 1) < 1e-12
+
+
+# -- 5. results that match their inputs ---------------------------------------------------------
+
+
+def test_a_plan_is_simulated_only_on_its_robot():
+    plan = ttmanip.plan_hit(ttmanip.robots.gantry6(), ttmanip.DEMO_HIT)
+    with pytest.raises(TtmanipError, match="made for robot 'gantry6'"):
+        ttmanip.simulate(ttmanip.robots.ur5(), plan)
+    with pytest.raises(TtmanipError, match="made for robot"):
+        ttmanip.simulate(ttmanip.robots.mobile8(), plan)
+    assert plan.made_for(ttmanip.robots.gantry6())
+
+
+def test_hit_times_beyond_the_longest_stroke_are_refused_at_the_hit():
+    with pytest.raises(TtmanipError, match="hit.t: the hit time must be at most"):
+        ttmanip.Hit(ttmanip.DEMO_HIT.pose, ttmanip.DEMO_HIT.twist, 1e300)
+
+
+def test_an_overflowing_motor_model_is_refused_not_simulated_as_nan():
+    refused(
+        """
+s = ttmanip.motor.Servo(ttmanip.motor.DcMotor(inductance=1e-300))
+s.step_response('current', 1.0, 0.01)
+""",
+        "inductance",
+    )
+
+
+def test_unphysical_ball_speeds_are_refused():
+    with pytest.raises(TtmanipError, match="velocity"):
+        ttmanip.ball.predict(ttmanip.ball.state([0, 0, 1], [1e200, 0, 0]), [0.1])
+
+
+# -- 6. hit files as strict as robot files ------------------------------------------------------
+
+GOOD = {
+    "centre": [0.35, -0.55, 0.05],
+    "normal": [0.3, -1.0, -0.2],
+    "velocity": [0.86, -2.87, -0.57],
+    "t": 0.35,
+}
+
+
+@pytest.mark.parametrize(
+    "data, key",
+    [
+        ({"robot": "gantry6", "hits": [GOOD], "redy": [0] * 6}, "redy"),
+        ({"robot": "gantry6", "hits": [GOOD], "profle": "jerk"}, "profle"),
+        ({"robot": "gantry6", "hits": [GOOD], "state": {"q": [0] * 6, "qdot": [0] * 6}}, "state.qdot"),
+        ({"robot": "gantry6", "hits": [{**GOOD, "center": [0, 0, 0]}]}, "center"),
+        ({"robot": "gantry6", **GOOD, "profle": "jerk"}, "profle"),
+    ],
+)
+def test_unknown_keys_in_hit_files_are_refused(tmp_path, data, key):
+    from ttmanip import cli
+
+    path = tmp_path / "hit.json"
+    path.write_text(json.dumps(data))
+    with pytest.raises(cli.CliError, match=key):
+        cli.read_hit_file(str(path))
+
+
+# -- 7. binaries: checked arguments and one set of exit codes -----------------------------------
+
+
+def _binary(name: str) -> str | None:
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    for profile in ("release", "debug"):
+        p = os.path.join(root, "target", profile, name)
+        if os.path.exists(p):
+            return p
+    return None
+
+
+@pytest.mark.parametrize(
+    "binary, args, fragment",
+    [
+        ("ttctl", ["--demo", "--amplitude", "nan", "--check"], "--amplitude"),
+        ("ttctl", ["--demo", "--max-seconds=-1", "--check"], "--max-seconds"),
+        ("ttctl", ["--no-such-option"], ""),
+        ("ttdrive-sim", ["--channel", "vcan0:1", "--duration", "nan"], "--duration"),
+        ("ttdrive-sim", ["--channel", "vcan0:1,1"], "node 1 given twice"),
+        ("ttdrive-sim", ["--channel", "vcan0:1", "--channel", "vcan0:2"], "interface given twice"),
+        ("ttdrive-sim", ["--bogus"], ""),
+    ],
+)
+def test_binaries_refuse_bad_arguments_with_exit_1(binary, args, fragment):
+    exe = _binary(binary)
+    if exe is None:
+        pytest.skip(f"{binary} is not built (cargo build -p ttcan)")
+    r = subprocess.run([exe, *args], capture_output=True, text=True, timeout=CAP_SECONDS, preexec_fn=_limits)
+    assert r.returncode == 1, (r.returncode, r.stderr)
+    assert fragment in r.stderr, r.stderr
+
+
+def test_cli_usage_errors_exit_1_and_help_0():
+    from ttmanip import cli
+
+    assert cli.main(["--no-such-option"]) == 1
+    assert cli.main(["fk"]) == 1
+
+
+# -- 8. messages that name the right thing ------------------------------------------------------
+
+
+def test_a_plan_for_another_robot_names_the_plan_not_q0():
+    plan = ttmanip.plan_hit(ttmanip.robots.gantry6(), ttmanip.DEMO_HIT)
+    with pytest.raises(TtmanipError) as e:
+        ttmanip.simulate(ttmanip.robots.mobile8(), plan)
+    assert str(e.value).startswith("plan:") and "q0" not in str(e.value)
