@@ -83,4 +83,4 @@ def test_reader_errors_say_what_to_fix(tmp_path):
     (tmp_path / "a.json").write_text("[]")
     with pytest.raises(ValueError, match="'ob'"):
         ball_fit.read_flights(tmp_path)
-    assert main(["ball", "fit", str(tmp_path / "nothing"), "--out", str(tmp_path / "o")]) == 2
+    assert main(["ball", "fit", str(tmp_path / "nothing"), "--out", str(tmp_path / "o")]) == 1

@@ -74,3 +74,28 @@ def test_planned_hits_executed_through_the_drives_stay_on_the_plan():
     s = ttmanip.rally(30, seed=3, drives=3)
     assert s["drive_balls"] >= 1
     assert s["drive_racket_position_error_m_max"] < 0.005  # the racket is 7.5 cm in radius
+
+
+def test_mismatched_world_on_the_same_balls_and_balls_from_a_file(tmp_path, capsys):
+    # issue 28: the world's physics drawn per ball around the planner's model, on the same balls.
+    s = ttmanip.rally(60, seed=2, compare_world=True, world=True)
+    c = s["world_comparison"]
+    assert c["same_balls"] and c["balls"] == 60
+    assert set(c) >= {"matched", "mismatched"}
+    assert c["mismatched"]["returned"] == s["returned"]
+    assert s["world"].startswith("per-ball")
+    # Replaying the drawn balls from a file: the same incoming states.
+    rows = s["results"]["incoming"][:25]
+    f = tmp_path / "balls.csv"
+    np.savetxt(f, rows, delimiter=",", header="t,px,py,pz,vx,vy,vz,wx,wy,wz")
+    out = tmp_path / "r"
+    assert cli.main(["rally", "--balls", str(f), "--out", str(out), "--drives", "0"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["balls"] == 25 and summary["incoming"] == "given"
+    g = ttmanip.rally(25, seed=2, incoming=rows)
+    np.testing.assert_array_equal(g["results"]["incoming"], rows)
+    with pytest.raises(ttmanip.TtmanipError, match="incoming"):
+        ttmanip.rally(5, incoming=np.zeros((3, 10)))
+    (tmp_path / "bad.csv").write_text("1 2 3\n")
+    assert cli.main(["rally", "--balls", str(tmp_path / "bad.csv"), "--out", str(out)]) == 1
+    capsys.readouterr()

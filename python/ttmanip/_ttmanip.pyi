@@ -810,6 +810,21 @@ def ball_fit(
     window: int = 20,
     period: float | None = None,
 ) -> dict[str, Any]: ...
+def ball_racket_hit(
+    state: ArrayLike, normal: ArrayLike, velocity: ArrayLike, model: str = "default"
+) -> NDArray[np.float64]: ...
+def ball_plan_correct(
+    state: ArrayLike,
+    now: float,
+    target: ArrayLike,
+    state_new: ArrayLike,
+    t_c: float,
+    after_bounce: bool,
+    model: str = "default",
+) -> dict[str, Any]: ...
+def ball_update(
+    t: ArrayLike, p: ArrayLike, t_new: ArrayLike, p_new: ArrayLike, model: str = "default"
+) -> dict[str, Any]: ...
 def ball_rally(
     n: int,
     seed: int = 0,
@@ -817,6 +832,9 @@ def ball_rally(
     target: tuple[float, float] = (0.9, 0.0),
     max_spin_rps: float = 40.0,
     paths: int = 5,
+    world: bool = False,
+    incoming: ArrayLike | None = None,
+    drives: bool = False,
 ) -> dict[str, Any]: ...
 
 # issue 26: the controller's datagram format (ttcan::online::wire)

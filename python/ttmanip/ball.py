@@ -27,13 +27,16 @@ __all__ = [
     "Table",
     "crossing",
     "estimate",
+    "plan_correct",
     "plan_return",
     "predict",
     "predict_batch",
+    "racket_hit",
     "state",
+    "update",
 ]
 
-MODELS = ("default", "muelling", "mpi", "tt3d", "vacuum")
+MODELS = ("default", "measured", "aero", "muelling", "mpi", "tt3d", "vacuum")
 
 _TABLE = _t.ball_table()  # ttkin::ball::model::Table::default(), the one source of the numbers
 
@@ -42,9 +45,12 @@ _TABLE = _t.ball_table()  # ttkin::ball::model::Table::default(), the one source
 class BallModel:
     """A named flight model: a = g − k_d·|v|·v + k_m·(ω × v).
 
-    ``default``: ρ = 1.184 kg/m³, C_D = 0.5, C_L = rω/|v| → k_d = 0.1377 /m, k_m = 0.00551;
+    ``default`` (= ``measured``): fitted on the measured flights of the MPI PAM setup
+    (``ttmanip ball fit``, docs/ball.md): k_d = 0.1229 /m, k_m = 0.00159, table restitution
+    0.964, friction 0.25. Presets (table restitution 0.93, friction 0.25): ``aero`` (the previous
+    default, ρ = 1.184 kg/m³, C_D = 0.5, C_L = rω/|v| → k_d = 0.1377 /m, k_m = 0.00551),
     ``muelling`` (k_d 0.1414, k_m 0.001), ``mpi`` (0.129, 0.00807), ``tt3d`` (0.141, 0.0018),
-    ``vacuum`` (no air). Ball 2.7 g, 40 mm; table restitution 0.93, friction 0.25.
+    ``vacuum`` (no air). Ball 2.7 g, 40 mm.
     """
 
     name: str = "default"
@@ -212,3 +218,45 @@ def plan_return(
             }
         )
     return d
+
+
+def racket_hit(
+    state: ArrayLike, normal: ArrayLike, velocity: ArrayLike, model: BallModel | str = "default"
+) -> NDArray[np.float64]:
+    """The racket impact model: the ball ``state`` (10,) just before, the racket's unit face
+    ``normal`` (3,) and its face velocity (3,, m/s) at the contact (world frame) in; the ball state
+    (10,) just after out (``ttkin::ball::impact::Racket``: restitution 0.85, friction 0.9 with the
+    rolling cap, Nakashima's impulse relative to the racket)."""
+    return _t.ball_racket_hit(state, normal, velocity, _model(model))
+
+
+def update(
+    t: ArrayLike, p: ArrayLike, t_new: ArrayLike, p_new: ArrayLike, model: BallModel | str = "default"
+) -> dict:
+    """The estimate of observations ``p`` (N, 3) at ``t`` (N,) updated with later observations
+    ``p_new`` (M, 3) at ``t_new`` (M,), through a bounce between them (``ttkin::ball::update``):
+    ``state`` (10,) at the last new observation, ``at_prior`` (10,), ``covariance`` (9, 9) of
+    [p; v; ω] at the prior's time, ``used``, ``outliers``, ``bounced``."""
+    return _t.ball_update(t, p, t_new, p_new, _model(model))
+
+
+def plan_correct(
+    state: ArrayLike,
+    now: float,
+    target: ArrayLike,
+    state_new: ArrayLike,
+    t_c: float,
+    after_bounce: bool,
+    model: BallModel | str = "default",
+) -> dict:
+    """The correction of a planned hit, as the rally makes it after the bounce: gantry6's return
+    of ``state`` planned for a stroke from rest at ``now`` (s) landing at ``target`` (x, y, m),
+    then, that stroke under way, planned again at ``t_c`` (s) for the ball ``state_new`` (e.g.
+    :func:`update`'s state; ``after_bounce`` when past its bounce) near the first hit
+    (``HitPlanner::plan_near`` from the stroke's joint state at ``t_c``). Returns ``first`` and
+    ``corrected``, plan dicts as :func:`plan_return`'s (``status`` and the hit's items)."""
+    if not isinstance(after_bounce, (bool, np.bool_)):
+        raise _t.TtmanipError(f"after_bounce: must be True or False, got {after_bounce!r}")
+    now = _finite_scalar(now, "now")
+    t_c = _finite_scalar(t_c, "t_c")
+    return _t.ball_plan_correct(state, now, target, state_new, t_c, bool(after_bounce), _model(model))

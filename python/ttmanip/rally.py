@@ -42,6 +42,10 @@ def rally(
     progress: bool = False,
     chunk: int = 1000,
     drives: int = 0,
+    world: bool = False,
+    incoming: np.ndarray | None = None,
+    compare_world: bool = False,
+    drive_execution: bool = False,
 ) -> dict:
     """Plays ``n`` balls (deterministic in ``seed``); returns the summary (and writes
     ``summary.json`` and figures into ``out`` when given).
@@ -66,6 +70,18 @@ def rally(
     simulation on the rigid-body dynamics); ``drive_*`` keys report the racket's pose and velocity
     error at the hit against the plan, i.e. how far the exactly executed stroke of the rally is
     from a driven one (about 60 ms per ball, hence a subset).
+
+    ``world=True`` plays every ball in a world the planner does not know (``ttkin::ball::rally::
+    WorldSpread::measured``: per-ball drag, Magnus, restitution and friction drawn around the
+    planner's measured constants within the spreads measured between the ball-gun groups, and a
+    camera time-stamp error of up to ±3 ms); the balls themselves are the same as without.
+    ``incoming`` (N, 10) gives the balls (``[t, p, v, w]`` at the opponent's hit, e.g. recorded
+    shots; ``n`` ≤ N) instead of drawing them. ``compare_world=True`` plays the same balls in both
+    worlds and adds ``world_comparison`` (return rates side by side) to the summary, whose other
+    keys are those of the world asked for. ``drive_execution=True`` executes every planned stroke
+    through the coupled drive simulation (``ttcan::coupled::execute``: a fresh simulation per
+    stroke, inverse-dynamics feed-forward, setpoints at 1 kHz) instead of exactly; the racket meets
+    the ball where the driven joints put it.
     """
     if not isinstance(n, (int, np.integer)) or isinstance(n, bool) or n < 1:
         raise _t.TtmanipError(f"n: must be a positive integer, got {n!r}")
@@ -79,6 +95,13 @@ def rally(
         raise _t.TtmanipError(f"chunk: must be a positive integer, got {chunk!r}")
     if not isinstance(drives, (int, np.integer)) or isinstance(drives, bool) or drives < 0:
         raise _t.TtmanipError(f"drives: must be a non-negative integer, got {drives!r}")
+    for what, flag in (
+        ("world", world),
+        ("compare_world", compare_world),
+        ("drive_execution", drive_execution),
+    ):
+        if not isinstance(flag, (bool, np.bool_)):
+            raise _t.TtmanipError(f"{what}: must be True or False, got {flag!r}")
     if not isinstance(progress, (bool, np.bool_)):
         raise _t.TtmanipError(f"progress: must be True or False, got {progress!r}")
     try:
@@ -96,6 +119,23 @@ def rally(
         raise _t.TtmanipError(
             f"target: expected (x, y) on the opponent's half in m, got {len(target)} values"
         )
+    if incoming is not None:
+        try:
+            incoming = np.asarray(incoming, dtype=float)
+        except (TypeError, ValueError):
+            raise _t.TtmanipError(
+                f"incoming: expected an (N, 10) array of ball states, got {incoming!r}"
+            ) from None
+        if incoming.ndim != 2 or incoming.shape[1] != 10 or len(incoming) < n:
+            raise _t.TtmanipError(
+                f"incoming: expected ({n}, 10) or more rows of [t, p, v, w], got shape {incoming.shape}"
+            )
+    comparison = None
+    if compare_world:
+        other = rally(
+            n, seed, target=target, max_spin_rps=max_spin_rps, chunk=chunk, world=not world, incoming=incoming
+        )
+        comparison = other
     parts = []
     for start in range(0, n, chunk):
         m = min(chunk, n - start)
@@ -107,6 +147,9 @@ def rally(
                 (float(target[0]), float(target[1])),
                 float(max_spin_rps),
                 5 if start == 0 else 0,
+                bool(world),
+                incoming,
+                bool(drive_execution),
             )
         )
         if progress:
@@ -161,9 +204,28 @@ def rally(
             "outliers": 0.02,
             "window_s": 0.20,
         },
-        "stroke_execution": "planned hit leg (quintic, else jerk-limited) executed exactly; "
-        "drive_* keys: a subset through plan_hit + simulate (coupled drive simulation)",
+        "stroke_execution": (
+            "every stroke through the coupled drive simulation (ttcan::coupled::execute)"
+            if drive_execution
+            else "planned hit leg (quintic, else jerk-limited) executed exactly"
+        )
+        + "; drive_* keys: a subset through plan_hit + simulate (coupled drive simulation)",
+        "world": "per-ball constants drawn around the planner's (WorldSpread::measured) and camera "
+        "time-stamp error up to +-3 ms"
+        if world
+        else "the planner's model",
+        "incoming": "given" if incoming is not None else "drawn (ttkin::ball::rally::serve)",
     }
+    if comparison is not None:
+        mine = "mismatched" if world else "matched"
+        theirs = "matched" if world else "mismatched"
+        keys = ("in_reach", "returned", "return_rate", "returned_out_of_reach")
+        summary["world_comparison"] = {
+            "balls": int(n),
+            mine: {k: summary[k] for k in keys},
+            theirs: {k: comparison[k] for k in keys},
+            "same_balls": bool(np.array_equal(comparison["results"]["incoming"], res["incoming"])),
+        }
     if drives > 0:
         summary.update(_drive_check(res, in_reach, int(drives)))
     if out is not None:

@@ -9,7 +9,9 @@ import json
 def add_parser(sub) -> argparse.ArgumentParser:
     """Adds ``rally`` to the subparsers ``sub`` of the ``ttmanip`` command."""
     p = sub.add_parser("rally", help="simulate gantry6 returning randomized incoming balls")
-    p.add_argument("--n", type=int, default=1000, help="number of balls (default 1000)")
+    p.add_argument(
+        "--n", type=int, default=None, help="number of balls (default 1000, or the rows of --balls)"
+    )
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument("--out", default="out/rally", help="output folder (default: out/rally)")
     p.add_argument(
@@ -17,6 +19,25 @@ def add_parser(sub) -> argparse.ArgumentParser:
         type=int,
         default=20,
         help="in-reach balls also executed through the drive simulation (default 20)",
+    )
+    p.add_argument(
+        "--world",
+        choices=("model", "mismatch", "both"),
+        default="model",
+        help="the world the balls fly in: the planner's model (default), a mismatched one "
+        "(per-ball constants and latency drawn around the model's), or both on the same balls "
+        "(summary of the mismatched run with world_comparison)",
+    )
+    p.add_argument(
+        "--balls",
+        help="incoming balls from a file: one row per ball, t px py pz vx vy vz wx wy wz "
+        "(s, m, m/s, rad/s, world frame; comma or space separated, # comments); --n defaults to its rows",
+    )
+    p.add_argument(
+        "--execution",
+        choices=("ideal", "drives"),
+        default="ideal",
+        help="strokes executed exactly (default) or through the coupled drive simulation",
     )
     p.add_argument(
         "--rerun",
@@ -31,11 +52,41 @@ def run(args: argparse.Namespace) -> int:
     """Runs the rally, writes ``summary.json`` and figures, prints the summary."""
     import sys
 
+    import numpy as np
+
     from . import TtmanipError
     from .rally import rally
 
+    incoming = None
+    n = args.n if args.n is not None else 1000
+    if args.balls:
+        try:
+            with open(args.balls) as f:
+                text = f.read().replace(",", " ")
+            incoming = np.loadtxt(text.splitlines(), ndmin=2)
+        except (OSError, ValueError) as e:
+            print(f"ttmanip rally: --balls {args.balls}: {e}", file=sys.stderr)
+            return 1  # bad input (ttmanip.cli.EXIT_BAD_INPUT)
+        if incoming.shape[1] != 10:
+            print(
+                f"ttmanip rally: --balls {args.balls}: rows must have 10 numbers "
+                f"(t px py pz vx vy vz wx wy wz), got {incoming.shape[1]}",
+                file=sys.stderr,
+            )
+            return 1  # bad input
+        n = min(args.n, len(incoming)) if args.n is not None else len(incoming)
     try:
-        summary = rally(args.n, args.seed, out=args.out, progress=True, drives=args.drives)
+        summary = rally(
+            n,
+            args.seed,
+            out=args.out,
+            progress=True,
+            drives=args.drives,
+            world=args.world != "model",
+            incoming=incoming,
+            compare_world=args.world == "both",
+            drive_execution=args.execution == "drives",
+        )
     except TtmanipError as e:
         print(f"ttmanip rally: {e}", file=sys.stderr)
         return 1  # bad input (ttmanip.cli.EXIT_BAD_INPUT)

@@ -220,3 +220,45 @@ fn a_current_noise_in_amps_reaches_every_axis_built_from_the_drive_sections() {
     let negative = CoupledOptions::default().with_current_noise(-0.001);
     assert!(ttcan::coupled::axis_configs_from_chain(&chain, &q0, &negative).is_err());
 }
+
+/// The rally's strokes through the drives (`ttcan::coupled::execute`): the racket still meets the
+/// balls, near the planned contact point.
+#[test]
+fn rally_strokes_through_the_drives_return_the_balls() {
+    use ttkin::ball::flight::Flight;
+    use ttkin::ball::hitplan::HitPlanner;
+    use ttkin::ball::rally::{self, RallyConfig};
+    use ttkin::ball::reach::ReachRegion;
+    let pl = HitPlanner::new(ttkin::robots::gantry6(), Flight::default()).unwrap();
+    let region = ReachRegion::new(&pl.chain, pl.placement, pl.ready.clone(), pl.flight.model.radius).unwrap();
+    let truth = Flight {
+        step: 0.001,
+        ..Flight::default()
+    };
+    let cfg = RallyConfig {
+        paths: 0,
+        ..RallyConfig::default()
+    };
+    let ex = ttcan::coupled::execute::DriveExecutor::new(&pl.chain, ttcan::CoupledOptions::default(), 1e-3).unwrap();
+    let (mut ok, mut returned, mut ideal) = (0, 0, 0);
+    for i in 0..8 {
+        let a = rally::play(&pl, &region, &truth, &cfg, i);
+        let b = rally::play_with(&pl, &region, &truth, &cfg, i, None, Some(&ex));
+        assert_eq!(a.incoming, b.incoming);
+        if a.status == "returned" {
+            ideal += 1;
+            ok += 1;
+            returned += usize::from(b.returned);
+            assert!(
+                b.contact && b.racket_error < 0.05,
+                "ball {i}: {} {}",
+                b.status,
+                b.racket_error
+            );
+        }
+    }
+    assert!(
+        ok >= 4 && returned + 1 >= ideal,
+        "{returned} of {ideal} returned through the drives"
+    );
+}

@@ -220,27 +220,87 @@ fn ball_plan_return<'py>(
     d.set_item("candidates", plan.candidates)?;
     d.set_item("ready", to_numpy(py, &[planner.ready.len()], &planner.ready))?;
     if let Some(h) = plan.hit {
-        d.set_item("pose", pose_to_numpy(py, &h.pose))?;
-        d.set_item("twist", to_numpy(py, &[6], &h.twist))?;
-        d.set_item("t_hit", h.t_hit)?;
-        d.set_item("q_hit", to_numpy(py, &[h.q_hit.len()], &h.q_hit))?;
-        d.set_item("qd_hit", to_numpy(py, &[h.qd_hit.len()], &h.qd_hit))?;
-        d.set_item("qdd_hit", to_numpy(py, &[h.qdd_hit.len()], &h.qdd_hit))?;
-        d.set_item("ball", to_numpy(py, &[10], &state_vec(&h.ball)))?;
-        d.set_item("v_out", to_numpy(py, &[3], h.v_out.as_slice()))?;
-        d.set_item("normal", to_numpy(py, &[3], h.racket.normal.as_slice()))?;
-        d.set_item("racket_velocity", to_numpy(py, &[3], h.racket.velocity.as_slice()))?;
-        d.set_item("spin_out", to_numpy(py, &[3], h.racket.spin_out.as_slice()))?;
-        d.set_item("margin", h.margin)?;
-        d.set_item("landing", to_numpy(py, &[3], h.landing.as_slice()))?;
+        hit_items(py, &d, &h)?;
     }
+    Ok(d)
+}
+
+fn hit_items<'py>(py: Python<'py>, d: &Bound<'py, PyDict>, h: &ttkin::ball::hitplan::Hit) -> PyResult<()> {
+    d.set_item("pose", pose_to_numpy(py, &h.pose))?;
+    d.set_item("twist", to_numpy(py, &[6], &h.twist))?;
+    d.set_item("t_hit", h.t_hit)?;
+    d.set_item("q_hit", to_numpy(py, &[h.q_hit.len()], &h.q_hit))?;
+    d.set_item("qd_hit", to_numpy(py, &[h.qd_hit.len()], &h.qd_hit))?;
+    d.set_item("qdd_hit", to_numpy(py, &[h.qdd_hit.len()], &h.qdd_hit))?;
+    d.set_item("ball", to_numpy(py, &[10], &state_vec(&h.ball)))?;
+    d.set_item("v_out", to_numpy(py, &[3], h.v_out.as_slice()))?;
+    d.set_item("normal", to_numpy(py, &[3], h.racket.normal.as_slice()))?;
+    d.set_item("racket_velocity", to_numpy(py, &[3], h.racket.velocity.as_slice()))?;
+    d.set_item("spin_out", to_numpy(py, &[3], h.racket.spin_out.as_slice()))?;
+    d.set_item("margin", h.margin)?;
+    d.set_item("landing", to_numpy(py, &[3], h.landing.as_slice()))?;
+    Ok(())
+}
+
+/// The correction of a planned hit (`ttkin::ball::rally::correct_hit`, `plan_near`): gantry6's
+/// return of the ball `state` planned for a stroke from rest at `now` (s) landing at `target`,
+/// then, with that stroke under way, planned again at `t_c` (s) for the ball `state_new` (e.g.
+/// `ball.update`'s state; `after_bounce` when past its bounce) near the first hit. Returns
+/// `first` and `corrected` (the plan dicts of `ball_plan_return`).
+#[ttkin_py_guard::guarded]
+#[pyfunction]
+#[pyo3(signature = (state, now, target, state_new, t_c, after_bounce, model = "default"))]
+#[allow(clippy::too_many_arguments)]
+fn ball_plan_correct<'py>(
+    py: Python<'py>,
+    state: &Bound<'py, PyAny>,
+    now: f64,
+    target: &Bound<'py, PyAny>,
+    state_new: &Bound<'py, PyAny>,
+    t_c: f64,
+    after_bounce: bool,
+    model: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    let s = state_arg(state, "state")?;
+    let s_new = state_arg(state_new, "state_new")?;
+    s.validate("state").py()?;
+    s_new.validate("state_new").py()?;
+    let tg = vector(target, "target", 2)?;
+    let planner = HitPlanner::new(ttkin::robots::gantry6(), flight(model)?).py()?;
+    let first = py.detach(|| planner.plan(&s, now, [tg[0], tg[1]])).py()?;
+    let d = PyDict::new(py);
+    let fd = PyDict::new(py);
+    fd.set_item("status", first.status.name())?;
+    if let Some(h) = &first.hit {
+        hit_items(py, &fd, h)?;
+    }
+    d.set_item("first", fd)?;
+    let Some(h) = first
+        .hit
+        .filter(|_| first.status == ttkin::ball::hitplan::HitStatus::Ok)
+    else {
+        return Err(TtmanipError::new_err(format!(
+            "ball_plan_correct: the first plan has no feasible hit (status {}): nothing to correct",
+            first.status.name()
+        )));
+    };
+    let c = py
+        .detach(|| rally::correct_hit(&planner, &h, now, &s_new, t_c, after_bounce))
+        .py()?;
+    let cd = PyDict::new(py);
+    cd.set_item("status", c.status.name())?;
+    if let Some(h) = &c.hit {
+        hit_items(py, &cd, h)?;
+    }
+    d.set_item("corrected", cd)?;
     Ok(d)
 }
 
 /// Plays balls `start`..`start + n` of a simulated rally (see `ttkin::ball::rally`) in parallel.
 #[ttkin_py_guard::guarded]
 #[pyfunction]
-#[pyo3(signature = (n, seed = 0, start = 0, target = (0.9, 0.0), max_spin_rps = 40.0, paths = 5))]
+#[pyo3(signature = (n, seed = 0, start = 0, target = (0.9, 0.0), max_spin_rps = 40.0, paths = 5, world = false, incoming = None, drives = false))]
+#[allow(clippy::too_many_arguments)]
 fn ball_rally<'py>(
     py: Python<'py>,
     n: i128,
@@ -249,6 +309,9 @@ fn ball_rally<'py>(
     target: (f64, f64),
     max_spin_rps: f64,
     paths: i128,
+    world: bool,
+    incoming: Option<&Bound<'py, PyAny>>,
+    drives: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let n: usize = args::sample_count(n, "n")?;
     let seed: u64 = args::unsigned(seed, "seed")?;
@@ -277,7 +340,26 @@ fn ball_rally<'py>(
         max_spin_rps,
         seed,
         paths,
+        world: world.then(rally::WorldSpread::measured),
         ..RallyConfig::default()
+    };
+    let given: Option<Vec<BallState>> = match incoming {
+        Some(a) => {
+            let a = rows_array(a, "incoming", "N", &[10])?;
+            let states: Vec<BallState> = a.data().chunks_exact(10).map(state_from).collect();
+            if (start as usize).saturating_add(n) > states.len() {
+                return Err(TtmanipError::new_err(format!(
+                    "incoming: {} states, balls {start}..{} asked",
+                    states.len(),
+                    start as usize + n
+                )));
+            }
+            for (i, s) in states.iter().enumerate() {
+                s.validate(&format!("incoming[{i}]")).py()?;
+            }
+            Some(states)
+        }
+        None => None,
     };
     let region = ReachRegion::new(
         &planner.chain,
@@ -286,12 +368,20 @@ fn ball_rally<'py>(
         truth.model.radius,
     )
     .py()?;
+    let executor = if drives {
+        Some(ttcan::coupled::execute::DriveExecutor::new(&planner.chain, ttcan::CoupledOptions::default(), 1e-3).py()?)
+    } else {
+        None
+    };
     // Ctrl-C stops the rally within one ball per thread (issue 29).
     let out: Vec<rally::BallOutcome> = crate::interrupt::detach_interruptible(py, |cancel| {
         (start..start + n as u64)
             .into_par_iter()
             .filter_map(|i| {
-                (!crate::interrupt::cancelled(cancel)).then(|| rally::play(&planner, &region, &truth, &cfg, i))
+                let s = given.as_ref().map(|g| &g[i as usize]);
+                let ex = executor.as_ref().map(|e| e as &dyn rally::Executor);
+                (!crate::interrupt::cancelled(cancel))
+                    .then(|| rally::play_with(&planner, &region, &truth, &cfg, i, s, ex))
             })
             .collect()
     })?;
@@ -335,6 +425,81 @@ fn ball_rally<'py>(
         paths_list.append(pd)?;
     }
     d.set_item("paths", paths_list)?;
+    Ok(d)
+}
+
+/// The ball after a racket impact (`ttkin::ball::impact::Racket::hit` with the default racket):
+/// `state` (10,) just before, the racket's unit face `normal` (3,) and the face point's
+/// `velocity` (3,, m/s, world); returns the state (10,) just after.
+#[ttkin_py_guard::guarded]
+#[pyfunction]
+#[pyo3(signature = (state, normal, velocity, model = "default"))]
+fn ball_racket_hit<'py>(
+    py: Python<'py>,
+    state: &Bound<'py, PyAny>,
+    normal: &Bound<'py, PyAny>,
+    velocity: &Bound<'py, PyAny>,
+    model: &str,
+) -> PyResult<Bound<'py, PyAny>> {
+    let s = state_arg(state, "state")?;
+    s.validate("state").py()?;
+    let n = vector(normal, "normal", 3)?;
+    let rv = vector(velocity, "velocity", 3)?;
+    let n = nalgebra::Vector3::new(n[0], n[1], n[2]);
+    let rv = nalgebra::Vector3::new(rv[0], rv[1], rv[2]);
+    let unit = (n.norm() - 1.0).abs() < 1e-6;
+    if !unit || !rv.iter().all(|x| x.is_finite()) {
+        return Err(ttkin::Error::invalid(
+            "normal, velocity",
+            format!(
+                "the normal must be a unit vector (norm {}) and the velocity finite",
+                n.norm()
+            ),
+        ))
+        .py();
+    }
+    let f = flight(model)?;
+    let (v, w) = ttkin::ball::impact::Racket::default().hit(&f.model, &s.v, &s.w, &n, &rv);
+    let out = BallState { v, w, ..s };
+    Ok(to_numpy(py, &[10], &state_vec(&out)).into_any())
+}
+
+/// The estimate from the observations `t` (N,), `p` (N, 3) updated with later ones `t_new`
+/// (M,), `p_new` (M, 3), through a bounce between them (`ttkin::ball::update`).
+#[ttkin_py_guard::guarded]
+#[pyfunction]
+#[pyo3(signature = (t, p, t_new, p_new, model = "default"))]
+fn ball_update<'py>(
+    py: Python<'py>,
+    t: &Bound<'py, PyAny>,
+    p: &Bound<'py, PyAny>,
+    t_new: &Bound<'py, PyAny>,
+    p_new: &Bound<'py, PyAny>,
+    model: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    let times = rows_array(t, "t", "N", &[])?.data().to_vec();
+    let obs = rows3(p, "p")?;
+    let times_new = rows_array(t_new, "t_new", "M", &[])?.data().to_vec();
+    let obs_new = rows3(p_new, "p_new")?;
+    let opts = EstimateOptions {
+        flight: flight(model)?,
+        ..EstimateOptions::default()
+    };
+    let up = py
+        .detach(|| {
+            let est = estimate(&times, &obs, &opts)?;
+            ttkin::ball::update::update(&est, &times_new, &obs_new, &opts)
+        })
+        .map_err(ttkin::Error::from)
+        .py()?;
+    let d = PyDict::new(py);
+    d.set_item("state", to_numpy(py, &[10], &state_vec(&up.state)))?;
+    d.set_item("at_prior", to_numpy(py, &[10], &state_vec(&up.at_prior)))?;
+    let cov: Vec<f64> = up.covariance.iter().flatten().copied().collect();
+    d.set_item("covariance", to_numpy(py, &[9, 9], &cov))?;
+    d.set_item("used", up.used)?;
+    d.set_item("outliers", up.outliers)?;
+    d.set_item("bounced", up.bounced)?;
     Ok(d)
 }
 
@@ -494,6 +659,9 @@ fn ball_fit<'py>(
 /// Adds the ball functions to the module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ball_fit, m)?)?;
+    m.add_function(wrap_pyfunction!(ball_racket_hit, m)?)?;
+    m.add_function(wrap_pyfunction!(ball_update, m)?)?;
+    m.add_function(wrap_pyfunction!(ball_plan_correct, m)?)?;
     m.add("MAX_RALLY_BALLS", MAX_RALLY_BALLS)?;
     m.add_function(wrap_pyfunction!(ball_table, m)?)?;
     m.add_function(wrap_pyfunction!(ball_placement, m)?)?;

@@ -39,6 +39,7 @@ use ttkin::{Chain, Dynamics, DynamicsData, JointType};
 use crate::axis::{Axis, AxisConfig, Mode};
 
 mod drives;
+pub mod execute;
 mod trace;
 mod winding;
 use crate::error::{Error, Result};

@@ -33,6 +33,7 @@
 use super::estimate::{estimate, EstimateOptions};
 use super::flight::{BallState, EventKind, Flight};
 use super::hitplan::{shoot, Hit, HitPlanner, HitStatus};
+use super::model::BallModel;
 use super::reach::ReachRegion;
 use super::update::update;
 use crate::chain::JacobianFrame;
@@ -74,6 +75,53 @@ impl Default for Camera {
     }
 }
 
+/// How the simulated world departs from the planner's model, drawn anew for every ball (from its
+/// own random stream, so the incoming balls are the same with and without it): the true ball's
+/// drag and Magnus constants scaled by (1 + σ·N(0, 1)), its table restitution and friction moved
+/// by σ·N(0, 1) (clamped to their physical ranges), and the camera's time stamps off by a constant
+/// uniform in ±`latency_jitter` for the ball (the delivery latency differs from the one the
+/// planner assumes).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WorldSpread {
+    /// Relative standard deviation of k_d.
+    pub k_drag: f64,
+    /// Relative standard deviation of k_m.
+    pub k_magnus: f64,
+    /// Standard deviation of the table restitution.
+    pub restitution: f64,
+    /// Standard deviation of the table friction.
+    pub friction: f64,
+    /// Largest time-stamp error (s) of the observations.
+    pub latency_jitter: f64,
+}
+
+impl WorldSpread {
+    /// The spreads between the calibrations of the four ball-gun groups of the PAM flights
+    /// (docs/ball.md, "The world the planner does not know"): k_d 4 %, k_m 45 % (0.00064–0.00235),
+    /// restitution 0.008; friction 0.05 and ±3 ms of latency jitter are assumed, not measured (the
+    /// flights do not identify μ and carry no time stamps).
+    pub fn measured() -> Self {
+        WorldSpread {
+            k_drag: 0.04,
+            k_magnus: 0.45,
+            restitution: 0.008,
+            friction: 0.05,
+            latency_jitter: 0.003,
+        }
+    }
+
+    /// The ball model of one ball's world: `model` with its constants drawn with `rng`.
+    pub fn draw(&self, model: &BallModel, rng: &mut fastrand::Rng) -> BallModel {
+        BallModel {
+            k_drag: (model.k_drag * (1.0 + self.k_drag * gauss(rng))).max(0.0),
+            k_magnus: (model.k_magnus * (1.0 + self.k_magnus * gauss(rng))).max(0.0),
+            table_restitution: (model.table_restitution + self.restitution * gauss(rng)).clamp(0.0, 1.0),
+            table_friction: (model.table_friction + self.friction * gauss(rng)).max(0.0),
+            ..*model
+        }
+    }
+}
+
 /// Rally settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RallyConfig {
@@ -99,6 +147,8 @@ pub struct RallyConfig {
     /// the estimate updated with the observations delivered by then ([`update`]) and the hit
     /// planned again from the robot's state; 0 for none.
     pub correction_delay: f64,
+    /// The world's departure from the planner's model per ball; `None`: the world is the model.
+    pub world: Option<WorldSpread>,
 }
 
 impl Default for RallyConfig {
@@ -113,6 +163,7 @@ impl Default for RallyConfig {
             replan_period: 0.0,
             max_window: 0.25,
             correction_delay: 0.03,
+            world: None,
         }
     }
 }
@@ -204,6 +255,51 @@ pub fn serve(flight: &Flight, rng: &mut fastrand::Rng, max_spin_rps: f64, corksc
     }
 }
 
+/// What the robot actually did for a commanded stroke: joint positions and velocities at times
+/// `t` (s from the stroke's start), `dof` columns, row-major.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Executed {
+    /// Joints.
+    pub dof: usize,
+    /// Sample times (s from the stroke's start, increasing).
+    pub t: Vec<f64>,
+    /// Joint positions (rad or m), K × dof.
+    pub q: Vec<f64>,
+    /// Joint speeds (rad/s or m/s), K × dof.
+    pub qd: Vec<f64>,
+}
+
+/// Executes a stroke on the robot (the rally's execution hook; `ttcan` implements it with the
+/// coupled drive simulation, since `ttkin` may not depend on `ttcan`). The reference: samples at
+/// `times` (s from the stroke's start, increasing, uniform) of q, q̇, q̈ (K × n, row-major), the
+/// robot at rest at the first sample; `None` when the execution failed (a drive fault).
+pub trait Executor: Sync {
+    /// The executed motion for the reference (see the trait doc).
+    fn execute(&self, times: &[f64], q: &[f64], qd: &[f64], qdd: &[f64]) -> Option<Executed>;
+}
+
+impl Executed {
+    /// Joint state at `t` (s from the start): linear interpolation, held beyond the ends.
+    fn sample(&self, t: f64, q: &mut [f64], qd: &mut [f64]) {
+        let n = self.dof;
+        let k = self.t.partition_point(|&x| x <= t).clamp(1, self.t.len().max(2) - 1);
+        let (t0, t1) = (self.t[k - 1], self.t[k.min(self.t.len() - 1)]);
+        let s = if t1 > t0 {
+            ((t - t0) / (t1 - t0)).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let k1 = k.min(self.t.len() - 1);
+        for j in 0..n {
+            q[j] = self.q[(k - 1) * n + j] + s * (self.q[k1 * n + j] - self.q[(k - 1) * n + j]);
+            qd[j] = self.qd[(k - 1) * n + j] + s * (self.qd[k1 * n + j] - self.qd[(k - 1) * n + j]);
+        }
+    }
+}
+
+/// Sample period (s) of the reference handed to an [`Executor`].
+const EXECUTION_PERIOD: f64 = 0.001;
+
 /// A stroke made of pieces: each re-plan replaces the motion from its start time (s, absolute).
 struct Motion {
     pieces: Vec<(f64, JointTrajectory)>,
@@ -236,15 +332,52 @@ impl Motion {
 /// Plays ball `index` of the rally: serve, observe, classify against `region`, plan, re-plan,
 /// execute, score.
 pub fn play(planner: &HitPlanner, region: &ReachRegion, truth: &Flight, cfg: &RallyConfig, index: u64) -> BallOutcome {
+    play_with(planner, region, truth, cfg, index, None, None)
+}
+
+/// [`play`] with the incoming ball given (`incoming`, e.g. a recorded shot; time stamps from its
+/// `t`, re-based to 0) instead of served. With [`RallyConfig::world`] the ball flies in its own
+/// world (constants drawn around `truth`'s, see [`WorldSpread`]) while the planner keeps its model.
+/// With an `executor` the stroke (as planned, re-plans included) is executed by it from the
+/// planning time to 60 ms after the hit, and the racket follows the executed motion.
+pub fn play_with(
+    planner: &HitPlanner,
+    region: &ReachRegion,
+    truth: &Flight,
+    cfg: &RallyConfig,
+    index: u64,
+    incoming: Option<&BallState>,
+    executor: Option<&dyn Executor>,
+) -> BallOutcome {
     let mut rng = fastrand::Rng::with_seed(
         cfg.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ index.wrapping_mul(0xD1B5_4A32_D192_ED03),
     );
-    let s0 = serve(truth, &mut rng, cfg.max_spin_rps, cfg.corkscrew);
+    let s0 = match incoming {
+        Some(s) => BallState { t: 0.0, ..*s },
+        None => serve(truth, &mut rng, cfg.max_spin_rps, cfg.corkscrew),
+    };
+    // The ball's own world, from a stream of its own (the serve and the camera noise unchanged).
+    let mut world_rng = fastrand::Rng::with_seed(
+        cfg.seed.wrapping_mul(0xA076_1D64_78BD_642F) ^ index.wrapping_mul(0xE703_7ED1_A0B4_28DB) ^ 0x5EED,
+    );
+    let (world, stamp_error) = match &cfg.world {
+        Some(w) => (
+            Flight {
+                model: w.draw(&truth.model, &mut world_rng),
+                ..*truth
+            },
+            w.latency_jitter * (2.0 * world_rng.f64() - 1.0),
+        ),
+        None => (*truth, 0.0),
+    };
+    let truth = &world;
     let cam = &cfg.camera;
     // The camera runs for the whole incoming flight; each plan sees what was delivered by then.
     let count = (1.2 * cam.rate) as usize;
-    let times: Vec<f64> = (0..count).map(|k| cam.start + k as f64 / cam.rate).collect();
-    let truth_path = super::predict::predict(truth, &s0, &times).expect("valid times");
+    let exposures: Vec<f64> = (0..count).map(|k| cam.start + k as f64 / cam.rate).collect();
+    let truth_path = super::predict::predict(truth, &s0, &exposures).expect("valid times");
+    // The time stamps the planner sees: the exposures, off by the ball's latency error.
+    let times: Vec<f64> = exposures.iter().map(|t| t + stamp_error).collect();
     let obs: Vec<[f64; 3]> = truth_path
         .positions
         .iter()
@@ -263,7 +396,7 @@ pub fn play(planner: &HitPlanner, region: &ReachRegion, truth: &Flight, cfg: &Ra
     let first = (cam.window * cam.rate).round() as usize + 1;
     let t_last = times[first - 1];
     let now = t_last + cam.latency;
-    let (truth_at_last, _) = truth.run(&s0, t_last, None);
+    let (truth_at_last, _) = truth.run(&s0, exposures[first - 1], None);
     let reach = region.classify(truth, &s0, now);
     let mut out = BallOutcome {
         incoming: s0,
@@ -390,9 +523,39 @@ pub fn play(planner: &HitPlanner, region: &ReachRegion, truth: &Flight, cfg: &Ra
     out.planned = Some((hit.ball, hit.racket.normal));
     let world = planner.placement.world_from_base();
     let (mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    // The executed motion, when an executor runs the stroke: from its start to 60 ms past the hit.
+    let t_start = motion.pieces[0].0;
+    let executed = match executor {
+        Some(ex) => {
+            let k = ((hit_abs + 0.06 - t_start) / EXECUTION_PERIOD).ceil() as usize + 1;
+            let times: Vec<f64> = (0..k).map(|i| i as f64 * EXECUTION_PERIOD).collect();
+            let (mut rq, mut rqd, mut rqdd) = (
+                Vec::with_capacity(k * n),
+                Vec::with_capacity(k * n),
+                Vec::with_capacity(k * n),
+            );
+            for &t in &times {
+                motion.sample(t_start + t, &mut q, &mut qd, &mut qdd);
+                rq.extend_from_slice(&q);
+                rqd.extend_from_slice(&qd);
+                rqdd.extend_from_slice(&qdd);
+            }
+            match ex.execute(&times, &rq, &rqd, &rqdd) {
+                Some(e) => Some(e),
+                None => {
+                    out.status = "execution_failed".into();
+                    return out;
+                }
+            }
+        }
+        None => None,
+    };
     // Racket centre, normal, velocity and angular velocity (world) at time t (s, absolute).
     let mut racket_at = |t: f64| {
-        motion.sample(t, &mut q, &mut qd, &mut qdd);
+        match &executed {
+            Some(e) => e.sample(t - t_start, &mut q, &mut qd),
+            None => motion.sample(t, &mut q, &mut qd, &mut qdd),
+        }
         let pose = world * planner.chain.fk(&q).expect("sizes match");
         let jac = planner.chain.jacobian(&q, JacobianFrame::Base).expect("sizes match");
         let tw = jac * nalgebra::DVector::from_column_slice(&qd);
@@ -539,6 +702,39 @@ fn correct(
     Some((t_c, hit))
 }
 
+/// The correction of a planned hit, as the rally makes it after the bounce: the stroke of `first`
+/// (planned at `t_first`, s absolute, from rest at the planner's ready configuration) is under
+/// way; at `now` (s) the hit is planned again for the ball `ball` (e.g. the estimate updated
+/// through the bounce, [`update`]; `after_bounce` when it is past its bounce) from the stroke's
+/// joint state then, near `first` ([`HitPlanner::plan_near`], shortest stroke 60 ms). An error
+/// when `now` is before `t_first` or less than 60 ms before the first hit.
+pub fn correct_hit(
+    planner: &HitPlanner,
+    first: &Hit,
+    t_first: f64,
+    ball: &BallState,
+    now: f64,
+    after_bounce: bool,
+) -> crate::error::Result<super::hitplan::HitPlan> {
+    let t_prev = t_first + first.t_hit;
+    if !(now >= t_first && t_prev - now > CORRECTION_MIN_STROKE) {
+        return Err(crate::error::Error::invalid(
+            "now",
+            format!(
+                "a correction at {now} s needs the stroke under way (started {t_first} s) and at least \
+                 {CORRECTION_MIN_STROKE} s before the first hit at {t_prev} s"
+            ),
+        ));
+    }
+    let motion = Motion {
+        pieces: vec![(t_first, execution(first, &JointState::rest(&planner.ready)))],
+    };
+    let start = motion.state(now, planner.chain.dof());
+    let mut replanner = planner.clone();
+    replanner.min_stroke_time = CORRECTION_MIN_STROKE;
+    replanner.plan_near(ball, now, &start, after_bounce, first, t_prev)
+}
+
 /// Shortest stroke (s) of the correction after the bounce: the rest of a stroke under way.
 const CORRECTION_MIN_STROKE: f64 = 0.06;
 
@@ -578,6 +774,22 @@ fn sample_path(flight: &Flight, s: &BallState, duration: f64) -> Vec<[f64; 3]> {
         .collect();
     let pred = super::predict::predict(flight, s, &times).expect("valid times");
     pred.positions.into_iter().filter(|p| p[0].is_finite()).collect()
+}
+
+/// Plays the balls `incoming` (states at the opponent's hit, e.g. recorded shots; ball `i` is
+/// `incoming[i]`) in parallel; see [`play_with`].
+pub fn rally_from(
+    planner: &HitPlanner,
+    region: &ReachRegion,
+    truth: &Flight,
+    cfg: &RallyConfig,
+    incoming: &[BallState],
+) -> Vec<BallOutcome> {
+    incoming
+        .par_iter()
+        .enumerate()
+        .map(|(i, s)| play_with(planner, region, truth, cfg, i as u64, Some(s), None))
+        .collect()
 }
 
 /// Plays balls 0..`n` in parallel.
