@@ -124,10 +124,12 @@ if [ $rc = 1 ] && echo "$msg" | grep -q "can0: 3 axes"; then pass budget-refused
 
 # 7. interoperability with python-canopen (a stack no one here wrote), issue 27: the host's
 # filesystem is shared read-only over 9p (scripts/vm/run.sh); its Python with python-canopen and
-# the release binaries run in a chroot on it, on vcan4/vcan5 with SocketCAN on both sides.
+# the release binaries run in a chroot on it, on vcan4/vcan5 with SocketCAN on both sides. Their
+# scratch space is a tmpfs on /dev/shm (TMPDIR), never over the host's /tmp: the checkout under
+# test may live there (a CI clone in /tmp).
 . /ttmanip/interop.env   # HOST_ROOT, HOST_PY (written by scripts/vm/build.sh)
 interop() {  # interop NAME SCENARIO IFACE
-    out=$(chroot /host "$HOST_PY" "$HOST_ROOT/tests/vm/interop.py" "$2" "$3" "$HOST_ROOT/target/release" 2>&1); rc=$?
+    out=$(TMPDIR=/dev/shm chroot /host "$HOST_PY" "$HOST_ROOT/tests/vm/interop.py" "$2" "$3" "$HOST_ROOT/target/release" 2>&1); rc=$?
     echo "$out" | grep -v "^CAN " | sed "s/^/[$1] /"
     r=$(echo "$out" | grep "^RESULT " | tail -1 | cut -c8-)
     if [ $rc = 0 ]; then pass "$1" "$r"; else failed "$1" "rc $rc: $r"; fi
@@ -135,7 +137,7 @@ interop() {  # interop NAME SCENARIO IFACE
 if modprobe can_bcm && modprobe virtio_pci && modprobe 9pnet_virtio && modprobe 9p && mkdir -p /host \
     && mount -t 9p -o trans=virtio,version=9p2000.L,ro hostfs /host \
     && mount -t proc proc /host/proc && mount -t sysfs sys /host/sys && mount -t devtmpfs dev /host/dev \
-    && mount -t tmpfs tmp /host/tmp; then
+    && mkdir -p /host/dev/shm && mount -t tmpfs tmp /host/dev/shm; then
     for i in 4 5; do $IP link add dev "vcan$i" type vcan && $IP link set "vcan$i" txqueuelen 1000 up || failed "vcan$i" ""; done
     interop interop-python-master python-master vcan4
     interop interop-ttctl-master ttctl-master vcan5
