@@ -104,3 +104,19 @@ def test_flat_plant_keys_are_deprecated_nested_entries():
     np.testing.assert_array_equal(
         old.step_response("velocity", 5.0, 0.01).speed, new.step_response("velocity", 5.0, 0.01).speed
     )
+
+
+def test_reprs_print_the_current_names():
+    """Issue 30: a repr shows the names to type today, not the deprecated ones."""
+    import warnings
+
+    robot = ttmanip.robots.ur5()
+    assert repr(robot) == "Robot('ur5', dof=6, joints='RRRRRR')"
+    drive = ttmanip.DiffDrive(
+        wheel_radius=0.1, track_width=0.5, max_wheel_speed=3.0, max_wheel_acceleration=6.0
+    )
+    assert "track_width=0.5" in repr(drive) and "track=" not in repr(drive)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the repr evaluates without a deprecated keyword
+        again = eval(repr(drive), {"DiffDrive": ttmanip.DiffDrive})  # noqa: S307 - our own repr
+    assert repr(again) == repr(drive)

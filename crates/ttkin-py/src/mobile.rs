@@ -121,7 +121,7 @@ impl PyDiffDrive {
 
     fn __repr__(&self) -> String {
         format!(
-            "DiffDrive(wheel_radius={}, track={}, max_wheel_speed={}, max_wheel_acceleration={})",
+            "DiffDrive(wheel_radius={}, track_width={}, max_wheel_speed={}, max_wheel_acceleration={})",
             self.drive.wheel_radius(),
             self.drive.track(),
             self.drive.max_wheel_speed(),

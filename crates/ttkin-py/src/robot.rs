@@ -288,7 +288,7 @@ impl PyRobot {
     fn __repr__(&self) -> String {
         let types: String = self.chain.joints().iter().map(|j| j.kind().letter()).collect();
         format!(
-            "Robot('{}', n={}, joints='{}')",
+            "Robot('{}', dof={}, joints='{}')",
             self.chain.name(),
             self.chain.dof(),
             types
