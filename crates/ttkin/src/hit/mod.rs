@@ -25,6 +25,8 @@
 //! beyond a joint's speed limit, a stroke leaving the position limits, or an effort limit no hit
 //! time can meet. Errors are for bad input only (shapes, NaN, non-positive times).
 
+pub mod branch;
+pub mod leg;
 pub mod racket;
 mod solve;
 mod stroke;
@@ -39,6 +41,8 @@ use crate::error::{check_finite, check_vector, Error, Result};
 use crate::ik::Analytic;
 use crate::traj::limits::{KinematicLimits, Violation};
 use crate::traj::{JointState, JointTrajectory};
+pub use branch::BranchLeg;
+pub use leg::HitLeg;
 pub use racket::{racket_axes, racket_frame, racket_state_batch, Racket, DEFAULT_HANDLE, RACKET_STATE_LEN};
 
 /// Standard gravity (m/s², base frame: base z up).
@@ -362,6 +366,11 @@ impl HitPlanner {
     /// The chain.
     pub fn chain(&self) -> &Chain {
         &self.chain
+    }
+
+    /// The analytic IK of the chain, when it has one ([`Analytic::for_chain`]).
+    pub fn analytic(&self) -> Option<&Analytic> {
+        self.analytic.as_ref()
     }
 
     /// The racket mount.
