@@ -104,7 +104,7 @@ impl HitPlanner {
             return true;
         };
         let mut data = DynamicsData::new(dynamics);
-        let gravity = Vector3::from(self.options.gravity);
+        let gravity = Vector3::from(self.gravity);
         let threshold = 1.0 + LIMIT_TOLERANCE;
         let stop = PeakStop::decide(threshold, 1e-3);
         let peak = dynamics.effort_peak(&mut data, leg, &self.effort, &gravity, stop);

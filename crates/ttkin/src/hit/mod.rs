@@ -45,9 +45,6 @@ pub use branch::BranchLeg;
 pub use leg::HitLeg;
 pub use racket::{racket_axes, racket_frame, racket_state_batch, Racket, DEFAULT_HANDLE, RACKET_STATE_LEN};
 
-/// Standard gravity (m/s², base frame: base z up).
-pub const GRAVITY: [f64; 3] = [0.0, 0.0, -9.81];
-
 /// Default jerk limit as a multiple of the acceleration limit (1/s): full acceleration is built up
 /// in 5 ms (a servo drive's current loop settles in about 1 ms). Robot files carry no jerk limits.
 pub const DEFAULT_JERK_PER_ACCELERATION: f64 = 200.0;
@@ -173,8 +170,9 @@ pub struct HitOptions {
     /// Jerk limits (rad/s³ or m/s³, one per joint); `None` for
     /// [`DEFAULT_JERK_PER_ACCELERATION`] × the acceleration limits.
     pub jerk: Option<Vec<f64>>,
-    /// Gravity (m/s², base frame) for the torques.
-    pub gravity: [f64; 3],
+    /// Gravity (m/s², base frame) for the torques; `None`: the robot's own ([`Chain::gravity`]:
+    /// base z up unless the robot file says otherwise, x up for mobile8).
+    pub gravity: Option<[f64; 3]>,
     /// Check (and retime for) the effort limits by inverse dynamics; off: kinematic limits only.
     pub check_effort: bool,
     /// Tolerance (ratio units) of the reported [`HitPlan::effort_ratio`]: the certified bound of
@@ -186,14 +184,14 @@ pub struct HitOptions {
 }
 
 impl Default for HitOptions {
-    /// Auto profile and task, default jerk limits, standard gravity, effort ratio to 1e-4,
+    /// Auto profile and task, default jerk limits, the robot's gravity, effort ratio to 1e-4,
     /// search up to 10 s.
     fn default() -> Self {
         HitOptions {
             profile: StrokeProfile::Auto,
             task: HitTask::Auto,
             jerk: None,
-            gravity: GRAVITY,
+            gravity: None,
             check_effort: true,
             effort_tolerance: 1e-4,
             max_t_hit: 10.0,
@@ -305,6 +303,7 @@ pub struct HitPlanner {
     limits: KinematicLimits,
     effort: EffortLimits,
     options: HitOptions,
+    gravity: [f64; 3],
     ready: Vec<f64>,
 }
 
@@ -344,7 +343,8 @@ impl HitPlanner {
                 format!("need a finite tolerance > 0, got {}", options.effort_tolerance),
             ));
         }
-        check_finite("gravity", &options.gravity)?;
+        let gravity = options.gravity.unwrap_or_else(|| chain.gravity());
+        check_finite("gravity", &gravity)?;
         crate::traj::check_duration("max_t_hit", options.max_t_hit)?;
         let effort = EffortLimits::of(chain);
         Ok(HitPlanner {
@@ -359,6 +359,7 @@ impl HitPlanner {
             limits,
             effort,
             ready: chain.ready(),
+            gravity,
             options,
         })
     }
@@ -391,6 +392,11 @@ impl HitPlanner {
     /// The options.
     pub fn options(&self) -> &HitOptions {
         &self.options
+    }
+
+    /// Gravity (m/s², base frame) of the torques: the options', else the chain's.
+    pub fn gravity(&self) -> [f64; 3] {
+        self.gravity
     }
 
     /// Default rest configuration: the chain's [`Chain::ready`] (gantry6 (0, 0, 0, 0.6, 0.6, 0),

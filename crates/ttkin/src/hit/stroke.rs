@@ -327,7 +327,7 @@ fn within_position_limits(
 /// dynamics with friction, gravity of the options), stopping as `stop` says.
 fn effort(p: &HitPlanner, data: &mut DynamicsData, traj: &JointTrajectory, stop: PeakStop) -> EffortPeak {
     let dynamics = p.dynamics.as_ref().expect("effort data exists only with dynamics");
-    let gravity = nalgebra::Vector3::from(p.options.gravity);
+    let gravity = nalgebra::Vector3::from(p.gravity);
     dynamics.effort_peak(data, traj, &p.effort, &gravity, stop)
 }
 
@@ -351,7 +351,7 @@ fn ratio_at(p: &HitPlanner, data: &mut DynamicsData, traj: &JointTrajectory, t: 
     if !q.iter().chain(&qd).chain(&qdd).all(|v| v.is_finite()) {
         return f64::INFINITY;
     }
-    let gravity = nalgebra::Vector3::from(p.options.gravity);
+    let gravity = nalgebra::Vector3::from(p.gravity);
     let tau = dynamics.inverse_dynamics_unchecked(data, &q, &qd, &qdd, &gravity);
     let mut ratio: f64 = 0.0;
     for j in 0..n {
