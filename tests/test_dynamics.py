@@ -260,7 +260,8 @@ def test_default_gravity_is_the_robots_and_agrees_with_pinocchio(name):
     grav = robot.gravity(q)
     for k in range(len(q)):
         np.testing.assert_allclose(tau[k], pin.rnea(model, data, q[k], qd[k], qdd[k]), rtol=0, atol=1e-8)
-        np.testing.assert_allclose(grav[k], pin.computeGeneralizedGravity(model, data, q[k]), rtol=0, atol=1e-8)
+        g_pin = pin.computeGeneralizedGravity(model, data, q[k])
+        np.testing.assert_allclose(grav[k], g_pin, rtol=0, atol=1e-8)
     # A renamed copy from its file keeps its gravity: nothing is decided by the name.
     copy = ttmanip.Robot.from_toml(robot.to_toml().replace(f'name = "{name}"', 'name = "copy"', 1))
     np.testing.assert_array_equal(copy.gravity_vector, expected)

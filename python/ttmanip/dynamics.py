@@ -12,11 +12,12 @@ The algorithms are methods of the robot, single configuration (n,) or batch (N, 
   joint torques (friction included), motor torques through the gear ratio, currents through the
   torque constant, and the effort-limit check.
 
-Units are SI (N·m, N, kg·m², m/s²). ``gravity`` is a base-frame vector, default
-the robot's own ``robot.gravity_vector`` (robot-file key ``gravity``: :data:`EARTH_GRAVITY` unless the
-file says otherwise, :data:`MOBILE8_GRAVITY` for mobile8); ``wrench`` is [fx, fy, fz, mx, my, mz] applied *to* the tool by the
-environment, in tool-frame axes, moment about the tool point. Inertias and drives come from the
-robot file (``inertial``, ``drive``) or URDF (``<inertial>``, ``<dynamics damping friction>``), or
+Units are SI (N·m, N, kg·m², m/s²). ``gravity`` is a base-frame vector, default the robot's
+own ``robot.gravity_vector`` (robot-file key ``gravity``: :data:`EARTH_GRAVITY` unless the file
+says otherwise, :data:`MOBILE8_GRAVITY` for mobile8); ``wrench`` is [fx, fy, fz, mx, my, mz]
+applied *to* the tool by the environment, in tool-frame axes, moment about the tool point.
+Inertias and drives come from the robot file (``inertial``, ``drive``) or URDF (``<inertial>``,
+``<dynamics damping friction>``), or
 ``robot.with_inertials`` / ``robot.with_drives``.
 """
 
