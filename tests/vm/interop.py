@@ -77,6 +77,7 @@ def online_hit(ifaces: str, bindir: Path) -> str:
     then SIGINT: controlled stop, exit 0."""
     import signal
     import socket
+    import struct
 
     import ttmanip
     from ttmanip.ctl import Link
@@ -115,7 +116,8 @@ def online_hit(ifaces: str, bindir: Path) -> str:
             if not at_ready:
                 raise RuntimeError("the robot did not reach the ready pose")
             s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-            s.sendto(b"TTMW" + bytes(60), ("127.0.0.1", 5005))  # truncated
+            # a hit datagram cut to 64 bytes: version 1, kind 1, truncated
+            s.sendto(b"TTMW" + struct.pack("<HH", 1, 1) + bytes(56), ("127.0.0.1", 5005))
             s.close()
             link.hit(ttmanip.DEMO_HIT, t_hit=time.monotonic() + 1.5, id=1, stroke=1)
             status, until = None, time.monotonic() + 10
