@@ -231,7 +231,7 @@ fn rally_strokes_through_the_drives_return_the_balls() {
         ..RallyConfig::default()
     })
     .unwrap();
-    let ex = ttcan::coupled::execute::DriveExecutor::with_defaults(&r.planner.chain).unwrap();
+    let ex = ttcan::coupled::execute::DriveExecutor::with_defaults(r.planner.chain()).unwrap();
     let (mut ok, mut returned, mut ideal) = (0, 0, 0);
     for i in 0..8 {
         let a = r.play(i, None, None);

@@ -17,7 +17,7 @@
 //! (latency); planning happens at the delivery of the last observation.
 //!
 //! **Execution**: the planned stroke is executed exactly (no drive simulation): the racket follows
-//! the hit leg the planner accepted ([`crate::ball::leg`]: quintic or jerk-limited; on a re-plan the new
+//! the hit leg the planner accepted ([`crate::hit::leg`]: quintic or jerk-limited; on a re-plan the new
 //! leg from the state at that time; by default one correction 30 ms after the bounce with the
 //! estimate updated through it, [`RallyConfig::correction_delay`]) and then a 0.4 s quintic back to the ready configuration; the racket pose and
 //! velocity at the impact come from forward kinematics and the Jacobian along it. The true ball is
@@ -46,7 +46,7 @@ pub use score::{BallOutcome, Outcomes, SampledPath};
 pub use serve::{serve, WorldSpread};
 
 use super::flight::{BallState, Flight};
-use super::hitplan::HitPlanner;
+use super::hitplan::ReturnPlanner;
 use super::reach::ReachRegion;
 use crate::error::{Error, Result};
 use rayon::prelude::*;
@@ -108,7 +108,7 @@ pub const TRUTH_STEP: f64 = 0.001;
 #[derive(Debug, Clone)]
 pub struct Rally {
     /// The robot's ball planner (robot, placement, ready configuration, racket, model flight).
-    pub planner: HitPlanner,
+    pub planner: ReturnPlanner,
     /// The robot's reachable region ([`ReachRegion::classify`] scores a ball in reach or not).
     pub region: ReachRegion,
     /// The true ball's flight: the planner's model integrated at [`TRUTH_STEP`].
@@ -120,12 +120,12 @@ pub struct Rally {
 impl Rally {
     /// The rally of the built-in gantry6 ([`crate::robots::gantry6`]) with the default ball model.
     pub fn new(config: RallyConfig) -> Result<Self> {
-        Self::with_planner(HitPlanner::new(crate::robots::gantry6(), Flight::default())?, config)
+        Self::with_planner(ReturnPlanner::new(crate::robots::gantry6(), Flight::default())?, config)
     }
 
     /// The rally of `planner`'s robot; checks the target (on the opponent's half) and the largest
     /// spin (finite, ≥ 0 rev/s).
-    pub fn with_planner(planner: HitPlanner, config: RallyConfig) -> Result<Self> {
+    pub fn with_planner(planner: ReturnPlanner, config: RallyConfig) -> Result<Self> {
         planner.check_target(config.target)?;
         if !(config.max_spin_rps >= 0.0 && config.max_spin_rps.is_finite()) {
             return Err(Error::invalid(
@@ -138,7 +138,7 @@ impl Rally {
             ..planner.flight
         };
         let region = ReachRegion::new(
-            &planner.chain,
+            planner.chain(),
             planner.placement,
             planner.ready.clone(),
             truth.model.radius,
@@ -209,7 +209,7 @@ impl Rally {
 /// Plays the balls `incoming` (states at the opponent's hit, e.g. recorded shots; ball `i` is
 /// `incoming[i]`) in parallel; see [`play_with`].
 pub fn rally_from(
-    planner: &HitPlanner,
+    planner: &ReturnPlanner,
     region: &ReachRegion,
     truth: &Flight,
     cfg: &RallyConfig,
@@ -224,7 +224,7 @@ pub fn rally_from(
 
 /// Plays balls 0..`n` in parallel.
 pub fn rally(
-    planner: &HitPlanner,
+    planner: &ReturnPlanner,
     region: &ReachRegion,
     truth: &Flight,
     cfg: &RallyConfig,

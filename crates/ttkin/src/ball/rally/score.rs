@@ -4,7 +4,7 @@
 
 use super::RallyConfig;
 use crate::ball::flight::{BallState, EventKind, Flight};
-use crate::ball::hitplan::HitPlanner;
+use crate::ball::hitplan::ReturnPlanner;
 use nalgebra::Vector3;
 
 /// What happened to one ball.
@@ -63,7 +63,7 @@ pub type RacketSample = (Vector3<f64>, Vector3<f64>, Vector3<f64>, Vector3<f64>)
 #[allow(clippy::too_many_arguments)]
 pub(super) fn strike(
     out: &mut BallOutcome,
-    planner: &HitPlanner,
+    planner: &ReturnPlanner,
     truth: &Flight,
     cfg: &RallyConfig,
     s0: &BallState,
