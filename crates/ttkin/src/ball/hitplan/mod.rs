@@ -312,13 +312,37 @@ impl HitPlanner {
                 candidates: 0,
             });
         }
+        let (mut best, mut any_return, mut tried) = (None, false, 0);
+        self.search(&list, now, target, start, &mut best, &mut any_return, &mut tried);
+        if best.is_none() && !after_bounce {
+            // No early hit is feasible (often: no stroke that fast within the drives' torque):
+            // the later candidates the early ones had cut.
+            let late = self.late_candidate_states(&self.flight, ball, now, self.search_margin);
+            if !late.is_empty() {
+                self.search(&late, now, target, start, &mut best, &mut any_return, &mut tried);
+            }
+        }
+        Ok(searched(best, any_return, tried))
+    }
+
+    /// The search of [`Self::plan_from`] over the candidate states `list`: the best hit into
+    /// `best`, whether some shot returned the ball into `any_return`, candidates tried added to
+    /// `tried`.
+    #[allow(clippy::too_many_arguments)]
+    fn search(
+        &self,
+        list: &[BallState],
+        now: f64,
+        target: [f64; 2],
+        start: &JointState,
+        best: &mut Option<Hit>,
+        any_return: &mut bool,
+        tried: &mut usize,
+    ) {
         let order = candidate_order(list.len(), self.candidates.max(1));
         let first = self.candidates.max(1).min(list.len());
         let targets = self.targets(target);
         let poses = RacketPoses::new(self);
-        let mut best: Option<Hit> = None;
-        let mut any_return = false;
-        let mut tried = 0;
         // Candidates that fail the cheap placement test for every target are skipped, and tried
         // in full (requested target) only when no other candidate gives a hit (the test's normal
         // is approximate).
@@ -332,12 +356,12 @@ impl HitPlanner {
             *placeable_memo[i * nt + t].get_or_insert_with(|| self.roughly_placeable(&poses, &list[i], targets[t]))
         };
         let mut attempt = |s: &BallState, goal: [f64; 2], best: &mut Option<Hit>| {
-            tried += 1;
+            *tried += 1;
             for &tf in &self.return_times {
                 let Some((v_out, racket, landing)) = self.outgoing(s, goal, tf) else {
                     continue;
                 };
-                any_return = true;
+                *any_return = true;
                 if let Some(hit) = self.robot_hit(&poses, s, now, start, v_out, racket, landing) {
                     if best.as_ref().is_none_or(|b| hit.margin > b.margin) {
                         *best = Some(hit);
@@ -361,14 +385,14 @@ impl HitPlanner {
                 continue;
             };
             first_goal.push(Some(goal));
-            attempt(&s, goal, &mut best);
+            attempt(&s, goal, best);
         }
         if best.is_none() {
             for &i in &skipped {
                 if best.is_some() {
                     break;
                 }
-                attempt(&list[i], target, &mut best);
+                attempt(&list[i], target, best);
             }
         }
         // Still nothing: the other placeable targets of each candidate (another face normal, other
@@ -385,11 +409,10 @@ impl HitPlanner {
                 }
                 if placeable(i, t) {
                     budget -= 1;
-                    attempt(&s, goal, &mut best);
+                    attempt(&s, goal, best);
                 }
             }
         }
-        Ok(searched(best, any_return, tried))
     }
 
     /// Kinematic limits of the strokes (joint order of the chain; jerk as in the module doc).
