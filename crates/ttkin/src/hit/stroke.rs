@@ -12,7 +12,7 @@
 //! T* is computed on demand ([`super::HitPlanner::earliest_t_hit`]) when planning did not need it.
 //! A leg that leaves the position limits is replanned jerk-limited with position limits.
 //! When the torques exceed an effective effort limit ([`crate::effort`]) at any instant, the
-//! return leg is slowed, and the hit time is moved later (growth by 10 %, then bisection to
+//! return leg is slowed, and the hit time is moved later (growth by 25 %, then bisection to
 //! 0.1 %) until they do not, with the quintic hit leg at each time tried when it is within the
 //! kinematic limits, else the jerk-limited one (`Auto`; `Quintic` and `Jerk` keep their family) (a time-optimal leg stretched in time keeps its
 //! bang-bang torques: gantry6's demo hit needs 1.03 s jerk-limited, 0.50 s as a quintic). "At any instant" is certified, not sampled: the branch-and-bound
@@ -499,13 +499,18 @@ fn within_effort_limits(
     // reported one, so that the same leg gets the same answer wherever it is checked) fits. Every
     // time the search settles on is one at which a plan requested for it is accepted.
     let certified = |t: f64, data: &mut DynamicsData, skip: Option<&JointTrajectory>| {
-        legs_at(t)
-            .filter(|(traj, _)| skip != Some(traj))
-            .map(|(traj, profile)| {
-                let e = effort(p, data, &traj, refine_hit);
-                (traj, profile, e)
-            })
-            .find(|(_, _, e)| fits(e))
+        for (traj, profile) in legs_at(t) {
+            // A torque above the limit at one of the screening instants rejects the leg at once
+            // (the certified bound is at least every value the leg takes: the same answer).
+            if skip == Some(&traj) || screen(p, data, &traj, SCREEN_POINTS) > threshold {
+                continue;
+            }
+            let e = effort(p, data, &traj, refine_hit);
+            if fits(&e) {
+                return Some((traj, profile, e));
+            }
+        }
+        None
     };
     // The other leg family at the requested time first (a stretched time-optimal leg or a
     // quintic may fit where the first choice does not).
@@ -537,8 +542,12 @@ fn within_effort_limits(
     Ok(())
 }
 
+/// Growth factor of the hit time in [`earliest`] before its bisection (25 %: half the steps of
+/// 10 % to a hit that needs no time at all, e.g. `effort_limit`; the bisection adds two).
+const GROWTH: f64 = 1.25;
+
 /// The earliest hit time after `lo` s (not accepted) up to `max` s at which `accept` gives a leg,
-/// to [`EFFORT_SEARCH_PRECISION`]: growth by 10 %, then bisection. The time and the leg with its profile.
+/// to [`EFFORT_SEARCH_PRECISION`]: growth by [`GROWTH`], then bisection. The time and the leg with its profile.
 fn earliest<F>(
     mut lo: f64,
     max: f64,
@@ -548,7 +557,7 @@ fn earliest<F>(
 where
     F: FnMut(f64, &mut DynamicsData) -> Option<(JointTrajectory, StrokeProfile)>,
 {
-    let mut hi = lo * 1.1;
+    let mut hi = lo * GROWTH;
     let mut best = loop {
         if hi > max {
             return None;
@@ -557,7 +566,7 @@ where
             break traj;
         }
         lo = hi;
-        hi *= 1.1;
+        hi *= GROWTH;
     };
     while hi - lo > EFFORT_SEARCH_PRECISION * hi {
         let mid = 0.5 * (lo + hi);
