@@ -253,7 +253,7 @@ def plan_correct(
     of ``state`` planned for a stroke from rest at ``now`` (s) landing at ``target`` (x, y, m),
     then, that stroke under way, planned again at ``t_c`` (s) for the ball ``state_new`` (e.g.
     :func:`update`'s state; ``after_bounce`` when past its bounce) near the first hit
-    (``HitPlanner::plan_near`` from the stroke's joint state at ``t_c``). Returns ``first`` and
+    (``ReturnPlanner::plan_near`` from the stroke's joint state at ``t_c``). Returns ``first`` and
     ``corrected``, plan dicts as :func:`plan_return`'s (``status`` and the hit's items)."""
     if not isinstance(after_bounce, (bool, np.bool_)):
         raise _t.TtmanipError(f"after_bounce: must be True or False, got {after_bounce!r}")

@@ -8,7 +8,7 @@ use rayon::prelude::*;
 use ttkin::ball::estimate::{estimate, EstimateOptions, Segment};
 use ttkin::ball::fit::{self, Bounce, FitOptions, Recording};
 use ttkin::ball::flight::{BallState, Flight, Plane};
-use ttkin::ball::hitplan::HitPlanner;
+use ttkin::ball::hitplan::{ReturnHit, ReturnPlanner, ReturnStatus};
 use ttkin::ball::model::{BallModel, Table};
 use ttkin::ball::predict::{crossing, predict, CrossingOutcome};
 use ttkin::ball::rally::{self, RallyConfig};
@@ -213,7 +213,7 @@ fn ball_plan_return<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let s = state_arg(state, "state")?;
     let tg = vector(target, "target", 2)?;
-    let planner = HitPlanner::new(ttkin::robots::gantry6(), flight(model)?).py()?;
+    let planner = ReturnPlanner::new(ttkin::robots::gantry6(), flight(model)?).py()?;
     let plan = py.detach(|| planner.plan(&s, now, [tg[0], tg[1]])).py()?;
     let d = PyDict::new(py);
     d.set_item("status", plan.status.name())?;
@@ -225,19 +225,20 @@ fn ball_plan_return<'py>(
     Ok(d)
 }
 
-fn hit_items<'py>(py: Python<'py>, d: &Bound<'py, PyDict>, h: &ttkin::ball::hitplan::Hit) -> PyResult<()> {
-    d.set_item("pose", pose_to_numpy(py, &h.pose))?;
-    d.set_item("twist", to_numpy(py, &[6], &h.twist))?;
-    d.set_item("t_hit", h.t_hit)?;
-    d.set_item("q_hit", to_numpy(py, &[h.q_hit.len()], &h.q_hit))?;
-    d.set_item("qd_hit", to_numpy(py, &[h.qd_hit.len()], &h.qd_hit))?;
-    d.set_item("qdd_hit", to_numpy(py, &[h.qdd_hit.len()], &h.qdd_hit))?;
+fn hit_items<'py>(py: Python<'py>, d: &Bound<'py, PyDict>, h: &ReturnHit) -> PyResult<()> {
+    let (b, qdd) = (&h.branch, &h.branch.leg.qdd_hit);
+    d.set_item("pose", pose_to_numpy(py, &h.hit.pose))?;
+    d.set_item("twist", to_numpy(py, &[6], &h.hit.twist))?;
+    d.set_item("t_hit", h.hit.t)?;
+    d.set_item("q_hit", to_numpy(py, &[b.q.len()], &b.q))?;
+    d.set_item("qd_hit", to_numpy(py, &[b.qd.len()], &b.qd))?;
+    d.set_item("qdd_hit", to_numpy(py, &[qdd.len()], qdd))?;
     d.set_item("ball", to_numpy(py, &[10], &state_vec(&h.ball)))?;
     d.set_item("v_out", to_numpy(py, &[3], h.v_out.as_slice()))?;
     d.set_item("normal", to_numpy(py, &[3], h.racket.normal.as_slice()))?;
     d.set_item("racket_velocity", to_numpy(py, &[3], h.racket.velocity.as_slice()))?;
     d.set_item("spin_out", to_numpy(py, &[3], h.racket.spin_out.as_slice()))?;
-    d.set_item("margin", h.margin)?;
+    d.set_item("margin", b.margin)?;
     d.set_item("landing", to_numpy(py, &[3], h.landing.as_slice()))?;
     Ok(())
 }
@@ -266,7 +267,7 @@ fn ball_plan_correct<'py>(
     s.validate("state").py()?;
     s_new.validate("state_new").py()?;
     let tg = vector(target, "target", 2)?;
-    let planner = HitPlanner::new(ttkin::robots::gantry6(), flight(model)?).py()?;
+    let planner = ReturnPlanner::new(ttkin::robots::gantry6(), flight(model)?).py()?;
     let first = py.detach(|| planner.plan(&s, now, [tg[0], tg[1]])).py()?;
     let d = PyDict::new(py);
     let fd = PyDict::new(py);
@@ -275,10 +276,7 @@ fn ball_plan_correct<'py>(
         hit_items(py, &fd, h)?;
     }
     d.set_item("first", fd)?;
-    let Some(h) = first
-        .hit
-        .filter(|_| first.status == ttkin::ball::hitplan::HitStatus::Ok)
-    else {
+    let Some(h) = first.hit.filter(|_| first.status == ReturnStatus::Ok) else {
         return Err(TtmanipError::new_err(format!(
             "ball_plan_correct: the first plan has no feasible hit (status {}): nothing to correct",
             first.status.name()
@@ -322,7 +320,7 @@ fn ball_rally<'py>(
             "n: balls {start}..{start} + {n} go past the {MAX_RALLY_BALLS} balls a rally may have"
         )));
     }
-    let planner = HitPlanner::new(ttkin::robots::gantry6(), Flight::default()).py()?;
+    let planner = ReturnPlanner::new(ttkin::robots::gantry6(), Flight::default()).py()?;
     planner.check_target([target.0, target.1]).py()?;
     if !(max_spin_rps >= 0.0 && max_spin_rps.is_finite()) {
         return Err(ttkin::Error::invalid(
@@ -362,14 +360,17 @@ fn ball_rally<'py>(
         None => None,
     };
     let region = ReachRegion::new(
-        &planner.chain,
+        planner.chain(),
         planner.placement,
         planner.ready.clone(),
         truth.model.radius,
     )
     .py()?;
     let executor = if drives {
-        Some(ttcan::coupled::execute::DriveExecutor::new(&planner.chain, ttcan::CoupledOptions::default(), 1e-3).py()?)
+        Some(
+            ttcan::coupled::execute::DriveExecutor::new(planner.chain(), ttcan::CoupledOptions::default(), 1e-3)
+                .py()?,
+        )
     } else {
         None
     };

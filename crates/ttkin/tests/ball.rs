@@ -5,7 +5,7 @@ use proptest::prelude::*;
 use ttkin::ball::contact::{energy, impulse};
 use ttkin::ball::estimate::{estimate, EstimateError, EstimateOptions, Segment};
 use ttkin::ball::flight::{BallState, EventKind, Flight, Plane};
-use ttkin::ball::hitplan::{HitPlanner, HitStatus};
+use ttkin::ball::hitplan::{ReturnPlanner, ReturnStatus};
 use ttkin::ball::impact::Racket;
 use ttkin::ball::model::BallModel;
 use ttkin::ball::predict::{crossing, predict, CrossingOutcome};
@@ -410,8 +410,8 @@ fn prediction_rejects_bad_times_and_states() {
     assert!(predict(&f, &bad, &[0.1]).is_err());
 }
 
-fn planner() -> HitPlanner {
-    HitPlanner::new(ttkin::robots::gantry6(), Flight::default()).unwrap()
+fn planner() -> ReturnPlanner {
+    ReturnPlanner::new(ttkin::robots::gantry6(), Flight::default()).unwrap()
 }
 
 #[test]
@@ -445,10 +445,14 @@ fn executed_hit_returns_the_ball_to_its_target() {
             at_target += 1;
         }
         // The robot's racket is there at the hit: FK of q_hit is the planned pose.
-        let fk = pl.chain.fk(&hit.q_hit).unwrap();
-        assert!((fk.translation.vector - hit.pose.translation.vector).norm() < 1e-9);
+        let fk = pl.chain().fk(&hit.branch.q).unwrap();
+        assert!((fk.translation.vector - hit.hit.pose.translation.vector).norm() < 1e-9);
         // A late candidate (tried when no early one is feasible) may be exactly time-optimal.
-        assert!(hit.margin >= 0.0 && hit.t_hit > 0.0, "margin {}", hit.margin);
+        assert!(
+            hit.branch.margin >= 0.0 && hit.hit.t > 0.0,
+            "margin {}",
+            hit.branch.margin
+        );
     }
     assert!(planned >= 15, "only {planned} of 30 planned");
     assert!(
@@ -466,11 +470,14 @@ fn target_off_the_table_is_an_error_and_unreachable_balls_a_status() {
     }
     // Served into the net: no bounce on the robot's half.
     let net = BallState::new(0.0, [0.8, 0.0, 0.05], [-3.0, 0.0, 0.0], [0.0; 3]);
-    assert_eq!(pl.plan(&net, 0.0, [0.9, 0.0]).unwrap().status, HitStatus::NoBounce);
+    assert_eq!(pl.plan(&net, 0.0, [0.9, 0.0]).unwrap().status, ReturnStatus::NoBounce);
     // Flying off to the side, far from the reach box.
     let wide = BallState::new(0.0, [1.6, 0.0, 0.3], [-4.0, 2.2, 1.0], [0.0; 3]);
     let st = pl.plan(&wide, 0.0, [0.9, 0.0]).unwrap().status;
-    assert!(matches!(st, HitStatus::NoBounce | HitStatus::OutOfReach), "{st:?}");
+    assert!(
+        matches!(st, ReturnStatus::NoBounce | ReturnStatus::OutOfReach),
+        "{st:?}"
+    );
 }
 
 /// Smallest return rate of the balls in reach asserted on the 120-ball sample (docs/ball.md): it
@@ -489,7 +496,7 @@ fn rally_returns_most_balls_in_reach() {
         seed: 5,
         ..RallyConfig::default()
     };
-    let region = ReachRegion::new(&pl.chain, pl.placement, pl.ready.clone(), truth.model.radius).unwrap();
+    let region = ReachRegion::new(pl.chain(), pl.placement, pl.ready.clone(), truth.model.radius).unwrap();
     let out = rally::rally(&pl, &region, &truth, &cfg, 120);
     let in_reach = out.iter().filter(|o| o.in_reach).count();
     let returned = out.iter().filter(|o| o.in_reach && o.returned).count();
@@ -521,36 +528,36 @@ fn ball_beyond_the_quintic_is_planned_and_executed_jerk_limited() {
         let s = rally::serve(&pl.flight, &mut rng, 30.0, 0.2);
         let plan = pl.plan(&s, 0.2, [0.9, 0.0]).unwrap();
         let Some(hit) = plan.hit else { continue };
-        if hit.leg.profile != StrokeProfile::Jerk {
+        if hit.branch.leg.profile != StrokeProfile::Jerk {
             continue;
         }
-        assert_eq!(plan.status, HitStatus::Ok);
-        let t = hit.t_hit;
+        assert_eq!(plan.status, ReturnStatus::Ok);
+        let t = hit.hit.t;
         // Every quintic the planner tries to this hit state breaks a limit.
         for alpha in [0.0, 0.5, 1.0] {
             let qdd = (0..6)
-                .map(|i| alpha * (-6.0 * (hit.q_hit[i] - ready.q[i]) / (t * t) + 4.0 * hit.qd_hit[i] / t))
+                .map(|i| alpha * (-6.0 * (hit.branch.q[i] - ready.q[i]) / (t * t) + 4.0 * hit.branch.qd[i] / t))
                 .collect();
             let end = JointState {
-                q: hit.q_hit.clone(),
-                qd: hit.qd_hit.clone(),
+                q: hit.branch.q.clone(),
+                qd: hit.branch.qd.clone(),
                 qdd,
             };
             assert!(quintic_limit_ratio(&ready, &end, t, pl.limits()) > 1.0);
         }
         // The jerk-limited leg lasts exactly the hit time, within every limit, and the executed
         // stroke is that leg: at t_hit the racket is at the planned pose with the planned speeds.
-        assert!((hit.leg.trajectory.duration() - t).abs() < 1e-9);
-        assert!(hit.leg.trajectory.check_limits(pl.limits()).unwrap().is_empty());
-        assert!(hit.margin >= 0.0);
+        assert!((hit.branch.leg.trajectory.duration() - t).abs() < 1e-9);
+        assert!(hit.branch.leg.trajectory.check_limits(pl.limits()).unwrap().is_empty());
+        assert!(hit.branch.margin >= 0.0);
         let exec = rally::execution(&hit, &ready);
         let at = exec.state(t).unwrap();
         for j in 0..6 {
-            assert!((at.q[j] - hit.q_hit[j]).abs() < 1e-7, "{at:?}");
-            assert!((at.qd[j] - hit.qd_hit[j]).abs() < 1e-6, "{at:?}");
+            assert!((at.q[j] - hit.branch.q[j]).abs() < 1e-7, "{at:?}");
+            assert!((at.qd[j] - hit.branch.qd[j]).abs() < 1e-6, "{at:?}");
         }
-        let fk = pl.chain.fk(&at.q).unwrap();
-        assert!((fk.translation.vector - hit.pose.translation.vector).norm() < 1e-6);
+        let fk = pl.chain().fk(&at.q).unwrap();
+        assert!((fk.translation.vector - hit.hit.pose.translation.vector).norm() < 1e-6);
         assert!(exec.state(0.0).unwrap().q == ready.q);
         found += 1;
     }
@@ -574,7 +581,7 @@ fn wide_balls_are_returned_to_another_target_or_off_the_racket_centre() {
             "{:?}",
             hit.landing
         );
-        let world = pl.placement.world_from_base() * hit.pose;
+        let world = pl.placement.world_from_base() * hit.hit.pose;
         let n = world.rotation * Vector3::z();
         assert!((n - hit.racket.normal).norm() < 1e-9);
         let contact = hit.ball.p - pl.flight.model.radius * n;
@@ -598,7 +605,7 @@ fn wide_balls_are_returned_to_another_target_or_off_the_racket_centre() {
 fn mismatched_world_keeps_the_balls_and_draws_their_physics() {
     use ttkin::ball::rally::WorldSpread;
     let pl = planner();
-    let region = ReachRegion::new(&pl.chain, pl.placement, pl.ready.clone(), pl.flight.model.radius).unwrap();
+    let region = ReachRegion::new(pl.chain(), pl.placement, pl.ready.clone(), pl.flight.model.radius).unwrap();
     let truth = Flight {
         step: 0.001,
         ..Flight::default()
@@ -661,7 +668,7 @@ impl rally::Executor for Exact {
 #[test]
 fn an_exact_executor_plays_as_the_ideal_execution() {
     let pl = planner();
-    let region = ReachRegion::new(&pl.chain, pl.placement, pl.ready.clone(), pl.flight.model.radius).unwrap();
+    let region = ReachRegion::new(pl.chain(), pl.placement, pl.ready.clone(), pl.flight.model.radius).unwrap();
     let truth = Flight {
         step: 0.001,
         ..Flight::default()

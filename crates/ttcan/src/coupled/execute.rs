@@ -35,7 +35,7 @@ impl Executor for DriveExecutor {
         let mut sim = CoupledSim::from_chain(&self.chain, q.get(..n)?, self.options).ok()?;
         let mut tau = vec![0.0; q.len()];
         sim.dynamics()
-            .inverse_dynamics_batch(q, qd, qdd, &self.options.gravity, None, &mut tau)
+            .inverse_dynamics_batch(q, qd, qdd, &self.options.gravity_on(&self.chain), None, &mut tau)
             .ok()?;
         let tr = sim.run(times, q, qd, qdd, Some(&tau), self.setpoint_period).ok()?;
         if tr.faults.iter().any(|f| !f.is_empty()) {

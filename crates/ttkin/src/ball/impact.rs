@@ -6,7 +6,7 @@
 //! the rolling cap (the rigid-ball part of Nakashima et al., "Modeling of rebound phenomenon of a
 //! rigid ball with friction and elastic effects", ACC 2010).
 //!
-//! Rubber constants, parameters of [`Racket`] (set `HitPlanner::racket` to change them):
+//! Rubber constants, parameters of [`Racket`] (set `ReturnPlanner::racket` to change them):
 //! - **restitution e = 0.85**. Reference points: the ITTF ball rule (Technical Leaflet T3: dropped
 //!   from 305 mm on a steel block it bounces 240–260 mm, e = √(h₁/h₀) = 0.89–0.92) and the table
 //!   (ITTF Laws 2.1.3: about 23 cm from 30 cm, e ≈ 0.88) bound it from above, since rubber on a

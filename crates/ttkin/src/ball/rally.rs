@@ -17,7 +17,7 @@
 //! (latency); planning happens at the delivery of the last observation.
 //!
 //! **Execution**: the planned stroke is executed exactly (no drive simulation): the racket follows
-//! the hit leg the planner accepted ([`super::leg`]: quintic or jerk-limited; on a re-plan the new
+//! the hit leg the planner accepted ([`crate::hit::leg`]: quintic or jerk-limited; on a re-plan the new
 //! leg from the state at that time; by default one correction 30 ms after the bounce with the
 //! estimate updated through it, [`RallyConfig::correction_delay`]) and then a 0.4 s quintic back to the ready configuration; the racket pose and
 //! velocity at the impact come from forward kinematics and the Jacobian along it. The true ball is
@@ -32,7 +32,7 @@
 
 use super::estimate::{estimate, EstimateOptions};
 use super::flight::{BallState, EventKind, Flight};
-use super::hitplan::{shoot, Hit, HitPlanner, HitStatus};
+use super::hitplan::{shoot, ReturnHit, ReturnPlanner, ReturnStatus};
 use super::model::BallModel;
 use super::reach::ReachRegion;
 use super::update::update;
@@ -331,7 +331,13 @@ impl Motion {
 
 /// Plays ball `index` of the rally: serve, observe, classify against `region`, plan, re-plan,
 /// execute, score.
-pub fn play(planner: &HitPlanner, region: &ReachRegion, truth: &Flight, cfg: &RallyConfig, index: u64) -> BallOutcome {
+pub fn play(
+    planner: &ReturnPlanner,
+    region: &ReachRegion,
+    truth: &Flight,
+    cfg: &RallyConfig,
+    index: u64,
+) -> BallOutcome {
     play_with(planner, region, truth, cfg, index, None, None)
 }
 
@@ -341,7 +347,7 @@ pub fn play(planner: &HitPlanner, region: &ReachRegion, truth: &Flight, cfg: &Ra
 /// With an `executor` the stroke (as planned, re-plans included) is executed by it from the
 /// planning time to 60 ms after the hit, and the racket follows the executed motion.
 pub fn play_with(
-    planner: &HitPlanner,
+    planner: &ReturnPlanner,
     region: &ReachRegion,
     truth: &Flight,
     cfg: &RallyConfig,
@@ -447,7 +453,7 @@ pub fn play_with(
     };
     out.status = plan.status.name().to_string();
     let keep_path = (index as usize) < cfg.paths;
-    let mut first_hit = plan.hit.filter(|_| plan.status == HitStatus::Ok);
+    let mut first_hit = plan.hit.filter(|_| plan.status == ReturnStatus::Ok);
     // Once, `correction_delay` after the bounce the estimate predicts: the estimate updated with
     // every observation delivered since (through the bounce, [`update`]) and the hit planned
     // again from the robot's state then (from rest when the first plan had no hit).
@@ -455,13 +461,13 @@ pub fn play_with(
     let mut motion = Motion {
         pieces: first_hit.iter().map(|h| (now, execution(h, &ready))).collect(),
     };
-    let mut hit_at = first_hit.as_ref().map(|h| now + h.t_hit);
+    let mut hit_at = first_hit.as_ref().map(|h| now + h.hit.t);
     if cfg.correction_delay > 0.0 {
         let clock = cpu_time::ThreadTime::now();
-        let previous = first_hit.as_ref().map(|h| (h, now + h.t_hit));
+        let previous = first_hit.as_ref().map(|h| (h, now + h.hit.t));
         if let Some((t_c, h)) = correct(planner, cfg, &est, &times, &obs, previous, &motion, &opts) {
             motion.pieces.push((t_c, execution(&h, &ready)));
-            hit_at = Some(t_c + h.t_hit);
+            hit_at = Some(t_c + h.hit.t);
             first_hit = Some(h);
             out.replans += 1;
         }
@@ -473,8 +479,8 @@ pub fn play_with(
         }
         return out;
     };
-    let n = hit.q_hit.len();
-    let leg = |hit: &Hit| execution(hit, &ready);
+    let n = hit.branch.q.len();
+    let leg = |hit: &ReturnHit| execution(hit, &ready);
     let mut hit_abs = hit_at.expect("a hit has its time");
     // Re-plan every `replan_period` with the newest observations (at most `max_window` s of them)
     // while the stroke has at least `replan.min_stroke_time` left. Observations are split at the
@@ -509,9 +515,9 @@ pub fn play_with(
             }
             let start = motion.state(t_plan, n);
             if let Ok(p) = replanner.plan_from(&e.state, t_plan, cfg.target, &start, after) {
-                if let Some(h) = p.hit.filter(|_| p.status == HitStatus::Ok) {
+                if let Some(h) = p.hit.filter(|_| p.status == ReturnStatus::Ok) {
                     hit = h;
-                    hit_abs = t_plan + hit.t_hit;
+                    hit_abs = t_plan + hit.hit.t;
                     motion.pieces.push((t_plan, leg(&hit)));
                     out.replans += 1;
                 }
@@ -519,7 +525,7 @@ pub fn play_with(
         }
         t_plan += cfg.replan_period;
     }
-    out.profile = hit.leg.profile.name();
+    out.profile = hit.branch.leg.profile.name();
     out.planned = Some((hit.ball, hit.racket.normal));
     let world = planner.placement.world_from_base();
     let (mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
@@ -556,8 +562,8 @@ pub fn play_with(
             Some(e) => e.sample(t - t_start, &mut q, &mut qd),
             None => motion.sample(t, &mut q, &mut qd, &mut qdd),
         }
-        let pose = world * planner.chain.fk(&q).expect("sizes match");
-        let jac = planner.chain.jacobian(&q, JacobianFrame::Base).expect("sizes match");
+        let pose = world * planner.chain().fk(&q).expect("sizes match");
+        let jac = planner.chain().jacobian(&q, JacobianFrame::Base).expect("sizes match");
         let tw = jac * nalgebra::DVector::from_column_slice(&qd);
         let v = world.rotation * Vector3::new(tw[0], tw[1], tw[2]);
         let w = world.rotation * Vector3::new(tw[3], tw[4], tw[5]);
@@ -656,21 +662,21 @@ pub fn play_with(
 /// The correction after the bounce (see [`RallyConfig::correction_delay`]): at the delivery `t_c`
 /// of the last observation at most `correction_delay` after the bounce `est` predicts, `est`
 /// updated with the observations since ([`update`]) and the hit planned again from the state of
-/// `motion` at `t_c` ([`HitPlanner::plan_near`] near the `previous` hit's time and landing point;
-/// without a previous hit, [`HitPlanner::plan_from`] from rest); the new hit and `t_c`, or `None`
+/// `motion` at `t_c` ([`ReturnPlanner::plan_near`] near the `previous` hit's time and landing point;
+/// without a previous hit, [`ReturnPlanner::plan_from`] from rest); the new hit and `t_c`, or `None`
 /// (no bounce predicted, less than the re-plan's shortest stroke left before the previous hit, no
 /// update or no feasible hit: the stroke goes on unchanged).
 #[allow(clippy::too_many_arguments)]
 fn correct(
-    planner: &HitPlanner,
+    planner: &ReturnPlanner,
     cfg: &RallyConfig,
     est: &super::estimate::Estimate,
     times: &[f64],
     obs: &[[f64; 3]],
-    previous: Option<(&Hit, f64)>,
+    previous: Option<(&ReturnHit, f64)>,
     motion: &Motion,
     opts: &EstimateOptions,
-) -> Option<(f64, Hit)> {
+) -> Option<(f64, ReturnHit)> {
     let t_bounce = bounce_time(&planner.flight, &est.state)?;
     let last = times.partition_point(|&t| t <= t_bounce + cfg.correction_delay);
     if last == 0 {
@@ -686,7 +692,7 @@ fn correct(
     let up = update(est, &times[from..last], &obs[from..last], opts).ok()?;
     let plan = match previous {
         Some((hit, t_prev)) => {
-            let start = motion.state(t_c, planner.chain.dof());
+            let start = motion.state(t_c, planner.chain().dof());
             replanner.plan_near(&up.state, t_c, &start, up.bounced, hit, t_prev)
         }
         None => replanner.plan_from(
@@ -698,7 +704,7 @@ fn correct(
         ),
     }
     .ok()?;
-    let hit = plan.hit.filter(|_| plan.status == HitStatus::Ok)?;
+    let hit = plan.hit.filter(|_| plan.status == ReturnStatus::Ok)?;
     Some((t_c, hit))
 }
 
@@ -706,17 +712,17 @@ fn correct(
 /// (planned at `t_first`, s absolute, from rest at the planner's ready configuration) is under
 /// way; at `now` (s) the hit is planned again for the ball `ball` (e.g. the estimate updated
 /// through the bounce, [`update`]; `after_bounce` when it is past its bounce) from the stroke's
-/// joint state then, near `first` ([`HitPlanner::plan_near`], shortest stroke 60 ms). An error
+/// joint state then, near `first` ([`ReturnPlanner::plan_near`], shortest stroke 60 ms). An error
 /// when `now` is before `t_first` or less than 60 ms before the first hit.
 pub fn correct_hit(
-    planner: &HitPlanner,
-    first: &Hit,
+    planner: &ReturnPlanner,
+    first: &ReturnHit,
     t_first: f64,
     ball: &BallState,
     now: f64,
     after_bounce: bool,
-) -> crate::error::Result<super::hitplan::HitPlan> {
-    let t_prev = t_first + first.t_hit;
+) -> crate::error::Result<super::hitplan::ReturnPlan> {
+    let t_prev = t_first + first.hit.t;
     if !(now >= t_first && t_prev - now > CORRECTION_MIN_STROKE) {
         return Err(crate::error::Error::invalid(
             "now",
@@ -729,7 +735,7 @@ pub fn correct_hit(
     let motion = Motion {
         pieces: vec![(t_first, execution(first, &JointState::rest(&planner.ready)))],
     };
-    let start = motion.state(now, planner.chain.dof());
+    let start = motion.state(now, planner.chain().dof());
     let mut replanner = planner.clone();
     replanner.min_stroke_time = CORRECTION_MIN_STROKE;
     replanner.plan_near(ball, now, &start, after_bounce, first, t_prev)
@@ -755,13 +761,14 @@ fn bounce_time(flight: &Flight, s: &BallState) -> Option<f64> {
 
 /// The executed stroke of `hit` (joint frame, from the stroke start): its accepted hit leg, then a
 /// 0.4 s quintic from the hit state to rest at `ready`.
-pub fn execution(hit: &Hit, ready: &JointState) -> JointTrajectory {
+pub fn execution(hit: &ReturnHit, ready: &JointState) -> JointTrajectory {
     let at_hit = JointState {
-        q: hit.q_hit.clone(),
-        qd: hit.qd_hit.clone(),
-        qdd: hit.qdd_hit.clone(),
+        q: hit.branch.q.clone(),
+        qd: hit.branch.qd.clone(),
+        qdd: hit.branch.leg.qdd_hit.clone(),
     };
-    hit.leg
+    hit.branch
+        .leg
         .trajectory
         .clone()
         .append(JointTrajectory::quintic_unchecked(&at_hit, ready, 0.4))
@@ -779,7 +786,7 @@ fn sample_path(flight: &Flight, s: &BallState, duration: f64) -> Vec<[f64; 3]> {
 /// Plays the balls `incoming` (states at the opponent's hit, e.g. recorded shots; ball `i` is
 /// `incoming[i]`) in parallel; see [`play_with`].
 pub fn rally_from(
-    planner: &HitPlanner,
+    planner: &ReturnPlanner,
     region: &ReachRegion,
     truth: &Flight,
     cfg: &RallyConfig,
@@ -794,7 +801,7 @@ pub fn rally_from(
 
 /// Plays balls 0..`n` in parallel.
 pub fn rally(
-    planner: &HitPlanner,
+    planner: &ReturnPlanner,
     region: &ReachRegion,
     truth: &Flight,
     cfg: &RallyConfig,
