@@ -452,7 +452,12 @@ fn executed_hit_returns_the_ball_to_its_target() {
         // The robot's racket is there at the hit: FK of q_hit is the planned pose.
         let fk = pl.chain().fk(&hit.branch.q).unwrap();
         assert!((fk.translation.vector - hit.hit.pose.translation.vector).norm() < 1e-9);
-        assert!(hit.branch.margin > 0.0 && hit.hit.t > 0.0);
+        // A late candidate (tried when no early one is feasible) may be exactly time-optimal.
+        assert!(
+            hit.branch.margin >= 0.0 && hit.hit.t > 0.0,
+            "margin {}",
+            hit.branch.margin
+        );
     }
     assert!(planned >= 15, "only {planned} of 30 planned");
     assert!(
