@@ -147,7 +147,11 @@ fn main() {
         pl.contact_offset = r.parse().expect("CONTACT_OFFSET (m)");
     }
     if std::env::var_os("NO_EFFORT").is_some() {
-        pl.check_effort = false;
+        let options = ttkin::hit::HitOptions {
+            check_effort: false,
+            ..Default::default()
+        };
+        pl.robot = ttkin::hit::HitPlanner::new(&pl.chain().clone(), options).expect("planner without effort");
     }
     if let Ok(r) = std::env::var("RETURN_TIMES") {
         let v: Vec<f64> = r.split(',').map(|d| d.parse().expect("RETURN_TIMES")).collect();
