@@ -160,7 +160,11 @@ def predict(state: ArrayLike, times: ArrayLike, model: BallModel | str = "defaul
     if not isinstance(events, (bool, np.bool_)):
         raise _t.TtmanipError(f"events: must be True or False, got {events!r}")
     d = _t.ball_predict(state, times, _model(model))
-    return (d["positions"], d["events"]) if events else d["positions"]
+    if not events:
+        return d["positions"]
+    # The extension gives the events' serde form (states as lists); here as (10,) arrays.
+    evs = [{**e, "before": np.asarray(e["before"]), "after": np.asarray(e["after"])} for e in d["events"]]
+    return d["positions"], evs
 
 
 def predict_batch(

@@ -9,8 +9,8 @@ use ttkin::ball::hitplan::{ReturnPlanner, ReturnStatus};
 use ttkin::ball::impact::Racket;
 use ttkin::ball::model::BallModel;
 use ttkin::ball::predict::{crossing, predict, CrossingOutcome};
-use ttkin::ball::rally::{self, RallyConfig};
-use ttkin::ball::reach::{walk_after_bounce, walk_after_bounce_clip, ReachRegion};
+use ttkin::ball::rally::{self, Rally, RallyConfig};
+use ttkin::ball::reach::{walk_after_bounce, walk_after_bounce_clip};
 use ttkin::hit::StrokeProfile;
 use ttkin::traj::duration::quintic_limit_ratio;
 use ttkin::traj::JointState;
@@ -482,17 +482,15 @@ const RALLY_RATE: f64 = 0.93;
 
 #[test]
 fn rally_returns_most_balls_in_reach() {
-    let pl = planner();
-    let truth = Flight {
-        step: 0.001,
-        ..Flight::default()
-    };
-    let cfg = RallyConfig {
-        seed: 5,
-        ..RallyConfig::default()
-    };
-    let region = ReachRegion::new(pl.chain(), pl.placement, pl.ready.clone(), truth.model.radius).unwrap();
-    let out = rally::rally(&pl, &region, &truth, &cfg, 120);
+    let r = Rally::with_planner(
+        planner(),
+        RallyConfig {
+            seed: 5,
+            ..RallyConfig::default()
+        },
+    )
+    .unwrap();
+    let out = r.play_range(0, 120, None, None, &|| false).unwrap();
     let in_reach = out.iter().filter(|o| o.in_reach).count();
     let returned = out.iter().filter(|o| o.in_reach && o.returned).count();
     let mut statuses: Vec<String> = out
@@ -599,22 +597,24 @@ fn wide_balls_are_returned_to_another_target_or_off_the_racket_centre() {
 #[test]
 fn mismatched_world_keeps_the_balls_and_draws_their_physics() {
     use ttkin::ball::rally::WorldSpread;
-    let pl = planner();
-    let region = ReachRegion::new(pl.chain(), pl.placement, pl.ready.clone(), pl.flight.model.radius).unwrap();
-    let truth = Flight {
-        step: 0.001,
-        ..Flight::default()
-    };
-    let cfg = RallyConfig {
-        paths: 0,
-        ..RallyConfig::default()
-    };
-    let mis = RallyConfig {
-        world: Some(WorldSpread::measured()),
-        ..cfg
-    };
-    let a: Vec<_> = (0..12).map(|i| rally::play(&pl, &region, &truth, &cfg, i)).collect();
-    let b: Vec<_> = (0..12).map(|i| rally::play(&pl, &region, &truth, &mis, i)).collect();
+    let matched = Rally::with_planner(
+        planner(),
+        RallyConfig {
+            paths: 0,
+            ..RallyConfig::default()
+        },
+    )
+    .unwrap();
+    let mismatched = Rally::with_planner(
+        planner(),
+        RallyConfig {
+            world: Some(WorldSpread::measured()),
+            ..matched.config
+        },
+    )
+    .unwrap();
+    let a: Vec<_> = (0..12).map(|i| matched.play(i, None, None)).collect();
+    let b: Vec<_> = (0..12).map(|i| mismatched.play(i, None, None)).collect();
     // The same incoming balls, another flight: the estimates differ.
     for (x, y) in a.iter().zip(&b) {
         assert_eq!(x.incoming, y.incoming);
@@ -623,7 +623,13 @@ fn mismatched_world_keeps_the_balls_and_draws_their_physics() {
     assert!(differ >= 10, "{differ} of 12 estimates differ");
     // Given incoming balls are played as given.
     let given: Vec<BallState> = a.iter().map(|o| o.incoming).collect();
-    let c = rally::rally_from(&pl, &region, &truth, &cfg, &given);
+    let c = rally::rally_from(
+        &matched.planner,
+        &matched.region,
+        &matched.truth,
+        &matched.config,
+        &given,
+    );
     assert!(c
         .iter()
         .zip(&a)
@@ -662,20 +668,18 @@ impl rally::Executor for Exact {
 
 #[test]
 fn an_exact_executor_plays_as_the_ideal_execution() {
-    let pl = planner();
-    let region = ReachRegion::new(pl.chain(), pl.placement, pl.ready.clone(), pl.flight.model.radius).unwrap();
-    let truth = Flight {
-        step: 0.001,
-        ..Flight::default()
-    };
-    let cfg = RallyConfig {
-        paths: 0,
-        ..RallyConfig::default()
-    };
+    let r = Rally::with_planner(
+        planner(),
+        RallyConfig {
+            paths: 0,
+            ..RallyConfig::default()
+        },
+    )
+    .unwrap();
     let mut same = 0;
     for i in 0..16 {
-        let a = rally::play(&pl, &region, &truth, &cfg, i);
-        let b = rally::play_with(&pl, &region, &truth, &cfg, i, None, Some(&Exact));
+        let a = r.play(i, None, None);
+        let b = r.play(i, None, Some(&Exact));
         assert_eq!(a.incoming, b.incoming);
         if a.returned == b.returned {
             same += 1;
@@ -720,4 +724,43 @@ fn flights_far_from_t0_or_too_long_are_refused_not_run() {
     let unix = BallState::new(1.7e9, [-1.0, 0.0, 1.0], [5.0, 0.0, 0.0], [0.0; 3]);
     let p = predict(&f, &unix, &[1.7e9 + 0.1]).unwrap();
     assert!(p.positions[0].iter().all(|v| v.is_finite()));
+}
+
+/// `Rally::play_range`: the balls of `play` in ball order, its checks, and a caller's stop.
+#[test]
+fn a_rally_range_plays_the_balls_in_order_and_stops_when_asked() {
+    let r = Rally::new(RallyConfig {
+        paths: 1,
+        ..RallyConfig::default()
+    })
+    .unwrap();
+    let out = r.play_range(3, 2, None, None, &|| false).unwrap();
+    for (o, i) in out.iter().zip(3..) {
+        let p = r.play(i, None, None);
+        assert_eq!(
+            (&o.incoming, &o.status, o.returned),
+            (&p.incoming, &p.status, p.returned)
+        );
+        assert!(o.landing_error == p.landing_error || (o.landing_error.is_nan() && p.landing_error.is_nan()));
+    }
+    let cols = rally::Outcomes::new(&out);
+    assert_eq!(cols.incoming[10..20], out[1].incoming.to_array());
+    assert_eq!(cols.paths.len(), out.iter().filter(|o| !o.path.is_empty()).count());
+    let e = r
+        .play_range(rally::MAX_BALLS, 1, None, None, &|| false)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("go past"), "{e}");
+    let given = [out[0].incoming];
+    let e = r
+        .play_range(0, 2, Some(&given), None, &|| false)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("1 states"), "{e}");
+    assert!(r.play_range(0, 4, None, None, &|| true).is_err());
+    let bad = RallyConfig {
+        max_spin_rps: f64::NAN,
+        ..RallyConfig::default()
+    };
+    assert!(Rally::new(bad).unwrap_err().to_string().contains("max_spin_rps"));
 }
