@@ -10,7 +10,7 @@ use ttkin::ball::fit::{self, Bounce, FitOptions, Recording};
 use ttkin::ball::flight::{BallState, Flight, Plane};
 use ttkin::ball::hitplan::HitPlanner;
 use ttkin::ball::model::{BallModel, Table};
-use ttkin::ball::predict::{crossing, predict, CrossingOutcome};
+use ttkin::ball::predict::{crossing, predict_until, CrossingOutcome};
 use ttkin::ball::rally::{self, RallyConfig};
 use ttkin::ball::reach::{Placement, ReachRegion};
 
@@ -89,7 +89,11 @@ fn ball_predict<'py>(
     let s = state_arg(state, "state")?;
     let ts = rows_array(times, "times", "K", &[])?.data().to_vec();
     let f = flight(model)?;
-    let pred = py.detach(|| predict(&f, &s, &ts)).py()?;
+    // Ctrl-C stops a long flight within about a millisecond of work (issue 29).
+    let pred = crate::interrupt::detach_interruptible(py, |cancel| {
+        predict_until(&f, &s, &ts, &|| crate::interrupt::cancelled(cancel))
+    })?
+    .py()?;
     let d = PyDict::new(py);
     let flat: Vec<f64> = pred.positions.iter().flatten().copied().collect();
     d.set_item("positions", to_numpy(py, &[ts.len(), 3], &flat))?;
@@ -149,7 +153,8 @@ fn predict_rows(
             if crate::interrupt::cancelled(cancel) {
                 return Err(ttkin::Error::invalid("states", "prediction stopped"));
             }
-            let pred = predict(f, s, ts).map_err(|e| ttkin::Error::invalid(format!("states[{i}]"), e.to_string()))?;
+            let pred = predict_until(f, s, ts, &|| crate::interrupt::cancelled(cancel))
+                .map_err(|e| ttkin::Error::invalid(format!("states[{i}]"), e.to_string()))?;
             for (dst, p) in o.chunks_exact_mut(3).zip(&pred.positions) {
                 dst.copy_from_slice(p);
             }

@@ -290,6 +290,32 @@ impl Flight {
         samples: usize,
         net: bool,
     ) -> (BallState, Option<Event>) {
+        self.advance_stoppable(s, t_end, plane, samples, net, &|| false)
+    }
+
+    /// [`Flight::advance`] that also returns, without an event and before `t_end`, when `stop()`
+    /// turns true (polled every [`crate::budget::STOP_POLL_STEPS`] steps): a caller's
+    /// cancellation. Until then the steps are those of `advance`.
+    pub fn advance_until(
+        &self,
+        s: &BallState,
+        t_end: f64,
+        plane: Option<&Plane>,
+        stop: crate::budget::Stop<'_>,
+    ) -> (BallState, Option<Event>) {
+        self.advance_stoppable(s, t_end, plane, 1, true, stop)
+    }
+
+    /// [`Flight::advance_guarded`] with a stop check (see [`Flight::advance_until`]).
+    fn advance_stoppable(
+        &self,
+        s: &BallState,
+        t_end: f64,
+        plane: Option<&Plane>,
+        samples: usize,
+        net: bool,
+        stop: crate::budget::Stop<'_>,
+    ) -> (BallState, Option<Event>) {
         let samples = samples.max(1);
         let mut cur = *s;
         // Every guard is > 0 where none may fire (the cheap test has a 1e-9 m margin): the exact
@@ -301,7 +327,12 @@ impl Flight {
             [true; 4]
         };
         armed[1] &= net;
+        let mut steps = 0u64;
         while cur.t < t_end {
+            steps += 1;
+            if steps.is_multiple_of(crate::budget::STOP_POLL_STEPS) && stop() {
+                return (cur, None);
+            }
             let h = self.step.min(t_end - cur.t);
             let next = self.rk4(&cur, h);
             if !(next.t > cur.t) {

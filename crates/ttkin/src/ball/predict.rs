@@ -44,6 +44,17 @@ fn check_times(times: &[f64], t0: f64) -> Result<()> {
 
 /// Positions of the ball from `state` at `times` (s, non-decreasing, ≥ state.t), through bounces.
 pub fn predict(flight: &Flight, state: &BallState, times: &[f64]) -> Result<Prediction> {
+    predict_until(flight, state, times, &|| false)
+}
+
+/// [`predict`] that ends early with [`crate::budget::stopped`]'s error when `stop()` turns true
+/// (polled every [`crate::budget::STOP_POLL_STEPS`] integration steps).
+pub fn predict_until(
+    flight: &Flight,
+    state: &BallState,
+    times: &[f64],
+    stop: crate::budget::Stop<'_>,
+) -> Result<Prediction> {
     flight.validate()?;
     state.validate("state")?;
     check_times(times, state.t)?;
@@ -56,7 +67,16 @@ pub fn predict(flight: &Flight, state: &BallState, times: &[f64]) -> Result<Pred
     let mut positions = Vec::with_capacity(times.len());
     for &t in times {
         while end.is_none() && cur.t < t {
-            let (next, ev) = flight.advance(&cur, t, None);
+            let (next, ev) = flight.advance_until(&cur, t, None, stop);
+            if ev.is_none() && next.t < t {
+                // stopped by the caller (or a clock that no longer advances, which the span check
+                // above refuses)
+                return Err(if stop() {
+                    crate::budget::stopped("times")
+                } else {
+                    Error::invalid("times", "the clock no longer advances at this time")
+                });
+            }
             cur = next;
             if let Some(e) = ev {
                 events.push(e);

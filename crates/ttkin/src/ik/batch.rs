@@ -149,6 +149,19 @@ impl IkBatchSolver {
     /// when one start is given (empty: [`Chain::mid_range`]); in parallel when there is more than
     /// one target. Errors only for bad input; each element carries its status.
     pub fn solve(&self, chain: &Chain, targets: &[IsometryMatrix3<f64>], q0s: &[Vec<f64>]) -> Result<Vec<IkOutcome>> {
+        self.solve_until(chain, targets, q0s, &|| false)
+    }
+
+    /// [`Self::solve`] that ends early with [`crate::budget::stopped`]'s error when `stop()`
+    /// turns true (polled before each target; one target is bounded by the solver's iterations,
+    /// restarts and time budget).
+    pub fn solve_until(
+        &self,
+        chain: &Chain,
+        targets: &[IsometryMatrix3<f64>],
+        q0s: &[Vec<f64>],
+        stop: crate::budget::Stop<'_>,
+    ) -> Result<Vec<IkOutcome>> {
         let mid;
         let q0s = if q0s.is_empty() {
             mid = vec![chain.mid_range()];
@@ -158,6 +171,9 @@ impl IkBatchSolver {
         };
         check_batch(chain, targets, q0s)?;
         let one = |i: usize, t: &IsometryMatrix3<f64>| {
+            if stop() {
+                return Err(crate::budget::stopped("T"));
+            }
             let q0 = if q0s.len() == 1 { &q0s[0] } else { &q0s[i] };
             self.solve_one(chain, i, t, q0)
         };
