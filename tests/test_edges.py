@@ -445,3 +445,35 @@ def test_a_single_ball_flight_stops_on_ctrl_c():
     # horizon (about 10 s of work)
     s = ttmanip.ball.state([0.0, 0.0, 1e4], [900.0, 0.0, 0.0], [0.0, 1e5, 0.0])
     _stops_early(lambda: ttmanip.ball.predict(s, [1.9e5]), lambda: ttmanip.ball.predict(s, [1.9e4]), 0.1)
+
+
+# -- 8. messages: a huge Python int names its argument (every binding argument, by #[guarded]) ----
+
+
+@pytest.mark.parametrize(
+    ("call", "name"),
+    [
+        (lambda p, r: p.sample(10**400), "rate"),
+        (lambda p, r: r.ik(r.fk(np.zeros(r.dof)), max_iterations=10**400), "max_iterations"),
+        (lambda p, r: r.ik(r.fk(np.zeros(r.dof)), seed=-(2**130)), "seed"),
+        (lambda p, r: ttmanip.motor.Servo().step_response("current", 1.0, 2**1024), "duration"),
+        (lambda p, r: ttmanip.DriveSim(r).tick(10**40), "n"),
+    ],
+)
+def test_huge_python_ints_name_their_argument_and_range(call, name):
+    r = ttmanip.robots.gantry6()
+    p = ttmanip.plan_hit(r, ttmanip.DEMO_HIT)
+    pattern = rf"^{name}: .* is out of range; expected (a real number|an integer)"
+    with pytest.raises(TtmanipError, match=pattern):
+        call(p, r)
+
+
+def test_a_plane_crossing_search_stops_on_ctrl_c():
+    s = ttmanip.ball.state([0.0, 0.0, 1e4], [900.0, 0.0, 0.0], [0.0, 1e5, 0.0])
+    # a plane below the floor, never reached: the spin keeps the ball up
+    below = {"point": [0.0, 0.0, -5.0], "normal": [0.0, 0.0, 1.0]}
+    _stops_early(
+        lambda: ttmanip.ball.crossing(s, t_max=1.9e5, **below),
+        lambda: ttmanip.ball.crossing(s, t_max=1.9e4, **below),
+        0.1,
+    )

@@ -415,6 +415,23 @@ mod tests {
         (q, vec![1.0; n], vec![0.0; n])
     }
 
+    /// A run asked to stop ends with an error after its first poll; one never asked is the
+    /// plain run, bit for bit.
+    #[test]
+    fn runs_stop_on_request_and_are_unchanged_otherwise() {
+        let err = sim()
+            .step_response_until(Mode::Position, 0.1, 1.0, 0.0, &|| true)
+            .unwrap_err();
+        assert!(err.to_string().contains("stopped by the caller"), "{err}");
+        let a = sim().step_response(Mode::Position, 0.1, 0.2, 0.0).unwrap();
+        let b = sim()
+            .step_response_until(Mode::Position, 0.1, 0.2, 0.0, &|| false)
+            .unwrap();
+        assert_eq!(a, b);
+        let (q, qd, qdd) = ramp(2000);
+        assert!(sim().follow_until(&q, &qd, &qdd, 0.0, 0.0, &|| true).is_err());
+    }
+
     #[test]
     fn follow_is_the_trajectory_from_rest_then_the_held_last_sample() {
         let (q, qd, qdd) = ramp(50);

@@ -10,7 +10,7 @@ use ttkin::ball::fit::{self, Bounce, FitOptions, Recording};
 use ttkin::ball::flight::{BallState, Flight, Plane};
 use ttkin::ball::hitplan::HitPlanner;
 use ttkin::ball::model::{BallModel, Table};
-use ttkin::ball::predict::{crossing, predict_until, CrossingOutcome};
+use ttkin::ball::predict::{crossing_until, predict_until, CrossingOutcome};
 use ttkin::ball::rally::{self, RallyConfig};
 use ttkin::ball::reach::{Placement, ReachRegion};
 
@@ -187,7 +187,11 @@ fn ball_crossing<'py>(
         normal: nalgebra::Vector3::new(n[0] / nn, n[1] / nn, n[2] / nn),
     };
     let f = flight(model)?;
-    let out = py.detach(|| crossing(&f, &s, &plane, t_max)).py()?;
+    // Ctrl-C stops a long flight within about a millisecond of work (issue 29).
+    let out = crate::interrupt::detach_interruptible(py, |cancel| {
+        crossing_until(&f, &s, &plane, t_max, &|| crate::interrupt::cancelled(cancel))
+    })?
+    .py()?;
     let d = PyDict::new(py);
     match out {
         CrossingOutcome::Crossed { state, bounces } => {
@@ -512,6 +516,27 @@ fn ball_update<'py>(
 /// checks its `n` against it before the first chunk.
 pub const MAX_RALLY_BALLS: u64 = 1_000_000;
 
+/// The rally's camera of `ttkin::ball::rally::Camera::default()`: rate (Hz), latency (s), noise
+/// (m, σ per axis), outlier_rate, outlier_size (m), start and window (s).
+#[ttkin_py_guard::guarded]
+#[pyfunction]
+fn ball_camera(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    let c = rally::Camera::default();
+    let d = PyDict::new(py);
+    for (k, v) in [
+        ("rate", c.rate),
+        ("latency", c.latency),
+        ("noise", c.noise),
+        ("outlier_rate", c.outlier_rate),
+        ("outlier_size", c.outlier_size),
+        ("start", c.start),
+        ("window", c.window),
+    ] {
+        d.set_item(k, v)?;
+    }
+    Ok(d)
+}
+
 /// The ITTF table of `ttkin::ball::model::Table::default()` (m): length, width, height (surface
 /// above the floor), thickness, net_height, net_overhang.
 #[ttkin_py_guard::guarded]
@@ -669,6 +694,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ball_plan_correct, m)?)?;
     m.add("MAX_RALLY_BALLS", MAX_RALLY_BALLS)?;
     m.add_function(wrap_pyfunction!(ball_table, m)?)?;
+    m.add_function(wrap_pyfunction!(ball_camera, m)?)?;
     m.add_function(wrap_pyfunction!(ball_placement, m)?)?;
     m.add_function(wrap_pyfunction!(ball_estimate, m)?)?;
     m.add_function(wrap_pyfunction!(ball_predict, m)?)?;

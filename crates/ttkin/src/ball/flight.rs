@@ -464,11 +464,23 @@ impl Flight {
     /// Integrates from `s` to `t_end` (s) through bounces, collecting the events, until `t_end`,
     /// a terminal event (net, floor) or a plane crossing. Returns the final state and the events.
     pub fn run(&self, s: &BallState, t_end: f64, plane: Option<&Plane>) -> (BallState, Vec<Event>) {
+        self.run_until(s, t_end, plane, &|| false)
+    }
+
+    /// [`Flight::run`] that also ends, before `t_end` and without a further event, when `stop()`
+    /// turns true (a caller's cancellation, see [`Flight::advance_until`]).
+    pub fn run_until(
+        &self,
+        s: &BallState,
+        t_end: f64,
+        plane: Option<&Plane>,
+        stop: crate::budget::Stop<'_>,
+    ) -> (BallState, Vec<Event>) {
         let mut cur = *s;
         let mut events = Vec::new();
         // Each bounce loses energy; 64 events bound a flight of any practical length.
         while cur.t < t_end && events.len() < 64 {
-            let (next, ev) = self.advance(&cur, t_end, plane);
+            let (next, ev) = self.advance_until(&cur, t_end, plane, stop);
             cur = next;
             match ev {
                 Some(e) => {

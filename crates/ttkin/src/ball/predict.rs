@@ -109,6 +109,18 @@ pub enum CrossingOutcome {
 /// Where and when the ball from `state` crosses `plane` (from its positive to negative side),
 /// searching up to `t_max` (s).
 pub fn crossing(flight: &Flight, state: &BallState, plane: &Plane, t_max: f64) -> Result<CrossingOutcome> {
+    crossing_until(flight, state, plane, t_max, &|| false)
+}
+
+/// [`crossing`] that ends early with [`crate::budget::stopped`]'s error when `stop()` turns true
+/// (polled every [`crate::budget::STOP_POLL_STEPS`] integration steps).
+pub fn crossing_until(
+    flight: &Flight,
+    state: &BallState,
+    plane: &Plane,
+    t_max: f64,
+    stop: crate::budget::Stop<'_>,
+) -> Result<CrossingOutcome> {
     flight.validate()?;
     state.validate("state")?;
     if !t_max.is_finite() {
@@ -119,7 +131,15 @@ pub fn crossing(flight: &Flight, state: &BallState, plane: &Plane, t_max: f64) -
         });
     }
     flight.check_span("t_max", state, t_max)?;
-    let (_, events) = flight.run(state, t_max, Some(plane));
+    let (end, events) = flight.run_until(state, t_max, Some(plane), stop);
+    if end.t < t_max
+        && events
+            .last()
+            .is_none_or(|e| !(e.kind.terminal() || e.kind == EventKind::Plane))
+        && stop()
+    {
+        return Err(crate::budget::stopped("t_max"));
+    }
     let mut bounces = Vec::new();
     for e in events {
         match e.kind {
@@ -149,4 +169,39 @@ pub fn crossing_batch(
     t_max: f64,
 ) -> Vec<Result<CrossingOutcome>> {
     states.par_iter().map(|s| crossing(flight, s, plane, t_max)).collect()
+}
+
+#[cfg(test)]
+mod stop_tests {
+    use super::*;
+    use crate::ball::model::BallModel;
+    use std::sync::atomic::{AtomicU64, Ordering};
+
+    /// A flight asked to stop ends with the stop's error after one poll's worth of steps; one
+    /// never asked is `predict`, bit for bit.
+    #[test]
+    fn predict_until_stops_on_request_and_is_predict_otherwise() {
+        let f = Flight::new(BallModel::default());
+        let s = BallState::new(0.0, [0.0, 0.0, 1e4], [900.0, 0.0, 0.0], [0.0, 1e5, 0.0]);
+        let polls = AtomicU64::new(0);
+        let err = predict_until(&f, &s, &[100.0], &|| polls.fetch_add(1, Ordering::Relaxed) >= 2).unwrap_err();
+        assert!(err.to_string().contains("stopped by the caller"), "{err}");
+        // three polls in the flight (the third stops it), one more to tell a stop from a stalled clock
+        assert_eq!(polls.load(Ordering::Relaxed), 4);
+        let plane = Plane {
+            point: nalgebra::Vector3::new(0.0, 0.0, -5.0),
+            normal: nalgebra::Vector3::new(0.0, 0.0, 1.0),
+        };
+        let err = crossing_until(&f, &s, &plane, 100.0, &|| true).unwrap_err();
+        assert!(err.to_string().contains("stopped by the caller"), "{err}");
+        assert_eq!(
+            crossing(&f, &s, &plane, 3.0).unwrap(),
+            crossing_until(&f, &s, &plane, 3.0, &|| false).unwrap()
+        );
+        let times = [0.5, 1.0, 7.0];
+        assert_eq!(
+            predict(&f, &s, &times).unwrap(),
+            predict_until(&f, &s, &times, &|| false).unwrap()
+        );
+    }
 }

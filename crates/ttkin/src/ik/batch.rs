@@ -287,6 +287,26 @@ mod tests {
         IsometryMatrix3::translation(5.0, 0.0, 0.0)
     }
 
+    /// A batch asked to stop ends with the stop's error; one never asked gives `solve`'s outcomes.
+    #[test]
+    fn solve_until_stops_on_request_and_is_solve_otherwise() {
+        let chain = crate::robots::ur5();
+        let t = chain.fk(&[0.3, -0.9, 1.1, -0.4, 0.8, 0.2]).unwrap();
+        let s = IkSolver {
+            time_budget: None, // deterministic: iterations and restarts only
+            ..IkSolver::default()
+        };
+        let b = IkBatchSolver::new(&chain, s, IkMethod::Numeric).unwrap();
+        let err = b.solve_until(&chain, &[t, t], &[], &|| true).unwrap_err();
+        assert!(err.to_string().contains("stopped by the caller"), "{err}");
+        let a = b.solve(&chain, &[t, t], &[]).unwrap();
+        let c = b.solve_until(&chain, &[t, t], &[], &|| false).unwrap();
+        assert_eq!(
+            a.iter().map(|o| &o.result.q).collect::<Vec<_>>(),
+            c.iter().map(|o| &o.result.q).collect::<Vec<_>>()
+        );
+    }
+
     /// One unreachable target in a batch gets its status and does not fail the others.
     #[test]
     fn unreachable_target_does_not_fail_the_batch() {
