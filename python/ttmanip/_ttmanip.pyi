@@ -640,8 +640,11 @@ class DriveSim:
     def current(self) -> NDArray[np.float64]:
         """Winding currents, A."""
     @property
-    def current_ref(self) -> NDArray[np.float64]:
+    def current_reference(self) -> NDArray[np.float64]:
         """Current references after limiting, A."""
+    @property
+    def current_ref(self) -> NDArray[np.float64]:
+        """Deprecated name of `current_reference`."""
     @property
     def faults(self) -> list[str]:
         """Fault of each axis ("" when none)."""

@@ -221,11 +221,19 @@ impl DriveSim {
         PyArray1::from_slice(py, self.sim.current())
     }
 
-    /// Current references after limiting, A.
+    /// Current references after limiting, A (`Servo`'s `current_reference`, the axis'
+    /// `current_reference()`).
     #[getter]
-    fn current_ref<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+    fn current_reference<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         let v: Vec<f64> = self.sim.axes().iter().map(|a| a.current_reference()).collect();
         PyArray1::from_vec(py, v)
+    }
+
+    /// Deprecated name of `current_reference` (issue 30 item 5: one name per concept).
+    #[getter]
+    fn current_ref<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        crate::errors::deprecated(py, "DriveSim.current_ref", "DriveSim.current_reference")?;
+        self.current_reference(py) // a PyResult: `#[guarded]` wraps every method's result
     }
 
     /// Runs the reference (t (K,), q, qd, qdd and optional tau_ff (K, n)); returns the recorded arrays.
