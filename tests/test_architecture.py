@@ -237,11 +237,19 @@ def test_every_source_module_is_named():
 
 FORBIDDEN_IN_TTKIN = {
     # Python
-    "pyo3", "pyo3-ffi", "pyo3-build-config", "numpy", "pythonize",
+    "pyo3",
+    "pyo3-ffi",
+    "pyo3-build-config",
+    "numpy",
+    "pythonize",
     # buses and devices
-    "socketcan", "embedded-can", "neli", "nix",
+    "socketcan",
+    "embedded-can",
+    "neli",
+    "nix",
     # the crates above it
-    "ttcan", "ttkin-py",
+    "ttcan",
+    "ttkin-py",
 }
 
 
@@ -251,7 +259,9 @@ def _metadata() -> dict:
 
     out = subprocess.run(
         ["cargo", "metadata", "--format-version", "1", "--manifest-path", str(ROOT / "Cargo.toml")],
-        capture_output=True, text=True, check=True,
+        capture_output=True,
+        text=True,
+        check=True,
     )
     return json.loads(out.stdout)
 
@@ -338,3 +348,144 @@ def test_no_robot_name_match_outside_the_robots_room():
     assert _name_matches("if robot.name == 'mobile8':\n    pass", names, rust=False)
     assert _name_matches("if name in ('ur5', 'arm4'):", names, rust=False)
     assert not _name_matches('summary["gantry6"] = run(robots.gantry6())  # gantry6 ==', names, rust=False)
+
+
+# The binding crate converts only (issue 30 item 6): a binding reads its arguments, calls one core
+# function and converts the result. Structural check on crates/ttkin-py/src: loops over data
+# (`for … in`, `while`, `loop`, iterators, chunks, zips) are allowed only in the conversion helpers,
+# and signature defaults are never numeric literals (a default comes from the core's `Default` or
+# constant, e.g. `t_max = CROSSING_HORIZON`). The loops still in the bindings are listed below by
+# function with their count, a ratchet: a new loop, or one more in a listed function, fails; a loop
+# removed must come off the list (so it only shrinks).
+
+BINDING_SRC = ROOT / "crates/ttkin-py/src"
+CONVERSION_HELPERS = {"convert.rs", "errors.rs", "interrupt.rs", "pickle.rs", "args.rs", "guard.rs", "lib.rs"}
+_LOOP = re.compile(
+    r"\bfor\s+[\w(), &]+\s+in\b|\bwhile\b|\bloop\s*\{|\.(?:par_)?iter(?:_mut)?\(\)|\.into_(?:par_)?iter\(\)"
+    r"|\.(?:par_)?chunks(?:_exact)?(?:_mut)?\(|\.zip\("
+)
+_FN = re.compile(r"^\s*(?:pub(?:\([^)]*\))?\s+)?fn\s+(\w+)")
+_SIGNATURE = re.compile(r"#\[pyo3\(signature\s*=\s*\((.*?)\)\)\]", re.S)
+_NUMERIC_DEFAULT = re.compile(r"\b(\w+)\s*=\s*(-?\d[\w.]*)")
+
+# Known loops left in the bindings (file::function -> count), each a debt of issue 30 item 3.
+BINDING_LOOP_DEBTS = {
+    "ball.rs::ball_fit": 9,  # result records of the calibration (per flight, per comparison)
+    "cartesian.rs::sample_rate": 2,
+    "drives.rs::from_state": 1,
+    "drives.rs::current_reference": 1,
+    "drives.rs::actuators": 3,
+    "dynamics.rs::states": 2,
+    "dynamics.rs::batch_shape": 1,
+    "dynamics.rs::drives": 1,
+    "dynamics.rs::with_drives": 1,
+    "hit.rs::hit_plan_batch": 6,  # hitstack's: the hits built row by row
+    "ik.rs::ik": 9,  # seed broadcasting and the fast-path choice
+    "ik.rs::ik_all": 3,
+    "mobile.rs::track": 1,
+    "motor.rs::put": 2,  # dict deep-merging
+    "motor.rs::trace_dict": 1,
+    "profile.rs::violations": 1,
+    "profile.rs::trajectory_arrays": 2,
+    "robot.rs::joint_types": 1,
+    "robot.rs::limits": 1,
+    "robot.rs::__repr__": 3,
+    "traj.rs::violations_to_py": 1,
+    "traj.rs::coefficients": 2,
+    "traj.rs::sample": 1,
+    "traj.rs::peaks": 2,
+    "traj.rs::sample_uniform": 1,
+}
+
+# Known numeric literal defaults left in binding signatures (file -> the `name=value` texts).
+BINDING_DEFAULT_DEBTS = {
+    "ball.rs": ["start=0", "window=20"],
+    "cartesian.rs": ["blend=0.25", "blend=0.25", "blend=0.25", "hz=1000.0"],
+    "drives.rs": ["setpoint_rate=1000.0", "seed=0", "n=1", "setpoint_rate=1000.0"],
+    "hit.rs": ["rate=1000.0", "rate=1000.0"],
+    "mobile.rs": ["rate_hz=1000.0", "rate_hz=1000.0"],
+    "motor.rs": ["external_torque=0.0", "seed=7", "settle=0.0", "external_torque=0.0", "seed=7"],
+    "traj.rs": ["n=101"],
+}
+
+
+def _code(line: str) -> str:
+    """`line` without string contents and comments."""
+    return re.sub(r'"(?:[^"\\]|\\.)*"', '""', line).split("//")[0]
+
+
+def _binding_loops(name: str, text: str) -> dict[str, int]:
+    """Loops over data per function (`file::fn` -> count) in binding file `name`; unit tests off."""
+    out: dict[str, int] = {}
+    fn = "<top>"
+    for line in text.splitlines():
+        if line.startswith("#[cfg(test)]"):
+            break
+        m = _FN.match(line)
+        if m:
+            fn = m.group(1)
+        n = len(_LOOP.findall(_code(line)))
+        if n:
+            key = f"{name}::{fn}"
+            out[key] = out.get(key, 0) + n
+    return out
+
+
+def _binding_defaults(text: str) -> list[str]:
+    return [f"{a}={b}" for sig in _SIGNATURE.findall(text) for a, b in _NUMERIC_DEFAULT.findall(sig)]
+
+
+def _binding_files() -> dict[str, str]:
+    return {
+        f.name: f.read_text() for f in sorted(BINDING_SRC.glob("*.rs")) if f.name not in CONVERSION_HELPERS
+    }
+
+
+def _binding_violations(files: dict[str, str]) -> list[str]:
+    """What the bindings hold beyond the listed debts: loops over data, numeric literal defaults."""
+    bad = []
+    loops: dict[str, int] = {}
+    for name, text in files.items():
+        loops.update(_binding_loops(name, text))
+        extra = list(_binding_defaults(text))
+        for d in BINDING_DEFAULT_DEBTS.get(name, []):
+            if d in extra:
+                extra.remove(d)
+        bad += [f"{name}: literal default {d} (take it from the core)" for d in extra]
+    for key, n in sorted(loops.items()):
+        if n > BINDING_LOOP_DEBTS.get(key, 0):
+            bad.append(f"{key}: {n} loops over data (listed: {BINDING_LOOP_DEBTS.get(key, 0)})")
+    return bad
+
+
+def test_bindings_convert_only():
+    files = _binding_files()
+    bad = _binding_violations(files)
+    assert not bad, "the bindings must convert only (ARCHITECTURE.md, crates/ttkin-py):\n" + "\n".join(bad)
+    # The ratchet is tight: every listed debt is still there, at its count.
+    loops: dict[str, int] = {}
+    for name, text in files.items():
+        loops.update(_binding_loops(name, text))
+    stale = {k: n for k, n in BINDING_LOOP_DEBTS.items() if loops.get(k, 0) != n}
+    assert not stale, f"loops removed: lower or drop their BINDING_LOOP_DEBTS entries {stale}"
+    for name, debts in BINDING_DEFAULT_DEBTS.items():
+        assert sorted(_binding_defaults(files[name])) == sorted(debts), (
+            f"{name}: update BINDING_DEFAULT_DEBTS"
+        )
+
+
+def test_the_binding_check_finds_a_planted_loop_and_default():
+    files = _binding_files()
+    planted = dict(files)
+    planted["ball.rs"] = files["ball.rs"] + (
+        "\nfn ball_speeds(py: Python<'_>, states: &[BallState]) -> Vec<f64> {\n"
+        "    let mut out = Vec::new();\n"
+        "    for s in states {\n"
+        "        out.push(s.v.norm());\n"
+        "    }\n"
+        "    out\n}\n"
+    )
+    assert _binding_violations(planted) == ["ball.rs::ball_speeds: 1 loops over data (listed: 0)"]
+    planted = dict(files)
+    planted["traj.rs"] = files["traj.rs"] + '\n#[pyo3(signature = (q, step = 0.001, name = "x"))]\n'
+    assert _binding_violations(planted) == ["traj.rs: literal default step=0.001 (take it from the core)"]

@@ -11,6 +11,7 @@ import pinocchio as pin
 import pytest
 import ttmanip
 from conftest import BUILTINS, random_q
+from ttmanip.dynamics import EARTH_GRAVITY, MOBILE8_GRAVITY
 
 TOL = 1e-9
 
@@ -244,3 +245,23 @@ def test_torque_figure_is_written(tmp_path):
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     gantry, t, profile = ttmanip.dynamics.gantry6_example()
     assert profile.within_limits and profile.joint.shape == (len(t), gantry.dof)
+
+
+@pytest.mark.parametrize("name", BUILTINS)
+def test_default_gravity_is_the_robots_and_agrees_with_pinocchio(name):
+    # Gravity is a fact of the robot in its base frame (robot file `gravity`): mobile8's base
+    # frame has x up. Every default uses it: rnea, the static torques, DriveSim.
+    robot = ttmanip.Robot.builtin(name)
+    expected = MOBILE8_GRAVITY if name == "mobile8" else EARTH_GRAVITY
+    np.testing.assert_array_equal(robot.gravity_vector, expected)
+    model, data = pinocchio_model(robot, robot.gravity_vector)
+    q, qd, qdd = states(robot, 10, seed=5)
+    tau = robot.rnea(q, qd, qdd)
+    grav = robot.gravity(q)
+    for k in range(len(q)):
+        np.testing.assert_allclose(tau[k], pin.rnea(model, data, q[k], qd[k], qdd[k]), rtol=0, atol=1e-8)
+        g_pin = pin.computeGeneralizedGravity(model, data, q[k])
+        np.testing.assert_allclose(grav[k], g_pin, rtol=0, atol=1e-8)
+    # A renamed copy from its file keeps its gravity: nothing is decided by the name.
+    copy = ttmanip.Robot.from_toml(robot.to_toml().replace(f'name = "{name}"', 'name = "copy"', 1))
+    np.testing.assert_array_equal(copy.gravity_vector, expected)

@@ -118,6 +118,9 @@ class Robot:
     def ready(self) -> NDArray[np.float64]:
         """(n,) ready (rest) configuration (m or rad): where strokes start and return to."""
     @property
+    def gravity_vector(self) -> NDArray[np.float64]:
+        """(3,) gravity in the base frame (m/s²): the default of every dynamics call on this robot."""
+    @property
     def drive_effort_limits(self) -> NDArray[np.float64]:
         """(n,) drive peak torque G·k_t·I_peak·η (N or N·m; inf where the drive data lacks it)."""
     @property

@@ -160,7 +160,11 @@ def predict(state: ArrayLike, times: ArrayLike, model: BallModel | str = "defaul
     if not isinstance(events, (bool, np.bool_)):
         raise _t.TtmanipError(f"events: must be True or False, got {events!r}")
     d = _t.ball_predict(state, times, _model(model))
-    return (d["positions"], d["events"]) if events else d["positions"]
+    if not events:
+        return d["positions"]
+    # The extension gives the events' serde form (states as lists); here as (10,) arrays.
+    evs = [{**e, "before": np.asarray(e["before"]), "after": np.asarray(e["after"])} for e in d["events"]]
+    return d["positions"], evs
 
 
 def predict_batch(
@@ -253,7 +257,7 @@ def plan_correct(
     of ``state`` planned for a stroke from rest at ``now`` (s) landing at ``target`` (x, y, m),
     then, that stroke under way, planned again at ``t_c`` (s) for the ball ``state_new`` (e.g.
     :func:`update`'s state; ``after_bounce`` when past its bounce) near the first hit
-    (``HitPlanner::plan_near`` from the stroke's joint state at ``t_c``). Returns ``first`` and
+    (``ReturnPlanner::plan_near`` from the stroke's joint state at ``t_c``). Returns ``first`` and
     ``corrected``, plan dicts as :func:`plan_return`'s (``status`` and the hit's items)."""
     if not isinstance(after_bounce, (bool, np.bool_)):
         raise _t.TtmanipError(f"after_bounce: must be True or False, got {after_bounce!r}")

@@ -12,10 +12,12 @@ The algorithms are methods of the robot, single configuration (n,) or batch (N, 
   joint torques (friction included), motor torques through the gear ratio, currents through the
   torque constant, and the effort-limit check.
 
-Units are SI (N·m, N, kg·m², m/s²). ``gravity`` is a base-frame vector, default
-:data:`EARTH_GRAVITY`; ``wrench`` is [fx, fy, fz, mx, my, mz] applied *to* the tool by the
-environment, in tool-frame axes, moment about the tool point. Inertias and drives come from the
-robot file (``inertial``, ``drive``) or URDF (``<inertial>``, ``<dynamics damping friction>``), or
+Units are SI (N·m, N, kg·m², m/s²). ``gravity`` is a base-frame vector, default the robot's
+own ``robot.gravity_vector`` (robot-file key ``gravity``: :data:`EARTH_GRAVITY` unless the file
+says otherwise, :data:`MOBILE8_GRAVITY` for mobile8); ``wrench`` is [fx, fy, fz, mx, my, mz]
+applied *to* the tool by the environment, in tool-frame axes, moment about the tool point.
+Inertias and drives come from the robot file (``inertial``, ``drive``) or URDF (``<inertial>``,
+``<dynamics damping friction>``), or
 ``robot.with_inertials`` / ``robot.with_drives``.
 """
 
@@ -23,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._ttmanip import ShapeError, TorqueProfile, TtmanipError, real_array
+from ._ttmanip import Robot, ShapeError, TorqueProfile, TtmanipError, real_array
 
 __all__ = ["EARTH_GRAVITY", "MOBILE8_GRAVITY", "TorqueProfile", "gantry6_example", "torque_figure"]
 
@@ -32,8 +34,8 @@ EARTH_GRAVITY = np.array([0.0, 0.0, -9.81])
 
 #: Gravity for ``robots.mobile8()`` in its base frame (Table 1's frame 0), m/s²: joint 1 moves the
 #: base along z0, horizontally, and the waist joint 2 turns about x0, so x0 is up (our reading of
-#: seed 000, which does not say it explicitly).
-MOBILE8_GRAVITY = np.array([-9.81, 0.0, 0.0])
+#: seed 000, which does not say it explicitly). The robot's own fact (``Robot.gravity_vector``), read here.
+MOBILE8_GRAVITY = Robot.builtin("mobile8").gravity_vector
 
 
 def torque_figure(robot, t, profile: TorqueProfile, path) -> None:

@@ -159,7 +159,15 @@ def rally(
         for k in parts[0]
         if k not in ("paths", "reach_names")
     }
-    res["paths"] = parts[0]["paths"]
+    # The extension gives the paths' serde form (lists of points); here as (K, 3) arrays.
+    res["paths"] = [
+        {
+            **p,
+            "ball": np.asarray(p["ball"], float).reshape(-1, 3),
+            "racket": np.asarray(p["racket"], float).reshape(-1, 3),
+        }
+        for p in parts[0]["paths"]
+    ]
     in_reach = res["in_reach"].astype(bool)
     returned = res["returned"].astype(bool) & in_reach
     statuses: dict[str, int] = {}

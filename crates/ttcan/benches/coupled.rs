@@ -14,7 +14,7 @@ fn coupled_tick(c: &mut Criterion) {
     // cannot hold the 15 kg base continuously (the I²t limit folds back after a second of
     // benchmark); the timing does not depend on it.
     let options = CoupledOptions {
-        gravity: [0.0; 3],
+        gravity: Some([0.0; 3]),
         ..CoupledOptions::default()
     };
     let mut sim = CoupledSim::from_chain(&chain, &q0, options).expect("mobile8 has drives");

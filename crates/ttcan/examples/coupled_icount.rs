@@ -5,7 +5,7 @@ fn main() {
     let chain = ttkin::robots::mobile8();
     let q0 = ttkin::robots::mobile8_start();
     let options = CoupledOptions {
-        gravity: [0.0; 3],
+        gravity: Some([0.0; 3]),
         ..CoupledOptions::default()
     };
     let mut sim = CoupledSim::from_chain(&chain, &q0, options).expect("mobile8 has drives");

@@ -53,7 +53,7 @@ fn the_armature_is_counted_once() {
     // from rest, ideal current loop, accelerates by M⁻¹τ, not by a doubled armature
     let options = CoupledOptions {
         ideal_current: true,
-        gravity: [0.0; 3],
+        gravity: Some([0.0; 3]),
         refresh_ticks: 1,
         ..CoupledOptions::default()
     };

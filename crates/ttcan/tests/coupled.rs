@@ -225,25 +225,17 @@ fn a_current_noise_in_amps_reaches_every_axis_built_from_the_drive_sections() {
 /// balls, near the planned contact point.
 #[test]
 fn rally_strokes_through_the_drives_return_the_balls() {
-    use ttkin::ball::flight::Flight;
-    use ttkin::ball::hitplan::HitPlanner;
-    use ttkin::ball::rally::{self, RallyConfig};
-    use ttkin::ball::reach::ReachRegion;
-    let pl = HitPlanner::new(ttkin::robots::gantry6(), Flight::default()).unwrap();
-    let region = ReachRegion::new(&pl.chain, pl.placement, pl.ready.clone(), pl.flight.model.radius).unwrap();
-    let truth = Flight {
-        step: 0.001,
-        ..Flight::default()
-    };
-    let cfg = RallyConfig {
+    use ttkin::ball::rally::{Rally, RallyConfig};
+    let r = Rally::new(RallyConfig {
         paths: 0,
         ..RallyConfig::default()
-    };
-    let ex = ttcan::coupled::execute::DriveExecutor::new(&pl.chain, ttcan::CoupledOptions::default(), 1e-3).unwrap();
+    })
+    .unwrap();
+    let ex = ttcan::coupled::execute::DriveExecutor::with_defaults(r.planner.chain()).unwrap();
     let (mut ok, mut returned, mut ideal) = (0, 0, 0);
     for i in 0..8 {
-        let a = rally::play(&pl, &region, &truth, &cfg, i);
-        let b = rally::play_with(&pl, &region, &truth, &cfg, i, None, Some(&ex));
+        let a = r.play(i, None, None);
+        let b = r.play(i, None, Some(&ex));
         assert_eq!(a.incoming, b.incoming);
         if a.status == "returned" {
             ideal += 1;

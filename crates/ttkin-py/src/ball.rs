@@ -1,37 +1,38 @@
 //! Bindings of `ttkin::ball`: conversion only. A ball state is a (10,) array
-//! [t, px, py, pz, vx, vy, vz, wx, wy, wz] (s, m, m/s, rad/s, world frame of `ttkin::ball`).
+//! [t, px, py, pz, vx, vy, vz, wx, wy, wz] (s, m, m/s, rad/s, world frame of `ttkin::ball`),
+//! `ttkin::ball::BallState::to_array`.
 
 use numpy::PyArrayDyn;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use rayon::prelude::*;
-use ttkin::ball::estimate::{estimate, EstimateOptions, Segment};
+use ttkin::ball::estimate::{estimate, EstimateOptions};
 use ttkin::ball::fit::{self, Bounce, FitOptions, Recording};
 use ttkin::ball::flight::{BallState, Flight, Plane};
-use ttkin::ball::hitplan::HitPlanner;
+use ttkin::ball::hitplan::{ReturnHit, ReturnPlanner, ReturnStatus};
 use ttkin::ball::model::{BallModel, Table};
-use ttkin::ball::predict::{crossing_until, predict_until, CrossingOutcome};
-use ttkin::ball::rally::{self, RallyConfig};
-use ttkin::ball::reach::{Placement, ReachRegion};
+use ttkin::ball::predict::{crossing_until, predict_batch_into, predict_until, CrossingOutcome, CROSSING_HORIZON};
+use ttkin::ball::rally::{self, Outcomes, Rally, RallyConfig};
+use ttkin::ball::reach::Placement;
 
 use crate::args;
-use crate::convert::{pose_to_numpy, rows_array, to_numpy, vector};
+use crate::convert::{pose_to_numpy, rows_array, serde_to_python, to_numpy, vector};
 use crate::errors::{PyResultExt, TtmanipError};
 
 fn flight(model: &str) -> PyResult<Flight> {
     Ok(Flight::new(BallModel::by_name(model).py()?))
 }
 
-fn state_from(v: &[f64]) -> BallState {
-    BallState::new(v[0], [v[1], v[2], v[3]], [v[4], v[5], v[6]], [v[7], v[8], v[9]])
-}
-
-fn state_vec(s: &BallState) -> Vec<f64> {
-    vec![s.t, s.p.x, s.p.y, s.p.z, s.v.x, s.v.y, s.v.z, s.w.x, s.w.y, s.w.z]
+fn state_vec(s: &BallState) -> [f64; 10] {
+    s.to_array()
 }
 
 fn state_arg(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<BallState> {
-    Ok(state_from(&vector(obj, what, 10)?))
+    Ok(BallState::from_row(&vector(obj, what, 10)?))
+}
+
+/// (N, 3) rows of `obj` (named `what` in errors) as triples.
+fn rows3(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<[f64; 3]>> {
+    Ok(crate::convert::triples(rows_array(obj, what, "N", &[3])?.data()))
 }
 
 /// Fits a ball state to observed positions `p` (N, 3) at times `t` (N,); see `ttkin::ball::estimate`.
@@ -44,10 +45,8 @@ fn ball_estimate<'py>(
     p: &Bound<'py, PyAny>,
     model: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let ta = rows_array(t, "t", "N", &[])?;
-    let pa = rows_array(p, "p", "N", &[3])?;
-    let times = ta.data().to_vec();
-    let obs: Vec<[f64; 3]> = pa.data().chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    let times = rows_array(t, "t", "N", &[])?.data().to_vec();
+    let obs = rows3(p, "p")?;
     let opts = EstimateOptions {
         flight: flight(model)?,
         ..EstimateOptions::default()
@@ -58,8 +57,7 @@ fn ball_estimate<'py>(
         .py()?;
     let d = PyDict::new(py);
     d.set_item("state", to_numpy(py, &[10], &state_vec(&e.state)))?;
-    let cov: Vec<f64> = e.covariance.iter().flatten().copied().collect();
-    d.set_item("covariance", to_numpy(py, &[6, 6], &cov))?;
+    d.set_item("covariance", to_numpy(py, &[6, 6], e.covariance.as_flattened()))?;
     d.set_item("spin_std", e.spin_std)?;
     d.set_item("spin_fitted", e.spin_fitted)?;
     d.set_item("sigma", e.sigma)?;
@@ -67,12 +65,7 @@ fn ball_estimate<'py>(
     d.set_item("outliers", e.outliers)?;
     d.set_item("nonfinite", e.nonfinite)?;
     d.set_item("bounce_time", e.bounce_time)?;
-    let seg = match e.segment {
-        Segment::Whole => "whole",
-        Segment::AfterBounce => "after_bounce",
-        Segment::BeforeBounce => "before_bounce",
-    };
-    d.set_item("segment", seg)?;
+    d.set_item("segment", e.segment.name())?;
     Ok(d)
 }
 
@@ -95,17 +88,8 @@ fn ball_predict<'py>(
     })?
     .py()?;
     let d = PyDict::new(py);
-    let flat: Vec<f64> = pred.positions.iter().flatten().copied().collect();
-    d.set_item("positions", to_numpy(py, &[ts.len(), 3], &flat))?;
-    let events = PyList::empty(py);
-    for e in &pred.events {
-        let ev = PyDict::new(py);
-        ev.set_item("kind", e.kind.name())?;
-        ev.set_item("before", to_numpy(py, &[10], &state_vec(&e.before)))?;
-        ev.set_item("after", to_numpy(py, &[10], &state_vec(&e.after)))?;
-        events.append(ev)?;
-    }
-    d.set_item("events", events)?;
+    d.set_item("positions", to_numpy(py, &[ts.len(), 3], pred.positions.as_flattened()))?;
+    d.set_item("events", serde_to_python(py, &pred.events)?)?;
     d.set_item("end", pred.end.map(|k| k.name()))?;
     Ok(d)
 }
@@ -121,52 +105,27 @@ fn ball_predict_batch<'py>(
     times: &Bound<'py, PyAny>,
     model: &str,
 ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-    let sa = rows_array(states, "states", "N", &[10])?;
-    let ta = rows_array(times, "times", "K", &[])?;
-    let list: Vec<BallState> = sa.data().chunks_exact(10).map(state_from).collect();
-    let ts = ta.data().to_vec();
+    let list = BallState::from_rows(rows_array(states, "states", "N", &[10])?.data());
+    let ts = rows_array(times, "times", "K", &[])?.data().to_vec();
     let f = flight(model)?;
-    let k = ts.len();
-    crate::convert::check_result_size(&[list.len(), k, 3])?;
-    let out = crate::convert::zeros(py, &[list.len(), k, 3]);
+    let shape = [list.len(), ts.len(), 3];
+    crate::convert::check_result_size(&shape)?;
+    let out = crate::convert::zeros(py, &shape);
     // Ctrl-C stops the batch within one ball per thread (issue 29).
     crate::convert::fill_fresh(&out, |o| {
-        crate::interrupt::detach_interruptible(py, |cancel| predict_rows(&f, &list, &ts, o, cancel))?.py()
+        crate::interrupt::detach_interruptible(py, |cancel| {
+            predict_batch_into(&f, &list, &ts, o, &|| crate::interrupt::cancelled(cancel))
+        })?
+        .py()
     })?;
     Ok(out)
-}
-
-/// The rows of `ball_predict_batch`: ball i's positions at `ts` into `out[i]`, stopping when
-/// `cancel` is set.
-fn predict_rows(
-    f: &Flight,
-    list: &[BallState],
-    ts: &[f64],
-    out: &mut [f64],
-    cancel: &std::sync::atomic::AtomicBool,
-) -> ttkin::Result<()> {
-    let k = ts.len();
-    out.par_chunks_mut((3 * k).max(1))
-        .zip(list.par_iter())
-        .enumerate()
-        .try_for_each(|(i, (o, s))| {
-            if crate::interrupt::cancelled(cancel) {
-                return Err(ttkin::Error::invalid("states", "prediction stopped"));
-            }
-            let pred = predict_until(f, s, ts, &|| crate::interrupt::cancelled(cancel))
-                .map_err(|e| ttkin::Error::invalid(format!("states[{i}]"), e.to_string()))?;
-            for (dst, p) in o.chunks_exact_mut(3).zip(&pred.positions) {
-                dst.copy_from_slice(p);
-            }
-            Ok(())
-        })
 }
 
 /// Where and when the ball from `state` crosses the plane through `point` with normal `normal`
 /// (from its positive side), searching until `t_max` (s).
 #[ttkin_py_guard::guarded]
 #[pyfunction]
-#[pyo3(signature = (state, point, normal, t_max = 2.0, model = "default"))]
+#[pyo3(signature = (state, point, normal, t_max = CROSSING_HORIZON, model = "default"))]
 fn ball_crossing<'py>(
     py: Python<'py>,
     state: &Bound<'py, PyAny>,
@@ -176,16 +135,7 @@ fn ball_crossing<'py>(
     model: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let s = state_arg(state, "state")?;
-    let pt = vector(point, "point", 3)?;
-    let n = vector(normal, "normal", 3)?;
-    let nn = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-    if nn.is_nan() || nn <= 1e-12 {
-        return Err(ttkin::Error::invalid("normal", "must be a non-zero vector")).py();
-    }
-    let plane = Plane {
-        point: nalgebra::Vector3::new(pt[0], pt[1], pt[2]),
-        normal: nalgebra::Vector3::new(n[0] / nn, n[1] / nn, n[2] / nn),
-    };
+    let plane = Plane::new(vec3(point, "point")?, vec3(normal, "normal")?).py()?;
     let f = flight(model)?;
     // Ctrl-C stops a long flight within about a millisecond of work (issue 29).
     let out = crate::interrupt::detach_interruptible(py, |cancel| {
@@ -197,7 +147,7 @@ fn ball_crossing<'py>(
         CrossingOutcome::Crossed { state, bounces } => {
             d.set_item("outcome", "crossed")?;
             d.set_item("state", to_numpy(py, &[10], &state_vec(&state)))?;
-            d.set_item("bounces", bounces.iter().map(|e| e.kind.name()).collect::<Vec<_>>())?;
+            d.set_item("bounces", ttkin::ball::flight::Event::names(&bounces))?;
         }
         CrossingOutcome::Ended(e) => {
             d.set_item("outcome", e.kind.name())?;
@@ -206,6 +156,12 @@ fn ball_crossing<'py>(
         CrossingOutcome::Timeout => d.set_item("outcome", "timeout")?,
     }
     Ok(d)
+}
+
+/// A (3,) vector argument as an array.
+fn vec3(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<[f64; 3]> {
+    let v = vector(obj, what, 3)?;
+    Ok([v[0], v[1], v[2]])
 }
 
 /// Plans gantry6's return of the ball `state` for a stroke starting at time `now` (s), landing at
@@ -222,7 +178,7 @@ fn ball_plan_return<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let s = state_arg(state, "state")?;
     let tg = vector(target, "target", 2)?;
-    let planner = HitPlanner::new(ttkin::robots::gantry6(), flight(model)?).py()?;
+    let planner = ReturnPlanner::new(ttkin::robots::gantry6(), flight(model)?).py()?;
     let plan = py.detach(|| planner.plan(&s, now, [tg[0], tg[1]])).py()?;
     let d = PyDict::new(py);
     d.set_item("status", plan.status.name())?;
@@ -234,19 +190,20 @@ fn ball_plan_return<'py>(
     Ok(d)
 }
 
-fn hit_items<'py>(py: Python<'py>, d: &Bound<'py, PyDict>, h: &ttkin::ball::hitplan::Hit) -> PyResult<()> {
-    d.set_item("pose", pose_to_numpy(py, &h.pose))?;
-    d.set_item("twist", to_numpy(py, &[6], &h.twist))?;
-    d.set_item("t_hit", h.t_hit)?;
-    d.set_item("q_hit", to_numpy(py, &[h.q_hit.len()], &h.q_hit))?;
-    d.set_item("qd_hit", to_numpy(py, &[h.qd_hit.len()], &h.qd_hit))?;
-    d.set_item("qdd_hit", to_numpy(py, &[h.qdd_hit.len()], &h.qdd_hit))?;
+fn hit_items<'py>(py: Python<'py>, d: &Bound<'py, PyDict>, h: &ReturnHit) -> PyResult<()> {
+    let (b, qdd) = (&h.branch, &h.branch.leg.qdd_hit);
+    d.set_item("pose", pose_to_numpy(py, &h.hit.pose))?;
+    d.set_item("twist", to_numpy(py, &[6], &h.hit.twist))?;
+    d.set_item("t_hit", h.hit.t)?;
+    d.set_item("q_hit", to_numpy(py, &[b.q.len()], &b.q))?;
+    d.set_item("qd_hit", to_numpy(py, &[b.qd.len()], &b.qd))?;
+    d.set_item("qdd_hit", to_numpy(py, &[qdd.len()], qdd))?;
     d.set_item("ball", to_numpy(py, &[10], &state_vec(&h.ball)))?;
     d.set_item("v_out", to_numpy(py, &[3], h.v_out.as_slice()))?;
     d.set_item("normal", to_numpy(py, &[3], h.racket.normal.as_slice()))?;
     d.set_item("racket_velocity", to_numpy(py, &[3], h.racket.velocity.as_slice()))?;
     d.set_item("spin_out", to_numpy(py, &[3], h.racket.spin_out.as_slice()))?;
-    d.set_item("margin", h.margin)?;
+    d.set_item("margin", b.margin)?;
     d.set_item("landing", to_numpy(py, &[3], h.landing.as_slice()))?;
     Ok(())
 }
@@ -275,7 +232,7 @@ fn ball_plan_correct<'py>(
     s.validate("state").py()?;
     s_new.validate("state_new").py()?;
     let tg = vector(target, "target", 2)?;
-    let planner = HitPlanner::new(ttkin::robots::gantry6(), flight(model)?).py()?;
+    let planner = ReturnPlanner::new(ttkin::robots::gantry6(), flight(model)?).py()?;
     let first = py.detach(|| planner.plan(&s, now, [tg[0], tg[1]])).py()?;
     let d = PyDict::new(py);
     let fd = PyDict::new(py);
@@ -284,10 +241,7 @@ fn ball_plan_correct<'py>(
         hit_items(py, &fd, h)?;
     }
     d.set_item("first", fd)?;
-    let Some(h) = first
-        .hit
-        .filter(|_| first.status == ttkin::ball::hitplan::HitStatus::Ok)
-    else {
+    let Some(h) = first.hit.filter(|_| first.status == ReturnStatus::Ok) else {
         return Err(TtmanipError::new_err(format!(
             "ball_plan_correct: the first plan has no feasible hit (status {}): nothing to correct",
             first.status.name()
@@ -305,10 +259,13 @@ fn ball_plan_correct<'py>(
     Ok(d)
 }
 
-/// Plays balls `start`..`start + n` of a simulated rally (see `ttkin::ball::rally`) in parallel.
+/// Plays balls `start`..`start + n` of a simulated rally (`ttkin::ball::rally::Rally::play_range`)
+/// in parallel; the settings not given are `RallyConfig::default()`'s.
 #[ttkin_py_guard::guarded]
 #[pyfunction]
-#[pyo3(signature = (n, seed = 0, start = 0, target = (0.9, 0.0), max_spin_rps = 40.0, paths = 5, world = false, incoming = None, drives = false))]
+#[pyo3(signature = (n, seed = RallyConfig::default().seed as i128, start = 0, target = (RallyConfig::default().target[0], RallyConfig::default().target[1]),
+    max_spin_rps = RallyConfig::default().max_spin_rps, paths = RallyConfig::default().paths as i128,
+    world = RallyConfig::default().world.is_some(), incoming = None, drives = false))]
 #[allow(clippy::too_many_arguments)]
 fn ball_rally<'py>(
     py: Python<'py>,
@@ -323,122 +280,51 @@ fn ball_rally<'py>(
     drives: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let n: usize = args::sample_count(n, "n")?;
-    let seed: u64 = args::unsigned(seed, "seed")?;
     let start: u64 = args::unsigned(start, "start")?;
-    let paths: usize = args::unsigned(paths, "paths")?;
-    if start.checked_add(n as u64).is_none_or(|end| end > MAX_RALLY_BALLS) {
-        return Err(TtmanipError::new_err(format!(
-            "n: balls {start}..{start} + {n} go past the {MAX_RALLY_BALLS} balls a rally may have"
-        )));
-    }
-    let planner = HitPlanner::new(ttkin::robots::gantry6(), Flight::default()).py()?;
-    planner.check_target([target.0, target.1]).py()?;
-    if !(max_spin_rps >= 0.0 && max_spin_rps.is_finite()) {
-        return Err(ttkin::Error::invalid(
-            "max_spin_rps",
-            format!("must be finite and ≥ 0, got {max_spin_rps}"),
-        ))
-        .py();
-    }
-    let truth = Flight {
-        step: 0.001,
-        ..Flight::default()
-    };
-    let cfg = RallyConfig {
+    let config = RallyConfig {
         target: [target.0, target.1],
         max_spin_rps,
-        seed,
-        paths,
+        seed: args::unsigned(seed, "seed")?,
+        paths: args::unsigned(paths, "paths")?,
         world: world.then(rally::WorldSpread::measured),
         ..RallyConfig::default()
     };
-    let given: Option<Vec<BallState>> = match incoming {
-        Some(a) => {
-            let a = rows_array(a, "incoming", "N", &[10])?;
-            let states: Vec<BallState> = a.data().chunks_exact(10).map(state_from).collect();
-            if (start as usize).saturating_add(n) > states.len() {
-                return Err(TtmanipError::new_err(format!(
-                    "incoming: {} states, balls {start}..{} asked",
-                    states.len(),
-                    start as usize + n
-                )));
-            }
-            for (i, s) in states.iter().enumerate() {
-                s.validate(&format!("incoming[{i}]")).py()?;
-            }
-            Some(states)
-        }
-        None => None,
-    };
-    let region = ReachRegion::new(
-        &planner.chain,
-        planner.placement,
-        planner.ready.clone(),
-        truth.model.radius,
-    )
-    .py()?;
-    let executor = if drives {
-        Some(ttcan::coupled::execute::DriveExecutor::new(&planner.chain, ttcan::CoupledOptions::default(), 1e-3).py()?)
-    } else {
-        None
-    };
+    let rally = Rally::new(config).py()?;
+    let given = incoming
+        .map(|a| rows_array(a, "incoming", "N", &[10]).map(|a| BallState::from_rows(a.data())))
+        .transpose()?;
+    let executor = drives
+        .then(|| ttcan::coupled::execute::DriveExecutor::with_defaults(rally.planner.chain()))
+        .transpose()
+        .py()?;
     // Ctrl-C stops the rally within one ball per thread (issue 29).
-    let out: Vec<rally::BallOutcome> = crate::interrupt::detach_interruptible(py, |cancel| {
-        (start..start + n as u64)
-            .into_par_iter()
-            .filter_map(|i| {
-                let s = given.as_ref().map(|g| &g[i as usize]);
-                let ex = executor.as_ref().map(|e| e as &dyn rally::Executor);
-                (!crate::interrupt::cancelled(cancel))
-                    .then(|| rally::play_with(&planner, &region, &truth, &cfg, i, s, ex))
-            })
-            .collect()
-    })?;
+    let out = crate::interrupt::detach_interruptible(py, |cancel| {
+        let ex = executor.as_ref().map(|e| e as &dyn rally::Executor);
+        rally.play_range(start, n, given.as_deref(), ex, &|| crate::interrupt::cancelled(cancel))
+    })?
+    .py()?;
+    let o = Outcomes::new(&out);
     let d = PyDict::new(py);
-    let col = |f: &dyn Fn(&rally::BallOutcome) -> f64| out.iter().map(f).collect::<Vec<f64>>();
-    d.set_item(
-        "incoming",
-        to_numpy(
-            py,
-            &[n, 10],
-            &out.iter().flat_map(|o| state_vec(&o.incoming)).collect::<Vec<_>>(),
-        ),
-    )?;
-    d.set_item("in_reach", out.iter().map(|o| o.in_reach).collect::<Vec<_>>())?;
-    d.set_item("reach", out.iter().map(|o| o.reach).collect::<Vec<_>>())?;
+    d.set_item("incoming", to_numpy(py, &[o.n, 10], &o.incoming))?;
+    d.set_item("in_reach", o.in_reach)?;
+    d.set_item("reach", o.reach)?;
     d.set_item("reach_names", ttkin::ball::reach::Reachability::NAMES.to_vec())?;
-    d.set_item("returned", out.iter().map(|o| o.returned).collect::<Vec<_>>())?;
-    d.set_item("contact", out.iter().map(|o| o.contact).collect::<Vec<_>>())?;
-    d.set_item("status", out.iter().map(|o| o.status.clone()).collect::<Vec<_>>())?;
-    d.set_item("racket_error", to_numpy(py, &[n], &col(&|o| o.racket_error)))?;
-    d.set_item("plan_time_us", to_numpy(py, &[n], &col(&|o| o.plan_time_us)))?;
-    d.set_item("plan_wall_time_us", to_numpy(py, &[n], &col(&|o| o.plan_wall_time_us)))?;
-    d.set_item(
-        "correction_time_us",
-        to_numpy(py, &[n], &col(&|o| o.correction_time_us)),
-    )?;
-    d.set_item("landing_error", to_numpy(py, &[n], &col(&|o| o.landing_error)))?;
-    d.set_item("velocity_error", to_numpy(py, &[n], &col(&|o| o.velocity_error)))?;
-    d.set_item(
-        "landing",
-        to_numpy(py, &[n, 3], &out.iter().flat_map(|o| o.landing).collect::<Vec<_>>()),
-    )?;
-    let paths_list = PyList::empty(py);
-    for o in out.iter().filter(|o| !o.path.is_empty()) {
-        let pd = PyDict::new(py);
-        let flat: Vec<f64> = o.path.iter().flatten().copied().collect();
-        pd.set_item("ball", to_numpy(py, &[o.path.len(), 3], &flat))?;
-        let flat: Vec<f64> = o.racket_path.iter().flatten().copied().collect();
-        pd.set_item("racket", to_numpy(py, &[o.racket_path.len(), 3], &flat))?;
-        pd.set_item("status", o.status.clone())?;
-        paths_list.append(pd)?;
-    }
-    d.set_item("paths", paths_list)?;
+    d.set_item("returned", o.returned)?;
+    d.set_item("contact", o.contact)?;
+    d.set_item("status", o.status)?;
+    d.set_item("racket_error", to_numpy(py, &[o.n], &o.racket_error))?;
+    d.set_item("plan_time_us", to_numpy(py, &[o.n], &o.plan_time_us))?;
+    d.set_item("plan_wall_time_us", to_numpy(py, &[o.n], &o.plan_wall_time_us))?;
+    d.set_item("correction_time_us", to_numpy(py, &[o.n], &o.correction_time_us))?;
+    d.set_item("landing_error", to_numpy(py, &[o.n], &o.landing_error))?;
+    d.set_item("velocity_error", to_numpy(py, &[o.n], &o.velocity_error))?;
+    d.set_item("landing", to_numpy(py, &[o.n, 3], &o.landing))?;
+    d.set_item("paths", serde_to_python(py, &o.paths)?)?;
     Ok(d)
 }
 
-/// The ball after a racket impact (`ttkin::ball::impact::Racket::hit` with the default racket):
-/// `state` (10,) just before, the racket's unit face `normal` (3,) and the face point's
+/// The ball after a racket impact (`ttkin::ball::impact::Racket::hit_state` with the default
+/// racket): `state` (10,) just before, the racket's unit face `normal` (3,) and the face point's
 /// `velocity` (3,, m/s, world); returns the state (10,) just after.
 #[ttkin_py_guard::guarded]
 #[pyfunction]
@@ -451,25 +337,12 @@ fn ball_racket_hit<'py>(
     model: &str,
 ) -> PyResult<Bound<'py, PyAny>> {
     let s = state_arg(state, "state")?;
-    s.validate("state").py()?;
-    let n = vector(normal, "normal", 3)?;
-    let rv = vector(velocity, "velocity", 3)?;
-    let n = nalgebra::Vector3::new(n[0], n[1], n[2]);
-    let rv = nalgebra::Vector3::new(rv[0], rv[1], rv[2]);
-    let unit = (n.norm() - 1.0).abs() < 1e-6;
-    if !unit || !rv.iter().all(|x| x.is_finite()) {
-        return Err(ttkin::Error::invalid(
-            "normal, velocity",
-            format!(
-                "the normal must be a unit vector (norm {}) and the velocity finite",
-                n.norm()
-            ),
-        ))
-        .py();
-    }
+    let n = nalgebra::Vector3::from(vec3(normal, "normal")?);
+    let rv = nalgebra::Vector3::from(vec3(velocity, "velocity")?);
     let f = flight(model)?;
-    let (v, w) = ttkin::ball::impact::Racket::default().hit(&f.model, &s.v, &s.w, &n, &rv);
-    let out = BallState { v, w, ..s };
+    let out = ttkin::ball::impact::Racket::default()
+        .hit_state(&f.model, &s, &n, &rv)
+        .py()?;
     Ok(to_numpy(py, &[10], &state_vec(&out)).into_any())
 }
 
@@ -504,57 +377,27 @@ fn ball_update<'py>(
     let d = PyDict::new(py);
     d.set_item("state", to_numpy(py, &[10], &state_vec(&up.state)))?;
     d.set_item("at_prior", to_numpy(py, &[10], &state_vec(&up.at_prior)))?;
-    let cov: Vec<f64> = up.covariance.iter().flatten().copied().collect();
-    d.set_item("covariance", to_numpy(py, &[9, 9], &cov))?;
+    d.set_item("covariance", to_numpy(py, &[9, 9], up.covariance.as_flattened()))?;
     d.set_item("used", up.used)?;
     d.set_item("outliers", up.outliers)?;
     d.set_item("bounced", up.bounced)?;
     Ok(d)
 }
 
-/// Most balls one rally may play (about a minute of work on two cores); `ttmanip.rally`
-/// checks its `n` against it before the first chunk.
-pub const MAX_RALLY_BALLS: u64 = 1_000_000;
-
 /// The rally's camera of `ttkin::ball::rally::Camera::default()`: rate (Hz), latency (s), noise
 /// (m, σ per axis), outlier_rate, outlier_size (m), start and window (s).
 #[ttkin_py_guard::guarded]
 #[pyfunction]
-fn ball_camera(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
-    let c = rally::Camera::default();
-    let d = PyDict::new(py);
-    for (k, v) in [
-        ("rate", c.rate),
-        ("latency", c.latency),
-        ("noise", c.noise),
-        ("outlier_rate", c.outlier_rate),
-        ("outlier_size", c.outlier_size),
-        ("start", c.start),
-        ("window", c.window),
-    ] {
-        d.set_item(k, v)?;
-    }
-    Ok(d)
+fn ball_camera(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
+    serde_to_python(py, &rally::Camera::default())
 }
 
 /// The ITTF table of `ttkin::ball::model::Table::default()` (m): length, width, height (surface
 /// above the floor), thickness, net_height, net_overhang.
 #[ttkin_py_guard::guarded]
 #[pyfunction]
-fn ball_table(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
-    let t = Table::default();
-    let d = PyDict::new(py);
-    for (k, v) in [
-        ("length", t.length),
-        ("width", t.width),
-        ("height", t.height),
-        ("thickness", t.thickness),
-        ("net_height", t.net_height),
-        ("net_overhang", t.net_overhang),
-    ] {
-        d.set_item(k, v)?;
-    }
-    Ok(d)
+fn ball_table(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
+    serde_to_python(py, &Table::default())
 }
 
 /// (4, 4) base frame of the rally's robot in the world (table) frame, m
@@ -563,12 +406,6 @@ fn ball_table(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
 #[pyfunction]
 fn ball_placement(py: Python<'_>) -> Bound<'_, PyAny> {
     pose_to_numpy(py, &Placement::default().world_from_base()).into_any()
-}
-
-/// (N, 3) rows of `obj` (named `what` in errors) as triples.
-fn rows3(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<[f64; 3]>> {
-    let a = rows_array(obj, what, "N", &[3])?;
-    Ok(a.data().chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
 }
 
 /// The ball-model calibration experiment of `ttkin::ball::fit::experiment` on recorded flights:
@@ -692,7 +529,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ball_racket_hit, m)?)?;
     m.add_function(wrap_pyfunction!(ball_update, m)?)?;
     m.add_function(wrap_pyfunction!(ball_plan_correct, m)?)?;
-    m.add("MAX_RALLY_BALLS", MAX_RALLY_BALLS)?;
+    m.add("MAX_RALLY_BALLS", rally::MAX_BALLS)?;
     m.add_function(wrap_pyfunction!(ball_table, m)?)?;
     m.add_function(wrap_pyfunction!(ball_camera, m)?)?;
     m.add_function(wrap_pyfunction!(ball_placement, m)?)?;

@@ -457,3 +457,14 @@ pub fn real_array<'py>(py: Python<'py>, obj: &Bound<'py, PyAny>, what: &str) -> 
     let a = f64_array(obj, what)?;
     Ok(to_numpy(py, a.shape(), a.data()))
 }
+
+/// The serde form of `value` as plain Python objects (dicts, lists, floats, strings): the one
+/// converter of records (`pythonize`).
+pub fn serde_to_python<'py, T: serde::Serialize + ?Sized>(py: Python<'py>, value: &T) -> PyResult<Bound<'py, PyAny>> {
+    pythonize::pythonize(py, value).map_err(|e| crate::errors::TtmanipError::new_err(e.to_string()))
+}
+
+/// Consecutive triples of `data` (its length a multiple of 3, as `rows_array(.., &[3])` gives).
+pub fn triples(data: &[f64]) -> Vec<[f64; 3]> {
+    data.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
+}

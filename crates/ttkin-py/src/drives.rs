@@ -117,11 +117,8 @@ impl DriveSim {
         let setpoint_period = 1.0 / args::positive("setpoint_rate", setpoint_rate)?;
         let noise = noise.map(|a| args::non_negative("noise", a)).transpose()?;
         let options = CoupledOptions {
-            gravity: if gravity {
-                ttkin::dynamics::EARTH_GRAVITY
-            } else {
-                [0.0; 3]
-            },
+            // On: the robot's own gravity (`Chain::gravity`, the core's default).
+            gravity: (!gravity).then_some([0.0; 3]),
             ideal_current,
             seed: args::unsigned(seed, "seed")?,
             setpoint_period: Some(setpoint_period),

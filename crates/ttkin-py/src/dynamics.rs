@@ -10,7 +10,6 @@ use std::sync::Arc;
 
 use nalgebra::Vector3;
 use pyo3::prelude::*;
-use ttkin::dynamics::EARTH_GRAVITY;
 use ttkin::{Dynamics, DynamicsData, Wrench};
 
 use crate::convert::{
@@ -87,10 +86,11 @@ fn shape_of(batch: Option<usize>, n: usize) -> String {
     }
 }
 
-/// Gravity argument: None → (0, 0, −9.81) m/s², else a 3-vector in the base frame.
-pub(crate) fn gravity_arg(g: Option<&Any<'_>>) -> PyResult<[f64; 3]> {
+/// Gravity argument: None → the robot's own (`Chain::gravity`, base frame), else a 3-vector in
+/// the base frame.
+pub(crate) fn gravity_arg(g: Option<&Any<'_>>, chain: &ttkin::Chain) -> PyResult<[f64; 3]> {
     match g {
-        None => Ok(EARTH_GRAVITY),
+        None => Ok(chain.gravity()),
         Some(g) => {
             let v = vector(g, "gravity", 3)?;
             Ok([v[0], v[1], v[2]])
@@ -152,7 +152,8 @@ array_getters!(PyRobot, |r| {
 inverse_dynamics_methods! {
     /// Inverse dynamics (recursive Newton–Euler): joint torques (N·m) / forces (N) for q, qd, qdd
     /// of shape (n,) or (N, n); rigid bodies plus rotor armature, no friction (Pinocchio's rnea).
-    /// `gravity` is a base-frame vector (default (0, 0, −9.81) m/s²); `wrench` [fx, fy, fz, mx, my,
+    /// `gravity` is a base-frame vector (default the robot's, `Robot.gravity_vector`: (0, 0, −9.81) m/s²
+    /// unless its file says otherwise); `wrench` [fx, fy, fz, mx, my,
     /// mz] (N, N·m) is applied to the tool by the environment, tool-frame axes, moment about the
     /// tool point.
     rnea => friction: false;
@@ -180,7 +181,7 @@ impl PyRobot {
     /// Gravity torques g(q) (N·m or N) that hold the robot still: (n,) or (N, n).
     #[pyo3(signature = (q, gravity=None))]
     fn gravity<'py>(&self, py: Python<'py>, q: &Any<'py>, gravity: Option<&Any<'py>>) -> PyResult<Array<'py>> {
-        let g = gravity_arg(gravity)?;
+        let g = gravity_arg(gravity, &self.chain)?;
         let (a, batch) = self.configs(q, "q")?;
         let n = self.chain.dof();
         let q = a.data();
@@ -215,7 +216,7 @@ impl PyRobot {
         qd: &Any<'py>,
         gravity: Option<&Any<'py>>,
     ) -> PyResult<Array<'py>> {
-        let g = gravity_arg(gravity)?;
+        let g = gravity_arg(gravity, &self.chain)?;
         let (arrays, batch) = self.states([(q, "q"), (qd, "qd")])?;
         let (q, qd, n) = (arrays[0].data(), arrays[1].data(), self.chain.dof());
         self.one_or_many(
@@ -239,7 +240,7 @@ impl PyRobot {
         gravity: Option<&Any<'py>>,
         wrench: Option<&Any<'py>>,
     ) -> PyResult<Array<'py>> {
-        let g = gravity_arg(gravity)?;
+        let g = gravity_arg(gravity, &self.chain)?;
         let w = wrench_arg(wrench)?;
         let (arrays, batch) = self.states([(q, "q"), (qd, "qd"), (tau, "tau")])?;
         let n = self.chain.dof();
@@ -273,7 +274,7 @@ impl PyRobot {
     /// Potential energy −Σ m_i g·c_i (J) at one configuration (n,).
     #[pyo3(signature = (q, gravity=None))]
     fn potential_energy(&self, q: &Any<'_>, gravity: Option<&Any<'_>>) -> PyResult<f64> {
-        let g = gravity_arg(gravity)?;
+        let g = gravity_arg(gravity, &self.chain)?;
         let q = vector(q, "q", self.chain.dof())?;
         crate::convert::finite_scalar(self.dynamics()?.potential_energy(&q, &g).py()?)
     }
@@ -294,7 +295,7 @@ impl PyRobot {
         friction: bool,
     ) -> PyResult<(Array<'py>, Array<'py>)> {
         let n = self.chain.dof();
-        let g = gravity_arg(gravity)?;
+        let g = gravity_arg(gravity, &self.chain)?;
         let (q0, qd0) = (vector(q0, "q0", n)?, vector(qd0, "qd0", n)?);
         let (t, batch) = self.configs(tau, "tau")?;
         if batch.is_none() {
@@ -397,7 +398,7 @@ impl PyRobot {
         wrench: Option<&Any<'py>>,
         friction: bool,
     ) -> PyResult<Array<'py>> {
-        let g = gravity_arg(gravity)?;
+        let g = gravity_arg(gravity, &self.chain)?;
         let w = wrench_arg(wrench)?;
         let (arrays, batch) = self.states([(q, "q"), (qd, "qd"), (qdd, "qdd")])?;
         let n = self.chain.dof();

@@ -117,7 +117,7 @@ impl PyHitPlan {
         let s = self.stroke()?.sample_rate(rate).py()?;
         let dy = Dynamics::new(self.planner.chain()).py()?;
         let profile = py
-            .detach(|| dy.torque_profile(&s.q, &s.qd, &s.qdd, &hit::GRAVITY, None))
+            .detach(|| dy.torque_profile(&s.q, &s.qd, &s.qdd, &self.planner.gravity(), None))
             .py()?;
         Ok(to_numpy(py, &[s.t.len(), s.dof], &profile.joint).into_any())
     }

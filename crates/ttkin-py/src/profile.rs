@@ -113,7 +113,7 @@ impl PyRobot {
         gravity: Option<&Any<'py>>,
         wrench: Option<&Any<'py>>,
     ) -> PyResult<PyTorqueProfile> {
-        let g = gravity_arg(gravity)?;
+        let g = gravity_arg(gravity, &self.chain)?;
         let w = wrench_arg(wrench)?;
         let [q, qd, qdd] = trajectory_arrays(trajectory, qd, qdd)?;
         let (arrays, _) = self.states([(&q, "q"), (&qd, "qd"), (&qdd, "qdd")])?;

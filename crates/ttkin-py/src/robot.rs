@@ -212,6 +212,14 @@ impl PyRobot {
         to_numpy(py, &[self.chain.dof()], &self.chain.ready())
     }
 
+    /// (3,) gravity in the base frame (m/s²): the default of every dynamics call on this robot
+    /// (robot file `gravity`; (0, 0, −9.81) unless the file says otherwise, (−9.81, 0, 0) for
+    /// mobile8, whose base frame has x up).
+    #[getter]
+    fn gravity_vector<'py>(&self, py: Python<'py>) -> Array<'py> {
+        to_numpy(py, &[3], &self.chain.gravity())
+    }
+
     /// Base frame → frame 0 (4×4).
     #[getter]
     fn base<'py>(&self, py: Python<'py>) -> Array<'py> {

@@ -6,7 +6,7 @@ use nalgebra::Vector3;
 use std::hint::black_box;
 use ttkin::ball::estimate::estimate;
 use ttkin::ball::flight::{BallState, Flight, Plane};
-use ttkin::ball::hitplan::HitPlanner;
+use ttkin::ball::hitplan::ReturnPlanner;
 use ttkin::ball::predict::crossing;
 #[path = "../tests/support/ball_windows.rs"]
 mod ball_windows;
@@ -34,7 +34,7 @@ fn ball(c: &mut Criterion) {
             black_box(crossing(&flight, &states[k], &plane, 2.0).unwrap())
         })
     });
-    let planner = HitPlanner::new(ttkin::robots::gantry6(), Flight::default()).unwrap();
+    let planner = ReturnPlanner::new(ttkin::robots::gantry6(), Flight::default()).unwrap();
     c.bench_function("ball_plan_per_ball", |b| {
         b.iter(|| {
             k = (k + 1) % obs.len();

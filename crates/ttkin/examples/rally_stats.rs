@@ -12,10 +12,10 @@
 use nalgebra::Vector3;
 use rayon::prelude::*;
 use ttkin::ball::flight::{BallState, Flight};
-use ttkin::ball::hitplan::{shoot, HitPlanner};
-use ttkin::ball::leg::hit_leg;
+use ttkin::ball::hitplan::{shoot, ReturnPlanner};
 use ttkin::ball::rally::{self, RallyConfig};
 use ttkin::ball::reach::{min_joint_time, walk_after_bounce, Reach, ReachRegion};
+use ttkin::hit::leg::hit_leg;
 use ttkin::ik::{joint_velocity, Analytic, LimitFilter};
 use ttkin::traj::JointState;
 
@@ -36,7 +36,7 @@ const STAGES: [&str; 8] = [
 ];
 
 /// Deepest stage (index into `STAGES`) any candidate of `ball` planned at `now` reaches.
-fn deepest(pl: &HitPlanner, ik: &Analytic, ball: &BallState, now: f64, target: [f64; 2]) -> usize {
+fn deepest(pl: &ReturnPlanner, ik: &Analytic, ball: &BallState, now: f64, target: [f64; 2]) -> usize {
     let m = pl.search_margin;
     let reach = Reach {
         lo: pl.reach.lo - Vector3::repeat(m),
@@ -86,7 +86,7 @@ fn deepest(pl: &HitPlanner, ik: &Analytic, ball: &BallState, now: f64, target: [
                 };
                 for q in sols.iter() {
                     best = best.max(3);
-                    let Ok(jv) = joint_velocity(&pl.chain, q, &twist) else {
+                    let Ok(jv) = joint_velocity(pl.chain(), q, &twist) else {
                         continue;
                     };
                     if jv.singular {
@@ -118,7 +118,7 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     let n: usize = args.get(1).map_or(10_000, |a| a.parse().expect("N"));
     let seed: u64 = args.get(2).map_or(0, |a| a.parse().expect("SEED"));
-    let mut pl = HitPlanner::new(ttkin::robots::gantry6(), Flight::default()).expect("gantry6");
+    let mut pl = ReturnPlanner::new(ttkin::robots::gantry6(), Flight::default()).expect("gantry6");
     // Experiments: ROLLS="0,30,-30" (degrees), RETURN_TIMES="0.8,0.55,1.05" (s), CONTACT_OFFSET=0.03 (m), CANDIDATES=3, GOOD_MARGIN=0.25,
     // READY=-1.85,0,0.255 (racket centre facing forward, m, world; also the region's).
     if let Ok(r) = std::env::var("ROLLS") {
@@ -133,7 +133,7 @@ fn main() {
             .map(|d| d.parse().expect("READY x,y,z (m, world)"))
             .collect();
         let pose = pl.base_pose(&Vector3::new(c[0], c[1], c[2]), &Vector3::x());
-        let ik = Analytic::for_chain(&pl.chain).expect("analytic IK");
+        let ik = Analytic::for_chain(pl.chain()).expect("analytic IK");
         pl.ready = ik.nearest(&pose, &pl.ready, LimitFilter::Enforce).expect("ready IK");
     }
     if let Ok(r) = std::env::var("CANDIDATES") {
@@ -163,7 +163,7 @@ fn main() {
         correction_delay: std::env::var("CORRECT").map_or(cfg.correction_delay, |r| r.parse().expect("CORRECT (s)")),
         ..cfg
     };
-    let region = ReachRegion::new(&pl.chain, pl.placement, pl.ready.clone(), truth.model.radius).expect("region");
+    let region = ReachRegion::new(pl.chain(), pl.placement, pl.ready.clone(), truth.model.radius).expect("region");
     let clock = std::time::Instant::now();
     let out = rally::rally(&pl, &region, &truth, &cfg, n);
     let wall = clock.elapsed().as_secs_f64();
@@ -287,7 +287,7 @@ fn main() {
         }
     }
     println!("infeasible, planned from the true state: {from_truth:?}");
-    let ik = Analytic::for_chain(&pl.chain).expect("analytic IK");
+    let ik = Analytic::for_chain(pl.chain()).expect("analytic IK");
     let mut stages = [0usize; STAGES.len()];
     let mut excess = Vec::new();
     for o in in_reach.iter().filter(|o| o.status == "infeasible") {

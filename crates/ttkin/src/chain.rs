@@ -39,6 +39,14 @@ pub struct Chain {
     racket: IsometryMatrix3<f64>,
     /// Ready (rest) configuration (m, rad), within the limits; `None`: [`Chain::mid_range`].
     ready: Option<Vec<f64>>,
+    /// Gravity in the base frame (m/s²): [`crate::dynamics::EARTH_GRAVITY`] (base z up) unless
+    /// the robot's base frame is mounted otherwise.
+    #[serde(default = "earth_gravity")]
+    gravity: [f64; 3],
+}
+
+fn earth_gravity() -> [f64; 3] {
+    crate::dynamics::EARTH_GRAVITY
 }
 
 impl Chain {
@@ -88,6 +96,7 @@ impl Chain {
             kinds,
             racket: IsometryMatrix3::identity(),
             ready: None,
+            gravity: crate::dynamics::EARTH_GRAVITY,
         })
     }
 
@@ -99,7 +108,9 @@ impl Chain {
         base: IsometryMatrix3<f64>,
         tool: IsometryMatrix3<f64>,
     ) -> Result<Self> {
-        let c = Chain::new(self.name.clone(), joints, base, tool)?.with_racket(self.racket)?;
+        let c = Chain::new(self.name.clone(), joints, base, tool)?
+            .with_racket(self.racket)?
+            .with_gravity(self.gravity)?;
         match &self.ready {
             Some(r) => c.with_ready(r),
             None => Ok(c),
@@ -147,6 +158,22 @@ impl Chain {
             ready: Some(q.to_vec()),
             ..self.clone()
         })
+    }
+
+    /// The same chain under the gravity `g` (m/s², base frame): a fact of how the robot's base is
+    /// mounted, the default of every dynamics computation on it. Refused unless finite.
+    pub fn with_gravity(&self, g: [f64; 3]) -> Result<Self> {
+        crate::error::check_finite(&format!("gravity of chain '{}'", self.name), &g)?;
+        Ok(Chain {
+            gravity: g,
+            ..self.clone()
+        })
+    }
+
+    /// Gravity in the base frame (m/s²): (0, 0, −9.81) unless the robot says otherwise (mobile8's
+    /// base frame has x up, [`crate::robots::MOBILE8_GRAVITY`]; robot-file key `gravity`).
+    pub fn gravity(&self) -> [f64; 3] {
+        self.gravity
     }
 
     /// Racket frame in the tool frame (m): where this robot carries its racket.

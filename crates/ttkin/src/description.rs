@@ -52,6 +52,9 @@ struct RobotFile {
     racket: Option<PoseEntry>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     ready: Option<Vec<f64>>,
+    /// Gravity in the base frame (m/s², never scaled by `units`); (0, 0, −9.81) when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    gravity: Option<[f64; 3]>,
     joint: Vec<JointEntry>,
 }
 
@@ -263,6 +266,9 @@ pub fn from_toml_str(text: &str, origin: &str) -> Result<Chain> {
             .collect();
         chain = chain.with_ready(&si).map_err(|e| file_err(format!("ready: {e}")))?;
     }
+    if let Some(g) = f.gravity {
+        chain = chain.with_gravity(g).map_err(|e| file_err(format!("gravity: {e}")))?;
+    }
     Ok(chain)
 }
 
@@ -323,6 +329,7 @@ pub fn to_toml(chain: &Chain) -> String {
         tool: pose_entry(chain.tool()),
         racket: pose_entry(chain.racket()),
         ready: chain.has_ready().then(|| chain.ready()),
+        gravity: (chain.gravity() != crate::dynamics::EARTH_GRAVITY).then(|| chain.gravity()),
         joint,
     };
     toml::to_string(&f).expect("a robot file of finite values always serialises")

@@ -117,13 +117,15 @@ pub fn mobile8() -> Chain {
     .and_then(mobile8_dynamics)
     .and_then(|c| c.with_racket(crate::hit::Racket::seed000().in_tool))
     .and_then(|c| c.with_ready(&mobile8_start()))
+    .and_then(|c| c.with_gravity(MOBILE8_GRAVITY))
     .expect("built-in mobile8 is valid")
 }
 
 /// Gravity for mobile8 in its base frame (Table 1's frame 0), m/s². Joint 1 moves the base along
 /// z0, horizontally ("back and forth on fixed wheels"), so z0 cannot be vertical; joint 2, the
 /// waist, turns about x0 and sits 68 mm along its own axis above the base: x0 is up. The seed
-/// does not say so explicitly: this is our reading, used for mobile8's torque profiles.
+/// does not say so explicitly: this is our reading, mobile8's [`Chain::gravity`] (robot-file key
+/// `gravity`), so every default (RNEA, hit planner, coupled simulation) uses it.
 pub const MOBILE8_GRAVITY: [f64; 3] = [-9.81, 0.0, 0.0];
 
 /// The start configuration of seed 000's experiment: [0.26 m, 200°, 90°, 80°, 250°, 105°, 180°, 135°].

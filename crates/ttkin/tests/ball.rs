@@ -5,12 +5,12 @@ use proptest::prelude::*;
 use ttkin::ball::contact::{energy, impulse};
 use ttkin::ball::estimate::{estimate, EstimateError, EstimateOptions, Segment};
 use ttkin::ball::flight::{BallState, EventKind, Flight, Plane};
-use ttkin::ball::hitplan::{HitPlanner, HitStatus};
+use ttkin::ball::hitplan::{ReturnPlanner, ReturnStatus};
 use ttkin::ball::impact::Racket;
 use ttkin::ball::model::BallModel;
 use ttkin::ball::predict::{crossing, predict, CrossingOutcome};
-use ttkin::ball::rally::{self, RallyConfig};
-use ttkin::ball::reach::{walk_after_bounce, walk_after_bounce_clip, ReachRegion};
+use ttkin::ball::rally::{self, Rally, RallyConfig};
+use ttkin::ball::reach::{walk_after_bounce, walk_after_bounce_clip};
 use ttkin::hit::StrokeProfile;
 use ttkin::traj::duration::quintic_limit_ratio;
 use ttkin::traj::JointState;
@@ -410,8 +410,8 @@ fn prediction_rejects_bad_times_and_states() {
     assert!(predict(&f, &bad, &[0.1]).is_err());
 }
 
-fn planner() -> HitPlanner {
-    HitPlanner::new(ttkin::robots::gantry6(), Flight::default()).unwrap()
+fn planner() -> ReturnPlanner {
+    ReturnPlanner::new(ttkin::robots::gantry6(), Flight::default()).unwrap()
 }
 
 #[test]
@@ -445,9 +445,9 @@ fn executed_hit_returns_the_ball_to_its_target() {
             at_target += 1;
         }
         // The robot's racket is there at the hit: FK of q_hit is the planned pose.
-        let fk = pl.chain.fk(&hit.q_hit).unwrap();
-        assert!((fk.translation.vector - hit.pose.translation.vector).norm() < 1e-9);
-        assert!(hit.margin > 0.0 && hit.t_hit > 0.0);
+        let fk = pl.chain().fk(&hit.branch.q).unwrap();
+        assert!((fk.translation.vector - hit.hit.pose.translation.vector).norm() < 1e-9);
+        assert!(hit.branch.margin > 0.0 && hit.hit.t > 0.0);
     }
     assert!(planned >= 15, "only {planned} of 30 planned");
     assert!(
@@ -465,11 +465,14 @@ fn target_off_the_table_is_an_error_and_unreachable_balls_a_status() {
     }
     // Served into the net: no bounce on the robot's half.
     let net = BallState::new(0.0, [0.8, 0.0, 0.05], [-3.0, 0.0, 0.0], [0.0; 3]);
-    assert_eq!(pl.plan(&net, 0.0, [0.9, 0.0]).unwrap().status, HitStatus::NoBounce);
+    assert_eq!(pl.plan(&net, 0.0, [0.9, 0.0]).unwrap().status, ReturnStatus::NoBounce);
     // Flying off to the side, far from the reach box.
     let wide = BallState::new(0.0, [1.6, 0.0, 0.3], [-4.0, 2.2, 1.0], [0.0; 3]);
     let st = pl.plan(&wide, 0.0, [0.9, 0.0]).unwrap().status;
-    assert!(matches!(st, HitStatus::NoBounce | HitStatus::OutOfReach), "{st:?}");
+    assert!(
+        matches!(st, ReturnStatus::NoBounce | ReturnStatus::OutOfReach),
+        "{st:?}"
+    );
 }
 
 /// Smallest return rate of the balls in reach asserted on the 120-ball sample (docs/ball.md): it
@@ -479,17 +482,15 @@ const RALLY_RATE: f64 = 0.93;
 
 #[test]
 fn rally_returns_most_balls_in_reach() {
-    let pl = planner();
-    let truth = Flight {
-        step: 0.001,
-        ..Flight::default()
-    };
-    let cfg = RallyConfig {
-        seed: 5,
-        ..RallyConfig::default()
-    };
-    let region = ReachRegion::new(&pl.chain, pl.placement, pl.ready.clone(), truth.model.radius).unwrap();
-    let out = rally::rally(&pl, &region, &truth, &cfg, 120);
+    let r = Rally::with_planner(
+        planner(),
+        RallyConfig {
+            seed: 5,
+            ..RallyConfig::default()
+        },
+    )
+    .unwrap();
+    let out = r.play_range(0, 120, None, None, &|| false).unwrap();
     let in_reach = out.iter().filter(|o| o.in_reach).count();
     let returned = out.iter().filter(|o| o.in_reach && o.returned).count();
     let mut statuses: Vec<String> = out
@@ -520,36 +521,36 @@ fn ball_beyond_the_quintic_is_planned_and_executed_jerk_limited() {
         let s = rally::serve(&pl.flight, &mut rng, 30.0, 0.2);
         let plan = pl.plan(&s, 0.2, [0.9, 0.0]).unwrap();
         let Some(hit) = plan.hit else { continue };
-        if hit.leg.profile != StrokeProfile::Jerk {
+        if hit.branch.leg.profile != StrokeProfile::Jerk {
             continue;
         }
-        assert_eq!(plan.status, HitStatus::Ok);
-        let t = hit.t_hit;
+        assert_eq!(plan.status, ReturnStatus::Ok);
+        let t = hit.hit.t;
         // Every quintic the planner tries to this hit state breaks a limit.
         for alpha in [0.0, 0.5, 1.0] {
             let qdd = (0..6)
-                .map(|i| alpha * (-6.0 * (hit.q_hit[i] - ready.q[i]) / (t * t) + 4.0 * hit.qd_hit[i] / t))
+                .map(|i| alpha * (-6.0 * (hit.branch.q[i] - ready.q[i]) / (t * t) + 4.0 * hit.branch.qd[i] / t))
                 .collect();
             let end = JointState {
-                q: hit.q_hit.clone(),
-                qd: hit.qd_hit.clone(),
+                q: hit.branch.q.clone(),
+                qd: hit.branch.qd.clone(),
                 qdd,
             };
             assert!(quintic_limit_ratio(&ready, &end, t, pl.limits()) > 1.0);
         }
         // The jerk-limited leg lasts exactly the hit time, within every limit, and the executed
         // stroke is that leg: at t_hit the racket is at the planned pose with the planned speeds.
-        assert!((hit.leg.trajectory.duration() - t).abs() < 1e-9);
-        assert!(hit.leg.trajectory.check_limits(pl.limits()).unwrap().is_empty());
-        assert!(hit.margin >= 0.0);
+        assert!((hit.branch.leg.trajectory.duration() - t).abs() < 1e-9);
+        assert!(hit.branch.leg.trajectory.check_limits(pl.limits()).unwrap().is_empty());
+        assert!(hit.branch.margin >= 0.0);
         let exec = rally::execution(&hit, &ready);
         let at = exec.state(t).unwrap();
         for j in 0..6 {
-            assert!((at.q[j] - hit.q_hit[j]).abs() < 1e-7, "{at:?}");
-            assert!((at.qd[j] - hit.qd_hit[j]).abs() < 1e-6, "{at:?}");
+            assert!((at.q[j] - hit.branch.q[j]).abs() < 1e-7, "{at:?}");
+            assert!((at.qd[j] - hit.branch.qd[j]).abs() < 1e-6, "{at:?}");
         }
-        let fk = pl.chain.fk(&at.q).unwrap();
-        assert!((fk.translation.vector - hit.pose.translation.vector).norm() < 1e-6);
+        let fk = pl.chain().fk(&at.q).unwrap();
+        assert!((fk.translation.vector - hit.hit.pose.translation.vector).norm() < 1e-6);
         assert!(exec.state(0.0).unwrap().q == ready.q);
         found += 1;
     }
@@ -573,7 +574,7 @@ fn wide_balls_are_returned_to_another_target_or_off_the_racket_centre() {
             "{:?}",
             hit.landing
         );
-        let world = pl.placement.world_from_base() * hit.pose;
+        let world = pl.placement.world_from_base() * hit.hit.pose;
         let n = world.rotation * Vector3::z();
         assert!((n - hit.racket.normal).norm() < 1e-9);
         let contact = hit.ball.p - pl.flight.model.radius * n;
@@ -596,22 +597,24 @@ fn wide_balls_are_returned_to_another_target_or_off_the_racket_centre() {
 #[test]
 fn mismatched_world_keeps_the_balls_and_draws_their_physics() {
     use ttkin::ball::rally::WorldSpread;
-    let pl = planner();
-    let region = ReachRegion::new(&pl.chain, pl.placement, pl.ready.clone(), pl.flight.model.radius).unwrap();
-    let truth = Flight {
-        step: 0.001,
-        ..Flight::default()
-    };
-    let cfg = RallyConfig {
-        paths: 0,
-        ..RallyConfig::default()
-    };
-    let mis = RallyConfig {
-        world: Some(WorldSpread::measured()),
-        ..cfg
-    };
-    let a: Vec<_> = (0..12).map(|i| rally::play(&pl, &region, &truth, &cfg, i)).collect();
-    let b: Vec<_> = (0..12).map(|i| rally::play(&pl, &region, &truth, &mis, i)).collect();
+    let matched = Rally::with_planner(
+        planner(),
+        RallyConfig {
+            paths: 0,
+            ..RallyConfig::default()
+        },
+    )
+    .unwrap();
+    let mismatched = Rally::with_planner(
+        planner(),
+        RallyConfig {
+            world: Some(WorldSpread::measured()),
+            ..matched.config
+        },
+    )
+    .unwrap();
+    let a: Vec<_> = (0..12).map(|i| matched.play(i, None, None)).collect();
+    let b: Vec<_> = (0..12).map(|i| mismatched.play(i, None, None)).collect();
     // The same incoming balls, another flight: the estimates differ.
     for (x, y) in a.iter().zip(&b) {
         assert_eq!(x.incoming, y.incoming);
@@ -620,7 +623,13 @@ fn mismatched_world_keeps_the_balls_and_draws_their_physics() {
     assert!(differ >= 10, "{differ} of 12 estimates differ");
     // Given incoming balls are played as given.
     let given: Vec<BallState> = a.iter().map(|o| o.incoming).collect();
-    let c = rally::rally_from(&pl, &region, &truth, &cfg, &given);
+    let c = rally::rally_from(
+        &matched.planner,
+        &matched.region,
+        &matched.truth,
+        &matched.config,
+        &given,
+    );
     assert!(c
         .iter()
         .zip(&a)
@@ -659,20 +668,18 @@ impl rally::Executor for Exact {
 
 #[test]
 fn an_exact_executor_plays_as_the_ideal_execution() {
-    let pl = planner();
-    let region = ReachRegion::new(&pl.chain, pl.placement, pl.ready.clone(), pl.flight.model.radius).unwrap();
-    let truth = Flight {
-        step: 0.001,
-        ..Flight::default()
-    };
-    let cfg = RallyConfig {
-        paths: 0,
-        ..RallyConfig::default()
-    };
+    let r = Rally::with_planner(
+        planner(),
+        RallyConfig {
+            paths: 0,
+            ..RallyConfig::default()
+        },
+    )
+    .unwrap();
     let mut same = 0;
     for i in 0..16 {
-        let a = rally::play(&pl, &region, &truth, &cfg, i);
-        let b = rally::play_with(&pl, &region, &truth, &cfg, i, None, Some(&Exact));
+        let a = r.play(i, None, None);
+        let b = r.play(i, None, Some(&Exact));
         assert_eq!(a.incoming, b.incoming);
         if a.returned == b.returned {
             same += 1;
@@ -717,4 +724,43 @@ fn flights_far_from_t0_or_too_long_are_refused_not_run() {
     let unix = BallState::new(1.7e9, [-1.0, 0.0, 1.0], [5.0, 0.0, 0.0], [0.0; 3]);
     let p = predict(&f, &unix, &[1.7e9 + 0.1]).unwrap();
     assert!(p.positions[0].iter().all(|v| v.is_finite()));
+}
+
+/// `Rally::play_range`: the balls of `play` in ball order, its checks, and a caller's stop.
+#[test]
+fn a_rally_range_plays_the_balls_in_order_and_stops_when_asked() {
+    let r = Rally::new(RallyConfig {
+        paths: 1,
+        ..RallyConfig::default()
+    })
+    .unwrap();
+    let out = r.play_range(3, 2, None, None, &|| false).unwrap();
+    for (o, i) in out.iter().zip(3..) {
+        let p = r.play(i, None, None);
+        assert_eq!(
+            (&o.incoming, &o.status, o.returned),
+            (&p.incoming, &p.status, p.returned)
+        );
+        assert!(o.landing_error == p.landing_error || (o.landing_error.is_nan() && p.landing_error.is_nan()));
+    }
+    let cols = rally::Outcomes::new(&out);
+    assert_eq!(cols.incoming[10..20], out[1].incoming.to_array());
+    assert_eq!(cols.paths.len(), out.iter().filter(|o| !o.path.is_empty()).count());
+    let e = r
+        .play_range(rally::MAX_BALLS, 1, None, None, &|| false)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("go past"), "{e}");
+    let given = [out[0].incoming];
+    let e = r
+        .play_range(0, 2, Some(&given), None, &|| false)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("1 states"), "{e}");
+    assert!(r.play_range(0, 4, None, None, &|| true).is_err());
+    let bad = RallyConfig {
+        max_spin_rps: f64::NAN,
+        ..RallyConfig::default()
+    };
+    assert!(Rally::new(bad).unwrap_err().to_string().contains("max_spin_rps"));
 }

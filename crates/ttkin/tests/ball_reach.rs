@@ -3,7 +3,7 @@
 
 use nalgebra::{IsometryMatrix3, Translation3, Vector3};
 use ttkin::ball::flight::{BallState, EventKind, Flight};
-use ttkin::ball::hitplan::HitPlanner;
+use ttkin::ball::hitplan::ReturnPlanner;
 use ttkin::ball::rally;
 use ttkin::ball::reach::{min_joint_time, racket_rotation, ReachRegion, Reachability};
 use ttkin::chain::Chain;
@@ -17,8 +17,8 @@ fn truth() -> Flight {
 }
 
 fn region() -> ReachRegion {
-    let pl = HitPlanner::new(ttkin::robots::gantry6(), Flight::default()).unwrap();
-    ReachRegion::new(&pl.chain, pl.placement, pl.ready.clone(), pl.flight.model.radius).unwrap()
+    let pl = ReturnPlanner::new(ttkin::robots::gantry6(), Flight::default()).unwrap();
+    ReachRegion::new(pl.chain(), pl.placement, pl.ready.clone(), pl.flight.model.radius).unwrap()
 }
 
 #[test]

@@ -1,10 +1,10 @@
 //! The estimate updated through the bounce (`ttkin::ball::update`) and the correction of a planned
-//! hit during its stroke (`HitPlanner::plan_near`, `RallyConfig::correction_delay`).
+//! hit during its stroke (`ReturnPlanner::plan_near`, `RallyConfig::correction_delay`).
 
 use nalgebra::Vector3;
 use ttkin::ball::estimate::{estimate, EstimateError, EstimateOptions, Segment};
 use ttkin::ball::flight::{BallState, EventKind, Flight};
-use ttkin::ball::hitplan::{shoot, HitPlanner, HitStatus};
+use ttkin::ball::hitplan::{shoot, ReturnPlanner, ReturnStatus};
 use ttkin::ball::predict::predict;
 use ttkin::ball::rally::{self, RallyConfig};
 use ttkin::ball::reach::ReachRegion;
@@ -165,8 +165,8 @@ fn the_update_without_new_observations_is_the_prior_and_bad_input_is_an_error() 
     assert!(update(&predicted, &t, &p, &options()).is_err());
 }
 
-fn planner() -> HitPlanner {
-    HitPlanner::new(ttkin::robots::gantry6(), Flight::default()).unwrap()
+fn planner() -> ReturnPlanner {
+    ReturnPlanner::new(ttkin::robots::gantry6(), Flight::default()).unwrap()
 }
 
 #[test]
@@ -183,13 +183,13 @@ fn a_correction_with_the_same_ball_keeps_the_hit_and_starts_from_the_stroke() {
         let Some(hit) = pl.plan(&s, now, [0.9, 0.0]).unwrap().hit else {
             continue;
         };
-        let t_prev = now + hit.t_hit;
+        let t_prev = now + hit.hit.t;
         let t_c = t_prev - 0.1;
         if t_c <= now {
             continue;
         }
         let stroke = rally::execution(&hit, &ready);
-        let n = hit.q_hit.len();
+        let n = hit.branch.q.len();
         let (mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
         stroke.sample(t_c - now, &mut q, &mut qd, &mut qdd).unwrap();
         let start = JointState { q, qd, qdd };
@@ -200,20 +200,24 @@ fn a_correction_with_the_same_ball_keeps_the_hit_and_starts_from_the_stroke() {
         let plan = pl.plan_near(&ball, t_c, &start, bounced, &hit, t_prev).unwrap();
         tried += 1;
         let Some(new) = plan.hit else {
-            assert_ne!(plan.status, HitStatus::Ok);
+            assert_ne!(plan.status, ReturnStatus::Ok);
             continue;
         };
-        assert_eq!(plan.status, HitStatus::Ok);
+        assert_eq!(plan.status, ReturnStatus::Ok);
         corrected += 1;
         // The nearest candidate in time, to the same landing point, from the stroke's state.
         assert!(
-            (t_c + new.t_hit - t_prev).abs() <= 0.0101,
+            (t_c + new.hit.t - t_prev).abs() <= 0.0101,
             "{} vs {t_prev}",
-            t_c + new.t_hit
+            t_c + new.hit.t
         );
         assert!((new.landing - hit.landing).xy().norm() < 2e-3);
         let (mut q0, mut qd0, mut qdd0) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-        new.leg.trajectory.sample(0.0, &mut q0, &mut qd0, &mut qdd0).unwrap();
+        new.branch
+            .leg
+            .trajectory
+            .sample(0.0, &mut q0, &mut qd0, &mut qdd0)
+            .unwrap();
         for i in 0..n {
             assert!((q0[i] - start.q[i]).abs() < 1e-9 && (qd0[i] - start.qd[i]).abs() < 1e-9);
         }
@@ -233,7 +237,7 @@ fn a_correction_with_the_same_ball_keeps_the_hit_and_starts_from_the_stroke() {
 fn the_correction_after_the_bounce_removes_most_misses() {
     let pl = planner();
     let truth = truth();
-    let region = ReachRegion::new(&pl.chain, pl.placement, pl.ready.clone(), truth.model.radius).unwrap();
+    let region = ReachRegion::new(pl.chain(), pl.placement, pl.ready.clone(), truth.model.radius).unwrap();
     let count = |cfg: &RallyConfig| {
         let out = rally::rally(&pl, &region, &truth, cfg, 400);
         let in_reach: Vec<_> = out.iter().filter(|o| o.in_reach).collect();

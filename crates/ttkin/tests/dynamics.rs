@@ -370,11 +370,8 @@ fn built_in_gravity_torques_hold_within_effort_limits() {
     for chain in robots() {
         let dy = Dynamics::new(&chain).unwrap();
         let mut d = DynamicsData::new(&dy);
-        let gravity = if chain.name() == "mobile8" {
-            ttkin::robots::MOBILE8_GRAVITY
-        } else {
-            EARTH_GRAVITY
-        };
+        // The robot's own gravity (mobile8: base x up, robots::MOBILE8_GRAVITY).
+        let gravity = chain.gravity();
         for x in [0.1, 0.5, 0.9] {
             let q = config_from_unit(&chain, &vec![x; chain.dof()]);
             let g = dy.gravity(&mut d, &q, &gravity).unwrap();

@@ -70,6 +70,11 @@ fn robot_facts_are_data_that_robot_files_carry() {
     assert_eq!(*m8.racket(), ttkin::hit::Racket::seed000().in_tool);
     assert_eq!(m8.ready(), ttkin::robots::mobile8_start().to_vec());
     assert_eq!(ttkin::robots::gantry6().ready(), ttkin::robots::GANTRY6_READY.to_vec());
+    // Gravity too (base frame): mobile8's base frame has x up, the others z up.
+    assert_eq!(m8.gravity(), ttkin::robots::MOBILE8_GRAVITY);
+    assert_eq!(ttkin::robots::gantry6().gravity(), ttkin::dynamics::EARTH_GRAVITY);
+    let m8_file = description::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../../robots/mobile8.toml")).unwrap();
+    assert_eq!(m8_file.gravity(), ttkin::robots::MOBILE8_GRAVITY);
     for chain in robots() {
         let back = description::from_toml_str(&description::to_toml(&chain), "test").unwrap();
         assert!(pose_diff(back.racket(), chain.racket()) < 1e-15, "{}", chain.name());
@@ -83,7 +88,10 @@ fn robot_facts_are_data_that_robot_files_carry() {
         .unwrap();
         assert!(pose_diff(renamed.racket(), chain.racket()) < 1e-15);
         assert_eq!(renamed.ready(), chain.ready());
+        assert_eq!(back.gravity(), chain.gravity(), "{}", chain.name());
+        assert_eq!(renamed.gravity(), chain.gravity());
         let planner = ttkin::hit::HitPlanner::new(&renamed, Default::default()).unwrap();
+        assert_eq!(planner.gravity(), chain.gravity());
         assert_eq!(planner.default_ready(), &chain.ready()[..]);
         assert!(pose_diff(&planner.racket().in_tool, chain.racket()) < 1e-15);
     }

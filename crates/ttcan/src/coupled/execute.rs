@@ -15,7 +15,15 @@ pub struct DriveExecutor {
     setpoint_period: f64,
 }
 
+/// Period (s) of the setpoints handed to the drives by [`DriveExecutor::with_defaults`].
+pub const SETPOINT_PERIOD: f64 = 1e-3;
+
 impl DriveExecutor {
+    /// For `chain` with the default simulation options and setpoints every [`SETPOINT_PERIOD`].
+    pub fn with_defaults(chain: &Chain) -> Result<Self> {
+        Self::new(chain, CoupledOptions::default(), SETPOINT_PERIOD)
+    }
+
     /// For `chain` (with drive sections on every joint) with `options` and setpoints handed to
     /// the drives every `setpoint_period` s. Checks that a simulation of the chain can be built.
     pub fn new(chain: &Chain, options: CoupledOptions, setpoint_period: f64) -> Result<Self> {
@@ -35,7 +43,7 @@ impl Executor for DriveExecutor {
         let mut sim = CoupledSim::from_chain(&self.chain, q.get(..n)?, self.options).ok()?;
         let mut tau = vec![0.0; q.len()];
         sim.dynamics()
-            .inverse_dynamics_batch(q, qd, qdd, &self.options.gravity, None, &mut tau)
+            .inverse_dynamics_batch(q, qd, qdd, &self.options.gravity_on(&self.chain), None, &mut tau)
             .ok()?;
         let tr = sim.run(times, q, qd, qdd, Some(&tau), self.setpoint_period).ok()?;
         if tr.faults.iter().any(|f| !f.is_empty()) {

@@ -56,8 +56,9 @@ pub const MAX_RUN_TICKS: u64 = 1_000_000;
 /// Options of a [`CoupledSim`].
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CoupledOptions {
-    /// Gravity in the base frame, m/s² (zero to switch it off).
-    pub gravity: [f64; 3],
+    /// Gravity in the base frame, m/s² (`Some([0.0; 3])` to switch it off; `None`: the robot's own,
+    /// [`ttkin::Chain::gravity`]).
+    pub gravity: Option<[f64; 3]>,
     /// Ideal current loops: the winding current equals the current reference every period.
     pub ideal_current: bool,
     /// Periods between refreshes of M(q), its factor and h(q, q̇) (≥ 1).
@@ -72,10 +73,17 @@ pub struct CoupledOptions {
     pub noise_scale: f64,
 }
 
+impl CoupledOptions {
+    /// The gravity (m/s², base frame) these options give on `chain`: their own, else the chain's.
+    pub fn gravity_on(&self, chain: &Chain) -> [f64; 3] {
+        self.gravity.unwrap_or_else(|| chain.gravity())
+    }
+}
+
 impl Default for CoupledOptions {
     fn default() -> Self {
         CoupledOptions {
-            gravity: ttkin::dynamics::EARTH_GRAVITY,
+            gravity: None,
             ideal_current: false,
             refresh_ticks: 4,
             seed: 0,
@@ -107,6 +115,8 @@ pub struct CoupledSim {
     viscous: Vec<f64>,
     scheduler: Scheduler,
     options: CoupledOptions,
+    /// Gravity used (m/s², base frame): the options' or the chain's.
+    gravity: [f64; 3],
     period: f64,
     time: f64,
     ticks: u64,
@@ -145,7 +155,8 @@ impl CoupledSim {
                 reason: "must be >= 1".into(),
             });
         }
-        crate::error::finite("gravity", options.gravity.iter().map(|g| g.abs()).sum())?;
+        let gravity = options.gravity_on(chain);
+        crate::error::finite("gravity", gravity.iter().map(|g| g.abs()).sum())?;
         let rates = configs[0].rates;
         let mut axes = Vec::with_capacity(n);
         let mut windings = Vec::with_capacity(n);
@@ -191,6 +202,7 @@ impl CoupledSim {
             viscous,
             scheduler: Scheduler::new(&rates),
             options,
+            gravity,
             period,
             time: 0.0,
             ticks: 0,
@@ -256,7 +268,7 @@ impl CoupledSim {
         let n = self.dof();
         let h = self
             .dynamics
-            .nonlinear_effects(&mut self.data, &self.q, &self.qd, &self.options.gravity)
+            .nonlinear_effects(&mut self.data, &self.q, &self.qd, &self.gravity)
             .map_err(model_error)?;
         self.h.copy_from(h);
         let m = self
@@ -437,7 +449,7 @@ impl CoupledSim {
             .map_err(model_error)?;
         let potential = self
             .dynamics
-            .potential_energy(&self.q, &self.options.gravity)
+            .potential_energy(&self.q, &self.gravity)
             .map_err(model_error)?;
         let magnetic: f64 = self
             .windings

@@ -67,6 +67,17 @@ pub enum Segment {
     BeforeBounce,
 }
 
+impl Segment {
+    /// The segment's name: "whole", "after_bounce" or "before_bounce".
+    pub fn name(&self) -> &'static str {
+        match self {
+            Segment::Whole => "whole",
+            Segment::AfterBounce => "after_bounce",
+            Segment::BeforeBounce => "before_bounce",
+        }
+    }
+}
+
 /// An estimated ball state with its uncertainty.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Estimate {

@@ -45,6 +45,28 @@ impl BallState {
         }
     }
 
+    /// The state as [t, px, py, pz, vx, vy, vz, wx, wy, wz] (s, m, m/s, rad/s, world).
+    pub fn to_array(&self) -> [f64; 10] {
+        let (p, v, w) = (&self.p, &self.v, &self.w);
+        [self.t, p.x, p.y, p.z, v.x, v.y, v.z, w.x, w.y, w.z]
+    }
+
+    /// The state of a [`Self::to_array`] row (the first 10 values of `row`).
+    pub fn from_row(row: &[f64]) -> Self {
+        let r = |i: usize| [row[i], row[i + 1], row[i + 2]];
+        BallState::new(row[0], r(1), r(4), r(7))
+    }
+
+    /// The states of consecutive [`Self::to_array`] rows (`data.len() / 10` of them).
+    pub fn from_rows(data: &[f64]) -> Vec<Self> {
+        data.chunks_exact(10).map(Self::from_row).collect()
+    }
+
+    /// The rows ([`Self::to_array`]) of `states`, concatenated.
+    pub fn rows(states: &[BallState]) -> Vec<f64> {
+        states.iter().flat_map(Self::to_array).collect()
+    }
+
     /// Checks that every component is finite and within the ball's physical range
     /// ([`MAX_POSITION`], [`MAX_SPEED`], [`MAX_SPIN`]: beyond them the drag and Magnus terms
     /// overflow or the flight is not a table-tennis ball's); `what` names the argument.
@@ -136,6 +158,26 @@ pub struct Event {
     pub after: BallState,
 }
 
+impl Event {
+    /// The kinds' names ([`EventKind::name`]) of `events`, in order.
+    pub fn names(events: &[Event]) -> Vec<&'static str> {
+        events.iter().map(|e| e.kind.name()).collect()
+    }
+}
+
+/// An event's serde form: `kind` (its name) and the states `before` and `after` as
+/// [`BallState::to_array`] rows.
+impl serde::Serialize for Event {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        let mut st = s.serialize_struct("Event", 3)?;
+        st.serialize_field("kind", self.kind.name())?;
+        st.serialize_field("before", &self.before.to_array())?;
+        st.serialize_field("after", &self.after.to_array())?;
+        st.end()
+    }
+}
+
 /// A plane n·(p − point) = 0 (world); crossing means n·(p − point) goes from > 0 to ≤ 0.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Plane {
@@ -146,6 +188,23 @@ pub struct Plane {
 }
 
 impl Plane {
+    /// The plane through `point` (m, world) with normal along `normal` (any length, normalised
+    /// here); an error for a non-finite point or a zero or non-finite normal.
+    pub fn new(point: [f64; 3], normal: [f64; 3]) -> Result<Self> {
+        let (point, normal) = (Vector3::from(point), Vector3::from(normal));
+        let norm = normal.norm();
+        if !(norm > 1e-12 && norm.is_finite()) {
+            return Err(Error::invalid("normal", "must be a non-zero vector"));
+        }
+        if !point.iter().all(|x| x.is_finite()) {
+            return Err(Error::invalid("point", "must be finite"));
+        }
+        Ok(Plane {
+            point,
+            normal: normal / norm,
+        })
+    }
+
     /// Signed distance (m) of `p` to the plane.
     pub fn distance(&self, p: &Vector3<f64>) -> f64 {
         self.normal.dot(&(p - self.point))

@@ -6,7 +6,7 @@
 //! the rolling cap (the rigid-ball part of Nakashima et al., "Modeling of rebound phenomenon of a
 //! rigid ball with friction and elastic effects", ACC 2010).
 //!
-//! Rubber constants, parameters of [`Racket`] (set `HitPlanner::racket` to change them):
+//! Rubber constants, parameters of [`Racket`] (set `ReturnPlanner::racket` to change them):
 //! - **restitution e = 0.85**. Reference points: the ITTF ball rule (Technical Leaflet T3: dropped
 //!   from 305 mm on a steel block it bounces 240–260 mm, e = √(h₁/h₀) = 0.89–0.92) and the table
 //!   (ITTF Laws 2.1.3: about 23 cm from 30 cm, e ≈ 0.88) bound it from above, since rubber on a
@@ -27,6 +27,7 @@
 //! the full model until the outgoing velocity matches to 1e-9 m/s.
 
 use super::contact::impulse;
+use super::flight::BallState;
 use super::model::BallModel;
 use crate::error::{Error, Result};
 use nalgebra::{Matrix3, Vector3};
@@ -77,6 +78,31 @@ impl Racket {
         let rel = v - racket_v;
         let (dv, dw) = impulse(model, &rel, w, n, self.restitution, self.friction);
         (v + dv, w + dw)
+    }
+
+    /// The ball `state` just after the impact on a face with unit normal `n` whose contact point
+    /// moves at `racket_v` (m/s, world), with the checks a caller's input needs: a physical
+    /// state, a unit normal (within 1e-6) and a finite velocity.
+    pub fn hit_state(
+        &self,
+        model: &BallModel,
+        state: &BallState,
+        n: &Vector3<f64>,
+        racket_v: &Vector3<f64>,
+    ) -> Result<BallState> {
+        state.validate("state")?;
+        let unit = (n.norm() - 1.0).abs() < 1e-6;
+        if !unit || !racket_v.iter().all(|x| x.is_finite()) {
+            return Err(Error::invalid(
+                "normal, velocity",
+                format!(
+                    "the normal must be a unit vector (norm {}) and the velocity finite",
+                    n.norm()
+                ),
+            ));
+        }
+        let (v, w) = self.hit(model, &state.v, &state.w, n, racket_v);
+        Ok(BallState { v, w, ..*state })
     }
 
     /// The racket normal and velocity (along the normal) that turn an incoming ball (`v_in`, `w_in`)

@@ -10,7 +10,8 @@
 //! One concept per file: [`model`] (ball and table constants), [`flight`] (integration with events),
 //! [`contact`] (table, edge, net contacts and the bounce impulse), [`estimate`](mod@estimate) (state from
 //! observations; its path sensitivities in [`sensitivity`]; [`update`] with later observations through the bounce), [`predict`] (positions, crossings), [`impact`] (racket impact and its inverse),
-//! [`hitplan`] (where, when and how to hit), [`leg`] (the hit leg: quintic or jerk-limited), [`reach`] (the robot's reachable region,
+//! [`hitplan`] (where and when to hit, handing the hit to the one robot-side planner
+//! [`crate::hit::HitPlanner`]), [`reach`] (the robot's reachable region,
 //! independent of the planner), [`rally`] (the closed loop in simulation).
 
 pub mod contact;
@@ -19,7 +20,6 @@ pub mod fit;
 pub mod flight;
 pub mod hitplan;
 pub mod impact;
-pub mod leg;
 pub mod model;
 pub mod predict;
 pub mod rally;

@@ -186,7 +186,7 @@ impl BallModel {
 }
 
 /// ITTF table and net geometry in the world frame (m): surface at z = 0, centred at the origin.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Table {
     /// Playing-surface length along x (m): 2.74.
     pub length: f64,

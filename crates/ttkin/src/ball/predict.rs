@@ -106,6 +106,9 @@ pub enum CrossingOutcome {
     Timeout,
 }
 
+/// The default search horizon (s) of a crossing: longer than any flight across the table.
+pub const CROSSING_HORIZON: f64 = 2.0;
+
 /// Where and when the ball from `state` crosses `plane` (from its positive to negative side),
 /// searching up to `t_max` (s).
 pub fn crossing(flight: &Flight, state: &BallState, plane: &Plane, t_max: f64) -> Result<CrossingOutcome> {
@@ -159,6 +162,41 @@ pub fn crossing_until(
 /// [`predict`] for many balls in parallel, one result per state.
 pub fn predict_batch(flight: &Flight, states: &[BallState], times: &[f64]) -> Vec<Result<Prediction>> {
     states.par_iter().map(|s| predict(flight, s, times)).collect()
+}
+
+/// [`predict`] for many balls in parallel, written into `out` (N × K × 3 for N `states` and K
+/// `times`, row-major; NaN after a terminal event), each ball's error naming it (`states[i]`);
+/// `stop()` is polled before each ball (a caller's cancellation) and ends the batch with an error.
+pub fn predict_batch_into(
+    flight: &Flight,
+    states: &[BallState],
+    times: &[f64],
+    out: &mut [f64],
+    stop: &(dyn Fn() -> bool + Sync),
+) -> Result<()> {
+    let k = times.len();
+    if out.len() != states.len() * 3 * k {
+        return Err(Error::shape(
+            "out",
+            format!("{} values", states.len() * 3 * k),
+            out.len(),
+        ));
+    }
+    out.par_chunks_mut((3 * k).max(1))
+        .zip(states.par_iter())
+        .enumerate()
+        .try_for_each(|(i, (o, s))| {
+            if stop() {
+                return Err(Error::invalid("states", "prediction stopped"));
+            }
+            // one long flight stops too (issue 29), not only between balls
+            let pred = predict_until(flight, s, times, stop)
+                .map_err(|e| Error::invalid(format!("states[{i}]"), e.to_string()))?;
+            for (dst, p) in o.chunks_exact_mut(3).zip(&pred.positions) {
+                dst.copy_from_slice(p);
+            }
+            Ok(())
+        })
 }
 
 /// [`crossing`] for many balls in parallel, one result per state.

@@ -57,6 +57,10 @@ impl Racket {
 
     /// Tool pose (base frame, m) that puts the racket at `racket` (base frame, m).
     pub fn tool_pose(&self, racket: &IsometryMatrix3<f64>) -> IsometryMatrix3<f64> {
+        if self.in_tool == IsometryMatrix3::identity() {
+            // The tool frame is the racket frame (gantry6): the same pose without the products.
+            return *racket;
+        }
         racket * self.in_tool.inverse()
     }
 

@@ -258,21 +258,12 @@ pub(super) fn earliest_kinematic(p: &HitPlanner, start: &JointState, hit: &Joint
 const QUICK_GROWTH: f64 = 1.1;
 
 /// A quintic from `from` to `to` within the velocity, acceleration and jerk limits, not minimal:
-/// the duration starts at the largest rest-to-rest quintic bound (15h/8v, √(10h/√3a), ∛(60h/j))
-/// and the time to cancel the start velocity and acceleration, and grows by √(peak/limit) (at least
+/// the duration starts at [`duration::quintic_start_duration`] (the rest-to-rest quintic bound and
+/// the time to cancel the start velocity and acceleration), and grows by √(peak/limit) (at least
 /// [`QUICK_GROWTH`]) until the exact peaks are within the limits; not minimal, typically within a
 /// few tens of percent of the minimal duration of that family.
 fn quick_quintic(from: &JointState, to: &JointState, lim: &KinematicLimits) -> JointTrajectory {
-    let mut t: f64 = 1e-3;
-    for j in 0..from.q.len() {
-        let h = (to.q[j] - from.q[j]).abs();
-        t = t
-            .max(15.0 * h / (8.0 * lim.velocity[j]))
-            .max((10.0 * h / (3f64.sqrt() * lim.acceleration[j])).sqrt())
-            .max((60.0 * h / lim.jerk[j]).cbrt())
-            .max((to.qd[j] - from.qd[j]).abs() / lim.acceleration[j])
-            .max((to.qdd[j] - from.qdd[j]).abs() / lim.jerk[j]);
-    }
+    let mut t = duration::quintic_start_duration(from, to, lim);
     for _ in 0..200 {
         let ratio = duration::quintic_limit_ratio_above(from, to, t, lim, 1.0 + LIMIT_TOLERANCE);
         if ratio <= 1.0 + LIMIT_TOLERANCE {
@@ -327,7 +318,7 @@ fn within_position_limits(
 /// dynamics with friction, gravity of the options), stopping as `stop` says.
 fn effort(p: &HitPlanner, data: &mut DynamicsData, traj: &JointTrajectory, stop: PeakStop) -> EffortPeak {
     let dynamics = p.dynamics.as_ref().expect("effort data exists only with dynamics");
-    let gravity = nalgebra::Vector3::from(p.options.gravity);
+    let gravity = nalgebra::Vector3::from(p.gravity);
     dynamics.effort_peak(data, traj, &p.effort, &gravity, stop)
 }
 
@@ -351,7 +342,7 @@ fn ratio_at(p: &HitPlanner, data: &mut DynamicsData, traj: &JointTrajectory, t: 
     if !q.iter().chain(&qd).chain(&qdd).all(|v| v.is_finite()) {
         return f64::INFINITY;
     }
-    let gravity = nalgebra::Vector3::from(p.options.gravity);
+    let gravity = nalgebra::Vector3::from(p.gravity);
     let tau = dynamics.inverse_dynamics_unchecked(data, &q, &qd, &qdd, &gravity);
     let mut ratio: f64 = 0.0;
     for j in 0..n {

@@ -221,3 +221,52 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn mobile8_plans_under_its_own_gravity() {
+    // mobile8's base frame has x up (robots::MOBILE8_GRAVITY): the planner's default gravity is
+    // the robot's, and the hit's peak torques differ from the same plan under base-z-up gravity.
+    let chain = robots::mobile8();
+    assert_eq!(chain.gravity(), robots::MOBILE8_GRAVITY);
+    let own = HitPlanner::new(&chain, HitOptions::default()).unwrap();
+    assert_eq!(own.gravity(), robots::MOBILE8_GRAVITY);
+    let z_up = HitPlanner::new(
+        &chain,
+        HitOptions {
+            gravity: Some(crate::dynamics::EARTH_GRAVITY),
+            ..HitOptions::default()
+        },
+    )
+    .unwrap();
+    let q0 = own.default_ready().to_vec();
+    let now = own.racket().racket_pose(&chain.fk(&q0).unwrap());
+    let c = now.translation.vector + Vector3::new(0.02, -0.04, -0.07);
+    let n = now.rotation.matrix().column(2).into_owned();
+    let hit = Hit::from_normal([c.x, c.y, c.z], [n.x, n.y, n.z], [-0.29, 0.19, 0.25], 1.5, None, None).unwrap();
+    let a = own.plan(&hit, None, None).unwrap();
+    let b = z_up.plan(&hit, None, None).unwrap();
+    assert!(
+        a.trajectory.is_some() && b.trajectory.is_some(),
+        "{:?} {:?}",
+        a.status,
+        b.status
+    );
+    let differs = a
+        .peak_effort
+        .iter()
+        .zip(&b.peak_effort)
+        .any(|(x, y)| (x - y).abs() > 1e-3 * (1.0 + y.abs()));
+    assert!(differs, "{:?} vs {:?}", a.peak_effort, b.peak_effort);
+    // The held ready pose: the static torques are the RNEA's under the robot's gravity.
+    let dy = crate::Dynamics::new(&chain).unwrap();
+    let mut d = crate::DynamicsData::new(&dy);
+    let g_own = dy.gravity(&mut d, &q0, &chain.gravity()).unwrap().clone();
+    let g_z = dy
+        .gravity(&mut d, &q0, &crate::dynamics::EARTH_GRAVITY)
+        .unwrap()
+        .clone();
+    assert!(
+        (g_own - g_z).norm() > 1.0,
+        "gravity along x and along z load the joints differently"
+    );
+}

@@ -42,19 +42,41 @@ pub fn minimal_duration_rest(q0: &[f64], q1: &[f64], limits: &KinematicLimits, k
     limits.check_dof(n)?;
     check_vector("q0", q0, n)?;
     check_vector("q1", q1, n)?;
-    let (kv, ka, kj) = match kind {
-        SegmentKind::Cubic => (1.5, 6.0, 12.0),
-        SegmentKind::Quintic => (15.0 / 8.0, 10.0 / 3f64.sqrt(), 60.0),
-    };
     let mut t: f64 = 0.0;
     for j in 0..n {
         let h = (q1[j] - q0[j]).abs();
-        t = t
-            .max(kv * h / limits.velocity[j])
-            .max((ka * h / limits.acceleration[j]).sqrt())
-            .max((kj * h / limits.jerk[j]).cbrt());
+        let (v, a, jk) = (limits.velocity[j], limits.acceleration[j], limits.jerk[j]);
+        t = t.max(match kind {
+            SegmentKind::Cubic => (1.5 * h / v).max((6.0 * h / a).sqrt()).max((12.0 * h / jk).cbrt()),
+            SegmentKind::Quintic => quintic_rest_bound(h, v, a, jk),
+        });
     }
     Ok(t)
+}
+
+/// The shortest rest-to-rest quintic over a distance `h` (m or rad) under the speed, acceleration
+/// and jerk limits `v`, `a`, `j` (s): the largest of 15h/(8v), √(10h/(√3·a)), ∛(60h/j), the
+/// durations that put each exact peak at its limit. The one home of this bound.
+pub fn quintic_rest_bound(h: f64, v: f64, a: f64, j: f64) -> f64 {
+    (15.0 * h / (8.0 * v))
+        .max((10.0 * h / (3f64.sqrt() * a)).sqrt())
+        .max((60.0 * h / j).cbrt())
+}
+
+/// A duration (s) from which a search for a feasible quintic from `from` to `to` starts: per joint
+/// the rest-to-rest bound [`quintic_rest_bound`] and the times to change the velocity at full
+/// acceleration and the acceleration at full jerk (at least 1 ms). Not a lower bound of the
+/// minimal quintic (the rest-to-rest bound ignores the end velocities).
+pub fn quintic_start_duration(from: &JointState, to: &JointState, lim: &KinematicLimits) -> f64 {
+    let mut t: f64 = 1e-3;
+    for j in 0..from.q.len() {
+        let h = (to.q[j] - from.q[j]).abs();
+        t = t
+            .max(quintic_rest_bound(h, lim.velocity[j], lim.acceleration[j], lim.jerk[j]))
+            .max((to.qd[j] - from.qd[j]).abs() / lim.acceleration[j])
+            .max((to.qdd[j] - from.qdd[j]).abs() / lim.jerk[j]);
+    }
+    t
 }
 
 /// Longest duration (s) [`earliest_quintic_duration`] tries before giving up.

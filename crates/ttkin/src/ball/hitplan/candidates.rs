@@ -3,10 +3,10 @@
 
 use super::super::flight::{BallState, Flight};
 use super::super::reach::{walk_after_bounce_clip, Reach};
-use super::{HitPlanner, RacketPoses};
+use super::{RacketPoses, ReturnPlanner};
 use nalgebra::Vector3;
 
-impl HitPlanner {
+impl ReturnPlanner {
     /// Predicted states every 10 ms inside the hitting volume after the bounce on the robot's half
     /// (a ball clipping the net flies on; only those at most `LATEST_AFTER_BOUNCE` after it when there are any, and not on a re-plan
     /// after the bounce), and whether that bounce happens.
@@ -63,7 +63,7 @@ impl HitPlanner {
         let n = (v_out - s.v).normalize();
         self.racket_centres(&s.p, &n)
             .iter()
-            .any(|c| (0..poses.rolls()).any(|k| !self.branches(&poses.pose(c, &n, k), None).is_empty()))
+            .any(|c| (0..poses.rolls()).any(|k| !self.robot.branches(&poses.pose(c, &n, k), None).is_empty()))
     }
 
     /// Landing targets (x, y, m, world) tried in order for a hit point: the requested `target`,

@@ -9,16 +9,17 @@
 //! targets: the landing point planned before already has a placeable racket near there.
 
 use super::super::flight::BallState;
-use super::super::impact::RacketHit;
-use super::{Hit, HitPlan, HitPlanner, HitStatus, RacketPoses};
-use crate::error::{Error, Result};
+use super::search::{Begin, Shot};
+use super::{RacketPoses, ReturnHit, ReturnPlan, ReturnPlanner};
+use crate::error::{check_finite, Result};
+use crate::hit::Hit;
 use crate::traj::JointState;
-use nalgebra::{IsometryMatrix3, Vector3};
+use nalgebra::IsometryMatrix3;
 
 /// Most candidates a correction tries when none of the nearest `candidates` is feasible.
 const MOST_CANDIDATES: usize = 12;
 
-impl HitPlanner {
+impl ReturnPlanner {
     /// Plans the hit of the ball `ball` again for a stroke in the joint state `start` at `now`
     /// (s), near the hit `previous` planned before for the time `t_prev` (s, absolute): see the
     /// module doc. `after_bounce` says that `ball` is past its bounce on the robot's half.
@@ -28,63 +29,30 @@ impl HitPlanner {
         now: f64,
         start: &JointState,
         after_bounce: bool,
-        previous: &Hit,
+        previous: &ReturnHit,
         t_prev: f64,
-    ) -> Result<HitPlan> {
+    ) -> Result<ReturnPlan> {
         let goal = [previous.landing.x, previous.landing.y];
-        self.check_target(goal)?;
-        self.check_start(ball, start)?;
-        if !(now.is_finite() && t_prev.is_finite()) {
-            return Err(Error::invalid(
-                "now, t_prev",
-                format!("must be finite, got {now}, {t_prev}"),
-            ));
-        }
-        let (list, bounced) = self.candidate_states(&self.flight, ball, now, self.search_margin, after_bounce);
-        let status = match (bounced, list.is_empty()) {
-            (false, _) => Some(HitStatus::NoBounce),
-            (true, true) => Some(HitStatus::OutOfReach),
-            _ => None,
+        check_finite("t_prev", &[t_prev])?;
+        let (list, mut search) = match self.begin(ball, now, goal, start, after_bounce)? {
+            Begin::Done(plan) => return Ok(plan),
+            Begin::Search(list, search) => (list, search),
         };
-        if let Some(status) = status {
-            return Ok(HitPlan {
-                status,
-                hit: None,
-                candidates: 0,
-            });
-        }
         let mut order: Vec<usize> = (0..list.len()).collect();
         order.sort_by(|&a, &b| (list[a].t - t_prev).abs().total_cmp(&(list[b].t - t_prev).abs()));
         order.truncate(MOST_CANDIDATES);
         let poses = RacketPoses::new(self);
-        let mut best: Option<Hit> = None;
-        let mut any_return = false;
-        let mut tried = 0;
+        let robot = |s: &BallState, shot: Shot| {
+            let near = self.robot_hit_near(&poses, s, now, start, shot, &previous.branch.q);
+            near.or_else(|| self.robot_hit(&poses, s, now, start, shot))
+        };
         for &i in &order {
-            if best
-                .as_ref()
-                .is_some_and(|b| b.margin >= self.good_margin || tried >= self.candidates.max(1))
-            {
+            if search.best.is_some() && (search.good() || search.tried() >= self.candidates.max(1)) {
                 break;
             }
-            tried += 1;
-            let s = &list[i];
-            for &tf in &self.return_times {
-                let Some((v_out, racket, landing)) = self.outgoing(s, goal, tf) else {
-                    continue;
-                };
-                any_return = true;
-                let near = self.robot_hit_near(&poses, s, now, start, (v_out, racket, landing), &previous.q_hit);
-                let hit = near.or_else(|| self.robot_hit(&poses, s, now, start, v_out, racket, landing));
-                if let Some(hit) = hit {
-                    if best.as_ref().is_none_or(|b| hit.margin > b.margin) {
-                        best = Some(hit);
-                    }
-                    break;
-                }
-            }
+            search.attempt(self, &list[i], goal, &robot);
         }
-        Ok(super::searched(best, any_return, tried))
+        Ok(search.finish())
     }
 
     /// The robot hit of the shot `shot` (outgoing velocity, racket, landing point) at the ball `s`
@@ -97,9 +65,9 @@ impl HitPlanner {
         s: &BallState,
         now: f64,
         start: &JointState,
-        shot: (Vector3<f64>, RacketHit, Vector3<f64>),
+        shot: Shot,
         q_prev: &[f64],
-    ) -> Option<Hit> {
+    ) -> Option<ReturnHit> {
         let (v_out, racket, landing) = shot;
         let lim = self.limits();
         let distance = |q: &[f64]| -> f64 {
@@ -119,7 +87,7 @@ impl HitPlanner {
         for c in &self.racket_centres(&s.p, &racket.normal) {
             for roll in 0..poses.rolls() {
                 let pose = poses.pose(c, &racket.normal, roll);
-                for q in self.branches(&pose, Some(&start.q)).iter() {
+                for q in self.robot.branches(&pose, Some(&start.q)).iter() {
                     let d = distance(q);
                     if nearest.as_ref().is_none_or(|(best, _, _)| d < *best) {
                         nearest = Some((d, q.to_vec(), pose));
@@ -128,22 +96,19 @@ impl HitPlanner {
             }
         }
         let (_, q, pose) = nearest?;
-        let v_b = self.placement.world_from_base().rotation.inverse() * racket.velocity;
-        let twist = [v_b.x, v_b.y, v_b.z, 0.0, 0.0, 0.0];
-        let t_hit = s.t - now;
-        let (qd, leg, margin) = self.stroke_margin(&q, start, &twist, t_hit, f64::NEG_INFINITY)?;
-        Some(Hit {
+        let hit = Hit {
+            pose,
+            twist: self.base_twist(&racket.velocity),
+            t: s.t - now,
+        };
+        let twist = self.robot.tool_twist(&hit);
+        let branch = self.robot.branch_leg(&q, start, &twist, hit.t, f64::NEG_INFINITY)?;
+        Some(ReturnHit {
             ball: *s,
             v_out,
             racket,
-            pose,
-            twist,
-            t_hit,
-            q_hit: q,
-            qd_hit: qd,
-            qdd_hit: leg.qdd_hit.clone(),
-            leg,
-            margin,
+            hit,
+            branch,
             landing,
         })
     }

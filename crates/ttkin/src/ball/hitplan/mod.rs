@@ -24,40 +24,45 @@
 //!    centre; only when that has no IK, `contact_offset` across the table in the face plane); the racket frame has its z axis on the face normal and its x axis (the handle) as
 //!    close to world up as possible (the convention of `python/ttmanip/pipeline.py`).
 //! 4. **Robot** (`robot.rs`). The pose (for each racket roll of `rolls` about the normal) and twist go to the
-//!    base frame ([`Placement`]), analytic IK (every branch within the limits), q̇ = J⁻¹·V, and the
-//!    hit leg from the stroke's start state at `now` to (q, q̇, q̈) at the hit ([`super::leg`]): a
+//!    base frame ([`Placement`]) as a [`crate::hit::Hit`], handed to the one robot-side planner
+//!    ([`crate::hit::HitPlanner::best_leg`]): analytic IK (every branch within the limits), q̇ = J⁻¹·V, and the
+//!    hit leg from the stroke's start state at `now` to (q, q̇, q̈) at the hit ([`crate::hit::leg`]): a
 //!    quintic when its exact velocity, acceleration and jerk peaks are within the limits, else the
 //!    jerk-limited (Ruckig) leg that reaches the hit state exactly at the hit time inside the
 //!    position limits. Jerk limits: the robot files carry none, so
 //!    [`crate::hit::DEFAULT_JERK_PER_ACCELERATION`] × the acceleration limits, as `plan_hit` uses.
-//!    With `check_effort` (the default) the leg's torques (inverse dynamics with friction, world
-//!    gravity) must also stay within the effective effort limits ([`crate::effort`]) at every
+//!    With the robot planner's `check_effort` (the default) the leg's torques (inverse dynamics
+//!    with friction, the robot's gravity [`crate::hit::HitOptions::gravity`]) must also stay within the effective effort limits ([`crate::effort`]) at every
 //!    instant, certified by [`crate::dynamics::peak`], checked last and only for a leg that
 //!    would replace the best so far.
 //! 5. **Choice.** Among feasible candidates, the one with the largest margin: the smallest of the
 //!    joints' normalised distance to their position limits at the hit and the leg's margin
 //!    (1 − peak/limit ratio for a quintic, 1 − fastest duration / hit time for a jerk-limited leg). Candidates are tried from the middle of the spread outward and the search
 //!    stops at the first with a margin ≥ `good_margin` (0.25), which bounds the planning time.
+//!
+//! [`ReturnPlanner::plan_from`] and the correction [`ReturnPlanner::plan_near`] share the checks,
+//! the early exits, the return-time loop and the outcome choice (`search.rs`); they differ only in
+//! the order of the candidates and the robot hit tried for each shot.
 
 mod candidates;
-use crate::dynamics::Dynamics;
-use crate::effort::EffortLimits;
-use candidates::candidate_order;
 mod correct;
 mod poses;
-use poses::RacketPoses;
 mod robot;
+mod search;
 mod shoot;
 
+use candidates::candidate_order;
+use poses::RacketPoses;
+use search::Begin;
 pub use shoot::shoot;
 
 use super::flight::{BallState, Flight};
 use super::impact::{Racket, RacketHit};
-use super::leg::HitLeg;
 pub use super::reach::{racket_rotation, Placement, Reach};
 use crate::chain::Chain;
 use crate::error::{Error, Result};
-use crate::ik::{Analytic, LimitFilter};
+use crate::hit::{BranchLeg, HitOptions, HitPlanner};
+use crate::ik::LimitFilter;
 use crate::traj::limits::KinematicLimits;
 use crate::traj::JointState;
 use nalgebra::{IsometryMatrix3, Translation3, Vector3};
@@ -65,9 +70,10 @@ use nalgebra::{IsometryMatrix3, Translation3, Vector3};
 /// Most shooting solves for the fallback targets of a ball no candidate hit otherwise.
 const FALLBACK_ATTEMPTS: usize = 24;
 
-/// Why a ball got no hit, or that it got one.
+/// Why a ball got no return, or that it got one: the ball side's outcome. The robot side's
+/// statuses are [`crate::hit::HitStatus`]; a ball with hit points but no feasible robot hit is `Infeasible`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum HitStatus {
+pub enum ReturnStatus {
     /// A feasible hit was planned.
     Ok,
     /// The ball does not bounce on the robot's half and come back up (net, long, wide, floor).
@@ -80,67 +86,69 @@ pub enum HitStatus {
     Infeasible,
 }
 
-impl HitStatus {
+impl ReturnStatus {
     /// Short lower-case name ("ok", "no_bounce", "out_of_reach", "no_return", "infeasible").
     pub fn name(&self) -> &'static str {
         match self {
-            HitStatus::Ok => "ok",
-            HitStatus::NoBounce => "no_bounce",
-            HitStatus::OutOfReach => "out_of_reach",
-            HitStatus::NoReturn => "no_return",
-            HitStatus::Infeasible => "infeasible",
+            ReturnStatus::Ok => "ok",
+            ReturnStatus::NoBounce => "no_bounce",
+            ReturnStatus::OutOfReach => "out_of_reach",
+            ReturnStatus::NoReturn => "no_return",
+            ReturnStatus::Infeasible => "infeasible",
         }
     }
 }
 
-/// A planned hit: what the racket must do, and what the robot must do for it.
+/// A planned return: the ball and the shot, the [`crate::hit::Hit`] handed to the robot planner,
+/// and the robot's branch for it.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Hit {
+pub struct ReturnHit {
     /// Predicted ball state at the impact (world).
     pub ball: BallState,
     /// Outgoing ball velocity (m/s, world) and the racket producing it.
     pub v_out: Vector3<f64>,
     /// Racket normal, velocity and outgoing spin (world).
     pub racket: RacketHit,
-    /// Racket pose (racket frame in the robot base frame, m): the `pose` of `ttmanip.Hit`.
-    pub pose: IsometryMatrix3<f64>,
-    /// Racket twist [v; ω] (m/s, rad/s, base axes): the `twist` of `ttmanip.Hit`.
-    pub twist: [f64; 6],
-    /// Hit time (s from `now`): the `t` of `ttmanip.Hit`.
-    pub t_hit: f64,
-    /// Joint configuration (m, rad) and velocities at the hit.
-    pub q_hit: Vec<f64>,
-    /// Joint velocities (m/s, rad/s) at the hit.
-    pub qd_hit: Vec<f64>,
-    /// Joint accelerations (m/s², rad/s²) at the hit chosen for the stroke (see [`super::leg`]).
-    pub qdd_hit: Vec<f64>,
-    /// The accepted hit leg (its profile and trajectory from the stroke start at `now` to the hit):
-    /// what the rally executes.
-    pub leg: HitLeg,
-    /// Choice margin (see the module doc), in (0, 1].
-    pub margin: f64,
+    /// The hit (racket pose in the robot's base frame, m; racket-centre twist, base axes; time,
+    /// s from `now`): the `ttmanip.Hit` of the plan.
+    pub hit: crate::hit::Hit,
+    /// The robot's side: hit configuration, joint velocities, the accepted hit leg (what the rally
+    /// executes; q̈ at the hit is its `qdd_hit`) and the choice margin in (0, 1] (module doc).
+    pub branch: BranchLeg,
     /// Landing point (m, world) of the exactly executed impact and its flight time (s).
     pub landing: Vector3<f64>,
 }
 
-/// The result of [`HitPlanner::plan`].
+impl ReturnHit {
+    /// Hit time (s from the plan's `now`).
+    pub fn t_hit(&self) -> f64 {
+        self.hit.t
+    }
+
+    /// The choice margin (module doc), in (0, 1].
+    pub fn margin(&self) -> f64 {
+        self.branch.margin
+    }
+}
+
+/// The result of [`ReturnPlanner::plan`].
 #[derive(Debug, Clone, PartialEq)]
-pub struct HitPlan {
+pub struct ReturnPlan {
     /// Outcome.
-    pub status: HitStatus,
-    /// The hit when `status` is [`HitStatus::Ok`].
-    pub hit: Option<Hit>,
+    pub status: ReturnStatus,
+    /// The hit when `status` is [`ReturnStatus::Ok`].
+    pub hit: Option<ReturnHit>,
     /// Candidates examined.
     pub candidates: usize,
 }
 
-/// The hit planner of one robot: its chain, placement, hitting volume, ready configuration and racket.
+/// The ball planner of one robot: where and when to hit (placement, hitting volume, ready
+/// configuration, racket rubber, the search's settings), over the one robot-side planner.
 #[derive(Debug, Clone)]
-pub struct HitPlanner {
-    /// Robot chain (base frame as in [`Placement`]; tool frame = racket frame).
-    pub chain: Chain,
-    ik: Analytic,
-    limits: KinematicLimits,
+pub struct ReturnPlanner {
+    /// The robot-side planner: chain (base frame as in [`Placement`]), racket mount, analytic IK,
+    /// kinematic limits (jerk as in the module doc), dynamics, effort limits and gravity.
+    pub robot: HitPlanner,
     /// Base frame in the world.
     pub placement: Placement,
     /// Hitting volume of the ball centre (world) searched for candidates.
@@ -170,33 +178,22 @@ pub struct HitPlanner {
     /// Rolls (rad) of the racket about its face normal tried in order (0: handle up); the ball
     /// does not see the roll, the joints do.
     pub rolls: Vec<f64>,
-    /// Check the hit leg's torques against the effective effort limits at every instant (on by
-    /// default; without inertials there is no dynamics and no check).
-    pub check_effort: bool,
-    dynamics: Option<Dynamics>,
-    effort: EffortLimits,
 }
 
-impl HitPlanner {
-    /// The planner for `chain` (an analytic-IK gantry6 structure) with defaults: placement and reach
+impl ReturnPlanner {
+    /// The planner for `chain` (an analytic-IK gantry6 structure) with defaults: the robot planner
+    /// of `chain` with default options (effort checked, the robot's gravity), placement and reach
     /// of gantry6, ready configuration = IK of a forward-facing racket at (−1.85, 0, 0.255) m (world).
     pub fn new(chain: Chain, flight: Flight) -> Result<Self> {
-        let ik = Analytic::for_chain(&chain)
-            .ok_or_else(|| Error::Model("hit planning needs a chain with analytic IK (gantry6)".into()))?;
-        // Robot files carry no jerk limits: the same default as `plan_hit` (infinite when an
-        // acceleration limit is, and then no jerk-limited leg).
-        let jerk: Vec<f64> = chain
-            .limits()
-            .iter()
-            .map(|l| l.acceleration.unwrap_or(f64::INFINITY) * crate::hit::DEFAULT_JERK_PER_ACCELERATION)
-            .collect();
-        let limits = KinematicLimits::from_chain(&chain, Some(&jerk))?;
-        let (dynamics, effort) = (Dynamics::new(&chain).ok(), EffortLimits::of(&chain));
-        let mut planner = HitPlanner {
+        let robot = HitPlanner::new(&chain, HitOptions::default())?;
+        if robot.analytic().is_none() {
+            return Err(Error::Model(
+                "hit planning needs a chain with analytic IK (gantry6)".into(),
+            ));
+        }
+        let mut planner = ReturnPlanner {
             ready: vec![0.0; chain.dof()],
-            chain,
-            ik,
-            limits,
+            robot,
             placement: Placement::default(),
             reach: Reach::default(),
             racket: Racket::default(),
@@ -208,16 +205,27 @@ impl HitPlanner {
             good_margin: 0.25,
             contact_offset: 0.03,
             rolls: [0.0, 30.0, -30.0].iter().map(|d: &f64| d.to_radians()).collect(),
-            check_effort: true,
-            dynamics,
-            effort,
         };
         // Ready: racket facing forward 0.48 m behind the end line, across the table's centre line,
         // at mid-height of the band, so that a stroke accelerates forward into the hit.
         let centre = Vector3::new(-1.85, 0.0, 0.5 * (planner.reach.lo.z + planner.reach.hi.z));
-        let pose = planner.base_pose(&centre, &Vector3::x());
-        planner.ready = planner.ik.nearest(&pose, &planner.ready, LimitFilter::Enforce)?;
+        let pose = planner
+            .robot
+            .racket()
+            .tool_pose(&planner.base_pose(&centre, &Vector3::x()));
+        let ik = planner.robot.analytic().expect("checked above");
+        planner.ready = ik.nearest(&pose, &planner.ready, LimitFilter::Enforce)?;
         Ok(planner)
+    }
+
+    /// The robot's chain.
+    pub fn chain(&self) -> &Chain {
+        self.robot.chain()
+    }
+
+    /// Kinematic limits of the strokes (joint order of the chain; jerk as in the module doc).
+    pub fn limits(&self) -> &KinematicLimits {
+        self.robot.limits()
     }
 
     /// Racket pose in the base frame for a racket centre `c` and face normal `n` (world), handle
@@ -226,7 +234,7 @@ impl HitPlanner {
         self.base_pose_rolled(c, n, 0.0)
     }
 
-    /// [`HitPlanner::base_pose`] with the racket turned by `roll` (rad) about its normal.
+    /// [`ReturnPlanner::base_pose`] with the racket turned by `roll` (rad) about its normal.
     pub fn base_pose_rolled(&self, c: &Vector3<f64>, n: &Vector3<f64>, roll: f64) -> IsometryMatrix3<f64> {
         let world = IsometryMatrix3::from_parts(Translation3::from(*c), racket_rotation(n, roll));
         self.placement.world_from_base().inverse() * world
@@ -259,24 +267,11 @@ impl HitPlanner {
 
     /// Plans the hit of the ball `ball` (state at time `ball.t`, s) for a stroke starting at rest
     /// at the ready configuration at time `now` (s), returning the ball to `target` (x, y, m, world).
-    pub fn plan(&self, ball: &BallState, now: f64, target: [f64; 2]) -> Result<HitPlan> {
+    pub fn plan(&self, ball: &BallState, now: f64, target: [f64; 2]) -> Result<ReturnPlan> {
         self.plan_from(ball, now, target, &JointState::rest(&self.ready), false)
     }
 
-    /// Checks a re-plan's inputs: `start` a joint state of this robot, `ball` a valid ball state.
-    pub(super) fn check_start(&self, ball: &BallState, start: &JointState) -> Result<()> {
-        if start.check("start")? != self.chain.dof() {
-            return Err(Error::shape(
-                "start.q",
-                format!("{} values", self.chain.dof()),
-                start.q.len(),
-            ));
-        }
-        ball.validate("ball")?;
-        Ok(())
-    }
-
-    /// [`HitPlanner::plan`] for a stroke starting from the joint state `start` at `now` (re-planning
+    /// [`ReturnPlanner::plan`] for a stroke starting from the joint state `start` at `now` (re-planning
     /// during a stroke with a newer estimate); `after_bounce` says that `ball` is already past its
     /// bounce on the robot's half (an estimate from observations after it).
     pub fn plan_from(
@@ -286,39 +281,14 @@ impl HitPlanner {
         target: [f64; 2],
         start: &JointState,
         after_bounce: bool,
-    ) -> Result<HitPlan> {
-        self.check_target(target)?;
-        self.check_start(ball, start)?;
-        if !now.is_finite() {
-            return Err(Error::NonFinite {
-                what: "now".into(),
-                index: 0,
-                value: now,
-            });
-        }
-        self.flight.check_span("now", ball, now)?;
-        let (list, bounced) = self.candidate_states(&self.flight, ball, now, self.search_margin, after_bounce);
-        if !bounced {
-            return Ok(HitPlan {
-                status: HitStatus::NoBounce,
-                hit: None,
-                candidates: 0,
-            });
-        }
-        if list.is_empty() {
-            return Ok(HitPlan {
-                status: HitStatus::OutOfReach,
-                hit: None,
-                candidates: 0,
-            });
-        }
+    ) -> Result<ReturnPlan> {
+        let (list, mut search) = match self.begin(ball, now, target, start, after_bounce)? {
+            Begin::Done(plan) => return Ok(plan),
+            Begin::Search(list, search) => (list, search),
+        };
         let order = candidate_order(list.len(), self.candidates.max(1));
         let first = self.candidates.max(1).min(list.len());
         let targets = self.targets(target);
-        let poses = RacketPoses::new(self);
-        let mut best: Option<Hit> = None;
-        let mut any_return = false;
-        let mut tried = 0;
         // Candidates that fail the cheap placement test for every target are skipped, and tried
         // in full (requested target) only when no other candidate gives a hit (the test's normal
         // is approximate).
@@ -328,87 +298,50 @@ impl HitPlanner {
         // The placement test of (candidate, target), each computed once (the fallback asks again).
         let nt = targets.len();
         let mut placeable_memo: Vec<Option<bool>> = vec![None; list.len() * nt];
+        let poses = RacketPoses::new(self);
         let mut placeable = |i: usize, t: usize| -> bool {
             *placeable_memo[i * nt + t].get_or_insert_with(|| self.roughly_placeable(&poses, &list[i], targets[t]))
         };
-        let mut attempt = |s: &BallState, goal: [f64; 2], best: &mut Option<Hit>| {
-            tried += 1;
-            for &tf in &self.return_times {
-                let Some((v_out, racket, landing)) = self.outgoing(s, goal, tf) else {
-                    continue;
-                };
-                any_return = true;
-                if let Some(hit) = self.robot_hit(&poses, s, now, start, v_out, racket, landing) {
-                    if best.as_ref().is_none_or(|b| hit.margin > b.margin) {
-                        *best = Some(hit);
-                    }
-                    break;
-                }
-            }
-        };
+        let robot = |s: &BallState, shot: search::Shot| self.robot_hit(&poses, s, now, start, shot);
         for (rank, &i) in order.iter().enumerate() {
             // More than the first `candidates` only when none of those is feasible.
-            if rank == first && best.is_some() {
+            if rank == first && search.best.is_some() {
                 break;
             }
-            if best.as_ref().is_some_and(|b| b.margin >= self.good_margin) {
+            if search.good() {
                 break;
             }
-            let s = list[i];
             let Some(goal) = (0..nt).find(|&t| placeable(i, t)).map(|t| targets[t]) else {
                 skipped.push(i);
                 first_goal.push(None);
                 continue;
             };
             first_goal.push(Some(goal));
-            attempt(&s, goal, &mut best);
+            search.attempt(self, &list[i], goal, &robot);
         }
-        if best.is_none() {
-            for &i in &skipped {
-                if best.is_some() {
-                    break;
-                }
-                attempt(&list[i], target, &mut best);
+        for &i in &skipped {
+            if search.best.is_some() {
+                break;
             }
+            search.attempt(self, &list[i], target, &robot);
         }
         // Still nothing: the other placeable targets of each candidate (another face normal, other
         // joint positions and velocities at the hit), at most `FALLBACK_ATTEMPTS` shooting solves.
         let mut budget = FALLBACK_ATTEMPTS;
         'fallback: for (&i, &tried_goal) in order.iter().zip(&first_goal) {
-            if best.is_some() {
+            if search.best.is_some() {
                 break;
             }
-            let s = list[i];
             for (t, &goal) in targets.iter().enumerate().filter(|(_, g)| Some(**g) != tried_goal) {
-                if budget == 0 || best.is_some() {
+                if budget == 0 || search.best.is_some() {
                     break 'fallback;
                 }
                 if placeable(i, t) {
                     budget -= 1;
-                    attempt(&s, goal, &mut best);
+                    search.attempt(self, &list[i], goal, &robot);
                 }
             }
         }
-        Ok(searched(best, any_return, tried))
-    }
-
-    /// Kinematic limits of the strokes (joint order of the chain; jerk as in the module doc).
-    pub fn limits(&self) -> &KinematicLimits {
-        &self.limits
-    }
-}
-
-/// The plan a search ends with: its best hit (`Ok`), or `Infeasible` when some shot returned the
-/// ball but no hit was feasible, else `NoReturn`; `tried` candidates.
-pub(super) fn searched(best: Option<Hit>, any_return: bool, tried: usize) -> HitPlan {
-    let status = match (&best, any_return) {
-        (Some(_), _) => HitStatus::Ok,
-        (None, true) => HitStatus::Infeasible,
-        (None, false) => HitStatus::NoReturn,
-    };
-    HitPlan {
-        status,
-        hit: best,
-        candidates: tried,
+        Ok(search.finish())
     }
 }

@@ -2,7 +2,7 @@
 //! and cosines computed once per plan, not once per pose (a plan asks for a few hundred poses).
 
 use super::super::reach::racket_rotation_turned;
-use super::HitPlanner;
+use super::ReturnPlanner;
 use nalgebra::{IsometryMatrix3, Translation3, Vector3};
 
 /// The planner's placement inverted and its rolls as (sine, cosine), fixed for one plan.
@@ -13,7 +13,7 @@ pub(super) struct RacketPoses {
 
 impl RacketPoses {
     /// The poses of `planner` as its placement and rolls are now.
-    pub(super) fn new(planner: &HitPlanner) -> Self {
+    pub(super) fn new(planner: &ReturnPlanner) -> Self {
         RacketPoses {
             base_from_world: planner.placement.world_from_base().inverse(),
             rolls: planner
@@ -29,7 +29,7 @@ impl RacketPoses {
         self.rolls.len()
     }
 
-    /// [`HitPlanner::base_pose_rolled`] for the racket centre `c` and normal `n` (m, world) with
+    /// [`ReturnPlanner::base_pose_rolled`] for the racket centre `c` and normal `n` (m, world) with
     /// the planner's roll number `k`: the same pose.
     pub(super) fn pose(&self, c: &Vector3<f64>, n: &Vector3<f64>, k: usize) -> IsometryMatrix3<f64> {
         let world = IsometryMatrix3::from_parts(Translation3::from(*c), racket_rotation_turned(n, self.rolls[k]));
@@ -44,7 +44,7 @@ mod tests {
 
     #[test]
     fn poses_are_the_planners_base_poses() {
-        let mut pl = HitPlanner::new(crate::robots::gantry6(), Flight::default()).unwrap();
+        let mut pl = ReturnPlanner::new(crate::robots::gantry6(), Flight::default()).unwrap();
         pl.placement.yaw = 0.3;
         pl.rolls = vec![0.0, 0.5, -1.1];
         let poses = RacketPoses::new(&pl);

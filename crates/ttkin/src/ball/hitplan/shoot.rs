@@ -3,11 +3,11 @@
 
 use super::super::flight::{BallState, EventKind, Flight};
 use super::super::impact::RacketHit;
-use super::HitPlanner;
+use super::ReturnPlanner;
 use nalgebra::{Matrix3, Vector3};
 use std::cell::Cell;
 
-impl HitPlanner {
+impl ReturnPlanner {
     /// Outgoing velocity, racket and landing point returning the ball at `s` to `target` in a
     /// return flight of `tf` s.
     pub(super) fn outgoing(
@@ -81,7 +81,7 @@ where
 /// instead of 6.4 flights per solve on 300 random shots). On the hit planner's shots the coarse
 /// and the flight's own integration of the same v₀ end at most 1.3e-5 m apart at 80 ms against 10
 /// ms (7e-7 m at 40 ms; 300 random shots, spins to 150 rad/s, flights of 0.55–1.05 s; tested
-/// below), far inside the 1 mm landing check of [`HitPlanner::outgoing`] (the same integration,
+/// below), far inside the 1 mm landing check of [`ReturnPlanner::outgoing`] (the same integration,
 /// its guards sampled at the flight's own step).
 fn shoot_coarse<S>(f: &Flight, p: &Vector3<f64>, goal: &Vector3<f64>, tf: f64, spin: S) -> Option<Vector3<f64>>
 where

@@ -227,16 +227,7 @@ pub fn racket_rotation_turned(n: &Vector3<f64>, (sin, cos): (f64, f64)) -> Rotat
     Rotation3::from_matrix_unchecked(Matrix3::from_columns(&[x, z.cross(&x), z]))
 }
 
-/// Per-joint minimum time (s) to move `delta` (m or rad) from rest under speed `v` and
-/// acceleration `a`, arriving at any speed.
-pub fn min_joint_time(delta: f64, v: f64, a: f64) -> f64 {
-    let d = delta.abs();
-    if d * 2.0 * a <= v * v {
-        (2.0 * d / a).sqrt()
-    } else {
-        d / v + v / (2.0 * a)
-    }
-}
+pub use crate::hit::leg::min_joint_time;
 
 impl ReachRegion {
     /// The region of `chain` (analytic IK) placed by `placement`, starting from `ready`, with the

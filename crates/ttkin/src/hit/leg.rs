@@ -1,5 +1,6 @@
-//! The hit leg of a ball stroke: the joint motion from the stroke's start state to the hit state
-//! (q, q̇, q̈) at the hit time, the one the hit planner accepts and the rally executes.
+//! The hit leg of a stroke: the joint motion from the stroke's start state to the hit state
+//! (q, q̇, q̈) at the hit time, the one the ball planner ([`crate::ball::hitplan`], through [`super::HitPlanner::best_leg`])
+//! accepts and the rally executes.
 //!
 //! 1. **Quintic** (cheap, tried first): from the start state to (q, q̇, q̈) at `t_hit`, with q̈ = 0
 //!    or a fraction (½, 1) of the end acceleration of the cubic through the same boundary
@@ -160,6 +161,17 @@ fn inside(traj: &JointTrajectory, limits: &KinematicLimits) -> bool {
     traj.position_violations(limits, 0.0).is_empty()
 }
 
+/// Per-joint minimum time (s) to move `delta` (m or rad) from rest under speed `v` and
+/// acceleration `a`, arriving at any speed (jerk unlimited): a lower bound of every leg's time.
+pub fn min_joint_time(delta: f64, v: f64, a: f64) -> f64 {
+    let d = delta.abs();
+    if d * 2.0 * a <= v * v {
+        (2.0 * d / a).sqrt()
+    } else {
+        d / v + v / (2.0 * a)
+    }
+}
+
 /// Shortest time (s) for one joint from rest to travel `delta` and arrive with velocity `v1` (m
 /// or rad, per s) under the speed limit `vmax` and acceleration limit `amax`, jerk unlimited: the
 /// time-optimal bang-bang (and cruise) profile of the double integrator (Pontryagin's maximum
@@ -196,8 +208,8 @@ mod tests {
 
     #[test]
     fn leg_above_a_floor_is_the_leg_when_its_margin_exceeds_the_floor() {
-        let pl = crate::ball::hitplan::HitPlanner::new(crate::robots::gantry6(), Default::default()).unwrap();
-        let lim = pl.limits();
+        let pl = crate::ball::hitplan::ReturnPlanner::new(crate::robots::gantry6(), Default::default()).unwrap();
+        let lim = pl.robot.limits();
         let mut rng = fastrand::Rng::with_seed(5);
         let (mut quintic, mut jerk, mut none) = (0, 0, 0);
         for _ in 0..400 {

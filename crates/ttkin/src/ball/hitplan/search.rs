@@ -1,0 +1,129 @@
+//! What [`ReturnPlanner::plan_from`] and [`ReturnPlanner::plan_near`] share, written once: the
+//! checks of their inputs (one error for the same bad input), the early exits (no bounce, out of
+//! reach), the return-time loop of one candidate and the outcome choice.
+
+use super::super::flight::BallState;
+use super::super::impact::RacketHit;
+use super::{ReturnHit, ReturnPlan, ReturnPlanner, ReturnStatus};
+use crate::error::{check_finite, Error, Result};
+use crate::traj::JointState;
+use nalgebra::Vector3;
+
+/// An outgoing shot: ball velocity after the impact (m/s, world), the racket producing it, and the
+/// landing point (m, world).
+pub(super) type Shot = (Vector3<f64>, RacketHit, Vector3<f64>);
+
+/// How a plan starts: already decided (no bounce, out of reach), or a search over candidates.
+pub(super) enum Begin {
+    /// The plan without a search.
+    Done(ReturnPlan),
+    /// The candidate ball states (in time order) and the empty search.
+    Search(Vec<BallState>, Search),
+}
+
+/// A search in progress: the best hit so far, whether any shot returned the ball, candidates tried.
+pub(super) struct Search {
+    /// The best hit so far (largest margin).
+    pub(super) best: Option<ReturnHit>,
+    any_return: bool,
+    tried: usize,
+    good_margin: f64,
+    return_times: [f64; 3],
+}
+
+impl ReturnPlanner {
+    /// Checks the inputs of a plan for `ball` at `now` (s) toward `goal` from the joint state
+    /// `start` and predicts the candidates: the early exits, or the search to run.
+    pub(super) fn begin(
+        &self,
+        ball: &BallState,
+        now: f64,
+        goal: [f64; 2],
+        start: &JointState,
+        after_bounce: bool,
+    ) -> Result<Begin> {
+        self.check_target(goal)?;
+        if start.check("start")? != self.chain().dof() {
+            return Err(Error::shape(
+                "start.q",
+                format!("{} values", self.chain().dof()),
+                start.q.len(),
+            ));
+        }
+        ball.validate("ball")?;
+        check_finite("now", &[now])?;
+        self.flight.check_span("now", ball, now)?;
+        let (list, bounced) = self.candidate_states(&self.flight, ball, now, self.search_margin, after_bounce);
+        let status = match (bounced, list.is_empty()) {
+            (false, _) => ReturnStatus::NoBounce,
+            (true, true) => ReturnStatus::OutOfReach,
+            (true, false) => {
+                let search = Search {
+                    best: None,
+                    any_return: false,
+                    tried: 0,
+                    good_margin: self.good_margin,
+                    return_times: self.return_times,
+                };
+                return Ok(Begin::Search(list, search));
+            }
+        };
+        Ok(Begin::Done(ReturnPlan {
+            status,
+            hit: None,
+            candidates: 0,
+        }))
+    }
+}
+
+impl Search {
+    /// Whether the best hit so far is good enough to end the search (margin ≥ `good_margin`).
+    pub(super) fn good(&self) -> bool {
+        self.best.as_ref().is_some_and(|b| b.margin() >= self.good_margin)
+    }
+
+    /// Candidates tried so far.
+    pub(super) fn tried(&self) -> usize {
+        self.tried
+    }
+
+    /// One candidate `s` aimed at `goal`: the return times in order, the shot of each
+    /// (`ReturnPlanner::outgoing`), and the first whose robot hit (`robot`) is feasible, kept when
+    /// its margin beats the best so far.
+    pub(super) fn attempt(
+        &mut self,
+        planner: &ReturnPlanner,
+        s: &BallState,
+        goal: [f64; 2],
+        robot: &dyn Fn(&BallState, Shot) -> Option<ReturnHit>,
+    ) {
+        self.tried += 1;
+        for &tf in &self.return_times {
+            let Some(shot) = planner.outgoing(s, goal, tf) else {
+                continue;
+            };
+            self.any_return = true;
+            if let Some(hit) = robot(s, shot) {
+                if self.best.as_ref().is_none_or(|b| hit.margin() > b.margin()) {
+                    self.best = Some(hit);
+                }
+                break;
+            }
+        }
+    }
+
+    /// The plan the search ends with: its best hit (`Ok`), or `Infeasible` when some shot returned
+    /// the ball but no hit was feasible, else `NoReturn`.
+    pub(super) fn finish(self) -> ReturnPlan {
+        let status = match (&self.best, self.any_return) {
+            (Some(_), _) => ReturnStatus::Ok,
+            (None, true) => ReturnStatus::Infeasible,
+            (None, false) => ReturnStatus::NoReturn,
+        };
+        ReturnPlan {
+            status,
+            hit: self.best,
+            candidates: self.tried,
+        }
+    }
+}

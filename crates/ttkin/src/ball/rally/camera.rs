@@ -1,0 +1,89 @@
+//! The rally's camera: its model ([`Camera`]) and what it delivers of one ball's true flight
+//! (positions with Gaussian noise and outliers at the frame times, stamped as the planner sees
+//! them).
+
+use super::serve::{gauss, uniform};
+use crate::ball::flight::{BallState, Flight};
+
+/// Camera model.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Camera {
+    /// Frame rate (Hz).
+    pub rate: f64,
+    /// Delay from exposure to delivery (s).
+    pub latency: f64,
+    /// Position noise σ per axis (m).
+    pub noise: f64,
+    /// Probability of an outlier observation.
+    pub outlier_rate: f64,
+    /// Largest outlier displacement per axis (m).
+    pub outlier_size: f64,
+    /// First observation after the opponent's hit (s).
+    pub start: f64,
+    /// Observation window (s).
+    pub window: f64,
+}
+
+impl Default for Camera {
+    fn default() -> Self {
+        Camera {
+            rate: 200.0,
+            latency: 0.010,
+            noise: 0.002,
+            outlier_rate: 0.02,
+            outlier_size: 0.10,
+            start: 0.02,
+            window: 0.20,
+        }
+    }
+}
+
+/// What the camera delivered of one ball's flight: frames over the whole incoming flight, each
+/// plan seeing those delivered by its time.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Observations {
+    /// True exposure times (s from the opponent's hit).
+    pub exposures: Vec<f64>,
+    /// The time stamps the planner sees (s): the exposures, off by the ball's latency error.
+    pub times: Vec<f64>,
+    /// Observed positions (m, world), one per frame.
+    pub positions: Vec<[f64; 3]>,
+    /// Frames in the first observation window (the first plan uses `positions[..first]`).
+    pub first: usize,
+}
+
+impl Camera {
+    /// The frames of the true flight from `s0` over 1.2 s, noise and outliers drawn with `rng`,
+    /// time stamps off by `stamp_error` (s).
+    pub fn observe(&self, truth: &Flight, s0: &BallState, stamp_error: f64, rng: &mut fastrand::Rng) -> Observations {
+        let cam = self;
+        // The camera runs for the whole incoming flight; each plan sees what was delivered by then.
+        let count = (1.2 * cam.rate) as usize;
+        let exposures: Vec<f64> = (0..count).map(|k| cam.start + k as f64 / cam.rate).collect();
+        let truth_path = crate::ball::predict::predict(truth, s0, &exposures).expect("valid times");
+        // The time stamps the planner sees: the exposures, off by the ball's latency error.
+        let times: Vec<f64> = exposures.iter().map(|t| t + stamp_error).collect();
+        let positions: Vec<[f64; 3]> = truth_path
+            .positions
+            .iter()
+            .map(|p| {
+                let mut o = *p;
+                let outlier = rng.f64() < cam.outlier_rate;
+                for x in o.iter_mut() {
+                    *x += cam.noise * gauss(rng);
+                    if outlier {
+                        *x += uniform(rng, -cam.outlier_size, cam.outlier_size);
+                    }
+                }
+                o
+            })
+            .collect();
+        let first = (cam.window * cam.rate).round() as usize + 1;
+        Observations {
+            exposures,
+            times,
+            positions,
+            first,
+        }
+    }
+}

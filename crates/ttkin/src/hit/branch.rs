@@ -1,0 +1,291 @@
+//! A hit on every IK branch: the robot's side of a hit the ball planner
+//! ([`crate::ball::hitplan`]) chose. For a [`Hit`] (racket pose, twist, time) and the stroke's
+//! start state, each analytic IK branch within the position limits gets its joint velocities
+//! q̇ = J⁻¹V, its hit leg ([`super::leg`]: quintic or jerk-limited, on time) and its effort check
+//! (certified peak, [`crate::dynamics::peak`]); the branch with the largest margin is kept.
+//!
+//! [`HitPlanner::plan`] plans one whole stroke (hit and return legs) on the branch nearest the
+//! current state and moves a late hit; this is the cheaper question a search over thousands of
+//! candidate hits asks: is this hit feasible on time, and with which margin?
+
+use nalgebra::{IsometryMatrix3, Matrix6, Vector3, Vector6};
+
+use super::leg::{hit_leg_above, min_joint_time, HitLeg};
+use super::{Hit, HitPlanner};
+use crate::chain::JacobianFrame;
+use crate::dynamics::{DynamicsData, PeakStop};
+use crate::ik::{joint_velocity, DifferentialIk, Solutions};
+use crate::linalg::cholesky::factor_in_place;
+use crate::traj::limits::LIMIT_TOLERANCE;
+use crate::traj::{JointState, JointTrajectory};
+
+/// One IK branch's hit: configuration, joint velocities, hit leg and margin.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BranchLeg {
+    /// Hit configuration (m, rad).
+    pub q: Vec<f64>,
+    /// Joint velocities at the hit (m/s, rad/s).
+    pub qd: Vec<f64>,
+    /// The hit leg from the start state at 0 s to (q, q̇, q̈) at the hit time.
+    pub leg: HitLeg,
+    /// Margin in (0, 1]: the smaller of the joints' normalised distance to their position limits
+    /// at the hit and the leg's margin ([`HitLeg::margin`]).
+    pub margin: f64,
+}
+
+impl HitPlanner {
+    /// The branch of `hit` with the largest margin above `floor` (−∞: any) from the joint state
+    /// `start` (at 0 s): analytic IK within the position limits (the branch nearest `start` first
+    /// on ties), or `None` when no branch is feasible (no analytic IK, singular, a joint speed
+    /// beyond its limit, no leg on time within the limits, an effort limit exceeded).
+    pub fn best_leg(&self, hit: &Hit, start: &JointState, floor: f64) -> Option<BranchLeg> {
+        let twist = self.tool_twist(hit);
+        let mut best: Option<BranchLeg> = None;
+        for q in self.branches(&hit.pose, Some(&start.q)).iter() {
+            // Only a margin above the best so far can replace it: no solves for the rest.
+            let floor = best.as_ref().map_or(floor, |b| b.margin);
+            if let Some(b) = self.branch_leg(q, start, &twist, hit.t, floor) {
+                best = Some(b);
+            }
+        }
+        best
+    }
+
+    /// The tool-point twist (base axes) of `hit`'s racket-centre twist on this robot's racket.
+    pub fn tool_twist(&self, hit: &Hit) -> [f64; 6] {
+        self.racket.tool_twist(&self.racket.tool_pose(&hit.pose), &hit.twist)
+    }
+
+    /// The hit at configuration `q` moving the tool with `tool_twist` (base axes) after `t_hit` s
+    /// from `start`: q̇, leg and margin, or `None` when it is singular, a joint speed exceeds its
+    /// limit, no leg is within the limits, the effort limits are exceeded or the margin is at most
+    /// `floor` (−∞: any margin).
+    pub fn branch_leg(
+        &self,
+        q: &[f64],
+        start: &JointState,
+        tool_twist: &[f64; 6],
+        t_hit: f64,
+        floor: f64,
+    ) -> Option<BranchLeg> {
+        let mut pos_margin = f64::INFINITY;
+        for (i, &qi) in q.iter().enumerate() {
+            let (lo, hi) = (self.limits.lower[i], self.limits.upper[i]);
+            if lo.is_finite() && hi.is_finite() {
+                pos_margin = pos_margin.min(2.0 * (qi - lo).min(hi - qi) / (hi - lo));
+            }
+        }
+        if pos_margin <= floor || self.too_far(q, start, t_hit) {
+            return None;
+        }
+        let qd = self.hit_joint_velocity(q, tool_twist)?;
+        let lim = &self.limits;
+        if qd.iter().zip(&lim.velocity).any(|(v, vmax)| v.abs() > *vmax) {
+            return None;
+        }
+        let leg = hit_leg_above(start, q, &qd, t_hit, &self.limits, floor)?;
+        if !self.within_effort(&leg.trajectory) {
+            return None;
+        }
+        let margin = pos_margin.min(leg.margin);
+        Some(BranchLeg {
+            q: q.to_vec(),
+            qd,
+            leg,
+            margin,
+        })
+    }
+
+    /// Whether `leg`'s torques (inverse dynamics with friction under the options' gravity, base
+    /// frame) stay within the effective effort limits at every instant (certified,
+    /// [`crate::dynamics::peak`]); true without dynamics or with `check_effort` off.
+    pub fn within_effort(&self, leg: &JointTrajectory) -> bool {
+        let Some(dynamics) = self.dynamics.as_ref() else {
+            return true;
+        };
+        let mut data = DynamicsData::new(dynamics);
+        let gravity = Vector3::from(self.gravity);
+        let threshold = 1.0 + LIMIT_TOLERANCE;
+        let stop = PeakStop::decide(threshold, 1e-3);
+        let peak = dynamics.effort_peak(&mut data, leg, &self.effort, &gravity, stop);
+        peak.bound <= threshold
+    }
+
+    /// q̇ = J⁻¹·V (base frame) at `q` for the tool twist `twist`, or `None` where
+    /// [`joint_velocity`] calls the Jacobian singular (σ_min below its default threshold): for six
+    /// joints on the stack, the threshold test by a Cholesky of JᵀJ − threshold²·I and q̇ from an
+    /// LU solve (the same q̇ to rounding as the damped-SVD solve away from singularities).
+    pub fn hit_joint_velocity(&self, q: &[f64], twist: &[f64; 6]) -> Option<Vec<f64>> {
+        if q.len() != 6 {
+            let jv = joint_velocity(&self.chain, q, twist).ok()?;
+            return (!jv.singular).then_some(jv.qdot);
+        }
+        let j = self.chain.jacobian(q, JacobianFrame::Base).ok()?;
+        let m = Matrix6::from_iterator(j.iter().copied());
+        // σ_min ≥ t exactly when JᵀJ − t²·I is positive definite: a 6 × 6 Cholesky instead of
+        // an SVD (with t = 1e-3 the shift t² = 1e-6 is ten orders above the rounding of JᵀJ).
+        let t = DifferentialIk::default().threshold;
+        let mut shifted = m.transpose() * m - Matrix6::identity() * (t * t);
+        if !m.iter().all(|x| x.is_finite()) || factor_in_place(shifted.as_mut_slice(), 6).is_err() {
+            return None;
+        }
+        let qd = m.lu().solve(&Vector6::from_column_slice(twist))?;
+        Some(qd.iter().copied().collect())
+    }
+
+    /// Whether some joint cannot reach `q` from `start` within `t_hit` s even at full acceleration
+    /// then full speed with any arrival speed ([`min_joint_time`]): a cheap necessary test before
+    /// the hit leg's solves, from rest only (false when `start` moves).
+    fn too_far(&self, q: &[f64], start: &JointState, t_hit: f64) -> bool {
+        if start.qd.iter().chain(&start.qdd).any(|x| *x != 0.0) {
+            return false;
+        }
+        let lim = &self.limits;
+        (0..q.len()).any(|i| min_joint_time(q[i] - start.q[i], lim.velocity[i], lim.acceleration[i]) > t_hit)
+    }
+
+    /// The analytic IK branches of the racket pose `pose` (base frame) within the joint position
+    /// limits, revolute angles moved by 2πk into them where that fits (the branches and values of
+    /// [`crate::ik::LimitFilter::Enforce`], without building its error message for the dropped
+    /// ones: a search asks for thousands of poses beyond the strokes), on the stack; none without
+    /// an analytic IK.
+    pub fn branches(&self, pose: &IsometryMatrix3<f64>, hint: Option<&[f64]>) -> Solutions {
+        let n = self.chain.dof();
+        let Some(ik) = self.analytic.as_ref() else {
+            return Solutions::empty(n);
+        };
+        let mut sols = ik
+            .solve_quiet(&self.racket.tool_pose(pose), hint)
+            .unwrap_or_else(|| Solutions::empty(n));
+        sols.retain_map(|_, i, q| {
+            let kind = self.chain.joints()[i].kind();
+            crate::ik::fit_to_range(q, kind, self.limits.lower[i], self.limits.upper[i])
+        });
+        sols
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ik::{Analytic, LimitFilter};
+    use crate::traj::JointState;
+    use nalgebra::{Rotation3, Translation3};
+
+    fn gantry() -> HitPlanner {
+        HitPlanner::new(&crate::robots::gantry6(), Default::default()).unwrap()
+    }
+
+    #[test]
+    fn hit_joint_velocity_matches_differential_ik() {
+        let pl = gantry();
+        let ready = pl.default_ready().to_vec();
+        let mut rng = fastrand::Rng::with_seed(7);
+        let (mut regular, mut singular) = (0, 0);
+        let mut near = (0, 0);
+        for k in 0..3000 {
+            let mut q: Vec<f64> = ready.iter().map(|x| x + 2.0 * rng.f64() - 1.0).collect();
+            if k % 10 == 0 {
+                q[3] = std::f64::consts::FRAC_PI_2 + 1e-5 * (rng.f64() - 0.5); // c4 ≈ 0: singular
+            } else if k % 10 == 1 {
+                // σ_min around the threshold (1e-3) on both sides.
+                q[3] = std::f64::consts::FRAC_PI_2 + 10f64.powf(-4.0 + 2.0 * rng.f64()) * (rng.f64() - 0.5).signum();
+            }
+            let twist = [0.0, 1.0, 0.0, 0.0, 0.0, 0.0].map(|_| 4.0 * rng.f64() - 2.0);
+            let twist = [twist[0], twist[1], twist[2], 0.0, 0.0, 0.0];
+            let jv = joint_velocity(pl.chain(), &q, &twist).unwrap();
+            if (0.3e-3..3e-3).contains(&jv.sigma_min) {
+                if jv.singular {
+                    near.1 += 1;
+                } else {
+                    near.0 += 1;
+                }
+            }
+            match pl.hit_joint_velocity(&q, &twist) {
+                Some(qd) => {
+                    regular += 1;
+                    assert!(!jv.singular, "{q:?}");
+                    for (a, b) in qd.iter().zip(&jv.qdot) {
+                        assert!((a - b).abs() <= 1e-9 * (1.0 + b.abs()), "{qd:?} vs {:?}", jv.qdot);
+                    }
+                }
+                None => {
+                    singular += 1;
+                    assert!(jv.singular, "{q:?} sigma_min {}", jv.sigma_min);
+                }
+            }
+        }
+        assert!(
+            regular > 1000 && singular > 100,
+            "{regular} regular, {singular} singular"
+        );
+        assert!(
+            near.0 > 20 && near.1 > 20,
+            "{near:?} regular / singular near the threshold"
+        );
+    }
+
+    #[test]
+    fn own_branch_filter_matches_the_ik_limit_filter() {
+        let pl = gantry();
+        let ik = Analytic::for_chain(pl.chain()).unwrap();
+        let hint = pl.default_ready().to_vec();
+        let mut rng = fastrand::Rng::with_seed(4);
+        let (mut some, mut none) = (0, 0);
+        for _ in 0..2000 {
+            let p = Translation3::new(-0.8 + 1.6 * rng.f64(), -1.0 + 2.0 * rng.f64(), -0.3 + 0.6 * rng.f64());
+            let r = Rotation3::from_euler_angles(rng.f64() - 0.5, rng.f64() - 0.5, 6.0 * rng.f64());
+            let pose = IsometryMatrix3::from_parts(p, r);
+            let ours: Vec<Vec<f64>> = pl.branches(&pose, Some(&hint)).iter().map(|q| q.to_vec()).collect();
+            match ik.solve(&pose, Some(&hint), LimitFilter::Enforce) {
+                Ok(sols) => {
+                    some += 1;
+                    let theirs: Vec<Vec<f64>> = sols.iter().map(|q| q.to_vec()).collect();
+                    assert_eq!(ours, theirs);
+                }
+                Err(_) => {
+                    none += 1;
+                    assert!(ours.is_empty());
+                }
+            }
+        }
+        assert!(some > 100 && none > 100, "{some} placeable, {none} not");
+    }
+
+    #[test]
+    fn best_leg_is_the_best_branch_and_its_floor_cuts() {
+        // Hits around the ready pose's racket: best_leg's margin is the largest over the branches
+        // (each through branch_leg), and a floor at or above it gives None.
+        let pl = gantry();
+        let ready = pl.default_ready().to_vec();
+        let start = JointState::rest(&ready);
+        let tool = pl.chain().fk(&ready).unwrap();
+        let mut rng = fastrand::Rng::with_seed(11);
+        let (mut some, mut none) = (0, 0);
+        for _ in 0..300 {
+            let d = Translation3::new(0.3 * rng.f64() - 0.15, 0.3 * rng.f64() - 0.15, 0.2 * rng.f64() - 0.1);
+            let pose = IsometryMatrix3::from_parts(d, Rotation3::from_euler_angles(0.2 * rng.f64(), 0.0, 0.0)) * tool;
+            let v = Vector3::new(rng.f64() - 0.5, rng.f64() - 0.5, rng.f64() - 0.5) * 4.0;
+            let hit = Hit::new(pose, [v.x, v.y, v.z, 0.0, 0.0, 0.0], 0.15 + 0.4 * rng.f64()).unwrap();
+            let each: Vec<f64> = pl
+                .branches(&hit.pose, Some(&start.q))
+                .iter()
+                .filter_map(|q| pl.branch_leg(q, &start, &hit.twist, hit.t, f64::NEG_INFINITY))
+                .map(|b| b.margin)
+                .collect();
+            match pl.best_leg(&hit, &start, f64::NEG_INFINITY) {
+                Some(b) => {
+                    some += 1;
+                    assert_eq!(b.margin, each.iter().copied().fold(f64::NEG_INFINITY, f64::max));
+                    assert!(pl.best_leg(&hit, &start, b.margin).is_none());
+                    assert!((b.leg.trajectory.duration() - hit.t).abs() <= 1e-9);
+                }
+                None => {
+                    none += 1;
+                    assert!(each.is_empty());
+                }
+            }
+        }
+        assert!(some > 20 && none > 20, "{some} feasible, {none} not");
+    }
+}
