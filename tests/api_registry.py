@@ -167,7 +167,10 @@ API: dict[str, dict] = {
     "SimResult.t": {},
     # --- drives (issue 10)
     "DriveSim": {"args": {"setpoint_rate": "rate", "noise": "noise", "gravity": "flag"}},
-    **{f"DriveSim.{a}": {} for a in ("current", "current_ref", "faults", "q", "qd", "t", "tick_rate")},
+    **{
+        f"DriveSim.{a}": {}
+        for a in ("current", "current_reference", "current_ref", "faults", "q", "qd", "t", "tick_rate")
+    },
     "DriveSim.reset": {},
     "DriveSim.set_setpoint": {},
     "DriveSim.tick": {"args": {"n": "small_count"}},
@@ -418,7 +421,7 @@ PICKLE_PROBES: dict[str, object] = {
     "Hit": lambda h: (h.pose, h.twist, h.t),
     "HitPlan": lambda p: (p.sample(500.0), p.torques(500.0), p.earliest_t_hit),
     "SimResult": lambda s: (s.summary(), s.arrays, s.racket_pose),
-    "DriveSim": lambda s: (s.tick(40), s.q, s.qd, s.current, s.current_ref, s.t),
+    "DriveSim": lambda s: (s.tick(40), s.q, s.qd, s.current, s.current_reference, s.t),
     "IkResult": lambda r: (r.q, r.status, bool(r)),
     "DiffDrive": lambda d: (d.wheel_speeds(0.3, 0.2), d.integrate([0.0, 0.0, 0.1], [1.0, 2.0], 0.5)),
     "TrackResult": lambda t: (len(t), t.q, t.qd, t.x, t.joint_names),

@@ -283,6 +283,9 @@ FLOAT_NAMES = set(
     "racket_offset amplitude settle external_torque".split()
 )
 PATH_NAMES = {"path", "file"}
+#: Python ints beyond every scalar type of the bindings (float64, i128, u64) and negative ones:
+#: each must be refused with a TtmanipError naming the argument, never PyO3's OverflowError.
+HUGE_INTS = [10**400, -(10**400), 2**1024, 2**128, -(2**127) - 1, -(2**64), -1]
 
 
 def small_count(d: Draw, _ctx):
@@ -427,6 +430,9 @@ def argument(d: Draw, pname: str, ctx: dict, override: str | None, default=inspe
     if pname in ARRAY_NAMES:
         return None if default is None and d(st.integers(0, 4)) == 0 else d.array(shapes)
     if pname in FLOAT_NAMES:
+        if d(st.integers(0, 19)) == 0:  # a Python int beyond float64 (issue 29: named, not OverflowError)
+            d.finite = False
+            return d(st.sampled_from(HUGE_INTS))
         return None if default is None and d(st.integers(0, 4)) == 0 else d.value()
     if pname == "robot":
         extra = [None] if default is None else []
@@ -437,7 +443,10 @@ def argument(d: Draw, pname: str, ctx: dict, override: str | None, default=inspe
         return d(st.sampled_from(CHOICES[pname]))
     if pname in INTS:
         return d(
-            st.one_of(st.integers(-3, 40), st.sampled_from([-(2**40), 2**64, 0, 10**30, -(10**30), 2**126]))
+            st.one_of(
+                st.integers(-3, 40),
+                st.sampled_from([-(2**40), 2**64, 0, 10**30, -(10**30), 2**126, *HUGE_INTS]),
+            )
         )
     if pname in BOOLS:
         return d(st.booleans())
@@ -610,5 +619,69 @@ def test_each_callable_survives_a_few_calls(key):
     @given(data=st.data())
     def inner(data):
         run_one(Draw(data), key, CALLABLES[key])
+
+    inner()
+
+
+def is_scalar_parameter(p: inspect.Parameter) -> bool:
+    """A parameter that takes a number: by name, or by its numeric default."""
+    if p.name in FLOAT_NAMES or p.name in INTS:
+        return True
+    return isinstance(p.default, (int, float)) and not isinstance(p.default, bool)
+
+
+def run_huge_int(d: Draw, key: str, obj):
+    """One call of `key` with a huge or negative Python int for one of its scalar parameters."""
+    spec = API.get(key, {})
+    target, receiver, attr, args, kwargs, ctx = make_call(d, key, obj)
+    if target is None:
+        return
+    scalars = [p for p in parameters(target) if is_scalar_parameter(p) and p.kind != p.POSITIONAL_ONLY]
+    if not scalars:
+        return
+    p = d(st.sampled_from(scalars))
+    value = d(st.sampled_from(HUGE_INTS))
+    kwargs[p.name] = value
+    faulthandler.dump_traceback_later(CALL_SECONDS, exit=True)
+    try:
+        target(*args, **kwargs)
+    except ttmanip.TtmanipError as e:
+        # a refusal of the huge int names its argument and the accepted range
+        if "is out of range; expected" in str(e):
+            huge = [
+                k
+                for k, v in kwargs.items()
+                if isinstance(v, int) and not isinstance(v, bool) and v in HUGE_INTS
+            ]
+            assert any(f"{k}: " in str(e) for k in huge), f"{key}({p.name}={value}): {e}"
+    except BaseException as e:  # noqa: BLE001 - the point: nothing else may escape
+        if isinstance(e, KeyboardInterrupt):
+            raise
+        if isinstance(e, TypeError) and (d.loose or any(m in str(e) for m in spec.get("type_error", ()))):
+            return
+        if isinstance(e, OSError) and spec.get("os_error"):
+            return
+        kind = f"{type(e).__module__}.{type(e).__name__}"
+        raise AssertionError(f"{key}({args!r}, {{..., {p.name!r}: {value}}}) raised {kind}: {e}") from e
+    finally:
+        faulthandler.cancel_dump_traceback_later()
+
+
+@pytest.mark.parametrize("key", sorted(k for k in CALLABLES if "skip_call" not in API.get(k, {})))
+def test_huge_and_negative_ints_are_named(key):
+    """Every scalar parameter of every callable, given a Python int out of every binding type's
+    range (10**400, 2**1024, 2**128, -2**64, -1): a TtmanipError naming it, never a bare
+    OverflowError (issue 29, class 8)."""
+
+    @settings(
+        max_examples=12,
+        deadline=None,
+        suppress_health_check=list(HealthCheck),
+        derandomize=True,
+        phases=[Phase.explicit, Phase.generate],
+    )
+    @given(data=st.data())
+    def inner(data):
+        run_huge_int(Draw(data), key, CALLABLES[key])
 
     inner()

@@ -373,7 +373,7 @@ BINDING_LOOP_DEBTS = {
     "ball.rs::ball_fit": 9,  # result records of the calibration (per flight, per comparison)
     "cartesian.rs::sample_rate": 2,
     "drives.rs::from_state": 1,
-    "drives.rs::current_ref": 1,
+    "drives.rs::current_reference": 1,
     "drives.rs::actuators": 3,
     "dynamics.rs::states": 2,
     "dynamics.rs::batch_shape": 1,

@@ -46,7 +46,7 @@ def test_tick_by_tick_holds_against_gravity_and_reports_state():
         sim.tick(20)
     assert sim.t == pytest.approx(0.2 + 1.0 / sim.tick_rate, abs=1e-9)
     assert np.abs(sim.q - q0).max() < 1e-3
-    assert sim.current.shape == sim.current_ref.shape == (6,)
+    assert sim.current.shape == sim.current_reference.shape == (6,)
     assert sim.faults == [""] * 6
 
 

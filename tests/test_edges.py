@@ -7,10 +7,12 @@ could kill the interpreter or run unbounded runs in a subprocess with a time and
 from __future__ import annotations
 
 import json
+import os
 import signal
 import subprocess
 import sys
 import textwrap
+import threading
 import time
 
 import numpy as np
@@ -356,3 +358,122 @@ def test_a_plan_for_another_robot_names_the_plan_not_q0():
     with pytest.raises(TtmanipError) as e:
         ttmanip.simulate(ttmanip.robots.mobile8(), plan)
     assert str(e.value).startswith("plan:") and "q0" not in str(e.value)
+
+
+# -- 1b. long calls stop on Ctrl-C (issue 29: every call that can run longer than ~0.5 s) --------
+
+
+def _ctrl_c_after(call, seconds: float = 0.3) -> float:
+    """Runs ``call()`` with a timer thread sending SIGINT to this process after ``seconds``;
+    returns how long the call went on after the signal (it must raise KeyboardInterrupt)."""
+    sent = []
+
+    def fire():
+        sent.append(time.perf_counter())
+        os.kill(os.getpid(), signal.SIGINT)
+
+    timer = threading.Timer(seconds, fire)
+    timer.start()
+    try:
+        call()
+    except KeyboardInterrupt:
+        return time.perf_counter() - sent[0]
+    finally:
+        timer.cancel()
+    pytest.fail("the call ended before Ctrl-C: make its work longer")
+
+
+def _stops_early(full, part, fraction: float):
+    """``full()`` stops on Ctrl-C well before its end: the time it goes on after the signal is a
+    small share of its whole duration, estimated from ``part()`` (the same work times
+    ``fraction``) on the same machine, so that the check holds under any load."""
+    t0 = time.perf_counter()
+    part()
+    whole = (time.perf_counter() - t0) / fraction
+    assert whole > 0.6, f"the work ({whole:.2f} s) is too short to show an interrupt"
+    waited = _ctrl_c_after(full)
+    assert waited < 0.5 * whole, (waited, whole)
+
+
+def test_an_ik_batch_stops_on_ctrl_c():
+    ur5 = ttmanip.robots.ur5()
+    rng = np.random.default_rng(0)
+    lim = np.clip(ur5.limits, -3.0, 3.0)
+    T = ur5.fk(lim[:, 0] + (lim[:, 1] - lim[:, 0]) * rng.random((4000, 6)))
+    q0 = np.zeros(6)
+    _stops_early(
+        lambda: ur5.ik(np.tile(T, (50, 1, 1)), q0, method="numeric", time_budget=None),
+        lambda: ur5.ik(T[:400], q0, method="numeric", time_budget=None),
+        400 / 200_000,
+    )
+
+
+def test_a_servo_run_stops_on_ctrl_c():
+    servo = ttmanip.motor.Servo()
+    _stops_early(
+        lambda: servo.step_response("position", 0.1, 300.0),
+        lambda: servo.step_response("position", 0.1, 15.0),
+        15.0 / 300.0,
+    )
+
+
+def test_a_drive_run_and_ticks_stop_on_ctrl_c():
+    robot = ttmanip.robots.mobile8()
+    sim = ttmanip.DriveSim(robot)
+    z = np.zeros((2, robot.dof))
+    q0 = ttmanip.robots.mobile8_start()
+    qs = np.tile(q0, (2, 1))
+    sim.reset(q0)
+    t_end = 49.0  # 980 000 ticks at 20 kHz, under the 10⁶ a run may take
+    _stops_early(
+        lambda: sim.run(np.array([0.0, t_end]), qs, z, z),
+        lambda: sim.run(np.array([0.0, t_end / 20]), qs, z, z),
+        1 / 20,
+    )
+    # the simulation stayed usable, and a pickle replays the interrupted run to the same tick
+    import pickle
+
+    copy = pickle.loads(pickle.dumps(sim))
+    np.testing.assert_array_equal(copy.q, sim.q)
+    _stops_early(lambda: sim.tick(980_000), lambda: sim.tick(49_000), 1 / 20)
+    copy = pickle.loads(pickle.dumps(sim))
+    np.testing.assert_array_equal(copy.q, sim.q)
+
+
+def test_a_single_ball_flight_stops_on_ctrl_c():
+    # a ball high up with a strong spin: the Magnus force keeps it flying for the whole 10⁸-step
+    # horizon (about 10 s of work)
+    s = ttmanip.ball.state([0.0, 0.0, 1e4], [900.0, 0.0, 0.0], [0.0, 1e5, 0.0])
+    _stops_early(lambda: ttmanip.ball.predict(s, [1.9e5]), lambda: ttmanip.ball.predict(s, [1.9e4]), 0.1)
+
+
+# -- 8. messages: a huge Python int names its argument (every binding argument, by #[guarded]) ----
+
+
+@pytest.mark.parametrize(
+    ("call", "name"),
+    [
+        (lambda p, r: p.sample(10**400), "rate"),
+        (lambda p, r: r.ik(r.fk(np.zeros(r.dof)), max_iterations=10**400), "max_iterations"),
+        (lambda p, r: r.ik(r.fk(np.zeros(r.dof)), seed=-(2**130)), "seed"),
+        (lambda p, r: ttmanip.motor.Servo().step_response("current", 1.0, 2**1024), "duration"),
+        (lambda p, r: ttmanip.DriveSim(r).tick(10**40), "n"),
+    ],
+)
+def test_huge_python_ints_name_their_argument_and_range(call, name):
+    r = ttmanip.robots.gantry6()
+    p = ttmanip.plan_hit(r, ttmanip.DEMO_HIT)
+    pattern = rf"^{name}: .* is out of range; expected (a real number|an integer)"
+    with pytest.raises(TtmanipError, match=pattern):
+        call(p, r)
+
+
+def test_a_plane_crossing_search_stops_on_ctrl_c():
+    s = ttmanip.ball.state([0.0, 0.0, 1e4], [900.0, 0.0, 0.0], [0.0, 1e5, 0.0])
+    # a plane below the floor, never reached: the spin keeps the ball up
+    below = {"point": [0.0, 0.0, -5.0], "normal": [0.0, 0.0, 1.0]}
+    _stops_early(
+        lambda: ttmanip.ball.crossing(s, t_max=1.9e5, **below),
+        lambda: ttmanip.ball.crossing(s, t_max=1.9e4, **below),
+        0.1,
+    )

@@ -99,3 +99,22 @@ def test_mismatched_world_on_the_same_balls_and_balls_from_a_file(tmp_path, caps
     (tmp_path / "bad.csv").write_text("1 2 3\n")
     assert cli.main(["rally", "--balls", str(tmp_path / "bad.csv"), "--out", str(out)]) == 1
     capsys.readouterr()
+
+
+def test_the_summary_reports_the_cores_camera():
+    """The summary's camera is ``ttkin::ball::rally::Camera::default()``, not a copy of it."""
+    from ttmanip import _ttmanip
+    from ttmanip.rally import _camera_summary
+
+    core = _ttmanip.ball_camera()
+    assert set(core) == {"rate", "latency", "noise", "outlier_rate", "outlier_size", "start", "window"}
+    assert _camera_summary() == {
+        "rate_hz": core["rate"],
+        "latency_s": core["latency"],
+        "noise_m": core["noise"],
+        "outliers": core["outlier_rate"],
+        "window_s": core["window"],
+    }
+    # the values the summary printed before it read them from the core (unchanged)
+    before = {"rate_hz": 200.0, "latency_s": 0.010, "noise_m": 0.002, "outliers": 0.02, "window_s": 0.20}
+    assert _camera_summary() == before

@@ -15,6 +15,15 @@ def test_robot_n_is_a_deprecated_dof():
     assert n == robot.dof == 6
 
 
+def test_drive_sim_current_ref_is_a_deprecated_current_reference():
+    sim = ttmanip.DriveSim(ttmanip.robots.gantry6())
+    sim.tick(40)
+    message = r"DriveSim\.current_ref is deprecated; use DriveSim\.current_reference"
+    with pytest.warns(DeprecationWarning, match=message):
+        old = sim.current_ref
+    np.testing.assert_array_equal(old, sim.current_reference)
+
+
 def test_diff_drive_track_is_a_deprecated_track_width():
     with pytest.warns(DeprecationWarning, match="track_width"):
         old = ttmanip.DiffDrive(wheel_radius=0.1, track=0.5)

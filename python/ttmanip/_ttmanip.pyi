@@ -643,8 +643,11 @@ class DriveSim:
     def current(self) -> NDArray[np.float64]:
         """Winding currents, A."""
     @property
-    def current_ref(self) -> NDArray[np.float64]:
+    def current_reference(self) -> NDArray[np.float64]:
         """Current references after limiting, A."""
+    @property
+    def current_ref(self) -> NDArray[np.float64]:
+        """Deprecated name of `current_reference`."""
     @property
     def faults(self) -> list[str]:
         """Fault of each axis ("" when none)."""
@@ -794,6 +797,7 @@ MAX_RALLY_BALLS: int
 
 # issue 13: ball flight, estimation, prediction, hit planning, rally (ttkin::ball)
 def ball_table() -> dict[str, float]: ...
+def ball_camera() -> dict[str, float]: ...
 def ball_placement() -> _F: ...
 def ball_estimate(t: ArrayLike, p: ArrayLike, model: str = "default") -> dict[str, Any]: ...
 def ball_predict(state: ArrayLike, times: ArrayLike, model: str = "default") -> dict[str, Any]: ...

@@ -82,6 +82,11 @@ def gantry6_example(duration: float = 0.5, samples: int = 201):
 
     if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or not 2 <= samples <= 10**8:
         raise TtmanipError(f"samples: expected an integer in 2..=100000000, got {samples!r}")
+    try:
+        duration = float(duration)
+    except OverflowError:  # a Python int beyond float64 (issue 29: named, not a bare OverflowError)
+        shown = str(duration)[:20]
+        raise TtmanipError(f"duration: {shown}… is out of range; expected a real number (float64)") from None
     robot = robots.gantry6()
     t = np.linspace(0.0, duration, samples)
     q1 = np.array([0.3, -0.2, 1.0, 0.5, -0.8, 1.5])

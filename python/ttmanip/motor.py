@@ -224,9 +224,23 @@ def _target(target: float) -> float:
     return float(target)
 
 
+def _int_as_float(v, what: str):
+    """A Python int as a float64, or a TtmanipError naming ``what`` when it is beyond float64's
+    range (issue 29: not a bare OverflowError); anything else unchanged."""
+    if isinstance(v, int) and not isinstance(v, bool):
+        try:
+            return float(v)
+        except OverflowError:
+            shown = str(v)[:20]
+            raise TtmanipError(f"{what}: {shown}… is out of range; expected a float64") from None
+    return v
+
+
 def quintic(distance: float, duration: float, rate_hz: float, start: float = 0.0):
     """Rest-to-rest quintic sampled at ``rate_hz``: arrays (t, q, qd, qdd) in s, rad, rad/s, rad/s²
     (``ttmanip.traj``'s quintic, the one in Rust)."""
+    distance, duration = _int_as_float(distance, "distance"), _int_as_float(duration, "duration")
+    rate_hz, start = _int_as_float(rate_hz, "rate_hz"), _int_as_float(start, "start")
     if not (duration > 0 and rate_hz > 0 and np.isfinite(distance) and np.isfinite(start)):
         raise TtmanipError("quintic: need finite distance and start, duration > 0 and rate_hz > 0")
     if not duration * rate_hz <= 1e8:

@@ -27,6 +27,7 @@ import numpy as np
 
 from . import _ttmanip
 from ._ttmanip import HitPlan, Robot, ShapeError, TtmanipError
+from .traj import joint_state_parts
 
 __all__ = [
     "DEMO_HIT",
@@ -143,28 +144,9 @@ DEMO_HIT = Hit.from_normal(
 )
 
 
-def _state(robot: Robot, state) -> dict:
-    """Keyword arguments q, qd, qdd for the bindings from ``state``: None, q (n,), a tuple
-    (q, qd[, qdd]) or a dict with keys q, qd, qdd."""
-    if state is None:
-        return {}
-    if isinstance(state, dict):
-        unknown = set(state) - {"q", "qd", "qdd"}
-        if unknown:
-            raise TtmanipError(f"state: unknown keys {sorted(unknown)}; use 'q', 'qd', 'qdd'")
-        if "q" not in state:
-            raise TtmanipError("state: missing key 'q'")
-        return {k: state[k] for k in ("q", "qd", "qdd") if k in state}
-    if isinstance(state, tuple):
-        if not 1 <= len(state) <= 3:
-            raise TtmanipError(f"state: expected (q,), (q, qd) or (q, qd, qdd), got {len(state)} items")
-        return dict(zip(("q", "qd", "qdd"), state, strict=False))
-    return {"q": state}
-
-
 def _keywords(robot: Robot, state, ready, profile: str, task: str, jerk, effort: bool) -> dict:
     """The keywords :func:`plan_hit` and :func:`plan_hits` pass on to the planner."""
-    return dict(ready=ready, profile=profile, task=task, jerk=jerk, effort=effort, **_state(robot, state))
+    return dict(ready=ready, profile=profile, task=task, jerk=jerk, effort=effort, **joint_state_parts(state))
 
 
 def _check_hit(hit) -> Hit:

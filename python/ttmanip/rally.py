@@ -205,13 +205,7 @@ def rally(
         "statuses": dict(sorted(statuses.items())),
         "target": list(map(float, target)),
         "max_spin_rps": float(max_spin_rps),
-        "camera": {
-            "rate_hz": 200.0,
-            "latency_s": 0.010,
-            "noise_m": 0.002,
-            "outliers": 0.02,
-            "window_s": 0.20,
-        },
+        "camera": _camera_summary(),
         "stroke_execution": (
             "every stroke through the coupled drive simulation (ttcan::coupled::execute)"
             if drive_execution
@@ -243,6 +237,19 @@ def rally(
         (out / "summary.json").write_text(json.dumps(summary, indent=2))
     summary["results"] = res
     return summary
+
+
+def _camera_summary() -> dict:
+    """The rally's camera as the summary reports it: the core's defaults
+    (``ttkin::ball::rally::Camera::default``), with units in the keys."""
+    c = _t.ball_camera()
+    return {
+        "rate_hz": c["rate"],
+        "latency_s": c["latency"],
+        "noise_m": c["noise"],
+        "outliers": c["outlier_rate"],
+        "window_s": c["window"],
+    }
 
 
 def _drive_check(res: dict, in_reach: np.ndarray, count: int) -> dict:

@@ -17,7 +17,7 @@ peaks, not sampled). Task-space results are :class:`CartesianTrajectory` objects
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -29,6 +29,7 @@ from ._ttmanip import (
     JointTrajectory,
     Robot,
     ShapeError,
+    TtmanipError,
     real_array,
     traj_cubic,
     traj_minimal_duration,
@@ -134,25 +135,41 @@ def _float_array(x: Any, what: str) -> np.ndarray:
         raise ShapeError(f"{what}: expected an array of real numbers ({e})") from None
 
 
-def _state(state: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(q, qd, qdd) from a tuple, a mapping, an object with q/qd/qdd, or q alone (at rest)."""
+def joint_state_parts(state: Any) -> dict:
+    """The one reading of a joint state argument (``stroke``, ``plan_hit``, ``plan_hits``): q, qd
+    and qdd as given (unconverted; the bindings check them), from None (``{}``), a mapping with
+    keys q, qd, qdd (any other key is refused), an object with attributes q, qd, qdd, a tuple
+    or list (q,), (q, qd) or (q, qd, qdd), or q alone."""
+    if state is None:
+        return {}
     if isinstance(state, Mapping):
-        q = _float_array(state["q"], "state.q")
-        qd, qdd = state.get("qd"), state.get("qdd")
-    elif hasattr(state, "q"):
-        q = _float_array(state.q, "state.q")
-        qd, qdd = getattr(state, "qd", None), getattr(state, "qdd", None)
-    elif isinstance(state, Sequence) and len(state) in (1, 2, 3) and np.ndim(state[0]) == 1:
-        q = _float_array(state[0], "state.q")
-        qd = state[1] if len(state) > 1 else None
-        qdd = state[2] if len(state) > 2 else None
-    else:
-        q, qd, qdd = _float_array(state, "state"), None, None
+        unknown = set(state) - {"q", "qd", "qdd"}
+        if unknown:
+            raise TtmanipError(f"state: unknown keys {sorted(unknown)}; use 'q', 'qd', 'qdd'")
+        if "q" not in state:
+            raise TtmanipError("state: missing key 'q'")
+        return {k: state[k] for k in ("q", "qd", "qdd") if k in state}
+    if hasattr(state, "q"):
+        parts = {k: getattr(state, k, None) for k in ("q", "qd", "qdd")}
+        return {k: v for k, v in parts.items() if v is not None}
+    if isinstance(state, (tuple, list)) and state and np.ndim(state[0]) >= 1:
+        if not 1 <= len(state) <= 3:
+            raise TtmanipError(f"state: expected (q,), (q, qd) or (q, qd, qdd), got {len(state)} items")
+        return dict(zip(("q", "qd", "qdd"), state, strict=False))
+    return {"q": state}
+
+
+def _state(state: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(q, qd, qdd) as float arrays from :func:`joint_state_parts` (qd, qdd zero when not given)."""
+    parts = joint_state_parts(state)
+    if "q" not in parts:
+        raise TtmanipError("state: expected q (n,), (q, qd[, qdd]) or a mapping with 'q'")
+    q = _float_array(parts["q"], "state" if state is parts["q"] else "state.q")
     if q.ndim != 1:
         raise ShapeError(f"state: expected q of shape (n,), got shape {q.shape}")
     zero = np.zeros_like(q)
-    qd = zero if qd is None else _float_array(qd, "state.qd")
-    qdd = zero if qdd is None else _float_array(qdd, "state.qdd")
+    qd = zero if parts.get("qd") is None else _float_array(parts["qd"], "state.qd")
+    qdd = zero if parts.get("qdd") is None else _float_array(parts["qdd"], "state.qdd")
     return q, qd, qdd
 
 

@@ -41,6 +41,12 @@ pub enum Error {
     Model(String),
 }
 
+/// The error of a run that a caller's [`ttkin::budget::Stop`] ended (Ctrl-C seen by the Python
+/// binding, which raises `KeyboardInterrupt` instead).
+pub fn stopped() -> Error {
+    Error::Model(ttkin_reason(ttkin::budget::stopped("duration")))
+}
+
 /// Checks that `value` is finite and strictly positive.
 pub fn positive(what: &str, value: f64) -> Result<f64> {
     finite_with(what, value, value > 0.0, || "must be > 0".to_string())

@@ -2,7 +2,7 @@
 //! with the duty the axis computed from the measurement taken at the start of that period.
 
 use crate::axis::{Axis, AxisConfig, AxisState, Mode};
-use crate::error::{finite, Error, Result};
+use crate::error::{finite, stopped, Error, Result};
 use crate::motor::{MotorModel, Plant};
 use crate::schedule::Scheduler;
 
@@ -208,10 +208,25 @@ impl Simulation {
 
     /// Runs for `duration` seconds, asking `reference(t)` for the setpoint every period, recording
     /// every period. A non-finite or negative duration is an error.
-    pub fn run(&mut self, duration: f64, mut reference: impl FnMut(f64) -> Setpoint) -> Result<Trace> {
+    pub fn run(&mut self, duration: f64, reference: impl FnMut(f64) -> Setpoint) -> Result<Trace> {
+        self.run_until(duration, reference, &|| false)
+    }
+
+    /// [`Simulation::run`] that ends early with an error when `stop()` turns true (a caller's
+    /// cancellation, e.g. Ctrl-C seen by the Python binding; polled every
+    /// [`ttkin::budget::STOP_POLL_STEPS`] periods).
+    pub fn run_until(
+        &mut self,
+        duration: f64,
+        mut reference: impl FnMut(f64) -> Setpoint,
+        stop: ttkin::budget::Stop<'_>,
+    ) -> Result<Trace> {
         let n = self.periods_in(duration)?;
         let mut trace = Trace::with_capacity(n);
-        for _ in 0..n {
+        for k in 0..n {
+            if (k as u64 + 1).is_multiple_of(ttkin::budget::STOP_POLL_STEPS) && stop() {
+                return Err(stopped());
+            }
             self.apply(reference(self.time));
             self.record_into(&mut trace);
             self.step();
@@ -223,13 +238,25 @@ impl Simulation {
     /// `duration` s, with `external_torque` (N·m at the output) acting throughout. Every argument
     /// is checked (finite, duration ≥ 0) before anything runs.
     pub fn step_response(&mut self, mode: Mode, amplitude: f64, duration: f64, external_torque: f64) -> Result<Trace> {
+        self.step_response_until(mode, amplitude, duration, external_torque, &|| false)
+    }
+
+    /// [`Simulation::step_response`] that ends early with an error when `stop()` turns true.
+    pub fn step_response_until(
+        &mut self,
+        mode: Mode,
+        amplitude: f64,
+        duration: f64,
+        external_torque: f64,
+        stop: ttkin::budget::Stop<'_>,
+    ) -> Result<Trace> {
         finite("step amplitude", amplitude)?;
         finite("external torque (N·m)", external_torque)?;
         self.periods_in(duration)?;
         self.plant.set_external_torque(external_torque);
         self.enable(mode);
         let setpoint = Setpoint::step(mode, amplitude);
-        self.run(duration, |_| setpoint)
+        self.run_until(duration, |_| setpoint, stop)
     }
 
     /// Follows a position trajectory (q, qd, qdd: rad, rad/s, rad/s², at least one sample, given
@@ -237,6 +264,19 @@ impl Simulation {
     /// mode, then holds its last sample for `settle` s; `external_torque` (N·m at the output) acts
     /// throughout. Every argument is checked before anything runs.
     pub fn follow(&mut self, q: &[f64], qd: &[f64], qdd: &[f64], settle: f64, external_torque: f64) -> Result<Trace> {
+        self.follow_until(q, qd, qdd, settle, external_torque, &|| false)
+    }
+
+    /// [`Simulation::follow`] that ends early with an error when `stop()` turns true.
+    pub fn follow_until(
+        &mut self,
+        q: &[f64],
+        qd: &[f64],
+        qdd: &[f64],
+        settle: f64,
+        external_torque: f64,
+        stop: ttkin::budget::Stop<'_>,
+    ) -> Result<Trace> {
         check_trajectory(q, qd, qdd)?;
         let (Some(&q0), Some(&q_end), Some(&qd_end), Some(&qdd_end)) = (q.first(), q.last(), qd.last(), qdd.last())
         else {
@@ -251,8 +291,8 @@ impl Simulation {
         self.plant.set_external_torque(external_torque);
         self.plant.set_output_state(q0, 0.0);
         self.enable(Mode::Position);
-        let mut trace = self.run_position(q, qd, qdd)?;
-        trace.append(self.run(settle, |_| Setpoint::Position(q_end, qd_end, qdd_end))?);
+        let mut trace = self.run_position_until(q, qd, qdd, stop)?;
+        trace.append(self.run_until(settle, |_| Setpoint::Position(q_end, qd_end, qdd_end), stop)?);
         Ok(trace)
     }
 
@@ -261,11 +301,27 @@ impl Simulation {
     /// the run ends after the position period of the last sample. All three must have the same length and
     /// be finite (checked before anything runs).
     pub fn run_position(&mut self, q: &[f64], qd: &[f64], qdd: &[f64]) -> Result<Trace> {
+        self.run_position_until(q, qd, qdd, &|| false)
+    }
+
+    /// [`Simulation::run_position`] that ends early with an error when `stop()` turns true.
+    pub fn run_position_until(
+        &mut self,
+        q: &[f64],
+        qd: &[f64],
+        qdd: &[f64],
+        stop: ttkin::budget::Stop<'_>,
+    ) -> Result<Trace> {
         check_trajectory(q, qd, qdd)?;
         let per = self.axis.rates().position_ticks() as usize;
         let mut trace = Trace::with_capacity(q.len() * per);
         let mut k = 0;
+        let mut steps = 0u64;
         while k < q.len() || !self.scheduler.peek().position {
+            steps += 1;
+            if steps.is_multiple_of(ttkin::budget::STOP_POLL_STEPS) && stop() {
+                return Err(stopped());
+            }
             if self.scheduler.peek().position {
                 self.axis.set_position(q[k], qd[k], qdd[k]);
                 k += 1;
@@ -357,6 +413,23 @@ mod tests {
     fn ramp(n: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
         let q = (0..n).map(|k| 0.2 + 1e-3 * k as f64).collect();
         (q, vec![1.0; n], vec![0.0; n])
+    }
+
+    /// A run asked to stop ends with an error after its first poll; one never asked is the
+    /// plain run, bit for bit.
+    #[test]
+    fn runs_stop_on_request_and_are_unchanged_otherwise() {
+        let err = sim()
+            .step_response_until(Mode::Position, 0.1, 1.0, 0.0, &|| true)
+            .unwrap_err();
+        assert!(err.to_string().contains("stopped by the caller"), "{err}");
+        let a = sim().step_response(Mode::Position, 0.1, 0.2, 0.0).unwrap();
+        let b = sim()
+            .step_response_until(Mode::Position, 0.1, 0.2, 0.0, &|| false)
+            .unwrap();
+        assert_eq!(a, b);
+        let (q, qd, qdd) = ramp(2000);
+        assert!(sim().follow_until(&q, &qd, &qdd, 0.0, 0.0, &|| true).is_err());
     }
 
     #[test]

@@ -6,12 +6,20 @@
 //! `TtmanipError`) instead of PyO3's `PanicException`, which derives from `BaseException` and so
 //! escapes `except Exception`. Functions that do not return a `PyResult` get `PyResult<T>` as
 //! their return type (PyO3 accepts both). The guard costs one landing pad, no run-time work.
+//!
+//! It also names scalar arguments: every parameter typed `f64`, an integer type or an `Option`
+//! of one gets `#[pyo3(from_py_with = ..)]` with a small generated extractor that calls
+//! `crate::args::scalar(obj, "name")`, so a Python int out of range (`10**400` for a float, `-1`
+//! for a count) raises a `TtmanipError` naming the argument and the accepted range rather than
+//! PyO3's bare `OverflowError`. Defaults and text signatures are unchanged.
 
 #![forbid(unsafe_code)]
 
 use proc_macro::TokenStream;
 use quote::quote;
-use syn::{parse_macro_input, parse_quote, Block, ImplItem, Item, ReturnType, Signature, Type};
+use syn::{
+    parse_macro_input, parse_quote, Attribute, Block, FnArg, ImplItem, Item, ItemFn, Pat, ReturnType, Signature, Type,
+};
 
 /// Wraps every function of a `#[pymethods]` block (or one `#[pyfunction]`) in the panic guard.
 #[proc_macro_attribute]
@@ -22,9 +30,11 @@ pub fn guarded(attr: TokenStream, item: TokenStream) -> TokenStream {
             .into();
     }
     let mut item = parse_macro_input!(item as Item);
+    let mut extractors: Vec<ItemFn> = Vec::new();
     match &mut item {
         Item::Fn(f) => {
             let name = f.sig.ident.to_string();
+            name_scalars(&name, &f.attrs, &mut f.sig, &mut extractors);
             wrap(&name, &mut f.sig, &mut f.block);
         }
         Item::Impl(imp) => {
@@ -36,6 +46,7 @@ pub fn guarded(attr: TokenStream, item: TokenStream) -> TokenStream {
                         continue;
                     }
                     let name = format!("{owner}.{}", m.sig.ident);
+                    name_scalars(&name, &m.attrs, &mut m.sig, &mut extractors);
                     wrap(&name, &mut m.sig, &mut m.block);
                 }
             }
@@ -46,7 +57,54 @@ pub fn guarded(attr: TokenStream, item: TokenStream) -> TokenStream {
                 .into();
         }
     }
-    quote!(#item).into()
+    quote!(#item #(#extractors)*).into()
+}
+
+/// The scalar types whose extraction `crate::args::scalar` takes over (spelled without spaces).
+const SCALARS: &[&str] = &["f64", "i128", "i64", "i32", "u64", "u32", "u16", "u8", "usize"];
+
+/// Whether `ty` is one of [`SCALARS`] or an `Option` of one.
+fn is_scalar(ty: &Type) -> bool {
+    let spelled = quote!(#ty).to_string().replace(' ', "");
+    let inner = spelled
+        .strip_prefix("Option<")
+        .and_then(|s| s.strip_suffix('>'))
+        .unwrap_or(&spelled);
+    SCALARS.contains(&inner)
+}
+
+/// Puts `#[pyo3(from_py_with = ..)]` on every scalar parameter of the function `name` (which has
+/// attributes `attrs`), with its extractor pushed onto `out` (a function beside the item).
+fn name_scalars(name: &str, attrs: &[Attribute], sig: &mut Signature, out: &mut Vec<ItemFn>) {
+    let setter = attrs.iter().any(|a| a.path().is_ident("setter"));
+    for input in &mut sig.inputs {
+        let FnArg::Typed(arg) = input else { continue };
+        if !is_scalar(&arg.ty) || arg.attrs.iter().any(|a| a.path().is_ident("pyo3")) {
+            continue;
+        }
+        let Pat::Ident(ident) = &*arg.pat else { continue };
+        let param = ident.ident.to_string();
+        let param = param.strip_prefix("r#").unwrap_or(&param).to_string();
+        // a setter's value is named after its property (`set_gain` sets `gain`)
+        let shown = if setter {
+            sig.ident.to_string().strip_prefix("set_").unwrap_or(&param).to_string()
+        } else {
+            param.clone()
+        };
+        let fn_name = syn::Ident::new(
+            &format!("__ttkin_arg_{}_{}", name.replace('.', "_"), param),
+            proc_macro2::Span::call_site(),
+        );
+        let ty = &arg.ty;
+        out.push(parse_quote! {
+            #[doc(hidden)]
+            #[allow(non_snake_case)]
+            fn #fn_name(obj: &::pyo3::Bound<'_, ::pyo3::PyAny>) -> ::pyo3::PyResult<#ty> {
+                crate::args::scalar::<#ty>(obj, #shown)
+            }
+        });
+        arg.attrs.push(parse_quote!(#[pyo3(from_py_with = #fn_name)]));
+    }
 }
 
 /// `PyRobot` → `Robot`: the class name Python users see, for error messages.

@@ -92,3 +92,73 @@ pub fn positive_or_nan_vector(obj: &Bound<'_, PyAny>, what: &str, n: usize) -> P
         })
         .collect()
 }
+
+/// The range a scalar argument of this Rust type accepts, as the error message writes it.
+pub trait ScalarRange {
+    /// `"a real number of magnitude at most 1.8e308"`, `"an integer in 0..=18446744073709551615"`.
+    fn accepted() -> String;
+}
+
+macro_rules! integer_range {
+    ($($t:ty),*) => {$(
+        impl ScalarRange for $t {
+            fn accepted() -> String {
+                format!("an integer in {}..={}", <$t>::MIN, <$t>::MAX)
+            }
+        }
+    )*};
+}
+integer_range!(i64, i32, u64, u32, u16, u8, usize);
+
+impl ScalarRange for i128 {
+    fn accepted() -> String {
+        String::from("an integer of magnitude below 2**127 (counts and seeds are checked further)")
+    }
+}
+
+impl ScalarRange for f64 {
+    fn accepted() -> String {
+        format!("a real number of magnitude at most {:e} (a float64)", f64::MAX)
+    }
+}
+
+impl<T: ScalarRange> ScalarRange for Option<T> {
+    fn accepted() -> String {
+        format!("{} or None", T::accepted())
+    }
+}
+
+/// Extracts the scalar argument `what` (a float, an integer or an optional one) as PyO3 would,
+/// but a Python int out of the type's range (`10**400` for a float64, `-1` or `2**64` for a
+/// count) is a `TtmanipError` naming the argument and the accepted range instead of PyO3's bare
+/// `OverflowError`, and a value of the wrong Python type is a `TypeError` that names it.
+///
+/// The `#[guarded]` attribute puts this extractor (through a small function per argument,
+/// `#[pyo3(from_py_with = ...)]`) on every scalar parameter of every binding, so no binding can
+/// forget it.
+pub fn scalar<'py, T>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<T>
+where
+    T: for<'a> FromPyObject<'a, 'py> + ScalarRange,
+{
+    obj.extract::<T>().map_err(|e| {
+        let e: PyErr = e.into();
+        let py = obj.py();
+        if e.is_instance_of::<pyo3::exceptions::PyOverflowError>(py) {
+            let shown = obj.repr().map(|r| r.to_string()).unwrap_or_else(|_| String::from("?"));
+            let shown = if shown.len() > 40 {
+                format!(
+                    "{}… (an integer of {} digits)",
+                    &shown[..20],
+                    shown.trim_start_matches('-').len()
+                )
+            } else {
+                shown
+            };
+            TtmanipError::new_err(format!("{what}: {shown} is out of range; expected {}", T::accepted()))
+        } else if e.get_type(py).is(py.get_type::<pyo3::exceptions::PyTypeError>()) {
+            pyo3::exceptions::PyTypeError::new_err(format!("{what}: {}", e.value(py)))
+        } else {
+            e
+        }
+    })
+}

@@ -10,7 +10,7 @@ use ttkin::ball::fit::{self, Bounce, FitOptions, Recording};
 use ttkin::ball::flight::{BallState, Flight, Plane};
 use ttkin::ball::hitplan::{ReturnHit, ReturnPlanner, ReturnStatus};
 use ttkin::ball::model::{BallModel, Table};
-use ttkin::ball::predict::{crossing, predict, predict_batch_into, CrossingOutcome, CROSSING_HORIZON};
+use ttkin::ball::predict::{crossing_until, predict_batch_into, predict_until, CrossingOutcome, CROSSING_HORIZON};
 use ttkin::ball::rally::{self, Outcomes, Rally, RallyConfig};
 use ttkin::ball::reach::Placement;
 
@@ -82,7 +82,11 @@ fn ball_predict<'py>(
     let s = state_arg(state, "state")?;
     let ts = rows_array(times, "times", "K", &[])?.data().to_vec();
     let f = flight(model)?;
-    let pred = py.detach(|| predict(&f, &s, &ts)).py()?;
+    // Ctrl-C stops a long flight within about a millisecond of work (issue 29).
+    let pred = crate::interrupt::detach_interruptible(py, |cancel| {
+        predict_until(&f, &s, &ts, &|| crate::interrupt::cancelled(cancel))
+    })?
+    .py()?;
     let d = PyDict::new(py);
     d.set_item("positions", to_numpy(py, &[ts.len(), 3], pred.positions.as_flattened()))?;
     d.set_item("events", serde_to_python(py, &pred.events)?)?;
@@ -133,7 +137,11 @@ fn ball_crossing<'py>(
     let s = state_arg(state, "state")?;
     let plane = Plane::new(vec3(point, "point")?, vec3(normal, "normal")?).py()?;
     let f = flight(model)?;
-    let out = py.detach(|| crossing(&f, &s, &plane, t_max)).py()?;
+    // Ctrl-C stops a long flight within about a millisecond of work (issue 29).
+    let out = crate::interrupt::detach_interruptible(py, |cancel| {
+        crossing_until(&f, &s, &plane, t_max, &|| crate::interrupt::cancelled(cancel))
+    })?
+    .py()?;
     let d = PyDict::new(py);
     match out {
         CrossingOutcome::Crossed { state, bounces } => {
@@ -376,6 +384,14 @@ fn ball_update<'py>(
     Ok(d)
 }
 
+/// The rally's camera of `ttkin::ball::rally::Camera::default()`: rate (Hz), latency (s), noise
+/// (m, σ per axis), outlier_rate, outlier_size (m), start and window (s).
+#[ttkin_py_guard::guarded]
+#[pyfunction]
+fn ball_camera(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
+    serde_to_python(py, &rally::Camera::default())
+}
+
 /// The ITTF table of `ttkin::ball::model::Table::default()` (m): length, width, height (surface
 /// above the floor), thickness, net_height, net_overhang.
 #[ttkin_py_guard::guarded]
@@ -515,6 +531,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ball_plan_correct, m)?)?;
     m.add("MAX_RALLY_BALLS", rally::MAX_BALLS)?;
     m.add_function(wrap_pyfunction!(ball_table, m)?)?;
+    m.add_function(wrap_pyfunction!(ball_camera, m)?)?;
     m.add_function(wrap_pyfunction!(ball_placement, m)?)?;
     m.add_function(wrap_pyfunction!(ball_estimate, m)?)?;
     m.add_function(wrap_pyfunction!(ball_predict, m)?)?;

@@ -1,7 +1,10 @@
 //! `ttmanip.DriveSim`: all axes of a robot through their drive cascades on its rigid-body dynamics
 //! (`ttcan::coupled::CoupledSim`). Conversion only: arrays in, arrays out, errors mapped.
 
+use std::sync::atomic::{AtomicU64, Ordering};
+
 use numpy::PyArray1;
+
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use ttcan::{CoupledOptions, CoupledSim};
@@ -43,6 +46,9 @@ enum Call {
     Tick(u64),
     /// `run(t, q, qd, qdd, tau_ff)` with the setpoint period.
     Run(Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Option<Vec<f64>>),
+    /// A `run` that Ctrl-C stopped, with how many times it had polled its stop (the last poll
+    /// stopped it): replayed to the same tick.
+    RunStopped(Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Option<Vec<f64>>, u64),
 }
 
 impl DriveSim {
@@ -77,6 +83,11 @@ impl DriveSim {
                 Call::Tick(n) => sim.tick_n(*n),
                 Call::Run(t, q, qd, qdd, tau) => {
                     let _ = sim.run(t, q, qd, qdd, tau.as_deref(), setpoint_period);
+                }
+                Call::RunStopped(t, q, qd, qdd, tau, polls) => {
+                    let seen = AtomicU64::new(0);
+                    let stop = || seen.fetch_add(1, Ordering::Relaxed) + 1 >= *polls;
+                    let _ = sim.run_until(t, q, qd, qdd, tau.as_deref(), setpoint_period, &stop);
                 }
             }
         }
@@ -177,12 +188,16 @@ impl DriveSim {
             )));
         }
         let sim = &mut self.sim;
-        py.detach(|| sim.tick_n(n));
+        // Ctrl-C stops within about a thousand ticks (issue 29); the ticks run are journaled.
+        let mut ran = 0;
+        let interrupted = crate::interrupt::detach_interruptible(py, |cancel| {
+            ran = sim.tick_n_until(n, &|| crate::interrupt::cancelled(cancel));
+        });
         match self.journal.calls.last_mut() {
-            Some(Call::Tick(m)) => *m += n,
-            _ => self.journal.calls.push(Call::Tick(n)),
+            Some(Call::Tick(m)) => *m += ran,
+            _ => self.journal.calls.push(Call::Tick(ran)),
         }
-        Ok(())
+        interrupted
     }
 
     /// True joint positions, rad or m.
@@ -203,11 +218,19 @@ impl DriveSim {
         PyArray1::from_slice(py, self.sim.current())
     }
 
-    /// Current references after limiting, A.
+    /// Current references after limiting, A (`Servo`'s `current_reference`, the axis'
+    /// `current_reference()`).
     #[getter]
-    fn current_ref<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+    fn current_reference<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         let v: Vec<f64> = self.sim.axes().iter().map(|a| a.current_reference()).collect();
         PyArray1::from_vec(py, v)
+    }
+
+    /// Deprecated name of `current_reference` (issue 30 item 5: one name per concept).
+    #[getter]
+    fn current_ref<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        crate::errors::deprecated(py, "DriveSim.current_ref", "DriveSim.current_reference")?;
+        self.current_reference(py) // a PyResult: `#[guarded]` wraps every method's result
     }
 
     /// Runs the reference (t (K,), q, qd, qdd and optional tau_ff (K, n)); returns the recorded arrays.
@@ -239,7 +262,31 @@ impl DriveSim {
         let times = t.data().to_vec();
         let period = self.setpoint_period;
         let sim = &mut self.sim;
-        let tr = py.detach(|| sim.run(&times, &q, &qd, &qdd, tau.as_deref(), period));
+        // Ctrl-C stops the run within about a thousand ticks (issue 29); the number of stop polls
+        // is journaled, so that a pickle replays the run to the same tick.
+        let polls = AtomicU64::new(0);
+        let stopped_at = AtomicU64::new(0);
+        let tr = crate::interrupt::detach_interruptible(py, |cancel| {
+            let stop = || {
+                let k = polls.fetch_add(1, Ordering::Relaxed) + 1;
+                let stop = crate::interrupt::cancelled(cancel);
+                if stop {
+                    stopped_at.store(k, Ordering::Relaxed);
+                }
+                stop
+            };
+            sim.run_until(&times, &q, &qd, &qdd, tau.as_deref(), period, &stop)
+        });
+        let tr = match tr {
+            Ok(tr) => tr,
+            Err(interrupt) => {
+                match stopped_at.load(Ordering::Relaxed) {
+                    0 => self.journal.calls.push(Call::Run(times, q, qd, qdd, tau)), // it ran to the end
+                    k => self.journal.calls.push(Call::RunStopped(times, q, qd, qdd, tau, k)),
+                }
+                return Err(interrupt);
+            }
+        };
         self.journal.calls.push(Call::Run(times, q, qd, qdd, tau)); // failed or not (see from_state)
         let tr = tr.py()?;
         let rows = tr.len();

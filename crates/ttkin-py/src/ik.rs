@@ -135,7 +135,11 @@ impl PyRobot {
             }
         };
         let chain = &*self.chain;
-        let outcomes = py.detach(|| front.solve(chain, &targets, &q0s)).py()?;
+        // Ctrl-C stops a batch within one target per thread (issue 29).
+        let outcomes = crate::interrupt::detach_interruptible(py, |cancel| {
+            front.solve_until(chain, &targets, &q0s, &|| crate::interrupt::cancelled(cancel))
+        })?
+        .py()?;
         if raise_on_failure {
             if let Some((i, o)) = outcomes.iter().enumerate().find(|(_, o)| o.status != IkStatus::Solved) {
                 let msg = o.failure_message(i);

@@ -98,10 +98,14 @@ impl PyServoSim {
         &self,
         py: Python<'py>,
         seed: i128,
-        f: impl Send + FnOnce(&mut Simulation) -> ttcan::Result<Trace>,
+        f: impl Send + FnOnce(&mut Simulation, ttkin::budget::Stop<'_>) -> ttcan::Result<Trace>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let mut s = self.simulation(seed)?;
-        let (trace, fault) = py.detach(|| (f(&mut s), s.axis.fault()));
+        // Ctrl-C stops a long run within about a thousand loop periods (issue 29).
+        let (trace, fault) = crate::interrupt::detach_interruptible(py, |cancel| {
+            let trace = f(&mut s, &|| crate::interrupt::cancelled(cancel));
+            (trace, s.axis.fault())
+        })?;
         trace_dict(py, trace.py()?, fault)
     }
 }
@@ -166,8 +170,8 @@ impl PyServoSim {
         seed: i128,
     ) -> PyResult<Bound<'py, PyDict>> {
         let mode: Mode = kind.parse().map_err(|e| TtmanipError::new_err(format!("kind: {e}")))?;
-        self.run(py, seed, |s| {
-            s.step_response(mode, amplitude, duration, external_torque)
+        self.run(py, seed, |s, stop| {
+            s.step_response_until(mode, amplitude, duration, external_torque, stop)
         })
     }
 
@@ -188,7 +192,9 @@ impl PyServoSim {
     ) -> PyResult<Bound<'py, PyDict>> {
         let q = vector_of_len(q, "q", 1)?;
         let (qd, qdd) = (table(qd, "qd", q.len(), 1)?, table(qdd, "qdd", q.len(), 1)?);
-        self.run(py, seed, |s| s.follow(&q, &qd, &qdd, settle, external_torque))
+        self.run(py, seed, |s, stop| {
+            s.follow_until(&q, &qd, &qdd, settle, external_torque, stop)
+        })
     }
 
     fn __repr__(&self) -> String {

@@ -27,6 +27,21 @@ pub const MAX_XML_DEPTH: usize = 64;
 /// Most joints a URDF may declare.
 pub const MAX_URDF_JOINTS: usize = 4096;
 
+/// A caller's request to stop long work early (Ctrl-C seen by the Python binding), polled
+/// between items (targets, balls) and every [`STOP_POLL_STEPS`] steps of a loop; `&|| false`
+/// never stops. The work then ends with [`stopped`]'s error, which the caller replaces by its own
+/// (Python's `KeyboardInterrupt`).
+pub type Stop<'a> = &'a (dyn Fn() -> bool + Sync);
+
+/// How many steps of an integration or control loop run between two polls of a [`Stop`]
+/// (about 0.1–1 ms of work).
+pub const STOP_POLL_STEPS: u64 = 1024;
+
+/// The error of work that a [`Stop`] ended; `what` names the argument that set the work's size.
+pub fn stopped(what: &str) -> Error {
+    Error::invalid(what, "stopped by the caller before the end (an interrupt)")
+}
+
 /// Reads the text file at `path`, refusing more than [`MAX_FILE_BYTES`] (read no further: a
 /// device such as `/dev/zero` ends the read) and bytes that are not UTF-8 (with their offset).
 pub fn read_text(path: &std::path::Path) -> Result<String> {

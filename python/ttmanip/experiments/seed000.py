@@ -60,8 +60,8 @@ import numpy as np  # noqa: E402
 from .. import Robot, robots, traj  # noqa: E402
 from ..mobile import TrackResult, task_line, track  # noqa: E402
 
-#: The seed's start configuration (m, rad).
-Q_START = np.array([0.26, *np.radians([200.0, 90.0, 80.0, 250.0, 105.0, 180.0, 135.0])])
+#: The seed's start configuration (m, rad): mobile8's ready configuration, from the robot's data.
+Q_START = robots.mobile8_start()
 #: The seed's printed x(4): racket centre (m), polar and azimuth of the face normal (rad).
 X4_SEED = np.array([0.5501, 1.0647, 0.3998, 0.4699, 1.0528])
 #: The previous target: this fraction of the straight task-space line toward x(4) (comparison only).
@@ -70,8 +70,6 @@ DURATION = 4.0
 RATE_HZ = 1000.0
 #: Arm span from joint 2 to the racket centre (m): d2 + d4 + d5 + racket offset of Table 1.
 ARM_SPAN = 0.068 + 0.156 + 0.325 + 0.15
-#: Racket centre along z8 (m).
-RACKET_OFFSET = 0.15
 #: Weight of the face-normal angle in the distance to x(4) (m/rad).
 NORMAL_WEIGHT = 0.1
 #: Margin kept from the joint limits by the target: m for the prismatic joint, rad for the others.
@@ -87,10 +85,25 @@ def x4_centre_normal() -> tuple[np.ndarray, np.ndarray]:
     return X4_SEED[:3].copy(), n
 
 
+def _normal(polar: np.ndarray, azimuth: np.ndarray) -> np.ndarray:
+    """Unit face normals from racket task angles (rad)."""
+    sp = np.sin(polar)
+    return np.stack([sp * np.cos(azimuth), sp * np.sin(azimuth), np.cos(polar)], axis=-1)
+
+
+def _task_rows(robot: Robot, q: np.ndarray) -> np.ndarray:
+    """The core's racket task coordinates (``Robot.task_coordinates``) of q (n,) or (N, n)."""
+    q = np.asarray(q, dtype=float)
+    rows = q.reshape(-1, q.shape[-1])
+    x = np.array([robot.task_coordinates(row, "racket5") for row in rows]).reshape(-1, 5)
+    return x.reshape(*q.shape[:-1], 5)
+
+
 def racket_centre_normal(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Racket centres (m) and face normals (tool x) in the base frame for q (n,) or (N, n)."""
-    T = robot.fk(q)
-    return T[..., :3, 3] + RACKET_OFFSET * T[..., :3, 2], T[..., :3, 0]
+    """Racket centres (m) and face normals in the base frame for q (n,) or (N, n): the core's
+    racket task (the robot's racket mount, ``Robot.task_coordinates``)."""
+    x = _task_rows(robot, q)
+    return x[..., :3], _normal(x[..., 3], x[..., 4])
 
 
 def distance_to_x4(c: np.ndarray, n: np.ndarray) -> np.ndarray:
@@ -104,23 +117,6 @@ def distance_of_coordinates(x: np.ndarray) -> float:
     """:func:`distance_to_x4` of racket task coordinates [centre (m), polar, azimuth (rad)]."""
     n = np.array([np.sin(x[3]) * np.cos(x[4]), np.sin(x[3]) * np.sin(x[4]), np.cos(x[3])])
     return float(distance_to_x4(np.asarray(x[:3]), n))
-
-
-def _skew(v: np.ndarray) -> np.ndarray:
-    z = np.zeros(v.shape[:-1])
-    x, y, w = v[..., 0], v[..., 1], v[..., 2]
-    return np.stack([np.stack([z, -w, y], -1), np.stack([w, z, -x], -1), np.stack([-y, x, z], -1)], -2)
-
-
-def _centre_normal_jacobians(robot: Robot, q: np.ndarray):
-    """ċ = J_c q̇ and ṅ = J_n q̇ (3 × n each, batched), with c and n."""
-    T = robot.fk(q)
-    J = robot.jacobian(q)
-    c = T[..., :3, 3] + RACKET_OFFSET * T[..., :3, 2]
-    n = T[..., :3, 0]
-    jc = J[..., :3, :] - _skew(c - T[..., :3, 3]) @ J[..., 3:, :]
-    jn = -_skew(n) @ J[..., 3:, :]  # ṅ = ω × n
-    return jc, jn, c, n
 
 
 def task_sigma_min(robot: Robot, q: np.ndarray) -> np.ndarray:
@@ -220,14 +216,18 @@ def joint_path_task_trajectory(
     q0 → q1, and that path (N, n); azimuth unwrapped."""
     count = int(round(duration * rate_hz)) + 1
     q, qdot, _ = traj.quintic(q0, q1, duration).sample(np.linspace(0.0, duration, count))
-    jc, jn, c, n = _centre_normal_jacobians(robot, q)
+    # the core's racket task (the robot's racket mount): its centre rows of the task Jacobian are
+    # ċ = J q̇; its angle rows are residual coordinates, not the angles' rates, which follow from
+    # the face normal's ṅ = ω × n with ω = J_ω q̇ (the geometric Jacobian's angular rows)
+    x = _task_rows(robot, q)
+    jc = np.array([robot.task_jacobian(row, "racket5")[:3] for row in q])
     cdot = np.einsum("kij,kj->ki", jc, qdot)
-    ndot = np.einsum("kij,kj->ki", jn, qdot)
-    polar = np.arccos(np.clip(n[:, 2], -1.0, 1.0))
-    azimuth = np.unwrap(np.arctan2(n[:, 1], n[:, 0]))
-    polar_rate = -ndot[:, 2] / np.sin(polar)
+    omega = np.einsum("kij,kj->ki", robot.jacobian(q)[:, 3:, :], qdot)
+    n = _normal(x[:, 3], x[:, 4])
+    ndot = np.cross(omega, n)
+    polar_rate = -ndot[:, 2] / np.sin(x[:, 3])
     azimuth_rate = (n[:, 0] * ndot[:, 1] - n[:, 1] * ndot[:, 0]) / (n[:, 0] ** 2 + n[:, 1] ** 2)
-    x = np.column_stack([c, polar, azimuth])
+    x[:, 4] = np.unwrap(x[:, 4])
     xdot = np.column_stack([cdot, polar_rate, azimuth_rate])
     return x, xdot, q
 

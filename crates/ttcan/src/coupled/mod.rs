@@ -361,9 +361,19 @@ impl CoupledSim {
 
     /// Runs `n` ticks.
     pub fn tick_n(&mut self, n: u64) {
-        for _ in 0..n {
+        self.tick_n_until(n, &|| false);
+    }
+
+    /// Runs `n` ticks, or fewer when `stop()` turns true (a caller's cancellation, polled every
+    /// [`ttkin::budget::STOP_POLL_STEPS`] ticks); returns the ticks run.
+    pub fn tick_n_until(&mut self, n: u64, stop: ttkin::budget::Stop<'_>) -> u64 {
+        for k in 0..n {
+            if (k + 1).is_multiple_of(ttkin::budget::STOP_POLL_STEPS) && stop() {
+                return k;
+            }
             self.tick();
         }
+        n
     }
 
     /// Hands every axis a position setpoint (joint space: rad or m, per s, per s²) and a

@@ -116,6 +116,23 @@ impl CoupledSim {
         tau_ff: Option<&[f64]>,
         setpoint_period: f64,
     ) -> Result<CoupledTrace> {
+        self.run_until(times, q, qd, qdd, tau_ff, setpoint_period, &|| false)
+    }
+
+    /// [`CoupledSim::run`] that ends early with an error when `stop()` turns true (a caller's
+    /// cancellation, polled every [`ttkin::budget::STOP_POLL_STEPS`] ticks); the simulation is
+    /// then left where the run stopped.
+    #[allow(clippy::too_many_arguments)]
+    pub fn run_until(
+        &mut self,
+        times: &[f64],
+        q: &[f64],
+        qd: &[f64],
+        qdd: &[f64],
+        tau_ff: Option<&[f64]>,
+        setpoint_period: f64,
+        stop: ttkin::budget::Stop<'_>,
+    ) -> Result<CoupledTrace> {
         let n = self.dof();
         let k = times.len();
         if k < 2 {
@@ -187,6 +204,9 @@ impl CoupledSim {
         };
         let start_tick = self.ticks;
         for tick in 0..total {
+            if (tick + 1).is_multiple_of(ttkin::budget::STOP_POLL_STEPS) && stop() {
+                return Err(crate::error::stopped());
+            }
             let t_rel = tick as f64 * self.period;
             if tick % ticks_per_setpoint == 0 {
                 interpolate(times, t0 + t_rel + lead, n, q, qd, qdd, tau_ff, &mut buf);

@@ -349,6 +349,32 @@ impl Flight {
         samples: usize,
         net: bool,
     ) -> (BallState, Option<Event>) {
+        self.advance_stoppable(s, t_end, plane, samples, net, &|| false)
+    }
+
+    /// [`Flight::advance`] that also returns, without an event and before `t_end`, when `stop()`
+    /// turns true (polled every [`crate::budget::STOP_POLL_STEPS`] steps): a caller's
+    /// cancellation. Until then the steps are those of `advance`.
+    pub fn advance_until(
+        &self,
+        s: &BallState,
+        t_end: f64,
+        plane: Option<&Plane>,
+        stop: crate::budget::Stop<'_>,
+    ) -> (BallState, Option<Event>) {
+        self.advance_stoppable(s, t_end, plane, 1, true, stop)
+    }
+
+    /// [`Flight::advance_guarded`] with a stop check (see [`Flight::advance_until`]).
+    fn advance_stoppable(
+        &self,
+        s: &BallState,
+        t_end: f64,
+        plane: Option<&Plane>,
+        samples: usize,
+        net: bool,
+        stop: crate::budget::Stop<'_>,
+    ) -> (BallState, Option<Event>) {
         let samples = samples.max(1);
         let mut cur = *s;
         // Every guard is > 0 where none may fire (the cheap test has a 1e-9 m margin): the exact
@@ -360,7 +386,12 @@ impl Flight {
             [true; 4]
         };
         armed[1] &= net;
+        let mut steps = 0u64;
         while cur.t < t_end {
+            steps += 1;
+            if steps.is_multiple_of(crate::budget::STOP_POLL_STEPS) && stop() {
+                return (cur, None);
+            }
             let h = self.step.min(t_end - cur.t);
             let next = self.rk4(&cur, h);
             if !(next.t > cur.t) {
@@ -492,11 +523,23 @@ impl Flight {
     /// Integrates from `s` to `t_end` (s) through bounces, collecting the events, until `t_end`,
     /// a terminal event (net, floor) or a plane crossing. Returns the final state and the events.
     pub fn run(&self, s: &BallState, t_end: f64, plane: Option<&Plane>) -> (BallState, Vec<Event>) {
+        self.run_until(s, t_end, plane, &|| false)
+    }
+
+    /// [`Flight::run`] that also ends, before `t_end` and without a further event, when `stop()`
+    /// turns true (a caller's cancellation, see [`Flight::advance_until`]).
+    pub fn run_until(
+        &self,
+        s: &BallState,
+        t_end: f64,
+        plane: Option<&Plane>,
+        stop: crate::budget::Stop<'_>,
+    ) -> (BallState, Vec<Event>) {
         let mut cur = *s;
         let mut events = Vec::new();
         // Each bounce loses energy; 64 events bound a flight of any practical length.
         while cur.t < t_end && events.len() < 64 {
-            let (next, ev) = self.advance(&cur, t_end, plane);
+            let (next, ev) = self.advance_until(&cur, t_end, plane, stop);
             cur = next;
             match ev {
                 Some(e) => {

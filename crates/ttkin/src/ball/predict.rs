@@ -44,6 +44,17 @@ fn check_times(times: &[f64], t0: f64) -> Result<()> {
 
 /// Positions of the ball from `state` at `times` (s, non-decreasing, ≥ state.t), through bounces.
 pub fn predict(flight: &Flight, state: &BallState, times: &[f64]) -> Result<Prediction> {
+    predict_until(flight, state, times, &|| false)
+}
+
+/// [`predict`] that ends early with [`crate::budget::stopped`]'s error when `stop()` turns true
+/// (polled every [`crate::budget::STOP_POLL_STEPS`] integration steps).
+pub fn predict_until(
+    flight: &Flight,
+    state: &BallState,
+    times: &[f64],
+    stop: crate::budget::Stop<'_>,
+) -> Result<Prediction> {
     flight.validate()?;
     state.validate("state")?;
     check_times(times, state.t)?;
@@ -56,7 +67,16 @@ pub fn predict(flight: &Flight, state: &BallState, times: &[f64]) -> Result<Pred
     let mut positions = Vec::with_capacity(times.len());
     for &t in times {
         while end.is_none() && cur.t < t {
-            let (next, ev) = flight.advance(&cur, t, None);
+            let (next, ev) = flight.advance_until(&cur, t, None, stop);
+            if ev.is_none() && next.t < t {
+                // stopped by the caller (or a clock that no longer advances, which the span check
+                // above refuses)
+                return Err(if stop() {
+                    crate::budget::stopped("times")
+                } else {
+                    Error::invalid("times", "the clock no longer advances at this time")
+                });
+            }
             cur = next;
             if let Some(e) = ev {
                 events.push(e);
@@ -92,6 +112,18 @@ pub const CROSSING_HORIZON: f64 = 2.0;
 /// Where and when the ball from `state` crosses `plane` (from its positive to negative side),
 /// searching up to `t_max` (s).
 pub fn crossing(flight: &Flight, state: &BallState, plane: &Plane, t_max: f64) -> Result<CrossingOutcome> {
+    crossing_until(flight, state, plane, t_max, &|| false)
+}
+
+/// [`crossing`] that ends early with [`crate::budget::stopped`]'s error when `stop()` turns true
+/// (polled every [`crate::budget::STOP_POLL_STEPS`] integration steps).
+pub fn crossing_until(
+    flight: &Flight,
+    state: &BallState,
+    plane: &Plane,
+    t_max: f64,
+    stop: crate::budget::Stop<'_>,
+) -> Result<CrossingOutcome> {
     flight.validate()?;
     state.validate("state")?;
     if !t_max.is_finite() {
@@ -102,7 +134,15 @@ pub fn crossing(flight: &Flight, state: &BallState, plane: &Plane, t_max: f64) -
         });
     }
     flight.check_span("t_max", state, t_max)?;
-    let (_, events) = flight.run(state, t_max, Some(plane));
+    let (end, events) = flight.run_until(state, t_max, Some(plane), stop);
+    if end.t < t_max
+        && events
+            .last()
+            .is_none_or(|e| !(e.kind.terminal() || e.kind == EventKind::Plane))
+        && stop()
+    {
+        return Err(crate::budget::stopped("t_max"));
+    }
     let mut bounces = Vec::new();
     for e in events {
         match e.kind {
@@ -149,7 +189,9 @@ pub fn predict_batch_into(
             if stop() {
                 return Err(Error::invalid("states", "prediction stopped"));
             }
-            let pred = predict(flight, s, times).map_err(|e| Error::invalid(format!("states[{i}]"), e.to_string()))?;
+            // one long flight stops too (issue 29), not only between balls
+            let pred = predict_until(flight, s, times, stop)
+                .map_err(|e| Error::invalid(format!("states[{i}]"), e.to_string()))?;
             for (dst, p) in o.chunks_exact_mut(3).zip(&pred.positions) {
                 dst.copy_from_slice(p);
             }
@@ -165,4 +207,39 @@ pub fn crossing_batch(
     t_max: f64,
 ) -> Vec<Result<CrossingOutcome>> {
     states.par_iter().map(|s| crossing(flight, s, plane, t_max)).collect()
+}
+
+#[cfg(test)]
+mod stop_tests {
+    use super::*;
+    use crate::ball::model::BallModel;
+    use std::sync::atomic::{AtomicU64, Ordering};
+
+    /// A flight asked to stop ends with the stop's error after one poll's worth of steps; one
+    /// never asked is `predict`, bit for bit.
+    #[test]
+    fn predict_until_stops_on_request_and_is_predict_otherwise() {
+        let f = Flight::new(BallModel::default());
+        let s = BallState::new(0.0, [0.0, 0.0, 1e4], [900.0, 0.0, 0.0], [0.0, 1e5, 0.0]);
+        let polls = AtomicU64::new(0);
+        let err = predict_until(&f, &s, &[100.0], &|| polls.fetch_add(1, Ordering::Relaxed) >= 2).unwrap_err();
+        assert!(err.to_string().contains("stopped by the caller"), "{err}");
+        // three polls in the flight (the third stops it), one more to tell a stop from a stalled clock
+        assert_eq!(polls.load(Ordering::Relaxed), 4);
+        let plane = Plane {
+            point: nalgebra::Vector3::new(0.0, 0.0, -5.0),
+            normal: nalgebra::Vector3::new(0.0, 0.0, 1.0),
+        };
+        let err = crossing_until(&f, &s, &plane, 100.0, &|| true).unwrap_err();
+        assert!(err.to_string().contains("stopped by the caller"), "{err}");
+        assert_eq!(
+            crossing(&f, &s, &plane, 3.0).unwrap(),
+            crossing_until(&f, &s, &plane, 3.0, &|| false).unwrap()
+        );
+        let times = [0.5, 1.0, 7.0];
+        assert_eq!(
+            predict(&f, &s, &times).unwrap(),
+            predict_until(&f, &s, &times, &|| false).unwrap()
+        );
+    }
 }

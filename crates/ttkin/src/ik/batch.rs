@@ -149,6 +149,19 @@ impl IkBatchSolver {
     /// when one start is given (empty: [`Chain::mid_range`]); in parallel when there is more than
     /// one target. Errors only for bad input; each element carries its status.
     pub fn solve(&self, chain: &Chain, targets: &[IsometryMatrix3<f64>], q0s: &[Vec<f64>]) -> Result<Vec<IkOutcome>> {
+        self.solve_until(chain, targets, q0s, &|| false)
+    }
+
+    /// [`Self::solve`] that ends early with [`crate::budget::stopped`]'s error when `stop()`
+    /// turns true (polled before each target; one target is bounded by the solver's iterations,
+    /// restarts and time budget).
+    pub fn solve_until(
+        &self,
+        chain: &Chain,
+        targets: &[IsometryMatrix3<f64>],
+        q0s: &[Vec<f64>],
+        stop: crate::budget::Stop<'_>,
+    ) -> Result<Vec<IkOutcome>> {
         let mid;
         let q0s = if q0s.is_empty() {
             mid = vec![chain.mid_range()];
@@ -158,6 +171,9 @@ impl IkBatchSolver {
         };
         check_batch(chain, targets, q0s)?;
         let one = |i: usize, t: &IsometryMatrix3<f64>| {
+            if stop() {
+                return Err(crate::budget::stopped("T"));
+            }
             let q0 = if q0s.len() == 1 { &q0s[0] } else { &q0s[i] };
             self.solve_one(chain, i, t, q0)
         };
@@ -269,6 +285,26 @@ mod tests {
 
     fn far() -> IsometryMatrix3<f64> {
         IsometryMatrix3::translation(5.0, 0.0, 0.0)
+    }
+
+    /// A batch asked to stop ends with the stop's error; one never asked gives `solve`'s outcomes.
+    #[test]
+    fn solve_until_stops_on_request_and_is_solve_otherwise() {
+        let chain = crate::robots::ur5();
+        let t = chain.fk(&[0.3, -0.9, 1.1, -0.4, 0.8, 0.2]).unwrap();
+        let s = IkSolver {
+            time_budget: None, // deterministic: iterations and restarts only
+            ..IkSolver::default()
+        };
+        let b = IkBatchSolver::new(&chain, s, IkMethod::Numeric).unwrap();
+        let err = b.solve_until(&chain, &[t, t], &[], &|| true).unwrap_err();
+        assert!(err.to_string().contains("stopped by the caller"), "{err}");
+        let a = b.solve(&chain, &[t, t], &[]).unwrap();
+        let c = b.solve_until(&chain, &[t, t], &[], &|| false).unwrap();
+        assert_eq!(
+            a.iter().map(|o| &o.result.q).collect::<Vec<_>>(),
+            c.iter().map(|o| &o.result.q).collect::<Vec<_>>()
+        );
     }
 
     /// One unreachable target in a batch gets its status and does not fail the others.

@@ -6,7 +6,7 @@ use super::serve::{gauss, uniform};
 use crate::ball::flight::{BallState, Flight};
 
 /// Camera model.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Camera {
     /// Frame rate (Hz).
     pub rate: f64,
