@@ -399,13 +399,10 @@ BINDING_LOOP_DEBTS = {
 
 # Known numeric literal defaults left in binding signatures (file -> the `name=value` texts).
 BINDING_DEFAULT_DEBTS = {
-    "ball.rs": ["start=0", "window=20"],
-    "cartesian.rs": ["blend=0.25", "blend=0.25", "blend=0.25", "hz=1000.0"],
-    "drives.rs": ["setpoint_rate=1000.0", "seed=0", "n=1", "setpoint_rate=1000.0"],
-    "hit.rs": ["rate=1000.0", "rate=1000.0"],
-    "mobile.rs": ["rate_hz=1000.0", "rate_hz=1000.0"],
+    "ball.rs": ["start=0"],
+    "drives.rs": ["seed=0", "n=1"],
+    "hit.rs": ["rate=1000.0", "rate=1000.0"],  # hitstack's file: ttkin::traj::SAMPLE_RATE
     "motor.rs": ["external_torque=0.0", "seed=7", "settle=0.0", "external_torque=0.0", "seed=7"],
-    "traj.rs": ["n=101"],
 }
 
 

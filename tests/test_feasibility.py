@@ -85,9 +85,15 @@ def plans(count: int, seed: int):
         yield ttmanip.plan_hit(GANTRY, hit, state, profile=profile), state is not None
 
 
-def test_no_feasible_plan_exceeds_a_limit_at_10_khz_and_effort_ratio_is_the_dense_peak():
+def test_no_feasible_plan_exceeds_a_limit_at_10_khz_and_effort_ratio_is_the_dense_peak_with_knots():
     """Every `ok` or `too_early` plan (a stroke the planner calls feasible, on time or late) of
-    1,000 random hits is within every limit at every 10 kHz sample."""
+    1,000 random hits (moving starts and both profiles) is within every limit at every 10 kHz
+    sample, and every plan's `effort_ratio` is within 1e-3 of the peak of a *dense sample
+    including knots*: the 10 kHz instants plus the stroke's knots and both sides of every zero
+    crossing of a joint's speed. That is the sense in which issue 28's "effort_ratio equals the
+    dense-sampled peak within 1e-3" holds: a plain 10 kHz sample steps over the peak by more than
+    1e-3 on some plans (a jerk switch's kink, a Coulomb step at q̇ = 0; counted and printed), and
+    the certified ratio is the true peak, not the sample's."""
     ok, moving, jerk_legs, worst_gap, stepped_over = 0, 0, 0, 0.0, 0
     for plan, moved in plans(1000, seed=28):
         if plan.trajectory is None:

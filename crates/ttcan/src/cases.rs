@@ -10,6 +10,7 @@
 //! (as in the demo).
 
 use nalgebra::Vector3;
+use ttkin::hit::{Hit, Racket};
 use ttkin::ik::{Analytic, LimitFilter};
 use ttkin::traj::limits::KinematicLimits;
 use ttkin::traj::{stroke::stroke, JointState, JointTrajectory};
@@ -33,16 +34,19 @@ fn ttkin_error(e: ttkin::Error) -> Error {
     Error::Model(e.to_string())
 }
 
-/// Plans the demo stroke of gantry6 (the default hit request of `ttmanip.pipeline`).
+/// Plans the demo stroke of gantry6 (the default hit request of `ttmanip.pipeline`): the hit as a
+/// [`ttkin::hit::Hit`] (the one racket frame, [`ttkin::hit::racket_frame`]), the IK target through
+/// the chain's racket mount, q̇ = J⁻¹V, then the quintic stroke at 0.30 s.
 pub fn gantry6_demo_stroke(chain: &Chain) -> Result<DemoStroke> {
-    let normal = Vector3::new(0.3, -1.0, -0.2);
-    let rot = ttkin::hit::racket_axes(&normal.normalize(), &Vector3::z());
-    let target = nalgebra::IsometryMatrix3::from_parts(nalgebra::Translation3::new(0.35, -0.55, 0.05), rot);
+    let normal = Vector3::new(0.3, -1.0, -0.2).normalize();
+    let v = normal * 3.0;
+    let hit = Hit::from_normal([0.35, -0.55, 0.05], normal.into(), v.into(), 0.30, None, None).map_err(ttkin_error)?;
     let ready = chain.ready();
     let ik = Analytic::for_chain(chain).ok_or_else(|| Error::Model("gantry6 has no analytic IK".into()))?;
+    let racket = Racket::for_chain(chain);
+    let target = racket.tool_pose(&hit.pose);
     let q_hit = ik.nearest(&target, &ready, LimitFilter::Enforce).map_err(ttkin_error)?;
-    let v = normal.normalize() * 3.0;
-    let twist = [v.x, v.y, v.z, 0.0, 0.0, 0.0];
+    let twist = racket.tool_twist(&target, &hit.twist);
     let qd_hit = ttkin::ik::differential::DifferentialIk::default()
         .solve(chain, &q_hit, &twist, None)
         .map_err(ttkin_error)?

@@ -413,7 +413,7 @@ fn ball_placement(py: Python<'_>) -> Bound<'_, PyAny> {
 /// the prediction window (frames) and the frame period (s; estimated from the data when None).
 #[ttkin_py_guard::guarded]
 #[pyfunction]
-#[pyo3(signature = (names, positions, velocities = None, window = 20, period = None))]
+#[pyo3(signature = (names, positions, velocities = None, window = fit::WINDOW, period = None))]
 fn ball_fit<'py>(
     py: Python<'py>,
     names: Vec<String>,

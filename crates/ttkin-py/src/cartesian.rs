@@ -47,7 +47,7 @@ fn state_to_py<'py>(py: Python<'py>, s: &CartesianState) -> PyResult<Bound<'py, 
 impl PyCartesianTrajectory {
     /// Straight line from pose T0 to pose T1 (4×4) in `duration` s, slerp orientation.
     #[staticmethod]
-    #[pyo3(signature = (t0, t1, duration, law="quintic", blend=0.25))]
+    #[pyo3(signature = (t0, t1, duration, law="quintic", blend=ttkin::traj::cartesian::TRAPEZOID_BLEND))]
     fn line(t0: &Any<'_>, t1: &Any<'_>, duration: f64, law: &str, blend: f64) -> PyResult<Self> {
         let (a, b) = (transform(t0, "T0")?, transform(t1, "T1")?);
         let inner = CartesianTrajectory::line(&a, &b, duration, self::law(law, blend)?).py()?;
@@ -56,7 +56,7 @@ impl PyCartesianTrajectory {
 
     /// Circular arc from pose T0 through point `via` (3,) to pose T1, slerp orientation.
     #[staticmethod]
-    #[pyo3(signature = (t0, via, t1, duration, law="quintic", blend=0.25))]
+    #[pyo3(signature = (t0, via, t1, duration, law="quintic", blend=ttkin::traj::cartesian::TRAPEZOID_BLEND))]
     fn arc_through(t0: &Any<'_>, via: &Any<'_>, t1: &Any<'_>, duration: f64, law: &str, blend: f64) -> PyResult<Self> {
         let (a, b) = (transform(t0, "T0")?, transform(t1, "T1")?);
         let inner =
@@ -67,7 +67,7 @@ impl PyCartesianTrajectory {
     /// Circular arc from pose T0 about the axis line (centre (3,), axis (3,)) by `angle` rad; the
     /// tool turns with the arc.
     #[staticmethod]
-    #[pyo3(signature = (t0, centre, axis, angle, duration, law="quintic", blend=0.25))]
+    #[pyo3(signature = (t0, centre, axis, angle, duration, law="quintic", blend=ttkin::traj::cartesian::TRAPEZOID_BLEND))]
     fn arc_about(
         t0: &Any<'_>,
         centre: &Any<'_>,
@@ -142,7 +142,7 @@ impl PyCartesianTrajectory {
 
     /// Sampled limit check through IK (see `to_joint`) against the robot's position, velocity and
     /// acceleration limits: the worst violation per joint and quantity, as dicts.
-    #[pyo3(signature = (robot, ik, q_start, hz=1000.0))]
+    #[pyo3(signature = (robot, ik, q_start, hz=ttkin::traj::SAMPLE_RATE))]
     fn check_limits<'py>(
         &self,
         py: Python<'py>,

@@ -105,7 +105,7 @@ impl DriveSim {
 #[pymethods]
 impl DriveSim {
     #[new]
-    #[pyo3(signature = (robot, *, gravity=true, setpoint_rate=1000.0, noise=None, seed=0, ideal_current=false))]
+    #[pyo3(signature = (robot, *, gravity=true, setpoint_rate=ttcan::coupled::SETPOINT_RATE, noise=None, seed=0, ideal_current=false))]
     fn new(
         robot: &Robot,
         gravity: bool,
@@ -350,7 +350,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 /// Issue 10's θ5 case (`ttcan::cases::theta5_case`): its RMS numbers and traces.
 #[ttkin_py_guard::guarded]
 #[pyfunction]
-#[pyo3(signature = (setpoint_rate=1000.0))]
+#[pyo3(signature = (setpoint_rate=ttcan::coupled::SETPOINT_RATE))]
 fn drive_theta5_case<'py>(py: Python<'py>, setpoint_rate: f64) -> PyResult<Bound<'py, PyDict>> {
     let setpoint_rate = args::positive("setpoint_rate", setpoint_rate)?;
     let c = py.detach(|| ttcan::cases::theta5_case(setpoint_rate)).py()?;

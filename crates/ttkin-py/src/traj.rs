@@ -297,7 +297,7 @@ fn traj_quintic(
 /// last three (n, dof) in Fortran order.
 #[ttkin_py_guard::guarded]
 #[pyfunction]
-#[pyo3(signature = (q0, q1, duration, n=101, v0=None, v1=None, a0=None, a1=None))]
+#[pyo3(signature = (q0, q1, duration, n=ttkin::traj::SAMPLES as i128, v0=None, v1=None, a0=None, a1=None))]
 #[allow(clippy::too_many_arguments)]
 fn traj_quintic_samples<'py>(
     py: Python<'py>,

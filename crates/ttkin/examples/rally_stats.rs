@@ -8,7 +8,8 @@
 //! inverse, IK, q̇ = J⁻¹V, the hit leg): `no_candidate`, `no_shot`, `no_ik`, `singular`, `speed`
 //! (some |q̇_i| above its limit on every solution), `time_bound` (the region's per-joint minimum
 //! time exceeds the time left), `leg` (no hit leg within the limits), `feasible` (a hit exists
-//! that the planner's search did not try). Also the median planning CPU time.
+//! that the planner's search did not try; with the effort check on, mostly a hit whose stroke exceeds
+//! the drives' torque). Also the median planning CPU time. `NO_EFFORT=1`: without the effort check.
 use nalgebra::Vector3;
 use rayon::prelude::*;
 use ttkin::ball::flight::{BallState, Flight};
@@ -144,6 +145,13 @@ fn main() {
     }
     if let Ok(r) = std::env::var("CONTACT_OFFSET") {
         pl.contact_offset = r.parse().expect("CONTACT_OFFSET (m)");
+    }
+    if std::env::var_os("NO_EFFORT").is_some() {
+        let options = ttkin::hit::HitOptions {
+            check_effort: false,
+            ..Default::default()
+        };
+        pl.robot = ttkin::hit::HitPlanner::new(&pl.chain().clone(), options).expect("planner without effort");
     }
     if let Ok(r) = std::env::var("RETURN_TIMES") {
         let v: Vec<f64> = r.split(',').map(|d| d.parse().expect("RETURN_TIMES")).collect();

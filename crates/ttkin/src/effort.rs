@@ -8,9 +8,23 @@
 //! taken for the worse direction (driving, τ·q̇ > 0) at both signs of the torque: braking has
 //! more headroom (U + k_e·|ω|), which the limit does not count, so it is conservative. The
 //! winding's inductance and the power stage's largest duty are left out (both belong to the
-//! controller, `ttcan::actuator`). The gear efficiency η divides nothing here: the joint gets at
-//! most η of the motor torque times G when the motor drives the load, and that is the smaller of
-//! the two directions.
+//! controller, `ttcan::actuator`).
+//!
+//! **The gear efficiency η is in the limit, as a physical loss** (issue 28's decision). A gearhead's
+//! losses are mostly tooth and bearing friction under load, about proportional to the transmitted
+//! torque: the catalogue's η (at the rated point) says the joint gets η·G·τ_motor when the motor
+//! drives the load (maxon's sizing rule, and `ttcan::motor`, whose gearbox loses the factor η in
+//! whichever direction the power flows). The joint-side friction of the drive data (Coulomb f_c and
+//! viscous b, in the inverse dynamics the planners check) is the load-independent part, fitted at
+//! no load: gantry6's θ3 has f_c = 0.3 N·m, while its gear loses (1 − η)·G·k_t·I_peak = 0.28 ·
+//! 27.1 = 7.6 N·m at peak current. Leaving η out would treat the gear as lossless at full load
+//! and let plans ask for 27.1 N·m that a real θ3 does not deliver. The coupled drive simulation
+//! (`ttcan::coupled`) is the lossless case (its plant passes G·k_t·I to the joint, minus that
+//! friction): against it a plan at its limit leaves the current loop's feedback 1/η − 1 of the
+//! current (39 % on θ3/θ4, 33 % on θ5/θ6), and a plan at G·k_t·I_peak would leave it none. When the load drives the motor
+//! (braking, τ·q̇ < 0) a real gear needs only η·|τ|/G of the motor, so it could brake with
+//! G·k_t·I_peak/η; the limit does not count that (conservative: the lossless coupled plant brakes
+//! with G·k_t·I_peak at most).
 
 use crate::chain::Chain;
 use crate::joint::Joint;

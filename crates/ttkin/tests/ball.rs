@@ -410,6 +410,11 @@ fn prediction_rejects_bad_times_and_states() {
     assert!(predict(&f, &bad, &[0.1]).is_err());
 }
 
+/// The rally of `planner()` with `config`.
+fn gantry_rally(config: RallyConfig) -> Rally {
+    Rally::with_planner(planner(), config).unwrap()
+}
+
 fn planner() -> ReturnPlanner {
     ReturnPlanner::new(ttkin::robots::gantry6(), Flight::default()).unwrap()
 }
@@ -447,7 +452,12 @@ fn executed_hit_returns_the_ball_to_its_target() {
         // The robot's racket is there at the hit: FK of q_hit is the planned pose.
         let fk = pl.chain().fk(&hit.branch.q).unwrap();
         assert!((fk.translation.vector - hit.hit.pose.translation.vector).norm() < 1e-9);
-        assert!(hit.branch.margin > 0.0 && hit.hit.t > 0.0);
+        // A late candidate (tried when no early one is feasible) may be exactly time-optimal.
+        assert!(
+            hit.branch.margin >= 0.0 && hit.hit.t > 0.0,
+            "margin {}",
+            hit.branch.margin
+        );
     }
     assert!(planned >= 15, "only {planned} of 30 planned");
     assert!(
@@ -482,14 +492,10 @@ const RALLY_RATE: f64 = 0.93;
 
 #[test]
 fn rally_returns_most_balls_in_reach() {
-    let r = Rally::with_planner(
-        planner(),
-        RallyConfig {
-            seed: 5,
-            ..RallyConfig::default()
-        },
-    )
-    .unwrap();
+    let r = gantry_rally(RallyConfig {
+        seed: 5,
+        ..RallyConfig::default()
+    });
     let out = r.play_range(0, 120, None, None, &|| false).unwrap();
     let in_reach = out.iter().filter(|o| o.in_reach).count();
     let returned = out.iter().filter(|o| o.in_reach && o.returned).count();
@@ -597,22 +603,14 @@ fn wide_balls_are_returned_to_another_target_or_off_the_racket_centre() {
 #[test]
 fn mismatched_world_keeps_the_balls_and_draws_their_physics() {
     use ttkin::ball::rally::WorldSpread;
-    let matched = Rally::with_planner(
-        planner(),
-        RallyConfig {
-            paths: 0,
-            ..RallyConfig::default()
-        },
-    )
-    .unwrap();
-    let mismatched = Rally::with_planner(
-        planner(),
-        RallyConfig {
-            world: Some(WorldSpread::measured()),
-            ..matched.config
-        },
-    )
-    .unwrap();
+    let matched = gantry_rally(RallyConfig {
+        paths: 0,
+        ..RallyConfig::default()
+    });
+    let mismatched = gantry_rally(RallyConfig {
+        world: Some(WorldSpread::measured()),
+        ..matched.config
+    });
     let a: Vec<_> = (0..12).map(|i| matched.play(i, None, None)).collect();
     let b: Vec<_> = (0..12).map(|i| mismatched.play(i, None, None)).collect();
     // The same incoming balls, another flight: the estimates differ.
@@ -668,14 +666,10 @@ impl rally::Executor for Exact {
 
 #[test]
 fn an_exact_executor_plays_as_the_ideal_execution() {
-    let r = Rally::with_planner(
-        planner(),
-        RallyConfig {
-            paths: 0,
-            ..RallyConfig::default()
-        },
-    )
-    .unwrap();
+    let r = gantry_rally(RallyConfig {
+        paths: 0,
+        ..RallyConfig::default()
+    });
     let mut same = 0;
     for i in 0..16 {
         let a = r.play(i, None, None);

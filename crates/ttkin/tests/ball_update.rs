@@ -267,3 +267,27 @@ fn the_correction_after_the_bounce_removes_most_misses() {
     // The ball still meets the racket within its radius (the branch kept may be off-centre).
     assert!(e1 < 0.075 && e0 < 0.075, "racket-centre error {e1} with, {e0} without");
 }
+
+#[test]
+fn plan_and_plan_near_refuse_the_same_bad_input_with_the_same_error() {
+    // One set of input checks for the plan and the re-plan (hitplan/search.rs): a non-finite
+    // `now` is `Error::NonFinite` in both (plan_near said `Error::Invalid` before).
+    let pl = planner();
+    let ready = JointState::rest(&pl.ready);
+    let mut rng = fastrand::Rng::with_seed(21);
+    let (s, hit) = loop {
+        let s = rally::serve(&pl.flight, &mut rng, 30.0, 0.2);
+        let (s, _) = pl.flight.run(&s, 0.22, None);
+        if let Some(h) = pl.plan(&s, 0.23, [0.9, 0.0]).unwrap().hit {
+            break (s, h);
+        }
+    };
+    for bad in [f64::NAN, f64::INFINITY] {
+        let a = pl.plan_from(&s, bad, [0.9, 0.0], &ready, false).unwrap_err();
+        let b = pl.plan_near(&s, bad, &ready, false, &hit, 0.5).unwrap_err();
+        assert!(matches!(a, ttkin::Error::NonFinite { .. }), "{a:?}");
+        assert!(matches!(b, ttkin::Error::NonFinite { .. }), "{b:?}");
+    }
+    let c = pl.plan_near(&s, 0.23, &ready, false, &hit, f64::NAN).unwrap_err();
+    assert!(matches!(c, ttkin::Error::NonFinite { .. }), "{c:?}");
+}

@@ -3,7 +3,9 @@
 //! them before the speed work of issue 12 (`data/hit_plans.txt`; regenerated from that planner with
 //! gantry6's issue-10 drives, which change the armatures and so the efforts; regenerated again for
 //! issue 28, whose certified effort check and drive effort limits change the efforts and some
-//! statuses: `TTKIN_WRITE_HIT_PLANS=1 cargo test -p ttkin --test hit` rewrites it).
+//! statuses; regenerated for the certified check's cheap child bounds and same-time leg alternatives, which move
+//! some too-early times by up to 0.1 % and efforts within the tolerance, no status or profile:
+//! `TTKIN_WRITE_HIT_PLANS=1 cargo test -p ttkin --test hit` rewrites it).
 //! Status, branch count, profile and violation count must match exactly, every number to
 //! 1e-10·(1 + |value|) (the speed work keeps them bit for bit on the machine that made them).
 

@@ -50,6 +50,10 @@ pub use drives::axis_configs_from_chain;
 pub use trace::CoupledTrace;
 use winding::{open_winding_step, winding_step, Winding};
 
+/// Default rate (Hz) of the setpoints handed to the simulated drives (Python `DriveSim`, the θ5
+/// case, the rally's drive execution).
+pub const SETPOINT_RATE: f64 = 1000.0;
+
 /// The longest whole-trajectory run [`CoupledSim::run`] accepts, in current-loop ticks (50 s at
 /// 20 kHz): its trace keeps every tick (about 100 bytes per tick and axis).
 pub const MAX_RUN_TICKS: u64 = 1_000_000;

@@ -958,6 +958,10 @@ pub struct Experiment {
     pub window: usize,
 }
 
+/// Default prediction window (frames) of the calibration experiment: the observations a
+/// prediction starts from.
+pub const WINDOW: usize = 20;
+
 /// Runs the calibration experiment (see [`Experiment`]); `period` overrides the estimate when given.
 pub fn experiment(
     recordings: &[Recording],

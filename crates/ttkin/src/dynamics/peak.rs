@@ -300,11 +300,30 @@ impl Dynamics {
     }
 }
 
-/// One interval of the search with its per-joint upper bounds of the ratio.
+/// One interval of the search with its per-joint upper bounds of the ratio, and, when its own
+/// enclosure was computed, that enclosure (valid on every sub-interval too).
 struct Interval {
     a: f64,
     b: f64,
     upper: Vec<f64>,
+    hull: Option<Vec<Hull>>,
+}
+
+/// What one joint's enclosure over an interval says about every instant of it: the smooth part
+/// τ_s (N·m or N), the largest |dτ_s/dt| (N·m/s or N/s), the Coulomb term and the smallest
+/// effective limit over the q̇ box (N·m or N).
+#[derive(Clone, Copy)]
+struct Hull {
+    smooth: Iv,
+    rate: f64,
+    coulomb: Iv,
+    limit: f64,
+}
+
+impl Interval {
+    fn key(&self) -> f64 {
+        self.upper.iter().fold(f64::NEG_INFINITY, |k, u| k.max(*u))
+    }
 }
 
 /// The state of one branch-and-bound search.
@@ -392,6 +411,7 @@ impl<'a> Search<'a> {
             .rnea_smooth(&mut self.work, q, qd, qdd, &self.gravity, &mut self.tau);
         let half = 0.5 * (b - a);
         let mut upper = vec![0.0; self.n];
+        let mut hull = Vec::with_capacity(self.n);
         for j in 0..self.n {
             let t = self.tau[j];
             let spread = t.d.mag() * half;
@@ -414,14 +434,48 @@ impl<'a> Search<'a> {
                     fc
                 },
             );
-            let mag = (smooth + coulomb).mag() * (1.0 + ROUNDING);
-            upper[j] = if mag.is_nan() {
-                f64::INFINITY
-            } else {
-                ratio(mag, self.limits.at(j, speed.mag()))
-            };
+            let limit = self.limits.at(j, speed.mag());
+            upper[j] = bound(smooth + coulomb, limit);
+            hull.push(Hull {
+                smooth,
+                rate: t.d.mag(),
+                coulomb,
+                limit,
+            });
         }
-        Interval { a, b, upper }
+        Interval {
+            a,
+            b,
+            upper,
+            hull: Some(hull),
+        }
+    }
+
+    /// The sub-interval [a, b] of an interval with enclosure `hull`, bounded without an enclosure
+    /// of its own: its midpoint evaluated, then per joint the mean-value form τ_s(m) ±
+    /// max|dτ_s/dt|·(b − a)/2 with the parent's rate, met with the parent's τ_s, plus the parent's
+    /// Coulomb term, against the parent's limit (all valid on a sub-interval). Costs one point
+    /// evaluation; looser than an enclosure of its own (the rate does not shrink with the
+    /// interval), enough away from the peak.
+    fn cheap(&mut self, data: &mut DynamicsData, a: f64, b: f64, hull: &[Hull]) -> Interval {
+        self.point(data, 0.5 * (a + b));
+        let half = 0.5 * (b - a);
+        let upper = (0..self.n)
+            .map(|j| {
+                let h = &hull[j];
+                let spread = h.rate * half;
+                let smooth = h
+                    .smooth
+                    .meet(&Iv::new(self.smooth[j] - spread, self.smooth[j] + spread));
+                bound(smooth + h.coulomb, h.limit)
+            })
+            .collect();
+        Interval {
+            a,
+            b,
+            upper,
+            hull: None,
+        }
     }
 
     /// Boxes of (q, q̇), (q̇, q̈), (q̈, jerk) over [a, b] from the pieces that overlap it.
@@ -501,11 +555,31 @@ impl<'a> Search<'a> {
                 settled = iv.upper.iter().fold(settled, |s, u| s.max(*u));
                 continue;
             }
+            let Some(hull) = iv.hull else {
+                // Bounded cheaply and still in the way: its own enclosure first.
+                let mut full = self.interval(data, iv.a, iv.b);
+                for (f, u) in full.upper.iter_mut().zip(&iv.upper) {
+                    *f = f.min(*u);
+                }
+                active.push(full);
+                continue;
+            };
             let m = 0.5 * (iv.a + iv.b);
-            let left = self.interval(data, iv.a, m);
-            let right = self.interval(data, m, iv.b);
-            active.push(left);
-            active.push(right);
+            for (a, b) in [(iv.a, m), (m, iv.b)] {
+                // The cheap bound from the parent's enclosure first; the child's own enclosure
+                // only when that cannot settle it (a bound the search would refine further).
+                let child = self.cheap(data, a, b, &hull);
+                let enough = (self.best.0.max(stop.floor) + stop.tolerance).max(stop.below);
+                if child.key() <= enough {
+                    active.push(child);
+                } else {
+                    let mut full = self.interval(data, a, b);
+                    for (f, u) in full.upper.iter_mut().zip(&child.upper) {
+                        *f = f.min(*u);
+                    }
+                    active.push(full);
+                }
+            }
         }
     }
 
@@ -530,6 +604,16 @@ fn sign(v: f64) -> f64 {
         -1.0
     } else {
         0.0
+    }
+}
+
+/// The ratio bound of a torque enclosure against `limit`, widened for rounding; +∞ for NaN.
+fn bound(tau: Iv, limit: f64) -> f64 {
+    let mag = tau.mag() * (1.0 + ROUNDING);
+    if mag.is_nan() {
+        f64::INFINITY
+    } else {
+        ratio(mag, limit)
     }
 }
 

@@ -125,10 +125,14 @@ impl HitPlanner {
         &self.ready
     }
 
-    /// The earliest feasible hit time (s) of `plan`: its own when planning found it, otherwise the
-    /// earliest time at which the planner's profile meets the velocity, acceleration and jerk
-    /// limits from the plan's start to its hit state (effort limits are not re-searched then: the
-    /// plan itself met them at its hit time). NaN when the plan has no hit state.
+    /// The earliest feasible hit time (s) of `plan`: its own when planning found it (a
+    /// `too_early` plan: planning for that time is accepted); for an `ok` plan the earliest time at
+    /// which planning its hit state from its start is accepted, every limit and the certified
+    /// effort check included (the kinematic earliest time when that is accepted, else a bisection
+    /// to 0.1 % up to the plan's time whose result is always an accepted time; about ten plans of
+    /// the stroke). For other plans with a stroke, the earliest time at which the planner's profile
+    /// meets the velocity, acceleration and jerk limits (no time meets every limit). NaN when the
+    /// plan has no hit state.
     pub fn earliest_t_hit(&self, plan: &HitPlan) -> f64 {
         if plan.earliest_t_hit.is_finite() || plan.trajectory.is_none() {
             return plan.earliest_t_hit;
@@ -138,7 +142,15 @@ impl HitPlanner {
             qd: plan.qd_hit.clone(),
             qdd: vec![0.0; plan.q_hit.len()],
         };
-        stroke::earliest_kinematic(self, &plan.start, &hit).map_or(f64::NAN, |t| t.min(plan.t_hit))
+        let Ok(t_kin) = stroke::earliest_kinematic(self, &plan.start, &hit) else {
+            return f64::NAN;
+        };
+        let t_kin = t_kin.min(plan.t_hit);
+        if plan.ok() {
+            stroke::earliest_accepted(self, plan, t_kin)
+        } else {
+            t_kin
+        }
     }
 
     /// Plans `hit` from `state` (at rest at `ready` when `None`) back to rest at `ready` (the

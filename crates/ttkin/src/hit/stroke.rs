@@ -12,14 +12,18 @@
 //! T* is computed on demand ([`super::HitPlanner::earliest_t_hit`]) when planning did not need it.
 //! A leg that leaves the position limits is replanned jerk-limited with position limits.
 //! When the torques exceed an effective effort limit ([`crate::effort`]) at any instant, the
-//! return leg is slowed, and the hit time is moved later (growth by 10 %, then bisection to
+//! return leg is slowed, and the hit time is moved later (growth by 25 %, then bisection to
 //! 0.1 %) until they do not, with the quintic hit leg at each time tried when it is within the
 //! kinematic limits, else the jerk-limited one (`Auto`; `Quintic` and `Jerk` keep their family) (a time-optimal leg stretched in time keeps its
 //! bang-bang torques: gantry6's demo hit needs 1.03 s jerk-limited, 0.50 s as a quintic). "At any instant" is certified, not sampled: the branch-and-bound
 //! bound of [`crate::dynamics::peak`] decides each leg, and the reported `effort_ratio` is the
-//! refined peak of the legs planned (to the options' `effort_tolerance`). The hit-time search
-//! screens its legs by the torques at 33 instants (a necessary test, cheap) and certifies only
-//! the leg it settles on; when that fails, it searches on from there certifying every leg. The final trajectory's speed, acceleration and jerk are checked exactly
+//! refined peak of the legs planned (to the options' `effort_tolerance`). A hit leg beyond the
+//! effort limits is first replaced by the other family at the requested time (the quintic when it
+//! is within the kinematic and position limits, the jerk-limited leg with position limits). The
+//! hit-time search screens its legs by the torques at 33 instants (a necessary test, cheap) and
+//! certifies only the leg it settles on; when that fails, it searches on from there certifying
+//! every leg. Every leg is certified with the same stopping rule wherever it is checked, so a
+//! plan requested for the time a `too_early` plan reports is accepted with the same leg. The final trajectory's speed, acceleration and jerk are checked exactly
 //! as well ([`JointTrajectory::rate_violations`]; Ruckig's legs and the accepted quintics are
 //! within them by construction, so this only catches a start state beyond the limits).
 //!
@@ -244,6 +248,42 @@ fn first_legs(
     Ok((Legs::new(leg.trajectory, back, StrokeProfile::Jerk), earliest))
 }
 
+/// The earliest hit time (s) at which a plan of `plan`'s hit state from its start is accepted
+/// (status ok: on time, every kinematic and effort limit met), for an `ok` plan: the kinematic
+/// earliest time ([`earliest_kinematic`]) when a plan there is accepted, otherwise bisection between
+/// it and the plan's own time to [`EFFORT_SEARCH_PRECISION`], each step a full plan of the stroke.
+/// The time returned is always one at which planning is accepted (acceptance need not be monotone
+/// in the hit time: an earlier accepted time may exist between the kinematic bound and it).
+pub(super) fn earliest_accepted(p: &HitPlanner, plan: &HitPlan, t_kin: f64) -> f64 {
+    let mut data = p.dynamics.as_ref().map(DynamicsData::new);
+    let mut accepted = |t: f64| {
+        let mut trial = plan.clone();
+        trial.hit.t = t;
+        trial.status = HitStatus::Ok;
+        trial.message.clear();
+        trial.violations.clear();
+        trial.trajectory = None;
+        trial.earliest_t_hit = f64::NAN;
+        plan_stroke(p, &mut trial, data.as_mut()).is_ok() && trial.status == HitStatus::Ok
+    };
+    let (mut lo, mut hi) = (t_kin, plan.t_hit);
+    if lo >= hi {
+        return hi;
+    }
+    if accepted(lo) {
+        return lo;
+    }
+    while hi - lo > EFFORT_SEARCH_PRECISION * hi {
+        let mid = 0.5 * (lo + hi);
+        if accepted(mid) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    hi
+}
+
 /// The earliest hit time (s) at which the planner's profile meets the velocity, acceleration and
 /// jerk limits from `start` to `hit`: the time-optimal jerk-limited duration (`Auto`, `Jerk`) or
 /// the minimal quintic duration (`Quintic`).
@@ -446,9 +486,34 @@ fn within_effort_limits(
     // The search for the earliest hit time screens each leg by its torques at instants (cheap,
     // necessary); the leg it settles on is then certified. When that fails (a peak between the
     // instants), the search runs again from there with every leg certified.
+    // A leg accepted at hit time t: the first of `legs_at(t)` whose certified peak (refined as the
+    // reported one, so that the same leg gets the same answer wherever it is checked) fits. Every
+    // time the search settles on is one at which a plan requested for it is accepted.
+    let certified = |t: f64, data: &mut DynamicsData, skip: Option<&JointTrajectory>| {
+        for (traj, profile) in legs_at(t) {
+            // A torque above the limit at one of the screening instants rejects the leg at once
+            // (the certified bound is at least every value the leg takes: the same answer).
+            if skip == Some(&traj) || screen(p, data, &traj, SCREEN_POINTS) > threshold {
+                continue;
+            }
+            let e = effort(p, data, &traj, refine_hit);
+            if fits(&e) {
+                return Some((traj, profile, e));
+            }
+        }
+        None
+    };
+    // The other leg family at the requested time first (a stretched time-optimal leg or a
+    // quintic may fit where the first choice does not).
+    let t0 = legs.t_hit();
+    if let Some((best, profile, e)) = certified(t0, data, Some(&legs.hit)) {
+        legs.set_hit(best);
+        legs.hit_known.effort = Some(e);
+        legs.profile = profile;
+        return Ok(());
+    }
     let screened =
         |t: f64, data: &mut DynamicsData| legs_at(t).find(|(traj, _)| screen(p, data, traj, SCREEN_POINTS) <= 1.0);
-    let t0 = legs.t_hit();
     let Some((hi, (best, profile))) = earliest(t0, p.options.max_t_hit, data, screened) else {
         return Err(name(&e_hit, "hit"));
     };
@@ -459,8 +524,8 @@ fn within_effort_limits(
         legs.profile = profile;
         return Ok(());
     }
-    let certified = |t: f64, data: &mut DynamicsData| legs_at(t).find(|(traj, _)| fits(&effort(p, data, traj, DECIDE)));
-    let Some((_, (best, profile))) = earliest(hi, p.options.max_t_hit, data, certified) else {
+    let accept = |t: f64, data: &mut DynamicsData| certified(t, data, None).map(|(traj, profile, _)| (traj, profile));
+    let Some((_, (best, profile))) = earliest(hi, p.options.max_t_hit, data, accept) else {
         return Err(name(&e, "hit"));
     };
     legs.set_hit(best);
@@ -468,8 +533,12 @@ fn within_effort_limits(
     Ok(())
 }
 
+/// Growth factor of the hit time in [`earliest`] before its bisection (25 %: half the steps of
+/// 10 % to a hit that needs no time at all, e.g. `effort_limit`; the bisection adds two).
+const GROWTH: f64 = 1.25;
+
 /// The earliest hit time after `lo` s (not accepted) up to `max` s at which `accept` gives a leg,
-/// to [`EFFORT_SEARCH_PRECISION`]: growth by 10 %, then bisection. The time and the leg with its profile.
+/// to [`EFFORT_SEARCH_PRECISION`]: growth by [`GROWTH`], then bisection. The time and the leg with its profile.
 fn earliest<F>(
     mut lo: f64,
     max: f64,
@@ -479,7 +548,7 @@ fn earliest<F>(
 where
     F: FnMut(f64, &mut DynamicsData) -> Option<(JointTrajectory, StrokeProfile)>,
 {
-    let mut hi = lo * 1.1;
+    let mut hi = lo * GROWTH;
     let mut best = loop {
         if hi > max {
             return None;
@@ -488,7 +557,7 @@ where
             break traj;
         }
         lo = hi;
-        hi *= 1.1;
+        hi *= GROWTH;
     };
     while hi - lo > EFFORT_SEARCH_PRECISION * hi {
         let mid = 0.5 * (lo + hi);
@@ -502,12 +571,3 @@ where
     }
     Some((hi, best))
 }
-
-/// A certified decision of a leg: within the effort limits at every instant, or not (a peak
-/// within 1e-3 below the limit may be called above it, which only moves the hit a little later).
-const DECIDE: PeakStop = PeakStop {
-    tolerance: 1e-3,
-    floor: 0.0,
-    above: 1.0 + LIMIT_TOLERANCE,
-    below: 1.0 + LIMIT_TOLERANCE,
-};

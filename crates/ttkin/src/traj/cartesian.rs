@@ -11,6 +11,9 @@ use nalgebra::{IsometryMatrix3, Rotation3, Translation3, Vector3};
 use super::{check_duration, rate_times, Samples};
 use crate::error::{check_finite, Error, Result};
 
+/// Default blend of the trapezoidal time law (`TimeLaw::Trapezoid`), the one "trapezoid" gives.
+pub const TRAPEZOID_BLEND: f64 = 0.25;
+
 /// Time law s(t): the path parameter from 0 at t = 0 to 1 at the duration, at rest at both ends.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum TimeLaw {
@@ -32,7 +35,7 @@ impl TimeLaw {
         match name {
             "cubic" => Ok(TimeLaw::Cubic),
             "quintic" => Ok(TimeLaw::Quintic),
-            "trapezoid" | "trapezoidal" => Ok(TimeLaw::Trapezoid { blend: 0.25 }),
+            "trapezoid" | "trapezoidal" => Ok(TimeLaw::Trapezoid { blend: TRAPEZOID_BLEND }),
             _ => Err(Error::invalid(
                 "law",
                 format!("expected cubic, quintic or trapezoid, got '{name}'"),

@@ -11,6 +11,13 @@
 //! Units: time in s, joint values in rad (revolute) or m (prismatic), their derivatives per s,
 //! s², s³. Time runs from 0 to [`JointTrajectory::duration`].
 
+/// Default rate (Hz) at which sampled trajectories are handed out (Python's `sample`, `check_limits`,
+/// task trajectories).
+pub const SAMPLE_RATE: f64 = 1000.0;
+
+/// Default number of evenly spaced samples of a sampled segment (`traj_quintic_samples`).
+pub const SAMPLES: usize = 101;
+
 pub mod cartesian;
 pub mod duration;
 pub mod jerk;

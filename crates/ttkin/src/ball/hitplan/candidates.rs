@@ -52,6 +52,37 @@ impl ReturnPlanner {
         (out, bounced)
     }
 
+    /// The predicted states every 10 ms inside the hitting volume later than `LATEST_AFTER_BOUNCE`
+    /// after the bounce on the robot's half, when [`Self::candidate_states`] cut them (some
+    /// candidate was earlier); empty otherwise. The planner tries them only when no early
+    /// candidate gives a feasible hit: a later hit leaves the stroke more time (less torque) and
+    /// is missed more often (the prediction's error grows after the bounce), a better chance than
+    /// none.
+    pub(super) fn late_candidate_states(&self, f: &Flight, ball: &BallState, now: f64, margin: f64) -> Vec<BallState> {
+        let reach = Reach {
+            lo: self.reach.lo - Vector3::repeat(margin),
+            hi: self.reach.hi + Vector3::repeat(margin),
+        };
+        let mut out: Vec<BallState> = Vec::new();
+        let mut early = false;
+        let mut t_bounce = None;
+        walk_after_bounce_clip(f, ball, 0.01, false, NET_CLIP, |s| {
+            let tb = *t_bounce.get_or_insert(s.t);
+            if s.t >= now + self.min_stroke_time && reach.contains(&s.p) {
+                if s.t <= tb + LATEST_AFTER_BOUNCE {
+                    early = true;
+                } else {
+                    out.push(*s);
+                }
+            }
+            s.p.x >= self.reach.lo.x - 0.05
+        });
+        if !early {
+            out.clear();
+        }
+        out
+    }
+
     /// Whether some roll of a racket with the frictionless, drag-free normal (along v_out − v_in,
     /// v_out the vacuum shot to `target` in the first return time) at the ball `s` has IK within the
     /// limits: a cheap test before the shooting solve.

@@ -53,7 +53,7 @@ mod shoot;
 
 use candidates::candidate_order;
 use poses::RacketPoses;
-use search::Begin;
+use search::{Begin, Search};
 pub use shoot::shoot;
 
 use super::flight::{BallState, Flight};
@@ -286,6 +286,20 @@ impl ReturnPlanner {
             Begin::Done(plan) => return Ok(plan),
             Begin::Search(list, search) => (list, search),
         };
+        self.search_list(&list, now, target, start, &mut search);
+        if search.best.is_none() && !after_bounce {
+            // No early hit is feasible (often: no stroke that fast within the drives' torque):
+            // the later candidates the early ones had cut (issue 28).
+            let late = self.late_candidate_states(&self.flight, ball, now, self.search_margin);
+            if !late.is_empty() {
+                self.search_list(&late, now, target, start, &mut search);
+            }
+        }
+        Ok(search.finish())
+    }
+
+    /// The search of [`Self::plan_from`] over the candidate states `list` into `search`.
+    fn search_list(&self, list: &[BallState], now: f64, target: [f64; 2], start: &JointState, search: &mut Search) {
         let order = candidate_order(list.len(), self.candidates.max(1));
         let first = self.candidates.max(1).min(list.len());
         let targets = self.targets(target);
@@ -342,6 +356,5 @@ impl ReturnPlanner {
                 }
             }
         }
-        Ok(search.finish())
     }
 }
