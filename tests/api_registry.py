@@ -55,6 +55,7 @@ API: dict[str, dict] = {
     "Robot.builtin": {"args": {"name": "robot_name"}},
     "Robot.builtin_names": {},
     "Robot.ready": {},
+    "Robot.gravity_vector": {},
     "Robot.with_racket": {},
     "Robot.with_ready": {},
     "Robot.from_dh": {},
