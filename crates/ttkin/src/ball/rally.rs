@@ -30,12 +30,12 @@
 //! independently of the planner (see [`super::reach`]). Balls out of reach are counted
 //! separately, with the reason.
 
+use super::decide::{BallDecider, DecideConfig, Decision};
 use super::estimate::{estimate, EstimateOptions};
 use super::flight::{BallState, EventKind, Flight};
 use super::hitplan::{shoot, Hit, HitPlanner, HitStatus};
 use super::model::BallModel;
 use super::reach::ReachRegion;
-use super::update::update;
 use crate::chain::JacobianFrame;
 use crate::traj::{JointState, JointTrajectory};
 use nalgebra::Vector3;
@@ -144,7 +144,7 @@ pub struct RallyConfig {
     /// Longest observation window (s) of a re-plan's estimate.
     pub max_window: f64,
     /// Time (s) after the bounce the first estimate predicts at which the stroke is corrected once:
-    /// the estimate updated with the observations delivered by then ([`update`]) and the hit
+    /// the estimate updated with the observations delivered by then ([`super::update::update`]) and the hit
     /// planned again from the robot's state; 0 for none.
     pub correction_delay: f64,
     /// The world's departure from the planner's model per ball; `None`: the world is the model.
@@ -329,26 +329,25 @@ impl Motion {
     }
 }
 
-/// Plays ball `index` of the rally: serve, observe, classify against `region`, plan, re-plan,
-/// execute, score.
-pub fn play(planner: &HitPlanner, region: &ReachRegion, truth: &Flight, cfg: &RallyConfig, index: u64) -> BallOutcome {
-    play_with(planner, region, truth, cfg, index, None, None)
+/// One ball of the rally as the camera sees it: the incoming ball, the world it flies in, and its
+/// observations (see [`play_with`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct BallObservations {
+    /// Incoming state at the opponent's hit (t = 0).
+    pub incoming: BallState,
+    /// The ball's world: `truth` with its constants drawn by [`RallyConfig::world`].
+    pub world: Flight,
+    /// Exposure times (s from the opponent's hit), the camera's whole run.
+    pub exposures: Vec<f64>,
+    /// The time stamps the planner sees (s): the exposures, off by the ball's time-stamp error.
+    pub times: Vec<f64>,
+    /// Observed ball centres (m, world): the true ones with the camera's noise and outliers.
+    pub positions: Vec<[f64; 3]>,
 }
 
-/// [`play`] with the incoming ball given (`incoming`, e.g. a recorded shot; time stamps from its
-/// `t`, re-based to 0) instead of served. With [`RallyConfig::world`] the ball flies in its own
-/// world (constants drawn around `truth`'s, see [`WorldSpread`]) while the planner keeps its model.
-/// With an `executor` the stroke (as planned, re-plans included) is executed by it from the
-/// planning time to 60 ms after the hit, and the racket follows the executed motion.
-pub fn play_with(
-    planner: &HitPlanner,
-    region: &ReachRegion,
-    truth: &Flight,
-    cfg: &RallyConfig,
-    index: u64,
-    incoming: Option<&BallState>,
-    executor: Option<&dyn Executor>,
-) -> BallOutcome {
+/// Ball `index` of the rally as the camera sees it (served, or `incoming` when given, re-based to
+/// t = 0): the same random streams as [`play_with`], so the same ball and observations.
+pub fn observe_ball(truth: &Flight, cfg: &RallyConfig, index: u64, incoming: Option<&BallState>) -> BallObservations {
     let mut rng = fastrand::Rng::with_seed(
         cfg.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ index.wrapping_mul(0xD1B5_4A32_D192_ED03),
     );
@@ -370,12 +369,11 @@ pub fn play_with(
         ),
         None => (*truth, 0.0),
     };
-    let truth = &world;
     let cam = &cfg.camera;
     // The camera runs for the whole incoming flight; each plan sees what was delivered by then.
     let count = (1.2 * cam.rate) as usize;
     let exposures: Vec<f64> = (0..count).map(|k| cam.start + k as f64 / cam.rate).collect();
-    let truth_path = super::predict::predict(truth, &s0, &exposures).expect("valid times");
+    let truth_path = super::predict::predict(&world, &s0, &exposures).expect("valid times");
     // The time stamps the planner sees: the exposures, off by the ball's latency error.
     let times: Vec<f64> = exposures.iter().map(|t| t + stamp_error).collect();
     let obs: Vec<[f64; 3]> = truth_path
@@ -393,6 +391,44 @@ pub fn play_with(
             o
         })
         .collect();
+    BallObservations {
+        incoming: s0,
+        world,
+        exposures,
+        times,
+        positions: obs,
+    }
+}
+
+/// Plays ball `index` of the rally: serve, observe, classify against `region`, plan, re-plan,
+/// execute, score.
+pub fn play(planner: &HitPlanner, region: &ReachRegion, truth: &Flight, cfg: &RallyConfig, index: u64) -> BallOutcome {
+    play_with(planner, region, truth, cfg, index, None, None)
+}
+
+/// [`play`] with the incoming ball given (`incoming`, e.g. a recorded shot; time stamps from its
+/// `t`, re-based to 0) instead of served. With [`RallyConfig::world`] the ball flies in its own
+/// world (constants drawn around `truth`'s, see [`WorldSpread`]) while the planner keeps its model.
+/// With an `executor` the stroke (as planned, re-plans included) is executed by it from the
+/// planning time to 60 ms after the hit, and the racket follows the executed motion.
+pub fn play_with(
+    planner: &HitPlanner,
+    region: &ReachRegion,
+    truth: &Flight,
+    cfg: &RallyConfig,
+    index: u64,
+    incoming: Option<&BallState>,
+    executor: Option<&dyn Executor>,
+) -> BallOutcome {
+    let BallObservations {
+        incoming: s0,
+        world,
+        exposures,
+        times,
+        positions: obs,
+    } = observe_ball(truth, cfg, index, incoming);
+    let truth = &world;
+    let cam = &cfg.camera;
     let first = (cam.window * cam.rate).round() as usize + 1;
     let t_last = times[first - 1];
     let now = t_last + cam.latency;
@@ -424,49 +460,69 @@ pub fn play_with(
         flight: planner.flight,
         ..EstimateOptions::default()
     };
-    let clock = Instant::now();
-    let cpu = cpu_time::ThreadTime::now();
-    let est = match estimate(&times[..first], &obs[..first], &opts) {
-        Ok(e) => e,
-        Err(e) => {
-            out.status = format!("estimate: {e}");
-            return out;
-        }
-    };
-    let plan = planner.plan(&est.state, now, cfg.target);
-    out.plan_time_us = cpu.elapsed().as_secs_f64() * 1e6;
-    out.plan_wall_time_us = clock.elapsed().as_secs_f64() * 1e6;
-    out.velocity_error = (est.state.v - truth_at_last.v).norm();
-    out.estimate = Some(est.state);
-    let plan = match plan {
-        Ok(p) => p,
-        Err(e) => {
-            out.status = format!("plan: {e}");
-            return out;
-        }
-    };
-    out.status = plan.status.name().to_string();
+    // The decisions, observation by observation at its delivery ([`BallDecider`]): the first plan
+    // after the window, then once, `correction_delay` after the bounce the estimate predicts, the
+    // estimate updated with every observation delivered since (through the bounce, [`update`])
+    // and the hit planned again from the robot's state then (from rest when the first plan had
+    // no hit).
     let keep_path = (index as usize) < cfg.paths;
-    let mut first_hit = plan.hit.filter(|_| plan.status == HitStatus::Ok);
-    // Once, `correction_delay` after the bounce the estimate predicts: the estimate updated with
-    // every observation delivered since (through the bounce, [`update`]) and the hit planned
-    // again from the robot's state then (from rest when the first plan had no hit).
+    let n = planner.chain.dof();
     let ready = JointState::rest(&planner.ready);
-    let mut motion = Motion {
-        pieces: first_hit.iter().map(|h| (now, execution(h, &ready))).collect(),
-    };
-    let mut hit_at = first_hit.as_ref().map(|h| now + h.t_hit);
-    if cfg.correction_delay > 0.0 {
-        let clock = cpu_time::ThreadTime::now();
-        let previous = first_hit.as_ref().map(|h| (h, now + h.t_hit));
-        if let Some((t_c, h)) = correct(planner, cfg, &est, &times, &obs, previous, &motion, &opts) {
-            motion.pieces.push((t_c, execution(&h, &ready)));
-            hit_at = Some(t_c + h.t_hit);
-            first_hit = Some(h);
-            out.replans += 1;
+    let mut decider = BallDecider::new(planner, DecideConfig::of(cfg));
+    let mut motion = Motion { pieces: Vec::new() };
+    let mut first_hit: Option<Hit> = None;
+    let mut hit_at = None;
+    let mut est = None;
+    for (&t, p) in times.iter().zip(&obs) {
+        if decider.done() {
+            break;
         }
-        out.correction_time_us = clock.elapsed().as_secs_f64() * 1e6;
+        let clock = Instant::now();
+        let cpu = cpu_time::ThreadTime::now();
+        let decision = decider.observe(planner, t, *p, t + cam.latency, &|tc| motion.state(tc, n));
+        match decision {
+            None => {}
+            Some(Decision::EstimateFailed(e)) => {
+                out.status = format!("estimate: {e}");
+                return out;
+            }
+            Some(Decision::PlanFailed(e)) => {
+                out.plan_time_us = cpu.elapsed().as_secs_f64() * 1e6;
+                out.plan_wall_time_us = clock.elapsed().as_secs_f64() * 1e6;
+                if let Some(e) = decider.estimate() {
+                    out.velocity_error = (e.state.v - truth_at_last.v).norm();
+                    out.estimate = Some(e.state);
+                }
+                out.status = format!("plan: {e}");
+                return out;
+            }
+            Some(Decision::Planned { now, estimate, plan }) => {
+                out.plan_time_us = cpu.elapsed().as_secs_f64() * 1e6;
+                out.plan_wall_time_us = clock.elapsed().as_secs_f64() * 1e6;
+                out.velocity_error = (estimate.state.v - truth_at_last.v).norm();
+                out.estimate = Some(estimate.state);
+                out.status = plan.status.name().to_string();
+                first_hit = plan.hit.filter(|_| plan.status == HitStatus::Ok);
+                if let Some(h) = &first_hit {
+                    motion.pieces.push((now, execution(h, &ready)));
+                    hit_at = Some(now + h.t_hit);
+                }
+                est = Some(*estimate);
+            }
+            Some(Decision::Corrected { now: t_c, hit }) => {
+                out.correction_time_us = cpu.elapsed().as_secs_f64() * 1e6;
+                if let Some(h) = hit {
+                    motion.pieces.push((t_c, execution(&h, &ready)));
+                    hit_at = Some(t_c + h.t_hit);
+                    first_hit = Some(*h);
+                    out.replans += 1;
+                }
+            }
+        }
     }
+    let Some(est) = est else {
+        return out;
+    };
     let Some(mut hit) = first_hit else {
         if keep_path {
             out.path = sample_path(truth, &s0, 1.2);
@@ -653,59 +709,10 @@ pub fn play_with(
     out
 }
 
-/// The correction after the bounce (see [`RallyConfig::correction_delay`]): at the delivery `t_c`
-/// of the last observation at most `correction_delay` after the bounce `est` predicts, `est`
-/// updated with the observations since ([`update`]) and the hit planned again from the state of
-/// `motion` at `t_c` ([`HitPlanner::plan_near`] near the `previous` hit's time and landing point;
-/// without a previous hit, [`HitPlanner::plan_from`] from rest); the new hit and `t_c`, or `None`
-/// (no bounce predicted, less than the re-plan's shortest stroke left before the previous hit, no
-/// update or no feasible hit: the stroke goes on unchanged).
-#[allow(clippy::too_many_arguments)]
-fn correct(
-    planner: &HitPlanner,
-    cfg: &RallyConfig,
-    est: &super::estimate::Estimate,
-    times: &[f64],
-    obs: &[[f64; 3]],
-    previous: Option<(&Hit, f64)>,
-    motion: &Motion,
-    opts: &EstimateOptions,
-) -> Option<(f64, Hit)> {
-    let t_bounce = bounce_time(&planner.flight, &est.state)?;
-    let last = times.partition_point(|&t| t <= t_bounce + cfg.correction_delay);
-    if last == 0 {
-        return None;
-    }
-    let t_c = times[last - 1] + cfg.camera.latency;
-    let mut replanner = planner.clone();
-    replanner.min_stroke_time = CORRECTION_MIN_STROKE;
-    if previous.is_some_and(|(_, t)| t - t_c <= replanner.min_stroke_time) {
-        return None;
-    }
-    let from = times.partition_point(|&t| t <= est.state.t);
-    let up = update(est, &times[from..last], &obs[from..last], opts).ok()?;
-    let plan = match previous {
-        Some((hit, t_prev)) => {
-            let start = motion.state(t_c, planner.chain.dof());
-            replanner.plan_near(&up.state, t_c, &start, up.bounced, hit, t_prev)
-        }
-        None => replanner.plan_from(
-            &up.state,
-            t_c,
-            cfg.target,
-            &JointState::rest(&planner.ready),
-            up.bounced,
-        ),
-    }
-    .ok()?;
-    let hit = plan.hit.filter(|_| plan.status == HitStatus::Ok)?;
-    Some((t_c, hit))
-}
-
 /// The correction of a planned hit, as the rally makes it after the bounce: the stroke of `first`
 /// (planned at `t_first`, s absolute, from rest at the planner's ready configuration) is under
 /// way; at `now` (s) the hit is planned again for the ball `ball` (e.g. the estimate updated
-/// through the bounce, [`update`]; `after_bounce` when it is past its bounce) from the stroke's
+/// through the bounce, [`super::update::update`]; `after_bounce` when it is past its bounce) from the stroke's
 /// joint state then, near `first` ([`HitPlanner::plan_near`], shortest stroke 60 ms). An error
 /// when `now` is before `t_first` or less than 60 ms before the first hit.
 pub fn correct_hit(
@@ -736,11 +743,11 @@ pub fn correct_hit(
 }
 
 /// Shortest stroke (s) of the correction after the bounce: the rest of a stroke under way.
-const CORRECTION_MIN_STROKE: f64 = 0.06;
+pub(super) const CORRECTION_MIN_STROKE: f64 = 0.06;
 
 /// Time (s) of the first table bounce on the robot's half of the flight from `s` (within 1.5 s),
 /// flying no further than that.
-fn bounce_time(flight: &Flight, s: &BallState) -> Option<f64> {
+pub(super) fn bounce_time(flight: &Flight, s: &BallState) -> Option<f64> {
     let mut cur = *s;
     while cur.t < s.t + 1.5 {
         let (next, ev) = flight.advance(&cur, s.t + 1.5, None);
