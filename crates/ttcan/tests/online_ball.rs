@@ -321,3 +321,91 @@ fn bad_settings_are_refused_with_their_name() {
     // A robot without analytic IK cannot play balls.
     assert!(BallBrain::new(ttkin::robots::arm4(), BallBrainConfig::default()).is_err());
 }
+
+#[test]
+fn the_rally_scoring_of_the_brains_strokes_is_the_rallys_outcome() {
+    // The HIL rally scores a ball from sampled joint states (`rally::score_executed`); here the
+    // samples are the brain's strokes as the rally executes them (1 ms, the first hit's stroke
+    // then the correction's from its decision time): the outcome must be the rally's.
+    let pl = planner();
+    let truth = truth();
+    let region = ReachRegion::new(&pl.chain, pl.placement, pl.ready.clone(), truth.model.radius).unwrap();
+    let cfg = RallyConfig::default();
+    let ready = JointState::rest(&pl.ready);
+    let mut b = brain(&pl, &cfg);
+    let mut same = 0;
+    for i in 0..10u64 {
+        let outcome = rally::play(&pl, &region, &truth, &cfg, i);
+        let seen = rally::observe_ball(&truth, &cfg, i, None);
+        let mut pieces = Vec::new();
+        for (&t, p) in seen.times.iter().zip(&seen.positions) {
+            let now = t + cfg.camera.latency;
+            let state = commanded(&pl, &b, now);
+            let obs = ObservationMsg {
+                id: 200 + i as u32,
+                camera_time: t,
+                position: *p,
+            };
+            if let Some(Command::Hit(_)) = b.observe(&obs, now, &state) {
+                let (hit, t_abs) = b.hit().unwrap();
+                pieces.push((t_abs - hit.t_hit, rally::execution(hit, &ready), t_abs));
+            }
+        }
+        b.tick(1e3, &ready);
+        let Some(&(_, _, t_hit)) = pieces.last() else {
+            assert!(!outcome.returned);
+            same += 1;
+            continue;
+        };
+        let n = pl.chain.dof();
+        let t_start = pieces[0].0;
+        let k = ((t_hit + 0.07 - t_start) / 1e-3).ceil() as usize;
+        let (mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        let mut ex = rally::Executed {
+            dof: n,
+            t: Vec::new(),
+            q: Vec::new(),
+            qd: Vec::new(),
+        };
+        for j in 0..k {
+            let t = t_start + j as f64 * 1e-3;
+            let (t0, traj, _) = pieces.iter().rev().find(|p| p.0 <= t).unwrap_or(&pieces[0]);
+            traj.sample((t - t0).clamp(0.0, traj.duration()), &mut q, &mut qd, &mut qdd)
+                .unwrap();
+            ex.t.push(t);
+            ex.q.extend_from_slice(&q);
+            ex.qd.extend_from_slice(&qd);
+        }
+        let sc = rally::score_executed(&pl, &seen.world, cfg.target, &seen.incoming, t_hit, &ex, 0.0).unwrap();
+        assert_eq!(sc.contact, outcome.contact, "ball {i}");
+        if sc.returned == outcome.returned {
+            same += 1;
+        }
+        if sc.returned && outcome.returned {
+            let d = (0..2)
+                .map(|k| (sc.landing[k] - outcome.landing[k]).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            assert!(d < 5e-3, "ball {i}: landing {:?} vs {:?}", sc.landing, outcome.landing);
+        }
+        if sc.contact {
+            assert!(
+                (sc.racket_error - outcome.racket_error).abs() < 2e-3,
+                "ball {i}: {} vs {}",
+                sc.racket_error,
+                outcome.racket_error
+            );
+        }
+    }
+    assert!(same >= 9, "{same}/10 balls scored as the rally did");
+    // Bad samples are refused with what to fix.
+    let bad = rally::Executed {
+        dof: 6,
+        t: vec![0.0, 0.0],
+        q: vec![0.0; 12],
+        qd: vec![0.0; 12],
+    };
+    let seen = rally::observe_ball(&truth, &cfg, 0, None);
+    let e = rally::score_executed(&pl, &seen.world, cfg.target, &seen.incoming, 0.5, &bad, 0.0).unwrap_err();
+    assert!(e.to_string().contains("increase"), "{e}");
+}
