@@ -674,7 +674,7 @@ pub struct Score {
     pub landing: [f64; 3],
     /// Distance (m) from the landing point to the target (NaN without landing).
     pub landing_error: f64,
-    /// "returned", "landed_short", "return_hit_<event>", "return_long" or "missed".
+    /// "returned", "landed_short", `return_hit_<event>`, "return_long" or "missed".
     pub status: String,
     /// The ball leaving the racket (world), with contact.
     pub after: Option<BallState>,
