@@ -1,24 +1,31 @@
 //! `ttctl`: the embedded controller. Loads the controller configuration (TOML), checks it (keys,
 //! values, bus budget), opens one SocketCAN interface per channel, and runs one real-time thread
 //! per channel that boots, configures and enables the CiA 402 drives and then follows a joint
-//! trajectory file (written by `ttmanip.ctl.write_trajectory`) or the built-in demo motion.
+//! trajectory file (written by `ttmanip.ctl.write_trajectory`) or the built-in demo motion, or
+//! (`--online hit`) takes hits over UDP and executes them (`ttcan::online`, docs/online.md).
+//! `--virtual-drives` runs the same controller on in-process virtual drives (no CAN needed).
 //! SIGINT/SIGTERM bring every axis to a controlled stop. Prints and saves latency statistics,
 //! writes telemetry CSV. Exit status (`ttcan::runtime::exit`): 0 motion completed, 1 bad input
 //! (usage errors included), 2 stopped by a fault.
 
 use std::io::Write;
 use std::path::PathBuf;
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use ttcan::bus::socketcan::SocketCanBus;
 use ttcan::bus::stdio::StdioBus;
 use ttcan::bus::CanBus;
-use ttcan::runtime::channel::{run_channel, ChannelPlan, ChannelReport, Shared};
+use ttcan::online::counters::CountersSnapshot;
+use ttcan::online::handoff::StrokeFollower;
+use ttcan::online::receiver::Mode;
+use ttcan::online::session::{self, Endpoints};
+use ttcan::runtime::channel::{run_channel, run_channel_with, ChannelPlan, ChannelReport, Shared};
 use ttcan::runtime::config::ControllerConfig;
 use ttcan::runtime::master::{ChannelMaster, StopReason, MAX_AXES_PER_CHANNEL};
 use ttcan::runtime::rt;
 use ttcan::runtime::stats::CycleStats;
 use ttcan::runtime::trajectory::Trajectory;
+use ttcan::runtime::vdrives::{VirtualChannel, VirtualDrives};
 
 /// Embedded controller: CiA 402 drives over SocketCAN, one real-time thread per channel.
 #[derive(clap::Parser, Debug)]
@@ -47,6 +54,21 @@ struct Args {
     /// Stop (controlled) after this many seconds whatever happens.
     #[arg(long, default_value_t = 60.0)]
     max_seconds: f64,
+    /// Run on in-process virtual drives (one in-memory bus per channel, the drives of
+    /// ttdrive-sim) instead of the channels' CAN interfaces: no SocketCAN needed.
+    #[arg(long)]
+    virtual_drives: bool,
+    /// Online mode: `hit` takes hits over UDP (docs/online.md) and executes them; needs `robot`
+    /// in the configuration with an axis for every joint. Runs until SIGINT/SIGTERM or
+    /// --max-seconds.
+    #[arg(long, value_parser = ["hit"], conflicts_with_all = ["trajectory", "demo"])]
+    online: Option<String>,
+    /// Address the online mode listens on (UDP).
+    #[arg(long, default_value = "127.0.0.1:5005")]
+    listen: std::net::SocketAddr,
+    /// Address the online mode sends statuses and telemetry to (UDP).
+    #[arg(long, default_value = "127.0.0.1:5006")]
+    reply: std::net::SocketAddr,
     /// Only check the configuration (syntax, values, bus budget) and the trajectory file if given,
     /// print the bus loads and exit.
     #[arg(long)]
@@ -128,10 +150,10 @@ fn main() {
                 .map_or(1, |j| j + 1);
             Trajectory::demo(n, args.amplitude, 2.0)
         }
-        None if args.check => return,
-        None => fail("give --trajectory FILE or --demo"),
+        None if args.check || args.online.is_some() => Trajectory::demo(1, 0.0, 1.0),
+        None => fail("give --trajectory FILE, --demo or --online hit"),
     };
-    if let Some(n) = cfg.joints {
+    if let Some(n) = cfg.joints.filter(|_| args.online.is_none()) {
         if traj.joints() != n {
             fail(format!(
                 "trajectory has {} joints, the configuration's robot {} has {n}",
@@ -140,6 +162,14 @@ fn main() {
             ));
         }
     }
+    let online_planner = args.online.as_ref().map(|_| {
+        let name = cfg
+            .robot
+            .as_deref()
+            .unwrap_or_else(|| fail("--online needs `robot = \"NAME\"` in the configuration"));
+        let chain = ttkin::robots::by_name(name).unwrap_or_else(|e| fail(e));
+        ttkin::hit::HitPlanner::new(&chain, ttkin::hit::HitOptions::default()).unwrap_or_else(|e| fail(e))
+    });
     if args.check {
         // The configuration, and the trajectory when one is given, are fine: nothing is moved.
         return;
@@ -157,7 +187,20 @@ fn main() {
         fail("only one channel can use the interface stdio");
     }
     let mut buses: Vec<Box<dyn CanBus>> = Vec::new();
-    for ch in &cfg.channel {
+    let mut drives = None;
+    if args.virtual_drives {
+        let vch: Vec<VirtualChannel> = cfg
+            .channel
+            .iter()
+            .map(|c| VirtualChannel {
+                axes: c.axis.iter().map(|a| (a.node, a.units)).collect(),
+            })
+            .collect();
+        let (d, ports) = VirtualDrives::new(&vch, 1.0 / cfg.cycle_hz, 100).unwrap_or_else(|e| fail(e));
+        drives = Some(d);
+        buses.extend(ports.into_iter().map(|p| Box::new(p) as Box<dyn CanBus>));
+    }
+    for ch in cfg.channel.iter().filter(|_| !args.virtual_drives) {
         if ch.interface == "stdio" {
             buses.push(Box::new(StdioBus::open()));
         } else {
@@ -170,13 +213,49 @@ fn main() {
     let shared = Shared::new(cfg.channel.len(), interrupt);
     let t0 = rt::now_ns() + 20 * period_ns;
     let max_cycles = (args.max_seconds * cfg.cycle_hz) as u64;
+    let joint_map: Vec<[Option<usize>; MAX_AXES_PER_CHANNEL]> = cfg
+        .channel
+        .iter()
+        .map(|ch| {
+            let mut joints = [None; MAX_AXES_PER_CHANNEL];
+            for (k, a) in ch.axis.iter().enumerate() {
+                joints[k] = a.joint;
+            }
+            joints
+        })
+        .collect();
+    let (session, followers) = match online_planner {
+        Some(planner) => {
+            let ends = Endpoints {
+                mode: Mode::Hit,
+                listen: args.listen,
+                reply: args.reply,
+            };
+            let (s, f) = session::start(ends, planner, &joint_map, period_ns, t0, &cfg.online)
+                .unwrap_or_else(|e| fail(format!("online mode: {e}")));
+            println!(
+                "ttctl: online hit mode: listening on {}, statuses and telemetry to {}",
+                s.local, args.reply
+            );
+            (Some(s), f.into_iter().map(Some).collect())
+        }
+        None => (None, Vec::new()),
+    };
+    let mut followers: Vec<Option<StrokeFollower>> = followers;
+    followers.resize_with(cfg.channel.len(), || None);
+    let done = AtomicBool::new(false);
     let reports: Vec<ChannelReport> = std::thread::scope(|s| {
+        if let Some(d) = drives.as_mut() {
+            let done = &done;
+            s.spawn(move || d.serve(done));
+        }
         let handles: Vec<_> = cfg
             .channel
             .iter()
             .zip(buses.iter_mut())
             .zip(&plans)
-            .map(|((ch, bus), plans)| {
+            .zip(followers.iter_mut())
+            .map(|(((ch, bus), plans), follower)| {
                 let links: Vec<_> = ch.axis.iter().map(|a| a.link()).collect();
                 let master = ChannelMaster::with_plans(&links, plans, cfg.watchdog)
                     .unwrap_or_else(|e| fail(format!("{}: {e}", ch.interface)));
@@ -196,28 +275,39 @@ fn main() {
                     if let Err(w) = rt::make_thread_realtime(prio) {
                         eprintln!("ttctl: warning: {}: {w}", ch.interface);
                     }
-                    run_channel(&ch.interface, bus, master, traj, &plan, shared)
+                    match follower.as_mut() {
+                        Some(f) => run_channel_with(&ch.interface, bus, master, f, &plan, shared),
+                        None => run_channel(&ch.interface, bus, master, traj, &plan, shared),
+                    }
                 })
             })
             .collect();
-        handles
+        let r = handles
             .into_iter()
             .map(|h| h.join().unwrap_or_else(|_| fail("a channel thread panicked")))
-            .collect()
+            .collect();
+        done.store(true, Ordering::Relaxed);
+        r
     });
-    report(&args, &reports);
+    let online = session.map(|s| s.stop());
+    report(&args, &reports, online.as_ref());
 }
 
-fn report(args: &Args, reports: &[ChannelReport]) {
+fn report(args: &Args, reports: &[ChannelReport], online: Option<&CountersSnapshot>) {
     let mut all = CycleStats::new();
+    let mut quiet = CycleStats::new();
+    let mut planning = CycleStats::new();
     let mut lines = Vec::new();
     let mut fault: Option<(String, StopReason)> = None;
     let mut worst_err: f64 = 0.0;
     let mut stop_cycles = 0u32;
     let (mut missed, mut bad, mut skipped, mut lost, mut tx_full) = (0u64, 0u64, 0u64, 0u64, 0u64);
-    let completed = reports.iter().all(|r| r.completed);
+    // online: no motion to complete; a stop without fault (signal, --max-seconds) is the end
+    let completed = reports.iter().all(|r| r.completed) || online.is_some();
     for r in reports {
         all.merge(&r.stats);
+        quiet.merge(&r.stats_quiet);
+        planning.merge(&r.stats_planning);
         let s = r.stats.summary();
         let e = r.max_tracking_error.iter().fold(0.0f64, |m, x| m.max(*x));
         worst_err = worst_err.max(e);
@@ -280,6 +370,18 @@ fn report(args: &Args, reports: &[ChannelReport]) {
     lines.push(format!("latency_max_us={:.1}", s.max_us));
     lines.push(format!("deadline_misses={}", s.deadline_misses));
     lines.push(format!("work_mean_us={:.1}", s.mean_work_us));
+    for (name, st) in [("quiet", quiet.summary()), ("planning", planning.summary())] {
+        lines.push(format!("cycles_{name}={}", st.cycles));
+        lines.push(format!("latency_p50_us_{name}={:.1}", st.p50_us));
+        lines.push(format!("latency_p99_us_{name}={:.1}", st.p99_us));
+        lines.push(format!("latency_max_us_{name}={:.1}", st.max_us));
+        lines.push(format!("deadline_misses_{name}={}", st.deadline_misses));
+    }
+    if let Some(c) = online {
+        for (name, v) in c.entries() {
+            lines.push(format!("online_{name}={v}"));
+        }
+    }
     println!("ttctl: RESULT {}", lines.join(" "));
     if let Some(p) = &args.stats {
         if let Err(e) = std::fs::write(p, lines.join("\n") + "\n") {

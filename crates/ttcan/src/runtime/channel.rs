@@ -4,7 +4,9 @@
 //! Channels share a [`Shared`] block: the motion starts when every channel runs, and a stop on
 //! one channel stops all. A thread woken more than a period late skips the missed deadlines
 //! (counted) rather than sending a burst of SYNCs; the motion time counts executed cycles, so a
-//! stall pauses the motion instead of making the target jump.
+//! stall pauses the motion instead of making the target jump. What the axes follow is a
+//! [`SetpointSource`]: a trajectory file or the demo ([`TrajectorySource`]), or the strokes the
+//! online planner hands over ([`crate::online::handoff::StrokeFollower`]).
 
 use super::master::{AxisSetpoint, ChannelCounters, ChannelMaster, Phase, StopReason, MAX_AXES_PER_CHANNEL};
 use super::rt::{now_ns, sleep_until};
@@ -54,6 +56,77 @@ pub struct ChannelPlan {
     pub max_cycles: u64,
 }
 
+/// What the channel thread knows about the present cycle when it asks for setpoints.
+#[derive(Debug, Clone, Copy)]
+pub struct CycleInfo {
+    /// Deadline index (cycles since the common start `t0`, skipped deadlines included).
+    pub k: u64,
+    /// Motion time, s: executed cycles since every channel runs (negative before).
+    pub t: f64,
+    /// Phase of the channel before this cycle's update.
+    pub phase: Phase,
+    /// Cycle period, s.
+    pub period: f64,
+}
+
+/// What the axes of one channel follow: called once per cycle on the cycle thread, so an
+/// implementation must not lock, allocate or make a system call.
+pub trait SetpointSource {
+    /// Writes this cycle's setpoint of every axis into `out` (position, velocity, torque) and the
+    /// commanded acceleration into `qdd` (telemetry only); `master` gives the held positions
+    /// and the feedback. Returns true when the motion is complete (the channel then stops).
+    fn fill(&mut self, c: &CycleInfo, master: &ChannelMaster, out: &mut [AxisSetpoint], qdd: &mut [f64]) -> bool;
+    /// True while a plan is being made elsewhere (the statistics are split by it).
+    fn planning(&self) -> bool {
+        false
+    }
+    /// Called after the cycle's frames were sent (feedback of this cycle in `master`).
+    fn after_cycle(&mut self, _c: &CycleInfo, _master: &ChannelMaster) {}
+}
+
+/// A trajectory (file or demo) preceded by a quintic approach from the held positions.
+#[derive(Debug, Clone, Copy)]
+pub struct TrajectorySource<'a> {
+    /// The trajectory.
+    pub traj: &'a Trajectory,
+    /// Trajectory joint of each axis (`None`: hold).
+    pub joints: [Option<usize>; MAX_AXES_PER_CHANNEL],
+    /// Approach duration, s.
+    pub approach_s: f64,
+}
+
+impl SetpointSource for TrajectorySource<'_> {
+    fn fill(&mut self, c: &CycleInfo, master: &ChannelMaster, out: &mut [AxisSetpoint], qdd: &mut [f64]) -> bool {
+        let (traj, t) = (self.traj, c.t);
+        for (a, setpoint) in out.iter_mut().enumerate() {
+            let hold = master.hold_position(a);
+            qdd[a] = 0.0;
+            *setpoint = match (self.joints[a], t >= 0.0) {
+                (Some(j), true) if j < traj.joints() => {
+                    if t < self.approach_s {
+                        let (q, qd) = approach(hold, traj.sample(j, 0.0).q, self.approach_s, t);
+                        AxisSetpoint { q, qd, tau: 0.0 }
+                    } else {
+                        let s = traj.sample(j, t - self.approach_s);
+                        qdd[a] = s.qdd;
+                        AxisSetpoint {
+                            q: s.q,
+                            qd: s.qd,
+                            tau: s.tau,
+                        }
+                    }
+                }
+                _ => AxisSetpoint {
+                    q: hold,
+                    qd: 0.0,
+                    tau: 0.0,
+                },
+            };
+        }
+        t >= 0.0 && t > self.approach_s + traj.duration() + 0.2 && c.phase == Phase::Run
+    }
+}
+
 /// One telemetry row (one cycle of one channel).
 #[derive(Debug, Clone, Copy, Default)]
 pub struct TelemetryRow {
@@ -65,6 +138,10 @@ pub struct TelemetryRow {
     pub phase: u8,
     /// Position reference sent, per axis.
     pub q_ref: [f64; MAX_AXES_PER_CHANNEL],
+    /// Velocity reference sent, per axis.
+    pub qd_ref: [f64; MAX_AXES_PER_CHANNEL],
+    /// Commanded acceleration, per axis.
+    pub qdd_ref: [f64; MAX_AXES_PER_CHANNEL],
     /// Position feedback, per axis.
     pub q: [f64; MAX_AXES_PER_CHANNEL],
     /// Current feedback, A, per axis.
@@ -88,6 +165,10 @@ pub struct ChannelReport {
     pub counters: ChannelCounters,
     /// Latency statistics.
     pub stats: CycleStats,
+    /// Latency statistics of the cycles while no plan was being made.
+    pub stats_quiet: CycleStats,
+    /// Latency statistics of the cycles while a plan was being made ([`SetpointSource::planning`]).
+    pub stats_planning: CycleStats,
     /// Telemetry rows.
     pub telemetry: Vec<TelemetryRow>,
     /// Largest |feedback − the target sent two cycles earlier| during the motion, per axis
@@ -113,17 +194,37 @@ fn phase_code(p: Phase) -> u8 {
     }
 }
 
-/// Runs one channel until its axes are stopped. No allocation inside the loop.
+/// Runs one channel following `traj` (after the approach) until its axes are stopped.
 pub fn run_channel<B: CanBus>(
     name: &str,
     bus: &mut B,
-    mut master: ChannelMaster,
+    master: ChannelMaster,
     traj: &Trajectory,
+    plan: &ChannelPlan,
+    shared: &Shared,
+) -> ChannelReport {
+    let mut source = TrajectorySource {
+        traj,
+        joints: plan.joints,
+        approach_s: plan.approach_s,
+    };
+    run_channel_with(name, bus, master, &mut source, plan, shared)
+}
+
+/// Runs one channel following `source` until its axes are stopped. No allocation inside the loop.
+pub fn run_channel_with<B: CanBus, S: SetpointSource + ?Sized>(
+    name: &str,
+    bus: &mut B,
+    mut master: ChannelMaster,
+    source: &mut S,
     plan: &ChannelPlan,
     shared: &Shared,
 ) -> ChannelReport {
     let n = master.len();
     let mut stats = CycleStats::new();
+    let mut stats_quiet = CycleStats::new();
+    let mut stats_planning = CycleStats::new();
+    let mut qdd = [0.0f64; MAX_AXES_PER_CHANNEL];
     let mut telemetry = Vec::with_capacity(plan.max_cycles as usize + 16);
     let mut out = Frames::new();
     let mut setpoints = [AxisSetpoint::default(); MAX_AXES_PER_CHANNEL];
@@ -179,30 +280,9 @@ pub fn run_channel<B: CanBus>(
             Some(g) => (executed - g) as f64 * period,
             None => -1.0,
         };
-        for (a, setpoint) in setpoints.iter_mut().enumerate().take(n) {
-            let hold = master.hold_position(a);
-            *setpoint = match (plan.joints[a], t >= 0.0) {
-                (Some(j), true) if j < traj.joints() => {
-                    if t < plan.approach_s {
-                        let (q, qd) = approach(hold, traj.sample(j, 0.0).q, plan.approach_s, t);
-                        AxisSetpoint { q, qd, tau: 0.0 }
-                    } else {
-                        let s = traj.sample(j, t - plan.approach_s);
-                        AxisSetpoint {
-                            q: s.q,
-                            qd: s.qd,
-                            tau: s.tau,
-                        }
-                    }
-                }
-                _ => AxisSetpoint {
-                    q: hold,
-                    qd: 0.0,
-                    tau: 0.0,
-                },
-            };
-        }
-        if t >= 0.0 && t > plan.approach_s + traj.duration() + 0.2 && phase == Phase::Run {
+        let planning = source.planning();
+        let info = CycleInfo { k, t, phase, period };
+        if source.fill(&info, &master, &mut setpoints[..n], &mut qdd[..n]) {
             completed = true;
             master.request_stop(StopReason::Requested);
         }
@@ -224,6 +304,7 @@ pub fn run_channel<B: CanBus>(
                 shared.stop.store(true, Ordering::Relaxed);
             }
         }
+        source.after_cycle(&info, &master);
         // record
         let mut row = TelemetryRow {
             cycle: k,
@@ -234,6 +315,8 @@ pub fn run_channel<B: CanBus>(
         };
         for a in 0..n {
             row.q_ref[a] = setpoints[a].q;
+            row.qd_ref[a] = setpoints[a].qd;
+            row.qdd_ref[a] = qdd[a];
             if let Some(fb) = master.feedback(a) {
                 row.q[a] = fb.q;
                 row.current[a] = fb.current;
@@ -258,6 +341,11 @@ pub fn run_channel<B: CanBus>(
         }
         let work = now_ns().saturating_sub(wake);
         stats.record(latency, work, plan.period_ns);
+        if planning || source.planning() {
+            stats_planning.record(latency, work, plan.period_ns);
+        } else {
+            stats_quiet.record(latency, work, plan.period_ns);
+        }
         if master.phase() == Phase::Stopped {
             break;
         }
@@ -286,6 +374,8 @@ pub fn run_channel<B: CanBus>(
         stopped_after: master.stopped_after(),
         counters: master.counters(),
         stats,
+        stats_quiet,
+        stats_planning,
         telemetry,
         max_tracking_error: max_err,
         tx_full,

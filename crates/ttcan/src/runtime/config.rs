@@ -106,6 +106,9 @@ pub struct ControllerConfig {
     /// Watchdog timing.
     #[serde(default)]
     pub watchdog: WatchdogConfig,
+    /// Online modes (`ttctl --online`): timeouts and budgets.
+    #[serde(default)]
+    pub online: crate::online::session::OnlineConfig,
     /// The channels.
     pub channel: Vec<ChannelEntry>,
     /// Directory that device files are relative to (the configuration file's).
@@ -191,6 +194,7 @@ impl ControllerConfig {
             approach_s: ap(),
             priority: prio(),
             watchdog: WatchdogConfig::default(),
+            online: Default::default(),
             channel,
             base_dir: PathBuf::new(),
         }
@@ -219,6 +223,7 @@ impl ControllerConfig {
         if !(self.cycle_hz.is_finite() && self.cycle_hz > 0.0 && self.cycle_hz <= 10_000.0) {
             return Err(invalid(format!("cycle_hz = {}: must be in (0, 10000]", self.cycle_hz)));
         }
+        self.online.check().map_err(invalid)?;
         if !(self.bitrate.is_finite() && self.bitrate >= 10_000.0 && self.bitrate <= 1e6) {
             return Err(invalid(format!(
                 "bitrate = {}: must be in [10000, 1000000] (classical CAN)",

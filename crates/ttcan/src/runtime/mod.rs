@@ -2,7 +2,8 @@
 //! and its [`watchdog`],
 //! and on top of it the real-time pieces: clocks and scheduling ([`rt`]), statistics ([`stats`]),
 //! trajectories ([`trajectory`]), the configuration file ([`config`]) and the per-channel thread
-//! ([`channel`]) that drives a controller over a [`crate::bus::CanBus`].
+//! ([`channel`]) that drives a controller over a [`crate::bus::CanBus`]; in-process virtual drives
+//! for a machine without CAN ([`vdrives`]).
 
 pub mod boot;
 pub mod channel;
@@ -13,6 +14,7 @@ pub mod master;
 pub mod rt;
 pub mod stats;
 pub mod trajectory;
+pub mod vdrives;
 pub mod watchdog;
 
 pub use master::{AxisSetpoint, ChannelMaster, LinkConfig, Phase};

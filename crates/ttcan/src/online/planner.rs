@@ -1,0 +1,430 @@
+//! The planning thread: commands in (hits from the receiver, or what a [`Brain`] makes of the
+//! observations), strokes out. Each stroke is planned with `ttkin::hit::HitPlanner` from the state
+//! the cycle threads will command at the splice cycle (position, velocity and acceleration of the
+//! strokes already handed over, [`Schedule`]), built completely (hit leg and return to the ready
+//! pose), then handed over ([`super::handoff`]); the status goes back to the upper computer once
+//! the cycle threads have taken (or refused) the stroke. A hit that cannot be planned leaves the
+//! robot doing what it did.
+//!
+//! Splice rules: the stroke starts `splice_lead` after the present cycle (planning must finish
+//! before; if it did not, the plan is made again with twice the lead, up to three times). A newer
+//! hit with the same stroke id, while the older one's hit time is still ahead, replaces it from
+//! the present state (the older one is answered `replaced`); a hit for another stroke is spliced
+//! into the return leg after the pending hit. Silence longer than the timeout, or a
+//! [`Command::Ready`], brings the robot back to the ready pose and holds it.
+
+use std::net::{SocketAddr, UdpSocket};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{Receiver, RecvTimeoutError};
+use std::sync::Arc;
+use std::time::Duration;
+
+use nalgebra::{IsometryMatrix3, Matrix3, Rotation3, Translation3};
+use ttkin::hit::{Hit, HitPlanner, HitStatus};
+use ttkin::traj::duration::minimal_quintic_duration;
+use ttkin::traj::{JointState, JointTrajectory};
+
+use super::brain::{Brain, Command};
+use super::counters::Counters;
+use super::handoff::{Decision, Sender, Timeline};
+use super::receiver::{controller_time, send_status, Inbound};
+use super::wire::{HitMsg, PlanStatus, StatusMsg};
+
+/// The strokes handed over, as the cycle threads follow them: the commanded state at any cycle.
+#[derive(Debug, Clone)]
+pub struct Schedule {
+    hold: Vec<f64>,
+    period: f64,
+    segments: Vec<(u64, JointTrajectory)>,
+}
+
+impl Schedule {
+    /// Holding `hold` (the enable positions) before any stroke; cycle period `period` s.
+    pub fn new(hold: Vec<f64>, period: f64) -> Self {
+        Schedule {
+            hold,
+            period,
+            segments: Vec::new(),
+        }
+    }
+
+    /// The state commanded at deadline `k`.
+    pub fn state_at(&self, k: u64) -> JointState {
+        match self.segments.iter().rev().find(|(s, _)| *s <= k) {
+            Some((s, traj)) => {
+                let t = ((k - s) as f64 * self.period).min(traj.duration());
+                traj.state(t).unwrap_or_else(|_| JointState::rest(&self.hold))
+            }
+            None => JointState::rest(&self.hold),
+        }
+    }
+
+    /// Adds a stroke starting at `start`: it supersedes every stroke starting at or after it
+    /// (as [`super::handoff::StrokeFollower`] does).
+    pub fn push(&mut self, start: u64, traj: JointTrajectory) {
+        self.segments.retain(|(s, _)| *s < start);
+        self.segments.push((start, traj));
+        // only the last few are ever looked at
+        if self.segments.len() > 16 {
+            self.segments.drain(..self.segments.len() - 16);
+        }
+    }
+
+    /// The cycle from which the schedule holds still: the end of the last stroke.
+    pub fn end_cycle(&self) -> u64 {
+        self.segments
+            .last()
+            .map_or(0, |(s, t)| s + (t.duration() / self.period).ceil() as u64)
+    }
+}
+
+/// Settings of the planning thread.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlannerConfig {
+    /// Time from the present cycle to the splice cycle, s (longer than a plan takes).
+    pub splice_lead: f64,
+    /// Silence (no valid datagram) after which the robot goes back to ready and holds, s.
+    pub silence: f64,
+}
+
+/// The hit that the robot is executing or will execute next.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Committed {
+    id: u32,
+    stroke: u32,
+    t_hit: f64,
+}
+
+/// The planning state: the planner, the schedule, the handoff senders.
+pub struct Splicer {
+    planner: HitPlanner,
+    ready: Vec<f64>,
+    timeline: Arc<Timeline>,
+    senders: Vec<Sender>,
+    cfg: PlannerConfig,
+    schedule: Option<Schedule>,
+    seq: u64,
+    last: Option<Committed>,
+}
+
+/// What came of a hit: its status and, when it replaced one, the older hit's `replaced` status.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HitOutcome {
+    /// The hit's own status.
+    pub status: StatusMsg,
+    /// The status of the hit it replaced.
+    pub replaced: Option<StatusMsg>,
+}
+
+fn status(id: u32, s: PlanStatus, earliest: f64, t_hit: f64, planning_time: f64) -> StatusMsg {
+    StatusMsg {
+        id,
+        status: s,
+        earliest_t_hit: earliest,
+        t_hit,
+        planning_time,
+    }
+}
+
+/// The racket pose of a hit datagram, if its rotation is a rotation (orthonormal, det +1).
+pub fn hit_pose(h: &HitMsg) -> Option<IsometryMatrix3<f64>> {
+    let r = Matrix3::from_row_slice(&h.rotation);
+    let err = (r.transpose() * r - Matrix3::identity()).abs().max();
+    if !(err < 1e-6 && r.determinant() > 0.0) {
+        return None;
+    }
+    Some(IsometryMatrix3::from_parts(
+        Translation3::new(h.centre[0], h.centre[1], h.centre[2]),
+        Rotation3::from_matrix_unchecked(r),
+    ))
+}
+
+impl Splicer {
+    /// A splicer planning with `planner` towards `planner.default_ready()`, handing over through
+    /// `senders` (one per channel, same order as the timeline's channels).
+    pub fn new(planner: HitPlanner, timeline: Arc<Timeline>, senders: Vec<Sender>, cfg: PlannerConfig) -> Self {
+        Splicer {
+            ready: planner.default_ready().to_vec(),
+            planner,
+            timeline,
+            senders,
+            cfg,
+            schedule: None,
+            seq: 0,
+            last: None,
+        }
+    }
+
+    /// The ready pose.
+    pub fn ready(&self) -> &[f64] {
+        &self.ready
+    }
+
+    /// The schedule (`None` before every channel is enabled).
+    pub fn schedule(&self) -> Option<&Schedule> {
+        self.schedule.as_ref()
+    }
+
+    /// Once every channel runs: starts the schedule at the held positions and approaches the
+    /// ready pose. True when the schedule exists.
+    pub fn start(&mut self, counters: &Counters) -> bool {
+        if self.schedule.is_some() {
+            return true;
+        }
+        if !self.timeline.all_enabled() {
+            return false;
+        }
+        self.schedule = Some(Schedule::new(self.timeline.hold(), self.timeline.period()));
+        self.to_ready(counters);
+        true
+    }
+
+    fn lead_cycles(&self, factor: f64) -> u64 {
+        (self.cfg.splice_lead * factor / self.timeline.period()).ceil().max(2.0) as u64
+    }
+
+    /// Hands `traj` over to start at `start`; waits until every channel has decided. True when
+    /// the channels took it.
+    fn hand_over(&mut self, start: u64, traj: &JointTrajectory) -> bool {
+        self.seq += 1;
+        let seq = self.seq;
+        self.timeline.open(seq);
+        for s in &mut self.senders {
+            if !s.push(seq, start, traj) {
+                return false;
+            }
+        }
+        // the channels see it at their next cycle; a stopped channel never will
+        let give_up = controller_time() + 0.5;
+        while !self.timeline.seen_by_all(seq) {
+            if self.timeline.stopped.load(Ordering::Relaxed) || controller_time() > give_up {
+                break;
+            }
+            std::thread::sleep(Duration::from_micros(100));
+        }
+        let taken = self.timeline.decision(seq) == Decision::Taken;
+        if taken {
+            if let Some(s) = self.schedule.as_mut() {
+                s.push(start, traj.clone());
+            }
+        }
+        taken
+    }
+
+    /// Brings the robot back to the ready pose from the state commanded a splice lead from now
+    /// (nothing when it holds there already). True when a stroke was handed over.
+    pub fn to_ready(&mut self, counters: &Counters) -> bool {
+        for factor in [1.0, 2.0, 4.0] {
+            let Some(schedule) = self.schedule.as_ref() else {
+                return false;
+            };
+            let present = self.timeline.present_cycle();
+            let s = present + self.lead_cycles(factor);
+            let state = schedule.state_at(s);
+            let end_cycle = schedule.end_cycle();
+            let at_ready = state.q.iter().zip(&self.ready).all(|(a, b)| (a - b).abs() < 1e-9)
+                && state.qd.iter().chain(&state.qdd).all(|v| v.abs() < 1e-9);
+            if at_ready && s >= end_cycle {
+                return false;
+            }
+            let end = JointState::rest(&self.ready);
+            let Ok(d) = minimal_quintic_duration(&state, &end, self.planner.limits()) else {
+                return false;
+            };
+            let Ok(traj) = JointTrajectory::quintic_between(&state, &end, d) else {
+                return false;
+            };
+            Counters::bump(&counters.plans);
+            if self.timeline.present_cycle() + 2 >= s {
+                continue;
+            }
+            if self.hand_over(s, &traj) {
+                Counters::bump(&counters.splices);
+                // a hit still ahead will not happen
+                self.last = None;
+                return true;
+            }
+            Counters::bump(&counters.splices_late);
+            return false;
+        }
+        false
+    }
+
+    /// Plans and splices one hit received at controller time `arrival` (s).
+    pub fn hit(&mut self, h: &HitMsg, arrival: f64, counters: &Counters) -> HitOutcome {
+        let reject = |t: f64| HitOutcome {
+            status: status(h.id, PlanStatus::Rejected, f64::NAN, f64::NAN, controller_time() - t),
+            replaced: None,
+        };
+        let now = controller_time();
+        let (Some(pose), true) = (hit_pose(h), h.t_hit > now) else {
+            return reject(arrival);
+        };
+        if self.schedule.is_none() || self.timeline.stopped.load(Ordering::Relaxed) {
+            return reject(arrival);
+        }
+        let tl = self.timeline.clone();
+        for factor in [1.0, 2.0, 4.0] {
+            let present = tl.present_cycle();
+            let mut s = present + self.lead_cycles(factor);
+            let mut replaces = None;
+            if let Some(last) = self.last.filter(|l| l.t_hit > tl.time_of(s)) {
+                if last.stroke == h.stroke {
+                    replaces = Some(last);
+                } else if h.t_hit <= last.t_hit + 2.0 * tl.period() {
+                    // another stroke's hit comes first
+                    return reject(arrival);
+                } else {
+                    s = s.max(tl.cycle_at(last.t_hit) + 1);
+                }
+            } else if self.last.is_some_and(|l| l.stroke == h.stroke) {
+                // that stroke's hit is done: nothing left to replace
+                return reject(arrival);
+            }
+            let Some(schedule) = self.schedule.as_ref() else {
+                return reject(arrival);
+            };
+            let state = schedule.state_at(s);
+            let t_rel = (h.t_hit - tl.time_of(s)).max(1e-3);
+            let hit = Hit {
+                pose,
+                twist: h.twist,
+                t: t_rel,
+            };
+            tl.planning.store(true, Ordering::Relaxed);
+            let plan = self.planner.plan(&hit, Some(&state), Some(&self.ready));
+            tl.planning.store(false, Ordering::Relaxed);
+            Counters::bump(&counters.plans);
+            let plan = match plan {
+                Ok(p) => p,
+                Err(_) => return reject(arrival),
+            };
+            let code = match plan.status {
+                HitStatus::Ok => PlanStatus::Accepted,
+                HitStatus::TooEarly => PlanStatus::TooEarly,
+                HitStatus::Unreachable | HitStatus::Singular => PlanStatus::Unreachable,
+                _ => PlanStatus::Infeasible,
+            };
+            let elapsed = controller_time() - arrival;
+            if code != PlanStatus::Accepted {
+                let earliest = match code {
+                    PlanStatus::TooEarly => tl.time_of(s) + self.planner.earliest_t_hit(&plan),
+                    _ => f64::NAN,
+                };
+                return HitOutcome {
+                    status: status(h.id, code, earliest, f64::NAN, elapsed),
+                    replaced: None,
+                };
+            }
+            let Some(traj) = plan.trajectory.as_ref() else {
+                return reject(arrival);
+            };
+            if tl.present_cycle() + 2 >= s {
+                // planning took longer than the lead: again, further ahead
+                continue;
+            }
+            if !self.hand_over(s, traj) {
+                Counters::bump(&counters.splices_late);
+                return reject(arrival);
+            }
+            Counters::bump(&counters.splices);
+            let t_hit = tl.time_of(s) + plan.t_hit;
+            self.last = Some(Committed {
+                id: h.id,
+                stroke: h.stroke,
+                t_hit,
+            });
+            let elapsed = controller_time() - arrival;
+            let us = (elapsed * 1e6) as u64;
+            counters.plan_time_max_us.fetch_max(us, Ordering::Relaxed);
+            return HitOutcome {
+                status: status(h.id, PlanStatus::Accepted, f64::NAN, t_hit, elapsed),
+                replaced: replaces.map(|r| status(r.id, PlanStatus::Replaced, f64::NAN, f64::NAN, elapsed)),
+            };
+        }
+        reject(arrival)
+    }
+}
+
+/// Runs the planning thread until `stop`: takes what the receiver hands over, plans, splices,
+/// answers every hit with a status to `reply` (from `socket`); in ball mode `brain` decides.
+pub fn run_planner(
+    mut splicer: Splicer,
+    inbound: &Receiver<Inbound>,
+    mut brain: Option<&mut dyn Brain>,
+    socket: &UdpSocket,
+    reply: SocketAddr,
+    counters: &Counters,
+    stop: &AtomicBool,
+) {
+    let mut seq = 0u64;
+    let mut last_heard: Option<f64> = None;
+    let mut silent = false;
+    while !stop.load(Ordering::Relaxed) {
+        let started = splicer.start(counters);
+        let msg = inbound.recv_timeout(Duration::from_millis(5));
+        let now = controller_time();
+        let commanded = |sp: &Splicer| {
+            let tl = &sp.timeline;
+            sp.schedule()
+                .map(|s| s.state_at(tl.present_cycle()))
+                .unwrap_or_else(|| JointState::rest(sp.ready()))
+        };
+        let mut command = None;
+        match msg {
+            Ok(Inbound::Hit { hit, arrival }) => {
+                Counters::bump(&counters.hits);
+                last_heard = Some(arrival);
+                silent = false;
+                command = Some((Command::Hit(hit), arrival));
+            }
+            Ok(Inbound::Observation { obs, arrival }) => {
+                Counters::bump(&counters.observations);
+                last_heard = Some(arrival);
+                silent = false;
+                if let Some(b) = brain.as_deref_mut() {
+                    let state = commanded(&splicer);
+                    command = b.observe(&obs, now, &state).map(|c| (c, arrival));
+                }
+            }
+            Err(RecvTimeoutError::Timeout) => {}
+            Err(RecvTimeoutError::Disconnected) => return,
+        }
+        if command.is_none() {
+            if let Some(b) = brain.as_deref_mut() {
+                let state = commanded(&splicer);
+                command = b.tick(now, &state).map(|c| (c, now));
+            }
+        }
+        if let Some(t) = last_heard {
+            if !silent && now - t > splicer.cfg.silence {
+                silent = true;
+                Counters::bump(&counters.silence_timeouts);
+                command = command.or(Some((Command::Ready, now)));
+            }
+        }
+        match command {
+            Some((Command::Hit(h), arrival)) => {
+                let out = if started {
+                    splicer.hit(&h, arrival, counters)
+                } else {
+                    HitOutcome {
+                        status: status(h.id, PlanStatus::Rejected, f64::NAN, f64::NAN, now - arrival),
+                        replaced: None,
+                    }
+                };
+                for s in out.replaced.iter().chain(std::iter::once(&out.status)) {
+                    seq += 1;
+                    send_status(socket, reply, seq, controller_time(), s, counters);
+                    if let Some(b) = brain.as_deref_mut() {
+                        b.outcome(s);
+                    }
+                }
+            }
+            Some((Command::Ready, _)) => {
+                splicer.to_ready(counters);
+            }
+            None => {}
+        }
+    }
+}
