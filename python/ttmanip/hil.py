@@ -98,9 +98,12 @@ def play(
     cam = _t.ball_rally_observations(index, seed, world)
     ball_id = index + 1
     t0 = time.monotonic() + 0.02  # the opponent's hit, on the camera clock
-    sends = []
+    sends, due = [], []
     for e, stamp, p in zip(cam["exposures"], cam["times"], cam["positions"], strict=True):
-        _sleep_until(t0 + e + cam["latency"])
+        if not np.all(np.isfinite(p)):
+            continue  # the ball is gone (past the floor or the net): no frame
+        due.append(t0 + e + cam["latency"])
+        _sleep_until(due[-1])
         sends.append(time.monotonic())
         link.observation(ball_id, t0 + stamp, p)
     _sleep_until(sends[-1] + settle)
@@ -112,7 +115,7 @@ def play(
     rec = {
         "index": index,
         "observations": len(sends),
-        "send_jitter_ms": float(np.max(np.array(sends) - (t0 + cam["exposures"] + cam["latency"])) * 1e3),
+        "send_jitter_ms": float(np.max(np.array(sends) - np.array(due)) * 1e3),
         "statuses": [s["status"] for _, s in hits],
         "planning_time_s": [s["planning_time"] for _, s in hits],
         "telemetry": len(rows),
@@ -141,15 +144,25 @@ def play(
     return rec
 
 
-def _ttctl_command(binary: str | None, port: int, reply: int, extra: list[str]) -> list[str]:
+_REPO = Path(__file__).resolve().parents[2]
+
+
+def _ttctl_command(
+    binary: str | None, config: str | None, port: int, reply: int, stats: Path, max_seconds: float
+) -> list[str]:
     exe = binary or shutil.which("ttctl")
     if exe is None:
-        local = Path(__file__).resolve().parents[2] / "target" / "release" / "ttctl"
+        local = _REPO / "target" / "release" / "ttctl"
         exe = str(local) if local.exists() else None
     if exe is None:
         raise HilError("ttctl not found: build it (cargo build --release -p ttcan) or give --ttctl PATH")
+    cfg = config or str(_REPO / "tests" / "online" / "gantry6_hil.toml")
+    if not Path(cfg).exists():
+        raise HilError(f"ttctl configuration {cfg} not found: give --config PATH")
     return [
         exe,
+        "-c",
+        cfg,
         "--virtual-drives",
         "--online",
         "ball",
@@ -157,8 +170,25 @@ def _ttctl_command(binary: str | None, port: int, reply: int, extra: list[str]) 
         f"127.0.0.1:{port}",
         "--reply",
         f"127.0.0.1:{reply}",
-        *extra,
+        "--stats",
+        str(stats),
+        "--max-seconds",
+        str(max_seconds),
     ]
+
+
+def _stats(path: Path) -> dict:
+    """ttctl's statistics file (key=value lines) as a dict, numbers as floats."""
+    out = {}
+    if path.exists():
+        for line in path.read_text().splitlines():
+            k, sep, v = line.partition("=")
+            if sep:
+                try:
+                    out[k.strip()] = float(v)
+                except ValueError:
+                    out[k.strip()] = v.strip()
+    return out
 
 
 def _pct(a, p):
@@ -171,7 +201,7 @@ def run(
     out: str | Path = "out/hil",
     connect: tuple[str, int] | None = None,
     ttctl: str | None = None,
-    ttctl_args: list[str] | None = None,
+    config: str | None = None,
     world: bool = False,
 ) -> dict:
     """Plays balls 0..``n`` of the rally of ``seed`` against ``ttctl`` (started here in ball mode
@@ -186,7 +216,7 @@ def run(
     proc = None
     if connect is None:
         port = _free_port()
-        cmd = _ttctl_command(ttctl, port, reply, list(ttctl_args or []))
+        cmd = _ttctl_command(ttctl, config, port, reply, out / "ttctl_stats.txt", 30.0 + 2.0 * n)
         log = (out / "ttctl.log").open("w")
         proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT)
         address = ("127.0.0.1", port)
@@ -230,6 +260,7 @@ def run(
         "refused_datagrams": listener.refused,
         "statuses": {s: sum(b["status"] == s for b in balls) for s in {b["status"] for b in balls}},
     }
+    summary["ttctl"] = _stats(out / "ttctl_stats.txt")
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
     _figure(out, balls)
     return summary

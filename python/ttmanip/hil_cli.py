@@ -23,6 +23,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--connect", metavar="HOST:PORT", help="a running ttctl's ball-mode address")
     p.add_argument("--ttctl", metavar="PATH", help="the ttctl binary (default: on PATH or target/release)")
     p.add_argument(
+        "--config", metavar="PATH", help="ttctl configuration (default: tests/online/gantry6_hil.toml)"
+    )
+    p.add_argument(
         "--world",
         choices=("model", "mismatch"),
         default="model",
@@ -49,6 +52,7 @@ def run(args: argparse.Namespace) -> int:
         out=args.out,
         connect=connect,
         ttctl=args.ttctl,
+        config=args.config,
         world=args.world == "mismatch",
     )
     print(json.dumps(summary, indent=2))
