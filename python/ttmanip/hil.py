@@ -120,6 +120,9 @@ def play(
         "planning_time_s": [s["planning_time"] for _, s in hits],
         "telemetry": len(rows),
     }
+    if not rows:
+        rec.update(status="no_telemetry", returned=False, contact=False)
+        return rec
     if not accepted:
         rec.update(status="no_hit", returned=False, contact=False)
         return rec
@@ -235,6 +238,8 @@ def run(
             time.sleep(0.05)
         for i in range(n):
             balls.append(play(link, listener, i, seed, world))
+            if balls[-1]["status"] == "no_telemetry":
+                break  # the controller stopped (see ttctl.log and its statistics' fault)
     finally:
         listener.stop()
         link.close()
@@ -244,15 +249,17 @@ def run(
                 proc.wait(timeout=10)
             except subprocess.TimeoutExpired:
                 proc.kill()
-    offline = _t.ball_rally(n, seed=seed, world=world)
+    offline = _t.ball_rally(len(balls), seed=seed, world=world)
     returned = sum(b["returned"] for b in balls)
+    played = len(balls)
     plan = [x for b in balls for x in b["planning_time_s"]]
     summary = {
         "n": n,
+        "played": played,
         "seed": seed,
         "world": "mismatch" if world else "model",
         "returned": returned,
-        "return_rate": returned / n,
+        "return_rate": returned / max(played, 1),
         "offline_returned": int(np.sum(offline["returned"])),
         "offline_return_rate": float(np.mean(offline["returned"])),
         "planning_time_ms": {"p50": _pct(plan, 50) * 1e3, "p99": _pct(plan, 99) * 1e3},
@@ -261,6 +268,8 @@ def run(
         "statuses": {s: sum(b["status"] == s for b in balls) for s in {b["status"] for b in balls}},
     }
     summary["ttctl"] = _stats(out / "ttctl_stats.txt")
+    summary["offline_statuses"] = [str(x) for x in offline["status"]]
+    summary["balls"] = [{k: v for k, v in b.items() if k != "timeline"} for b in balls]
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
     _figure(out, balls)
     return summary
