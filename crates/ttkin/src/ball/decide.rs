@@ -23,13 +23,14 @@
 //! `t_hit` counts from the `now` of its decision).
 
 use super::estimate::{estimate, Estimate, EstimateError, EstimateOptions};
+use super::flight::{BallState, EventKind, Flight};
 use super::hitplan::{Hit, HitPlan, HitPlanner, HitStatus};
-use super::rally::{bounce_time, RallyConfig, CORRECTION_MIN_STROKE};
 use super::update::update;
 use crate::error::Error;
 use crate::traj::JointState;
 
-/// The decision rules' settings.
+/// The decision rules' settings (the rally's: `DecideConfig::of(&rally_config)`, see
+/// [`super::rally`]; the default is the default rally's).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DecideConfig {
     /// Landing target of the return (x, y, m, world; on the opponent's half).
@@ -41,25 +42,6 @@ pub struct DecideConfig {
     pub frame_period: f64,
     /// Time (s) after the predicted bounce at which the hit is corrected once; 0 for none.
     pub correction_delay: f64,
-}
-
-impl DecideConfig {
-    /// The rules of the rally `cfg`: its target, its camera's window and frame period, its
-    /// correction delay.
-    pub fn of(cfg: &RallyConfig) -> Self {
-        DecideConfig {
-            target: cfg.target,
-            window_frames: (cfg.camera.window * cfg.camera.rate).round() as usize + 1,
-            frame_period: 1.0 / cfg.camera.rate,
-            correction_delay: cfg.correction_delay,
-        }
-    }
-}
-
-impl Default for DecideConfig {
-    fn default() -> Self {
-        DecideConfig::of(&RallyConfig::default())
-    }
 }
 
 /// What one observation led to.
@@ -257,4 +239,22 @@ impl BallDecider {
         .ok()?;
         plan.hit.filter(|_| plan.status == HitStatus::Ok)
     }
+}
+
+/// Shortest stroke (s) of the correction after the bounce: the rest of a stroke under way.
+pub(super) const CORRECTION_MIN_STROKE: f64 = 0.06;
+
+/// Time (s) of the first table bounce on the robot's half of the flight from `s` (within 1.5 s),
+/// flying no further than that.
+pub(super) fn bounce_time(flight: &Flight, s: &BallState) -> Option<f64> {
+    let mut cur = *s;
+    while cur.t < s.t + 1.5 {
+        let (next, ev) = flight.advance(&cur, s.t + 1.5, None);
+        match ev {
+            Some(e) if e.kind == EventKind::Table && e.before.p.x < 0.0 => return Some(e.before.t),
+            Some(e) if e.kind.terminal() => return None,
+            _ => cur = next,
+        }
+    }
+    None
 }

@@ -30,7 +30,7 @@
 //! independently of the planner (see [`super::reach`]). Balls out of reach are counted
 //! separately, with the reason.
 
-use super::decide::{BallDecider, DecideConfig, Decision};
+use super::decide::{BallDecider, DecideConfig, Decision, CORRECTION_MIN_STROKE};
 use super::estimate::{estimate, EstimateOptions};
 use super::flight::{BallState, EventKind, Flight};
 use super::hitplan::{shoot, Hit, HitPlanner, HitStatus};
@@ -165,6 +165,25 @@ impl Default for RallyConfig {
             correction_delay: 0.03,
             world: None,
         }
+    }
+}
+
+impl DecideConfig {
+    /// The rules of the rally `cfg`: its target, its camera's window and frame period, its
+    /// correction delay.
+    pub fn of(cfg: &RallyConfig) -> Self {
+        DecideConfig {
+            target: cfg.target,
+            window_frames: (cfg.camera.window * cfg.camera.rate).round() as usize + 1,
+            frame_period: 1.0 / cfg.camera.rate,
+            correction_delay: cfg.correction_delay,
+        }
+    }
+}
+
+impl Default for DecideConfig {
+    fn default() -> Self {
+        DecideConfig::of(&RallyConfig::default())
     }
 }
 
@@ -843,24 +862,6 @@ pub fn correct_hit(
     let mut replanner = planner.clone();
     replanner.min_stroke_time = CORRECTION_MIN_STROKE;
     replanner.plan_near(ball, now, &start, after_bounce, first, t_prev)
-}
-
-/// Shortest stroke (s) of the correction after the bounce: the rest of a stroke under way.
-pub(super) const CORRECTION_MIN_STROKE: f64 = 0.06;
-
-/// Time (s) of the first table bounce on the robot's half of the flight from `s` (within 1.5 s),
-/// flying no further than that.
-pub(super) fn bounce_time(flight: &Flight, s: &BallState) -> Option<f64> {
-    let mut cur = *s;
-    while cur.t < s.t + 1.5 {
-        let (next, ev) = flight.advance(&cur, s.t + 1.5, None);
-        match ev {
-            Some(e) if e.kind == EventKind::Table && e.before.p.x < 0.0 => return Some(e.before.t),
-            Some(e) if e.kind.terminal() => return None,
-            _ => cur = next,
-        }
-    }
-    None
 }
 
 /// The executed stroke of `hit` (joint frame, from the stroke start): its accepted hit leg, then a
