@@ -141,6 +141,10 @@ if modprobe can_bcm && modprobe virtio_pci && modprobe 9pnet_virtio && modprobe 
     for i in 4 5; do $IP link add dev "vcan$i" type vcan && $IP link set "vcan$i" txqueuelen 1000 up || failed "vcan$i" ""; done
     interop interop-python-master python-master vcan4
     interop interop-ttctl-master ttctl-master vcan5
+    # 8. issue 26: the online hit mode on vcan (gantry6 on vcan4..6 at 250 Hz, a hit over loopback UDP)
+    $IP link set lo up || failed lo-up ""
+    $IP link add dev vcan6 type vcan && $IP link set vcan6 txqueuelen 1000 up || failed vcan6 ""
+    interop online-hit online-hit vcan4,vcan5,vcan6
 else
     failed interop-9p "cannot mount the host's filesystem over 9p"
 fi

@@ -10,7 +10,7 @@
 
 use std::io::Write;
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 use ttcan::bus::socketcan::SocketCanBus;
 use ttcan::bus::stdio::StdioBus;
@@ -25,7 +25,7 @@ use ttcan::runtime::master::{ChannelMaster, StopReason, MAX_AXES_PER_CHANNEL};
 use ttcan::runtime::rt;
 use ttcan::runtime::stats::CycleStats;
 use ttcan::runtime::trajectory::Trajectory;
-use ttcan::runtime::vdrives::{VirtualChannel, VirtualDrives};
+use ttcan::runtime::vdrives::{VirtualBus, VirtualChannel};
 
 /// Embedded controller: CiA 402 drives over SocketCAN, one real-time thread per channel.
 #[derive(clap::Parser, Debug)]
@@ -188,18 +188,14 @@ fn main() {
         fail("only one channel can use the interface stdio");
     }
     let mut buses: Vec<Box<dyn CanBus>> = Vec::new();
-    let mut drives = None;
     if args.virtual_drives {
-        let vch: Vec<VirtualChannel> = cfg
-            .channel
-            .iter()
-            .map(|c| VirtualChannel {
+        for c in &cfg.channel {
+            let ch = VirtualChannel {
                 axes: c.axis.iter().map(|a| (a.node, a.units)).collect(),
-            })
-            .collect();
-        let (d, ports) = VirtualDrives::new(&vch, 1.0 / cfg.cycle_hz, 100).unwrap_or_else(|e| fail(e));
-        drives = Some(d);
-        buses.extend(ports.into_iter().map(|p| Box::new(p) as Box<dyn CanBus>));
+            };
+            let bus = VirtualBus::new(&ch, 1.0 / cfg.cycle_hz, 100).unwrap_or_else(|e| fail(e));
+            buses.push(Box::new(bus));
+        }
     }
     for ch in cfg.channel.iter().filter(|_| !args.virtual_drives) {
         if ch.interface == "stdio" {
@@ -250,12 +246,7 @@ fn main() {
     };
     let mut followers: Vec<Option<StrokeFollower>> = followers;
     followers.resize_with(cfg.channel.len(), || None);
-    let done = AtomicBool::new(false);
     let reports: Vec<ChannelReport> = std::thread::scope(|s| {
-        if let Some(d) = drives.as_mut() {
-            let done = &done;
-            s.spawn(move || d.serve(done));
-        }
         let handles: Vec<_> = cfg
             .channel
             .iter()
@@ -289,12 +280,10 @@ fn main() {
                 })
             })
             .collect();
-        let r = handles
+        handles
             .into_iter()
             .map(|h| h.join().unwrap_or_else(|_| fail("a channel thread panicked")))
-            .collect();
-        done.store(true, Ordering::Relaxed);
-        r
+            .collect()
     });
     let online = session.map(|s| s.stop());
     report(&args, &reports, online.as_ref());

@@ -69,6 +69,7 @@ pub struct Timeline {
     channels: usize,
     dof: usize,
     cycle: [AtomicU64; MAX_CHANNELS],
+    skipped: [AtomicU64; MAX_CHANNELS],
     enabled: AtomicUsize,
     hold: [AtomicU64; MAX_JOINTS],
     decision: AtomicU64,
@@ -115,6 +116,7 @@ impl Timeline {
             channels: channels.min(MAX_CHANNELS),
             dof: dof.min(MAX_JOINTS),
             cycle: std::array::from_fn(|_| AtomicU64::new(0)),
+            skipped: std::array::from_fn(|_| AtomicU64::new(0)),
             enabled: AtomicUsize::new(0),
             hold: std::array::from_fn(|_| AtomicU64::new(0)),
             decision: AtomicU64::new(0),
@@ -139,14 +141,24 @@ impl Timeline {
         self.channels
     }
 
-    /// Controller time (s, monotonic clock) of deadline `k`.
-    pub fn time_of(&self, k: u64) -> f64 {
-        (self.t0_ns as f64 + k as f64 * self.period_ns as f64) * 1e-9
+    /// Deadlines skipped so far (the most of any channel): a stall pauses the strokes.
+    pub fn skipped(&self) -> u64 {
+        self.skipped[..self.channels]
+            .iter()
+            .map(|c| c.load(Ordering::Acquire))
+            .max()
+            .unwrap_or(0)
     }
 
-    /// The first deadline index at or after controller time `t` (s).
+    /// Controller time (s, monotonic clock) of executed cycle `k` (deadline k + skipped).
+    pub fn time_of(&self, k: u64) -> f64 {
+        (self.t0_ns as f64 + (k + self.skipped()) as f64 * self.period_ns as f64) * 1e-9
+    }
+
+    /// The first executed cycle at or after controller time `t` (s), skips so far counted.
     pub fn cycle_at(&self, t: f64) -> u64 {
-        ((t * 1e9 - self.t0_ns as f64) / self.period_ns as f64).ceil().max(0.0) as u64
+        let d = ((t * 1e9 - self.t0_ns as f64) / self.period_ns as f64).ceil().max(0.0) as u64;
+        d.saturating_sub(self.skipped())
     }
 
     /// Period, s.
@@ -154,7 +166,7 @@ impl Timeline {
         self.period_ns as f64 * 1e-9
     }
 
-    /// The newest cycle any channel has started.
+    /// The newest cycle (executed cycles since deadline 0) any channel has started.
     pub fn present_cycle(&self) -> u64 {
         self.cycle[..self.channels]
             .iter()
@@ -290,6 +302,8 @@ pub struct StrokeFollower {
     q: [f64; MAX_JOINTS],
     qd: [f64; MAX_JOINTS],
     qdd: [f64; MAX_JOINTS],
+    /// Cycles executed (deadline index less the skipped deadlines): the strokes' clock.
+    executed: u64,
 }
 
 /// The two ends of channel `ch`'s handoff (`joints`: the robot joint of each axis).
@@ -320,6 +334,7 @@ pub fn channel(
             q: [0.0; MAX_JOINTS],
             qd: [0.0; MAX_JOINTS],
             qdd: [0.0; MAX_JOINTS],
+            executed: 0,
         },
     )
 }
@@ -378,7 +393,13 @@ impl StrokeFollower {
 impl SetpointSource for StrokeFollower {
     fn fill(&mut self, c: &CycleInfo, master: &ChannelMaster, out: &mut [AxisSetpoint], qdd: &mut [f64]) -> bool {
         let n = out.len();
-        self.timeline.cycle[self.ch].store(c.k, Ordering::Release);
+        // the strokes run on executed cycles: a stall of this thread pauses them (the drives'
+        // physics advance per SYNC too), the target never jumps; the skipped deadlines are
+        // published so that the planner maps the controller clock onto this count
+        let k = self.executed;
+        self.executed += 1;
+        self.timeline.skipped[self.ch].store(c.k.saturating_sub(k), Ordering::Release);
+        self.timeline.cycle[self.ch].store(k, Ordering::Release);
         if c.phase != Phase::Run {
             if matches!(c.phase, Phase::Stopping | Phase::Stopped) {
                 self.timeline.stopped.store(true, Ordering::Relaxed);
@@ -404,7 +425,7 @@ impl SetpointSource for StrokeFollower {
             self.published = true;
             self.timeline.enabled.fetch_add(1, Ordering::AcqRel);
         }
-        self.receive(c.k);
+        self.receive(k);
         let dof = self.timeline.dof;
         let sampled = match self
             .active
@@ -412,7 +433,7 @@ impl SetpointSource for StrokeFollower {
             .and_then(|s| s.traj.as_ref().map(|t| (s.start_cycle, t)))
         {
             Some((start, traj)) if traj.dof() == dof => {
-                let t = ((c.k - start.min(c.k)) as f64 * c.period).min(traj.duration());
+                let t = ((k - start.min(k)) as f64 * c.period).min(traj.duration());
                 traj.sample(t, &mut self.q[..dof], &mut self.qd[..dof], &mut self.qdd[..dof])
                     .is_ok()
             }

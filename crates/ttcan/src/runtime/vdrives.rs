@@ -1,89 +1,99 @@
-//! In-process virtual drives for a controller without CAN hardware: one in-memory bus
-//! ([`crate::bus::memory`]) per channel, the channel's drives ([`crate::vdrive::VirtualDrive`],
-//! the maxon RE 25 + GP 26 A model as `ttdrive-sim` has) served by one thread for all channels.
-//! The controller runs its ordinary channel threads on the other port of each bus: the same
-//! controller code, only the bus differs.
+//! In-process virtual drives for a controller without CAN hardware: each channel's bus is a
+//! [`VirtualBus`] holding the channel's drives ([`crate::vdrive::VirtualDrive`], the maxon RE 25 +
+//! GP 26 A model as `ttdrive-sim` has). A frame the controller sends reaches every drive at once
+//! and their answers wait for the controller's next poll, as on a bus; the drives advance one
+//! period per SYNC and run their 1 ms time base (heartbeat, SYNC watchdog) from the monotonic
+//! clock. The controller runs its ordinary channel threads on these buses: the same controller
+//! code, only the bus differs. The drives work inside the channel thread's send (test and laptop
+//! infrastructure: it allocates a little; on a real bus that work is the drives').
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::collections::VecDeque;
 
-use crate::bus::memory::{MemoryBus, MemoryPort};
-use crate::bus::{BusEvent, CanBus};
-use crate::canopen::{Frames, Units};
+use crate::bus::{BusError, BusEvent, CanBus};
+use crate::canopen::{Frame, Frames, Units};
 use crate::vdrive::VirtualDrive;
 use crate::{AxisConfig, MotorModel};
 
-/// The drives of one channel: node ids and scaling of each axis.
+/// The drives of one channel: node id and scaling of each axis.
 #[derive(Debug, Clone)]
 pub struct VirtualChannel {
     /// (node id, units) of each axis.
     pub axes: Vec<(u8, Units)>,
 }
 
-/// The drives of every channel on their buses, ready to be served.
-pub struct VirtualDrives {
-    channels: Vec<(MemoryPort, Vec<VirtualDrive>)>,
+/// One channel's bus with its virtual drives on it.
+#[derive(Debug)]
+pub struct VirtualBus {
+    drives: Vec<VirtualDrive>,
+    rx: VecDeque<BusEvent>,
+    out: Frames,
+    last_tick_ns: u64,
 }
 
-impl VirtualDrives {
-    /// Builds the drives of `channels` for a SYNC period of `period` s; returns them and the
-    /// controller's port of each channel's bus. `sync_timeout_ms`: the drives' SYNC watchdog.
-    pub fn new(
-        channels: &[VirtualChannel],
-        period: f64,
-        sync_timeout_ms: u32,
-    ) -> crate::Result<(VirtualDrives, Vec<MemoryPort>)> {
+impl VirtualBus {
+    /// The drives of `channel` for a SYNC period of `period` s, their SYNC watchdog
+    /// `sync_timeout_ms`; their boot-up messages wait on the bus.
+    pub fn new(channel: &VirtualChannel, period: f64, sync_timeout_ms: u32) -> crate::Result<Self> {
         let model = MotorModel::maxon_re25_gp26();
         let cfg = AxisConfig::new(model);
-        let mut ports = Vec::new();
-        let mut served = Vec::new();
-        for ch in channels {
-            let bus = MemoryBus::new();
-            ports.push(bus.port());
-            let mut port = bus.port();
-            let mut out = Frames::new();
-            let mut drives = Vec::new();
-            for &(node, units) in &ch.axes {
-                let mut d = VirtualDrive::new(node, &model, &cfg, units, period, &mut out)?;
-                d.sync_timeout_ms = sync_timeout_ms;
-                drives.push(d);
-            }
-            for f in out.as_slice() {
-                let _ = port.send(f);
-            }
-            served.push((port, drives));
+        let mut out = Frames::new();
+        let mut drives = Vec::new();
+        for &(node, units) in &channel.axes {
+            let mut d = VirtualDrive::new(node, &model, &cfg, units, period, &mut out)?;
+            d.sync_timeout_ms = sync_timeout_ms;
+            drives.push(d);
         }
-        Ok((VirtualDrives { channels: served }, ports))
+        let mut bus = VirtualBus {
+            drives,
+            rx: VecDeque::with_capacity(256),
+            out: Frames::new(),
+            last_tick_ns: crate::runtime::rt::now_ns(),
+        };
+        bus.queue(&out);
+        Ok(bus)
     }
 
-    /// Serves the drives until `done`: every frame to every drive of its bus, the drives' 1 ms
-    /// tick, their answers on the bus; polls every 100 µs.
-    pub fn serve(&mut self, done: &AtomicBool) {
-        let mut out = Frames::new();
-        let mut next = crate::runtime::rt::now_ns();
-        while !done.load(Ordering::Relaxed) {
-            let now = crate::runtime::rt::now_ns();
-            let tick = now >= next;
-            if tick {
-                next += 1_000_000;
-                if now > next + 100_000_000 {
-                    next = now;
-                }
-            }
-            for (port, drives) in &mut self.channels {
-                while let Ok(Some(BusEvent::Frame { frame, .. })) = port.poll() {
-                    for d in drives.iter_mut() {
-                        d.on_frame(&frame, &mut out);
-                    }
-                }
-                if tick {
-                    drives.iter_mut().for_each(|d| d.tick_ms(&mut out));
-                }
-                for f in out.as_slice() {
-                    let _ = port.send(f);
-                }
-                out.clear();
-            }
-            crate::runtime::rt::sleep_until(crate::runtime::rt::now_ns() + 100_000);
+    /// The drives.
+    pub fn drives(&self) -> &[VirtualDrive] {
+        &self.drives
+    }
+
+    fn queue(&mut self, frames: &Frames) {
+        let now = crate::runtime::rt::now_ns();
+        for f in frames.as_slice() {
+            self.rx.push_back(BusEvent::Frame {
+                frame: *f,
+                timestamp_ns: now,
+            });
         }
+    }
+
+    fn tick(&mut self) {
+        let now = crate::runtime::rt::now_ns();
+        let ms = (now.saturating_sub(self.last_tick_ns) / 1_000_000).min(1000);
+        self.last_tick_ns += ms * 1_000_000;
+        for _ in 0..ms {
+            for d in &mut self.drives {
+                d.tick_ms(&mut self.out);
+            }
+        }
+    }
+}
+
+impl CanBus for VirtualBus {
+    fn send(&mut self, frame: &Frame) -> Result<(), BusError> {
+        self.out.clear();
+        self.tick();
+        for d in &mut self.drives {
+            d.on_frame(frame, &mut self.out);
+        }
+        let out = std::mem::take(&mut self.out);
+        self.queue(&out);
+        self.out = out;
+        Ok(())
+    }
+
+    fn poll(&mut self) -> Result<Option<BusEvent>, BusError> {
+        Ok(self.rx.pop_front())
     }
 }
