@@ -17,7 +17,7 @@
 //! (latency); planning happens at the delivery of the last observation.
 //!
 //! **Execution**: the planned stroke is executed exactly (no drive simulation): the racket follows
-//! the hit leg the planner accepted ([`crate::ball::leg`]: quintic or jerk-limited; on a re-plan the new
+//! the hit leg the planner accepted ([`crate::hit::leg`]: quintic or jerk-limited; on a re-plan the new
 //! leg from the state at that time; by default one correction 30 ms after the bounce with the
 //! estimate updated through it, [`RallyConfig::correction_delay`]) and then a 0.4 s quintic back to the ready configuration; the racket pose and
 //! velocity at the impact come from forward kinematics and the Jacobian along it. The true ball is

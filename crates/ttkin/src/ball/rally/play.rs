@@ -1,5 +1,5 @@
 //! One ball of the rally from the robot's side: observe, estimate, plan, correct after the
-//! bounce, re-plan, execute (exactly, or through an [`Executor`]), then [`super::score`]'s impact
+//! bounce, re-plan, execute (exactly, or through an [`Executor`]), then [`super::score()`]'s impact
 //! and score.
 
 use super::camera::observe_ball;
