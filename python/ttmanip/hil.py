@@ -159,7 +159,10 @@ def _ttctl_command(
         exe = str(local) if local.exists() else None
     if exe is None:
         raise HilError("ttctl not found: build it (cargo build --release -p ttcan) or give --ttctl PATH")
-    cfg = config or str(_REPO / "tests" / "online" / "gantry6_hil.toml")
+    # The default configuration of the checkout: from the working directory (the package may be
+    # installed from the wheel, away from the repository), else next to the package's source.
+    default = Path("tests") / "online" / "gantry6_hil.toml"
+    cfg = config or str(default if default.exists() else _REPO / default)
     if not Path(cfg).exists():
         raise HilError(f"ttctl configuration {cfg} not found: give --config PATH")
     return [
