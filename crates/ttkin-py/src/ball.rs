@@ -409,7 +409,7 @@ fn rally_of(seed: i128, world: bool) -> PyResult<Rally> {
 /// camera's rate (Hz), latency (s) and window (s).
 #[ttkin_py_guard::guarded]
 #[pyfunction]
-#[pyo3(signature = (index, seed = 0, world = false))]
+#[pyo3(signature = (index, seed = RallyConfig::default().seed as i128, world = RallyConfig::default().world.is_some()))]
 fn ball_rally_observations(py: Python<'_>, index: i128, seed: i128, world: bool) -> PyResult<Bound<'_, PyDict>> {
     let index: u64 = args::unsigned(index, "index")?;
     let rally = rally_of(seed, world)?;
@@ -419,8 +419,10 @@ fn ball_rally_observations(py: Python<'_>, index: i128, seed: i128, world: bool)
     d.set_item("incoming", to_numpy(py, &[10], &state_vec(&o.incoming)))?;
     d.set_item("exposures", to_numpy(py, &[o.exposures.len()], &o.exposures))?;
     d.set_item("times", to_numpy(py, &[o.times.len()], &o.times))?;
-    let flat: Vec<f64> = o.positions.iter().flatten().copied().collect();
-    d.set_item("positions", to_numpy(py, &[o.positions.len(), 3], &flat))?;
+    d.set_item(
+        "positions",
+        to_numpy(py, &[o.positions.len(), 3], o.positions.as_flattened()),
+    )?;
     d.set_item("rate", cfg.camera.rate)?;
     d.set_item("latency", cfg.camera.latency)?;
     d.set_item("window", cfg.camera.window)?;
@@ -433,7 +435,7 @@ fn ball_rally_observations(py: Python<'_>, index: i128, seed: i128, world: bool)
 /// (s on the ball's clock: 0 at the opponent's hit), the hit expected at `t_hit` (s, same clock).
 #[ttkin_py_guard::guarded]
 #[pyfunction]
-#[pyo3(signature = (index, t_hit, t, q, qd, seed = 0, world = false))]
+#[pyo3(signature = (index, t_hit, t, q, qd, seed = RallyConfig::default().seed as i128, world = RallyConfig::default().world.is_some()))]
 #[allow(clippy::too_many_arguments)]
 fn ball_rally_score<'py>(
     py: Python<'py>,

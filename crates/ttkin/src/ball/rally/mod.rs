@@ -42,8 +42,10 @@ pub mod score;
 pub mod serve;
 
 pub use camera::{observe_ball, Camera, Observations};
-pub use play::{correct_hit, execution, play, play_with, Executed, Executor};
-pub use score::{racket_state, score, score_executed, BallOutcome, Outcomes, RacketState, SampledPath, Score};
+pub use play::{correct_hit, execution, play, play_with, Executor};
+pub use score::{
+    racket_state, score, score_executed, BallOutcome, Executed, Outcomes, RacketState, SampledPath, Score,
+};
 pub use serve::{serve, WorldSpread};
 
 use super::decide::DecideConfig;

@@ -3,7 +3,7 @@
 //! and score.
 
 use super::camera::observe_ball;
-use super::score::{racket_state, sample_path, score, BallOutcome};
+use super::score::{racket_state, sample_path, score, BallOutcome, Executed};
 use super::RallyConfig;
 use crate::ball::decide::{BallDecider, DecideConfig, Decision, CORRECTION_MIN_STROKE};
 use crate::ball::estimate::{estimate, EstimateOptions};
@@ -13,20 +13,6 @@ use crate::ball::reach::ReachRegion;
 use crate::traj::{JointState, JointTrajectory};
 use std::time::Instant;
 
-/// What the robot actually did for a commanded stroke: joint positions and velocities at times
-/// `t` (s from the stroke's start), `dof` columns, row-major.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Executed {
-    /// Joints.
-    pub dof: usize,
-    /// Sample times (s from the stroke's start, increasing).
-    pub t: Vec<f64>,
-    /// Joint positions (rad or m), K × dof.
-    pub q: Vec<f64>,
-    /// Joint speeds (rad/s or m/s), K × dof.
-    pub qd: Vec<f64>,
-}
-
 /// Executes a stroke on the robot (the rally's execution hook; `ttcan` implements it with the
 /// coupled drive simulation, since `ttkin` may not depend on `ttcan`). The reference: samples at
 /// `times` (s from the stroke's start, increasing, uniform) of q, q̇, q̈ (K × n, row-major), the
@@ -34,25 +20,6 @@ pub struct Executed {
 pub trait Executor: Sync {
     /// The executed motion for the reference (see the trait doc).
     fn execute(&self, times: &[f64], q: &[f64], qd: &[f64], qdd: &[f64]) -> Option<Executed>;
-}
-
-impl Executed {
-    /// Joint state at `t` (s from the start): linear interpolation, held beyond the ends.
-    pub(super) fn sample(&self, t: f64, q: &mut [f64], qd: &mut [f64]) {
-        let n = self.dof;
-        let k = self.t.partition_point(|&x| x <= t).clamp(1, self.t.len().max(2) - 1);
-        let (t0, t1) = (self.t[k - 1], self.t[k.min(self.t.len() - 1)]);
-        let s = if t1 > t0 {
-            ((t - t0) / (t1 - t0)).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        let k1 = k.min(self.t.len() - 1);
-        for j in 0..n {
-            q[j] = self.q[(k - 1) * n + j] + s * (self.q[k1 * n + j] - self.q[(k - 1) * n + j]);
-            qd[j] = self.qd[(k - 1) * n + j] + s * (self.qd[k1 * n + j] - self.qd[(k - 1) * n + j]);
-        }
-    }
 }
 
 /// Sample period (s) of the reference handed to an [`Executor`].

@@ -4,7 +4,6 @@
 //! scoring of the rally and of the hardware-in-the-loop rally ([`score_executed`]: from sampled
 //! joint states).
 
-use super::play::Executed;
 use crate::ball::flight::{BallState, EventKind, Flight};
 use crate::ball::hitplan::ReturnPlanner;
 use crate::chain::JacobianFrame;
@@ -54,6 +53,39 @@ pub struct BallOutcome {
     pub path: Vec<[f64; 3]>,
     /// Racket-centre path (m, world), same times as `path` while the stroke lasts.
     pub racket_path: Vec<[f64; 3]>,
+}
+
+/// What the robot actually did for a commanded stroke: joint positions and velocities at times
+/// `t` (s from the stroke's start), `dof` columns, row-major.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Executed {
+    /// Joints.
+    pub dof: usize,
+    /// Sample times (s from the stroke's start, increasing).
+    pub t: Vec<f64>,
+    /// Joint positions (rad or m), K × dof.
+    pub q: Vec<f64>,
+    /// Joint speeds (rad/s or m/s), K × dof.
+    pub qd: Vec<f64>,
+}
+
+impl Executed {
+    /// Joint state at `t` (s from the start): linear interpolation, held beyond the ends.
+    pub(super) fn sample(&self, t: f64, q: &mut [f64], qd: &mut [f64]) {
+        let n = self.dof;
+        let k = self.t.partition_point(|&x| x <= t).clamp(1, self.t.len().max(2) - 1);
+        let (t0, t1) = (self.t[k - 1], self.t[k.min(self.t.len() - 1)]);
+        let s = if t1 > t0 {
+            ((t - t0) / (t1 - t0)).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let k1 = k.min(self.t.len() - 1);
+        for j in 0..n {
+            q[j] = self.q[(k - 1) * n + j] + s * (self.q[k1 * n + j] - self.q[(k - 1) * n + j]);
+            qd[j] = self.qd[(k - 1) * n + j] + s * (self.qd[k1 * n + j] - self.qd[(k - 1) * n + j]);
+        }
+    }
 }
 
 /// The racket at one instant (world frame).
