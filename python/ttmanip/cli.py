@@ -687,6 +687,9 @@ def build_parser() -> argparse.ArgumentParser:
     from . import sweep_cli  # issue 31
 
     sweep_cli.add_parser(sub)
+    from . import hil_cli  # issue 26
+
+    hil_cli.add_parser(sub)
     _command(
         sub,
         "telemetry",

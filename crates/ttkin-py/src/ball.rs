@@ -408,6 +408,84 @@ fn ball_placement(py: Python<'_>) -> Bound<'_, PyAny> {
     pose_to_numpy(py, &Placement::default().world_from_base()).into_any()
 }
 
+/// The served rally of `seed` (`world`: the measured world spread), the other settings the core's
+/// defaults.
+fn rally_of(seed: i128, world: bool) -> PyResult<Rally> {
+    Rally::new(RallyConfig {
+        seed: args::unsigned(seed, "seed")?,
+        world: world.then(rally::WorldSpread::measured),
+        ..RallyConfig::default()
+    })
+    .py()
+}
+
+/// Ball `index` of the rally of `seed` (`world`: the measured world spread) as its camera sees it
+/// (`ttkin::ball::rally::Rally::observe`): the incoming state (10,), the exposure times and the
+/// time stamps (K,) (s from the opponent's hit), the observed positions (K, 3) (m, world), and the
+/// camera's rate (Hz), latency (s) and window (s).
+#[ttkin_py_guard::guarded]
+#[pyfunction]
+#[pyo3(signature = (index, seed = RallyConfig::default().seed as i128, world = RallyConfig::default().world.is_some()))]
+fn ball_rally_observations(py: Python<'_>, index: i128, seed: i128, world: bool) -> PyResult<Bound<'_, PyDict>> {
+    let index: u64 = args::unsigned(index, "index")?;
+    let rally = rally_of(seed, world)?;
+    let cfg = &rally.config;
+    let o = py.detach(|| rally.observe(index));
+    let d = PyDict::new(py);
+    d.set_item("incoming", to_numpy(py, &[10], &state_vec(&o.incoming)))?;
+    d.set_item("exposures", to_numpy(py, &[o.exposures.len()], &o.exposures))?;
+    d.set_item("times", to_numpy(py, &[o.times.len()], &o.times))?;
+    d.set_item(
+        "positions",
+        to_numpy(py, &[o.positions.len(), 3], o.positions.as_flattened()),
+    )?;
+    d.set_item("rate", cfg.camera.rate)?;
+    d.set_item("latency", cfg.camera.latency)?;
+    d.set_item("window", cfg.camera.window)?;
+    d.set_item("target", (cfg.target[0], cfg.target[1]))?;
+    Ok(d)
+}
+
+/// Scores ball `index` of the rally of `seed` as the rally does (`ttkin::ball::rally::Rally::score_executed`)
+/// against the rally robot's racket following the joint states `q`, `qd` (K, dof) at times `t` (K,)
+/// (s on the ball's clock: 0 at the opponent's hit), the hit expected at `t_hit` (s, same clock).
+#[ttkin_py_guard::guarded]
+#[pyfunction]
+#[pyo3(signature = (index, t_hit, t, q, qd, seed = RallyConfig::default().seed as i128, world = RallyConfig::default().world.is_some()))]
+#[allow(clippy::too_many_arguments)]
+fn ball_rally_score<'py>(
+    py: Python<'py>,
+    index: i128,
+    t_hit: f64,
+    t: &Bound<'py, PyAny>,
+    q: &Bound<'py, PyAny>,
+    qd: &Bound<'py, PyAny>,
+    seed: i128,
+    world: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    let index: u64 = args::unsigned(index, "index")?;
+    let t_hit = args::finite("t_hit", t_hit)?;
+    let rally = rally_of(seed, world)?;
+    let dof = rally.planner.chain().dof();
+    let times = rows_array(t, "t", "K", &[])?.data().to_vec();
+    let executed = rally::Executed {
+        dof,
+        q: rows_array(q, "q", "K", &[dof])?.data().to_vec(),
+        qd: rows_array(qd, "qd", "K", &[dof])?.data().to_vec(),
+        t: times,
+    };
+    let sc = py.detach(|| rally.score_executed(index, t_hit, &executed)).py()?;
+    let d = PyDict::new(py);
+    d.set_item("status", &sc.status)?;
+    d.set_item("contact", sc.contact)?;
+    d.set_item("returned", sc.returned)?;
+    d.set_item("racket_error", sc.racket_error)?;
+    d.set_item("landing", to_numpy(py, &[3], &sc.landing))?;
+    d.set_item("landing_error", sc.landing_error)?;
+    d.set_item("after", sc.after.map(|a| to_numpy(py, &[10], &state_vec(&a))))?;
+    Ok(d)
+}
+
 /// The ball-model calibration experiment of `ttkin::ball::fit::experiment` on recorded flights:
 /// `names` (F,), `positions` F arrays (N_i, 3) (m), `velocities` F arrays (N_i, 3) (m/s) or None;
 /// the prediction window (frames) and the frame period (s; estimated from the data when None).
@@ -533,6 +611,8 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ball_table, m)?)?;
     m.add_function(wrap_pyfunction!(ball_camera, m)?)?;
     m.add_function(wrap_pyfunction!(ball_placement, m)?)?;
+    m.add_function(wrap_pyfunction!(ball_rally_observations, m)?)?;
+    m.add_function(wrap_pyfunction!(ball_rally_score, m)?)?;
     m.add_function(wrap_pyfunction!(ball_estimate, m)?)?;
     m.add_function(wrap_pyfunction!(ball_predict, m)?)?;
     m.add_function(wrap_pyfunction!(ball_predict_batch, m)?)?;

@@ -58,10 +58,11 @@ struct Args {
     /// ttdrive-sim) instead of the channels' CAN interfaces: no SocketCAN needed.
     #[arg(long)]
     virtual_drives: bool,
-    /// Online mode: `hit` takes hits over UDP (docs/online.md) and executes them; needs `robot`
+    /// Online mode: `hit` takes hits over UDP (docs/online.md) and executes them; `ball` takes
+    /// camera observations and plays the balls (the ball brain, `ttcan::online::ball`); needs `robot`
     /// in the configuration with an axis for every joint. Runs until SIGINT/SIGTERM or
     /// --max-seconds.
-    #[arg(long, value_parser = ["hit"], conflicts_with_all = ["trajectory", "demo"])]
+    #[arg(long, value_parser = ["hit", "ball"], conflicts_with_all = ["trajectory", "demo"])]
     online: Option<String>,
     /// Address the online mode listens on (UDP).
     #[arg(long, default_value = "127.0.0.1:5005")]
@@ -223,15 +224,21 @@ fn main() {
     let (session, followers) = match online_planner {
         Some(planner) => {
             let ends = Endpoints {
-                mode: Mode::Hit,
+                mode: if args.online.as_deref() == Some("ball") {
+                    Mode::Ball
+                } else {
+                    Mode::Hit
+                },
                 listen: args.listen,
                 reply: args.reply,
             };
             let (s, f) = session::start(ends, planner, &joint_map, period_ns, t0, &cfg.online)
                 .unwrap_or_else(|e| fail(format!("online mode: {e}")));
             println!(
-                "ttctl: online hit mode: listening on {}, statuses and telemetry to {}",
-                s.local, args.reply
+                "ttctl: online {} mode: listening on {}, statuses and telemetry to {}",
+                args.online.as_deref().unwrap_or("hit"),
+                s.local,
+                args.reply
             );
             (Some(s), f.into_iter().map(Some).collect())
         }

@@ -21,6 +21,13 @@ pub trait Brain: Send {
     /// controller commands at that time (`commanded`, joint space); returns what to do, if
     /// anything changes.
     fn observe(&mut self, obs: &ObservationMsg, now: f64, commanded: &JointState) -> Option<Command>;
+    /// [`Brain::observe`] with the datagram header's send time `sent` (s, on the sender's clock),
+    /// for a brain that relates the camera's clock to the controller's by it; the runtime calls
+    /// this one. By default the send time is not used.
+    fn observe_sent(&mut self, obs: &ObservationMsg, sent: f64, now: f64, commanded: &JointState) -> Option<Command> {
+        let _ = sent;
+        self.observe(obs, now, commanded)
+    }
     /// Called on the planning thread at least every 10 ms (controller time `now`, s), for
     /// timeouts (a ball gone, silence); returns what to do, if anything changes.
     fn tick(&mut self, now: f64, commanded: &JointState) -> Option<Command>;

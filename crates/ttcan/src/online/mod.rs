@@ -1,10 +1,11 @@
 //! The controller's contact with the world at run time (issue 26): what an upper computer or a
 //! camera process sends to a running `ttctl`, and what it answers. The datagram format
-//! ([`wire`]) and the seam between deciding hits and executing them ([`brain`]); the run time of
-//! the online modes: the receiver thread ([`receiver`]) with its [`counters`], the planning thread
-//! ([`planner`]), the wait-free handoff to the cycle threads ([`handoff`]) and the session that
-//! starts them with the telemetry thread ([`session`]).
+//! ([`wire`]), the seam between deciding hits and executing them ([`brain`]) and the ball mode's
+//! brain ([`ball`]); the run time of the online modes: the receiver thread ([`receiver`]) with its
+//! [`counters`], the planning thread ([`planner`]), the wait-free handoff to the cycle threads
+//! ([`handoff`]) and the session that starts them with the telemetry thread ([`session`]).
 
+pub mod ball;
 pub mod brain;
 pub mod counters;
 pub mod handoff;

@@ -378,13 +378,13 @@ pub fn run_planner(
                 silent = false;
                 command = Some((Command::Hit(hit), arrival));
             }
-            Ok(Inbound::Observation { obs, arrival }) => {
+            Ok(Inbound::Observation { obs, sent, arrival }) => {
                 Counters::bump(&counters.observations);
                 last_heard = Some(arrival);
                 silent = false;
                 if let Some(b) = brain.as_deref_mut() {
                     let state = commanded(&splicer);
-                    command = b.observe(&obs, now, &state).map(|c| (c, arrival));
+                    command = b.observe_sent(&obs, sent, now, &state).map(|c| (c, arrival));
                 }
             }
             Err(RecvTimeoutError::Timeout) => {}

@@ -31,6 +31,8 @@ pub enum Inbound {
     Observation {
         /// The observation.
         obs: ObservationMsg,
+        /// The header's send time on the camera's clock, s.
+        sent: f64,
         /// Controller clock at reception, s.
         arrival: f64,
     },
@@ -147,7 +149,12 @@ pub fn run_receiver(
         let now = controller_time();
         let inbound = match screen.screen(&buf[..len], from, now, counters) {
             Some(Message::Hit(hit)) => Inbound::Hit { hit, arrival: now },
-            Some(Message::Observation(obs)) => Inbound::Observation { obs, arrival: now },
+            Some(Message::Observation(obs)) => Inbound::Observation {
+                obs,
+                // The header's send time (camera clock), for the ball brain's clock relation.
+                sent: wire::decode(&buf[..len]).map_or(f64::NAN, |d| d.sent),
+                arrival: now,
+            },
             _ => continue,
         };
         match to_planner.try_send(inbound) {

@@ -12,6 +12,8 @@ use std::thread::JoinHandle;
 
 use ttkin::hit::HitPlanner;
 
+use super::ball::{BallBrain, BallBrainConfig};
+use super::brain::Brain;
 use super::counters::{Counters, CountersSnapshot};
 use super::handoff::{self, StrokeFollower, Timeline, MAX_CHANNELS};
 use super::planner::{run_planner, PlannerConfig, Splicer};
@@ -130,7 +132,7 @@ pub struct Endpoints {
     pub reply: SocketAddr,
 }
 
-/// Starts an online session at `ends` (hit mode only for now: ball mode needs the ball brain),
+/// Starts an online session at `ends` (hit mode, or ball mode with a [`BallBrain`]),
 /// planning with `planner`, for channel threads with the joint of each axis `joints` (one entry
 /// per channel), at `period_ns` from deadline 0 at `t0_ns` (monotonic). Returns the session and
 /// one [`StrokeFollower`] per channel.
@@ -145,12 +147,21 @@ pub fn start(
     cfg.check()
         .map_err(|e| io::Error::new(io::ErrorKind::InvalidInput, e))?;
     let Endpoints { mode, listen, reply } = ends;
-    if mode != Mode::Hit {
-        return Err(io::Error::new(
-            io::ErrorKind::Unsupported,
-            "ball mode needs the ball brain (ttcan::online::ball), not in this build",
-        ));
-    }
+    // Ball mode: the ball brain of this robot (its base placed at the table by the core's rally
+    // placement), the receiver's latency budget for the observations.
+    let brain = match mode {
+        Mode::Hit => None,
+        Mode::Ball => Some(
+            BallBrain::new(
+                planner.chain().clone(),
+                BallBrainConfig {
+                    latency_budget: cfg.latency_budget_s,
+                    ..BallBrainConfig::default()
+                },
+            )
+            .map_err(|e| io::Error::new(io::ErrorKind::InvalidInput, format!("ball mode: {e}")))?,
+        ),
+    };
     let dof = planner.chain().dof();
     if joints.is_empty() || joints.len() > MAX_CHANNELS || dof > MAX_JOINTS {
         return Err(io::Error::new(
@@ -206,7 +217,11 @@ pub fn start(
         threads.push(
             std::thread::Builder::new()
                 .name("ttctl-planner".into())
-                .spawn(move || run_planner(splicer, &rx, None, &socket, reply, &counters, &stop))?,
+                .spawn(move || {
+                    let mut brain = brain;
+                    let b = brain.as_mut().map(|b| b as &mut dyn Brain);
+                    run_planner(splicer, &rx, b, &socket, reply, &counters, &stop)
+                })?,
         );
     }
     {

@@ -15,6 +15,7 @@
 //! independent of the planner), [`rally`] (the closed loop in simulation).
 
 pub mod contact;
+pub mod decide;
 pub mod estimate;
 pub mod fit;
 pub mod flight;

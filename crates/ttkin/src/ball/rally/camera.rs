@@ -1,8 +1,9 @@
 //! The rally's camera: its model ([`Camera`]) and what it delivers of one ball's true flight
 //! (positions with Gaussian noise and outliers at the frame times, stamped as the planner sees
-//! them).
+//! them); [`observe_ball`], ball `i` of a rally as its camera sees it.
 
-use super::serve::{gauss, uniform};
+use super::serve::{gauss, serve, uniform};
+use super::RallyConfig;
 use crate::ball::flight::{BallState, Flight};
 
 /// Camera model.
@@ -39,9 +40,14 @@ impl Default for Camera {
 }
 
 /// What the camera delivered of one ball's flight: frames over the whole incoming flight, each
-/// plan seeing those delivered by its time.
+/// plan seeing those delivered by its time; with the ball and the world it flew in.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Observations {
+    /// Incoming state at the opponent's hit (t = 0).
+    pub incoming: BallState,
+    /// The ball's world (the flight it was observed in; a rally's: its truth with the constants
+    /// drawn by [`RallyConfig::world`]).
+    pub world: Flight,
     /// True exposure times (s from the opponent's hit).
     pub exposures: Vec<f64>,
     /// The time stamps the planner sees (s): the exposures, off by the ball's latency error.
@@ -80,10 +86,42 @@ impl Camera {
             .collect();
         let first = (cam.window * cam.rate).round() as usize + 1;
         Observations {
+            incoming: *s0,
+            world: *truth,
             exposures,
             times,
             positions,
             first,
         }
     }
+}
+
+/// Ball `index` of the rally `cfg` as its camera sees it: served (or `incoming` when given, e.g. a
+/// recorded shot, re-based to t = 0), flying in its own world when [`RallyConfig::world`] is set
+/// (constants drawn around `truth`'s, time stamps off by the drawn latency error), observed by
+/// [`RallyConfig::camera`]. The rally's random streams of that ball: [`super::play_with`] sees the
+/// same ball and observations.
+pub fn observe_ball(truth: &Flight, cfg: &RallyConfig, index: u64, incoming: Option<&BallState>) -> Observations {
+    let mut rng = fastrand::Rng::with_seed(
+        cfg.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ index.wrapping_mul(0xD1B5_4A32_D192_ED03),
+    );
+    let s0 = match incoming {
+        Some(s) => BallState { t: 0.0, ..*s },
+        None => serve(truth, &mut rng, cfg.max_spin_rps, cfg.corkscrew),
+    };
+    // The ball's own world, from a stream of its own (the serve and the camera noise unchanged).
+    let mut world_rng = fastrand::Rng::with_seed(
+        cfg.seed.wrapping_mul(0xA076_1D64_78BD_642F) ^ index.wrapping_mul(0xE703_7ED1_A0B4_28DB) ^ 0x5EED,
+    );
+    let (world, stamp_error) = match &cfg.world {
+        Some(w) => (
+            Flight {
+                model: w.draw(&truth.model, &mut world_rng),
+                ..*truth
+            },
+            w.latency_jitter * (2.0 * world_rng.f64() - 1.0),
+        ),
+        None => (*truth, 0.0),
+    };
+    cfg.camera.observe(&world, &s0, stamp_error, &mut rng)
 }

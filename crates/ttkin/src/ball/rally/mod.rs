@@ -31,8 +31,9 @@
 //! separately, with the reason.
 //!
 //! One concept per file: [`serve`](mod@serve) (the incoming balls and each ball's world),
-//! [`camera`] (what the camera delivers), [`play`](mod@play) (one ball: observe, plan, correct,
-//! execute), [`score`] (the impact, the return and the outcomes); here the settings
+//! [`camera`] (what the camera delivers, [`observe_ball`]), [`play`](mod@play) (one ball:
+//! observe, the decisions of [`crate::ball::decide`], re-plan, execute), [`score`](mod@score) (the
+//! impact, the return and the outcomes; [`score()`] also for the hardware-in-the-loop rally); here the settings
 //! ([`RallyConfig`]), the set-up built once ([`Rally`]) and the parallel loops over balls.
 
 pub mod camera;
@@ -40,11 +41,14 @@ pub mod play;
 pub mod score;
 pub mod serve;
 
-pub use camera::{Camera, Observations};
-pub use play::{correct_hit, execution, play, play_with, Executed, Executor};
-pub use score::{BallOutcome, Outcomes, SampledPath};
+pub use camera::{observe_ball, Camera, Observations};
+pub use play::{correct_hit, execution, play, play_with, Executor};
+pub use score::{
+    racket_state, score, score_executed, BallOutcome, Executed, Outcomes, RacketState, SampledPath, Score,
+};
 pub use serve::{serve, WorldSpread};
 
+use super::decide::DecideConfig;
 use super::flight::{BallState, Flight};
 use super::hitplan::ReturnPlanner;
 use super::reach::ReachRegion;
@@ -99,6 +103,25 @@ impl Default for RallyConfig {
 
 /// Most balls one rally may play, indices `0..MAX_BALLS` (about a minute of work on two cores).
 pub const MAX_BALLS: u64 = 1_000_000;
+
+impl DecideConfig {
+    /// The rules of the rally `cfg`: its target, its camera's window and frame period, its
+    /// correction delay.
+    pub fn of(cfg: &RallyConfig) -> Self {
+        DecideConfig {
+            target: cfg.target,
+            window_frames: (cfg.camera.window * cfg.camera.rate).round() as usize + 1,
+            frame_period: 1.0 / cfg.camera.rate,
+            correction_delay: cfg.correction_delay,
+        }
+    }
+}
+
+impl Default for DecideConfig {
+    fn default() -> Self {
+        DecideConfig::of(&RallyConfig::default())
+    }
+}
 
 /// Integration step (s) of the true ball's flight (the planner predicts with its model's own step).
 pub const TRUTH_STEP: f64 = 0.001;
@@ -162,6 +185,27 @@ impl Rally {
             index,
             incoming,
             executor,
+        )
+    }
+
+    /// Ball `index` as the rally's camera sees it ([`observe_ball`]), served.
+    pub fn observe(&self, index: u64) -> Observations {
+        observe_ball(&self.truth, &self.config, index, None)
+    }
+
+    /// Scores served ball `index` against the rally robot's racket following the joint states
+    /// `executed` (times on the ball's clock: s from the opponent's hit), the hit expected at
+    /// `hit_abs` (s, same clock): [`score_executed`] in the ball's world.
+    pub fn score_executed(&self, index: u64, hit_abs: f64, executed: &Executed) -> Result<Score> {
+        let o = self.observe(index);
+        score_executed(
+            &self.planner,
+            &o.world,
+            self.config.target,
+            &o.incoming,
+            hit_abs,
+            executed,
+            0.0,
         )
     }
 

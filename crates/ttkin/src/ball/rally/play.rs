@@ -1,33 +1,17 @@
 //! One ball of the rally from the robot's side: observe, estimate, plan, correct after the
-//! bounce, re-plan, execute (exactly, or through an [`Executor`]), then [`super::score`]'s impact
+//! bounce, re-plan, execute (exactly, or through an [`Executor`]), then [`super::score()`]'s impact
 //! and score.
 
-use super::score::{sample_path, strike, BallOutcome};
-use super::serve::serve;
+use super::camera::observe_ball;
+use super::score::{racket_state, sample_path, score, BallOutcome, Executed};
 use super::RallyConfig;
+use crate::ball::decide::{BallDecider, DecideConfig, Decision, CORRECTION_MIN_STROKE};
 use crate::ball::estimate::{estimate, EstimateOptions};
 use crate::ball::flight::{BallState, EventKind, Flight};
 use crate::ball::hitplan::{ReturnHit, ReturnPlanner, ReturnStatus};
 use crate::ball::reach::ReachRegion;
-use crate::ball::update::update;
-use crate::chain::JacobianFrame;
 use crate::traj::{JointState, JointTrajectory};
-use nalgebra::Vector3;
 use std::time::Instant;
-
-/// What the robot actually did for a commanded stroke: joint positions and velocities at times
-/// `t` (s from the stroke's start), `dof` columns, row-major.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Executed {
-    /// Joints.
-    pub dof: usize,
-    /// Sample times (s from the stroke's start, increasing).
-    pub t: Vec<f64>,
-    /// Joint positions (rad or m), K × dof.
-    pub q: Vec<f64>,
-    /// Joint speeds (rad/s or m/s), K × dof.
-    pub qd: Vec<f64>,
-}
 
 /// Executes a stroke on the robot (the rally's execution hook; `ttcan` implements it with the
 /// coupled drive simulation, since `ttkin` may not depend on `ttcan`). The reference: samples at
@@ -36,25 +20,6 @@ pub struct Executed {
 pub trait Executor: Sync {
     /// The executed motion for the reference (see the trait doc).
     fn execute(&self, times: &[f64], q: &[f64], qd: &[f64], qdd: &[f64]) -> Option<Executed>;
-}
-
-impl Executed {
-    /// Joint state at `t` (s from the start): linear interpolation, held beyond the ends.
-    fn sample(&self, t: f64, q: &mut [f64], qd: &mut [f64]) {
-        let n = self.dof;
-        let k = self.t.partition_point(|&x| x <= t).clamp(1, self.t.len().max(2) - 1);
-        let (t0, t1) = (self.t[k - 1], self.t[k.min(self.t.len() - 1)]);
-        let s = if t1 > t0 {
-            ((t - t0) / (t1 - t0)).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        let k1 = k.min(self.t.len() - 1);
-        for j in 0..n {
-            q[j] = self.q[(k - 1) * n + j] + s * (self.q[k1 * n + j] - self.q[(k - 1) * n + j]);
-            qd[j] = self.qd[(k - 1) * n + j] + s * (self.qd[k1 * n + j] - self.qd[(k - 1) * n + j]);
-        }
-    }
 }
 
 /// Sample period (s) of the reference handed to an [`Executor`].
@@ -115,31 +80,11 @@ pub fn play_with(
     incoming: Option<&BallState>,
     executor: Option<&dyn Executor>,
 ) -> BallOutcome {
-    let mut rng = fastrand::Rng::with_seed(
-        cfg.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ index.wrapping_mul(0xD1B5_4A32_D192_ED03),
-    );
-    let s0 = match incoming {
-        Some(s) => BallState { t: 0.0, ..*s },
-        None => serve(truth, &mut rng, cfg.max_spin_rps, cfg.corkscrew),
-    };
-    // The ball's own world, from a stream of its own (the serve and the camera noise unchanged).
-    let mut world_rng = fastrand::Rng::with_seed(
-        cfg.seed.wrapping_mul(0xA076_1D64_78BD_642F) ^ index.wrapping_mul(0xE703_7ED1_A0B4_28DB) ^ 0x5EED,
-    );
-    let (world, stamp_error) = match &cfg.world {
-        Some(w) => (
-            Flight {
-                model: w.draw(&truth.model, &mut world_rng),
-                ..*truth
-            },
-            w.latency_jitter * (2.0 * world_rng.f64() - 1.0),
-        ),
-        None => (*truth, 0.0),
-    };
+    let seen = observe_ball(truth, cfg, index, incoming);
+    let (s0, world) = (seen.incoming, seen.world);
+    let (exposures, times, obs, first) = (seen.exposures, seen.times, seen.positions, seen.first);
     let truth = &world;
     let cam = &cfg.camera;
-    let seen = cam.observe(truth, &s0, stamp_error, &mut rng);
-    let (exposures, times, obs, first) = (seen.exposures, seen.times, seen.positions, seen.first);
     let t_last = times[first - 1];
     let now = t_last + cam.latency;
     let (truth_at_last, _) = truth.run(&s0, exposures[first - 1], None);
@@ -170,56 +115,75 @@ pub fn play_with(
         flight: planner.flight,
         ..EstimateOptions::default()
     };
-    let clock = Instant::now();
-    let cpu = cpu_time::ThreadTime::now();
-    let est = match estimate(&times[..first], &obs[..first], &opts) {
-        Ok(e) => e,
-        Err(e) => {
-            out.status = format!("estimate: {e}");
-            return out;
-        }
-    };
-    let plan = planner.plan(&est.state, now, cfg.target);
-    out.plan_time_us = cpu.elapsed().as_secs_f64() * 1e6;
-    out.plan_wall_time_us = clock.elapsed().as_secs_f64() * 1e6;
-    out.velocity_error = (est.state.v - truth_at_last.v).norm();
-    out.estimate = Some(est.state);
-    let plan = match plan {
-        Ok(p) => p,
-        Err(e) => {
-            out.status = format!("plan: {e}");
-            return out;
-        }
-    };
-    out.status = plan.status.name().to_string();
+    // The decisions, observation by observation at its delivery ([`BallDecider`], the same state
+    // machine as the controller's ball mode): the first plan after the window, then once,
+    // `correction_delay` after the bounce the estimate predicts, the estimate updated with every
+    // observation delivered since (through the bounce, [`crate::ball::update::update`]) and the
+    // hit planned again from the robot's state then (from rest when the first plan had no hit).
     let keep_path = (index as usize) < cfg.paths;
-    let mut first_hit = plan.hit.filter(|_| plan.status == ReturnStatus::Ok);
-    // Once, `correction_delay` after the bounce the estimate predicts: the estimate updated with
-    // every observation delivered since (through the bounce, [`update`]) and the hit planned
-    // again from the robot's state then (from rest when the first plan had no hit).
+    let n = planner.chain().dof();
     let ready = JointState::rest(&planner.ready);
-    let mut motion = Motion {
-        pieces: first_hit.iter().map(|h| (now, execution(h, &ready))).collect(),
-    };
-    let mut hit_at = first_hit.as_ref().map(|h| now + h.hit.t);
-    if cfg.correction_delay > 0.0 {
-        let clock = cpu_time::ThreadTime::now();
-        let previous = first_hit.as_ref().map(|h| (h, now + h.hit.t));
-        if let Some((t_c, h)) = correct(planner, cfg, &est, &times, &obs, previous, &motion, &opts) {
-            motion.pieces.push((t_c, execution(&h, &ready)));
-            hit_at = Some(t_c + h.hit.t);
-            first_hit = Some(h);
-            out.replans += 1;
+    let mut decider = BallDecider::new(planner, DecideConfig::of(cfg));
+    let mut motion = Motion { pieces: Vec::new() };
+    let mut first_hit: Option<ReturnHit> = None;
+    let mut hit_at = None;
+    let mut est = None;
+    for (&t, p) in times.iter().zip(&obs) {
+        if decider.done() {
+            break;
         }
-        out.correction_time_us = clock.elapsed().as_secs_f64() * 1e6;
+        let clock = Instant::now();
+        let cpu = cpu_time::ThreadTime::now();
+        let decision = decider.observe(planner, t, *p, t + cam.latency, &|tc| motion.state(tc, n));
+        match decision {
+            None => {}
+            Some(Decision::EstimateFailed(e)) => {
+                out.status = format!("estimate: {e}");
+                return out;
+            }
+            Some(Decision::PlanFailed(e)) => {
+                out.plan_time_us = cpu.elapsed().as_secs_f64() * 1e6;
+                out.plan_wall_time_us = clock.elapsed().as_secs_f64() * 1e6;
+                if let Some(e) = decider.estimate() {
+                    out.velocity_error = (e.state.v - truth_at_last.v).norm();
+                    out.estimate = Some(e.state);
+                }
+                out.status = format!("plan: {e}");
+                return out;
+            }
+            Some(Decision::Planned { now, estimate, plan }) => {
+                out.plan_time_us = cpu.elapsed().as_secs_f64() * 1e6;
+                out.plan_wall_time_us = clock.elapsed().as_secs_f64() * 1e6;
+                out.velocity_error = (estimate.state.v - truth_at_last.v).norm();
+                out.estimate = Some(estimate.state);
+                out.status = plan.status.name().to_string();
+                first_hit = plan.hit.filter(|_| plan.status == ReturnStatus::Ok);
+                if let Some(h) = &first_hit {
+                    motion.pieces.push((now, execution(h, &ready)));
+                    hit_at = Some(now + h.hit.t);
+                }
+                est = Some(*estimate);
+            }
+            Some(Decision::Corrected { now: t_c, hit }) => {
+                out.correction_time_us = cpu.elapsed().as_secs_f64() * 1e6;
+                if let Some(h) = hit {
+                    motion.pieces.push((t_c, execution(&h, &ready)));
+                    hit_at = Some(t_c + h.hit.t);
+                    first_hit = Some(*h);
+                    out.replans += 1;
+                }
+            }
+        }
     }
+    let Some(est) = est else {
+        return out;
+    };
     let Some(mut hit) = first_hit else {
         if keep_path {
             out.path = sample_path(truth, &s0, 1.2);
         }
         return out;
     };
-    let n = hit.branch.q.len();
     let leg = |hit: &ReturnHit| execution(hit, &ready);
     let mut hit_abs = hit_at.expect("a hit has its time");
     // Re-plan every `replan_period` with the newest observations (at most `max_window` s of them)
@@ -267,7 +231,6 @@ pub fn play_with(
     }
     out.profile = hit.branch.leg.profile.name();
     out.planned = Some((hit.ball, hit.racket.normal));
-    let world = planner.placement.world_from_base();
     let (mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     // The executed motion, when an executor runs the stroke: from its start to 60 ms past the hit.
     let t_start = motion.pieces[0].0;
@@ -296,87 +259,37 @@ pub fn play_with(
         }
         None => None,
     };
-    // Racket centre, normal, velocity and angular velocity (world) at time t (s, absolute).
+    // The racket (world) at time t (s, absolute).
     let mut racket_at = |t: f64| {
         match &executed {
             Some(e) => e.sample(t - t_start, &mut q, &mut qd),
             None => motion.sample(t, &mut q, &mut qd, &mut qdd),
         }
-        let pose = world * planner.chain().fk(&q).expect("sizes match");
-        let jac = planner.chain().jacobian(&q, JacobianFrame::Base).expect("sizes match");
-        let tw = jac * nalgebra::DVector::from_column_slice(&qd);
-        let v = world.rotation * Vector3::new(tw[0], tw[1], tw[2]);
-        let w = world.rotation * Vector3::new(tw[3], tw[4], tw[5]);
-        let n = pose.rotation * Vector3::z();
-        (pose.translation.vector, n, v, w)
+        racket_state(planner, &q, &qd)
     };
-    strike(
-        &mut out,
-        planner,
-        truth,
-        cfg,
-        &s0,
-        &truth_at_last,
-        hit_abs,
-        keep_path,
-        &mut racket_at,
-    );
-    out
-}
-
-/// The correction after the bounce (see [`RallyConfig::correction_delay`]): at the delivery `t_c`
-/// of the last observation at most `correction_delay` after the bounce `est` predicts, `est`
-/// updated with the observations since ([`update`]) and the hit planned again from the state of
-/// `motion` at `t_c` ([`ReturnPlanner::plan_near`] near the `previous` hit's time and landing point;
-/// without a previous hit, [`ReturnPlanner::plan_from`] from rest); the new hit and `t_c`, or `None`
-/// (no bounce predicted, less than the re-plan's shortest stroke left before the previous hit, no
-/// update or no feasible hit: the stroke goes on unchanged).
-#[allow(clippy::too_many_arguments)]
-fn correct(
-    planner: &ReturnPlanner,
-    cfg: &RallyConfig,
-    est: &crate::ball::estimate::Estimate,
-    times: &[f64],
-    obs: &[[f64; 3]],
-    previous: Option<(&ReturnHit, f64)>,
-    motion: &Motion,
-    opts: &EstimateOptions,
-) -> Option<(f64, ReturnHit)> {
-    let t_bounce = bounce_time(&planner.flight, &est.state)?;
-    let last = times.partition_point(|&t| t <= t_bounce + cfg.correction_delay);
-    if last == 0 {
-        return None;
-    }
-    let t_c = times[last - 1] + cfg.camera.latency;
-    let mut replanner = planner.clone();
-    replanner.min_stroke_time = CORRECTION_MIN_STROKE;
-    if previous.is_some_and(|(_, t)| t - t_c <= replanner.min_stroke_time) {
-        return None;
-    }
-    let from = times.partition_point(|&t| t <= est.state.t);
-    let up = update(est, &times[from..last], &obs[from..last], opts).ok()?;
-    let plan = match previous {
-        Some((hit, t_prev)) => {
-            let start = motion.state(t_c, planner.chain().dof());
-            replanner.plan_near(&up.state, t_c, &start, up.bounced, hit, t_prev)
+    let sc = score(planner, truth, cfg.target, &truth_at_last, hit_abs, &mut racket_at);
+    if keep_path {
+        out.path = sample_path(truth, &s0, hit_abs);
+        out.racket_path = (0..out.path.len())
+            .map(|k| racket_at(k as f64 * 0.005).centre.into())
+            .collect();
+        if let Some(after) = &sc.after {
+            out.path.extend(sample_path(truth, after, after.t + 1.0));
         }
-        None => replanner.plan_from(
-            &up.state,
-            t_c,
-            cfg.target,
-            &JointState::rest(&planner.ready),
-            up.bounced,
-        ),
     }
-    .ok()?;
-    let hit = plan.hit.filter(|_| plan.status == ReturnStatus::Ok)?;
-    Some((t_c, hit))
+    out.racket_error = sc.racket_error;
+    out.contact = sc.contact;
+    out.landing = sc.landing;
+    out.landing_error = sc.landing_error;
+    out.returned = sc.returned;
+    out.status = sc.status;
+    out
 }
 
 /// The correction of a planned hit, as the rally makes it after the bounce: the stroke of `first`
 /// (planned at `t_first`, s absolute, from rest at the planner's ready configuration) is under
 /// way; at `now` (s) the hit is planned again for the ball `ball` (e.g. the estimate updated
-/// through the bounce, [`update`]; `after_bounce` when it is past its bounce) from the stroke's
+/// through the bounce, [`crate::ball::update::update`]; `after_bounce` when it is past its bounce) from the stroke's
 /// joint state then, near `first` ([`ReturnPlanner::plan_near`], shortest stroke 60 ms). An error
 /// when `now` is before `t_first` or less than 60 ms before the first hit.
 pub fn correct_hit(
@@ -404,24 +317,6 @@ pub fn correct_hit(
     let mut replanner = planner.clone();
     replanner.min_stroke_time = CORRECTION_MIN_STROKE;
     replanner.plan_near(ball, now, &start, after_bounce, first, t_prev)
-}
-
-/// Shortest stroke (s) of the correction after the bounce: the rest of a stroke under way.
-const CORRECTION_MIN_STROKE: f64 = 0.06;
-
-/// Time (s) of the first table bounce on the robot's half of the flight from `s` (within 1.5 s),
-/// flying no further than that.
-fn bounce_time(flight: &Flight, s: &BallState) -> Option<f64> {
-    let mut cur = *s;
-    while cur.t < s.t + 1.5 {
-        let (next, ev) = flight.advance(&cur, s.t + 1.5, None);
-        match ev {
-            Some(e) if e.kind == EventKind::Table && e.before.p.x < 0.0 => return Some(e.before.t),
-            Some(e) if e.kind.terminal() => return None,
-            _ => cur = next,
-        }
-    }
-    None
 }
 
 /// The executed stroke of `hit` (joint frame, from the stroke start): its accepted hit leg, then a

@@ -1,10 +1,13 @@
 //! Scoring one ball of the rally: where the racket meets the true ball (bisection on the gap to
 //! the face plane), the ball's flight after the impact and where it lands; what happened to each
-//! ball ([`BallOutcome`]) and a rally's outcomes as columns ([`Outcomes`]).
+//! ball ([`BallOutcome`]) and a rally's outcomes as columns ([`Outcomes`]). [`score`] is the one
+//! scoring of the rally and of the hardware-in-the-loop rally ([`score_executed`]: from sampled
+//! joint states).
 
-use super::RallyConfig;
 use crate::ball::flight::{BallState, EventKind, Flight};
 use crate::ball::hitplan::ReturnPlanner;
+use crate::chain::JacobianFrame;
+use crate::error::{Error, Result};
 use nalgebra::Vector3;
 
 /// What happened to one ball.
@@ -52,35 +55,123 @@ pub struct BallOutcome {
     pub racket_path: Vec<[f64; 3]>,
 }
 
-/// The racket at one instant (world): centre (m), face normal, centre velocity (m/s) and angular
-/// velocity (rad/s).
-pub type RacketSample = (Vector3<f64>, Vector3<f64>, Vector3<f64>, Vector3<f64>);
+/// What the robot actually did for a commanded stroke: joint positions and velocities at times
+/// `t` (s from the stroke's start), `dof` columns, row-major.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Executed {
+    /// Joints.
+    pub dof: usize,
+    /// Sample times (s from the stroke's start, increasing).
+    pub t: Vec<f64>,
+    /// Joint positions (rad or m), K × dof.
+    pub q: Vec<f64>,
+    /// Joint speeds (rad/s or m/s), K × dof.
+    pub qd: Vec<f64>,
+}
 
-/// Plays out the impact of the true ball (at `truth_at_last` at the last observation of the first
-/// window) on the racket following `racket_at` (s, absolute) around the hit at `hit_abs` (s):
-/// contact, the ball's flight after it and the score, into `out`; with `keep_path` the sampled
-/// ball and racket paths from `s0`.
-#[allow(clippy::too_many_arguments)]
-pub(super) fn strike(
-    out: &mut BallOutcome,
+impl Executed {
+    /// Joint state at `t` (s from the start): linear interpolation, held beyond the ends.
+    pub(super) fn sample(&self, t: f64, q: &mut [f64], qd: &mut [f64]) {
+        let n = self.dof;
+        let k = self.t.partition_point(|&x| x <= t).clamp(1, self.t.len().max(2) - 1);
+        let (t0, t1) = (self.t[k - 1], self.t[k.min(self.t.len() - 1)]);
+        let s = if t1 > t0 {
+            ((t - t0) / (t1 - t0)).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let k1 = k.min(self.t.len() - 1);
+        for j in 0..n {
+            q[j] = self.q[(k - 1) * n + j] + s * (self.q[k1 * n + j] - self.q[(k - 1) * n + j]);
+            qd[j] = self.qd[(k - 1) * n + j] + s * (self.qd[k1 * n + j] - self.qd[(k - 1) * n + j]);
+        }
+    }
+}
+
+/// The racket at one instant (world frame).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RacketState {
+    /// Racket centre (m).
+    pub centre: Vector3<f64>,
+    /// Face normal (unit).
+    pub normal: Vector3<f64>,
+    /// Velocity of the centre (m/s).
+    pub velocity: Vector3<f64>,
+    /// Angular velocity (rad/s).
+    pub omega: Vector3<f64>,
+}
+
+/// The racket of `planner`'s robot (world frame, through its placement) at joint positions `q`
+/// (m, rad) and velocities `qd`: forward kinematics and the Jacobian.
+pub fn racket_state(planner: &ReturnPlanner, q: &[f64], qd: &[f64]) -> RacketState {
+    let world = planner.placement.world_from_base();
+    let pose = world * planner.chain().fk(q).expect("sizes match");
+    let jac = planner.chain().jacobian(q, JacobianFrame::Base).expect("sizes match");
+    let tw = jac * nalgebra::DVector::from_column_slice(qd);
+    RacketState {
+        centre: pose.translation.vector,
+        normal: pose.rotation * Vector3::z(),
+        velocity: world.rotation * Vector3::new(tw[0], tw[1], tw[2]),
+        omega: world.rotation * Vector3::new(tw[3], tw[4], tw[5]),
+    }
+}
+
+/// How a ball met the racket and where it went ([`score`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Score {
+    /// Whether the racket met the ball (contact point within the racket radius of its centre).
+    pub contact: bool,
+    /// Whether the return's first contact is the table on the opponent's half.
+    pub returned: bool,
+    /// Distance (m) of the contact point from the racket centre; without contact the ball's
+    /// closest distance to the racket's normal axis.
+    pub racket_error: f64,
+    /// Landing point (m, world) of the return (NaN when it did not touch the table).
+    pub landing: [f64; 3],
+    /// Distance (m) from the landing point to the target (NaN without landing).
+    pub landing_error: f64,
+    /// "returned", "landed_short", `return_hit_<event>`, "return_long" or "missed".
+    pub status: String,
+    /// The ball leaving the racket (world), with contact.
+    pub after: Option<BallState>,
+}
+
+/// The rally's scoring of one ball: the true ball `from` (any state of it before `hit_abs` − 60
+/// ms, flying in `truth`) against the racket `racket_at(t)` (t absolute, s): the first time from
+/// 60 ms before to 60 ms after `hit_abs` (s) the ball's distance to the face plane falls to its
+/// radius (0.5 ms steps, then bisection) with the contact point within the racket radius of its
+/// centre; the ball then leaves by `planner`'s racket impact model with the racket's normal and
+/// point velocity, and flies until its first contact, which decides the return (landing on the
+/// opponent's half; `target`, x, y m, for the landing error).
+pub fn score(
     planner: &ReturnPlanner,
     truth: &Flight,
-    cfg: &RallyConfig,
-    s0: &BallState,
-    truth_at_last: &BallState,
+    target: [f64; 2],
+    from: &BallState,
     hit_abs: f64,
-    keep_path: bool,
-    racket_at: &mut dyn FnMut(f64) -> RacketSample,
-) {
+    racket_at: &mut dyn FnMut(f64) -> RacketState,
+) -> Score {
+    let mut out = Score {
+        contact: false,
+        returned: false,
+        racket_error: f64::NAN,
+        landing: [f64::NAN; 3],
+        landing_error: f64::NAN,
+        status: "missed".into(),
+        after: None,
+    };
     let r = truth.model.radius;
     let t_open = hit_abs - 0.06;
-    let (mut ball, _) = truth.run(truth_at_last, t_open, None);
-    let gap = |b: &BallState, rk: &RacketSample| rk.1.dot(&(b.p - rk.0)) - r;
+    let (mut ball, _) = truth.run(from, t_open, None);
+    let gap = |b: &BallState, rk: &RacketState| rk.normal.dot(&(b.p - rk.centre)) - r;
+    let off = |b: &BallState, rk: &RacketState| {
+        let d = b.p - rk.centre;
+        (d - rk.normal * rk.normal.dot(&d)).norm()
+    };
     let mut contact = None;
     let mut closest = f64::INFINITY;
     let dt = 0.0005;
-    let mut rk = racket_at(ball.t);
-    let mut g = gap(&ball, &rk);
+    let mut g = gap(&ball, &racket_at(ball.t));
     while ball.t < hit_abs + 0.06 && contact.is_none() {
         let (next, ev) = truth.advance(&ball, ball.t + dt, None);
         if ev.is_some_and(|e| e.kind.terminal()) {
@@ -88,10 +179,6 @@ pub(super) fn strike(
         }
         let rk1 = racket_at(next.t);
         let g1 = gap(&next, &rk1);
-        let off = |b: &BallState, rk: &RacketSample| {
-            let d = b.p - rk.0;
-            (d - rk.1 * rk.1.dot(&d)).norm()
-        };
         closest = closest.min(off(&next, &rk1));
         if g > 0.0 && g1 <= 0.0 && ev.is_none() {
             let (mut lo, mut hi) = (0.0, next.t - ball.t);
@@ -113,50 +200,72 @@ pub(super) fn strike(
             }
         }
         ball = next;
-        rk = rk1;
         g = g1;
-    }
-    let _ = rk;
-    if keep_path {
-        out.path = sample_path(truth, s0, hit_abs);
-        out.racket_path = (0..out.path.len())
-            .map(|k| racket_at(k as f64 * 0.005).0.into())
-            .collect();
     }
     let Some((b, rkc, offset)) = contact else {
         out.racket_error = closest;
-        out.status = "missed".into();
-        return;
+        return out;
     };
     out.racket_error = offset;
-    if offset > planner.racket.radius {
-        out.status = "missed".into();
-        return;
-    }
     out.contact = true;
-    let point = b.p - r * rkc.1;
-    let v_point = rkc.2 + rkc.3.cross(&(point - rkc.0));
-    let (v, w) = planner.racket.hit(&truth.model, &b.v, &b.w, &rkc.1, &v_point);
+    let point = b.p - r * rkc.normal;
+    let v_point = rkc.velocity + rkc.omega.cross(&(point - rkc.centre));
+    let (v, w) = planner.racket.hit(&truth.model, &b.v, &b.w, &rkc.normal, &v_point);
     let after = BallState { v, w, ..b };
     let (_, events) = truth.run(&after, b.t + 2.0, None);
-    if keep_path {
-        let tail = sample_path(truth, &after, after.t + 1.0);
-        out.path.extend(tail);
-    }
+    out.after = Some(after);
     match events.first() {
         Some(e) if e.kind == EventKind::Table => {
             out.landing = e.before.p.into();
-            out.landing_error = (e.before.p.xy() - Vector3::new(cfg.target[0], cfg.target[1], 0.0).xy()).norm();
+            out.landing_error = (e.before.p.xy() - Vector3::new(target[0], target[1], 0.0).xy()).norm();
             out.returned = truth.table.on_opponent_half(e.before.p.x, e.before.p.y);
-            out.status = if out.returned {
-                "returned".into()
-            } else {
-                "landed_short".into()
-            };
+            out.status = if out.returned { "returned" } else { "landed_short" }.into();
         }
         Some(e) => out.status = format!("return_hit_{}", e.kind.name()),
         None => out.status = "return_long".into(),
     }
+    out
+}
+
+/// [`score`] with the racket following a joint motion `executed` (e.g. the measured joint states
+/// of a controller; its times from `t_start`, s absolute, linear interpolation, held beyond the
+/// ends), through [`racket_state`].
+pub fn score_executed(
+    planner: &ReturnPlanner,
+    truth: &Flight,
+    target: [f64; 2],
+    from: &BallState,
+    hit_abs: f64,
+    executed: &Executed,
+    t_start: f64,
+) -> Result<Score> {
+    let n = planner.chain().dof();
+    let k = executed.t.len();
+    if executed.dof != n || k == 0 || executed.q.len() != k * n || executed.qd.len() != k * n {
+        return Err(Error::shape(
+            "executed",
+            format!("{n} joints, positions and velocities of equal length ≥ 1 sample"),
+            format!(
+                "{} joints, {} times, {} q, {} qd",
+                executed.dof,
+                k,
+                executed.q.len(),
+                executed.qd.len()
+            ),
+        ));
+    }
+    if executed.t.windows(2).any(|w| !(w[1] > w[0])) || executed.q.iter().chain(&executed.qd).any(|x| !x.is_finite()) {
+        return Err(Error::invalid(
+            "executed",
+            "times must increase and every joint value be finite",
+        ));
+    }
+    let (mut q, mut qd) = (vec![0.0; n], vec![0.0; n]);
+    let mut racket_at = |t: f64| {
+        executed.sample(t - t_start, &mut q, &mut qd);
+        racket_state(planner, &q, &qd)
+    };
+    Ok(score(planner, truth, target, from, hit_abs, &mut racket_at))
 }
 
 /// True positions every 5 ms for `duration` s from `s`, ending at a terminal event.

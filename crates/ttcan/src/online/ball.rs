@@ -1,0 +1,368 @@
+//! The ball mode's brain (seed 002's "global control system"): camera observations in, hits for
+//! the runtime out. Per ball (a new ball id is a new incoming ball) it makes the rally's
+//! decisions ([`ttkin::ball::decide`]: the first plan after the estimation window, one correction
+//! after the bounce) and turns each hit into a [`Command::Hit`] in the robot's base frame on the
+//! controller's clock; the correction keeps the stroke id, so that the runtime replaces the
+//! stroke. [`Command::Ready`] follows `ready_after` past the hit, or comes when the ball is lost
+//! before a hit was planned.
+//!
+//! **Clocks.** Observations carry the camera's time stamp; the planner works on the controller's
+//! clock: controller time = camera time + offset, with the offset given ([`ClockRelation::Offset`],
+//! e.g. both on one host's clock) or estimated as the smallest delay seen over the last
+//! `clock_window` observations, which is the offset plus the shortest transit: from the header's
+//! send time ([`ClockRelation::SendTime`], the camera stamps the send on its clock), or from the
+//! exposure time stamp less the camera's known exposure-to-send latency
+//! ([`ClockRelation::MinDelay`]).
+//!
+//! **Latency budget.** An observation whose exposure is more than `latency_budget` old on arrival
+//! (controller clock) is dropped and counted (`stale`): a plan from it would start too late.
+
+use super::brain::{Brain, Command};
+use super::wire::{HitMsg, ObservationMsg, PlanStatus, StatusMsg};
+use std::collections::VecDeque;
+use ttkin::ball::decide::{BallDecider, DecideConfig, Decision};
+use ttkin::ball::flight::Flight;
+use ttkin::ball::hitplan::{ReturnHit, ReturnPlanner, ReturnStatus};
+use ttkin::chain::Chain;
+use ttkin::traj::JointState;
+
+/// How camera time stamps map to the controller's clock (controller = camera + offset).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ClockRelation {
+    /// A known offset (s).
+    Offset(f64),
+    /// The offset estimated as min(arrival − header send time) over the clock window (s).
+    SendTime,
+    /// The offset estimated as min(arrival − exposure time stamp) − `latency` over the clock
+    /// window: the camera's shortest exposure-to-send delay (s) is known.
+    MinDelay {
+        /// The camera's exposure-to-send latency (s).
+        latency: f64,
+    },
+}
+
+/// Settings of a [`BallBrain`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BallBrainConfig {
+    /// The decision rules (target, estimation window, frame period, correction delay).
+    pub decide: DecideConfig,
+    /// Camera clock to controller clock.
+    pub clock: ClockRelation,
+    /// Observations over which the offset's minimum is taken (the offset may drift beyond it).
+    pub clock_window: usize,
+    /// Oldest observation (s from its exposure to its arrival, controller clock) still used.
+    pub latency_budget: f64,
+    /// Silence (s) of the current ball's camera before a hit was planned after which the ball is
+    /// lost.
+    pub lost_after: f64,
+    /// Time (s) after a hit at which the robot is sent back to ready.
+    pub ready_after: f64,
+}
+
+impl Default for BallBrainConfig {
+    /// The rally's rules; the offset estimated from the send times over 2 s at 200 Hz; a 30 ms
+    /// budget (the rally's camera delivers 10 ms after the exposure); lost after 50 ms of
+    /// silence; ready 60 ms after the hit (the rally looks for the contact up to then).
+    fn default() -> Self {
+        BallBrainConfig {
+            decide: DecideConfig::default(),
+            clock: ClockRelation::SendTime,
+            clock_window: 400,
+            latency_budget: 0.030,
+            lost_after: 0.050,
+            ready_after: 0.060,
+        }
+    }
+}
+
+/// What the brain counted.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct BallStats {
+    /// Observations received.
+    pub observations: u64,
+    /// Dropped: older than the latency budget on arrival.
+    pub stale: u64,
+    /// Ignored: of a ball already decided, or not later than the ball's previous one.
+    pub ignored: u64,
+    /// Balls seen (distinct consecutive ids).
+    pub balls: u64,
+    /// Balls whose first estimate failed.
+    pub estimate_failed: u64,
+    /// Balls whose first plan failed or found no hit (and no correction found one).
+    pub no_hit: u64,
+    /// First hits sent.
+    pub planned: u64,
+    /// Corrected hits sent (same stroke as the first).
+    pub corrected: u64,
+    /// Balls lost before a hit was planned (camera silent for `lost_after`).
+    pub lost: u64,
+    /// Hits the runtime answered with another status than accepted or replaced.
+    pub refused: u64,
+}
+
+/// The ball in play.
+#[derive(Debug, Clone)]
+struct Ball {
+    id: u32,
+    decider: BallDecider,
+    last_seen: f64,
+    /// The absolute time (s, controller clock) and the ball planner's hit in force.
+    hit: Option<(f64, ReturnHit)>,
+    ended: bool,
+}
+
+/// The ball mode's brain (see the module doc).
+#[derive(Debug, Clone)]
+pub struct BallBrain {
+    planner: ReturnPlanner,
+    cfg: BallBrainConfig,
+    delays: VecDeque<f64>,
+    ball: Option<Ball>,
+    stroke: u32,
+    hit_id: u32,
+    sent_ids: VecDeque<u32>,
+    stats: BallStats,
+}
+
+impl BallBrain {
+    /// The brain of the robot `chain` (base frame placed at the table by the core's rally
+    /// placement, `ttkin::ball::reach::Placement::default`) with the default ball model; an error
+    /// when the chain has no analytic IK or `cfg` is out of range.
+    pub fn new(chain: Chain, cfg: BallBrainConfig) -> ttkin::Result<Self> {
+        Self::with_planner(ReturnPlanner::new(chain, Flight::default())?, cfg)
+    }
+
+    /// The brain with a given ball planner (its robot, placement, flight model and racket).
+    pub fn with_planner(planner: ReturnPlanner, cfg: BallBrainConfig) -> ttkin::Result<Self> {
+        planner.check_target(cfg.decide.target)?;
+        let positive = |what: &str, v: f64| {
+            if v > 0.0 && v.is_finite() {
+                Ok(())
+            } else {
+                Err(ttkin::Error::invalid(
+                    what,
+                    format!("must be finite and > 0 s, got {v}"),
+                ))
+            }
+        };
+        positive("latency_budget", cfg.latency_budget)?;
+        positive("lost_after", cfg.lost_after)?;
+        positive("frame_period", cfg.decide.frame_period)?;
+        if !(cfg.ready_after >= 0.0 && cfg.ready_after.is_finite()) {
+            return Err(ttkin::Error::invalid(
+                "ready_after",
+                format!("must be finite and ≥ 0 s, got {}", cfg.ready_after),
+            ));
+        }
+        if cfg.decide.window_frames < 2 || cfg.clock_window == 0 {
+            return Err(ttkin::Error::invalid(
+                "window_frames",
+                "the estimation window needs at least 2 observations and the clock window 1",
+            ));
+        }
+        match cfg.clock {
+            ClockRelation::Offset(o) if !o.is_finite() => {
+                return Err(ttkin::Error::invalid(
+                    "clock",
+                    format!("offset must be finite, got {o}"),
+                ))
+            }
+            ClockRelation::MinDelay { latency } if !(latency >= 0.0 && latency.is_finite()) => {
+                return Err(ttkin::Error::invalid(
+                    "clock",
+                    format!("camera latency must be finite and ≥ 0 s, got {latency}"),
+                ))
+            }
+            _ => {}
+        }
+        Ok(BallBrain {
+            planner,
+            delays: VecDeque::with_capacity(cfg.clock_window),
+            cfg,
+            ball: None,
+            stroke: 0,
+            hit_id: 0,
+            sent_ids: VecDeque::with_capacity(16),
+            stats: BallStats::default(),
+        })
+    }
+
+    /// The counters.
+    pub fn stats(&self) -> BallStats {
+        self.stats
+    }
+
+    /// The ball planner (robot, placement, flight model).
+    pub fn planner(&self) -> &ReturnPlanner {
+        &self.planner
+    }
+
+    /// The current offset (s) from camera time to controller time, once known.
+    pub fn offset(&self) -> Option<f64> {
+        match self.cfg.clock {
+            ClockRelation::Offset(o) => Some(o),
+            _ => self.delays.iter().copied().reduce(f64::min),
+        }
+    }
+
+    /// The ball planner's hit in force for the current ball and its absolute time (s, controller
+    /// clock), if any.
+    pub fn hit(&self) -> Option<(&ReturnHit, f64)> {
+        self.ball.as_ref()?.hit.as_ref().map(|(t, h)| (h, *t))
+    }
+
+    fn delay_sample(&mut self, d: f64) {
+        if d.is_finite() {
+            if self.delays.len() == self.cfg.clock_window {
+                self.delays.pop_front();
+            }
+            self.delays.push_back(d);
+        }
+    }
+
+    fn command(&mut self, hit: &ReturnHit, now: f64) -> Command {
+        self.hit_id = self.hit_id.wrapping_add(1);
+        if self.sent_ids.len() == self.sent_ids.capacity() {
+            self.sent_ids.pop_front();
+        }
+        self.sent_ids.push_back(self.hit_id);
+        Command::Hit(hit_msg(hit, self.hit_id, self.stroke, now + hit.hit.t))
+    }
+
+    /// The observation `obs` on the controller's clock with the header's send time `sent`
+    /// (camera clock; NaN when unknown).
+    fn receive(&mut self, obs: &ObservationMsg, sent: f64, now: f64, commanded: &JointState) -> Option<Command> {
+        self.stats.observations += 1;
+        match self.cfg.clock {
+            ClockRelation::SendTime => self.delay_sample(now - sent),
+            ClockRelation::MinDelay { latency } => self.delay_sample(now - obs.camera_time - latency),
+            ClockRelation::Offset(_) => {}
+        }
+        let t = obs.camera_time + self.offset()?;
+        if now - t > self.cfg.latency_budget {
+            self.stats.stale += 1;
+            return None;
+        }
+        let mut out = None;
+        if self.ball.as_ref().is_none_or(|b| b.id != obs.id) {
+            // A new ball: the previous one is over; a stroke for it still to come is called off.
+            if let Some(b) = self.ball.take() {
+                if b.hit.as_ref().is_some_and(|(th, _)| *th > now) && !b.ended {
+                    out = Some(Command::Ready);
+                }
+            }
+            self.stats.balls += 1;
+            self.ball = Some(Ball {
+                id: obs.id,
+                decider: BallDecider::new(&self.planner, self.cfg.decide),
+                last_seen: now,
+                hit: None,
+                ended: false,
+            });
+        }
+        let ball = self.ball.as_mut().expect("set above");
+        if ball.decider.done() || ball.ended {
+            self.stats.ignored += 1;
+            return out;
+        }
+        if ball.decider.observations().0.last().is_some_and(|&l| t <= l) {
+            self.stats.ignored += 1;
+            return out;
+        }
+        ball.last_seen = now;
+        let decision = ball
+            .decider
+            .observe(&self.planner, t, obs.position, now, &|_| commanded.clone());
+        let done = ball.decider.done();
+        match decision {
+            None => {}
+            Some(Decision::EstimateFailed(_)) => self.stats.estimate_failed += 1,
+            Some(Decision::PlanFailed(_)) => self.stats.no_hit += 1,
+            Some(Decision::Planned { now, plan, .. }) => match plan.hit.filter(|_| plan.status == ReturnStatus::Ok) {
+                Some(hit) => {
+                    self.stroke = self.stroke.wrapping_add(1);
+                    self.stats.planned += 1;
+                    out = Some(self.command(&hit, now));
+                    self.ball.as_mut().expect("set above").hit = Some((now + hit.hit.t, hit));
+                }
+                None if done => self.stats.no_hit += 1,
+                None => {}
+            },
+            Some(Decision::Corrected { now, hit }) => {
+                let first = self.ball.as_ref().is_some_and(|b| b.hit.is_some());
+                match hit {
+                    Some(hit) => {
+                        if !first {
+                            self.stroke = self.stroke.wrapping_add(1);
+                        }
+                        self.stats.corrected += 1;
+                        out = Some(self.command(&hit, now));
+                        self.ball.as_mut().expect("set above").hit = Some((now + hit.hit.t, *hit));
+                    }
+                    None if !first => self.stats.no_hit += 1,
+                    None => {}
+                }
+            }
+        }
+        out
+    }
+}
+
+/// The wire form of a ball planner's hit: racket pose and twist in the robot's base frame, the
+/// hit time `t_hit` (s, controller clock).
+pub fn hit_msg(hit: &ReturnHit, id: u32, stroke: u32, t_hit: f64) -> HitMsg {
+    let r = hit.hit.pose.rotation.matrix();
+    HitMsg {
+        id,
+        stroke,
+        t_hit,
+        rotation: [
+            r[(0, 0)],
+            r[(0, 1)],
+            r[(0, 2)],
+            r[(1, 0)],
+            r[(1, 1)],
+            r[(1, 2)],
+            r[(2, 0)],
+            r[(2, 1)],
+            r[(2, 2)],
+        ],
+        centre: hit.hit.pose.translation.vector.into(),
+        twist: hit.hit.twist,
+    }
+}
+
+impl Brain for BallBrain {
+    fn observe(&mut self, obs: &ObservationMsg, now: f64, commanded: &JointState) -> Option<Command> {
+        self.receive(obs, f64::NAN, now, commanded)
+    }
+
+    fn observe_sent(&mut self, obs: &ObservationMsg, sent: f64, now: f64, commanded: &JointState) -> Option<Command> {
+        self.receive(obs, sent, now, commanded)
+    }
+
+    fn tick(&mut self, now: f64, _commanded: &JointState) -> Option<Command> {
+        let ball = self.ball.as_mut()?;
+        if ball.ended {
+            return None;
+        }
+        match &ball.hit {
+            Some((t_hit, _)) if now >= t_hit + self.cfg.ready_after => {
+                ball.ended = true;
+                Some(Command::Ready)
+            }
+            None if !ball.decider.done() && now - ball.last_seen > self.cfg.lost_after => {
+                ball.ended = true;
+                self.stats.lost += 1;
+                Some(Command::Ready)
+            }
+            _ => None,
+        }
+    }
+
+    fn outcome(&mut self, status: &StatusMsg) {
+        if self.sent_ids.contains(&status.id) && !matches!(status.status, PlanStatus::Accepted | PlanStatus::Replaced) {
+            self.stats.refused += 1;
+        }
+    }
+}

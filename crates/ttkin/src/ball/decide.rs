@@ -1,0 +1,266 @@
+//! The robot's decisions for one incoming ball, observation by observation: when to plan the
+//! first hit, from which estimate, when and how to correct it once after the bounce. The rally
+//! ([`super::rally`]) and the controller's ball mode (`ttcan::online::ball`) both drive this one
+//! state machine, so that the same observations give the same hits offline and at run time.
+//!
+//! The rules (those of the rally since the correction was introduced):
+//! - **First plan** at the delivery of observation number `window_frames` of the ball (the
+//!   rally's 0.2 s window at 200 Hz: 41 observations): the ball estimated from all of them
+//!   ([`estimate`]), the hit planned for a stroke from rest at the ready configuration
+//!   ([`ReturnPlanner::plan`]).
+//! - **Correction**, once, at the delivery of the last observation taken at most
+//!   `correction_delay` after the bounce the first estimate predicts: the estimate updated with
+//!   the observations since ([`update`]) and the hit planned again from the state the robot is
+//!   commanded then ([`ReturnPlanner::plan_near`] near the first hit; without a first hit
+//!   [`ReturnPlanner::plan_from`] from rest), shortest stroke 60 ms; skipped (the first hit stands)
+//!   when less than that is left before the first hit, or when the update or the plan fails.
+//!   "The last observation" is recognised causally: the one whose time plus one frame period
+//!   passes the correction time (with every frame delivered, the rally's choice exactly); when
+//!   frames are missing, the first observation past the correction time triggers it with the
+//!   observations before it.
+//!
+//! Times are on one clock, the caller's: observation times, `now` and the hits' times (a hit's
+//! `hit.t` counts from the `now` of its decision).
+
+use super::estimate::{estimate, Estimate, EstimateError, EstimateOptions};
+use super::flight::{BallState, EventKind, Flight};
+use super::hitplan::{ReturnHit, ReturnPlan, ReturnPlanner, ReturnStatus};
+use super::update::update;
+use crate::error::Error;
+use crate::traj::JointState;
+
+/// The decision rules' settings (the rally's: `DecideConfig::of(&rally_config)`, see
+/// [`super::rally`]; the default is the default rally's).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DecideConfig {
+    /// Landing target of the return (x, y, m, world; on the opponent's half).
+    pub target: [f64; 2],
+    /// Observations of a ball the first plan waits for (and estimates from).
+    pub window_frames: usize,
+    /// The camera's frame period (s): how the last observation before the correction time is
+    /// recognised on arrival.
+    pub frame_period: f64,
+    /// Time (s) after the predicted bounce at which the hit is corrected once; 0 for none.
+    pub correction_delay: f64,
+}
+
+/// What one observation led to.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Decision {
+    /// The first estimate failed: nothing is planned for this ball.
+    EstimateFailed(EstimateError),
+    /// The first plan failed with an error: nothing is planned for this ball.
+    PlanFailed(Error),
+    /// The first plan at `now` (s): the estimate it started from and the plan (a hit to execute
+    /// when its status is [`ReturnStatus::Ok`]; its `hit.t` counts from `now`).
+    Planned {
+        /// Decision time (s).
+        now: f64,
+        /// The ball estimate the plan started from.
+        estimate: Box<Estimate>,
+        /// The plan.
+        plan: Box<ReturnPlan>,
+    },
+    /// The correction after the bounce was made at `now` (s): the hit replacing the first one
+    /// (`hit.t` from `now`), or `None` when the first hit stands.
+    Corrected {
+        /// Decision time (s).
+        now: f64,
+        /// The new hit.
+        hit: Option<Box<ReturnHit>>,
+    },
+}
+
+#[derive(Debug, Clone, PartialEq)]
+enum Phase {
+    /// Collecting observations for the first plan.
+    Observing,
+    /// First plan made; the correction is due at this time (s; observation clock).
+    Correcting(f64),
+    /// Nothing more to decide for this ball.
+    Done,
+}
+
+/// The decisions for one ball (see the module doc): feed its observations in time order with
+/// [`BallDecider::observe`].
+#[derive(Debug, Clone)]
+pub struct BallDecider {
+    cfg: DecideConfig,
+    opts: EstimateOptions,
+    times: Vec<f64>,
+    obs: Vec<[f64; 3]>,
+    phase: Phase,
+    estimate: Option<Estimate>,
+    /// The first hit and its absolute time (s).
+    first: Option<(ReturnHit, f64)>,
+}
+
+impl BallDecider {
+    /// A decider for a new ball, estimating with `planner`'s flight model.
+    pub fn new(planner: &ReturnPlanner, cfg: DecideConfig) -> Self {
+        BallDecider {
+            cfg,
+            opts: EstimateOptions {
+                flight: planner.flight,
+                ..EstimateOptions::default()
+            },
+            times: Vec::with_capacity(cfg.window_frames * 3),
+            obs: Vec::with_capacity(cfg.window_frames * 3),
+            phase: Phase::Observing,
+            estimate: None,
+            first: None,
+        }
+    }
+
+    /// Whether this ball needs no more observations (planned and corrected, or given up).
+    pub fn done(&self) -> bool {
+        self.phase == Phase::Done
+    }
+
+    /// The observations so far: times (s) and positions (m, world).
+    pub fn observations(&self) -> (&[f64], &[[f64; 3]]) {
+        (&self.times, &self.obs)
+    }
+
+    /// The first estimate, once made.
+    pub fn estimate(&self) -> Option<&Estimate> {
+        self.estimate.as_ref()
+    }
+
+    /// One observation: the ball at `position` (m, world) at time `t` (s), delivered at `now`
+    /// (s, same clock); `commanded(t)` is the joint state the robot is commanded at time `t`
+    /// (asked only for a correction while a first hit is under way). Observations must come in
+    /// increasing time; one not later than the previous is ignored. Returns the decision it led
+    /// to, if any.
+    pub fn observe(
+        &mut self,
+        planner: &ReturnPlanner,
+        t: f64,
+        position: [f64; 3],
+        now: f64,
+        commanded: &dyn Fn(f64) -> JointState,
+    ) -> Option<Decision> {
+        if self.times.last().is_some_and(|&l| t <= l) || !t.is_finite() {
+            return None;
+        }
+        match self.phase {
+            Phase::Done => None,
+            Phase::Observing => {
+                self.times.push(t);
+                self.obs.push(position);
+                (self.times.len() >= self.cfg.window_frames).then(|| self.first_plan(planner, now))
+            }
+            Phase::Correcting(at) => {
+                if t <= at {
+                    self.times.push(t);
+                    self.obs.push(position);
+                    (t + self.cfg.frame_period > at).then(|| self.correct(planner, at, now, commanded))
+                } else {
+                    // The last frame before the correction time is missing: correct now with
+                    // what came before it.
+                    let d = self.correct(planner, at, now, commanded);
+                    self.times.push(t);
+                    self.obs.push(position);
+                    Some(d)
+                }
+            }
+        }
+    }
+
+    fn first_plan(&mut self, planner: &ReturnPlanner, now: f64) -> Decision {
+        self.phase = Phase::Done;
+        let est = match estimate(&self.times, &self.obs, &self.opts) {
+            Ok(e) => e,
+            Err(e) => return Decision::EstimateFailed(e),
+        };
+        self.estimate = Some(est.clone());
+        let plan = match planner.plan(&est.state, now, self.cfg.target) {
+            Ok(p) => p,
+            Err(e) => return Decision::PlanFailed(e),
+        };
+        self.first = plan
+            .hit
+            .as_ref()
+            .filter(|_| plan.status == ReturnStatus::Ok)
+            .map(|h| (h.clone(), now + h.hit.t));
+        if self.cfg.correction_delay > 0.0 {
+            if let Some(tb) = bounce_time(&planner.flight, &est.state) {
+                let at = tb + self.cfg.correction_delay;
+                if at >= *self.times.last().expect("observed") {
+                    self.phase = Phase::Correcting(at);
+                }
+            }
+        }
+        Decision::Planned {
+            now,
+            estimate: Box::new(est),
+            plan: Box::new(plan),
+        }
+    }
+
+    fn correct(
+        &mut self,
+        planner: &ReturnPlanner,
+        at: f64,
+        now: f64,
+        commanded: &dyn Fn(f64) -> JointState,
+    ) -> Decision {
+        self.phase = Phase::Done;
+        Decision::Corrected {
+            now,
+            hit: self.correction(planner, at, now, commanded).map(Box::new),
+        }
+    }
+
+    fn correction(
+        &self,
+        planner: &ReturnPlanner,
+        at: f64,
+        now: f64,
+        commanded: &dyn Fn(f64) -> JointState,
+    ) -> Option<ReturnHit> {
+        let est = self.estimate.as_ref()?;
+        if self
+            .first
+            .as_ref()
+            .is_some_and(|(_, t)| t - now <= CORRECTION_MIN_STROKE)
+        {
+            return None;
+        }
+        let mut replanner = planner.clone();
+        replanner.min_stroke_time = CORRECTION_MIN_STROKE;
+        let from = self.times.partition_point(|&t| t <= est.state.t);
+        let last = self.times.partition_point(|&t| t <= at);
+        let up = update(est, &self.times[from..last], &self.obs[from..last], &self.opts).ok()?;
+        let plan = match &self.first {
+            Some((hit, t_prev)) => replanner.plan_near(&up.state, now, &commanded(now), up.bounced, hit, *t_prev),
+            None => replanner.plan_from(
+                &up.state,
+                now,
+                self.cfg.target,
+                &JointState::rest(&planner.ready),
+                up.bounced,
+            ),
+        }
+        .ok()?;
+        plan.hit.filter(|_| plan.status == ReturnStatus::Ok)
+    }
+}
+
+/// Shortest stroke (s) of the correction after the bounce: the rest of a stroke under way.
+pub(super) const CORRECTION_MIN_STROKE: f64 = 0.06;
+
+/// Time (s) of the first table bounce on the robot's half of the flight from `s` (within 1.5 s),
+/// flying no further than that.
+pub(super) fn bounce_time(flight: &Flight, s: &BallState) -> Option<f64> {
+    let mut cur = *s;
+    while cur.t < s.t + 1.5 {
+        let (next, ev) = flight.advance(&cur, s.t + 1.5, None);
+        match ev {
+            Some(e) if e.kind == EventKind::Table && e.before.p.x < 0.0 => return Some(e.before.t),
+            Some(e) if e.kind.terminal() => return None,
+            _ => cur = next,
+        }
+    }
+    None
+}

@@ -1,0 +1,308 @@
+"""The hardware-in-the-loop rally (issue 26 item 6): the rally's incoming balls played in real
+time against a running ``ttctl`` in ball mode.
+
+For each ball the simulated camera of the core (``_ttmanip.ball_rally_observations``: the rally's
+serve, flight, rate, noise, outliers and time-stamp error for the same seed and ball) is streamed
+over UDP with :class:`ttmanip.ctl.Link`, every observation sent at its exposure plus the camera's
+latency on this host's monotonic clock (the camera clock; the header's send time is the same
+clock, so the controller can relate its clock to it). The controller's telemetry (measured joint
+states) and plan status come back; the racket is put where forward kinematics of the measured
+joints puts it and the ball is scored by the rally's own scoring (``_ttmanip.ball_rally_score``).
+The controller's clock is related to this host's by the smallest delay of its telemetry
+(arrival − controller time), the same min filter the controller's ball brain uses.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import socket
+import subprocess
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+
+from . import TtmanipError
+from . import _ttmanip as _t
+from .ctl import Link
+
+__all__ = ["HilError", "play", "run"]
+
+
+class HilError(TtmanipError):
+    """The hardware-in-the-loop rally cannot run (no controller, no ball mode, no telemetry)."""
+
+
+def _free_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+class _Listener:
+    """Collects the controller's datagrams on a thread: telemetry rows and status dicts, each
+    with its arrival time on this host's monotonic clock."""
+
+    def __init__(self, link: Link):
+        self.link = link
+        self.telemetry: list[tuple[float, float, np.ndarray, np.ndarray]] = []
+        self.status: list[tuple[float, dict]] = []
+        self.refused = 0
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        while not self._stop.is_set():
+            try:
+                d = self.link.receive(timeout=0.05)
+            except TtmanipError:
+                self.refused += 1
+                continue
+            if d is None:
+                continue
+            now = time.monotonic()
+            if d["kind"] == "telemetry":
+                self.telemetry.append((now, d["time"], np.asarray(d["q"]), np.asarray(d["qd"])))
+            elif d["kind"] == "status":
+                self.status.append((now, d))
+
+    def offset(self) -> float:
+        """This host's monotonic clock minus the controller's (s), smallest delay seen."""
+        if not self.telemetry:
+            raise HilError("no telemetry from the controller: is it running in ball mode with --reply here?")
+        return min(a - c for a, c, _, _ in self.telemetry)
+
+    def stop(self) -> None:
+        self._stop.set()
+        self._thread.join(timeout=1.0)
+
+
+def _sleep_until(t: float) -> None:
+    while True:
+        dt = t - time.monotonic()
+        if dt <= 0:
+            return
+        time.sleep(min(dt, 0.002) if dt > 0.003 else 0)
+
+
+def play(
+    link: Link, listener: _Listener, index: int, seed: int = 0, world: bool = False, settle: float = 0.6
+) -> dict:
+    """Plays ball ``index`` of the rally of ``seed`` against the controller behind ``link``:
+    streams its observations in real time, waits ``settle`` s after the camera's last frame, and
+    scores it from the measured joint states. Returns the ball's record (status, returned, hit
+    time on the ball's clock, racket error, planning time, ...)."""
+    cam = _t.ball_rally_observations(index, seed, world)
+    ball_id = index + 1
+    t0 = time.monotonic() + 0.02  # the opponent's hit, on the camera clock
+    sends, due = [], []
+    for e, stamp, p in zip(cam["exposures"], cam["times"], cam["positions"], strict=True):
+        if not np.all(np.isfinite(p)):
+            continue  # the ball is gone (past the floor or the net): no frame
+        due.append(t0 + e + cam["latency"])
+        _sleep_until(due[-1])
+        sends.append(time.monotonic())
+        link.observation(ball_id, t0 + stamp, p)
+    _sleep_until(sends[-1] + settle)
+    offset = listener.offset()
+    start, end = t0, sends[-1] + settle
+    rows = [r for r in listener.telemetry if start <= r[1] + offset <= end]
+    hits = [(a, s) for a, s in listener.status if start <= a <= end]
+    accepted = [s for _, s in hits if s["status"] == "Accepted" and np.isfinite(s["t_hit"])]
+    rec = {
+        "index": index,
+        "observations": len(sends),
+        "send_jitter_ms": float(np.max(np.array(sends) - np.array(due)) * 1e3),
+        "statuses": [s["status"] for _, s in hits],
+        "planning_time_s": [s["planning_time"] for _, s in hits],
+        "telemetry": len(rows),
+    }
+    if not rows:
+        rec.update(status="no_telemetry", returned=False, contact=False)
+        return rec
+    if not accepted:
+        rec.update(status="no_hit", returned=False, contact=False)
+        return rec
+    t_hit = accepted[-1]["t_hit"] + offset - t0
+    t = np.array([r[1] + offset - t0 for r in rows])
+    q = np.array([r[2] for r in rows])
+    qd = np.array([r[3] for r in rows])
+    sc = _t.ball_rally_score(index, t_hit, t, q, qd, seed, world)
+    rec.update(
+        status=sc["status"],
+        returned=bool(sc["returned"]),
+        contact=bool(sc["contact"]),
+        racket_error=float(sc["racket_error"]),
+        t_hit=float(t_hit),
+        timeline={
+            "t_obs": cam["times"].tolist(),
+            "obs": cam["positions"].tolist(),
+            "t": t.tolist(),
+            "q": q.tolist(),
+        },
+    )
+    return rec
+
+
+_REPO = Path(__file__).resolve().parents[2]
+
+
+def _ttctl_command(
+    binary: str | None, config: str | None, port: int, reply: int, stats: Path, max_seconds: float
+) -> list[str]:
+    exe = binary or shutil.which("ttctl")
+    if exe is None:
+        local = _REPO / "target" / "release" / "ttctl"
+        exe = str(local) if local.exists() else None
+    if exe is None:
+        raise HilError("ttctl not found: build it (cargo build --release -p ttcan) or give --ttctl PATH")
+    # The default configuration of the checkout: from the working directory (the package may be
+    # installed from the wheel, away from the repository), else next to the package's source.
+    default = Path("tests") / "online" / "gantry6_hil.toml"
+    cfg = config or str(default if default.exists() else _REPO / default)
+    if not Path(cfg).exists():
+        raise HilError(f"ttctl configuration {cfg} not found: give --config PATH")
+    return [
+        exe,
+        "-c",
+        cfg,
+        "--virtual-drives",
+        "--online",
+        "ball",
+        "--listen",
+        f"127.0.0.1:{port}",
+        "--reply",
+        f"127.0.0.1:{reply}",
+        "--stats",
+        str(stats),
+        "--max-seconds",
+        str(max_seconds),
+    ]
+
+
+def _stats(path: Path) -> dict:
+    """ttctl's statistics file (key=value lines) as a dict, numbers as floats."""
+    out = {}
+    if path.exists():
+        for line in path.read_text().splitlines():
+            k, sep, v = line.partition("=")
+            if sep:
+                try:
+                    out[k.strip()] = float(v)
+                except ValueError:
+                    out[k.strip()] = v.strip()
+    return out
+
+
+def _pct(a, p):
+    return float(np.percentile(a, p)) if len(a) else float("nan")
+
+
+def run(
+    n: int,
+    seed: int = 0,
+    out: str | Path = "out/hil",
+    connect: tuple[str, int] | None = None,
+    ttctl: str | None = None,
+    config: str | None = None,
+    world: bool = False,
+) -> dict:
+    """Plays balls 0..``n`` of the rally of ``seed`` against ``ttctl`` (started here in ball mode
+    with virtual drives unless ``connect`` gives a running one's address), plays the offline rally
+    on the same balls, writes ``summary.json`` and the figure of one ball's timeline to ``out``,
+    and returns the summary."""
+    if n < 1:
+        raise HilError(f"--n: {n} balls, need at least 1")
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    reply = _free_port()
+    proc = None
+    if connect is None:
+        port = _free_port()
+        cmd = _ttctl_command(ttctl, config, port, reply, out / "ttctl_stats.txt", 30.0 + 2.0 * n)
+        log = (out / "ttctl.log").open("w")
+        proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT)
+        address = ("127.0.0.1", port)
+    else:
+        address = connect
+    link = Link(address, bind=("127.0.0.1", reply))
+    listener = _Listener(link)
+    balls = []
+    try:
+        deadline = time.monotonic() + 10.0
+        while not listener.telemetry:
+            if proc is not None and proc.poll() is not None:
+                raise HilError(f"ttctl exited with {proc.returncode}: see {out / 'ttctl.log'}")
+            if time.monotonic() > deadline:
+                raise HilError("no telemetry from the controller within 10 s")
+            time.sleep(0.05)
+        for i in range(n):
+            balls.append(play(link, listener, i, seed, world))
+            if balls[-1]["status"] == "no_telemetry":
+                break  # the controller stopped (see ttctl.log and its statistics' fault)
+    finally:
+        listener.stop()
+        link.close()
+        if proc is not None:
+            proc.send_signal(2)
+            try:
+                proc.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+    offline = _t.ball_rally(len(balls), seed=seed, world=world)
+    returned = sum(b["returned"] for b in balls)
+    played = len(balls)
+    plan = [x for b in balls for x in b["planning_time_s"]]
+    summary = {
+        "n": n,
+        "played": played,
+        "seed": seed,
+        "world": "mismatch" if world else "model",
+        "returned": returned,
+        "return_rate": returned / max(played, 1),
+        "offline_returned": int(np.sum(offline["returned"])),
+        "offline_return_rate": float(np.mean(offline["returned"])),
+        "planning_time_ms": {"p50": _pct(plan, 50) * 1e3, "p99": _pct(plan, 99) * 1e3},
+        "send_jitter_ms_max": max(b["send_jitter_ms"] for b in balls),
+        "refused_datagrams": listener.refused,
+        "statuses": {s: sum(b["status"] == s for b in balls) for s in {b["status"] for b in balls}},
+    }
+    summary["ttctl"] = _stats(out / "ttctl_stats.txt")
+    summary["offline_statuses"] = [str(x) for x in offline["status"]]
+    summary["balls"] = [{k: v for k, v in b.items() if k != "timeline"} for b in balls]
+    (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    _figure(out, balls)
+    return summary
+
+
+def _figure(out: Path, balls: list[dict]) -> None:
+    """The timeline of the first ball that was hit: observations, the hit time, the measured
+    racket (FK of the measured joints is in the score; here the joint motion)."""
+    ball = next((b for b in balls if "timeline" in b), None)
+    if ball is None:
+        return
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    tl = ball["timeline"]
+    fig, ax = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
+    obs = np.array(tl["obs"])
+    for k, name in enumerate("xyz"):
+        ax[0].plot(tl["t_obs"], obs[:, k], ".", ms=2, label=f"observed {name}")
+    ax[0].axvline(ball["t_hit"], color="k", ls="--", label="planned hit")
+    ax[0].set_ylabel("ball (m, world)")
+    ax[0].legend(fontsize=7)
+    q = np.array(tl["q"])
+    if q.size:
+        ax[1].plot(tl["t"], q)
+    ax[1].axvline(ball["t_hit"], color="k", ls="--")
+    ax[1].set_xlabel("s from the opponent's hit")
+    ax[1].set_ylabel("measured joints")
+    ax[0].set_title(f"ball {ball['index']}: {ball['status']}")
+    fig.savefig(out / "timeline.png", dpi=100)
+    plt.close(fig)
