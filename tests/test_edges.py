@@ -390,8 +390,9 @@ def _stops_early(full, part, fraction: float):
     t0 = time.perf_counter()
     part()
     whole = (time.perf_counter() - t0) / fraction
-    assert whole > 0.6, f"the work ({whole:.2f} s) is too short to show an interrupt"
-    waited = _ctrl_c_after(full)
+    assert whole > 0.4, f"the work ({whole:.2f} s) is too short to show an interrupt"
+    # the signal comes early enough that most of the work is still ahead of it
+    waited = _ctrl_c_after(full, min(0.3, whole / 5))
     assert waited < 0.5 * whole, (waited, whole)
 
 
