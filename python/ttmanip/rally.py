@@ -121,7 +121,8 @@ def rally(
         )
     if incoming is not None:
         try:
-            incoming = np.asarray(incoming, dtype=float)
+            # the bindings' one conversion: complex, boolean and string arrays are refused, not cast
+            incoming = _t.real_array(incoming, "incoming")
         except (TypeError, ValueError):
             raise _t.TtmanipError(
                 f"incoming: expected an (N, 10) array of ball states, got {incoming!r}"

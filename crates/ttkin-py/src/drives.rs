@@ -68,29 +68,42 @@ impl DriveSim {
         }
     }
 
-    /// The simulator back from `__reduce__`'s state: rebuilt, then the journal replayed.
-    pub fn from_state(state: &Bound<'_, PyAny>) -> PyResult<Self> {
+    /// The simulator back from `__reduce__`'s state: rebuilt, then the journal replayed (without
+    /// the GIL, interruptible: a journal of 10¹⁵ ticks is Ctrl-C-able work, not a hang).
+    pub fn from_state(py: Python<'_>, state: &Bound<'_, PyAny>) -> PyResult<Self> {
         let (chain, options, setpoint_period, journal): (ttkin::Chain, CoupledOptions, f64, Journal) =
             crate::pickle::from_state(state, "DriveSim")?;
+        // the constructor's check (a NaN period unpickled and ran)
+        let setpoint_period = args::positive("setpoint_period", setpoint_period)?;
         let mut sim = Self::build(&chain, options, journal.reset.as_ref())?;
-        for call in &journal.calls {
-            match call {
-                // a call that failed was journaled too (it may have changed the state before
-                // failing): its replay fails alike, at the same point
-                Call::Setpoint(q, qd, qdd, tau) => {
-                    let _ = sim.set_setpoint(q, qd, qdd, tau.as_deref());
+        let sim_ref = &mut sim;
+        let calls = &journal.calls;
+        crate::interrupt::detach_interruptible(py, |cancel| {
+            let cancelled = || crate::interrupt::cancelled(cancel);
+            for call in calls {
+                if cancelled() {
+                    return;
                 }
-                Call::Tick(n) => sim.tick_n(*n),
-                Call::Run(t, q, qd, qdd, tau) => {
-                    let _ = sim.run(t, q, qd, qdd, tau.as_deref(), setpoint_period);
-                }
-                Call::RunStopped(t, q, qd, qdd, tau, polls) => {
-                    let seen = AtomicU64::new(0);
-                    let stop = || seen.fetch_add(1, Ordering::Relaxed) + 1 >= *polls;
-                    let _ = sim.run_until(t, q, qd, qdd, tau.as_deref(), setpoint_period, &stop);
+                match call {
+                    // a call that failed was journaled too (it may have changed the state before
+                    // failing): its replay fails alike, at the same point
+                    Call::Setpoint(q, qd, qdd, tau) => {
+                        let _ = sim_ref.set_setpoint(q, qd, qdd, tau.as_deref());
+                    }
+                    Call::Tick(n) => {
+                        sim_ref.tick_n_until(*n, &cancelled);
+                    }
+                    Call::Run(t, q, qd, qdd, tau) => {
+                        let _ = sim_ref.run_until(t, q, qd, qdd, tau.as_deref(), setpoint_period, &cancelled);
+                    }
+                    Call::RunStopped(t, q, qd, qdd, tau, polls) => {
+                        let seen = AtomicU64::new(0);
+                        let stop = || cancelled() || seen.fetch_add(1, Ordering::Relaxed) + 1 >= *polls;
+                        let _ = sim_ref.run_until(t, q, qd, qdd, tau.as_deref(), setpoint_period, &stop);
+                    }
                 }
             }
-        }
+        })?;
         Ok(DriveSim {
             chain: std::sync::Arc::new(chain),
             options,
@@ -334,8 +347,8 @@ fn step_metrics(t: &Bound<'_, PyAny>, y: &Bound<'_, PyAny>, target: f64) -> PyRe
 /// Rebuilds a `DriveSim` from its pickle state (`DriveSim.__reduce__`; not meant to be called directly).
 #[ttkin_py_guard::guarded]
 #[pyfunction]
-fn _unpickle_drive_sim(state: &Bound<'_, PyAny>) -> PyResult<DriveSim> {
-    DriveSim::from_state(state)
+fn _unpickle_drive_sim(py: Python<'_>, state: &Bound<'_, PyAny>) -> PyResult<DriveSim> {
+    DriveSim::from_state(py, state)
 }
 
 /// Adds `DriveSim`, `drive_theta5_case`, `actuators` and `step_metrics` to the module.
