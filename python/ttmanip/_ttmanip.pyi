@@ -147,6 +147,8 @@ class Robot:
         self, q: ArrayLike, task: str = "racket5", target: ArrayLike | None = None
     ) -> NDArray[np.float64]:
         """Task Jacobian (m, n) of "pose", "position" or "racket5" in residual coordinates (ė = −J_e q̇)."""
+    def racket_angle_jacobian(self, q: ArrayLike) -> NDArray[np.float64]:
+        """Jacobian (5, n) of the racket 5-vector [centre (m), polar, azimuth (rad)]: ẋ = J q̇."""
     def task_coordinates(self, q: ArrayLike, task: str = "racket5") -> NDArray[np.float64]:
         """Task coordinates of the tool pose: (3,), (6,) or the racket 5-vector (m, rad)."""
 
@@ -852,6 +854,18 @@ def ball_rally(
     world: bool = False,
     incoming: ArrayLike | None = None,
     drives: bool = False,
+) -> dict[str, Any]: ...
+def ball_rally_stats(
+    in_reach: list[bool],
+    returned: list[bool],
+    reach: list[str],
+    status: list[str],
+    racket_error: ArrayLike,
+    plan_time_us: ArrayLike,
+    plan_wall_time_us: ArrayLike,
+    correction_time_us: ArrayLike,
+    landing_error: ArrayLike,
+    velocity_error: ArrayLike,
 ) -> dict[str, Any]: ...
 
 # issue 26: the controller's datagram format (ttcan::online::wire)

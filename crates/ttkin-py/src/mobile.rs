@@ -185,6 +185,18 @@ impl PyRobot {
         finite_to_numpy(py, &[task.dim(), n], je.transpose().as_slice())
     }
 
+    /// Jacobian (5, n) of seed 000's racket coordinates [centre x, y, z (m), polar, azimuth (rad)]
+    /// at `q` (`ttkin::task::racket_angle_jacobian_at`, racket centre 0.15 m along tool z): their
+    /// rates are ẋ = J q̇ (unlike `task_jacobian`'s residual rows); an error where the face normal
+    /// is along ±z (the azimuth is undefined there).
+    fn racket_angle_jacobian<'py>(&self, py: Python<'py>, q: &Any<'py>) -> PyResult<Array<'py>> {
+        let n = self.chain.dof();
+        let j =
+            ttkin::task::racket_angle_jacobian_at(&self.chain, &vector(q, "q", n)?, ttkin::task::SEED_RACKET_OFFSET)
+                .py()?;
+        finite_to_numpy(py, &[5, n], j.transpose().as_slice())
+    }
+
     /// Task coordinates of the tool pose at `q`: position (3,); position and rotation vector (6,);
     /// or seed 000's racket 5-vector [centre x, y, z (m), polar, azimuth (rad)].
     #[pyo3(signature = (q, task="racket5"))]
