@@ -476,7 +476,7 @@ fn gantry6_jacobian_determinant_is_minus_l3_c4_s45_and_singularities_stay_bounde
         let q = [0.1, 0.2, 0.3, t4, t5, 0.5];
         let r = settings.solve(&chain, &q, &twist, None).unwrap();
         assert!(r.singular, "θ4 = {t4}, θ5 = {t5}: σ_min = {}", r.sigma_min);
-        let bound = norm * (1.0 / settings.threshold).max(1.0 / (2.0 * r.damping));
+        let bound = norm * (1.0 / settings.epsilon).max(1.0 / (2.0 * r.damping));
         let qd = r.qdot.iter().map(|v| v * v).sum::<f64>().sqrt();
         assert!(
             qd.is_finite() && qd <= bound * (1.0 + 1e-9),

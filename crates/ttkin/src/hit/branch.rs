@@ -124,7 +124,7 @@ impl HitPlanner {
         let m = Matrix6::from_iterator(j.iter().copied());
         // σ_min ≥ t exactly when JᵀJ − t²·I is positive definite: a 6 × 6 Cholesky instead of
         // an SVD (with t = 1e-3 the shift t² = 1e-6 is ten orders above the rounding of JᵀJ).
-        let t = DifferentialIk::default().threshold;
+        let t = DifferentialIk::default().epsilon;
         let mut shifted = m.transpose() * m - Matrix6::identity() * (t * t);
         if !m.iter().all(|x| x.is_finite()) || factor_in_place(shifted.as_mut_slice(), 6).is_err() {
             return None;
