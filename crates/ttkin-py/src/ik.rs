@@ -300,7 +300,7 @@ impl PyRobot {
             frame,
         };
         let r = d.solve(&self.chain, &q, &twist, weights.as_deref()).py()?;
-        let qdot = to_numpy(py, &[n], &r.qdot);
+        let qdot = to_numpy(py, &[n], &r.qd);
         if !info {
             return Ok(qdot.into_any());
         }

@@ -290,7 +290,7 @@ array_getters!(PyTrackResult, |t| {
     /// Configurations (N, nq): m for prismatic, rad for revolute joints (base x, y, θ first).
     q => t.r.q, [t.r.len(), t.r.nq];
     /// Commanded inputs (N, nu): joint rates (m/s, rad/s), base (v, ω) first.
-    qd => t.r.qdot, [t.r.len(), t.r.nu];
+    qd => t.r.qd, [t.r.len(), t.r.nu];
     /// Task coordinates reached (N, dim).
     x => t.r.x, [t.r.len(), t.r.dim];
     /// Norm of the task residual (N,), task units.
@@ -314,7 +314,7 @@ impl PyTrackResult {
     #[getter]
     fn qdot<'py>(&self, py: Python<'py>) -> PyResult<Array<'py>> {
         crate::errors::deprecated(py, "TrackResult.qdot", "TrackResult.qd")?;
-        Ok(to_numpy(py, &[self.r.len(), self.r.nu], &self.r.qdot))
+        Ok(to_numpy(py, &[self.r.len(), self.r.nu], &self.r.qd))
     }
     fn __len__(&self) -> usize {
         self.r.len()

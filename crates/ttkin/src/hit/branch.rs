@@ -118,7 +118,7 @@ impl HitPlanner {
     pub fn hit_joint_velocity(&self, q: &[f64], twist: &[f64; 6]) -> Option<Vec<f64>> {
         if q.len() != 6 {
             let jv = joint_velocity(&self.chain, q, twist).ok()?;
-            return (!jv.singular).then_some(jv.qdot);
+            return (!jv.singular).then_some(jv.qd);
         }
         let j = self.chain.jacobian(q, JacobianFrame::Base).ok()?;
         let m = Matrix6::from_iterator(j.iter().copied());
@@ -205,8 +205,8 @@ mod tests {
                 Some(qd) => {
                     regular += 1;
                     assert!(!jv.singular, "{q:?}");
-                    for (a, b) in qd.iter().zip(&jv.qdot) {
-                        assert!((a - b).abs() <= 1e-9 * (1.0 + b.abs()), "{qd:?} vs {:?}", jv.qdot);
+                    for (a, b) in qd.iter().zip(&jv.qd) {
+                        assert!((a - b).abs() <= 1e-9 * (1.0 + b.abs()), "{qd:?} vs {:?}", jv.qd);
                     }
                 }
                 None => {

@@ -44,8 +44,8 @@ impl Default for DifferentialIk {
 /// Joint velocities from a twist, with the conditioning that produced them.
 #[derive(Debug, Clone, PartialEq)]
 pub struct JointVelocity {
-    /// Joint velocities (m/s or rad/s), chain order.
-    pub qdot: Vec<f64>,
+    /// Joint velocities (m/s or rad/s), chain order (was `qdot`).
+    pub qd: Vec<f64>,
     /// True when σ_min < ε and the damped inverse was used.
     pub singular: bool,
     /// Smallest singular value of the (weighted) Jacobian.
@@ -54,6 +54,14 @@ pub struct JointVelocity {
     pub damping: f64,
     /// ‖J·q̇ − V‖: 0 up to rounding for an exact solve, > 0 when damped or when n < 6.
     pub residual: f64,
+}
+
+impl JointVelocity {
+    /// Deprecated name of the field [`JointVelocity::qd`] (joint velocities, m/s or rad/s).
+    #[deprecated(note = "one name per concept: use the field `qd`")]
+    pub fn qdot(&self) -> &[f64] {
+        &self.qd
+    }
 }
 
 /// [`DifferentialIk::solve`] with default settings and no weights: q̇ for twist V = [v (m/s);
@@ -127,7 +135,7 @@ impl DifferentialIk {
         }
         let residual = (&j * &qdot - v).norm();
         Ok(JointVelocity {
-            qdot: qdot.iter().copied().collect(),
+            qd: qdot.iter().copied().collect(),
             singular,
             sigma_min,
             damping,

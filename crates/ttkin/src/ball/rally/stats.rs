@@ -1,6 +1,6 @@
 //! A rally's statistics: counts of the balls in reach and returned, the region's verdicts and the
 //! planner's statuses, and the medians of the per-ball errors and times ([`RallyStats`]), from
-//! the outcome columns of one or several runs ([`OutcomeColumns`], [`Outcomes::columns`]).
+//! the outcome columns of one or several runs ([`OutcomeColumns`], [`Outcomes::stats`]).
 
 use std::collections::BTreeMap;
 
@@ -88,7 +88,7 @@ fn median(a: &[f64], keep: impl Fn(usize) -> bool) -> Option<f64> {
 }
 
 impl RallyStats {
-    /// The statistics of the outcome columns `c`; [`Error::InvalidInput`] when the columns differ
+    /// The statistics of the outcome columns `c`; [`Error::InvalidArgument`] when the columns differ
     /// in length or a verdict is not one of [`Reachability::NAMES`].
     pub fn new(c: &OutcomeColumns<'_>) -> Result<Self> {
         let n = c.in_reach.len();
