@@ -162,3 +162,15 @@ where
         }
     })
 }
+
+/// The value of a renamed keyword argument: the new keyword's `value`, or the deprecated
+/// keyword's `old` when given (it wins, with a `DeprecationWarning` naming both).
+pub fn renamed<T>(py: Python<'_>, value: T, old: Option<T>, old_name: &str, new_name: &str) -> PyResult<T> {
+    match old {
+        None => Ok(value),
+        Some(v) => {
+            crate::errors::deprecated(py, old_name, new_name)?;
+            Ok(v)
+        }
+    }
+}

@@ -468,3 +468,8 @@ pub fn serde_to_python<'py, T: serde::Serialize + ?Sized>(py: Python<'py>, value
 pub fn triples(data: &[f64]) -> Vec<[f64; 3]> {
     data.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
 }
+
+/// Borrowed `&str`s of owned strings (a column of names read from Python).
+pub fn str_refs(v: &[String]) -> Vec<&str> {
+    v.iter().map(String::as_str).collect()
+}
