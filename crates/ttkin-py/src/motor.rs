@@ -60,9 +60,7 @@ fn to_dict<'py, T: Serialize>(py: Python<'py>, value: &T) -> PyResult<Bound<'py,
 
 fn trace_dict<'py>(py: Python<'py>, t: Trace, fault: Option<ttcan::Fault>) -> PyResult<Bound<'py, PyDict>> {
     // A non-finite signal from finite parameters is refused, never returned (issue 29).
-    for signal in [&t.time, &t.current, &t.duty, &t.speed, &t.position] {
-        crate::convert::check_finite_output(signal)?;
-    }
+    crate::convert::check_finite_outputs(&[&t.time, &t.current, &t.duty, &t.speed, &t.position])?;
     let d = PyDict::new(py);
     d.set_item("time", PyArray1::from_vec(py, t.time))?;
     d.set_item("current", PyArray1::from_vec(py, t.current))?;
@@ -159,7 +157,7 @@ impl PyServoSim {
     /// Step response: `kind` is 'current' (A), 'velocity' (rad/s) or 'position' (rad, a step with
     /// zero velocity and acceleration); `external_torque` (N·m at the output) acts throughout.
     /// Returns a dict of numpy arrays sampled every current-loop period, plus 'fault'.
-    #[pyo3(signature = (kind, amplitude, duration, external_torque=0.0, seed=7))]
+    #[pyo3(signature = (kind, amplitude, duration, external_torque=Simulation::NO_LOAD, seed=Simulation::NOISE_SEED as i128))]
     fn step<'py>(
         &self,
         py: Python<'py>,
@@ -178,7 +176,7 @@ impl PyServoSim {
     /// Follows a position trajectory given at the position-loop rate (1-D arrays q rad, qd rad/s,
     /// qdd rad/s² of equal length n ≥ 1, sample k for the k-th position period) from rest at q[0],
     /// then holds the last sample for `settle` seconds. Returns a dict of numpy arrays plus 'fault'.
-    #[pyo3(signature = (q, qd, qdd, settle=0.0, external_torque=0.0, seed=7))]
+    #[pyo3(signature = (q, qd, qdd, settle=Simulation::NO_SETTLE, external_torque=Simulation::NO_LOAD, seed=Simulation::NOISE_SEED as i128))]
     #[allow(clippy::too_many_arguments)]
     fn follow<'py>(
         &self,
