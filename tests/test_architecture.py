@@ -369,10 +369,8 @@ _SIGNATURE = re.compile(r"#\[pyo3\(signature\s*=\s*\((.*?)\)\)\]", re.S)
 _NUMERIC_DEFAULT = re.compile(r"\b(\w+)\s*=\s*(-?\d[\w.]*)")
 
 # Known loops left in the bindings (file::function -> count), each a debt of issue 30 item 3:
-# h30a moved the others into the core or into the conversion helpers; an entry may only be removed.
-BINDING_LOOP_DEBTS: dict[str, int] = {
-    "motor.rs::put": 2,  # dict deep-merging of partial configurations (Python None and NaN both pass)
-}
+# none left (moved into the core or into the conversion helpers); an entry may only be removed.
+BINDING_LOOP_DEBTS: dict[str, int] = {}
 
 # Known numeric literal defaults left in binding signatures (file -> the `name=value` texts): none.
 BINDING_DEFAULT_DEBTS: dict[str, list[str]] = {}
