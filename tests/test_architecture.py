@@ -368,42 +368,12 @@ _FN = re.compile(r"^\s*(?:pub(?:\([^)]*\))?\s+)?fn\s+(\w+)")
 _SIGNATURE = re.compile(r"#\[pyo3\(signature\s*=\s*\((.*?)\)\)\]", re.S)
 _NUMERIC_DEFAULT = re.compile(r"\b(\w+)\s*=\s*(-?\d[\w.]*)")
 
-# Known loops left in the bindings (file::function -> count), each a debt of issue 30 item 3.
-BINDING_LOOP_DEBTS = {
-    "ball.rs::ball_fit": 9,  # result records of the calibration (per flight, per comparison)
-    "cartesian.rs::sample_rate": 2,
-    "drives.rs::from_state": 1,
-    "drives.rs::current_reference": 1,
-    "drives.rs::actuators": 3,
-    "dynamics.rs::states": 2,
-    "dynamics.rs::batch_shape": 1,
-    "dynamics.rs::drives": 1,
-    "dynamics.rs::with_drives": 1,
-    "hit.rs::hit_plan_batch": 6,  # hitstack's: the hits built row by row
-    "ik.rs::ik": 9,  # seed broadcasting and the fast-path choice
-    "ik.rs::ik_all": 3,
-    "mobile.rs::track": 1,
-    "motor.rs::put": 2,  # dict deep-merging
-    "motor.rs::trace_dict": 1,
-    "profile.rs::violations": 1,
-    "profile.rs::trajectory_arrays": 2,
-    "robot.rs::joint_types": 1,
-    "robot.rs::limits": 1,
-    "robot.rs::__repr__": 3,
-    "traj.rs::violations_to_py": 1,
-    "traj.rs::coefficients": 2,
-    "traj.rs::sample": 1,
-    "traj.rs::peaks": 2,
-    "traj.rs::sample_uniform": 1,
-}
+# Known loops left in the bindings (file::function -> count), each a debt of issue 30 item 3:
+# none left (moved into the core or into the conversion helpers); an entry may only be removed.
+BINDING_LOOP_DEBTS: dict[str, int] = {}
 
-# Known numeric literal defaults left in binding signatures (file -> the `name=value` texts).
-BINDING_DEFAULT_DEBTS = {
-    "ball.rs": ["start=0"],
-    "drives.rs": ["seed=0", "n=1"],
-    "hit.rs": ["rate=1000.0", "rate=1000.0"],  # hitstack's file: ttkin::traj::SAMPLE_RATE
-    "motor.rs": ["external_torque=0.0", "seed=7", "settle=0.0", "external_torque=0.0", "seed=7"],
-}
+# Known numeric literal defaults left in binding signatures (file -> the `name=value` texts): none.
+BINDING_DEFAULT_DEBTS: dict[str, list[str]] = {}
 
 
 def _code(line: str) -> str:

@@ -169,9 +169,10 @@ def _figure(res: dict, out: Path) -> str:
         for c, style in ((comps[0], "C0-"), (best, "C3--")):
             e = next((e for e in c["errors"] if e["index"] == idx), None)
             if e is not None:
+                path = np.asarray(e["path"])
                 a2.plot(
-                    e["path"][:, 1],
-                    e["path"][:, 2],
+                    path[:, 1],
+                    path[:, 2],
                     style,
                     label=f"{c['name']} ({e['rms_after_bounce'] * 100:.1f} cm)",
                 )

@@ -5,6 +5,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::error::{Error, Result};
 use crate::motor::MotorModel;
 use crate::schedule::Rates;
 use crate::thermal::ThermalModel;
@@ -117,5 +118,208 @@ impl AxisConfig {
             bus_undervoltage: 0.7 * model.bus_voltage,
             holding_brake: None,
         }
+    }
+}
+
+/// Nested changes to a configuration as a caller gives them (e.g. a Python dict): a table of
+/// entries, a value (NaN and infinities kept for the physical checks), or unset (Python None:
+/// the entry is removed, so an optional entry reads as absent).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Change {
+    /// Remove the entry.
+    Unset,
+    /// Replace the entry.
+    Value(toml::Value),
+    /// Change the entries of a table, in order.
+    Table(Vec<(String, Change)>),
+}
+
+impl Change {
+    /// The change as a plain value (unset entries of a table dropped), or None when unset.
+    fn into_value(self) -> Option<toml::Value> {
+        match self {
+            Change::Unset => None,
+            Change::Value(v) => Some(v),
+            Change::Table(entries) => Some(toml::Value::Table(
+                entries
+                    .into_iter()
+                    .filter_map(|(k, c)| c.into_value().map(|v| (k, v)))
+                    .collect(),
+            )),
+        }
+    }
+}
+
+impl std::fmt::Display for Change {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.clone().into_value() {
+            None => write!(f, "None"),
+            Some(v) => write!(f, "{v}"),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Change {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        struct Visit;
+        impl<'de> serde::de::Visitor<'de> for Visit {
+            type Value = Change;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                write!(f, "a configuration entry (a number, flag, string, list, dict or None)")
+            }
+            fn visit_unit<E>(self) -> std::result::Result<Change, E> {
+                Ok(Change::Unset)
+            }
+            fn visit_none<E>(self) -> std::result::Result<Change, E> {
+                Ok(Change::Unset)
+            }
+            fn visit_some<D: serde::Deserializer<'de>>(self, d: D) -> std::result::Result<Change, D::Error> {
+                Change::deserialize(d)
+            }
+            fn visit_bool<E>(self, v: bool) -> std::result::Result<Change, E> {
+                Ok(Change::Value(toml::Value::Boolean(v)))
+            }
+            fn visit_i64<E>(self, v: i64) -> std::result::Result<Change, E> {
+                Ok(Change::Value(toml::Value::Integer(v)))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> std::result::Result<Change, E> {
+                i64::try_from(v)
+                    .map(|v| Change::Value(toml::Value::Integer(v)))
+                    .map_err(|_| E::custom(format!("integer {v} out of range")))
+            }
+            fn visit_f64<E>(self, v: f64) -> std::result::Result<Change, E> {
+                Ok(Change::Value(toml::Value::Float(v)))
+            }
+            fn visit_str<E>(self, v: &str) -> std::result::Result<Change, E> {
+                Ok(Change::Value(toml::Value::String(v.to_string())))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut a: A) -> std::result::Result<Change, A::Error> {
+                let mut items = Vec::new();
+                while let Some(c) = a.next_element::<Change>()? {
+                    items.push(
+                        c.into_value()
+                            .ok_or_else(|| serde::de::Error::custom("None inside a list"))?,
+                    );
+                }
+                Ok(Change::Value(toml::Value::Array(items)))
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(self, mut a: A) -> std::result::Result<Change, A::Error> {
+                let mut entries = Vec::new();
+                while let Some((k, c)) = a.next_entry::<String, Change>()? {
+                    entries.push((k, c));
+                }
+                Ok(Change::Table(entries))
+            }
+        }
+        d.deserialize_any(Visit)
+    }
+}
+
+/// `base` with `changes` put in (in `base`'s serde shape): a table merges into a table entry by
+/// entry, a value replaces the entry, unset removes it; a flag (bool) takes only a bool. The
+/// result is read back through serde, so a key or value the type does not take is an
+/// [`Error::Config`] naming its dotted path (`model.motor.resistance`). Physical checks are not
+/// made here (building a simulation makes them).
+pub fn overlay<T: Serialize + serde::de::DeserializeOwned>(base: &T, changes: Change) -> Result<T> {
+    let config = |path: &str, reason: String| Error::Config {
+        path: path.to_string(),
+        reason,
+    };
+    let mut merged = toml::Value::try_from(base).map_err(|e| config("", e.to_string()))?;
+    let Change::Table(entries) = changes else {
+        return Err(config(".", format!("expected a map of entries, got {changes}")));
+    };
+    put(&mut merged, entries, "")?;
+    serde_path_to_error::deserialize(merged).map_err(|e| config(&e.path().to_string(), e.inner().to_string()))
+}
+
+/// Writes `entries` into the table `into`, recursing where both hold a table; `path` names `into`.
+fn put(into: &mut toml::Value, entries: Vec<(String, Change)>, path: &str) -> Result<()> {
+    let toml::Value::Table(table) = into else {
+        return Ok(());
+    };
+    for (key, change) in entries {
+        let here = if path.is_empty() {
+            key.clone()
+        } else {
+            format!("{path}.{key}")
+        };
+        match (table.get_mut(&key), change) {
+            (Some(old @ toml::Value::Table(_)), Change::Table(inner)) => put(old, inner, &here)?,
+            (Some(toml::Value::Boolean(_)), c) if !matches!(c, Change::Value(toml::Value::Boolean(_))) => {
+                return Err(Error::Config {
+                    path: here,
+                    reason: format!("expected True or False, got {c}"),
+                })
+            }
+            (_, c) => match c.into_value() {
+                Some(v) => {
+                    table.insert(key, v);
+                }
+                None => {
+                    table.remove(&key);
+                }
+            },
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod overlay_tests {
+    use super::*;
+
+    fn change(text: &str) -> Change {
+        Change::deserialize(text.parse::<toml::Table>().unwrap()).unwrap()
+    }
+
+    /// `leaf` at the dotted `path` of nested tables.
+    fn nested(path: &[&str], leaf: Change) -> Change {
+        path.iter()
+            .rev()
+            .fold(leaf, |inner, key| Change::Table(vec![(key.to_string(), inner)]))
+    }
+
+    fn base() -> AxisConfig {
+        AxisConfig::new(MotorModel::maxon_re25_gp26())
+    }
+
+    #[test]
+    fn overlay_changes_only_the_named_entries() {
+        let b = base();
+        let r = b.model.motor.resistance;
+        let c: AxisConfig = overlay(&b, change(&format!("model.motor.resistance = {}", 2.0 * r))).unwrap();
+        assert_eq!(c.model.motor.resistance, 2.0 * r);
+        assert_eq!(c.model.motor.inductance, b.model.motor.inductance);
+        assert_eq!(c.rates, b.rates);
+        let same: AxisConfig = overlay(&b, Change::Table(Vec::new())).unwrap();
+        assert_eq!(toml::Value::try_from(same).unwrap(), toml::Value::try_from(b).unwrap());
+        // NaN passes through to the physical checks
+        let nan = nested(
+            &["model", "motor", "inductance"],
+            Change::Value(toml::Value::Float(f64::NAN)),
+        );
+        assert!(overlay::<AxisConfig>(&b, nan).unwrap().model.motor.inductance.is_nan());
+    }
+
+    #[test]
+    fn overlay_names_the_path_of_a_bad_entry() {
+        let b = base();
+        let e = overlay::<AxisConfig>(&b, change("model.motor.no_such = 1.0")).unwrap_err();
+        assert!(e.to_string().contains("model.motor"), "{e}");
+        let e = overlay::<AxisConfig>(&b, change("model.gearbox.ratio = \"x\"")).unwrap_err();
+        assert!(e.to_string().starts_with("model.gearbox.ratio"), "{e}");
+        assert!(overlay::<AxisConfig>(&b, Change::Value(toml::Value::Integer(1))).is_err());
+        // a flag takes a bool only, and unset is not a bool
+        let e = overlay::<AxisConfig>(&b, change("anti_windup = 1")).unwrap_err();
+        assert_eq!(e.to_string(), "anti_windup: expected True or False, got 1");
+        let unset = Change::Table(vec![("anti_windup".into(), Change::Unset)]);
+        assert!(overlay::<AxisConfig>(&b, unset).is_err());
+        let c: AxisConfig = overlay(&b, change(&format!("anti_windup = {}", !b.anti_windup))).unwrap();
+        assert_eq!(c.anti_windup, !b.anti_windup);
+        // a required number unset is missing, named by its path
+        let unset = nested(&["model", "motor", "resistance"], Change::Unset);
+        let e = overlay::<AxisConfig>(&b, unset).unwrap_err();
+        assert!(e.to_string().contains("resistance"), "{e}");
     }
 }

@@ -29,6 +29,15 @@ pub enum Error {
         /// What is accepted.
         reason: String,
     },
+    /// A configuration entry (given as nested changes, e.g. from a Python dict) that the type does
+    /// not take: an unknown key or a value of the wrong kind, named by its path (`motor.resistance`).
+    #[error("{path}: {reason}")]
+    Config {
+        /// Dotted path of the entry.
+        path: String,
+        /// What is wrong.
+        reason: String,
+    },
     /// Loop rates that the multi-rate stepper cannot schedule (not integer multiples of each other).
     #[error("loop rates: {0}")]
     Rates(String),

@@ -153,6 +153,14 @@ pub struct Simulation {
 }
 
 impl Simulation {
+    /// Seed of the current-sense noise of a run whose caller names none (the Python
+    /// `ServoSim.step` and `follow` default).
+    pub const NOISE_SEED: u64 = 7;
+    /// External torque at the output of a run without a load, N·m.
+    pub const NO_LOAD: f64 = 0.0;
+    /// Hold time after a followed trajectory when none is asked, s.
+    pub const NO_SETTLE: f64 = 0.0;
+
     /// Simulates `plant_model` controlled by an axis built from `config` (whose own model may differ,
     /// to test robustness). The plant steps at the current-loop period.
     pub fn new(plant_model: &MotorModel, config: &AxisConfig) -> Result<Self> {

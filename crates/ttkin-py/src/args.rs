@@ -72,7 +72,7 @@ fn finite_with(what: &str, v: f64, ok: bool, bound: &str) -> PyResult<f64> {
 
 /// A per-joint vector (n,) whose elements are each NaN (meaning "not given") or finite and > 0,
 /// e.g. `torque_constant`; element errors are named `what[i]`.
-pub fn positive_or_nan_vector(obj: &Bound<'_, PyAny>, what: &str, n: usize) -> PyResult<Vec<Option<f64>>> {
+pub fn positive_or_nan_vector(obj: &Bound<'_, PyAny>, what: &str, n: usize) -> PyResult<Vec<f64>> {
     let a = f64_array(obj, what)?;
     if a.shape() != [n] {
         return Err(ShapeError::new_err(format!(
@@ -85,9 +85,9 @@ pub fn positive_or_nan_vector(obj: &Bound<'_, PyAny>, what: &str, n: usize) -> P
         .enumerate()
         .map(|(i, &v)| {
             if v.is_nan() {
-                Ok(None)
+                Ok(v)
             } else {
-                positive(&format!("{what}[{i}]"), v).map(Some)
+                positive(&format!("{what}[{i}]"), v)
             }
         })
         .collect()
@@ -172,5 +172,36 @@ pub fn renamed<T>(py: Python<'_>, value: T, old: Option<T>, old_name: &str, new_
             crate::errors::deprecated(py, old_name, new_name)?;
             Ok(v)
         }
+    }
+}
+
+/// (q, qd, qdd) from `torques`' arguments: three arrays, a (q, qd, qdd) tuple, or an object with
+/// attributes q, qd, qdd (or position, velocity, acceleration).
+pub fn trajectory_arrays<'py>(
+    trajectory: &Bound<'py, PyAny>,
+    qd: Option<&Bound<'py, PyAny>>,
+    qdd: Option<&Bound<'py, PyAny>>,
+) -> PyResult<[Bound<'py, PyAny>; 3]> {
+    match (qd, qdd) {
+        (Some(qd), Some(qdd)) => Ok([trajectory.clone(), qd.clone(), qdd.clone()]),
+        (None, None) => {
+            if let Ok((q, qd, qdd)) = trajectory.extract::<(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>)>()
+            {
+                return Ok([q, qd, qdd]);
+            }
+            for names in [["q", "qd", "qdd"], ["position", "velocity", "acceleration"]] {
+                let got: PyResult<Vec<Bound<'py, PyAny>>> = names.iter().map(|n| trajectory.getattr(*n)).collect();
+                if let Ok(v) = got {
+                    if let Ok([q, qd, qdd]) = <[Bound<'py, PyAny>; 3]>::try_from(v) {
+                        return Ok([q, qd, qdd]);
+                    }
+                }
+            }
+            Err(TtmanipError::new_err(
+                "torques: expected (q, qd, qdd) arrays, a (q, qd, qdd) tuple, or an object with attributes \
+                 q, qd, qdd (or position, velocity, acceleration)",
+            ))
+        }
+        _ => Err(TtmanipError::new_err("torques: give both qd and qdd, or neither")),
     }
 }

@@ -6,7 +6,7 @@ use numpy::PyArrayDyn;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use ttkin::ball::estimate::{estimate, EstimateOptions};
-use ttkin::ball::fit::{self, Bounce, FitOptions, Recording};
+use ttkin::ball::fit::{self, FitOptions, Recording};
 use ttkin::ball::flight::{BallState, Flight, Plane};
 use ttkin::ball::hitplan::{ReturnHit, ReturnPlanner, ReturnStatus};
 use ttkin::ball::model::{BallModel, Table};
@@ -263,7 +263,7 @@ fn ball_plan_correct<'py>(
 /// in parallel; the settings not given are `RallyConfig::default()`'s.
 #[ttkin_py_guard::guarded]
 #[pyfunction]
-#[pyo3(signature = (n, seed = RallyConfig::default().seed as i128, start = 0, target = (RallyConfig::default().target[0], RallyConfig::default().target[1]),
+#[pyo3(signature = (n, seed = RallyConfig::default().seed as i128, start = rally::FIRST_BALL as i128, target = (RallyConfig::default().target[0], RallyConfig::default().target[1]),
     max_spin_rps = RallyConfig::default().max_spin_rps, paths = RallyConfig::default().paths as i128,
     world = RallyConfig::default().world.is_some(), incoming = None, drives = false))]
 #[allow(clippy::too_many_arguments)]
@@ -547,106 +547,16 @@ fn ball_fit<'py>(
     velocities: Option<&Bound<'py, PyList>>,
     window: usize,
     period: Option<f64>,
-) -> PyResult<Bound<'py, PyDict>> {
-    if positions.len() != names.len() || velocities.is_some_and(|v| v.len() != names.len()) {
-        return Err(TtmanipError::new_err(format!(
-            "ball_fit: {} names, {} position arrays and {} velocity arrays: give one of each per flight",
-            names.len(),
-            positions.len(),
-            velocities.map_or(names.len(), |v| v.len())
-        )));
-    }
-    let mut recs = Vec::with_capacity(names.len());
-    for (i, name) in names.into_iter().enumerate() {
-        let pos = rows3(&positions.get_item(i)?, &format!("positions[{i}]"))?;
-        let vel = match velocities {
-            Some(v) => rows3(&v.get_item(i)?, &format!("velocities[{i}]"))?,
-            None => Vec::new(),
-        };
-        recs.push(Recording {
-            name,
-            positions: pos,
-            velocities: vel,
-        });
-    }
+) -> PyResult<Bound<'py, PyAny>> {
+    let positions = crate::convert::each(positions, "positions", rows3)?;
+    let velocities = velocities
+        .map(|v| crate::convert::each(v, "velocities", rows3))
+        .transpose()?;
+    let recs = Recording::from_columns(names, positions, velocities).py()?;
     let e = py
         .detach(|| fit::experiment(&recs, window, period, &FitOptions::default()))
         .py()?;
-    let c = &e.calibration;
-    let d = PyDict::new(py);
-    d.set_item("period_estimate", e.period_estimate)?;
-    d.set_item("bounce_level", e.bounce_level)?;
-    d.set_item("held_out", e.held_out.clone())?;
-    d.set_item("unusable", e.unusable.clone())?;
-    d.set_item("window", e.window)?;
-    let cal = PyDict::new(py);
-    let g = PyDict::new(py);
-    let sd = PyDict::new(py);
-    for (j, n) in fit::GLOBAL_NAMES.iter().enumerate() {
-        g.set_item(*n, c.globals[j])?;
-        sd.set_item(*n, c.std[j])?;
-    }
-    cal.set_item("globals", g)?;
-    cal.set_item("std", sd)?;
-    let corr: Vec<f64> = c.correlation.iter().flatten().copied().collect();
-    cal.set_item("correlation", to_numpy(py, &[6, 6], &corr))?;
-    cal.set_item("sigma", c.sigma)?;
-    cal.set_item("rms", c.rms)?;
-    cal.set_item("iterations", c.iterations)?;
-    cal.set_item("observations", c.observations)?;
-    cal.set_item("spin_mean", c.spin.mean.to_vec())?;
-    cal.set_item("spin_std", c.spin.std.to_vec())?;
-    let flights = PyList::empty(py);
-    for f in &c.flights {
-        let fd = PyDict::new(py);
-        fd.set_item("index", f.index)?;
-        fd.set_item("state", to_numpy(py, &[10], &state_vec(&f.state)))?;
-        fd.set_item("frames", f.frames)?;
-        fd.set_item("bounce_frame", f.bounce_frame)?;
-        fd.set_item("rms", f.rms)?;
-        fd.set_item("friction_to_roll", f.friction_to_roll)?;
-        flights.append(fd)?;
-    }
-    cal.set_item("flights", flights)?;
-    d.set_item("calibration", cal)?;
-    let comps = PyList::empty(py);
-    for cm in &e.comparisons {
-        let cd = PyDict::new(py);
-        cd.set_item("name", &cm.name)?;
-        cd.set_item("k_drag", cm.model.model.k_drag)?;
-        cd.set_item("k_magnus", cm.model.model.k_magnus)?;
-        match cm.model.bounce {
-            Bounce::Impulse => {
-                cd.set_item("bounce", "impulse")?;
-                cd.set_item("table_restitution", cm.model.model.table_restitution)?;
-                cd.set_item("table_friction", cm.model.model.table_friction)?;
-            }
-            Bounce::Linear(k) => {
-                cd.set_item("bounce", "linear")?;
-                cd.set_item("linear", k.to_vec())?;
-            }
-        }
-        cd.set_item("median_after_bounce", cm.median_after_bounce)?;
-        cd.set_item("mean_after_bounce", cm.mean_after_bounce)?;
-        cd.set_item("median_rms", cm.median_rms)?;
-        let errs = PyList::empty(py);
-        for (i, pe) in &cm.errors {
-            let ed = PyDict::new(py);
-            ed.set_item("index", *i)?;
-            ed.set_item("window", pe.window)?;
-            ed.set_item("predicted", pe.predicted)?;
-            ed.set_item("rms_after_bounce", pe.rms_after_bounce)?;
-            ed.set_item("rms", pe.rms)?;
-            ed.set_item("max", pe.max)?;
-            let flat: Vec<f64> = pe.path.iter().flatten().copied().collect();
-            ed.set_item("path", to_numpy(py, &[pe.path.len(), 3], &flat))?;
-            errs.append(ed)?;
-        }
-        cd.set_item("errors", errs)?;
-        comps.append(cd)?;
-    }
-    d.set_item("comparisons", comps)?;
-    Ok(d)
+    crate::convert::serde_to_python(py, &e)
 }
 
 /// Adds the ball functions to the module.

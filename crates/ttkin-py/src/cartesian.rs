@@ -9,7 +9,7 @@ use ttkin::traj::cartesian::{CartesianState, CartesianTrajectory, TimeLaw};
 use ttkin::traj::Samples;
 
 use crate::convert::vector_of_len;
-use crate::convert::{pose_to_numpy, to_numpy, transform, vector, Any};
+use crate::convert::{column, pose_to_numpy, row_major, rows, to_numpy, transform, vector, Any};
 use crate::errors::{Callback, PyResultExt};
 use crate::robot::PyRobot;
 use crate::traj::{robot_limits, samples_to_py, violations_to_py};
@@ -104,24 +104,12 @@ impl PyCartesianTrajectory {
     /// (t (N,), poses (N, 4, 4), twists (N, 6), twist derivatives (N, 6)) at `hz`.
     fn sample_rate<'py>(&self, py: Python<'py>, hz: f64) -> PyResult<Bound<'py, PyAny>> {
         let states = self.inner.sample_rate(hz).py()?;
-        let m = states.len();
-        let (mut t, mut poses, mut tw, mut dtw) = (
-            Vec::with_capacity(m),
-            vec![0.0; 16 * m],
-            Vec::with_capacity(6 * m),
-            Vec::with_capacity(6 * m),
-        );
-        for (i, s) in states.iter().enumerate() {
-            t.push(s.t);
-            ttkin::transform::write_row_major(&s.pose, &mut poses[16 * i..16 * (i + 1)]);
-            tw.extend_from_slice(&s.twist());
-            dtw.extend_from_slice(&s.twist_derivative());
-        }
+        let s = &states[..];
         Ok((
-            to_numpy(py, &[m], &t),
-            to_numpy(py, &[m, 4, 4], &poses),
-            to_numpy(py, &[m, 6], &tw),
-            to_numpy(py, &[m, 6], &dtw),
+            column(py, s, |s| s.t),
+            rows(py, s, &[4, 4], |s| row_major(&s.pose)),
+            rows(py, s, &[6], |s| s.twist()),
+            rows(py, s, &[6], |s| s.twist_derivative()),
         )
             .into_pyobject(py)?
             .into_any())

@@ -339,6 +339,13 @@ pub fn finite_to_numpy<'py>(py: Python<'py>, shape: &[usize], data: &[f64]) -> P
     Ok(to_numpy(py, shape, data))
 }
 
+/// The 16 values of a transform's 4×4 matrix, row-major (as numpy reads a (4, 4) array).
+pub fn row_major(t: &IsometryMatrix3<f64>) -> [f64; 16] {
+    let mut buf = [0.0; 16];
+    ttkin::transform::write_row_major(t, &mut buf);
+    buf
+}
+
 /// A 4×4 numpy array of a transform.
 pub fn pose_to_numpy<'py>(py: Python<'py>, t: &IsometryMatrix3<f64>) -> Bound<'py, PyArrayDyn<f64>> {
     let mut buf = [0.0; 16];
@@ -472,4 +479,111 @@ pub fn triples(data: &[f64]) -> Vec<[f64; 3]> {
 /// Borrowed `&str`s of owned strings (a column of names read from Python).
 pub fn str_refs(v: &[String]) -> Vec<&str> {
     v.iter().map(String::as_str).collect()
+}
+
+/// Records (a `Vec` of core structs) → columns: the one conversion of a list of results into
+/// numpy arrays, one field at a time. `column(py, &records, |r| r.x)` is the (N,) array of
+/// field `x` of every record (any numpy element type: float64, int64, bool).
+pub fn column<'py, T, U: numpy::Element>(
+    py: Python<'py>,
+    records: &[T],
+    field: impl Fn(&T) -> U,
+) -> Bound<'py, numpy::PyArray1<U>> {
+    numpy::PyArray1::from_iter(py, records.iter().map(field))
+}
+
+/// Records → one float64 array (N, *item) of a slice field (or a whole record that is a slice,
+/// or values computed from it, e.g. an array) of every record, each `item.product()` long
+/// (e.g. `rows(py, &results, &[n], |r| &r.q)`).
+pub fn rows<'py, 'r, T, R: AsRef<[f64]>>(
+    py: Python<'py>,
+    records: &'r [T],
+    item: &[usize],
+    field: impl Fn(&'r T) -> R,
+) -> Array<'py> {
+    let data: Vec<f64> = records.iter().flat_map(|r| field(r).as_ref().to_vec()).collect();
+    let shape: Vec<usize> = std::iter::once(records.len()).chain(item.iter().copied()).collect();
+    to_numpy(py, &shape, &data)
+}
+
+/// Records → a Python list of one field of every record (strings, nested values).
+pub fn list<'py, T, U>(
+    py: Python<'py>,
+    records: &[T],
+    field: impl Fn(&T) -> U,
+) -> PyResult<Bound<'py, pyo3::types::PyList>>
+where
+    U: IntoPyObject<'py>,
+{
+    pyo3::types::PyList::new(py, records.iter().map(field))
+}
+
+/// Records → Python objects: each core result wrapped in its `#[pyclass]` (`wrap` builds one),
+/// for a list returned to Python (e.g. N `HitPlan`s of a batch).
+pub fn wrap_all<T, U>(records: Vec<T>, wrap: impl FnMut(T) -> U) -> Vec<U> {
+    records.into_iter().map(wrap).collect()
+}
+
+/// [`check_finite_output`] of several computed signals (e.g. the columns of a trace).
+pub fn check_finite_outputs(signals: &[&[f64]]) -> PyResult<()> {
+    signals.iter().try_for_each(|s| check_finite_output(s))
+}
+
+/// Reads `q` as one configuration (n,) or a batch (N, n) of an `n`-joint robot; returns the
+/// batch size (None for one).
+pub fn configs<'py>(q: &Any<'py>, what: &str, n: usize) -> PyResult<(F64Array<'py>, Option<usize>)> {
+    let a = f64_array(q, what)?;
+    let batch = match a.shape() {
+        [m] if *m == n => None,
+        [count, m] if *m == n => Some(*count),
+        _ => {
+            return Err(ShapeError::new_err(format!(
+                "{what}: expected shape ({n},) or (N, {n}) for this {n}-joint robot, got {}",
+                a.shape_str()
+            )))
+        }
+    };
+    Ok((a, batch))
+}
+
+/// Reads several per-configuration arrays (`(object, name)` pairs) of an `n`-joint robot that
+/// must all be (n,) or all (N, n) with the same N; returns them and N (None for single states).
+pub fn same_batch<'py>(arrays: &[(&Any<'py>, &str)], n: usize) -> PyResult<(Vec<F64Array<'py>>, Option<usize>)> {
+    let mut out = Vec::with_capacity(arrays.len());
+    let mut batch = None;
+    for (k, (obj, what)) in arrays.iter().enumerate() {
+        let (a, b) = configs(obj, what, n)?;
+        if k == 0 {
+            batch = b;
+        } else if b != batch {
+            let first = match batch {
+                None => format!("({n},)"),
+                Some(c) => format!("({c}, {n})"),
+            };
+            return Err(ShapeError::new_err(format!(
+                "{what}: expected shape {first} like the first argument, got {}",
+                a.shape_str()
+            )));
+        }
+        out.push(a);
+    }
+    Ok((out, batch))
+}
+
+/// The shape (count, *item) of a batch result.
+pub fn batch_shape(count: usize, item: &[usize]) -> Vec<usize> {
+    std::iter::once(count).chain(item.iter().copied()).collect()
+}
+
+/// A Python list read element by element with `read` (e.g. a list of (N_i, 3) arrays), element
+/// i named `what[i]` in errors.
+pub fn each<'py, T>(
+    list: &Bound<'py, pyo3::types::PyList>,
+    what: &str,
+    read: impl Fn(&Bound<'py, PyAny>, &str) -> PyResult<T>,
+) -> PyResult<Vec<T>> {
+    list.iter()
+        .enumerate()
+        .map(|(i, item)| read(&item, &format!("{what}[{i}]")))
+        .collect()
 }

@@ -7,6 +7,7 @@ use numpy::PyArray1;
 
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use ttcan::coupled::journal::Journal;
 use ttcan::{CoupledOptions, CoupledSim};
 
 use crate::args;
@@ -28,46 +29,7 @@ pub struct DriveSim {
     journal: Journal,
 }
 
-/// The calls that changed a `DriveSim` since it was built or reset (its pickle state).
-#[derive(Clone, Default, serde::Serialize, serde::Deserialize)]
-struct Journal {
-    /// `reset(q0, qd0)`'s arguments; None: still at the constructor's rest at q = 0.
-    reset: Option<(Vec<f64>, Option<Vec<f64>>)>,
-    /// The calls since, in order.
-    calls: Vec<Call>,
-}
-
-/// One call that advanced or commanded the simulation.
-#[derive(Clone, serde::Serialize, serde::Deserialize)]
-enum Call {
-    /// `set_setpoint(q, qd, qdd, tau_ff)`.
-    Setpoint(Vec<f64>, Vec<f64>, Vec<f64>, Option<Vec<f64>>),
-    /// `tick(n)`; consecutive ticks merge.
-    Tick(u64),
-    /// `run(t, q, qd, qdd, tau_ff)` with the setpoint period.
-    Run(Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Option<Vec<f64>>),
-    /// A `run` that Ctrl-C stopped, with how many times it had polled its stop (the last poll
-    /// stopped it): replayed to the same tick.
-    RunStopped(Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Option<Vec<f64>>, u64),
-}
-
 impl DriveSim {
-    /// A fresh simulation of `chain` at rest at q0.
-    fn build(
-        chain: &ttkin::Chain,
-        options: CoupledOptions,
-        reset: Option<&(Vec<f64>, Option<Vec<f64>>)>,
-    ) -> PyResult<CoupledSim> {
-        match reset {
-            None => CoupledSim::from_chain(chain, &vec![0.0; chain.dof()], options).py(),
-            Some((q0, qd0)) => {
-                let mut sim = CoupledSim::from_chain(chain, q0, options).py()?;
-                sim.reset(q0, qd0.as_deref()).py()?;
-                Ok(sim)
-            }
-        }
-    }
-
     /// The simulator back from `__reduce__`'s state: rebuilt, then the journal replayed (without
     /// the GIL, interruptible: a journal of 10¹⁵ ticks is Ctrl-C-able work, not a hang).
     pub fn from_state(py: Python<'_>, state: &Bound<'_, PyAny>) -> PyResult<Self> {
@@ -75,35 +37,12 @@ impl DriveSim {
             crate::pickle::from_state(state, "DriveSim")?;
         // the constructor's check (a NaN period unpickled and ran)
         let setpoint_period = args::positive("setpoint_period", setpoint_period)?;
-        let mut sim = Self::build(&chain, options, journal.reset.as_ref())?;
-        let sim_ref = &mut sim;
-        let calls = &journal.calls;
-        crate::interrupt::detach_interruptible(py, |cancel| {
-            let cancelled = || crate::interrupt::cancelled(cancel);
-            for call in calls {
-                if cancelled() {
-                    return;
-                }
-                match call {
-                    // a call that failed was journaled too (it may have changed the state before
-                    // failing): its replay fails alike, at the same point
-                    Call::Setpoint(q, qd, qdd, tau) => {
-                        let _ = sim_ref.set_setpoint(q, qd, qdd, tau.as_deref());
-                    }
-                    Call::Tick(n) => {
-                        sim_ref.tick_n_until(*n, &cancelled);
-                    }
-                    Call::Run(t, q, qd, qdd, tau) => {
-                        let _ = sim_ref.run_until(t, q, qd, qdd, tau.as_deref(), setpoint_period, &cancelled);
-                    }
-                    Call::RunStopped(t, q, qd, qdd, tau, polls) => {
-                        let seen = AtomicU64::new(0);
-                        let stop = || cancelled() || seen.fetch_add(1, Ordering::Relaxed) + 1 >= *polls;
-                        let _ = sim_ref.run_until(t, q, qd, qdd, tau.as_deref(), setpoint_period, &stop);
-                    }
-                }
-            }
-        })?;
+        let sim = crate::interrupt::detach_interruptible(py, |cancel| {
+            journal.replay_until(&chain, options, setpoint_period, &|| {
+                crate::interrupt::cancelled(cancel)
+            })
+        })?
+        .py()?;
         Ok(DriveSim {
             chain: std::sync::Arc::new(chain),
             options,
@@ -118,7 +57,7 @@ impl DriveSim {
 #[pymethods]
 impl DriveSim {
     #[new]
-    #[pyo3(signature = (robot, *, gravity=true, setpoint_rate=ttcan::coupled::SETPOINT_RATE, noise=None, seed=0, ideal_current=false))]
+    #[pyo3(signature = (robot, *, gravity=true, setpoint_rate=ttcan::coupled::SETPOINT_RATE, noise=None, seed=CoupledOptions::default().seed as i128, ideal_current=false))]
     fn new(
         robot: &Robot,
         gravity: bool,
@@ -155,12 +94,9 @@ impl DriveSim {
         let n = self.sim.dof();
         let q0 = vector(q0, "q0", n)?;
         let qd0 = qd0.map(|v| vector(v, "qd0", n)).transpose()?;
-        let start = (q0, qd0);
-        self.sim = Self::build(&self.chain, self.options, Some(&start))?;
-        self.journal = Journal {
-            reset: Some(start),
-            calls: Vec::new(),
-        };
+        let journal = Journal::from_reset(q0, qd0);
+        self.sim = journal.start(&self.chain, self.options).py()?;
+        self.journal = journal;
         Ok(())
     }
 
@@ -186,12 +122,12 @@ impl DriveSim {
             .unwrap_or_else(|| zeros.clone());
         let tau = tau_ff.map(|v| vector(v, "tau_ff", n)).transpose()?;
         let result = self.sim.set_setpoint(&q, &qd, &qdd, tau.as_deref());
-        self.journal.calls.push(Call::Setpoint(q, qd, qdd, tau)); // failed or not (see from_state)
+        self.journal.setpoint(q, qd, qdd, tau); // failed or not (see `Journal::replay`)
         result.py()
     }
 
     /// Advances `n` current-loop periods.
-    #[pyo3(signature = (n=1))]
+    #[pyo3(signature = (n=ttcan::coupled::TICKS_PER_CALL as i128))]
     fn tick(&mut self, py: Python<'_>, n: i128) -> PyResult<()> {
         let n: u64 = args::unsigned(n, "n")?;
         if n > ttcan::coupled::MAX_RUN_TICKS {
@@ -206,10 +142,7 @@ impl DriveSim {
         let interrupted = crate::interrupt::detach_interruptible(py, |cancel| {
             ran = sim.tick_n_until(n, &|| crate::interrupt::cancelled(cancel));
         });
-        match self.journal.calls.last_mut() {
-            Some(Call::Tick(m)) => *m += ran,
-            _ => self.journal.calls.push(Call::Tick(ran)),
-        }
+        self.journal.ticks(ran);
         interrupted
     }
 
@@ -235,8 +168,7 @@ impl DriveSim {
     /// `current_reference()`).
     #[getter]
     fn current_reference<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        let v: Vec<f64> = self.sim.axes().iter().map(|a| a.current_reference()).collect();
-        PyArray1::from_vec(py, v)
+        PyArray1::from_vec(py, self.sim.current_references())
     }
 
     /// Deprecated name of `current_reference` (issue 30 item 5: one name per concept).
@@ -290,18 +222,14 @@ impl DriveSim {
             };
             sim.run_until(&times, &q, &qd, &qdd, tau.as_deref(), period, &stop)
         });
-        let tr = match tr {
-            Ok(tr) => tr,
-            Err(interrupt) => {
-                match stopped_at.load(Ordering::Relaxed) {
-                    0 => self.journal.calls.push(Call::Run(times, q, qd, qdd, tau)), // it ran to the end
-                    k => self.journal.calls.push(Call::RunStopped(times, q, qd, qdd, tau, k)),
-                }
-                return Err(interrupt);
-            }
+        // failed or not, stopped (after its last poll) or not: see `Journal::replay`
+        let stopped_after = if tr.is_err() {
+            stopped_at.load(Ordering::Relaxed)
+        } else {
+            0
         };
-        self.journal.calls.push(Call::Run(times, q, qd, qdd, tau)); // failed or not (see from_state)
-        let tr = tr.py()?;
+        self.journal.run((times, q, qd, qdd, tau), stopped_after);
+        let tr = tr?.py()?;
         let rows = tr.len();
         let d = PyDict::new(py);
         d.set_item("t", to_numpy(py, &[rows], &tr.t))?;
@@ -389,27 +317,6 @@ fn drive_theta5_case<'py>(py: Python<'py>, setpoint_rate: f64) -> PyResult<Bound
 /// joint), `bus_voltage` (V), `encoder_counts`, `gear_ratio`.
 #[ttkin_py_guard::guarded]
 #[pyfunction]
-fn actuators<'py>(py: Python<'py>, robot: &Robot) -> PyResult<Vec<Bound<'py, PyDict>>> {
-    let chain = &robot.chain;
-    let configs =
-        ttcan::coupled::axis_configs_from_chain(chain, &vec![0.0; chain.dof()], &CoupledOptions::default()).py()?;
-    let mut out = Vec::with_capacity(configs.len());
-    for (j, c) in chain.joints().iter().zip(&configs) {
-        let d = PyDict::new(py);
-        d.set_item("joint", j.name())?;
-        let drive = j
-            .drive()
-            .map(|v| pythonize::pythonize(py, v))
-            .transpose()
-            .map_err(|e| TtmanipError::new_err(e.to_string()))?;
-        d.set_item("drive", drive)?;
-        d.set_item("continuous_current", c.continuous_current)?;
-        d.set_item("peak_current", c.peak_current)?;
-        d.set_item("max_speed", c.max_speed)?;
-        d.set_item("bus_voltage", c.model.bus_voltage)?;
-        d.set_item("encoder_counts", c.model.encoder_counts_per_rev)?;
-        d.set_item("gear_ratio", c.model.gearbox.ratio)?;
-        out.push(d);
-    }
-    Ok(out)
+fn actuators<'py>(py: Python<'py>, robot: &Robot) -> PyResult<Bound<'py, PyAny>> {
+    crate::convert::serde_to_python(py, &ttcan::coupled::actuator_summaries(&robot.chain).py()?)
 }

@@ -50,7 +50,7 @@ impl PyRobot {
                 .py()?,
             Some(count) => {
                 let dy = self.dynamics()?;
-                filled_without_gil(py, &batch_shape(count, item), |o| many(dy, o))
+                filled_without_gil(py, &crate::convert::batch_shape(count, item), |o| many(dy, o))
             }
         }
     }
@@ -60,29 +60,7 @@ impl PyRobot {
         &self,
         arrays: [(&Any<'py>, &str); K],
     ) -> PyResult<(Vec<F64Array<'py>>, Option<usize>)> {
-        let mut out = Vec::with_capacity(K);
-        let mut batch = None;
-        for (k, (obj, what)) in arrays.into_iter().enumerate() {
-            let (a, b) = self.configs(obj, what)?;
-            if k == 0 {
-                batch = b;
-            } else if b != batch {
-                return Err(ShapeError::new_err(format!(
-                    "{what}: expected shape {} like the first argument, got {}",
-                    shape_of(batch, self.chain.dof()),
-                    a.shape_str()
-                )));
-            }
-            out.push(a);
-        }
-        Ok((out, batch))
-    }
-}
-
-fn shape_of(batch: Option<usize>, n: usize) -> String {
-    match batch {
-        None => format!("({n},)"),
-        Some(c) => format!("({c}, {n})"),
+        crate::convert::same_batch(&arrays, self.chain.dof())
     }
 }
 
@@ -108,11 +86,6 @@ pub(crate) fn wrench_arg(w: Option<&Any<'_>>) -> PyResult<Option<Wrench>> {
         })
     })
     .transpose()
-}
-
-/// The shape (count, *item) of a batch result.
-fn batch_shape(count: usize, item: &[usize]) -> Vec<usize> {
-    std::iter::once(count).chain(item.iter().copied()).collect()
 }
 
 /// A `#[pymethods]` block of the inverse-dynamics methods: one signature (q, qd, qdd of shape (n,)
@@ -259,7 +232,7 @@ impl PyRobot {
         let (a, batch) = self.configs(qd, "qd")?;
         let dy = self.dynamics()?;
         let item = [self.chain.dof()];
-        let shape = batch.map_or(item.to_vec(), |count| batch_shape(count, &item));
+        let shape = batch.map_or(item.to_vec(), |count| crate::convert::batch_shape(count, &item));
         let qd = a.data();
         filled_without_gil(py, &shape, |o| dy.friction_batch(qd, o))
     }
@@ -314,22 +287,8 @@ impl PyRobot {
     /// Drive of each joint as a dict (gear_ratio, rotor_inertia, viscous, coulomb,
     /// torque_constant), or None.
     #[getter]
-    fn drives(&self) -> Vec<Option<std::collections::HashMap<&'static str, Option<f64>>>> {
-        self.chain
-            .joints()
-            .iter()
-            .map(|j| {
-                j.drive().map(|d| {
-                    std::collections::HashMap::from([
-                        ("gear_ratio", Some(d.gear_ratio)),
-                        ("rotor_inertia", Some(d.rotor_inertia)),
-                        ("viscous", Some(d.viscous)),
-                        ("coulomb", Some(d.coulomb)),
-                        ("torque_constant", d.torque_constant),
-                    ])
-                })
-            })
-            .collect()
+    fn drives<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        crate::convert::serde_to_python(py, &self.chain.drive_rows())
     }
 
     /// The same robot with new link inertias: `mass` (n,) kg, `com` (n, 3) m and `inertia`
@@ -370,8 +329,7 @@ impl PyRobot {
         // NaN: unknown; otherwise finite and > 0, errors named torque_constant[i] (issue 14)
         let kt = torque_constant
             .map(|o| crate::args::positive_or_nan_vector(o, "torque_constant", n))
-            .transpose()?
-            .map(|v| v.into_iter().map(|k| k.unwrap_or(f64::NAN)).collect::<Vec<f64>>());
+            .transpose()?;
         let drives = ttkin::tables::DriveColumns {
             gear_ratio: &g,
             rotor_inertia: j.as_deref(),

@@ -12,7 +12,7 @@
 //! | target proven out of reach | `Unreachable` | – | `UnreachableError` |
 //! | solver did not converge (maybe reachable) | (an [`IkStatus`]) | – | `NotConvergedError` |
 //! | singular configuration | `Singular` | – | `SingularError` |
-//! | any other bad argument | `InvalidArgument` | – | `TtmanipError` |
+//! | any other bad argument | `InvalidArgument` | `Config` | `TtmanipError` |
 //! | finite inputs, non-finite result (overflow) | – | – | `NumericalError` (`convert`) |
 //! | a Rust panic (a bug) caught at the boundary | – | – | `InternalError` (`guard`) |
 //!

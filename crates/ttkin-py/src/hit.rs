@@ -105,14 +105,14 @@ impl PyHitPlan {
     }
 
     /// Samples the stroke at `rate` Hz: (t (K,), q, qd, qdd (K, n)). TtmanipError when no stroke.
-    #[pyo3(signature = (rate=1000.0))]
+    #[pyo3(signature = (rate=ttkin::traj::SAMPLE_RATE))]
     fn sample<'py>(&self, py: Python<'py>, rate: f64) -> PyResult<Bound<'py, PyAny>> {
         samples_to_py(py, &self.stroke()?.sample_rate(rate).py()?)
     }
 
     /// (K, n) joint torques (N·m or N, inverse dynamics with friction and gravity: the drives'
     /// feed-forward) at `rate` Hz samples of the stroke.
-    #[pyo3(signature = (rate=1000.0))]
+    #[pyo3(signature = (rate=ttkin::traj::SAMPLE_RATE))]
     fn torques<'py>(&self, py: Python<'py>, rate: f64) -> PyResult<Bound<'py, PyAny>> {
         let s = self.stroke()?.sample_rate(rate).py()?;
         let dy = Dynamics::new(self.planner.chain()).py()?;
@@ -237,7 +237,8 @@ fn hit_plan(
     let pose = transform(pose, "hit.pose")?;
     let tw = vector(twist, "hit.twist", 6)?;
     let hit = Hit::new(pose, [tw[0], tw[1], tw[2], tw[3], tw[4], tw[5]], t)
-        .map_err(|e| TtmanipError::new_err(format!("hit.{e}")))?;
+        .map_err(|e| e.within("hit."))
+        .py()?;
     let keywords = Keywords {
         q,
         qd,
@@ -276,16 +277,13 @@ fn hit_plan_batch(
     jerk: Option<&Bound<'_, PyAny>>,
     effort: bool,
 ) -> PyResult<Vec<PyHitPlan>> {
-    let p = f64_array(poses, "poses")?;
-    let k = match p.shape() {
-        [k, 4, 4] => *k,
-        _ => {
-            return Err(ShapeError::new_err(format!(
-                "poses: expected shape (N, 4, 4), got {}",
-                p.shape_str()
-            )))
-        }
-    };
+    // Poses rigid to the precision of their dtype, as `hit_plan` reads its one pose (float32
+    // accepted in both).
+    let (poses, batch) = crate::convert::transforms(poses, "poses")?;
+    let k = poses.len();
+    if !batch {
+        return Err(ShapeError::new_err("poses: expected shape (N, 4, 4), got (4, 4)"));
+    }
     let tw = f64_array(twists, "twists")?;
     if tw.shape() != [k, 6] {
         return Err(ShapeError::new_err(format!(
@@ -294,20 +292,7 @@ fn hit_plan_batch(
         )));
     }
     let ts = vector(times, "times", k)?;
-    let mut hits = Vec::with_capacity(k);
-    for (i, ((m, w), &t)) in p
-        .data()
-        .chunks_exact(16)
-        .zip(tw.data().chunks_exact(6))
-        .zip(&ts)
-        .enumerate()
-    {
-        let m = nalgebra::Matrix4::from_row_slice(m);
-        let pose = ttkin::transform::isometry_from_matrix(&format!("poses[{i}]"), &m).py()?;
-        let hit = Hit::new(pose, [w[0], w[1], w[2], w[3], w[4], w[5]], t)
-            .map_err(|e| TtmanipError::new_err(format!("hits[{i}].{e}")))?;
-        hits.push(hit);
-    }
+    let hits = Hit::batch(&poses, tw.data(), &ts).py()?;
     let keywords = Keywords {
         q,
         qd,
@@ -326,13 +311,10 @@ fn hit_plan_batch(
         })
     })?
     .py()?;
-    Ok(plans
-        .into_iter()
-        .map(|plan| PyHitPlan {
-            plan,
-            planner: planner.clone(),
-        })
-        .collect())
+    Ok(crate::convert::wrap_all(plans, |plan| PyHitPlan {
+        plan,
+        planner: planner.clone(),
+    }))
 }
 
 /// (3, 3) racket orientation (base axes) with z along the face `normal` and x (the handle) as
@@ -364,7 +346,8 @@ fn hit_check(pose: &Bound<'_, PyAny>, twist: &Bound<'_, PyAny>, t: f64) -> PyRes
     let pose = transform(pose, "hit.pose")?;
     let tw = vector(twist, "hit.twist", 6)?;
     Hit::new(pose, [tw[0], tw[1], tw[2], tw[3], tw[4], tw[5]], t)
-        .map_err(|e| TtmanipError::new_err(format!("hit.{e}")))?;
+        .map_err(|e| e.within("hit."))
+        .py()?;
     Ok(())
 }
 

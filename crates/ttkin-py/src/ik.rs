@@ -3,18 +3,15 @@
 //! Conversion only: the maths is `ttkin::ik`. Batches over (N, 4, 4) run without the GIL.
 
 use nalgebra::IsometryMatrix3;
-use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use ttkin::ik::batch::{analytic_for, time_budget as time_budget_from};
-use ttkin::ik::{
-    Analytic, DifferentialIk, IkBatchSolver, IkMethod, IkResult, IkSolver, IkStatus, LimitFilter, MAX_BRANCHES,
-};
+use ttkin::ik::{Analytic, DifferentialIk, IkBatchSolver, IkMethod, IkSolver, IkStatus, LimitFilter, MAX_BRANCHES};
 use ttkin::task::Task;
 use ttkin::JacobianFrame;
 
 use crate::args;
-use crate::convert::{f64_array, to_numpy, transform, vector, zeros, Any, Array};
+use crate::convert::{column, f64_array, list, rigid_tolerance, rows, to_numpy, transform, vector, zeros, Any, Array};
 use crate::errors::{PyResultExt, ShapeError};
 use crate::robot::PyRobot;
 
@@ -118,20 +115,11 @@ impl PyRobot {
         let front = IkBatchSolver::new(&self.chain, solver, method.parse::<IkMethod>().py()?).py()?;
         let (targets, batch) = poses(T)?;
         let n = self.chain.dof();
-        let q0s: Vec<Vec<f64>> = match q0 {
+        let q0s = match q0 {
             None => Vec::new(),
             Some(q) => {
-                let (a, qb) = self.configs(q, "q0")?;
-                ttkin::error::check_finite("q0", a.data()).py()?;
-                match qb {
-                    Some(c) if !batch || c != targets.len() => {
-                        return Err(ShapeError::new_err(format!(
-                            "q0: expected shape ({n},) or ({}, {n}), got ({c}, {n})",
-                            targets.len()
-                        )))
-                    }
-                    _ => a.data().chunks_exact(n).map(<[f64]>::to_vec).collect(),
-                }
+                let (a, rows) = self.configs(q, "q0")?;
+                ttkin::ik::batch::starts(a.data(), n, rows, targets.len(), batch).py()?
             }
         };
         let chain = &*self.chain;
@@ -141,16 +129,13 @@ impl PyRobot {
         })?
         .py()?;
         if raise_on_failure {
-            if let Some((i, o)) = outcomes.iter().enumerate().find(|(_, o)| o.status != IkStatus::Solved) {
-                let msg = o.failure_message(i);
-                return Err(crate::errors::ik_failure(o.status, msg));
+            if let Some((i, o)) = ttkin::ik::batch::first_failure(&outcomes) {
+                return Err(crate::errors::ik_failure(o.status, o.failure_message(i)));
             }
         }
-        let results: Vec<&IkResult> = outcomes.iter().map(|o| &o.result).collect();
-        let status: Vec<&str> = outcomes.iter().map(|o| o.status.as_str()).collect();
         let any = |o: Bound<'_, PyAny>| o.unbind();
         if !batch {
-            let r = results[0];
+            let (r, status) = (&outcomes[0].result, outcomes[0].status);
             return Ok(PyIkResult {
                 q: any(to_numpy(py, &[n], &r.q).into_any()),
                 success: any(r.success.into_pyobject(py)?.to_owned().into_any()),
@@ -158,25 +143,18 @@ impl PyRobot {
                 orientation_error: any(r.orientation_error.into_pyobject(py)?.into_any()),
                 iterations: any(r.iterations.into_pyobject(py)?.into_any()),
                 restarts: any(r.restarts.into_pyobject(py)?.into_any()),
-                status: any(status_str(py, outcomes[0].status).clone().into_any()),
+                status: any(status_str(py, status).clone().into_any()),
             });
         }
-        let count = results.len();
-        let q: Vec<f64> = results.iter().flat_map(|r| r.q.iter().copied()).collect();
-        let floats = |f: fn(&IkResult) -> f64| {
-            any(to_numpy(py, &[count], &results.iter().map(|r| f(r)).collect::<Vec<_>>()).into_any())
-        };
-        let ints = |f: fn(&IkResult) -> usize| {
-            any(PyArray1::from_vec(py, results.iter().map(|r| f(r) as i64).collect()).into_any())
-        };
+        let o = &outcomes[..];
         Ok(PyIkResult {
-            q: any(to_numpy(py, &[count, n], &q).into_any()),
-            success: any(PyArray1::from_vec(py, results.iter().map(|r| r.success).collect()).into_any()),
-            position_error: floats(|r| r.position_error),
-            orientation_error: floats(|r| r.orientation_error),
-            iterations: ints(|r| r.iterations),
-            restarts: ints(|r| r.restarts),
-            status: any(status.into_pyobject(py)?.into_any()),
+            q: any(rows(py, o, &[n], |o| &o.result.q).into_any()),
+            success: any(column(py, o, |o| o.result.success).into_any()),
+            position_error: any(column(py, o, |o| o.result.position_error).into_any()),
+            orientation_error: any(column(py, o, |o| o.result.orientation_error).into_any()),
+            iterations: any(column(py, o, |o| o.result.iterations as i64).into_any()),
+            restarts: any(column(py, o, |o| o.result.restarts as i64).into_any()),
+            status: any(list(py, o, |o| o.status.as_str())?.into_any()),
         })
     }
 
@@ -200,31 +178,23 @@ impl PyRobot {
         let n = self.chain.dof();
         let filter = if limits { LimitFilter::Enforce } else { LimitFilter::Off };
         let a = f64_array(T, "T")?;
+        let hint = hint.map(|h| vector(h, "hint", n)).transpose()?;
         match a.shape() {
             [4, 4] => {
-                let hint = hint.map(|h| vector(h, "hint", n)).transpose()?;
                 let t = transform(T, "T")?;
                 let sols = ik.solve(&t, hint.as_deref(), filter).py()?;
-                let flat: Vec<f64> = sols.iter().flat_map(|q| q.iter().copied()).collect();
-                Ok(to_numpy(py, &[sols.len(), n], &flat).into_any())
+                Ok(to_numpy(py, &[sols.len(), n], &sols.flat()).into_any())
             }
             [count, 4, 4] => {
                 let count = *count;
                 let out = zeros(py, &[count, MAX_BRANCHES, n]);
                 let mut counts = vec![0usize; count];
-                let hint = hint.map(|h| vector(h, "hint", n)).transpose()?;
+                let (data, tolerance, h) = (a.data(), rigid_tolerance(a.precision()), hint.as_deref());
                 crate::convert::fill_fresh(&out, |o| {
-                    if hint.is_none() && a.precision() <= f64::EPSILON {
-                        let data = a.data();
-                        py.detach(|| ik.solve_batch(data, filter, o, &mut counts)).py()
-                    } else {
-                        // a hint, or poses rigid to a coarser dtype's precision (float32)
-                        let (targets, _) = crate::convert::transforms(T, "T")?;
-                        let h = hint.as_deref();
-                        py.detach(|| ik.solve_poses(&targets, h, filter, o, &mut counts)).py()
-                    }
+                    py.detach(|| ik.solve_matrices(data, tolerance, h, filter, o, &mut counts))
+                        .py()
                 })?;
-                let counts = PyArray1::from_vec(py, counts.into_iter().map(|c| c as i64).collect());
+                let counts = column(py, &counts, |&c| c as i64);
                 Ok((out, counts).into_pyobject(py)?.into_any())
             }
             _ => Err(ShapeError::new_err(format!(

@@ -407,7 +407,7 @@ fn track<'py>(
     let r = py
         .detach(|| ttkin::clik::track(&model, &q0, &trajectory, options))
         .py()?;
-    let joint_names = robot.chain.joints().iter().map(|j| j.name().to_string()).collect();
+    let joint_names = robot.chain.joint_names();
     Ok(PyTrackResult { r, joint_names })
 }
 

@@ -15,43 +15,15 @@ use ttcan::{AxisConfig, Mode, MotorModel, Simulation};
 use crate::convert::{table, vector_of_len};
 use crate::errors::{PyResultExt, TtmanipError};
 
-/// `base` with the entries of `changes` (a nested dict of `base`'s serde shape) put in, read back
-/// through serde: a key or value the type does not take is a `TtmanipError` naming its path
-/// (`model.motor.resistance`).
-fn overlay<T: Serialize + DeserializeOwned + Clone>(base: &T, changes: Option<&Bound<'_, PyDict>>) -> PyResult<T> {
-    let Some(changes) = changes else {
-        return Ok(base.clone());
+/// `base` with the entries of `changes` (a nested dict of `base`'s serde shape) put in:
+/// `ttcan::axis_config::overlay` (a key or value the type does not take is a `TtmanipError`
+/// naming its path, `model.motor.resistance`).
+fn overlay<T: Serialize + DeserializeOwned>(base: &T, changes: Option<&Bound<'_, PyDict>>) -> PyResult<T> {
+    let changes = match changes {
+        Some(c) => pythonize::depythonize(c.as_any()).map_err(|e| TtmanipError::new_err(e.to_string()))?,
+        None => ttcan::axis_config::Change::Table(Vec::new()),
     };
-    let err = |e: String| TtmanipError::new_err(e);
-    let merged = pythonize::pythonize(changes.py(), base).map_err(|e| err(e.to_string()))?;
-    put(merged.cast::<PyDict>()?, changes, "")?;
-    serde_path_to_error::deserialize(&mut pythonize::Depythonizer::from_object(&merged)).map_err(|e| err(e.to_string()))
-}
-
-/// Writes `changes` into `into`, recursing where both hold a dict; a flag (bool) stays a flag.
-fn put(into: &Bound<'_, PyDict>, changes: &Bound<'_, PyDict>, path: &str) -> PyResult<()> {
-    for (k, v) in changes.iter() {
-        let key: String = k
-            .extract()
-            .map_err(|_| TtmanipError::new_err(format!("{path}: keys must be str, got {k}")))?;
-        let here = if path.is_empty() {
-            key.clone()
-        } else {
-            format!("{path}.{key}")
-        };
-        match into.get_item(&key)? {
-            Some(old) if old.is_instance_of::<PyDict>() && v.is_instance_of::<PyDict>() => {
-                put(old.cast()?, v.cast()?, &here)?
-            }
-            Some(old) if old.extract::<bool>().is_ok() && v.extract::<bool>().is_err() => {
-                return Err(TtmanipError::new_err(format!(
-                    "{here}: expected True or False, got {v}"
-                )))
-            }
-            _ => into.set_item(key, v)?,
-        }
-    }
-    Ok(())
+    ttcan::axis_config::overlay(base, changes).py()
 }
 
 fn to_dict<'py, T: Serialize>(py: Python<'py>, value: &T) -> PyResult<Bound<'py, PyAny>> {
@@ -60,9 +32,7 @@ fn to_dict<'py, T: Serialize>(py: Python<'py>, value: &T) -> PyResult<Bound<'py,
 
 fn trace_dict<'py>(py: Python<'py>, t: Trace, fault: Option<ttcan::Fault>) -> PyResult<Bound<'py, PyDict>> {
     // A non-finite signal from finite parameters is refused, never returned (issue 29).
-    for signal in [&t.time, &t.current, &t.duty, &t.speed, &t.position] {
-        crate::convert::check_finite_output(signal)?;
-    }
+    crate::convert::check_finite_outputs(&[&t.time, &t.current, &t.duty, &t.speed, &t.position])?;
     let d = PyDict::new(py);
     d.set_item("time", PyArray1::from_vec(py, t.time))?;
     d.set_item("current", PyArray1::from_vec(py, t.current))?;
@@ -159,7 +129,7 @@ impl PyServoSim {
     /// Step response: `kind` is 'current' (A), 'velocity' (rad/s) or 'position' (rad, a step with
     /// zero velocity and acceleration); `external_torque` (N·m at the output) acts throughout.
     /// Returns a dict of numpy arrays sampled every current-loop period, plus 'fault'.
-    #[pyo3(signature = (kind, amplitude, duration, external_torque=0.0, seed=7))]
+    #[pyo3(signature = (kind, amplitude, duration, external_torque=Simulation::NO_LOAD, seed=Simulation::NOISE_SEED as i128))]
     fn step<'py>(
         &self,
         py: Python<'py>,
@@ -178,7 +148,7 @@ impl PyServoSim {
     /// Follows a position trajectory given at the position-loop rate (1-D arrays q rad, qd rad/s,
     /// qdd rad/s² of equal length n ≥ 1, sample k for the k-th position period) from rest at q[0],
     /// then holds the last sample for `settle` seconds. Returns a dict of numpy arrays plus 'fault'.
-    #[pyo3(signature = (q, qd, qdd, settle=0.0, external_torque=0.0, seed=7))]
+    #[pyo3(signature = (q, qd, qdd, settle=Simulation::NO_SETTLE, external_torque=Simulation::NO_LOAD, seed=Simulation::NOISE_SEED as i128))]
     #[allow(clippy::too_many_arguments)]
     fn follow<'py>(
         &self,

@@ -7,7 +7,7 @@ use ttkin::dynamics::TorqueProfile;
 
 use crate::convert::{array_getters, Any};
 use crate::dynamics::{gravity_arg, wrench_arg};
-use crate::errors::{PyResultExt, TtmanipError};
+use crate::errors::PyResultExt;
 use crate::robot::PyRobot;
 
 /// The result of `Robot.torques`: joint, motor-side and current profiles and the effort check.
@@ -45,12 +45,8 @@ impl PyTorqueProfile {
 
     /// Every (sample, joint, torque, limit) whose |torque| exceeds the effort limit.
     #[getter]
-    fn violations(&self) -> Vec<(usize, usize, f64, f64)> {
-        self.profile
-            .violations
-            .iter()
-            .map(|v| (v.sample, v.joint, v.torque, v.limit))
-            .collect()
+    fn violations<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyList>> {
+        crate::convert::list(py, &self.profile.violations, |v| (v.sample, v.joint, v.torque, v.limit))
     }
 
     fn __repr__(&self) -> String {
@@ -62,37 +58,6 @@ impl PyTorqueProfile {
             if p.within_limits() { "True" } else { "False" },
             p.violations.len()
         )
-    }
-}
-
-/// (q, qd, qdd) from `torques`' arguments: three arrays, a (q, qd, qdd) tuple, or an object with
-/// attributes q, qd, qdd (or position, velocity, acceleration).
-fn trajectory_arrays<'py>(
-    trajectory: &Any<'py>,
-    qd: Option<&Any<'py>>,
-    qdd: Option<&Any<'py>>,
-) -> PyResult<[Bound<'py, PyAny>; 3]> {
-    match (qd, qdd) {
-        (Some(qd), Some(qdd)) => Ok([trajectory.clone(), qd.clone(), qdd.clone()]),
-        (None, None) => {
-            if let Ok((q, qd, qdd)) = trajectory.extract::<(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>)>()
-            {
-                return Ok([q, qd, qdd]);
-            }
-            for names in [["q", "qd", "qdd"], ["position", "velocity", "acceleration"]] {
-                let got: PyResult<Vec<Bound<'py, PyAny>>> = names.iter().map(|n| trajectory.getattr(*n)).collect();
-                if let Ok(v) = got {
-                    if let Ok([q, qd, qdd]) = <[Bound<'py, PyAny>; 3]>::try_from(v) {
-                        return Ok([q, qd, qdd]);
-                    }
-                }
-            }
-            Err(TtmanipError::new_err(
-                "torques: expected (q, qd, qdd) arrays, a (q, qd, qdd) tuple, or an object with attributes \
-                 q, qd, qdd (or position, velocity, acceleration)",
-            ))
-        }
-        _ => Err(TtmanipError::new_err("torques: give both qd and qdd, or neither")),
     }
 }
 
@@ -115,7 +80,7 @@ impl PyRobot {
     ) -> PyResult<PyTorqueProfile> {
         let g = gravity_arg(gravity, &self.chain)?;
         let w = wrench_arg(wrench)?;
-        let [q, qd, qdd] = trajectory_arrays(trajectory, qd, qdd)?;
+        let [q, qd, qdd] = crate::args::trajectory_arrays(trajectory, qd, qdd)?;
         let (arrays, _) = self.states([(&q, "q"), (&qd, "qd"), (&qdd, "qdd")])?;
         let dy = self.dynamics()?;
         let (q, qd, qdd) = (arrays[0].data(), arrays[1].data(), arrays[2].data());

@@ -14,7 +14,7 @@ use crate::convert::{
     array_getters, f64_array, filled_without_gil, pose_to_numpy, shape_str, to_numpy, transform, value_getters, vector,
     zeros, Any, Array,
 };
-use crate::errors::{PyResultExt, ShapeError, TtmanipError};
+use crate::errors::{PyResultExt, TtmanipError};
 
 /// A serial robot arm: joints from base to tool (m, rad, s). Immutable; share it freely.
 #[pyclass(name = "Robot", module = "ttmanip", frozen)]
@@ -36,19 +36,7 @@ impl PyRobot {
 
     /// Reads `q` as one configuration (n,) or a batch (N, n); returns the batch size (None for one).
     pub fn configs<'py>(&self, q: &Any<'py>, what: &str) -> PyResult<(crate::convert::F64Array<'py>, Option<usize>)> {
-        let a = f64_array(q, what)?;
-        let n = self.chain.dof();
-        let batch = match a.shape() {
-            [m] if *m == n => None,
-            [count, m] if *m == n => Some(*count),
-            _ => {
-                return Err(ShapeError::new_err(format!(
-                    "{what}: expected shape ({n},) or (N, {n}) for this {n}-joint robot, got {}",
-                    a.shape_str()
-                )))
-            }
-        };
-        Ok((a, batch))
+        crate::convert::configs(q, what, self.chain.dof())
     }
 }
 
@@ -60,11 +48,7 @@ fn joint_types(types: &Any<'_>) -> PyResult<Vec<JointType>> {
     let items: Vec<String> = types.extract().map_err(|_| {
         TtmanipError::new_err("types: expected a string such as 'PRRRRR' or a list of 'revolute'/'prismatic'")
     })?;
-    items
-        .iter()
-        .map(|s| s.parse::<JointType>())
-        .collect::<ttkin::Result<Vec<_>>>()
-        .py()
+    JointType::from_names(&items).py()
 }
 
 #[ttkin_py_guard::guarded]
@@ -201,8 +185,7 @@ impl PyRobot {
     /// (n, 2) lower and upper position limits (m or rad; ±inf where unbounded).
     #[getter]
     fn limits<'py>(&self, py: Python<'py>) -> Array<'py> {
-        let flat: Vec<f64> = self.chain.limits().iter().flat_map(|l| [l.lower, l.upper]).collect();
-        to_numpy(py, &[self.chain.dof(), 2], &flat)
+        to_numpy(py, &[self.chain.dof(), 2], &self.chain.position_limit_table())
     }
 
     /// (n,) ready (rest) configuration (m or rad): where strokes start and return to; the
@@ -294,12 +277,11 @@ impl PyRobot {
     }
 
     fn __repr__(&self) -> String {
-        let types: String = self.chain.joints().iter().map(|j| j.kind().letter()).collect();
         format!(
             "Robot('{}', dof={}, joints='{}')",
             self.chain.name(),
             self.chain.dof(),
-            types
+            self.chain.joint_letters()
         )
     }
 }
@@ -325,12 +307,12 @@ value_getters!(PyRobot, |r| {
     /// Robot name.
     name: String => r.chain.name().to_string();
     /// Joint names, base to tool.
-    joint_names: Vec<String> => r.chain.joints().iter().map(|j| j.name().to_string()).collect();
+    joint_names: Vec<String> => r.chain.joint_names();
     /// Which limit governs each joint's effective effort limit at standstill: "robot file",
     /// "drive peak current", "drive voltage" or "none".
     effort_limit_sources: Vec<&'static str> => ttkin::effort::EffortLimits::of(&r.chain).sources_at_rest();
     /// Joint types, "revolute" or "prismatic".
-    joint_types: Vec<&'static str> => r.chain.joints().iter().map(|j| j.kind().name()).collect();
+    joint_types: Vec<&'static str> => r.chain.joint_type_names();
 });
 
 /// Adds `Robot` to the module.

@@ -4,14 +4,14 @@
 use numpy::ndarray::{Array2, ShapeBuilder};
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList};
+use pyo3::types::PyList;
 
 use ttkin::traj::duration::{self, SegmentKind};
 use ttkin::traj::limits::{KinematicLimits, Violation};
 use ttkin::traj::via::{self, ViaKind};
 use ttkin::traj::{JointState, JointTrajectory, Samples};
 
-use crate::convert::{f64_array, table, to_numpy, value_getters, vector, vector_of_len, zeros, Any, Array};
+use crate::convert::{column, f64_array, table, to_numpy, value_getters, vector, vector_of_len, zeros, Any, Array};
 use crate::errors::{PyResultExt, ShapeError};
 use crate::robot::PyRobot;
 
@@ -41,18 +41,9 @@ pub(crate) fn samples_to_py<'py>(py: Python<'py>, s: &Samples) -> PyResult<Bound
     Ok((t, q, qd, qdd).into_pyobject(py)?.into_any())
 }
 
+/// Violations as a list of dicts (joint, quantity, time, value, limit) in their serde form.
 pub(crate) fn violations_to_py<'py>(py: Python<'py>, v: &[Violation]) -> PyResult<Bound<'py, PyList>> {
-    let list = PyList::empty(py);
-    for x in v {
-        let d = PyDict::new(py);
-        d.set_item("joint", x.joint)?;
-        d.set_item("quantity", x.quantity.name())?;
-        d.set_item("time", x.time)?;
-        d.set_item("value", x.value)?;
-        d.set_item("limit", x.limit)?;
-        list.append(d)?;
-    }
-    Ok(list)
+    Ok(crate::convert::serde_to_python(py, v)?.cast_into::<PyList>()?)
 }
 
 pub(crate) fn robot_limits(robot: &PyRobot, jerk: Option<&Any<'_>>) -> PyResult<KinematicLimits> {
@@ -80,15 +71,7 @@ impl PyJointTrajectory {
     #[getter]
     fn coefficients<'py>(&self, py: Python<'py>) -> PyResult<Array<'py>> {
         let (k, n) = (self.inner.segments(), self.inner.dof());
-        let mut flat = Vec::with_capacity(k * n * 6);
-        for s in 0..k {
-            for j in 0..n {
-                let c = self.inner.coefficients(s, j).ok_or_else(|| {
-                    crate::errors::InternalError::new_err(format!("coefficients: segment {s}, joint {j} out of range"))
-                })?;
-                flat.extend_from_slice(&c);
-            }
-        }
+        let flat = self.inner.coefficient_table();
         Ok(to_numpy(py, &[k, n, 6], &flat))
     }
 
@@ -101,9 +84,7 @@ impl PyJointTrajectory {
                 crate::convert::fill_fresh(&qd, |b| {
                     crate::convert::fill_fresh(&qdd, |c| {
                         self.inner.sample(t, a, b, c).py()?;
-                        [&*a, &*b, &*c]
-                            .iter()
-                            .try_for_each(|v| crate::convert::check_finite_output(v))
+                        crate::convert::check_finite_outputs(&[a, b, c])
                     })
                 })
             })?;
@@ -148,10 +129,7 @@ impl PyJointTrajectory {
     /// (dof,), values signed.
     fn peaks<'py>(&self, py: Python<'py>, order: i128) -> PyResult<Bound<'py, PyAny>> {
         let p = self.inner.peaks(crate::args::unsigned(order, "order")?).py()?;
-        let values: Vec<f64> = p.iter().map(|x| x.value).collect();
-        let times: Vec<f64> = p.iter().map(|x| x.time).collect();
-        let n = p.len();
-        Ok((to_numpy(py, &[n], &values), to_numpy(py, &[n], &times))
+        Ok((column(py, &p, |x| x.value), column(py, &p, |x| x.time))
             .into_pyobject(py)?
             .into_any())
     }
@@ -196,9 +174,8 @@ fn sample_uniform<'py>(py: Python<'py>, traj: &JointTrajectory, n: usize) -> PyR
     traj.sample_uniform_columns_into(&mut t, &mut q, &mut qd, &mut qdd)
         .py()?;
     if !traj.samples_cannot_overflow() {
-        for v in [&t, &q, &qd, &qdd] {
-            crate::convert::check_finite_output(v)?; // e.g. a duration of 1e-200: 1/T³ overflows
-        }
+        // e.g. a duration of 1e-200: 1/T³ overflows
+        crate::convert::check_finite_outputs(&[&t, &q, &qd, &qdd])?;
     }
     let matrix = |v: Vec<f64>| -> PyResult<_> {
         let a = Array2::from_shape_vec((n, dof).f(), v)

@@ -265,6 +265,30 @@ impl Chain {
         self.joints.iter().map(|j| *j.limits()).collect()
     }
 
+    /// Position limits as an (n, 2) row-major table: lower then upper per joint (m or rad;
+    /// ±inf where unbounded).
+    pub fn position_limit_table(&self) -> Vec<f64> {
+        self.joints
+            .iter()
+            .flat_map(|j| [j.limits().lower, j.limits().upper])
+            .collect()
+    }
+
+    /// Joint names, in order.
+    pub fn joint_names(&self) -> Vec<String> {
+        self.joints.iter().map(|j| j.name().to_string()).collect()
+    }
+
+    /// Joint type names (`"revolute"`, `"prismatic"`), in order.
+    pub fn joint_type_names(&self) -> Vec<&'static str> {
+        self.joints.iter().map(|j| j.kind().name()).collect()
+    }
+
+    /// Joint types as one letter each (`"PRRRRR"`), the form [`JointType::from_letters`] reads.
+    pub fn joint_letters(&self) -> String {
+        self.joints.iter().map(|j| j.kind().letter()).collect()
+    }
+
     /// Checks that `q` has one finite value per joint.
     pub fn check_q(&self, what: &str, q: &[f64]) -> Result<()> {
         check_vector(what, q, self.dof())

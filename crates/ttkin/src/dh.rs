@@ -30,6 +30,11 @@ impl JointType {
     pub fn from_letters(letters: &str) -> Result<Vec<JointType>> {
         letters.chars().map(|c| c.to_string().parse()).collect()
     }
+
+    /// Joint types from their names, one per joint (`"revolute"`, `"prismatic"`, or a letter).
+    pub fn from_names<S: AsRef<str>>(names: &[S]) -> Result<Vec<JointType>> {
+        names.iter().map(|s| s.as_ref().parse()).collect()
+    }
 }
 
 impl FromStr for DhConvention {

@@ -74,6 +74,28 @@ impl Error {
             reason: reason.into(),
         }
     }
+
+    /// The same error with the argument's name prefixed by `outer` (`hits[2].` + `t` →
+    /// `hits[2].t`), for an element of a batch or a field of a record; other kinds unchanged.
+    pub fn within(self, outer: &str) -> Self {
+        match self {
+            Error::Shape { what, expected, got } => Error::Shape {
+                what: format!("{outer}{what}"),
+                expected,
+                got,
+            },
+            Error::NonFinite { what, index, value } => Error::NonFinite {
+                what: format!("{outer}{what}"),
+                index,
+                value,
+            },
+            Error::InvalidArgument { what, reason } => Error::InvalidArgument {
+                what: format!("{outer}{what}"),
+                reason,
+            },
+            other => other,
+        }
+    }
 }
 
 /// Checks that a scalar is finite and > 0; the error gives its `unit` ("m", "s", "Hz", "1/s").

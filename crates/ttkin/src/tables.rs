@@ -85,7 +85,39 @@ impl DriveColumns<'_> {
     }
 }
 
+/// The mechanical entries of one drive, the row of [`DriveColumns`] (serde: a record with every
+/// key, `torque_constant` None when unknown).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct DriveRow {
+    /// Gear ratio G (> 0).
+    pub gear_ratio: f64,
+    /// Rotor inertia, motor side, kg·m².
+    pub rotor_inertia: f64,
+    /// Viscous friction b, joint side (N·m·s/rad or N·s/m).
+    pub viscous: f64,
+    /// Coulomb friction f_c, joint side (N·m or N).
+    pub coulomb: f64,
+    /// Torque constant k_t, N·m/A, None when unknown.
+    pub torque_constant: Option<f64>,
+}
+
 impl Chain {
+    /// Each joint's [`DriveRow`], None for a joint without a drive.
+    pub fn drive_rows(&self) -> Vec<Option<DriveRow>> {
+        self.joints()
+            .iter()
+            .map(|j| {
+                j.drive().map(|d| DriveRow {
+                    gear_ratio: d.gear_ratio,
+                    rotor_inertia: d.rotor_inertia,
+                    viscous: d.viscous,
+                    coulomb: d.coulomb,
+                    torque_constant: d.torque_constant,
+                })
+            })
+            .collect()
+    }
+
     /// The same chain whose links carry `inertials` (one per joint, link frames; validated).
     pub fn with_inertials(&self, inertials: &[Inertial]) -> Result<Chain> {
         self.rebuilt(inertials, |j, i| j.with_inertial(*i))

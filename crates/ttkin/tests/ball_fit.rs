@@ -3,8 +3,8 @@
 //! the split, and the prediction error's definition.
 
 use ttkin::ball::fit::{
-    bounce_level, calibrate, estimate_period, held_out, prediction_error, segment, Bounce, FitModel, FitOptions,
-    Recording, SpinPrior,
+    bounce_level, calibrate, estimate_period, experiment, held_out, prediction_error, segment, Bounce, FitModel,
+    FitOptions, Recording, SpinPrior,
 };
 use ttkin::ball::{BallModel, BallState};
 
@@ -218,4 +218,33 @@ fn prediction_error_is_zero_for_the_true_model_without_noise_and_grows_with_a_wr
     assert!(e3.rms_after_bounce > 0.05, "{e3:?}");
     // A window reaching the bounce is refused.
     assert!(prediction_error(&rec, &tm, 90, level, &prior, &opts).is_none());
+}
+
+/// The experiment's report (its serde form) has the documented records: globals keyed by name,
+/// one record per fitted flight and per model, paths as rows of 3; the recordings come from
+/// parallel columns, whose counts must agree.
+#[test]
+fn experiment_report_and_recordings_from_columns() {
+    let recs = flights(8, 0.001, 3);
+    let names: Vec<String> = recs.iter().map(|r| r.name.clone()).collect();
+    let pos: Vec<Vec<[f64; 3]>> = recs.iter().map(|r| r.positions.clone()).collect();
+    let again = Recording::from_columns(names.clone(), pos.clone(), None).unwrap();
+    assert_eq!(again.len(), recs.len());
+    assert_eq!(again[2].positions, recs[2].positions);
+    assert!(again[2].velocities.is_empty());
+    assert!(Recording::from_columns(names[..3].to_vec(), pos.clone(), None).is_err());
+    assert!(Recording::from_columns(names.clone(), pos.clone(), Some(vec![Vec::new()])).is_err());
+    let e = experiment(&recs, 20, None, &FitOptions::default()).unwrap();
+    let v = toml::Value::try_from(&e).unwrap();
+    let cal = &v["calibration"];
+    assert_eq!(cal["globals"]["k_drag"].as_float(), Some(e.calibration.globals[0]));
+    assert_eq!(cal["correlation"].as_array().unwrap().len(), 6);
+    assert_eq!(cal["flights"].as_array().unwrap().len(), e.calibration.flights.len());
+    assert_eq!(cal["flights"][0]["state"].as_array().unwrap().len(), 10);
+    let comps = v["comparisons"].as_array().unwrap();
+    assert_eq!(comps.len(), e.comparisons.len());
+    assert_eq!(comps[0]["name"].as_str(), Some(e.comparisons[0].name.as_str()));
+    let err = &comps[0]["errors"][0];
+    assert_eq!(err["index"].as_integer(), Some(e.comparisons[0].errors[0].0 as i64));
+    assert_eq!(err["path"][0].as_array().unwrap().len(), 3);
 }

@@ -539,3 +539,47 @@ fn rotation_log_inverts_the_exponential_from_zero_to_pi() {
         assert!((v.norm() - angle).abs() < 1e-12, "angle {angle}: |log| = {}", v.norm());
     }
 }
+
+/// `solve_matrices` gives the same branches on the float64 fast path and on the pose path (a
+/// looser tolerance or a hint), and the loose path accepts poses rounded to float32.
+#[test]
+fn solve_matrices_paths_agree_and_float32_needs_its_tolerance() {
+    use ttkin::ik::MAX_BRANCHES;
+    let chain = ttkin::robots::gantry6();
+    let ik = Analytic::for_chain(&chain).unwrap();
+    let n = chain.dof();
+    let q = chain.mid_range();
+    let mut data = Vec::new();
+    for k in 0..3 {
+        let mut qk = q.clone();
+        qk[1] += 0.05 * k as f64;
+        let mut m = [0.0; 16];
+        ttkin::transform::write_row_major(&chain.fk(&qk).unwrap(), &mut m);
+        data.extend_from_slice(&m);
+    }
+    let run = |data: &[f64], tol: f64, hint: Option<&[f64]>| {
+        let mut out = vec![0.0; 3 * MAX_BRANCHES * n];
+        let mut counts = vec![0; 3];
+        ik.solve_matrices(data, tol, hint, LimitFilter::Off, &mut out, &mut counts)
+            .map(|_| (out, counts))
+    };
+    let (fast, c_fast) = run(&data, ttkin::transform::RIGID_TOLERANCE, None).unwrap();
+    let (slow, c_slow) = run(&data, 1e-6, None).unwrap();
+    assert_eq!(c_fast, c_slow);
+    assert!(c_fast.iter().all(|&c| c > 0));
+    for (a, b) in fast.iter().zip(&slow) {
+        assert!((a.is_nan() && b.is_nan()) || (a - b).abs() < 1e-12);
+    }
+    let rounded: Vec<f64> = data.iter().map(|&v| f64::from(v as f32)).collect();
+    let (_, c32) = run(&rounded, 16.0 * f64::from(f32::EPSILON), None).unwrap();
+    assert!(c32.iter().all(|&c| c > 0));
+    assert!(run(&data[..20], 1e-6, None).is_err());
+    // the single-pose branches, flat, are the rows of the batch's first pose
+    let mut m = [0.0; 16];
+    m.copy_from_slice(&data[..16]);
+    let t = ttkin::transform::isometry_from_matrix("T", &nalgebra::Matrix4::from_row_slice(&m)).unwrap();
+    let sols = ik.solve(&t, None, LimitFilter::Off).unwrap();
+    let flat = sols.flat();
+    assert_eq!(flat.len(), sols.len() * n);
+    assert_eq!(&flat[..], &fast[..sols.len() * n]);
+}

@@ -213,3 +213,28 @@ fn racket_pose_reproduces_its_coordinates() {
     let task = ttkin::task::Task::Racket { offset: 0.15 };
     assert!(task.error(&t, &t).norm() < 1e-15);
 }
+
+/// The per-joint tables the bindings hand over: names, type names and letters, position limits
+/// as (n, 2), and joint types read back from their names or letters.
+#[test]
+fn joint_tables_follow_the_joints() {
+    let chain = ttkin::robots::gantry6();
+    let n = chain.dof();
+    let kinds: String = chain.joints().iter().map(|j| j.kind().letter()).collect();
+    assert_eq!(chain.joint_letters(), kinds);
+    assert_eq!(chain.joint_letters().len(), n);
+    let letters = ttkin::JointType::from_letters(&chain.joint_letters()).unwrap();
+    assert_eq!(
+        ttkin::JointType::from_names(&chain.joint_type_names()).unwrap(),
+        letters
+    );
+    assert_eq!(chain.joint_type_names()[0], chain.joints()[0].kind().name());
+    assert!(ttkin::JointType::from_names(&["revolute", "hinge"]).is_err());
+    let names = chain.joint_names();
+    assert_eq!(names.len(), n);
+    assert_eq!(names[2], chain.joints()[2].name());
+    let table = chain.position_limit_table();
+    for (k, l) in chain.limits().iter().enumerate() {
+        assert_eq!((table[2 * k], table[2 * k + 1]), (l.lower, l.upper));
+    }
+}

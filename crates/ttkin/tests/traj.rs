@@ -793,3 +793,24 @@ fn the_overflow_bound_holds_for_ordinary_segments_and_refuses_overflowing_ones()
         "the edge case does produce huge values"
     );
 }
+
+/// The coefficient table holds, for every segment and joint, what `coefficients` gives, and its
+/// Quantity names serialise as the lower-case names the bindings hand to Python.
+#[test]
+fn coefficient_table_equals_per_segment_coefficients() {
+    let (points, times) = via_data();
+    let n = points.len() / times.len();
+    let traj = via::cubic(&points, &times, n, None).unwrap();
+    let table = traj.coefficient_table();
+    assert_eq!(table.len(), traj.segments() * n * 6);
+    for s in 0..traj.segments() {
+        for j in 0..n {
+            let c = traj.coefficients(s, j).unwrap();
+            assert_eq!(&table[(s * n + j) * 6..(s * n + j + 1) * 6], &c[..]);
+        }
+    }
+    assert_eq!(
+        toml::Value::try_from(Quantity::Acceleration).unwrap().as_str(),
+        Some(Quantity::Acceleration.name())
+    );
+}

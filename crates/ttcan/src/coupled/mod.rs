@@ -40,13 +40,14 @@ use crate::axis::{Axis, AxisConfig, Mode};
 
 mod drives;
 pub mod execute;
+pub mod journal;
 mod trace;
 mod winding;
 use crate::error::{Error, Result};
 use crate::motor::Measurement;
 use crate::noise::Gaussian;
 use crate::schedule::Scheduler;
-pub use drives::axis_configs_from_chain;
+pub use drives::{actuator_summaries, axis_configs_from_chain, ActuatorSummary};
 pub use trace::CoupledTrace;
 use winding::{open_winding_step, winding_step, Winding};
 
@@ -57,6 +58,9 @@ pub const SETPOINT_RATE: f64 = 1000.0;
 /// The longest whole-trajectory run [`CoupledSim::run`] accepts, in current-loop ticks (50 s at
 /// 20 kHz): its trace keeps every tick (about 100 bytes per tick and axis).
 pub const MAX_RUN_TICKS: u64 = 1_000_000;
+/// Ticks one step of a caller that names no count advances (the Python `DriveSim.tick()`).
+pub const TICKS_PER_CALL: u64 = 1;
+
 /// Options of a [`CoupledSim`].
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CoupledOptions {
@@ -428,6 +432,11 @@ impl CoupledSim {
     /// The axes (their references, states, faults).
     pub fn axes(&self) -> &[Axis] {
         &self.axes
+    }
+
+    /// Each axis' current reference after limiting, A (its `current_reference()`).
+    pub fn current_references(&self) -> Vec<f64> {
+        self.axes.iter().map(Axis::current_reference).collect()
     }
 
     /// The axes (to enable, disable, clear faults).

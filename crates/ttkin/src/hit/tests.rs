@@ -347,3 +347,26 @@ fn mobile8_plans_under_its_own_gravity() {
         "gravity along x and along z load the joints differently"
     );
 }
+
+/// `Hit::batch` builds the hits `Hit::new` builds, and names the element and field of a bad one.
+#[test]
+fn hit_batch_matches_new_and_names_the_element() {
+    let a = demo_hit(0.5);
+    let b = demo_hit(0.6);
+    let twists: Vec<f64> = a.twist.iter().chain(&b.twist).copied().collect();
+    let hits = Hit::batch(&[a.pose, b.pose], &twists, &[0.5, 0.6]).unwrap();
+    assert_eq!(hits, vec![a, b]);
+    let e = Hit::batch(&[a.pose, b.pose], &twists, &[0.5, -1.0]).unwrap_err();
+    assert!(e.to_string().starts_with("hits[1].t:"), "{e}");
+    let mut bad = twists.clone();
+    bad[7] = f64::NAN;
+    let e = Hit::batch(&[a.pose, b.pose], &bad, &[0.5, 0.6]).unwrap_err();
+    assert!(
+        matches!(e, crate::Error::NonFinite { ref what, .. } if what == "hits[1].twist"),
+        "{e}"
+    );
+    assert!(matches!(
+        Hit::batch(&[a.pose], &twists, &[0.5]),
+        Err(crate::Error::Shape { .. })
+    ));
+}

@@ -41,6 +41,28 @@ impl Hit {
         Ok(Hit { pose, twist, t })
     }
 
+    /// N hits from their poses (base frame, m), twists (N × 6, row-major, as in [`Hit::new`]) and
+    /// times (N,); an error names the element (`hits[i].t`); N poses, twists and times needed.
+    pub fn batch(poses: &[IsometryMatrix3<f64>], twists: &[f64], times: &[f64]) -> Result<Vec<Hit>> {
+        let k = poses.len();
+        if twists.len() != 6 * k || times.len() != k {
+            return Err(Error::shape(
+                "hits",
+                format!("{k} twists (6 values each) and {k} times for {k} poses"),
+                format!("{} twist values and {} times", twists.len(), times.len()),
+            ));
+        }
+        poses
+            .iter()
+            .zip(twists.chunks_exact(6))
+            .zip(times)
+            .enumerate()
+            .map(|(i, ((pose, w), &t))| {
+                Hit::new(*pose, [w[0], w[1], w[2], w[3], w[4], w[5]], t).map_err(|e| e.within(&format!("hits[{i}].")))
+            })
+            .collect()
+    }
+
     /// A hit from the racket centre (m, base frame), the face normal (any length, base axes), the
     /// racket-centre velocity (m/s, base axes), the hit time (s) and the racket's angular velocity
     /// (rad/s, base axes, zero when `None`). The handle points as close as possible to `handle`

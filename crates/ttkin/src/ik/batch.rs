@@ -254,6 +254,36 @@ impl IkBatchSolver {
     }
 }
 
+/// Start configurations (m, rad) for a batch of `targets` poses from `q0` as a caller hands it
+/// over, row-major with `dof` values a row: one start (`rows` = None, shape (dof,)) serves every
+/// target; `rows` = Some(N) starts (shape (N, dof)) need a batch (`batch`) of exactly N targets.
+/// Checks finiteness first, then the shape; the result feeds [`IkBatchSolver::solve_until`].
+pub fn starts(q0: &[f64], dof: usize, rows: Option<usize>, targets: usize, batch: bool) -> Result<Vec<Vec<f64>>> {
+    crate::error::check_finite("q0", q0)?;
+    if let Some(c) = rows {
+        if !batch || c != targets {
+            return Err(Error::shape(
+                "q0",
+                format!("shape ({dof},) or ({targets}, {dof})"),
+                format!("({c}, {dof})"),
+            ));
+        }
+    }
+    if dof == 0 || !q0.len().is_multiple_of(dof) {
+        return Err(Error::shape(
+            "q0",
+            format!("rows of {dof} values"),
+            format!("{} values", q0.len()),
+        ));
+    }
+    Ok(q0.chunks_exact(dof).map(<[f64]>::to_vec).collect())
+}
+
+/// The first outcome of a batch that is not solved, with its index (for `raise_on_failure`).
+pub fn first_failure(outcomes: &[IkOutcome]) -> Option<(usize, &IkOutcome)> {
+    outcomes.iter().enumerate().find(|(_, o)| o.status != IkStatus::Solved)
+}
+
 /// A time budget from seconds as users give it: `None` for unlimited, else finite and > 0.
 pub fn time_budget(seconds: Option<f64>) -> Result<Option<std::time::Duration>> {
     match seconds {
@@ -282,6 +312,49 @@ pub fn analytic_for(chain: &Chain) -> Result<Analytic> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn starts_broadcast_one_and_match_a_batch() {
+        let one = starts(&[0.1, 0.2], 2, None, 3, true).unwrap();
+        assert_eq!(one, vec![vec![0.1, 0.2]]);
+        let per = starts(&[1.0, 2.0, 3.0, 4.0], 2, Some(2), 2, true).unwrap();
+        assert_eq!(per, vec![vec![1.0, 2.0], vec![3.0, 4.0]]);
+        // N starts for a single pose, or for a batch of another size: a shape error naming q0
+        let e = starts(&[1.0, 2.0, 3.0, 4.0], 2, Some(2), 1, false).unwrap_err();
+        assert!(matches!(e, Error::Shape { .. }), "{e}");
+        assert_eq!(e.to_string(), "q0: expected shape (2,) or (1, 2), got (2, 2)");
+        assert!(matches!(
+            starts(&[1.0, 2.0, 3.0, 4.0], 2, Some(2), 3, true),
+            Err(Error::Shape { .. })
+        ));
+        assert!(matches!(
+            starts(&[f64::NAN, 0.0], 2, None, 1, false),
+            Err(Error::NonFinite { .. })
+        ));
+    }
+
+    #[test]
+    fn first_failure_names_the_first_unsolved_target() {
+        let ok = IkOutcome {
+            status: IkStatus::Solved,
+            result: IkResult {
+                q: vec![0.0],
+                success: true,
+                position_error: 0.0,
+                orientation_error: 0.0,
+                iterations: 1,
+                restarts: 0,
+            },
+        };
+        let bad = IkOutcome {
+            status: IkStatus::NotConverged,
+            ..ok.clone()
+        };
+        assert!(first_failure(&[ok.clone(), ok.clone()]).is_none());
+        let batch = [ok.clone(), bad.clone(), ok];
+        let (i, o) = first_failure(&batch).unwrap();
+        assert_eq!((i, o.status), (1, IkStatus::NotConverged));
+    }
 
     fn far() -> IsometryMatrix3<f64> {
         IsometryMatrix3::translation(5.0, 0.0, 0.0)

@@ -93,6 +93,11 @@ impl Solutions {
         &self.q[i][..self.dof]
     }
 
+    /// The branches as one (len, dof) row-major table (m, rad).
+    pub fn flat(&self) -> Vec<f64> {
+        self.iter().flat_map(|q| q.iter().copied()).collect()
+    }
+
     /// Every branch, in a fixed order (σ1 = +1 first, then σ2 = +1 first).
     pub fn iter(&self) -> impl Iterator<Item = &[f64]> + '_ {
         self.q[..self.count].iter().map(move |q| &q[..self.dof])
@@ -330,6 +335,41 @@ impl Analytic {
                 }
                 Ok(())
             })
+    }
+
+    /// Batch of [`Analytic::solve`] over `targets`, N row-major 4×4 matrices (N × 16) read as
+    /// rigid to within `tolerance` (|RᵀR − I|; [`crate::transform::RIGID_TOLERANCE`] for float64
+    /// data, looser for data read from a coarser dtype), with an optional `hint` (n,) for every
+    /// pose. Chooses the path: float64 data without a hint goes through [`Analytic::solve_batch`]
+    /// (chunked, no intermediate poses), the rest through [`Analytic::solve_poses`]. Outputs as
+    /// in [`Analytic::solve_batch`].
+    pub fn solve_matrices(
+        &self,
+        targets: &[f64],
+        tolerance: f64,
+        hint: Option<&[f64]>,
+        filter: LimitFilter,
+        out: &mut [f64],
+        counts: &mut [usize],
+    ) -> Result<()> {
+        if hint.is_none() && tolerance <= crate::transform::RIGID_TOLERANCE {
+            return self.solve_batch(targets, filter, out, counts);
+        }
+        if !targets.len().is_multiple_of(16) {
+            return Err(Error::shape("T", "N × 16 values", targets.len()));
+        }
+        let poses = targets
+            .chunks_exact(16)
+            .enumerate()
+            .map(|(i, m)| {
+                crate::transform::isometry_from_matrix_within(
+                    &format!("T[{i}]"),
+                    &Matrix4::from_row_slice(m),
+                    tolerance,
+                )
+            })
+            .collect::<Result<Vec<_>>>()?;
+        self.solve_poses(&poses, hint, filter, out, counts)
     }
 
     /// The branches of one pose into a row of [`MAX_BRANCHES`] × n values (NaN past the last);

@@ -133,6 +133,7 @@ impl KinematicLimits {
 
 /// The quantity a limit bounds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Quantity {
     /// Joint position (rad or m).
     Position,
@@ -145,7 +146,7 @@ pub enum Quantity {
 }
 
 impl Quantity {
-    /// Lower-case name: "position", "velocity", "acceleration", "jerk".
+    /// Lower-case name: "position", "velocity", "acceleration", "jerk" (also its serde form).
     pub fn name(&self) -> &'static str {
         match self {
             Quantity::Position => "position",

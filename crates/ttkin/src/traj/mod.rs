@@ -278,6 +278,20 @@ impl JointTrajectory {
         Some(c)
     }
 
+    /// Every coefficient as one (segments, dof, 6) row-major table: segment, joint, then
+    /// ascending powers of the local time τ = t − knot (s), as [`JointTrajectory::coefficients`].
+    pub fn coefficient_table(&self) -> Vec<f64> {
+        let (k, n) = (self.segments(), self.dof);
+        let mut flat = vec![0.0; k * n * 6];
+        for (i, c) in flat.chunks_exact_mut(6).enumerate() {
+            let (segment, joint) = (i / n, i % n);
+            for (p, v) in c.iter_mut().enumerate() {
+                *v = self.powers[(ROWS * segment + p) * n + joint];
+            }
+        }
+        flat
+    }
+
     /// The `ROWS` coefficient rows (each `dof` long) of segment `k`: q (τ⁰…τ⁵), q̇ (τ⁰…τ⁴), q̈ (τ⁰…τ³).
     #[inline]
     fn rows(&self, k: usize) -> [&[f64]; ROWS] {

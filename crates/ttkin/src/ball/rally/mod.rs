@@ -107,6 +107,10 @@ impl Default for RallyConfig {
 /// Most balls one rally may play, indices `0..MAX_BALLS` (about a minute of work on two cores).
 pub const MAX_BALLS: u64 = 1_000_000;
 
+/// Index of a rally's first ball: where [`Rally::play_range`] starts when the caller names no
+/// start (ball k's serve and noise are seeded from the rally seed and k).
+pub const FIRST_BALL: u64 = 0;
+
 impl DecideConfig {
     /// The rules of the rally `cfg`: its target, its camera's window and frame period, its
     /// correction delay.
