@@ -117,6 +117,7 @@ impl Session {
         }
         let mut c = self.counters.snapshot();
         c.splices_late += self.timeline.late_applied();
+        c.paused_cycles = self.timeline.paused();
         c
     }
 }
@@ -192,7 +193,7 @@ pub fn start(
         senders.push(s);
         followers.push(f);
     }
-    let splicer = Splicer::new(
+    let mut splicer = Splicer::new(
         planner,
         timeline.clone(),
         senders,
@@ -201,6 +202,10 @@ pub fn start(
             silence: cfg.silence_s,
         },
     );
+    // Ball mode: the robot waits at the ball planner's ready pose, where its strokes start.
+    if let Some(b) = &brain {
+        splicer.set_ready(&b.planner().ready);
+    }
     let (tx, rx) = sync_channel(cfg.queue);
     let mut threads = Vec::new();
     {
