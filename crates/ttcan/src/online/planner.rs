@@ -8,7 +8,8 @@
 //!
 //! Splice rules: the stroke starts at the first cycle at least `splice_lead` after the decision
 //! (and after the present cycle; planning must finish before that cycle is commanded; if it did
-//! not, the plan is made again with twice the lead, then four times). A stroke a [`Brain`] built
+//! not, the plan is made again with a lead of twice the one before or twice the planning time,
+//! whichever is longer, three tries in all). A stroke a [`Brain`] built
 //! ([`Command::Stroke`]) is handed over as it is at the cycle it was planned for, when that cycle
 //! is still ahead and the stroke starts from the state scheduled there; otherwise its hit is
 //! planned again like an upper computer's (counted `splices_replanned`). A newer
@@ -307,7 +308,9 @@ impl Splicer {
             return reject(arrival);
         }
         let tl = self.timeline.clone();
-        for factor in [1.0, 2.0, 4.0] {
+        let mut factor: f64 = 1.0;
+        for _ in 0..3 {
+            let began = controller_time();
             let mut s = self.splice_cycle(factor);
             let mut replaces = None;
             if let Some(last) = self.last.filter(|l| l.t_hit > tl.time_of(s)) {
@@ -363,7 +366,9 @@ impl Splicer {
                 return reject(arrival);
             };
             if tl.present_cycle() >= s {
-                // planning took longer than the lead: again, further ahead
+                // planning took longer than the lead: again, twice as far ahead or twice the
+                // planning time, whichever is further
+                factor = (2.0 * factor).max(2.0 * (controller_time() - began) / self.cfg.splice_lead);
                 continue;
             }
             if !self.hand_over(s, traj) {
