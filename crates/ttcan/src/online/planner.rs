@@ -396,8 +396,10 @@ impl Splicer {
 
     /// Splices a stroke a brain built for its splice cycle (decided on a datagram received at
     /// controller time `arrival`, s): handed over as it is when that cycle is still ahead and the
-    /// stroke starts from the state scheduled there; otherwise its hit is planned again from a
-    /// later cycle ([`Splicer::hit`]). The replacement rules are [`Splicer::hit`]'s.
+    /// stroke starts from the state scheduled there; otherwise nothing changes and the error
+    /// says why (the caller decides again or re-plans the hit, [`Splicer::replan`]). The
+    /// replacement rules are [`Splicer::hit`]'s; while another stroke's hit is still to come,
+    /// the hit is planned into that one's return leg.
     pub fn stroke(&mut self, st: &PlannedStroke, arrival: f64, counters: &Counters) -> Result<HitOutcome, StrokeMiss> {
         let h = &st.hit;
         let reject = |t: f64| HitOutcome {
