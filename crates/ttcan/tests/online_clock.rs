@@ -1,7 +1,8 @@
 //! The online handoff's one stroke clock: two channels follow the same stroke; when one channel
-//! thread stalls and skips deadlines, the other holds its stroke as long, so that from then on both
-//! command the stroke at the same time again (without the rule the joints on the two channels
-//! would stay apart by the stall for the rest of the run). Stepped by hand: no threads, no timing.
+//! thread stalls and skips deadlines, the other holds its stroke from the next cycle on until the
+//! stalled one is back, so that both command the stroke at the same time throughout (without the
+//! rule the joints on the two channels would stay apart by the stall for the rest of the run).
+//! Stepped by hand: no threads, no timing.
 
 #[path = "support/channel.rs"]
 mod channel;
@@ -25,7 +26,7 @@ fn step(f: &mut handoff::StrokeFollower, master: &ChannelMaster, k: u64) -> [f64
 }
 
 #[test]
-fn a_stall_of_one_channel_pauses_the_others_and_the_clocks_agree_again() {
+fn a_stall_of_one_channel_pauses_the_other_and_their_clocks_stay_together() {
     let (ma, _) = channel::running_channel();
     let (mb, _) = channel::running_channel();
     let tl = Arc::new(Timeline::new(2, 4, 1_000_000, 0));
@@ -53,11 +54,12 @@ fn a_stall_of_one_channel_pauses_the_others_and_the_clocks_agree_again() {
         let s = traj.state(((k_exec as f64 - 2.0) * 1e-3).clamp(0.0, 0.5)).unwrap();
         s.q
     };
-    // Before the stall both follow the deadlines; B resumes at deadline 25 where it stopped
-    // (executed 20); A, stepped before B at each deadline, sees B's skips at deadline 26 and
-    // holds its stroke for as many cycles (26..=30 repeat executed 25)...
+    // Before the stall both follow the deadlines. B's thread stalls at deadline 20: A sees B
+    // one cycle behind at deadline 21 and holds its stroke (repeats executed 20) until B is
+    // back; B resumes at deadline 25 where it stopped (executed 20); from deadline 26 on both
+    // command the same stroke time again, 5 cycles behind the deadlines.
     for (k, q) in &qa {
-        let exec = if *k <= 25 { *k } else { (*k - 5).max(25) };
+        let exec = if *k <= 20 { *k } else { (*k - 5).max(20) };
         let want = sample(exec);
         assert!((q[0] - want[0]).abs() < 1e-12, "A at deadline {k}: {q:?} vs {want:?}");
     }
@@ -66,7 +68,6 @@ fn a_stall_of_one_channel_pauses_the_others_and_the_clocks_agree_again() {
         let want = sample(exec);
         assert!((q[0] - want[2]).abs() < 1e-12, "B at deadline {k}: {q:?} vs {want:?}");
     }
-    // ... so that from deadline 31 on both command the same stroke time again.
     assert_eq!(tl.paused(), 5);
     assert_eq!(tl.skipped(), 5);
     assert_eq!(tl.present_cycle(), 35);

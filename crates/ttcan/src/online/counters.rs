@@ -121,6 +121,9 @@ counters! {
     /// Strokes of a brain whose hit was planned again like an upper computer's (still late after
     /// 3 decisions, or not starting from the scheduled state).
     splices_replanned,
+    /// Online threads (receiver, planning, telemetry) whose SCHED_FIFO priority the system
+    /// refused: they run on normal scheduling.
+    realtime_refused,
     /// Cycles a channel held its stroke to keep the stroke clock of a channel that skipped
     /// deadlines after a stall (all channels summed; read at the end).
     paused_cycles,

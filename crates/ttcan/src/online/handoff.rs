@@ -410,24 +410,22 @@ impl SetpointSource for StrokeFollower {
         let n = out.len();
         // The strokes run on executed cycles: a stall of this thread pauses them (the drives'
         // physics advance per SYNC too), the target never jumps. The channels keep one stroke
-        // clock: a channel whose threads did not stall pauses as long as the most-skipped
-        // channel did (holding its target), so that every joint follows the stroke at the same
-        // time; the skipped deadlines are published so that the planner maps the controller
-        // clock onto this count.
+        // clock: a channel advances its stroke only when every other channel has executed the
+        // cycle before (their threads run at the same deadlines, so one behind is the usual
+        // race); while another channel's thread is stalled it holds its stroke (repeats its
+        // last setpoint), so that every joint follows the stroke at the same time. The skipped
+        // deadlines are published so that the planner maps the controller clock onto this count.
         let next = self.executed;
-        let own = c.k.saturating_sub(next);
-        let lag = &self.timeline.skipped[self.ch];
-        lag.fetch_max(own, Ordering::AcqRel);
-        let most = self.timeline.skipped();
-        let k = if self.started {
-            next.min(c.k.saturating_sub(most)).max(next - 1)
-        } else {
-            next
-        };
-        let paused = self.started && k < next;
+        let slowest = (0..self.timeline.channels)
+            .filter(|&c| c != self.ch)
+            .map(|c| self.timeline.cycle[c].load(Ordering::Acquire))
+            .min()
+            .unwrap_or(u64::MAX);
+        let paused = self.started && slowest.saturating_add(1) < next;
+        let k = if paused { next - 1 } else { next };
         self.started = true;
         self.executed = k + 1;
-        lag.store(c.k.saturating_sub(k), Ordering::Release);
+        self.timeline.skipped[self.ch].store(c.k.saturating_sub(k), Ordering::Release);
         if paused {
             self.timeline.paused.fetch_add(1, Ordering::Relaxed);
         }

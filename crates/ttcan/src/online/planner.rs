@@ -98,6 +98,9 @@ struct Committed {
     id: u32,
     stroke: u32,
     t_hit: f64,
+    /// The executed cycle of the hit: the strokes' clock (a stall after the plan makes the hit
+    /// later on the controller clock, not on this one).
+    hit_cycle: u64,
 }
 
 /// The planning state: the planner, the schedule, the handoff senders.
@@ -313,14 +316,14 @@ impl Splicer {
             let began = controller_time();
             let mut s = self.splice_cycle(factor);
             let mut replaces = None;
-            if let Some(last) = self.last.filter(|l| l.t_hit > tl.time_of(s)) {
+            if let Some(last) = self.last.filter(|l| l.hit_cycle > s) {
                 if last.stroke == h.stroke {
                     replaces = Some(last);
-                } else if h.t_hit <= last.t_hit + 2.0 * tl.period() {
+                } else if h.t_hit <= tl.time_of(last.hit_cycle) + 2.0 * tl.period() {
                     // another stroke's hit comes first
                     return reject(arrival);
                 } else {
-                    s = s.max(tl.cycle_at(last.t_hit) + 1);
+                    s = s.max(last.hit_cycle + 1);
                 }
             } else if self.last.is_some_and(|l| l.stroke == h.stroke) {
                 // that stroke's hit is done: nothing left to replace
@@ -382,6 +385,7 @@ impl Splicer {
                 id: h.id,
                 stroke: h.stroke,
                 t_hit,
+                hit_cycle: s + (plan.t_hit / tl.period()).round() as u64,
             });
             let elapsed = controller_time() - arrival;
             let us = (elapsed * 1e6) as u64;
@@ -416,7 +420,7 @@ impl Splicer {
             return Ok(reject(arrival));
         };
         let mut replaces = None;
-        if let Some(last) = self.last.filter(|l| l.t_hit > tl.time_of(s)) {
+        if let Some(last) = self.last.filter(|l| l.hit_cycle > s) {
             if last.stroke == h.stroke {
                 replaces = Some(last);
             } else {
@@ -451,6 +455,7 @@ impl Splicer {
             id: h.id,
             stroke: h.stroke,
             t_hit: h.t_hit,
+            hit_cycle: s + ((h.t_hit - st.start) / tl.period()).round().max(0.0) as u64,
         });
         let elapsed = controller_time() - arrival;
         counters
