@@ -410,22 +410,29 @@ impl SetpointSource for StrokeFollower {
         let n = out.len();
         // The strokes run on executed cycles: a stall of this thread pauses them (the drives'
         // physics advance per SYNC too), the target never jumps. The channels keep one stroke
-        // clock: a channel advances its stroke only when every other channel has executed the
-        // cycle before (their threads run at the same deadlines, so one behind is the usual
-        // race); while another channel's thread is stalled it holds its stroke (repeats its
-        // last setpoint), so that every joint follows the stroke at the same time. The skipped
-        // deadlines are published so that the planner maps the controller clock onto this count.
+        // clock: a channel whose thread skipped fewer deadlines than another's holds its stroke
+        // (repeats its setpoint) until their counts agree, but only while its joints are at
+        // rest (a held target of drives in motion stops them abruptly: their tracking error
+        // jumps and a drive may refuse the next target, EMCY 0xFF01). So the joints of
+        // different channels are apart by the stalls of one stroke at most and agree again at
+        // the next rest (the ready pose between balls). The skipped deadlines are published
+        // so that the planner maps the controller clock onto this count.
         let next = self.executed;
-        let slowest = (0..self.timeline.channels)
-            .filter(|&c| c != self.ch)
-            .map(|c| self.timeline.cycle[c].load(Ordering::Acquire))
-            .min()
-            .unwrap_or(u64::MAX);
-        let paused = self.started && slowest.saturating_add(1) < next;
-        let k = if paused { next - 1 } else { next };
+        let own = c.k.saturating_sub(next);
+        let lag = &self.timeline.skipped[self.ch];
+        lag.fetch_max(own, Ordering::AcqRel);
+        let most = self.timeline.skipped();
+        let dof = self.timeline.dof;
+        let resting = self.qd[..dof].iter().chain(&self.qdd[..dof]).all(|v| v.abs() < 1e-9);
+        let k = if self.started && resting {
+            next.min(c.k.saturating_sub(most)).max(next - 1)
+        } else {
+            next
+        };
+        let paused = self.started && k < next;
         self.started = true;
         self.executed = k + 1;
-        self.timeline.skipped[self.ch].store(c.k.saturating_sub(k), Ordering::Release);
+        lag.store(c.k.saturating_sub(k), Ordering::Release);
         if paused {
             self.timeline.paused.fetch_add(1, Ordering::Relaxed);
         }
