@@ -59,7 +59,7 @@ def ttctl() -> Path:
 def test_a_short_hil_rally_plays_every_ball_against_ttctl(ttctl, tmp_path):
     from ttmanip.hil import run
 
-    n = 12
+    n = 20
     s = run(n, seed=0, out=tmp_path, ttctl=str(ttctl))
     assert s["played"] == n, s["statuses"]
     assert (tmp_path / "summary.json").exists() and (tmp_path / "timeline.png").exists()
@@ -70,7 +70,16 @@ def test_a_short_hil_rally_plays_every_ball_against_ttctl(ttctl, tmp_path):
     assert st["online_observations"] == sent and st["online_received"] == st["online_accepted"]
     assert st["fault"] == "none" and st["online_status_accepted"] >= 1
     assert s["refused_datagrams"] == 0
-    # Scored by the rally's scoring from the measured joints: balls are returned through the
-    # controller (not yet the offline rally's rate: docs/cli.md, "ttmanip hil", measured).
-    assert s["returned"] >= 1, (s["returned"], s["offline_returned"], s["statuses"])
+    # Scored by the rally's scoring from the measured joints: the controller plays the offline
+    # rally's strokes, so it returns about as many balls (a margin of 3 of 20 for the stalls of a
+    # shared machine; 200 balls measured in docs/online.md).
+    assert s["returned"] >= s["offline_returned"] - 3, (s["returned"], s["offline_returned"], s["statuses"])
     assert sum(b["status"] == "no_telemetry" for b in s["balls"]) == 0
+    # Measured in the controller: one decision latency per stroke handed over, the brain's
+    # counters, the cycle statistics split by planning.
+    lat = s["decision_latency_ms"]
+    assert lat["strokes"] == st["online_status_accepted"] >= 1, (lat, st["online_status_accepted"])
+    assert 0 < lat["p50"] <= lat["p99"] <= lat["max"], lat
+    assert s["brain"]["ball_observations"] == sent and s["brain"]["balls"] == n
+    assert s["brain"]["ball_planned"] >= s["offline_returned"] - 3
+    assert {"quiet", "planning"} <= set(s["deadline_misses"])

@@ -77,6 +77,12 @@ def test_bad_input_hits_and_planning_load_through_link(tmp_path):
                 tel = [m for m in _telemetry(link, 0.2) if m.get("kind") == "telemetry"]
                 at_ready = bool(tel) and np.allclose(np.asarray(tel[-1]["q"])[:6], ready, atol=2e-3)
             assert at_ready, "the robot did not reach the ready pose"
+            # settled: the drives' last motion (a few 1e-4 after the approach) has died out
+            settled = False
+            while time.monotonic() < until and not settled:
+                tel = [m for m in _telemetry(link, 0.2) if m.get("kind") == "telemetry"]
+                q = np.asarray([m["q"][:6] for m in tel])
+                settled = len(q) > 1 and np.ptp(q, axis=0).max() < 1e-5
             before = np.asarray(tel[-1]["q"])[:6]
             now = time.monotonic()
             hit = ttmanip.DEMO_HIT

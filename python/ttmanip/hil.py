@@ -241,6 +241,17 @@ def run(
             if time.monotonic() > deadline:
                 raise HilError("no telemetry from the controller within 10 s")
             time.sleep(0.05)
+        # The controller approaches its ready pose after enabling: the balls start once the
+        # measured joints have been at rest for 0.2 s (the rally's robot waits at ready).
+        while True:
+            rows = listener.telemetry[-200:]
+            if len(rows) >= 200 and all(float(np.max(np.abs(r[3]))) < 1e-3 for r in rows):
+                break
+            if proc is not None and proc.poll() is not None:
+                raise HilError(f"ttctl exited with {proc.returncode}: see {out / 'ttctl.log'}")
+            if time.monotonic() > deadline + 10.0:
+                raise HilError("the controller did not come to rest at its ready pose within 20 s")
+            time.sleep(0.05)
         for i in range(n):
             balls.append(play(link, listener, i, seed, world))
             if balls[-1]["status"] == "no_telemetry":
@@ -272,7 +283,31 @@ def run(
         "refused_datagrams": listener.refused,
         "statuses": {s: sum(b["status"] == s for b in balls) for s in {b["status"] for b in balls}},
     }
-    summary["ttctl"] = _stats(out / "ttctl_stats.txt")
+    st = _stats(out / "ttctl_stats.txt")
+    summary["ttctl"] = st
+
+    def stat(key: str, scale: float = 1.0) -> float:
+        v = st.get(key)
+        return float(v) * scale if isinstance(v, float) else float("nan")
+
+    # Measured in the controller: the arrival of the datagram a stroke was decided on (the last
+    # observation used) to the stroke's first cycle, the first changed setpoint.
+    summary["decision_latency_ms"] = {
+        p: stat(f"online_decision_latency_{p}_us", 1e-3) for p in ("p50", "p99", "max")
+    }
+    summary["decision_latency_ms"]["strokes"] = stat("online_decision_latency_count")
+    # Cycle wake-up latency and deadline misses, split by whether the planning thread planned.
+    summary["cycle_latency_us"] = {p: stat(f"latency_{p}_us") for p in ("p50", "p99", "max")}
+    summary["deadline_misses"] = {
+        "all": stat("deadline_misses"),
+        "quiet": stat("deadline_misses_quiet"),
+        "planning": stat("deadline_misses_planning"),
+        "cycles_quiet": stat("cycles_quiet"),
+        "cycles_planning": stat("cycles_planning"),
+        "latency_p99_us_quiet": stat("latency_p99_us_quiet"),
+        "latency_p99_us_planning": stat("latency_p99_us_planning"),
+    }
+    summary["brain"] = {k[len("online_") :]: v for k, v in st.items() if k.startswith("online_ball")}
     summary["offline_statuses"] = [str(x) for x in offline["status"]]
     summary["balls"] = [{k: v for k, v in b.items() if k != "timeline"} for b in balls]
     (out / "summary.json").write_text(json.dumps(summary, indent=2))

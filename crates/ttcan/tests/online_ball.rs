@@ -2,7 +2,7 @@
 //! observations, the clock relation, the latency budget, ready after the hit and on a lost ball.
 
 use ttcan::online::ball::{BallBrain, BallBrainConfig, ClockRelation};
-use ttcan::online::brain::{Brain, Command};
+use ttcan::online::brain::{Brain, Command, SpliceAt};
 use ttcan::online::wire::{HitMsg, ObservationMsg, PlanStatus, StatusMsg};
 use ttkin::ball::decide::DecideConfig;
 use ttkin::ball::flight::Flight;
@@ -66,9 +66,22 @@ fn feed(pl: &ReturnPlanner, cfg: &RallyConfig, b: &mut BallBrain, index: u64, id
             camera_time: t,
             position: *p,
         };
-        match b.observe(&obs, now, &state) {
-            Some(Command::Hit(h)) => hits.push(h),
-            Some(Command::Ready) => panic!("ready in the middle of ball {index}"),
+        match b.observe(&obs, f64::NAN, now, &SpliceAt::at(now, state.clone())) {
+            Some(Command::Stroke(st)) => {
+                // The stroke starts at the decision (the splice instant offered) from its state.
+                assert_eq!(st.start, now);
+                let s0 = st.traj.state(0.0).unwrap();
+                let gap = [(&s0.q, &state.q), (&s0.qd, &state.qd), (&s0.qdd, &state.qdd)]
+                    .iter()
+                    .flat_map(|(a, b)| a.iter().zip(b.iter()).map(|(x, y)| (x - y).abs()))
+                    .fold(0.0f64, f64::max);
+                assert!(
+                    gap < 1e-9,
+                    "ball {index}: the stroke starts {gap} away from the commanded state"
+                );
+                hits.push(st.hit)
+            }
+            Some(c) => panic!("{c:?} in the middle of ball {index}"),
             None => {}
         }
     }
@@ -152,7 +165,10 @@ fn stale_observations_are_dropped_and_counted() {
             camera_time: t,
             position: *p,
         };
-        assert_eq!(b.observe(&obs, t + 5.025, &ready), None);
+        assert_eq!(
+            b.observe(&obs, f64::NAN, t + 5.025, &SpliceAt::at(t + 5.025, ready.clone())),
+            None
+        );
     }
     let s = b.stats();
     assert_eq!(
@@ -191,8 +207,8 @@ fn clock_offset_is_the_smallest_delay() {
             position: [1.0, 0.0, 0.2],
         };
         let now = 100.0 + t + 0.010 + transit;
-        by_send.observe_sent(&obs, t + 0.010, now, &ready);
-        by_delay.observe(&obs, now, &ready);
+        by_send.observe(&obs, t + 0.010, now, &SpliceAt::at(now, ready.clone()));
+        by_delay.observe(&obs, f64::NAN, now, &SpliceAt::at(now, ready.clone()));
     }
     for b in [&by_send, &by_delay] {
         assert!((b.offset().unwrap() - (100.0 + smallest)).abs() < 1e-9);
@@ -204,7 +220,10 @@ fn clock_offset_is_the_smallest_delay() {
         camera_time: 0.0,
         position: [1.0, 0.0, 0.2],
     };
-    assert_eq!(blind.observe(&obs, 1.0, &ready), None);
+    assert_eq!(
+        blind.observe(&obs, f64::NAN, 1.0, &SpliceAt::at(1.0, ready.clone())),
+        None
+    );
     assert_eq!(blind.offset(), None);
 }
 
@@ -227,7 +246,10 @@ fn ready_after_the_hit_and_when_the_ball_is_lost() {
         position: [-1.5, 0.0, 0.2],
     };
     let ignored = b.stats().ignored;
-    assert_eq!(b.observe(&obs, t_hit + 0.08, &ready), None);
+    assert_eq!(
+        b.observe(&obs, f64::NAN, t_hit + 0.08, &SpliceAt::at(t_hit + 0.08, ready.clone())),
+        None
+    );
     assert_eq!(b.stats().ignored, ignored + 1);
     // A new ball seen for 10 frames, then silence: lost after `lost_after`, ready, counted.
     let seen = rally::observe_ball(&truth(), &cfg, 1, None);
@@ -238,7 +260,15 @@ fn ready_after_the_hit_and_when_the_ball_is_lost() {
             camera_time: base + t,
             position: *p,
         };
-        assert_eq!(b.observe(&obs, base + t + 0.01, &ready), None);
+        assert_eq!(
+            b.observe(
+                &obs,
+                f64::NAN,
+                base + t + 0.01,
+                &SpliceAt::at(base + t + 0.01, ready.clone())
+            ),
+            None
+        );
     }
     let last = base + seen.times[9] + 0.01;
     assert_eq!(b.tick(last + 0.04, &ready), None);
@@ -277,16 +307,21 @@ fn a_new_ball_calls_off_the_stroke_still_to_come() {
             camera_time: t,
             position: *p,
         };
-        sent = b.observe(&obs, t + 0.01, &ready).or(sent);
+        sent = b
+            .observe(&obs, f64::NAN, t + 0.01, &SpliceAt::at(t + 0.01, ready.clone()))
+            .or(sent);
     }
-    assert!(matches!(sent, Some(Command::Hit(_))), "ball 0's first plan hits");
+    assert!(matches!(sent, Some(Command::Stroke(_))), "ball 0's first plan hits");
     let t = seen.times[first];
     let obs = ObservationMsg {
         id: 2,
         camera_time: t,
         position: seen.positions[first],
     };
-    assert_eq!(b.observe(&obs, t + 0.01, &ready), Some(Command::Ready));
+    assert_eq!(
+        b.observe(&obs, f64::NAN, t + 0.01, &SpliceAt::at(t + 0.01, ready.clone())),
+        Some(Command::Ready)
+    );
     assert_eq!(b.stats().balls, 2);
 }
 
@@ -346,9 +381,12 @@ fn the_rally_scoring_of_the_brains_strokes_is_the_rallys_outcome() {
                 camera_time: t,
                 position: *p,
             };
-            if let Some(Command::Hit(_)) = b.observe(&obs, now, &state) {
+            if let Some(Command::Stroke(st)) = b.observe(&obs, f64::NAN, now, &SpliceAt::at(now, state.clone())) {
+                // The stroke handed to the runtime is the one the rally executes.
                 let (hit, t_abs) = b.hit().unwrap();
-                pieces.push((t_abs - hit.hit.t, rally::execution(hit, &ready), t_abs));
+                assert_eq!(st.traj, rally::execution(hit, &ready));
+                assert!((st.start - (t_abs - hit.hit.t)).abs() < 1e-12 && st.hit.t_hit == t_abs);
+                pieces.push((st.start, st.traj, t_abs));
             }
         }
         b.tick(1e3, &ready);

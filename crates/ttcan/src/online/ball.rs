@@ -1,10 +1,14 @@
 //! The ball mode's brain (seed 002's "global control system"): camera observations in, hits for
 //! the runtime out. Per ball (a new ball id is a new incoming ball) it makes the rally's
 //! decisions ([`ttkin::ball::decide`]: the first plan after the estimation window, one correction
-//! after the bounce) and turns each hit into a [`Command::Hit`] in the robot's base frame on the
-//! controller's clock; the correction keeps the stroke id, so that the runtime replaces the
-//! stroke. [`Command::Ready`] follows `ready_after` past the hit, or comes when the ball is lost
-//! before a hit was planned.
+//! after the bounce) and hands the runtime the stroke the ball planner built
+//! ([`Command::Stroke`]: the accepted hit leg and the return to ready, `rally::execution`, exactly
+//! what the offline rally executes), planned from the splice instant the runtime offers with the
+//! observation ([`SpliceAt`]: the first cycle a stroke decided now can start at and the state
+//! commanded then), so that the decision's `now` is the stroke's start. The hit goes with it in
+//! the robot's base frame on the controller's clock; the correction keeps the stroke id, so that
+//! the runtime replaces the stroke. [`Command::Ready`] follows `ready_after` past the hit, or
+//! comes when the ball is lost before a hit was planned.
 //!
 //! **Clocks.** Observations carry the camera's time stamp; the planner works on the controller's
 //! clock: controller time = camera time + offset, with the offset given ([`ClockRelation::Offset`],
@@ -17,12 +21,15 @@
 //! **Latency budget.** An observation whose exposure is more than `latency_budget` old on arrival
 //! (controller clock) is dropped and counted (`stale`): a plan from it would start too late.
 
-use super::brain::{Brain, Command};
+use super::brain::{Brain, Command, PlannedStroke, SpliceAt};
+use super::counters::Counters;
 use super::wire::{HitMsg, ObservationMsg, PlanStatus, StatusMsg};
 use std::collections::VecDeque;
+use std::sync::atomic::Ordering;
 use ttkin::ball::decide::{BallDecider, DecideConfig, Decision};
 use ttkin::ball::flight::Flight;
 use ttkin::ball::hitplan::{ReturnHit, ReturnPlanner, ReturnStatus};
+use ttkin::ball::rally::execution;
 use ttkin::chain::Chain;
 use ttkin::traj::JointState;
 
@@ -122,6 +129,22 @@ pub struct BallBrain {
     hit_id: u32,
     sent_ids: VecDeque<u32>,
     stats: BallStats,
+    /// The brain as it was before the last observation, with that observation: a decision whose
+    /// splice instant passed before it was ready is made again from there ([`Brain::retry`]).
+    before: Option<Box<Before>>,
+}
+
+/// The brain's state before an observation, and the observation (see [`BallBrain`]'s `before`).
+#[derive(Debug, Clone)]
+struct Before {
+    ball: Option<Ball>,
+    stroke: u32,
+    hit_id: u32,
+    sent_ids: VecDeque<u32>,
+    stats: BallStats,
+    obs: ObservationMsg,
+    sent: f64,
+    now: f64,
 }
 
 impl BallBrain {
@@ -184,6 +207,7 @@ impl BallBrain {
             hit_id: 0,
             sent_ids: VecDeque::with_capacity(16),
             stats: BallStats::default(),
+            before: None,
         })
     }
 
@@ -220,20 +244,29 @@ impl BallBrain {
         }
     }
 
-    fn command(&mut self, hit: &ReturnHit, now: f64) -> Command {
+    /// The stroke of the ball planner's `hit` decided for the splice `at`: its hit leg from the
+    /// state at `at` and the return to rest at ready, as the offline rally executes it.
+    fn command(&mut self, hit: &ReturnHit, at: &SpliceAt) -> Command {
         self.hit_id = self.hit_id.wrapping_add(1);
         if self.sent_ids.len() == self.sent_ids.capacity() {
             self.sent_ids.pop_front();
         }
         self.sent_ids.push_back(self.hit_id);
-        Command::Hit(hit_msg(hit, self.hit_id, self.stroke, now + hit.hit.t))
+        Command::Stroke(Box::new(PlannedStroke {
+            hit: hit_msg(hit, self.hit_id, self.stroke, at.t + hit.hit.t),
+            cycle: at.cycle,
+            start: at.t,
+            traj: execution(hit, &JointState::rest(&self.planner.ready)),
+        }))
     }
 
     /// The observation `obs` on the controller's clock with the header's send time `sent`
-    /// (camera clock; NaN when unknown).
-    fn receive(&mut self, obs: &ObservationMsg, sent: f64, now: f64, commanded: &JointState) -> Option<Command> {
+    /// (camera clock; NaN when unknown); a stroke decided now starts at `at`.
+    /// (`again`: the same observation taken again, its delay already sampled.)
+    fn receive(&mut self, obs: &ObservationMsg, sent: f64, now: f64, at: &SpliceAt, again: bool) -> Option<Command> {
         self.stats.observations += 1;
         match self.cfg.clock {
+            _ if again => {}
             ClockRelation::SendTime => self.delay_sample(now - sent),
             ClockRelation::MinDelay { latency } => self.delay_sample(now - obs.camera_time - latency),
             ClockRelation::Offset(_) => {}
@@ -270,9 +303,11 @@ impl BallBrain {
             return out;
         }
         ball.last_seen = now;
+        // The decision's `now` is the splice instant: the stroke it plans starts there, from the
+        // state commanded then (the offline rally decides at the delivery and starts there).
         let decision = ball
             .decider
-            .observe(&self.planner, t, obs.position, now, &|_| commanded.clone());
+            .observe(&self.planner, t, obs.position, at.t, &|_| at.state.clone());
         let done = ball.decider.done();
         match decision {
             None => {}
@@ -282,7 +317,7 @@ impl BallBrain {
                 Some(hit) => {
                     self.stroke = self.stroke.wrapping_add(1);
                     self.stats.planned += 1;
-                    out = Some(self.command(&hit, now));
+                    out = Some(self.command(&hit, at));
                     self.ball.as_mut().expect("set above").hit = Some((now + hit.hit.t, hit));
                 }
                 None if done => self.stats.no_hit += 1,
@@ -296,7 +331,7 @@ impl BallBrain {
                             self.stroke = self.stroke.wrapping_add(1);
                         }
                         self.stats.corrected += 1;
-                        out = Some(self.command(&hit, now));
+                        out = Some(self.command(&hit, at));
                         self.ball.as_mut().expect("set above").hit = Some((now + hit.hit.t, *hit));
                     }
                     None if !first => self.stats.no_hit += 1,
@@ -333,12 +368,50 @@ pub fn hit_msg(hit: &ReturnHit, id: u32, stroke: u32, t_hit: f64) -> HitMsg {
 }
 
 impl Brain for BallBrain {
-    fn observe(&mut self, obs: &ObservationMsg, now: f64, commanded: &JointState) -> Option<Command> {
-        self.receive(obs, f64::NAN, now, commanded)
+    fn observe(&mut self, obs: &ObservationMsg, sent: f64, now: f64, splice: &SpliceAt) -> Option<Command> {
+        let before = Before {
+            ball: self.ball.clone(),
+            stroke: self.stroke,
+            hit_id: self.hit_id,
+            sent_ids: self.sent_ids.clone(),
+            stats: self.stats,
+            obs: *obs,
+            sent,
+            now,
+        };
+        match &mut self.before {
+            Some(b) => **b = before,
+            None => self.before = Some(Box::new(before)),
+        }
+        self.receive(obs, sent, now, splice, false)
     }
 
-    fn observe_sent(&mut self, obs: &ObservationMsg, sent: f64, now: f64, commanded: &JointState) -> Option<Command> {
-        self.receive(obs, sent, now, commanded)
+    fn retry(&mut self, splice: &SpliceAt) -> Option<Command> {
+        let b = self.before.as_deref()?.clone();
+        self.ball = b.ball;
+        self.stroke = b.stroke;
+        self.hit_id = b.hit_id;
+        self.sent_ids = b.sent_ids;
+        self.stats = b.stats;
+        self.receive(&b.obs, b.sent, b.now, splice, true)
+    }
+
+    fn publish(&self, c: &Counters) {
+        let s = &self.stats;
+        for (a, v) in [
+            (&c.ball_observations, s.observations),
+            (&c.ball_stale, s.stale),
+            (&c.ball_ignored, s.ignored),
+            (&c.balls, s.balls),
+            (&c.ball_estimate_failed, s.estimate_failed),
+            (&c.ball_no_hit, s.no_hit),
+            (&c.ball_planned, s.planned),
+            (&c.ball_corrected, s.corrected),
+            (&c.ball_lost, s.lost),
+            (&c.ball_refused, s.refused),
+        ] {
+            a.store(v, Ordering::Relaxed);
+        }
     }
 
     fn tick(&mut self, now: f64, _commanded: &JointState) -> Option<Command> {

@@ -1,36 +1,83 @@
 //! The seam between what decides hits and the runtime that plans and executes them. In hit mode
 //! the hits come from the upper computer's datagrams; in ball mode a [`Brain`] turns camera
-//! observations into the same hits. Both run on the planning thread, never on a cycle thread.
+//! observations into strokes it builds itself. Both run on the planning thread, never on a cycle
+//! thread.
 
+use super::counters::Counters;
 use super::wire::{HitMsg, ObservationMsg, StatusMsg};
-use ttkin::traj::JointState;
+use ttkin::traj::{JointState, JointTrajectory};
+
+/// A stroke a brain built completely: the hit it executes and the joint trajectory from the
+/// splice instant it was planned from ([`SpliceAt`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlannedStroke {
+    /// The hit (robot base frame, controller clock), as the status and a re-plan see it.
+    pub hit: HitMsg,
+    /// Executed cycle the stroke starts at (its time 0), the [`SpliceAt::cycle`] it was planned for.
+    pub cycle: u64,
+    /// Controller time of that cycle, s.
+    pub start: f64,
+    /// Joint trajectory from the state commanded at `start` (time 0) through the hit and back
+    /// to rest (m or rad, s from `start`).
+    pub traj: JointTrajectory,
+}
 
 /// What the robot is asked to do, on the controller's clock.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum Command {
     /// Plan and execute this hit (robot base frame, controller clock); a newer hit with the same
     /// `stroke` replaces an older one while the replacement is still feasible.
     Hit(HitMsg),
+    /// Execute this stroke, already planned from the splice instant it names; a newer stroke
+    /// with the same `hit.stroke` replaces an older one. When the splice instant has passed by
+    /// the time the runtime gets it, the runtime plans `hit` again from a later instant.
+    Stroke(Box<PlannedStroke>),
     /// Go back to the ready pose and hold it.
     Ready,
 }
 
+/// The earliest instant a stroke decided now can start at, as the runtime offers it to a brain
+/// with each observation: the executed cycle, its controller time (s) and the joint state the
+/// controller commands then (m or rad; velocities, accelerations). A stroke planned from it is
+/// continuous with what runs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SpliceAt {
+    /// Executed cycle (the runtime's stroke clock).
+    pub cycle: u64,
+    /// Controller time of that cycle, s.
+    pub t: f64,
+    /// The state commanded at that cycle.
+    pub state: JointState,
+}
+
+impl SpliceAt {
+    /// A splice at controller time `t` (s) from `state`, cycle 0 (for a brain driven off-line).
+    pub fn at(t: f64, state: JointState) -> Self {
+        SpliceAt { cycle: 0, t, state }
+    }
+}
+
 /// A ball-mode decision maker: camera observations in, commands out.
 pub trait Brain: Send {
-    /// One camera observation received at controller time `now` (s), with the state the
-    /// controller commands at that time (`commanded`, joint space); returns what to do, if
+    /// One camera observation received at controller time `now` (s), with the header's send time
+    /// `sent` (s, on the sender's clock; NaN when unknown) and the earliest splice instant
+    /// (`splice`: a stroke decided now starts there, from its state); returns what to do, if
     /// anything changes.
-    fn observe(&mut self, obs: &ObservationMsg, now: f64, commanded: &JointState) -> Option<Command>;
-    /// [`Brain::observe`] with the datagram header's send time `sent` (s, on the sender's clock),
-    /// for a brain that relates the camera's clock to the controller's by it; the runtime calls
-    /// this one. By default the send time is not used.
-    fn observe_sent(&mut self, obs: &ObservationMsg, sent: f64, now: f64, commanded: &JointState) -> Option<Command> {
-        let _ = sent;
-        self.observe(obs, now, commanded)
+    fn observe(&mut self, obs: &ObservationMsg, sent: f64, now: f64, splice: &SpliceAt) -> Option<Command>;
+    /// The last observation's decision made again for a later splice instant (its stroke came
+    /// too late for the one it was planned for): the brain goes back to its state before that
+    /// observation and takes it again with `splice`. `None` when there is nothing to retry.
+    fn retry(&mut self, splice: &SpliceAt) -> Option<Command> {
+        let _ = splice;
+        None
     }
     /// Called on the planning thread at least every 10 ms (controller time `now`, s), for
     /// timeouts (a ball gone, silence); returns what to do, if anything changes.
     fn tick(&mut self, now: f64, commanded: &JointState) -> Option<Command>;
     /// How a hit this brain asked for came out (its status as sent to the upper computer).
     fn outcome(&mut self, status: &StatusMsg);
+    /// Copies the brain's own counters into the statistics (nothing by default).
+    fn publish(&self, counters: &Counters) {
+        let _ = counters;
+    }
 }

@@ -13,25 +13,48 @@ macro_rules! counters {
         #[derive(Debug, Default)]
         pub struct Counters {
             $($(#[$doc])* pub $name: AtomicU64,)*
+            /// Latency from the arrival of the datagram a stroke was decided on (the hit, or the
+            /// last observation used) to the stroke's first cycle (its first changed setpoint).
+            pub latency: LatencyHistogram,
         }
 
         /// A copy of the counters at one moment.
         #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
         pub struct CountersSnapshot {
             $($(#[$doc])* pub $name: u64,)*
+            /// Strokes whose decision latency was measured.
+            pub decision_latency_count: u64,
+            /// Decision latency (arrival → first changed setpoint), median, µs (0 without strokes).
+            pub decision_latency_p50_us: u64,
+            /// Decision latency, 99th percentile, µs.
+            pub decision_latency_p99_us: u64,
+            /// Decision latency, largest, µs.
+            pub decision_latency_max_us: u64,
         }
 
         impl Counters {
             /// Reads every counter.
             pub fn snapshot(&self) -> CountersSnapshot {
-                CountersSnapshot { $($name: self.$name.load(Ordering::Relaxed),)* }
+                CountersSnapshot {
+                    $($name: self.$name.load(Ordering::Relaxed),)*
+                    decision_latency_count: self.latency.count(),
+                    decision_latency_p50_us: self.latency.percentile_us(0.50),
+                    decision_latency_p99_us: self.latency.percentile_us(0.99),
+                    decision_latency_max_us: self.latency.max_us(),
+                }
             }
         }
 
         impl CountersSnapshot {
             /// Every counter as (name, value), in declaration order (for the statistics file).
             pub fn entries(&self) -> Vec<(&'static str, u64)> {
-                vec![$((stringify!($name), self.$name),)*]
+                vec![
+                    $((stringify!($name), self.$name),)*
+                    ("decision_latency_count", self.decision_latency_count),
+                    ("decision_latency_p50_us", self.decision_latency_p50_us),
+                    ("decision_latency_p99_us", self.decision_latency_p99_us),
+                    ("decision_latency_max_us", self.decision_latency_max_us),
+                ]
             }
         }
     };
@@ -92,6 +115,102 @@ counters! {
     telemetry_sent,
     /// Datagrams that could not be sent (socket errors).
     send_errors,
+    /// Brain decisions made again for a later splice (the stroke was ready after its splice
+    /// cycle: the decision took longer than the splice lead).
+    splices_redecided,
+    /// Strokes of a brain whose hit was planned again like an upper computer's (still late after
+    /// 3 decisions, or not starting from the scheduled state).
+    splices_replanned,
+    /// Online threads (receiver, planning, telemetry) whose SCHED_FIFO priority the system
+    /// refused: they run on normal scheduling.
+    realtime_refused,
+    /// Cycles a channel held its stroke to keep the stroke clock of a channel that skipped
+    /// deadlines after a stall (all channels summed; read at the end).
+    paused_cycles,
+    /// Ball mode: observations the brain received.
+    ball_observations,
+    /// Ball mode: observations older than the latency budget on arrival (dropped).
+    ball_stale,
+    /// Ball mode: observations of a ball already decided, or not later than its previous one.
+    ball_ignored,
+    /// Ball mode: balls seen (distinct consecutive ids).
+    balls,
+    /// Ball mode: balls whose first estimate failed.
+    ball_estimate_failed,
+    /// Ball mode: balls without a hit (the plans found none).
+    ball_no_hit,
+    /// Ball mode: first hits decided.
+    ball_planned,
+    /// Ball mode: hits corrected after the bounce.
+    ball_corrected,
+    /// Ball mode: balls lost (camera silent) before a hit was planned.
+    ball_lost,
+    /// Ball mode: the brain's hits answered otherwise than accepted or replaced.
+    ball_refused,
+}
+
+/// Bins of the latency histogram, each [`LatencyHistogram::BIN_US`] wide (the last: beyond).
+const LATENCY_BINS: usize = 5000;
+
+/// A histogram of latencies (10 µs bins up to 50 ms, then one bin beyond) in relaxed atomics:
+/// recorded by the planning thread, read for the statistics.
+#[derive(Debug)]
+pub struct LatencyHistogram {
+    bins: Box<[AtomicU64]>,
+    max_us: AtomicU64,
+}
+
+impl Default for LatencyHistogram {
+    fn default() -> Self {
+        LatencyHistogram {
+            bins: (0..LATENCY_BINS).map(|_| AtomicU64::new(0)).collect(),
+            max_us: AtomicU64::new(0),
+        }
+    }
+}
+
+impl LatencyHistogram {
+    /// Width of a bin, µs.
+    pub const BIN_US: u64 = 10;
+
+    /// Records one latency of `s` seconds (negative counts as 0, NaN is ignored).
+    pub fn record(&self, s: f64) {
+        if s.is_nan() {
+            return;
+        }
+        let us = (s.max(0.0) * 1e6).round().min(u64::MAX as f64 / 2.0) as u64;
+        let bin = ((us / Self::BIN_US) as usize).min(LATENCY_BINS - 1);
+        self.bins[bin].fetch_add(1, Ordering::Relaxed);
+        self.max_us.fetch_max(us, Ordering::Relaxed);
+    }
+
+    /// Latencies recorded.
+    pub fn count(&self) -> u64 {
+        self.bins.iter().map(|b| b.load(Ordering::Relaxed)).sum()
+    }
+
+    /// Largest latency recorded, µs.
+    pub fn max_us(&self) -> u64 {
+        self.max_us.load(Ordering::Relaxed)
+    }
+
+    /// The `p` quantile (0..=1), µs: the upper edge of the bin holding it (at most the largest
+    /// latency recorded); 0 when nothing was recorded.
+    pub fn percentile_us(&self, p: f64) -> u64 {
+        let n = self.count();
+        if n == 0 {
+            return 0;
+        }
+        let rank = ((p.clamp(0.0, 1.0) * n as f64).ceil() as u64).max(1);
+        let mut seen = 0;
+        for (k, b) in self.bins.iter().enumerate() {
+            seen += b.load(Ordering::Relaxed);
+            if seen >= rank {
+                return ((k as u64 + 1) * Self::BIN_US).min(self.max_us());
+            }
+        }
+        self.max_us()
+    }
 }
 
 impl Counters {

@@ -12,8 +12,9 @@
 //! The rest of the exchange is atomics in a [`Timeline`]: the cycle each channel is at, the
 //! positions held at enable, the measured joint state (a sequence lock made of atomics), and the
 //! decision on each stroke. Several channels take the same stroke: the first channel thread that
-//! sees it decides for all (compare-and-swap): taken when it arrives before its start cycle,
-//! refused (late) otherwise, so the channels never split on a stroke.
+//! sees it decides for all (compare-and-swap): taken when it arrives before its start cycle is
+//! commanded (at the latest in the cycle that commands it), refused (late) otherwise, so the
+//! channels never split on a stroke.
 
 use std::sync::atomic::{fence, AtomicBool, AtomicU32, AtomicU64, AtomicUsize, Ordering};
 use std::sync::Arc;
@@ -83,6 +84,7 @@ pub struct Timeline {
     measured_qd: [AtomicU64; MAX_JOINTS],
     faults: AtomicU32,
     late: AtomicU64,
+    paused: AtomicU64,
 }
 
 /// The measured joint state as the telemetry thread reads it.
@@ -128,6 +130,7 @@ impl Timeline {
             measured_qd: std::array::from_fn(|_| AtomicU64::new(0)),
             faults: AtomicU32::new(0),
             late: AtomicU64::new(0),
+            paused: AtomicU64::new(0),
         }
     }
 
@@ -189,6 +192,12 @@ impl Timeline {
     /// channel had taken them): a discontinuity, counted.
     pub fn late_applied(&self) -> u64 {
         self.late.load(Ordering::Relaxed)
+    }
+
+    /// Cycles a channel held its stroke still to stay with a channel that had skipped more
+    /// deadlines (summed over the channels).
+    pub fn paused(&self) -> u64 {
+        self.paused.load(Ordering::Relaxed)
     }
 
     /// Opens the decision on stroke `seq` (planning thread, before pushing it).
@@ -302,8 +311,10 @@ pub struct StrokeFollower {
     q: [f64; MAX_JOINTS],
     qd: [f64; MAX_JOINTS],
     qdd: [f64; MAX_JOINTS],
-    /// Cycles executed (deadline index less the skipped deadlines): the strokes' clock.
+    /// The next executed cycle (deadline index less the skipped deadlines): the strokes' clock.
     executed: u64,
+    /// A cycle was executed already.
+    started: bool,
 }
 
 /// The two ends of channel `ch`'s handoff (`joints`: the robot joint of each axis).
@@ -335,6 +346,7 @@ pub fn channel(
             qd: [0.0; MAX_JOINTS],
             qdd: [0.0; MAX_JOINTS],
             executed: 0,
+            started: false,
         },
     )
 }
@@ -354,13 +366,16 @@ impl StrokeFollower {
             let stopped = self.timeline.stopped.load(Ordering::Relaxed);
             let taken = self
                 .timeline
-                .decide(s.seq, k < s.start_cycle && free.is_some() && !stopped);
+                .decide(s.seq, k <= s.start_cycle && free.is_some() && !stopped);
             self.timeline.seen[self.ch].store(s.seq, Ordering::Release);
             if !taken {
                 self.give_back(s);
                 continue;
             }
-            if k >= s.start_cycle {
+            // Seen one cycle after its start (another channel took it at its start cycle): this
+            // channel commanded the running stroke there, which is the new stroke's start state,
+            // so it follows on without a jump. Later than that is a discontinuity.
+            if k > s.start_cycle + 1 {
                 self.timeline.late.fetch_add(1, Ordering::Relaxed);
             }
             // a stroke supersedes every pending one that would start at or after it
@@ -393,12 +408,34 @@ impl StrokeFollower {
 impl SetpointSource for StrokeFollower {
     fn fill(&mut self, c: &CycleInfo, master: &ChannelMaster, out: &mut [AxisSetpoint], qdd: &mut [f64]) -> bool {
         let n = out.len();
-        // the strokes run on executed cycles: a stall of this thread pauses them (the drives'
-        // physics advance per SYNC too), the target never jumps; the skipped deadlines are
-        // published so that the planner maps the controller clock onto this count
-        let k = self.executed;
-        self.executed += 1;
-        self.timeline.skipped[self.ch].store(c.k.saturating_sub(k), Ordering::Release);
+        // The strokes run on executed cycles: a stall of this thread pauses them (the drives'
+        // physics advance per SYNC too), the target never jumps. The channels keep one stroke
+        // clock: a channel whose thread skipped fewer deadlines than another's holds its stroke
+        // (repeats its setpoint) until their counts agree, but only while its joints are at
+        // rest (a held target of drives in motion stops them abruptly: their tracking error
+        // jumps and a drive may refuse the next target, EMCY 0xFF01). So the joints of
+        // different channels are apart by the stalls of one stroke at most and agree again at
+        // the next rest (the ready pose between balls). The skipped deadlines are published
+        // so that the planner maps the controller clock onto this count.
+        let next = self.executed;
+        let own = c.k.saturating_sub(next);
+        let lag = &self.timeline.skipped[self.ch];
+        lag.fetch_max(own, Ordering::AcqRel);
+        let most = self.timeline.skipped();
+        let dof = self.timeline.dof;
+        let resting = self.qd[..dof].iter().chain(&self.qdd[..dof]).all(|v| v.abs() < 1e-9);
+        let k = if self.started && resting {
+            next.min(c.k.saturating_sub(most)).max(next - 1)
+        } else {
+            next
+        };
+        let paused = self.started && k < next;
+        self.started = true;
+        self.executed = k + 1;
+        lag.store(c.k.saturating_sub(k), Ordering::Release);
+        if paused {
+            self.timeline.paused.fetch_add(1, Ordering::Relaxed);
+        }
         self.timeline.cycle[self.ch].store(k, Ordering::Release);
         if c.phase != Phase::Run {
             if matches!(c.phase, Phase::Stopping | Phase::Stopped) {
@@ -434,8 +471,11 @@ impl SetpointSource for StrokeFollower {
         {
             Some((start, traj)) if traj.dof() == dof => {
                 let t = ((k - start.min(k)) as f64 * c.period).min(traj.duration());
-                traj.sample(t, &mut self.q[..dof], &mut self.qd[..dof], &mut self.qdd[..dof])
-                    .is_ok()
+                let ok = traj
+                    .sample(t, &mut self.q[..dof], &mut self.qd[..dof], &mut self.qdd[..dof])
+                    .is_ok();
+                // paused: the same sample as the cycle before (the target held)
+                ok
             }
             _ => false,
         };

@@ -6,8 +6,13 @@
 //! the cycle threads have taken (or refused) the stroke. A hit that cannot be planned leaves the
 //! robot doing what it did.
 //!
-//! Splice rules: the stroke starts `splice_lead` after the present cycle (planning must finish
-//! before; if it did not, the plan is made again with twice the lead, up to three times). A newer
+//! Splice rules: the stroke starts at the first cycle at least `splice_lead` after the decision
+//! (and after the present cycle; planning must finish before that cycle is commanded; if it did
+//! not, the plan is made again with a lead of twice the one before or twice the planning time,
+//! whichever is longer, three tries in all). A stroke a [`Brain`] built
+//! ([`Command::Stroke`]) is handed over as it is at the cycle it was planned for, when that cycle
+//! is still ahead and the stroke starts from the state scheduled there; otherwise its hit is
+//! planned again like an upper computer's (counted `splices_replanned`). A newer
 //! hit with the same stroke id, while the older one's hit time is still ahead, replaces it from
 //! the present state (the older one is answered `replaced`); a hit for another stroke is spliced
 //! into the return leg after the pending hit. Silence longer than the timeout, or a
@@ -24,7 +29,7 @@ use ttkin::hit::{Hit, HitPlanner, HitStatus};
 use ttkin::traj::duration::minimal_quintic_duration;
 use ttkin::traj::{JointState, JointTrajectory};
 
-use super::brain::{Brain, Command};
+use super::brain::{Brain, Command, PlannedStroke, SpliceAt};
 use super::counters::Counters;
 use super::handoff::{Decision, Sender, Timeline};
 use super::receiver::{controller_time, send_status, Inbound};
@@ -93,6 +98,9 @@ struct Committed {
     id: u32,
     stroke: u32,
     t_hit: f64,
+    /// The executed cycle of the hit: the strokes' clock (a stall after the plan makes the hit
+    /// later on the controller clock, not on this one).
+    hit_cycle: u64,
 }
 
 /// The planning state: the planner, the schedule, the handoff senders.
@@ -114,6 +122,15 @@ pub struct HitOutcome {
     pub status: StatusMsg,
     /// The status of the hit it replaced.
     pub replaced: Option<StatusMsg>,
+}
+
+/// Why a brain's stroke was not handed over as it is ([`Splicer::stroke`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StrokeMiss {
+    /// Its splice cycle came before it was ready (the decision took longer than the lead).
+    Late,
+    /// It does not start from the state scheduled at its splice cycle.
+    Discontinuous,
 }
 
 fn status(id: u32, s: PlanStatus, earliest: f64, t_hit: f64, planning_time: f64) -> StatusMsg {
@@ -155,6 +172,16 @@ impl Splicer {
         }
     }
 
+    /// Sets the ready pose (m or rad, one per joint; ball mode: the ball planner's, from which
+    /// its strokes start); refused (`false`) once the schedule runs or with another joint count.
+    pub fn set_ready(&mut self, ready: &[f64]) -> bool {
+        if self.schedule.is_some() || ready.len() != self.ready.len() || ready.iter().any(|x| !x.is_finite()) {
+            return false;
+        }
+        self.ready = ready.to_vec();
+        true
+    }
+
     /// The ready pose.
     pub fn ready(&self) -> &[f64] {
         &self.ready
@@ -179,8 +206,29 @@ impl Splicer {
         true
     }
 
-    fn lead_cycles(&self, factor: f64) -> u64 {
-        (self.cfg.splice_lead * factor / self.timeline.period()).ceil().max(2.0) as u64
+    /// The splice cycle of a decision made now: the first executed cycle at least
+    /// `factor × splice_lead` from now, after the present one. A stroke handed over before the
+    /// cycle threads command that cycle starts there.
+    fn splice_cycle(&self, factor: f64) -> u64 {
+        let tl = &self.timeline;
+        let present = tl.present_cycle();
+        let at = tl.cycle_at(controller_time() + self.cfg.splice_lead * factor);
+        at.max(present + 1)
+    }
+
+    /// The earliest splice a brain deciding now can plan from (cycle, time, commanded state):
+    /// `factor × splice_lead` ahead.
+    pub fn splice_at(&self, factor: f64) -> SpliceAt {
+        let cycle = self.splice_cycle(factor);
+        let state = self
+            .schedule
+            .as_ref()
+            .map_or_else(|| JointState::rest(&self.ready), |s| s.state_at(cycle));
+        SpliceAt {
+            cycle,
+            t: self.timeline.time_of(cycle),
+            state,
+        }
     }
 
     /// Hands `traj` over to start at `start`; waits until every channel has decided. True when
@@ -218,8 +266,7 @@ impl Splicer {
             let Some(schedule) = self.schedule.as_ref() else {
                 return false;
             };
-            let present = self.timeline.present_cycle();
-            let s = present + self.lead_cycles(factor);
+            let s = self.splice_cycle(factor);
             let state = schedule.state_at(s);
             let end_cycle = schedule.end_cycle();
             let at_ready = state.q.iter().zip(&self.ready).all(|(a, b)| (a - b).abs() < 1e-9)
@@ -235,7 +282,7 @@ impl Splicer {
                 return false;
             };
             Counters::bump(&counters.plans);
-            if self.timeline.present_cycle() + 2 >= s {
+            if self.timeline.present_cycle() >= s {
                 continue;
             }
             if self.hand_over(s, &traj) {
@@ -264,18 +311,19 @@ impl Splicer {
             return reject(arrival);
         }
         let tl = self.timeline.clone();
-        for factor in [1.0, 2.0, 4.0] {
-            let present = tl.present_cycle();
-            let mut s = present + self.lead_cycles(factor);
+        let mut factor: f64 = 1.0;
+        for _ in 0..3 {
+            let began = controller_time();
+            let mut s = self.splice_cycle(factor);
             let mut replaces = None;
-            if let Some(last) = self.last.filter(|l| l.t_hit > tl.time_of(s)) {
+            if let Some(last) = self.last.filter(|l| l.hit_cycle > s) {
                 if last.stroke == h.stroke {
                     replaces = Some(last);
-                } else if h.t_hit <= last.t_hit + 2.0 * tl.period() {
+                } else if h.t_hit <= tl.time_of(last.hit_cycle) + 2.0 * tl.period() {
                     // another stroke's hit comes first
                     return reject(arrival);
                 } else {
-                    s = s.max(tl.cycle_at(last.t_hit) + 1);
+                    s = s.max(last.hit_cycle + 1);
                 }
             } else if self.last.is_some_and(|l| l.stroke == h.stroke) {
                 // that stroke's hit is done: nothing left to replace
@@ -285,7 +333,8 @@ impl Splicer {
                 return reject(arrival);
             };
             let state = schedule.state_at(s);
-            let t_rel = (h.t_hit - tl.time_of(s)).max(1e-3);
+            let t_s = tl.time_of(s);
+            let t_rel = (h.t_hit - t_s).max(1e-3);
             let hit = Hit {
                 pose,
                 twist: h.twist,
@@ -319,8 +368,10 @@ impl Splicer {
             let Some(traj) = plan.trajectory.as_ref() else {
                 return reject(arrival);
             };
-            if tl.present_cycle() + 2 >= s {
-                // planning took longer than the lead: again, further ahead
+            if tl.present_cycle() >= s {
+                // planning took longer than the lead: again, twice as far ahead or twice the
+                // planning time, whichever is further
+                factor = (2.0 * factor).max(2.0 * (controller_time() - began) / self.cfg.splice_lead);
                 continue;
             }
             if !self.hand_over(s, traj) {
@@ -328,11 +379,13 @@ impl Splicer {
                 return reject(arrival);
             }
             Counters::bump(&counters.splices);
-            let t_hit = tl.time_of(s) + plan.t_hit;
+            counters.latency.record(t_s - arrival);
+            let t_hit = t_s + plan.t_hit;
             self.last = Some(Committed {
                 id: h.id,
                 stroke: h.stroke,
                 t_hit,
+                hit_cycle: s + (plan.t_hit / tl.period()).round() as u64,
             });
             let elapsed = controller_time() - arrival;
             let us = (elapsed * 1e6) as u64;
@@ -343,6 +396,81 @@ impl Splicer {
             };
         }
         reject(arrival)
+    }
+
+    /// Splices a stroke a brain built for its splice cycle (decided on a datagram received at
+    /// controller time `arrival`, s): handed over as it is when that cycle is still ahead and the
+    /// stroke starts from the state scheduled there; otherwise nothing changes and the error
+    /// says why (the caller decides again or re-plans the hit, [`Splicer::replan`]). The
+    /// replacement rules are [`Splicer::hit`]'s; while another stroke's hit is still to come,
+    /// the hit is planned into that one's return leg.
+    pub fn stroke(&mut self, st: &PlannedStroke, arrival: f64, counters: &Counters) -> Result<HitOutcome, StrokeMiss> {
+        let h = &st.hit;
+        let reject = |t: f64| HitOutcome {
+            status: status(h.id, PlanStatus::Rejected, f64::NAN, f64::NAN, controller_time() - t),
+            replaced: None,
+        };
+        let now = controller_time();
+        if hit_pose(h).is_none() || h.t_hit <= now || self.timeline.stopped.load(Ordering::Relaxed) {
+            return Ok(reject(arrival));
+        }
+        let tl = self.timeline.clone();
+        let s = st.cycle;
+        let Some(schedule) = self.schedule.as_ref() else {
+            return Ok(reject(arrival));
+        };
+        let mut replaces = None;
+        if let Some(last) = self.last.filter(|l| l.hit_cycle > s) {
+            if last.stroke == h.stroke {
+                replaces = Some(last);
+            } else {
+                // another stroke's hit is still to come: spliced into its return leg as a hit
+                return Ok(self.replan(h, arrival, counters));
+            }
+        } else if self.last.is_some_and(|l| l.stroke == h.stroke) {
+            return Ok(reject(arrival));
+        }
+        // Continuous with what runs: the stroke starts from the state scheduled at its cycle.
+        let from = schedule.state_at(s);
+        let Ok(start) = st.traj.state(0.0) else {
+            return Err(StrokeMiss::Discontinuous);
+        };
+        let close =
+            |a: &[f64], b: &[f64], tol: f64| a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() <= tol);
+        let continuous =
+            close(&start.q, &from.q, 1e-9) && close(&start.qd, &from.qd, 1e-7) && close(&start.qdd, &from.qdd, 1e-5);
+        if !continuous {
+            return Err(StrokeMiss::Discontinuous);
+        }
+        if tl.present_cycle() >= s || (tl.time_of(s) - st.start).abs() > 0.25 * tl.period() {
+            return Err(StrokeMiss::Late);
+        }
+        if !self.hand_over(s, &st.traj) {
+            Counters::bump(&counters.splices_late);
+            return Err(StrokeMiss::Late);
+        }
+        Counters::bump(&counters.splices);
+        counters.latency.record(tl.time_of(s) - arrival);
+        self.last = Some(Committed {
+            id: h.id,
+            stroke: h.stroke,
+            t_hit: h.t_hit,
+            hit_cycle: s + ((h.t_hit - st.start) / tl.period()).round().max(0.0) as u64,
+        });
+        let elapsed = controller_time() - arrival;
+        counters
+            .plan_time_max_us
+            .fetch_max((elapsed * 1e6) as u64, Ordering::Relaxed);
+        Ok(HitOutcome {
+            status: status(h.id, PlanStatus::Accepted, f64::NAN, h.t_hit, elapsed),
+            replaced: replaces.map(|r| status(r.id, PlanStatus::Replaced, f64::NAN, f64::NAN, elapsed)),
+        })
+    }
+
+    /// Plans a brain's hit `h` again like an upper computer's hit ([`Splicer::hit`]), counted.
+    pub fn replan(&mut self, h: &HitMsg, arrival: f64, counters: &Counters) -> HitOutcome {
+        Counters::bump(&counters.splices_replanned);
+        self.hit(h, arrival, counters)
     }
 }
 
@@ -371,6 +499,7 @@ pub fn run_planner(
                 .unwrap_or_else(|| JointState::rest(sp.ready()))
         };
         let mut command = None;
+        let mut decided_in = 0.0;
         match msg {
             Ok(Inbound::Hit { hit, arrival }) => {
                 Counters::bump(&counters.hits);
@@ -383,8 +512,12 @@ pub fn run_planner(
                 last_heard = Some(arrival);
                 silent = false;
                 if let Some(b) = brain.as_deref_mut() {
-                    let state = commanded(&splicer);
-                    command = b.observe_sent(&obs, sent, now, &state).map(|c| (c, arrival));
+                    let at = splicer.splice_at(1.0);
+                    tl_planning(&splicer, true);
+                    command = b.observe(&obs, sent, now, &at).map(|c| (c, arrival));
+                    tl_planning(&splicer, false);
+                    decided_in = controller_time() - now;
+                    b.publish(counters);
                 }
             }
             Err(RecvTimeoutError::Timeout) => {}
@@ -394,6 +527,7 @@ pub fn run_planner(
             if let Some(b) = brain.as_deref_mut() {
                 let state = commanded(&splicer);
                 command = b.tick(now, &state).map(|c| (c, now));
+                b.publish(counters);
             }
         }
         if let Some(t) = last_heard {
@@ -404,15 +538,29 @@ pub fn run_planner(
             }
         }
         match command {
-            Some((Command::Hit(h), arrival)) => {
-                let out = if started {
-                    splicer.hit(&h, arrival, counters)
-                } else {
-                    HitOutcome {
-                        status: status(h.id, PlanStatus::Rejected, f64::NAN, f64::NAN, now - arrival),
-                        replaced: None,
+            Some((Command::Ready, _)) => {
+                splicer.to_ready(counters);
+            }
+            Some((c, arrival)) => {
+                let out = match c {
+                    _ if !started => {
+                        let id = match &c {
+                            Command::Stroke(st) => st.hit.id,
+                            Command::Hit(h) => h.id,
+                            Command::Ready => 0,
+                        };
+                        Some(HitOutcome {
+                            status: status(id, PlanStatus::Rejected, f64::NAN, f64::NAN, now - arrival),
+                            replaced: None,
+                        })
                     }
+                    Command::Stroke(st) => {
+                        splice_stroke(&mut splicer, brain.as_deref_mut(), st, arrival, decided_in, counters)
+                    }
+                    Command::Hit(h) => Some(splicer.hit(&h, arrival, counters)),
+                    Command::Ready => None,
                 };
+                let Some(out) = out else { continue };
                 for s in out.replaced.iter().chain(std::iter::once(&out.status)) {
                     seq += 1;
                     send_status(socket, reply, seq, controller_time(), s, counters);
@@ -421,10 +569,52 @@ pub fn run_planner(
                     }
                 }
             }
-            Some((Command::Ready, _)) => {
-                splicer.to_ready(counters);
-            }
             None => {}
         }
     }
+}
+
+/// Splices a brain's stroke; when its splice cycle passed before it was ready, the brain makes
+/// the decision again for a splice twice its decision time ahead (at most 3 times), then the hit
+/// is planned again from a later cycle; a stroke that does not start from the scheduled state is
+/// planned again at once. `None` when the decision made again has no hit (nothing to answer).
+fn splice_stroke<'c>(
+    splicer: &mut Splicer,
+    mut brain: Option<&mut (dyn Brain + 'c)>,
+    mut st: Box<PlannedStroke>,
+    arrival: f64,
+    mut decided_in: f64,
+    counters: &Counters,
+) -> Option<HitOutcome> {
+    for _ in 0..3 {
+        match splicer.stroke(&st, arrival, counters) {
+            Ok(out) => return Some(out),
+            Err(StrokeMiss::Discontinuous) => break,
+            Err(StrokeMiss::Late) => {}
+        }
+        let Some(b) = brain.as_deref_mut() else { break };
+        Counters::bump(&counters.splices_redecided);
+        let factor = (2.0 * decided_in / splicer.cfg.splice_lead).max(2.0);
+        let at = splicer.splice_at(factor);
+        let t0 = controller_time();
+        tl_planning(splicer, true);
+        let next = b.retry(&at);
+        tl_planning(splicer, false);
+        decided_in = controller_time() - t0;
+        b.publish(counters);
+        match next {
+            Some(Command::Stroke(n)) => st = n,
+            Some(Command::Hit(h)) => return Some(splicer.hit(&h, arrival, counters)),
+            Some(Command::Ready) => {
+                splicer.to_ready(counters);
+                return None;
+            }
+            None => return None,
+        }
+    }
+    Some(splicer.replan(&st.hit, arrival, counters))
+}
+
+fn tl_planning(splicer: &Splicer, on: bool) {
+    splicer.timeline.planning.store(on, Ordering::Relaxed);
 }

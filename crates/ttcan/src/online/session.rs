@@ -43,6 +43,12 @@ pub struct OnlineConfig {
     /// Commands waiting for the planning thread at most (more are refused, hits answered).
     #[serde(default = "queue")]
     pub queue: usize,
+    /// SCHED_FIFO priority (1–98) of the receiver, planning and telemetry threads, below the
+    /// channel threads' (so that other processes of the machine do not delay a decision); 0
+    /// keeps them on normal scheduling. Refused by the system: normal scheduling, counted
+    /// (`realtime_refused`).
+    #[serde(default = "thread_priority")]
+    pub priority: u8,
 }
 
 fn silence() -> f64 {
@@ -60,6 +66,9 @@ fn decimation() -> u32 {
 fn queue() -> usize {
     64
 }
+fn thread_priority() -> u8 {
+    40
+}
 
 impl Default for OnlineConfig {
     fn default() -> Self {
@@ -69,6 +78,7 @@ impl Default for OnlineConfig {
             splice_lead_s: lead(),
             telemetry_decimation: decimation(),
             queue: queue(),
+            priority: thread_priority(),
         }
     }
 }
@@ -91,6 +101,12 @@ impl OnlineConfig {
         }
         if !(1..=100_000).contains(&self.queue) {
             return Err(format!("online.queue = {}: must be in 1..=100000", self.queue));
+        }
+        if self.priority > 98 {
+            return Err(format!(
+                "online.priority = {}: must be in 0..=98 (0: normal scheduling)",
+                self.priority
+            ));
         }
         Ok(())
     }
@@ -117,6 +133,7 @@ impl Session {
         }
         let mut c = self.counters.snapshot();
         c.splices_late += self.timeline.late_applied();
+        c.paused_cycles = self.timeline.paused();
         c
     }
 }
@@ -192,7 +209,7 @@ pub fn start(
         senders.push(s);
         followers.push(f);
     }
-    let splicer = Splicer::new(
+    let mut splicer = Splicer::new(
         planner,
         timeline.clone(),
         senders,
@@ -201,7 +218,12 @@ pub fn start(
             silence: cfg.silence_s,
         },
     );
+    // Ball mode: the robot waits at the ball planner's ready pose, where its strokes start.
+    if let Some(b) = &brain {
+        splicer.set_ready(&b.planner().ready);
+    }
     let (tx, rx) = sync_channel(cfg.queue);
+    let prio = cfg.priority;
     let mut threads = Vec::new();
     {
         let (socket, counters, stop) = (socket.try_clone()?, counters.clone(), stop.clone());
@@ -209,7 +231,10 @@ pub fn start(
         threads.push(
             std::thread::Builder::new()
                 .name("ttctl-receiver".into())
-                .spawn(move || run_receiver(&socket, mode, budget, reply, &tx, &counters, &stop))?,
+                .spawn(move || {
+                    realtime(prio, &counters);
+                    run_receiver(&socket, mode, budget, reply, &tx, &counters, &stop)
+                })?,
         );
     }
     {
@@ -218,6 +243,7 @@ pub fn start(
             std::thread::Builder::new()
                 .name("ttctl-planner".into())
                 .spawn(move || {
+                    realtime(prio, &counters);
                     let mut brain = brain;
                     let b = brain.as_mut().map(|b| b as &mut dyn Brain);
                     run_planner(splicer, &rx, b, &socket, reply, &counters, &stop)
@@ -230,7 +256,10 @@ pub fn start(
         threads.push(
             std::thread::Builder::new()
                 .name("ttctl-telemetry".into())
-                .spawn(move || run_telemetry(&socket, reply, &tl, every, &counters, &stop))?,
+                .spawn(move || {
+                    realtime(prio, &counters);
+                    run_telemetry(&socket, reply, &tl, every, &counters, &stop)
+                })?,
         );
     }
     Ok((
@@ -243,6 +272,13 @@ pub fn start(
         },
         followers,
     ))
+}
+
+/// Switches the calling thread to SCHED_FIFO at `prio` (nothing for 0); a refusal is counted.
+fn realtime(prio: u8, counters: &Counters) {
+    if prio > 0 && crate::runtime::rt::make_thread_realtime(prio).is_err() {
+        Counters::bump(&counters.realtime_refused);
+    }
 }
 
 /// Sends the measured joint state to `reply` every `every_ns` until `stop` (once the channels run).

@@ -1,0 +1,70 @@
+//! The online handoff's one stroke clock: two channels follow the same stroke; when one channel
+//! thread stalls and skips deadlines during the stroke, the other keeps moving (holding drives in
+//! motion would stop them abruptly) and holds its stroke as long once at rest, so that from then
+//! on both command the stroke clock at the same time again (without the rule the joints on the
+//! two channels would stay apart by the stall for the rest of the run). Stepped by hand: no
+//! threads, no timing.
+
+#[path = "support/channel.rs"]
+mod channel;
+use std::sync::Arc;
+use ttcan::online::handoff::{self, Decision, Timeline};
+use ttcan::runtime::channel::{CycleInfo, SetpointSource};
+use ttcan::runtime::master::{AxisSetpoint, ChannelMaster, Phase};
+use ttkin::traj::{JointState, JointTrajectory};
+
+fn step(f: &mut handoff::StrokeFollower, master: &ChannelMaster, k: u64) -> [f64; 2] {
+    let info = CycleInfo {
+        k,
+        t: k as f64 * 1e-3,
+        phase: Phase::Run,
+        period: 1e-3,
+    };
+    let mut out = [AxisSetpoint::default(); 2];
+    let mut qdd = [0.0; 2];
+    f.fill(&info, master, &mut out, &mut qdd);
+    [out[0].q, out[1].q]
+}
+
+#[test]
+fn a_stall_during_a_stroke_is_made_up_at_rest() {
+    let (ma, _) = channel::running_channel();
+    let (mb, _) = channel::running_channel();
+    let tl = Arc::new(Timeline::new(2, 4, 1_000_000, 0));
+    let (mut sa, mut fa) = handoff::channel(0, [Some(0), Some(1), None, None], tl.clone());
+    let (mut sb, mut fb) = handoff::channel(1, [Some(2), Some(3), None, None], tl.clone());
+    // Deadline 0: both enabled (hold published), then a 0.5 s stroke of all four joints from 0.
+    step(&mut fa, &ma, 0);
+    step(&mut fb, &mb, 0);
+    let hold = tl.hold();
+    let end: Vec<f64> = hold.iter().map(|h| h + 0.3).collect();
+    let traj = JointTrajectory::quintic_between(&JointState::rest(&hold), &JointState::rest(&end), 0.5).unwrap();
+    tl.open(1);
+    assert!(sa.push(1, 2, &traj) && sb.push(1, 2, &traj));
+    let (mut qa, mut qb) = (Vec::new(), Vec::new());
+    for k in 1..=560u64 {
+        qa.push((k, step(&mut fa, &ma, k)));
+        // channel B's thread stalls during the stroke: deadlines 20..=24 skipped
+        if !(20..=24).contains(&k) {
+            qb.push((k, step(&mut fb, &mb, k)));
+        }
+    }
+    assert_eq!(tl.decision(1), Decision::Taken);
+    // The stroke sample at an executed cycle (the stroke starts at executed cycle 2).
+    let sample = |k_exec: u64| traj.state(((k_exec as f64 - 2.0) * 1e-3).clamp(0.0, 0.5)).unwrap().q;
+    // A never stalled and does not hold drives in motion: it follows the deadlines through the
+    // stroke; B resumes where it stopped, 5 cycles behind.
+    for (k, q) in qa.iter().filter(|(k, _)| *k <= 502) {
+        let want = sample(*k);
+        assert!((q[0] - want[0]).abs() < 1e-12, "A at deadline {k}: {q:?} vs {want:?}");
+    }
+    for (k, q) in &qb {
+        let exec = if *k < 20 { *k } else { *k - 5 };
+        let want = sample(exec);
+        assert!((q[0] - want[2]).abs() < 1e-12, "B at deadline {k}: {q:?} vs {want:?}");
+    }
+    // At rest after the stroke, A holds for the 5 cycles B skipped: one stroke clock again.
+    assert_eq!(tl.paused(), 5);
+    assert_eq!(tl.skipped(), 5);
+    assert_eq!(tl.present_cycle(), 555);
+}
