@@ -2,7 +2,11 @@
 //! ([`crate::ball::hitplan`]) chose. For a [`Hit`] (racket pose, twist, time) and the stroke's
 //! start state, each analytic IK branch within the position limits gets its joint velocities
 //! q̇ = J⁻¹V, its hit leg ([`super::leg`]: quintic or jerk-limited, on time) and its effort check
-//! (certified peak, [`crate::dynamics::peak`]); the branch with the largest margin is kept.
+//! (certified peak, [`crate::dynamics::peak`]); a leg beyond the effort limits is replaced by a
+//! gentler jerk-limited leg to the same hit state ([`super::leg::scaled_jerk_leg`]: acceleration
+//! and jerk limits scaled below the rejected leg's peak use by its torque excess, at most
+//! `EFFORT_RETRIES` times, each leg certified like the first) while that still arrives on time;
+//! the branch with the largest margin is kept.
 //!
 //! [`HitPlanner::plan`] plans one whole stroke (hit and return legs) on the branch nearest the
 //! current state and moves a late hit; this is the cheaper question a search over thousands of
@@ -128,6 +132,21 @@ impl HitPlanner {
         let mut data = DynamicsData::new(dynamics);
         let gravity = Vector3::from(self.gravity);
         let threshold = 1.0 + LIMIT_TOLERANCE;
+        // The torque at the leg's knots first (the ends of its jerk phases: plateaus of the
+        // acceleration, and the hit): a value above the limit at an instant rejects the leg at once,
+        // as the certified search would after its enclosures (most rejected legs peak at a knot).
+        let n = leg.dof();
+        let (mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        for &t in leg.knots() {
+            leg.sample_unchecked(t, &mut q, &mut qd, &mut qdd);
+            let tau = dynamics.inverse_dynamics_unchecked(&mut data, &q, &qd, &qdd, &gravity);
+            let excess = (0..n)
+                .map(|j| tau[j].abs() / self.effort.at(j, qd[j]))
+                .fold(0.0, f64::max);
+            if excess > threshold {
+                return Some(excess);
+            }
+        }
         let stop = PeakStop::decide(threshold, 1e-3);
         let peak = dynamics.effort_peak(&mut data, leg, &self.effort, &gravity, stop);
         (peak.bound > threshold).then_some(peak.ratio.max(1.0))
@@ -354,6 +373,12 @@ mod tests {
                 let Some(first) = hit_leg_above(&start, q, &qd, hit.t, &pl.limits, f64::NEG_INFINITY) else {
                     continue;
                 };
+                // The knots' pre-check decides as the certified search alone.
+                let g = Vector3::from(pl.gravity);
+                let threshold = 1.0 + LIMIT_TOLERANCE;
+                let stop = PeakStop::decide(threshold, 1e-3);
+                let certified = dy.effort_peak(&mut data, &first.trajectory, &pl.effort, &g, stop);
+                assert_eq!(pl.within_effort(&first.trajectory), certified.bound <= threshold);
                 if pl.within_effort(&first.trajectory) {
                     continue;
                 }
