@@ -14,7 +14,7 @@ use nalgebra::Vector3;
 use rayon::prelude::*;
 use ttkin::ball::flight::{BallState, Flight};
 use ttkin::ball::hitplan::{shoot, ReturnPlanner};
-use ttkin::ball::rally::{self, RallyConfig};
+use ttkin::ball::rally::{self, RallyConfig, WorldSpread};
 use ttkin::ball::reach::{min_joint_time, walk_after_bounce, Reach, ReachRegion};
 use ttkin::hit::leg::hit_leg;
 use ttkin::ik::{joint_velocity, Analytic, LimitFilter};
@@ -162,6 +162,10 @@ fn main() {
     };
     let cfg = RallyConfig {
         correction_delay: std::env::var("CORRECT").map_or(cfg.correction_delay, |r| r.parse().expect("CORRECT (s)")),
+        // WORLD=mismatch: every ball in a world of its own (`ttmanip rally --world mismatch`).
+        world: std::env::var("WORLD")
+            .is_ok_and(|w| w == "mismatch")
+            .then(WorldSpread::measured),
         ..cfg
     };
     let region = ReachRegion::new(pl.chain(), pl.placement, pl.ready.clone(), truth.model.radius).expect("region");

@@ -2,7 +2,11 @@
 //! ([`crate::ball::hitplan`]) chose. For a [`Hit`] (racket pose, twist, time) and the stroke's
 //! start state, each analytic IK branch within the position limits gets its joint velocities
 //! q̇ = J⁻¹V, its hit leg ([`super::leg`]: quintic or jerk-limited, on time) and its effort check
-//! (certified peak, [`crate::dynamics::peak`]); the branch with the largest margin is kept.
+//! (certified peak, [`crate::dynamics::peak`]); a leg beyond the effort limits is replaced by a
+//! gentler jerk-limited leg to the same hit state ([`super::leg::scaled_jerk_leg`]: acceleration
+//! and jerk limits scaled below the rejected leg's peak use by its torque excess, at most
+//! `EFFORT_RETRIES` times, each leg certified like the first) while that still arrives on time;
+//! the branch with the largest margin is kept.
 //!
 //! [`HitPlanner::plan`] plans one whole stroke (hit and return legs) on the branch nearest the
 //! current state and moves a late hit; this is the cheaper question a search over thousands of
@@ -10,7 +14,7 @@
 
 use nalgebra::{IsometryMatrix3, Matrix6, Vector3, Vector6};
 
-use super::leg::{hit_leg_above, min_joint_time, HitLeg};
+use super::leg::{hit_leg_above, min_joint_time, scaled_jerk_leg, HitLeg};
 use super::{Hit, HitPlanner};
 use crate::chain::JacobianFrame;
 use crate::dynamics::{DynamicsData, PeakStop};
@@ -18,6 +22,14 @@ use crate::ik::{joint_velocity, DifferentialIk, Solutions};
 use crate::linalg::cholesky::factor_in_place;
 use crate::traj::limits::LIMIT_TOLERANCE;
 use crate::traj::{JointState, JointTrajectory};
+
+/// Most gentler legs ([`scaled_jerk_leg`]) tried for a hit state whose leg exceeds the effort limits.
+const EFFORT_RETRIES: usize = 3;
+/// The scale of a gentler leg is the rejected leg's used acceleration times EFFORT_SAFETY / excess
+/// (the inertial torque shrinks with it; gravity, friction and the velocity terms do not)...
+const EFFORT_SAFETY: f64 = 0.95;
+/// ...and at most EFFORT_STEP times it (each retry is a real step down).
+const EFFORT_STEP: f64 = 0.85;
 
 /// One IK branch's hit: configuration, joint velocities, hit leg and margin.
 #[derive(Debug, Clone, PartialEq)]
@@ -83,9 +95,18 @@ impl HitPlanner {
         if qd.iter().zip(&lim.velocity).any(|(v, vmax)| v.abs() > *vmax) {
             return None;
         }
-        let leg = hit_leg_above(start, q, &qd, t_hit, &self.limits, floor)?;
-        if !self.within_effort(&leg.trajectory) {
-            return None;
+        let mut leg = hit_leg_above(start, q, &qd, t_hit, &self.limits, floor)?;
+        // Beyond the drives' torque: the same hit state by a gentler jerk-limited leg, its
+        // acceleration and jerk limits scaled below what the rejected leg used by the excess
+        // (each leg checked as the first; none when the gentler leg is too slow for the hit).
+        let mut tries = 0;
+        while let Some(excess) = self.effort_excess(&leg.trajectory) {
+            if tries == EFFORT_RETRIES {
+                return None;
+            }
+            tries += 1;
+            let scale = self.used_acceleration(&leg.trajectory) * (EFFORT_SAFETY / excess).min(EFFORT_STEP);
+            leg = scaled_jerk_leg(start, q, &qd, t_hit, &self.limits, scale, floor)?;
         }
         let margin = pos_margin.min(leg.margin);
         Some(BranchLeg {
@@ -100,15 +121,49 @@ impl HitPlanner {
     /// frame) stay within the effective effort limits at every instant (certified,
     /// [`crate::dynamics::peak`]); true without dynamics or with `check_effort` off.
     pub fn within_effort(&self, leg: &JointTrajectory) -> bool {
-        let Some(dynamics) = self.dynamics.as_ref() else {
-            return true;
-        };
+        self.effort_excess(leg).is_none()
+    }
+
+    /// `None` when `leg`'s torques stay within the effective effort limits at every instant (as
+    /// [`Self::within_effort`]), else the largest ratio |τ|/limit found at an instant (at least
+    /// 1: a peak too close to the limit to decide counts as 1).
+    pub fn effort_excess(&self, leg: &JointTrajectory) -> Option<f64> {
+        let dynamics = self.dynamics.as_ref()?;
         let mut data = DynamicsData::new(dynamics);
         let gravity = Vector3::from(self.gravity);
         let threshold = 1.0 + LIMIT_TOLERANCE;
+        // The torque at the leg's knots first (the ends of its jerk phases: plateaus of the
+        // acceleration, and the hit): a value above the limit at an instant rejects the leg at once,
+        // as the certified search would after its enclosures (most rejected legs peak at a knot).
+        let n = leg.dof();
+        let (mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        for &t in leg.knots() {
+            leg.sample_unchecked(t, &mut q, &mut qd, &mut qdd);
+            let tau = dynamics.inverse_dynamics_unchecked(&mut data, &q, &qd, &qdd, &gravity);
+            let excess = (0..n)
+                .map(|j| tau[j].abs() / self.effort.at(j, qd[j]))
+                .fold(0.0, f64::max);
+            if excess > threshold {
+                return Some(excess);
+            }
+        }
         let stop = PeakStop::decide(threshold, 1e-3);
         let peak = dynamics.effort_peak(&mut data, leg, &self.effort, &gravity, stop);
-        peak.bound <= threshold
+        (peak.bound > threshold).then_some(peak.ratio.max(1.0))
+    }
+
+    /// The largest of `traj`'s joints' peak |q̈| over their acceleration limits (exact, ≤ 1 for
+    /// a leg within the limits; 1 when a peak cannot be computed).
+    fn used_acceleration(&self, traj: &JointTrajectory) -> f64 {
+        let Ok(peaks) = traj.peaks(2) else {
+            return 1.0;
+        };
+        peaks
+            .iter()
+            .zip(&self.limits.acceleration)
+            .map(|(p, a)| p.value.abs() / a)
+            .fold(0.0, f64::max)
+            .min(1.0)
     }
 
     /// q̇ = J⁻¹·V (base frame) at `q` for the tool twist `twist`, or `None` where
@@ -287,5 +342,76 @@ mod tests {
             }
         }
         assert!(some > 20 && none > 20, "{some} feasible, {none} not");
+    }
+
+    #[test]
+    fn gentler_legs_reach_hits_beyond_the_torque_and_stay_within_it() {
+        // Fast hits around the ready pose's racket: where the leg of `hit_leg_above` exceeds the
+        // effort limits, `branch_leg` either gives up or returns a gentler jerk-limited leg to the
+        // same hit state on time, whose torques sampled at 10 kHz stay within the limits.
+        let pl = gantry();
+        let ready = pl.default_ready().to_vec();
+        let start = JointState::rest(&ready);
+        let tool = pl.chain().fk(&ready).unwrap();
+        let dy = pl.dynamics.as_ref().unwrap();
+        let mut data = DynamicsData::new(dy);
+        let mut rng = fastrand::Rng::with_seed(23);
+        let (mut rescued, mut lost) = (0, 0);
+        for _ in 0..1500 {
+            let d = Translation3::new(0.6 * rng.f64() - 0.3, 0.6 * rng.f64() - 0.3, 0.3 * rng.f64() - 0.15);
+            let pose = IsometryMatrix3::from_parts(d, Rotation3::from_euler_angles(0.3 * rng.f64(), 0.0, 0.0)) * tool;
+            let v = Vector3::new(rng.f64() - 0.5, rng.f64() - 0.5, rng.f64() - 0.5) * 8.0;
+            let hit = Hit::new(pose, [v.x, v.y, v.z, 0.0, 0.0, 0.0], 0.12 + 0.3 * rng.f64()).unwrap();
+            let twist = pl.tool_twist(&hit);
+            for q in pl.branches(&hit.pose, Some(&start.q)).iter() {
+                let Some(qd) = pl.hit_joint_velocity(q, &twist) else {
+                    continue;
+                };
+                if qd.iter().zip(&pl.limits.velocity).any(|(v, m)| v.abs() > *m) {
+                    continue;
+                }
+                let Some(first) = hit_leg_above(&start, q, &qd, hit.t, &pl.limits, f64::NEG_INFINITY) else {
+                    continue;
+                };
+                // The knots' pre-check decides as the certified search alone.
+                let g = Vector3::from(pl.gravity);
+                let threshold = 1.0 + LIMIT_TOLERANCE;
+                let stop = PeakStop::decide(threshold, 1e-3);
+                let certified = dy.effort_peak(&mut data, &first.trajectory, &pl.effort, &g, stop);
+                assert_eq!(pl.within_effort(&first.trajectory), certified.bound <= threshold);
+                if pl.within_effort(&first.trajectory) {
+                    continue;
+                }
+                let Some(b) = pl.branch_leg(q, &start, &twist, hit.t, f64::NEG_INFINITY) else {
+                    lost += 1;
+                    continue;
+                };
+                rescued += 1;
+                let traj = &b.leg.trajectory;
+                assert_eq!(b.leg.profile, crate::hit::StrokeProfile::Jerk);
+                assert!((traj.duration() - hit.t).abs() <= 1e-9);
+                assert!(traj.check_limits(&pl.limits).unwrap().is_empty());
+                let n = q.len();
+                let (mut qs, mut qds, mut qdds) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+                traj.sample_unchecked(traj.duration(), &mut qs, &mut qds, &mut qdds);
+                for j in 0..n {
+                    assert!(
+                        (qs[j] - q[j]).abs() < 1e-9 && (qds[j] - qd[j]).abs() < 1e-9,
+                        "end state"
+                    );
+                }
+                let k = (traj.duration() * 1e4).ceil() as usize;
+                let g = Vector3::from(pl.gravity);
+                for i in 0..=k {
+                    traj.sample_unchecked(traj.duration() * i as f64 / k as f64, &mut qs, &mut qds, &mut qdds);
+                    let tau = dy.inverse_dynamics_unchecked(&mut data, &qs, &qds, &qdds, &g);
+                    for j in 0..n {
+                        let limit = pl.effort.at(j, qds[j]);
+                        assert!(tau[j].abs() <= limit * (1.0 + 1e-6), "joint {j}: {} > {limit}", tau[j]);
+                    }
+                }
+            }
+        }
+        assert!(rescued > 5 && lost > 5, "{rescued} rescued, {lost} lost");
     }
 }

@@ -156,6 +156,36 @@ fn jerk_leg(
     })
 }
 
+/// The jerk-limited leg of [`hit_leg`] under `limits` with every acceleration and jerk limit
+/// scaled by `scale` in (0, 1] (speed and position limits kept): a slower, gentler stroke to the
+/// same hit state (q, q̇, q̈ = 0) at `t_hit`, whose inertial torques shrink with `scale` (the
+/// effort-limited stroke of [`super::HitPlanner::branch_leg`]). Its margin is 1 − T*ₛ/`t_hit`
+/// with T*ₛ the time-optimal duration under the scaled limits; `None` when that exceeds `t_hit`,
+/// the margin is at most `floor`, or the leg leaves the position limits.
+pub fn scaled_jerk_leg(
+    start: &JointState,
+    q: &[f64],
+    qd: &[f64],
+    t_hit: f64,
+    limits: &KinematicLimits,
+    scale: f64,
+    floor: f64,
+) -> Option<HitLeg> {
+    if !(scale > 0.0 && scale <= 1.0 && t_hit > 0.0 && t_hit.is_finite()) {
+        return None;
+    }
+    let mut scaled = limits.clone();
+    for (a, j) in scaled.acceleration.iter_mut().zip(scaled.jerk.iter_mut()) {
+        *a *= scale;
+        *j *= scale;
+    }
+    // The start state must lie within the scaled limits (a moving start's acceleration).
+    if start.qdd.iter().zip(&scaled.acceleration).any(|(x, a)| x.abs() > *a) {
+        return None;
+    }
+    jerk_leg(start, q, qd, t_hit, &scaled, floor)
+}
+
 /// Whether `traj` stays inside the position limits of `limits` (exact, to [`crate::traj::limits::LIMIT_TOLERANCE`]).
 fn inside(traj: &JointTrajectory, limits: &KinematicLimits) -> bool {
     traj.position_violations(limits, 0.0).is_empty()
@@ -266,5 +296,38 @@ mod tests {
         }
         assert!(cases == 2000 && worst_gap < 1e-3, "largest gap {worst_gap} s");
         assert_eq!(min_time_from_rest(0.5, 3.0, v, a), f64::INFINITY);
+    }
+
+    #[test]
+    fn scaled_leg_keeps_its_scaled_limits_and_reaches_the_hit_on_time() {
+        let pl = crate::ball::hitplan::ReturnPlanner::new(crate::robots::gantry6(), Default::default()).unwrap();
+        let lim = pl.robot.limits();
+        let mut rng = fastrand::Rng::with_seed(8);
+        let (mut some, mut none) = (0, 0);
+        for _ in 0..300 {
+            let start = JointState::rest(&pl.ready);
+            let q: Vec<f64> = pl.ready.iter().map(|x| x + 0.4 * (2.0 * rng.f64() - 1.0)).collect();
+            let qd: Vec<f64> = lim.velocity.iter().map(|v| 0.5 * v * (2.0 * rng.f64() - 1.0)).collect();
+            let t_hit = 0.2 + 0.4 * rng.f64();
+            let scale = 0.2 + 0.8 * rng.f64();
+            let Some(leg) = scaled_jerk_leg(&start, &q, &qd, t_hit, lim, scale, f64::NEG_INFINITY) else {
+                none += 1;
+                continue;
+            };
+            some += 1;
+            assert!((leg.trajectory.duration() - t_hit).abs() <= DURATION_TOLERANCE);
+            let acc = leg.trajectory.peaks(2).unwrap();
+            for (j, p) in acc.iter().enumerate() {
+                assert!(p.value.abs() <= scale * lim.acceleration[j] * (1.0 + 1e-9), "joint {j}");
+            }
+            assert!(leg.trajectory.check_limits(lim).unwrap().is_empty());
+            // Gentler limits leave less of the time unused than the full ones.
+            if let Some(full) = scaled_jerk_leg(&start, &q, &qd, t_hit, lim, 1.0, f64::NEG_INFINITY) {
+                assert!(leg.margin <= full.margin + 1e-12);
+            }
+        }
+        assert!(some > 20 && none > 20, "{some} legs, {none} none");
+        let start = JointState::rest(&pl.ready);
+        assert!(scaled_jerk_leg(&start, &pl.ready, &[0.0; 6], 0.3, lim, 0.0, f64::NEG_INFINITY).is_none());
     }
 }

@@ -34,7 +34,9 @@
 //!    With the robot planner's `check_effort` (the default) the leg's torques (inverse dynamics
 //!    with friction, the robot's gravity [`crate::hit::HitOptions::gravity`]) must also stay within the effective effort limits ([`crate::effort`]) at every
 //!    instant, certified by [`crate::dynamics::peak`], checked last and only for a leg that
-//!    would replace the best so far.
+//!    would replace the best so far. A leg beyond the torque is replaced by a gentler jerk-limited
+//!    leg to the same hit state ([`crate::hit::leg::scaled_jerk_leg`], up to three, each checked
+//!    the same way) before the hit state is given up.
 //! 5. **Choice.** Among feasible candidates, the one with the largest margin: the smallest of the
 //!    joints' normalised distance to their position limits at the hit and the leg's margin
 //!    (1 − peak/limit ratio for a quintic, 1 − fastest duration / hit time for a jerk-limited leg). Candidates are tried from the middle of the spread outward and the search
