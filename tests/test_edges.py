@@ -657,3 +657,11 @@ def test_ttdrive_sim_refuses_a_sync_period_it_cannot_step():
             input="",
         )
         assert r.returncode == 1 and "--period" in r.stderr, (r.returncode, r.stderr)
+
+
+def test_a_copy_of_a_huge_broadcast_view_is_refused_before_it_is_made():
+    # np.broadcast_to costs 0 bytes; the float64 copy the binding needs would take 48 GB
+    r = ttmanip.robots.gantry6()
+    q = np.broadcast_to(np.zeros(6, dtype=np.float32), (10**9, 6))
+    with pytest.raises(TtmanipError, match=r"asks for 6\.0+e9 items of 8 bytes.*512 MiB"):
+        r.fk(q)

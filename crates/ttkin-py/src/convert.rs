@@ -180,6 +180,11 @@ pub fn f64_array<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<F64Array<
             }
         }
     }
+    // A copy is needed: bound it before numpy makes it (a broadcast view of 0 bytes can ask
+    // for tens of GB).
+    if let Ok(size) = obj.getattr("size").and_then(|s| s.extract::<f64>()) {
+        ttkin::budget::check_bytes(what, size, 8).py()?;
+    }
     let (converted, precision) = as_contiguous_f64(obj, what)?;
     let a = converted
         .cast::<PyArrayDyn<f64>>()
