@@ -37,7 +37,7 @@ def main() -> None:
     xdot = np.array([0.1, 0.05, -0.08, 0.3, -0.2])
     lim = robot.limits
     rows = []
-    ours = ttmanip.wls_step(robot, q, xdot, weights="chan-dubey", damping=0.0)
+    ours = ttmanip.wls_step(robot, q, xdot, weights="chan-dubey", lambda_max=0.0)
     t_ours = per_call_us(lambda: ttmanip.wls_step(robot, q, xdot))
     rows.append(("ttmanip.wls_step (racket5, Chan–Dubey)", t_ours))
 

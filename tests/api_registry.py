@@ -104,6 +104,7 @@ API: dict[str, dict] = {
     "Robot.dof": {},
     "Robot.name": {},
     "Robot.simulate": {},
+    "Robot.racket_angle_jacobian": {},
     "Robot.task_coordinates": {},
     "Robot.task_jacobian": {},
     "Robot.to_toml": {},

@@ -273,11 +273,11 @@ POSE_NAMES = {"T", "T0", "T1", "base", "tool", "mount", "target", "pose"}
 ARRAY_NAMES = set(
     "q qd qdd q0 q1 q_hit qd_hit qdd_hit ready twist xdot x0 x1 gravity wheel_speeds hint t times points "
     "velocities accelerations v0 v1 a0 a1 v_start v_end mass com inertia gear_ratio rotor_inertia viscous "
-    "coulomb torque_constant limits a alpha d theta velocity acceleration jerk qdot_prev centre axis via "
-    "tau torques input_weights".split()
+    "coulomb torque_constant limits a alpha d theta velocity acceleration jerk qdot_prev qd_prev centre axis "
+    "via tau torques input_weights".split()
 )
 FLOAT_NAMES = set(
-    "duration rate_hz hz dt damping epsilon threshold max_damping time_budget position_tolerance "
+    "duration rate_hz hz dt damping epsilon lambda_max threshold max_damping time_budget position_tolerance "
     "orientation_tolerance gain limit_gain manipulability_gain max_error t_hit return_duration v omega "
     "angle blend distance start wheel_radius track track_width max_wheel_speed max_wheel_acceleration "
     "racket_offset amplitude settle external_torque".split()

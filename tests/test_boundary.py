@@ -192,10 +192,10 @@ def test_ik_all_batch_uses_the_hint():
 @pytest.mark.parametrize(
     "kw",
     [
-        {"threshold": np.inf},
-        {"max_damping": np.inf},
-        {"threshold": np.inf, "max_damping": np.inf},
-        {"max_damping": -1.0},
+        {"epsilon": np.inf},
+        {"lambda_max": np.inf},
+        {"epsilon": np.inf, "lambda_max": np.inf},
+        {"lambda_max": -1.0},
     ],
 )
 def test_joint_velocity_refuses_meaningless_thresholds(kw):
@@ -217,8 +217,8 @@ def test_undamped_wls_step_at_a_stretched_arm_singularity_raises():
     arm = ttmanip.Robot.from_dh([0.0, 1.0, 1.0], [np.pi / 2, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
     q = np.zeros(3)
     with pytest.raises(ttmanip.SingularError):
-        ttmanip.wls_step(arm, q, np.array([0.1, 0.0, 0.0]), task="position", damping=0.0)
-    step = ttmanip.wls_step(arm, q, np.array([0.1, 0.0, 0.0]), task="position", damping=0.05)
+        ttmanip.wls_step(arm, q, np.array([0.1, 0.0, 0.0]), task="position", lambda_max=0.0)
+    step = ttmanip.wls_step(arm, q, np.array([0.1, 0.0, 0.0]), task="position", lambda_max=0.05)
     assert np.isfinite(step).all()
 
 

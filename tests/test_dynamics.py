@@ -16,10 +16,13 @@ from ttmanip.dynamics import EARTH_GRAVITY, MOBILE8_GRAVITY
 TOL = 1e-9
 
 
-def pinocchio_model(robot: ttmanip.Robot, gravity=(0.0, 0.0, -9.81)):
+def pinocchio_model(robot: ttmanip.Robot, gravity=None):
+    """Pinocchio's model of `robot` with `gravity` (m/s², base frame; default: the robot's own, which
+    its rnea uses by default: mobile8's base frame has x up)."""
     model = pin.buildModelFromXML(robot.to_urdf())
     assert model.nq == robot.dof
     model.armature = robot.armature
+    gravity = robot.gravity_vector if gravity is None else gravity
     model.gravity = pin.Motion(np.array(gravity, dtype=float), np.zeros(3))
     return model, model.createData()
 
@@ -229,8 +232,11 @@ def test_robot_file_and_urdf_carry_inertias_and_drives():
     )
     urdf = ttmanip.Robot.from_urdf_string(robot.to_urdf(), "base_link", "tool")
     # URDF keeps masses, inertias and friction (<dynamics damping friction>), not the rotor inertia
+    # and not the gravity (URDF has no field for it: the loaded robot has the default, base -z)
+    np.testing.assert_array_equal(urdf.gravity_vector, [0.0, 0.0, -9.81])
+    g = robot.gravity_vector
     np.testing.assert_allclose(
-        urdf.inverse_dynamics(q, qd, 0 * qdd), robot.inverse_dynamics(q, qd, 0 * qdd), atol=1e-9
+        urdf.inverse_dynamics(q, qd, 0 * qdd, gravity=g), robot.inverse_dynamics(q, qd, 0 * qdd), atol=1e-9
     )
     model = pin.buildModelFromXML(robot.to_urdf())
     np.testing.assert_allclose(model.damping, [d["viscous"] for d in robot.drives])
@@ -262,6 +268,14 @@ def test_default_gravity_is_the_robots_and_agrees_with_pinocchio(name):
         np.testing.assert_allclose(tau[k], pin.rnea(model, data, q[k], qd[k], qdd[k]), rtol=0, atol=1e-8)
         g_pin = pin.computeGeneralizedGravity(model, data, q[k])
         np.testing.assert_allclose(grav[k], g_pin, rtol=0, atol=1e-8)
+    # The comparison could fail: the gravity torques are not zero, and Pinocchio with any other
+    # gravity (the other robots' default, or none) gives other torques.
+    assert np.abs(grav).max() > 0.1
+    other = (0.0, 0.0, -9.81) if name == "mobile8" else (-9.81, 0.0, 0.0)
+    for g in (other, (0.0, 0.0, 0.0)):
+        model_g, data_g = pinocchio_model(robot, g)
+        g_other = np.array([pin.computeGeneralizedGravity(model_g, data_g, qk) for qk in q])
+        assert np.abs(grav - g_other).max() > 0.1, g
     # A renamed copy from its file keeps its gravity: nothing is decided by the name.
     copy = ttmanip.Robot.from_toml(robot.to_toml().replace(f'name = "{name}"', 'name = "copy"', 1))
     np.testing.assert_array_equal(copy.gravity_vector, expected)

@@ -265,7 +265,7 @@ def test_a_plan_is_simulated_only_on_its_robot():
 
 
 def test_hit_times_beyond_the_longest_stroke_are_refused_at_the_hit():
-    with pytest.raises(TtmanipError, match="hit.t: the hit time must be at most"):
+    with pytest.raises(TtmanipError, match="hit.t: the hit time must be at most .* got 1e300 s$"):
         ttmanip.Hit(ttmanip.DEMO_HIT.pose, ttmanip.DEMO_HIT.twist, 1e300)
 
 
@@ -478,3 +478,182 @@ def test_a_plane_crossing_search_stops_on_ctrl_c():
         lambda: ttmanip.ball.crossing(s, t_max=1.9e4, **below),
         0.1,
     )
+
+
+# -- issue 29, second sweep (h29): escapes found by a new user's sweep of the newer API -----------
+
+
+def _cli(*args, timeout: float = CAP_SECONDS) -> subprocess.CompletedProcess:
+    """``ttmanip ARGS`` in a capped subprocess (a hang fails the test)."""
+    try:
+        return subprocess.run(
+            [sys.executable, "-m", "ttmanip.cli", *map(str, args)],
+            capture_output=True,
+            text=True,
+            timeout=timeout,
+            preexec_fn=_limits,
+            cwd="/tmp",
+        )
+    except subprocess.TimeoutExpired:
+        pytest.fail(f"hung for more than {timeout} s: ttmanip {args}")
+
+
+def _bad_input(r: subprocess.CompletedProcess, *fragments: str) -> None:
+    """Exit 1 (bad input) with a one-line message naming ``fragments``, no traceback."""
+    assert r.returncode == 1, (r.returncode, r.stderr[-2000:])
+    assert "Traceback" not in r.stderr, r.stderr[-3000:]
+    for f in fragments:
+        assert f in r.stderr, r.stderr
+
+
+def _flights(folder, rows: str) -> None:
+    folder.mkdir()
+    for i in range(4):
+        (folder / f"{i}.json").write_text('{"ob": [' + ",".join([rows] * 30) + "]}")
+
+
+def test_ball_fit_reads_flights_within_limits(tmp_path):
+    import zipfile
+
+    # a zip bomb: 20 MiB of spaces inflate from a few kB; refused before it is inflated whole
+    bomb = tmp_path / "bomb.zip"
+    with zipfile.ZipFile(bomb, "w", zipfile.ZIP_DEFLATED) as z, z.open("a.json", "w") as f:
+        f.write(b'{"ob": [[0, 0, 0] ')
+        for _ in range(20):
+            f.write(b" " * (1 << 20))
+        f.write(b"]}")
+    _bad_input(_cli("ball", "fit", bomb, "--out", tmp_path / "o"), "a.json", "16 MiB")
+    deep = tmp_path / "deep"
+    deep.mkdir()
+    (deep / "a.json").write_text('{"ob": ' + "[" * 100000 + "]" * 100000 + "}")
+    _bad_input(_cli("ball", "fit", deep, "--out", tmp_path / "o"), "nested 100001 deep")
+    _flights(tmp_path / "bigint", "[1" + "0" * 400 + ", 0, 1]")
+    _bad_input(_cli("ball", "fit", tmp_path / "bigint", "--out", tmp_path / "o"))
+    _flights(tmp_path / "bools", "[true, false, true]")
+    _bad_input(_cli("ball", "fit", tmp_path / "bools", "--out", tmp_path / "o"), "ob")
+    from ttmanip import ball_fit
+
+    with pytest.raises(TtmanipError, match="16 MiB"):
+        ball_fit.read_flights(bomb)
+
+
+def test_rally_balls_and_telemetry_files_are_read_within_limits(tmp_path):
+    _bad_input(_cli("rally", "--balls", "/dev/zero", "--out", tmp_path / "r"), "16 MiB")
+    _bad_input(_cli("telemetry", "/dev/zero", "--rerun", tmp_path / "t.rrd"), "16 MiB")
+    bad = tmp_path / "tele.csv"
+    bad.write_text("channel,t,latency_us\nvcan0,abc,1\n")
+    _bad_input(_cli("telemetry", bad, "--rerun", tmp_path / "t.rrd"), "line 2", "abc")
+    bad.write_bytes(b"channel,t,latency_us\nvcan0,1\xff,1\n")
+    _bad_input(_cli("telemetry", bad, "--rerun", tmp_path / "t.rrd"), "UTF-8")
+
+
+def test_rally_incoming_balls_of_complex_or_bool_dtype_are_refused():
+    inc = np.tile([0, -1.5, 0, 0.3, 4, 0, 1, 0, 0, 0.0], (3, 1))
+    for bad in (inc.astype(complex), inc.astype(bool)):
+        with pytest.raises(TtmanipError, match="incoming"):
+            ttmanip.rally(3, incoming=bad)
+
+
+def test_link_addresses_and_wire_times_are_checked():
+    with pytest.raises(TtmanipError, match="address: the port"):
+        ttmanip.ctl.Link(("127.0.0.1", 99999))
+    with pytest.raises(TtmanipError, match="address"):
+        ttmanip.ctl.Link("127.0.0.1:5005")
+    h = ttmanip.DEMO_HIT
+    # a NaN time encoded, and the controller dropped the datagram without an answer
+    with pytest.raises(ttmanip.NonFiniteError, match="t_hit"):
+        ttmanip._ttmanip.wire_hit(1, 0, float("nan"), h.pose, h.twist, 1, 0.0)
+    with pytest.raises(ttmanip.NonFiniteError, match="camera_time"):
+        ttmanip._ttmanip.wire_observation(1, float("inf"), [0.0, 0.0, 1.0], 1, 0.0)
+
+
+def test_hil_arguments_are_checked_before_a_controller_starts(tmp_path):
+    _bad_input(_cli("hil", "--n", "1", "--connect", "127.0.0.1:99999", "--out", tmp_path / "h"), "--connect")
+    r = _cli("hil", "--n", str(10**12), "--ttctl", "/nonexistent/ttctl", "--out", tmp_path / "h")
+    _bad_input(r, "--n")
+    _bad_input(_cli("hil", "--n", "1", "--seed", "-1", "--out", tmp_path / "h"), "--seed")
+
+
+def test_cli_ik_prints_only_branches_within_the_joint_limits():
+    # d2 = 4.9 m on a ±0.6 m axis was printed with exit 0
+    _bad_input(_cli("ik", "gantry6", "--centre", "5,0,0", "--normal", "0,-1,0"), "reach", "d2")
+    _bad_input(_cli("ik", "gantry6", "--centre", "1e300,0,0", "--normal", "0,-1,0"), "reach")
+
+
+def test_the_ball_speed_in_a_refusal_is_the_speed_given():
+    with pytest.raises(TtmanipError, match=r"‖velocity‖ = 1e200 m/s"):
+        ttmanip.ball.predict(ttmanip.ball.state([0, 0, 1], [1e200, 0, 0]), [0.1])
+
+
+def test_a_tampered_drive_sim_pickle_is_checked_and_its_replay_stops_on_ctrl_c():
+    sim = ttmanip.DriveSim(ttmanip.robots.gantry6())
+    sim.tick(10)
+    f, (state,) = sim.__reduce__()
+    chain, options, period, journal = state
+    with pytest.raises(TtmanipError, match="setpoint_period"):
+        f((chain, options, float("nan"), journal))
+    # 10¹⁵ ticks in the journal: hours of replay, stopped by Ctrl-C (it ignored the signal)
+    long = {"reset": None, "calls": [{"Tick": 10**15}]}
+    waited = _ctrl_c_after(lambda: f((chain, options, period, long)), 0.5)
+    assert waited < 10.0, waited
+
+
+CTL_AXES = '[[channel]]\ninterface = "vcan0"\n[[channel.axis]]\nnode = 1\njoint = 0\n'
+
+
+@pytest.mark.parametrize(
+    ("config", "trajectory", "extra", "fragment"),
+    [
+        # joint = 10¹² aborted `ttctl --demo` (a demo motion of 10¹² joints allocated)
+        (
+            '[[channel]]\ninterface = "vcan0"\n[[channel.axis]]\nnode = 1\njoint = 1000000000000\n',
+            None,
+            ["--demo"],
+            "joint",
+        ),
+        ("approach_s = 1e300\n" + CTL_AXES, None, [], "approach_s"),
+        (CTL_AXES + 'device_file = "/dev/zero"\n', None, [], "16 MiB"),
+        # an axis beyond the file's joints held still while the motion "completed"
+        (
+            CTL_AXES + "[[channel.axis]]\nnode = 2\njoint = 1\n",
+            "0,0,0,0,0\n1,0.1,0,0,0\n",
+            [],
+            "follows joint 1",
+        ),
+        # targets beyond the drive's 32-bit integers faulted at the first cycle
+        (CTL_AXES, "0,0,0,0,0\n1,1e300,0,0,0\n", [], "position"),
+        # times too coarse for the cycle: at 1e17 s float64 times are 16 s apart
+        (CTL_AXES, "1e17,0,0,0,0\n1.0000000000001e17,0,0,0,0\n", [], "nearer origin"),
+    ],
+)
+def test_ttctl_checks_configurations_and_trajectories_before_running(
+    tmp_path, config, trajectory, extra, fragment
+):
+    exe = _binary("ttctl")
+    if exe is None:
+        pytest.skip("ttctl is not built (cargo build -p ttcan)")
+    cfg = tmp_path / "ctl.toml"
+    cfg.write_text(config)
+    args = [exe, "--config", str(cfg), "--check", *extra]
+    if trajectory is not None:
+        (tmp_path / "t.csv").write_text("t,q1,qd1,qdd1,tau1\n" + trajectory)
+        args += ["--trajectory", str(tmp_path / "t.csv")]
+    r = subprocess.run(args, capture_output=True, text=True, timeout=CAP_SECONDS, preexec_fn=_limits)
+    assert r.returncode == 1, (r.returncode, r.stderr[-2000:])
+    assert fragment in r.stderr and "panicked" not in r.stderr, r.stderr
+
+
+def test_ttdrive_sim_refuses_a_sync_period_it_cannot_step():
+    exe = _binary("ttdrive-sim")
+    if exe is None:
+        pytest.skip("ttdrive-sim is not built (cargo build -p ttcan)")
+    for period in ("1e300", "1e-300"):
+        r = subprocess.run(
+            [exe, "--channel", "stdio:1", "--period", period, "--duration", "1"],
+            capture_output=True,
+            text=True,
+            timeout=CAP_SECONDS,
+            preexec_fn=_limits,
+            input="",
+        )
+        assert r.returncode == 1 and "--period" in r.stderr, (r.returncode, r.stderr)

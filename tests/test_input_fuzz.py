@@ -47,6 +47,7 @@ NUMBERS = [
     "1" + "0" * 400,
     "-0.0",
     "1e-300",
+    "1000000000000",
 ]
 JSON_NUMBERS = [
     "NaN",
@@ -130,7 +131,7 @@ def mutate(text: str, rng: random.Random, numbers: list[str]) -> str | bytes:
 def read_all(kind: str, paths: list[Path]) -> subprocess.CompletedProcess:
     """Reads every file of ``paths`` as ``kind`` in one capped interpreter; prints a line per file."""
     code = f"""
-import faulthandler, json, sys
+import faulthandler, json, os, sys
 import numpy as np
 import ttmanip
 from ttmanip import cli
@@ -140,6 +141,9 @@ for p in paths:
     try:
         if {kind!r} == "toml":
             r = ttmanip.Robot.from_file(p)
+        elif {kind!r} == "flight":
+            from ttmanip import ball_fit
+            r = ball_fit.read_flights(os.path.dirname(p))
         elif {kind!r} == "urdf":
             text = open(p, "rb").read().decode("utf-8", "replace")
             r = ttmanip.Robot.from_urdf_string(text, "base_link", "tool")
@@ -177,16 +181,24 @@ def sources(kind: str) -> list[str]:
             }
         ],
     }
+    if kind == "flight":
+        t = [0.004 * k for k in range(30)]
+        return [
+            json.dumps({"ob": [[-1.2 + 4 * x, 0.1 * x, 0.3 + 1.5 * x - 4.9 * x * x, 4, 0.1, 1.5] for x in t]})
+        ]
     return [json.dumps(hit, indent=1)]
 
 
-@pytest.mark.parametrize("kind", ["toml", "urdf", "json"])
+@pytest.mark.parametrize("kind", ["toml", "urdf", "json", "flight"])
 def test_mutated_files_are_read_or_refused_never_crash_or_hang(kind, tmp_path):
     rng = random.Random(f"{SEED}-{kind}")
     paths = []
     for i in range(CASES):
-        text = mutate(rng.choice(sources(kind)), rng, JSON_NUMBERS if kind == "json" else NUMBERS)
+        text = mutate(rng.choice(sources(kind)), rng, JSON_NUMBERS if kind in ("json", "flight") else NUMBERS)
         p = tmp_path / f"case{i}.{kind}"
+        if kind == "flight":  # one flight per folder (ball_fit.read_flights reads a folder)
+            (tmp_path / f"case{i}").mkdir()
+            p = tmp_path / f"case{i}" / "a.json"
         (p.write_bytes if isinstance(text, bytes) else p.write_text)(text)
         paths.append(p)
     r = read_all(kind, paths)
@@ -223,6 +235,25 @@ def test_mutated_trajectory_files_are_checked_by_ttctl(tmp_path):
     assert r.returncode == 1 and "16 MiB" in r.stderr, r.stderr
 
 
+def test_mutated_controller_configurations_are_checked_by_ttctl(tmp_path):
+    exe = _binary("ttctl")
+    if exe is None:
+        pytest.skip("ttctl is not built (cargo build -p ttcan)")
+    rng = random.Random(f"{SEED}-ctl")
+    sources = [
+        (ROOT / "tests" / "online" / "gantry6_hil.toml").read_text(),
+        (ROOT / "tests" / "vm" / "vcan.toml").read_text(),
+    ]
+    for i in range(CASES):
+        text = mutate(rng.choice(sources), rng, NUMBERS)
+        p = tmp_path / f"case{i}.toml"
+        (p.write_bytes if isinstance(text, bytes) else p.write_text)(text)
+        # --demo sizes its motion by the largest joint index (joint = 10^12 aborted it)
+        r = run([exe, "--config", str(p), "--demo", "--check"], timeout=CASE_SECONDS)
+        assert r.returncode in (0, 1), (i, r.returncode, r.stderr[-2000:])
+        assert "panicked" not in r.stderr, (i, r.stderr[-2000:])
+
+
 # -------------------------------------------------------------------------------- arguments
 
 
@@ -243,12 +274,19 @@ TTMANIP = [
     ["plan", "{path}", "--out", "{out}"],
     ["rally", "--n", "{v}", "--seed", "{v}", "--out", "{out}"],
     ["export", "{robot}", "--out", "{out}"],
+    ["ball", "fit", "{path}", "--window", "{v}", "--out", "{out}"],
+    ["rally", "--balls", "{path}", "--n", "2", "--drives", "0", "--out", "{out}"],
+    ["telemetry", "{path}", "--rerun", "{out}.rrd"],
+    ["hil", "--n", "{v}", "--seed", "{v}", "--connect", "127.0.0.1:{v}", "--out", "{out}"],
+    ["hil", "--n", "{v}", "--seed", "{v}", "--ttctl", "/nonexistent/ttctl", "--out", "{out}"],
+    ["ik", "{robot}", "--centre", "{v}", "--normal", "0,-1,0"],
     ["{v}"],
 ]
 TTCTL = [
     ["--demo", "--check", "--amplitude", "{v}"],
     ["--demo", "--check", "--max-seconds={v}"],
     ["--config", "{path}", "--check"],
+    ["--config", "{path}", "--demo", "--check"],
     ["--{v}"],
 ]
 TTDRIVE = [

@@ -99,12 +99,12 @@ def test_wls_step_realises_the_task_velocity(mobile8):
         if np.linalg.svd(je, compute_uv=False)[-1] < 1e-2:
             continue
         for weights in ("chan-dubey", "none"):
-            qd = ttmanip.wls_step(mobile8, q, xdot, task="racket5", weights=weights, damping=0.0)
+            qd = ttmanip.wls_step(mobile8, q, xdot, task="racket5", weights=weights, lambda_max=0.0)
             np.testing.assert_allclose(je @ qd, xdot, atol=1e-10)
     # unweighted and undamped is the minimum-norm solution: the Moore–Penrose pseudo-inverse
     q = Q_START
     xdot = np.array([0.1, -0.05, 0.02, 0.3, 0.1])
-    qd = ttmanip.wls_step(mobile8, q, xdot, weights="none", damping=0.0)
+    qd = ttmanip.wls_step(mobile8, q, xdot, weights="none", lambda_max=0.0)
     np.testing.assert_allclose(qd, np.linalg.pinv(mobile8.task_jacobian(q)) @ xdot, atol=1e-10)
 
 
@@ -113,9 +113,9 @@ def test_chan_dubey_weights_slow_a_joint_near_its_limit(mobile8):
     lo, hi = mobile8.limits[4]
     q[4] = hi - 0.02  # joint 5 close to its upper limit
     xdot = np.array([0.1, 0.1, 0.0, 0.0, 0.0])
-    free = ttmanip.wls_step(mobile8, q, xdot, weights="none", damping=0.0)
+    free = ttmanip.wls_step(mobile8, q, xdot, weights="none", lambda_max=0.0)
     toward = np.sign(free)  # last motion toward the limit where the unweighted one goes there
-    weighted = ttmanip.wls_step(mobile8, q, xdot, weights="chan-dubey", damping=0.0, qdot_prev=toward)
+    weighted = ttmanip.wls_step(mobile8, q, xdot, weights="chan-dubey", lambda_max=0.0, qd_prev=toward)
     if free[4] > 0:
         assert abs(weighted[4]) < 0.1 * abs(free[4])
 
@@ -130,7 +130,7 @@ def test_wls_step_bad_input(mobile8):
     with pytest.raises(ttmanip.NonFiniteError):
         ttmanip.wls_step(mobile8, np.full(8, np.nan), np.zeros(5))
     with pytest.raises(ttmanip.TtmanipError, match="damping"):
-        ttmanip.wls_step(mobile8, Q_START, np.zeros(5), damping=-1.0)
+        ttmanip.wls_step(mobile8, Q_START, np.zeros(5), lambda_max=-1.0)
 
 
 def test_track_returns_plot_ready_arrays(mobile8):
@@ -302,6 +302,6 @@ def test_wls_step_at_a_singular_configuration():
     q = np.array([0.3, -1.2, 1.4, -0.8, 0.0, 0.4])  # wrist singularity (q5 = 0)
     xdot = np.array([0.0, 0.0, 0.0, 0.3, 0.2, 0.1])
     with pytest.raises(ttmanip.SingularError, match="damping"):
-        ttmanip.wls_step(ur5, q, xdot, task="pose", weights="none", damping=0.0)
-    qd = ttmanip.wls_step(ur5, q, xdot, task="pose", weights="none", damping=0.05, epsilon=0.05)
+        ttmanip.wls_step(ur5, q, xdot, task="pose", weights="none", lambda_max=0.0)
+    qd = ttmanip.wls_step(ur5, q, xdot, task="pose", weights="none", lambda_max=0.05, epsilon=0.05)
     assert np.isfinite(qd).all() and np.abs(qd).max() < 20.0

@@ -118,3 +118,31 @@ def test_the_summary_reports_the_cores_camera():
     # the values the summary printed before it read them from the core (unchanged)
     before = {"rate_hz": 200.0, "latency_s": 0.010, "noise_m": 0.002, "outliers": 0.02, "window_s": 0.20}
     assert _camera_summary() == before
+
+
+def test_the_summary_statistics_are_the_cores_over_every_chunk():
+    """The counts and medians come from ``ttkin::ball::rally::RallyStats`` over the columns of all
+    chunks: the same as one chunk, and the same as counted here from the per-ball columns."""
+    from ttmanip import _ttmanip
+
+    a = ttmanip.rally(30, seed=1, chunk=7)
+    b = ttmanip.rally(30, seed=1)
+    for k in ("in_reach", "returned", "return_rate", "reach", "statuses", "landing_error_m_median"):
+        assert a[k] == b[k], k
+    res = a["results"]
+    in_reach = res["in_reach"].astype(bool)
+    returned = res["returned"].astype(bool) & in_reach
+    assert a["in_reach"] == in_reach.sum() and a["returned"] == returned.sum()
+    assert a["return_rate"] == pytest.approx(returned.sum() / in_reach.sum(), rel=1e-15)
+    assert a["returned_out_of_reach"] == (res["returned"].astype(bool) & ~in_reach).sum()
+    landing = res["landing_error"][returned]
+    assert a["landing_error_m_median"] == pytest.approx(np.median(landing[np.isfinite(landing)]), rel=1e-15)
+    racket = res["racket_error"][in_reach]
+    assert a["racket_error_m_median"] == pytest.approx(np.median(racket[np.isfinite(racket)]), rel=1e-15)
+    keys = [f"{r}/{str(s).split(':')[0]}" for r, s in zip(res["reach"], res["status"], strict=True)]
+    assert a["statuses"] == {k: keys.count(k) for k in sorted(set(keys))}
+    # bad columns are a typed error that names the column
+    with pytest.raises(ttmanip.TtmanipError, match="returned"):
+        _ttmanip.ball_rally_stats([True], [], ["in_reach"], ["ok"], *[np.zeros(1)] * 6)
+    with pytest.raises(ttmanip.TtmanipError, match="unknown verdict"):
+        _ttmanip.ball_rally_stats([True], [True], ["far"], ["ok"], *[np.zeros(1)] * 6)

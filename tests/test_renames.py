@@ -49,6 +49,34 @@ def test_track_result_qdot_is_a_deprecated_qd():
     np.testing.assert_array_equal(old, res.qd)
 
 
+def test_damping_keywords_are_deprecated_epsilon_and_lambda_max():
+    gantry = ttmanip.robots.gantry6()
+    q = np.array([0.1, -0.2, 0.3, 0.4, -0.5, 0.6])
+    twist = np.array([0.1, 0.0, 0.2, 0.0, 0.1, 0.0])
+    new = gantry.joint_velocity(q, twist, epsilon=0.5, lambda_max=0.3)
+    with pytest.warns(DeprecationWarning, match=r"\(threshold=\.\.\.\) is deprecated; use epsilon"):
+        with pytest.warns(DeprecationWarning, match=r"max_damping=\.\.\.\) is deprecated; use lambda_max"):
+            old = gantry.joint_velocity(q, twist, threshold=0.5, max_damping=0.3)
+    np.testing.assert_array_equal(old, new)
+    # the damped result differs from the default one: the keywords are used, not dropped
+    assert np.abs(new - gantry.joint_velocity(q, twist)).max() > 1e-6
+    robot = ttmanip.robots.mobile8()
+    from ttmanip.experiments import seed000
+
+    xdot, prev = np.array([0.01, 0.0, 0.02, 0.0, 0.01]), np.full(8, 0.01)
+    new = ttmanip.wls_step(robot, seed000.Q_START, xdot, lambda_max=0.2, epsilon=0.3, qd_prev=prev)
+    with pytest.warns(DeprecationWarning, match=r"wls_step\(damping=\.\.\.\) is deprecated; use lambda_max"):
+        with pytest.warns(DeprecationWarning, match=r"\(qdot_prev=\.\.\.\) is deprecated; use qd_prev"):
+            old = ttmanip.wls_step(robot, seed000.Q_START, xdot, damping=0.2, epsilon=0.3, qdot_prev=prev)
+    np.testing.assert_array_equal(old, new)
+    x0 = robot.task_coordinates(seed000.Q_START)
+    x, xd = ttmanip.task_line(x0, x0 + np.array([0.01, 0, 0, 0, 0]), 0.1)
+    new = ttmanip.track(robot, seed000.Q_START, x, velocities=xd, lambda_max=0.0)
+    with pytest.warns(DeprecationWarning, match=r"track\(damping=\.\.\.\) is deprecated; use lambda_max"):
+        old = ttmanip.track(robot, seed000.Q_START, x, velocities=xd, damping=0.0)
+    np.testing.assert_array_equal(old.q, new.q)
+
+
 def test_ik_status_tells_unreachable_from_not_converged():
     robot = ttmanip.robots.ur5()
     reachable = robot.fk(np.array([0.3, -0.9, 1.1, -0.4, 0.8, 0.2]))

@@ -147,6 +147,8 @@ class Robot:
         self, q: ArrayLike, task: str = "racket5", target: ArrayLike | None = None
     ) -> NDArray[np.float64]:
         """Task Jacobian (m, n) of "pose", "position" or "racket5" in residual coordinates (ė = −J_e q̇)."""
+    def racket_angle_jacobian(self, q: ArrayLike) -> NDArray[np.float64]:
+        """Jacobian (5, n) of the racket 5-vector [centre (m), polar, azimuth (rad)]: ẋ = J q̇."""
     def task_coordinates(self, q: ArrayLike, task: str = "racket5") -> NDArray[np.float64]:
         """Task coordinates of the tool pose: (3,), (6,) or the racket 5-vector (m, rad)."""
 
@@ -270,9 +272,12 @@ class Robot:
         twist: ArrayLike,
         frame: str = "base",
         weights: ArrayLike | None = None,
-        threshold: float = 1e-3,
-        max_damping: float = 1e-2,
+        epsilon: float = 1e-3,
+        lambda_max: float = 1e-2,
         info: bool = False,
+        *,
+        threshold: float | None = None,
+        max_damping: float | None = None,
     ) -> NDArray[np.float64] | tuple[NDArray[np.float64], dict[str, float | bool]]:
         """q̇ (n,) for the tool twist [v; ω] (6,): J⁻¹V, weighted least-norm, or damped near singularities."""
 
@@ -392,11 +397,14 @@ def wls_step(
     xdot: ArrayLike,
     task: str = "racket5",
     weights: str = "chan-dubey",
-    damping: float = 0.05,
+    lambda_max: float = 0.05,
     epsilon: float = 1e-3,
-    qdot_prev: ArrayLike | None = None,
+    qd_prev: ArrayLike | None = None,
     base: DiffDrive | None = None,
     mount: ArrayLike | None = None,
+    *,
+    damping: float | None = None,
+    qdot_prev: ArrayLike | None = None,
 ) -> NDArray[np.float64]:
     """One weighted least-norm step: inputs q̇ for task velocity `xdot` (residual coordinates)."""
 
@@ -414,7 +422,7 @@ def track(
     velocities: ArrayLike | None = None,
     weights: str = "chan-dubey",
     gain: float | None = None,
-    damping: float = 0.05,
+    lambda_max: float = 0.05,
     epsilon: float = 1e-3,
     input_weights: ArrayLike | None = None,
     limit_gain: float = 0.0,
@@ -424,6 +432,8 @@ def track(
     corrector: bool = True,
     base: DiffDrive | None = None,
     mount: ArrayLike | None = None,
+    *,
+    damping: float | None = None,
 ) -> TrackResult:
     """Closed-loop tracking of a task trajectory sampled at `rate_hz` (loop in Rust)."""
 
@@ -852,6 +862,18 @@ def ball_rally(
     world: bool = False,
     incoming: ArrayLike | None = None,
     drives: bool = False,
+) -> dict[str, Any]: ...
+def ball_rally_stats(
+    in_reach: list[bool],
+    returned: list[bool],
+    reach: list[str],
+    status: list[str],
+    racket_error: ArrayLike,
+    plan_time_us: ArrayLike,
+    plan_wall_time_us: ArrayLike,
+    correction_time_us: ArrayLike,
+    landing_error: ArrayLike,
+    velocity_error: ArrayLike,
 ) -> dict[str, Any]: ...
 
 # issue 26: the controller's datagram format (ttcan::online::wire)

@@ -16,34 +16,69 @@ from pathlib import Path
 import numpy as np
 
 from . import _ttmanip as _t
+from .files import MAX_TOTAL_BYTES, load_json, read_limited
 
 __all__ = ["fit", "read_flights"]
 
 
 def _parse(name: str, text: str | bytes) -> tuple[np.ndarray, np.ndarray | None]:
+    data = load_json(text, name)
+    if not isinstance(data, dict) or "ob" not in data:
+        raise _t.TtmanipError(f"{name}: expected a JSON object with 'ob': rows of x,y,z[,vx,vy,vz]")
     try:
-        ob = np.asarray(json.loads(text)["ob"], dtype=float)
-    except (ValueError, KeyError, TypeError) as e:
-        raise ValueError(f"{name}: expected a JSON object with 'ob': rows of x,y,z[,vx,vy,vz] ({e})") from e
+        # real numbers only: true/false or strings in the rows are refused, not cast
+        ob = _t.real_array(data["ob"], f"{name}: ob")
+    except (TypeError, ValueError) as e:
+        raise _t.TtmanipError(f"{name}: 'ob' must be rows of 3 or 6 numbers ({e})") from None
     if ob.ndim != 2 or ob.shape[1] not in (3, 6) or len(ob) < 10:
-        raise ValueError(f"{name}: 'ob' must be at least 10 rows of 3 or 6 numbers, got shape {ob.shape}")
+        raise _t.TtmanipError(
+            f"{name}: 'ob' must be at least 10 rows of 3 or 6 numbers, got shape {ob.shape}"
+        )
     return ob[:, :3].copy(), (ob[:, 3:6].copy() if ob.shape[1] == 6 else None)
+
+
+def _items(p: Path) -> list[tuple[str, bytes]]:
+    """The ``*.json`` members of the folder or zip ``p``, each read within
+    :data:`ttmanip.files.MAX_FILE_BYTES` and all within :data:`ttmanip.files.MAX_TOTAL_BYTES` (a zip
+    bomb is refused before it is inflated: the sizes are checked as the members are read)."""
+    items: list[tuple[str, bytes]] = []
+    total = 0
+
+    def add(name: str, raw: bytes) -> None:
+        nonlocal total
+        total += len(raw)
+        if total > MAX_TOTAL_BYTES:
+            raise _t.TtmanipError(
+                f"{p}: the flights add up to more than {MAX_TOTAL_BYTES} bytes (512 MiB), "
+                "the most read at once"
+            )
+        items.append((name, raw))
+
+    if p.is_dir():
+        for f in sorted(p.rglob("*.json")):
+            name = str(f.relative_to(p))
+            with f.open("rb") as fh:
+                add(name, read_limited(fh, name))
+    elif p.is_file() and zipfile.is_zipfile(p):
+        with zipfile.ZipFile(p) as z:
+            for n in sorted(z.namelist()):
+                if n.endswith(".json"):
+                    with z.open(n) as fh:
+                        add(n, read_limited(fh, n))
+    else:
+        raise FileNotFoundError(f"{p}: not a folder or a zip file of flights")
+    return items
 
 
 def read_flights(path: str | Path) -> tuple[list[str], list[np.ndarray], list[np.ndarray | None]]:
     """Flights from a zip or a folder of ``*.json`` (searched recursively), sorted by path: names,
-    positions (N, 3) m, tracker velocities (N, 3) m/s or None."""
+    positions (N, 3) m, tracker velocities (N, 3) m/s or None. A file over 16 MiB, flights over
+    512 MiB in all, JSON that is not UTF-8 or nested over 64 deep, or rows that are not numbers
+    are refused with a :class:`ttmanip.TtmanipError` naming the file."""
     p = Path(path)
-    items: list[tuple[str, str | bytes]] = []
-    if p.is_dir():
-        items = [(str(f.relative_to(p)), f.read_text()) for f in sorted(p.rglob("*.json"))]
-    elif p.is_file() and zipfile.is_zipfile(p):
-        with zipfile.ZipFile(p) as z:
-            items = [(n, z.read(n)) for n in sorted(z.namelist()) if n.endswith(".json")]
-    else:
-        raise FileNotFoundError(f"{path}: not a folder or a zip file of flights")
+    items = _items(p)
     if not items:
-        raise ValueError(f"{path}: no .json flights found")
+        raise _t.TtmanipError(f"{path}: no .json flights found")
     names, pos, vel = [], [], []
     for name, text in sorted(items):
         pp, vv = _parse(name, text)

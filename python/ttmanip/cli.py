@@ -27,6 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .files import MAX_FILE_BYTES as MAX_HIT_FILE_BYTES
+from .files import MAX_JSON_DEPTH, json_depth
 from .robots import NAMES as ROBOTS
 
 __all__ = ["CliError", "Progress", "build_parser", "main", "read_hit_file"]
@@ -46,8 +48,6 @@ are refused (as in robot files); at most 16 MiB, UTF-8, nested at most 64 deep."
 EXIT_SUCCESS, EXIT_BAD_INPUT, EXIT_NOT_DONE = 0, 1, 2
 
 #: Largest hit file read (bytes) and deepest JSON nesting accepted.
-MAX_HIT_FILE_BYTES = 16 << 20
-MAX_JSON_DEPTH = 64
 
 
 class CliError(Exception):
@@ -199,7 +199,7 @@ def read_hit_file(path: str) -> dict:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as e:
         raise CliError(f"{path}: not UTF-8 text: invalid byte at offset {e.start}") from None
-    depth = _json_depth(text)
+    depth = json_depth(text)
     if depth > MAX_JSON_DEPTH:
         raise CliError(f"{path}: JSON nested {depth} deep, at most {MAX_JSON_DEPTH}")
     try:
@@ -255,21 +255,6 @@ def read_hit_file(path: str) -> dict:
     if profile not in ("auto", "quintic", "jerk"):
         raise CliError(f"profile: expected 'auto', 'quintic' or 'jerk', got {profile!r}")
     return {"robot": robot, "hits": hits, "state": state, "ready": ready, "profile": profile}
-
-
-def _json_depth(text: str) -> int:
-    """Deepest nesting of ``[`` and ``{`` in JSON ``text`` (strings skipped), without recursing."""
-    import re
-
-    depth = deepest = 0
-    for m in re.finditer(r'"(?:[^"\\]|\\.)*"|[\[\]{}]', text):
-        c = m.group()
-        if c in "[{":
-            depth += 1
-            deepest = max(deepest, depth)
-        elif c in "]}":
-            depth -= 1
-    return deepest
 
 
 def _plans(spec: dict):
@@ -353,7 +338,7 @@ def _fk(args: argparse.Namespace) -> int:
 
 
 def _ik(args: argparse.Namespace) -> int:
-    from . import Hit, TtmanipError
+    from . import Hit, TtmanipError, UnreachableError
 
     robot = _robot(args.robot)
     centre = _numbers(args.centre, "--centre", 3)
@@ -362,7 +347,13 @@ def _ik(args: argparse.Namespace) -> int:
         raise CliError("--normal: the face normal must be a nonzero vector")
     try:
         hit = Hit.from_normal(centre, normal, np.zeros(3), 1.0)
-        branches = robot.ik_all(hit.pose)
+        # within the joint limits: a branch with d2 = 4.9 m on a ±0.6 m axis is not in reach
+        # (before issue 29's sweep it was printed with exit 0)
+        branches = robot.ik_all(hit.pose, limits=True)
+    except UnreachableError as e:
+        raise CliError(
+            f"--centre: the racket pose at {centre.tolist()} is outside {robot.name}'s reach: {e}"
+        ) from e
     except TtmanipError as e:
         raise CliError(f"--centre/--normal: {e}") from e
     ok = np.isfinite(branches).all(axis=1)
@@ -627,7 +618,7 @@ def build_parser() -> argparse.ArgumentParser:
         "ik",
         _ik,
         "every IK branch for a racket centre and face normal",
-        "Prints every analytic IK branch reaching the racket pose.\n\nexample:\n"
+        "Prints every analytic IK branch reaching the racket pose within the joint limits.\n\nexample:\n"
         "  ttmanip ik gantry6 --centre 0.35,-0.55,0.05 --normal 0.3,-1,-0.2",
         _arg("robot", choices=ROBOTS),
         _arg("--centre", required=True, help="racket centre x,y,z (m, base frame)"),

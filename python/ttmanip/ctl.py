@@ -96,6 +96,20 @@ def write_stroke(path: str | Path, rate_hz: float = 1000.0) -> Path:
     return write_trajectory(path, t, q, qd, qdd)
 
 
+def _address(name: str, address) -> tuple[str, int]:
+    """``address`` as (host, port), the port an integer in 0..=65535; otherwise a TtmanipError
+    naming ``name`` (the socket's own ``OverflowError`` named neither)."""
+    try:
+        host, port = address
+    except (TypeError, ValueError):
+        raise TtmanipError(f"{name}: expected (host, port), got {address!r}") from None
+    if not isinstance(host, str):
+        raise TtmanipError(f"{name}: the host must be a string, got {host!r}")
+    if isinstance(port, bool) or not isinstance(port, (int, np.integer)) or not 0 <= port <= 65535:
+        raise TtmanipError(f"{name}: the port must be an integer in 0..=65535, got {port!r}")
+    return host, int(port)
+
+
 class Link:
     """A UDP link to a controller at ``address`` (host, port): sends hits and ball observations in
     the controller's datagram format (version ``_ttmanip.WIRE_VERSION``), numbered by one sequence
@@ -107,7 +121,8 @@ class Link:
     """
 
     def __init__(self, address: tuple[str, int], bind: tuple[str, int] = ("", 0)):
-        self.address = address
+        self.address = _address("address", address)
+        bind = _address("bind", bind)
         self._sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         self._sock.bind(bind)
         self._seq = itertools.count(1)

@@ -214,8 +214,10 @@ def run(
     with virtual drives unless ``connect`` gives a running one's address), plays the offline rally
     on the same balls, writes ``summary.json`` and the figure of one ball's timeline to ``out``,
     and returns the summary."""
-    if n < 1:
-        raise HilError(f"--n: {n} balls, need at least 1")
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 1 <= n <= _t.MAX_RALLY_BALLS:
+        raise HilError(f"--n: {n!r} balls, need an integer in 1..={_t.MAX_RALLY_BALLS} (the rally's balls)")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed < 2**64:
+        raise HilError(f"--seed: {seed!r}, need an integer in 0..2^64")
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     reply = _free_port()

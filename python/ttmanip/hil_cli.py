@@ -43,8 +43,8 @@ def run(args: argparse.Namespace) -> int:
     connect = None
     if args.connect:
         host, _, port = args.connect.rpartition(":")
-        if not host or not port.isdigit():
-            raise HilError(f"--connect: {args.connect!r} is not HOST:PORT")
+        if not host or not port.isdigit() or int(port) > 65535:
+            raise HilError(f"--connect: {args.connect!r} is not HOST:PORT (a port in 0..=65535)")
         connect = (host, int(port))
     summary = hil_run(
         args.n,

@@ -121,7 +121,8 @@ def rally(
         )
     if incoming is not None:
         try:
-            incoming = np.asarray(incoming, dtype=float)
+            # the bindings' one conversion: complex, boolean and string arrays are refused, not cast
+            incoming = _t.real_array(incoming, "incoming")
         except (TypeError, ValueError):
             raise _t.TtmanipError(
                 f"incoming: expected an (N, 10) array of ball states, got {incoming!r}"
@@ -170,23 +171,28 @@ def rally(
     ]
     in_reach = res["in_reach"].astype(bool)
     returned = res["returned"].astype(bool) & in_reach
-    statuses: dict[str, int] = {}
-    for s, r in zip(res["status"], res["reach"], strict=True):
-        key = f"{r}/{str(s).split(':')[0]}"
-        statuses[key] = statuses.get(key, 0) + 1
-    # Every verdict of the region, counted (0 when none): the reasons a ball is out of reach.
-    reach: dict[str, int] = {str(name): 0 for name in parts[0]["reach_names"]}
-    for r in res["reach"]:
-        reach[str(r)] = reach.get(str(r), 0) + 1
+    stats = _t.ball_rally_stats(
+        in_reach.tolist(),
+        res["returned"].astype(bool).tolist(),
+        res["reach"].tolist(),
+        res["status"].tolist(),
+        res["racket_error"],
+        res["plan_time_us"],
+        res["plan_wall_time_us"],
+        res["correction_time_us"],
+        res["landing_error"],
+        res["velocity_error"],
+    )
     summary = {
-        "balls": int(n),
+        "balls": stats["balls"],
         "seed": int(seed),
-        "in_reach": int(in_reach.sum()),
-        "out_of_reach": int((~in_reach).sum()),
-        "returned": int(returned.sum()),
-        "return_rate": float(returned.sum() / in_reach.sum()) if in_reach.any() else None,
-        "returned_out_of_reach": int((res["returned"].astype(bool) & ~in_reach).sum()),
-        "reach": reach,
+        "in_reach": stats["in_reach"],
+        "out_of_reach": stats["out_of_reach"],
+        "returned": stats["returned"],
+        "return_rate": stats["return_rate"],
+        "returned_out_of_reach": stats["returned_out_of_reach"],
+        # every verdict of the region, counted (0 when none): the reasons a ball is out of reach
+        "reach": dict(stats["reach"]),
         "in_reach_definition": "a return is possible: after its bounce on the robot's half the true "
         "flight has a point in the hitting volume where a shot of a fixed grid (drag-free parabola "
         "to x in {0.4, 0.8, 1.2} m, y in {-0.5, 0, 0.5} m in 0.45 to 1.05 s) with the racket of the "
@@ -194,15 +200,15 @@ def rally(
         "(roll 0, +-30, +-60 deg) has IK within the joint position limits, q_dot = J^-1 V is within "
         "the velocity limits and the joints' minimum time from rest at the ready configuration is "
         "at most the time left (ttkin::ball::reach); independent of the planner",
-        "racket_error_m_median": _median(res["racket_error"][in_reach]),
-        "plan_time_us_median": _median(res["plan_time_us"]),  # thread CPU time
-        "plan_wall_time_us_median": _median(res["plan_wall_time_us"]),
+        "racket_error_m_median": stats["racket_error_m_median"],
+        "plan_time_us_median": stats["plan_time_us_median"],  # thread CPU time
+        "plan_wall_time_us_median": stats["plan_wall_time_us_median"],
         # the one correction after the bounce (estimate updated through it, re-plan from the
         # stroke's state), during the stroke: thread CPU time, balls that had one
-        "correction_time_us_median": _median(res["correction_time_us"]),
-        "landing_error_m_median": _median(res["landing_error"][returned]),
-        "velocity_error_mps_median": _median(res["velocity_error"]),
-        "statuses": dict(sorted(statuses.items())),
+        "correction_time_us_median": stats["correction_time_us_median"],
+        "landing_error_m_median": stats["landing_error_m_median"],
+        "velocity_error_mps_median": stats["velocity_error_mps_median"],
+        "statuses": stats["statuses"],
         "target": list(map(float, target)),
         "max_spin_rps": float(max_spin_rps),
         "camera": _camera_summary(),
@@ -295,6 +301,9 @@ def _figures(res: dict, in_reach: np.ndarray, returned: np.ndarray, target, out:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from . import robots
+    from .ball import Table
+
     paths = []
     fig, ax = plt.subplots(figsize=(8, 5), constrained_layout=True)
     _table(ax)
@@ -315,18 +324,20 @@ def _figures(res: dict, in_reach: np.ndarray, returned: np.ndarray, target, out:
 
     fig = plt.figure(figsize=(9, 6), constrained_layout=True)
     ax = fig.add_subplot(projection="3d")
-    xs, ys = np.meshgrid([-1.37, 1.37], [-0.7625, 0.7625])
+    table = Table()
+    half_l, half_w = table.length / 2, table.width / 2
+    xs, ys = np.meshgrid([-half_l, half_l], [-half_w, half_w])
     ax.plot_surface(xs, ys, np.zeros_like(xs), alpha=0.15, color="C2")
-    ax.plot([0, 0], [-0.915, 0.915], [0.1525, 0.1525], "k-")
-    # gantry6: base at (−2.0, 0, 0.15), d1 along x (±1 m), d2 along y (±0.6 m)
-    ax.plot(
-        [-3.0, -1.0, -1.0, -3.0, -3.0],
-        [-0.6, -0.6, 0.6, 0.6, -0.6],
-        [0.15] * 5,
-        "k--",
-        lw=1,
-        label="gantry axes (d1 × d2)",
-    )
+    net = half_w + table.net_overhang
+    ax.plot([0, 0], [-net, net], [table.net_height, table.net_height], "k-")
+    # the gantry's travel: its d1 × d2 position limits along the prismatic axes (the Jacobian's
+    # first two columns, base frame) from the base origin, placed in the world frame
+    gantry = robots.gantry6()
+    lim, axes = gantry.limits, gantry.jacobian(np.zeros(gantry.dof))[:3, :2]
+    ends = ((0, 0), (1, 0), (1, 1), (0, 1), (0, 0))
+    corners = [lim[0, a] * axes[:, 0] + lim[1, b] * axes[:, 1] for a, b in ends]
+    travel = np.column_stack([corners, np.ones(5)]) @ _t.ball_placement().T
+    ax.plot(*travel[:, :3].T, "k--", lw=1, label="gantry axes (d1 × d2)")
     for k, p in enumerate(res["paths"]):
         b, r = p["ball"], p["racket"]
         ax.plot(b[:, 0], b[:, 1], b[:, 2], color=f"C{k}", lw=1, label=f"ball {k}: {p['status']}")

@@ -55,15 +55,19 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from . import TtmanipError
+    from .files import read_text
     from .rally import rally
 
     incoming = None
     n = args.n if args.n is not None else 1000
     if args.balls:
         try:
-            with open(args.balls) as f:
-                text = f.read().replace(",", " ")
+            # read no further than 16 MiB (a device such as /dev/zero never ends), UTF-8 only
+            text = read_text(args.balls, f"--balls {args.balls}").replace(",", " ")
             incoming = np.loadtxt(text.splitlines(), ndmin=2)
+        except TtmanipError as e:
+            print(f"ttmanip rally: {e}", file=sys.stderr)
+            return 1  # bad input (ttmanip.cli.EXIT_BAD_INPUT)
         except (OSError, ValueError) as e:
             print(f"ttmanip rally: --balls {args.balls}: {e}", file=sys.stderr)
             return 1  # bad input (ttmanip.cli.EXIT_BAD_INPUT)

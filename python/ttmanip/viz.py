@@ -273,23 +273,39 @@ def record_rally(path: str | Path, summary: dict, balls: int = 10) -> Path:
 def record_telemetry(telemetry: str | Path, path: str | Path) -> Path:
     """A ``ttctl`` telemetry CSV (one row per channel and cycle) as a recording: per channel and
     axis ``telemetry/<channel>/axis<a>/{q, q_ref, current}`` and the cycle ``latency_us``."""
-    with open(telemetry, newline="") as f:
-        rows = list(csv.DictReader(f))
-    if not rows or "channel" not in rows[0] or "t" not in rows[0]:
-        raise _t.TtmanipError(f"telemetry: '{telemetry}' is not a ttctl telemetry CSV (no channel,t header)")
+    import io
+
+    from .files import read_text
+
+    # within 16 MiB and UTF-8 (a device such as /dev/zero never ends): a one-line error, no hang
+    rows = list(csv.DictReader(io.StringIO(read_text(telemetry, f"telemetry: {telemetry}"), newline="")))
+    if not rows or "channel" not in rows[0] or "t" not in rows[0] or "latency_us" not in rows[0]:
+        raise _t.TtmanipError(
+            f"telemetry: '{telemetry}' is not a ttctl telemetry CSV (no channel,t,latency_us header)"
+        )
+
+    def number(row: dict, key: str) -> float:
+        try:
+            return float(row[key])
+        except (TypeError, ValueError):
+            line = rows.index(row) + 2
+            raise _t.TtmanipError(
+                f"telemetry: {telemetry}: line {line}, column {key}: not a number: {row[key]!r}"
+            ) from None
+
     with Recording(path, "ttmanip-telemetry") as rec:
         for channel in dict.fromkeys(r["channel"] for r in rows):
             sel = [r for r in rows if r["channel"] == channel]
-            t = np.array([float(r["t"]) for r in sel])
+            t = np.array([number(r, "t") for r in sel])
             rec._columns(
                 f"telemetry/{channel}/latency_us",
                 t,
-                rec.rr.Scalars.columns(scalars=[float(r["latency_us"]) for r in sel]),
+                rec.rr.Scalars.columns(scalars=[number(r, "latency_us") for r in sel]),
             )
             a = 0
             while f"q{a}" in sel[0]:
                 for quantity in ("q", "q_ref", "current"):
-                    v = np.array([float(r[f"{quantity}{a}"]) for r in sel])
+                    v = np.array([number(r, f"{quantity}{a}") for r in sel])
                     rec._columns(
                         f"telemetry/{channel}/axis{a}/{quantity}", t, rec.rr.Scalars.columns(scalars=v)
                     )

@@ -50,7 +50,7 @@ pub fn gantry6_demo_stroke(chain: &Chain) -> Result<DemoStroke> {
     let qd_hit = ttkin::ik::differential::DifferentialIk::default()
         .solve(chain, &q_hit, &twist, None)
         .map_err(ttkin_error)?
-        .qdot;
+        .qd;
     let limits = KinematicLimits::from_chain(chain, None).map_err(ttkin_error)?;
     let (lower, upper): (Vec<f64>, Vec<f64>) = chain
         .joints()

@@ -193,3 +193,15 @@ pub fn trajectory_arrays<'py>(
         _ => Err(TtmanipError::new_err("torques: give both qd and qdd, or neither")),
     }
 }
+
+/// The value of a renamed keyword argument: the new keyword's `value`, or the deprecated
+/// keyword's `old` when given (it wins, with a `DeprecationWarning` naming both).
+pub fn renamed<T>(py: Python<'_>, value: T, old: Option<T>, old_name: &str, new_name: &str) -> PyResult<T> {
+    match old {
+        None => Ok(value),
+        Some(v) => {
+            crate::errors::deprecated(py, old_name, new_name)?;
+            Ok(v)
+        }
+    }
+}

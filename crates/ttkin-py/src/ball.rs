@@ -15,7 +15,7 @@ use ttkin::ball::rally::{self, Outcomes, Rally, RallyConfig};
 use ttkin::ball::reach::Placement;
 
 use crate::args;
-use crate::convert::{pose_to_numpy, rows_array, serde_to_python, to_numpy, vector};
+use crate::convert::{pose_to_numpy, rows_array, serde_to_python, str_refs, to_numpy, vector};
 use crate::errors::{PyResultExt, TtmanipError};
 
 fn flight(model: &str) -> PyResult<Flight> {
@@ -323,6 +323,54 @@ fn ball_rally<'py>(
     Ok(d)
 }
 
+/// The statistics of a rally's outcome columns (`ttkin::ball::rally::RallyStats::new`): the
+/// columns of `ball_rally`, one value per ball (concatenated over its chunks); returns the counts,
+/// the return rate, `reach` as [verdict, count] pairs in the region's order, `statuses` and the
+/// medians (None when no ball has a finite value).
+#[ttkin_py_guard::guarded]
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+fn ball_rally_stats<'py>(
+    py: Python<'py>,
+    in_reach: Vec<bool>,
+    returned: Vec<bool>,
+    reach: Vec<String>,
+    status: Vec<String>,
+    racket_error: &Bound<'py, PyAny>,
+    plan_time_us: &Bound<'py, PyAny>,
+    plan_wall_time_us: &Bound<'py, PyAny>,
+    correction_time_us: &Bound<'py, PyAny>,
+    landing_error: &Bound<'py, PyAny>,
+    velocity_error: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let column = |a: &Bound<'py, PyAny>, what: &str| rows_array(a, what, "N", &[]).map(|a| a.data().to_vec());
+    let (reach, status) = (str_refs(&reach), str_refs(&status));
+    let (racket_error, landing_error) = (
+        column(racket_error, "racket_error")?,
+        column(landing_error, "landing_error")?,
+    );
+    let (plan_time_us, plan_wall_time_us) = (
+        column(plan_time_us, "plan_time_us")?,
+        column(plan_wall_time_us, "plan_wall_time_us")?,
+    );
+    let correction_time_us = column(correction_time_us, "correction_time_us")?;
+    let velocity_error = column(velocity_error, "velocity_error")?;
+    let stats = rally::RallyStats::new(&rally::OutcomeColumns {
+        in_reach: &in_reach,
+        returned: &returned,
+        reach: &reach,
+        status: &status,
+        racket_error: &racket_error,
+        plan_time_us: &plan_time_us,
+        plan_wall_time_us: &plan_wall_time_us,
+        correction_time_us: &correction_time_us,
+        landing_error: &landing_error,
+        velocity_error: &velocity_error,
+    })
+    .py()?;
+    serde_to_python(py, &stats)
+}
+
 /// The ball after a racket impact (`ttkin::ball::impact::Racket::hit_state` with the default
 /// racket): `state` (10,) just before, the racket's unit face `normal` (3,) and the face point's
 /// `velocity` (3,, m/s, world); returns the state (10,) just after.
@@ -529,5 +577,6 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ball_crossing, m)?)?;
     m.add_function(wrap_pyfunction!(ball_plan_return, m)?)?;
     m.add_function(wrap_pyfunction!(ball_rally, m)?)?;
+    m.add_function(wrap_pyfunction!(ball_rally_stats, m)?)?;
     Ok(())
 }

@@ -582,3 +582,8 @@ pub fn each<'py, T>(
         .map(|(i, item)| read(&item, &format!("{what}[{i}]")))
         .collect()
 }
+
+/// Borrowed `&str`s of owned strings (a column of names read from Python).
+pub fn str_refs(v: &[String]) -> Vec<&str> {
+    v.iter().map(String::as_str).collect()
+}

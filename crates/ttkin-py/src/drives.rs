@@ -30,11 +30,19 @@ pub struct DriveSim {
 }
 
 impl DriveSim {
-    /// The simulator back from `__reduce__`'s state: rebuilt, then the journal replayed.
-    pub fn from_state(state: &Bound<'_, PyAny>) -> PyResult<Self> {
+    /// The simulator back from `__reduce__`'s state: rebuilt, then the journal replayed (without
+    /// the GIL, interruptible: a journal of 10¹⁵ ticks is Ctrl-C-able work, not a hang).
+    pub fn from_state(py: Python<'_>, state: &Bound<'_, PyAny>) -> PyResult<Self> {
         let (chain, options, setpoint_period, journal): (ttkin::Chain, CoupledOptions, f64, Journal) =
             crate::pickle::from_state(state, "DriveSim")?;
-        let sim = journal.replay(&chain, options, setpoint_period).py()?;
+        // the constructor's check (a NaN period unpickled and ran)
+        let setpoint_period = args::positive("setpoint_period", setpoint_period)?;
+        let sim = crate::interrupt::detach_interruptible(py, |cancel| {
+            journal.replay_until(&chain, options, setpoint_period, &|| {
+                crate::interrupt::cancelled(cancel)
+            })
+        })?
+        .py()?;
         Ok(DriveSim {
             chain: std::sync::Arc::new(chain),
             options,
@@ -267,8 +275,8 @@ fn step_metrics(t: &Bound<'_, PyAny>, y: &Bound<'_, PyAny>, target: f64) -> PyRe
 /// Rebuilds a `DriveSim` from its pickle state (`DriveSim.__reduce__`; not meant to be called directly).
 #[ttkin_py_guard::guarded]
 #[pyfunction]
-fn _unpickle_drive_sim(state: &Bound<'_, PyAny>) -> PyResult<DriveSim> {
-    DriveSim::from_state(state)
+fn _unpickle_drive_sim(py: Python<'_>, state: &Bound<'_, PyAny>) -> PyResult<DriveSim> {
+    DriveSim::from_state(py, state)
 }
 
 /// Adds `DriveSim`, `drive_theta5_case`, `actuators` and `step_metrics` to the module.

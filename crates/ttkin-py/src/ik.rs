@@ -230,11 +230,12 @@ impl PyRobot {
     /// Joint velocities (n,) (m/s, rad/s) that produce the tool twist [v (m/s); ω (rad/s)] (6,)
     /// at q (n,): J⁻¹V for a square robot, the weighted least-norm solution for a redundant one
     /// (weights (n,) > 0, default 1), least squares for fewer than 6 joints. Near a singularity
-    /// (σ_min < threshold) the inverse is damped up to max_damping. frame: axes of the twist,
+    /// (σ_min < epsilon) the inverse is damped up to lambda_max. frame: axes of the twist,
     /// "base" or "tool". With info=True returns (qdot, {"singular", "sigma_min", "damping",
-    /// "residual"}).
-    #[pyo3(signature = (q, twist, frame="base", weights=None, threshold=DifferentialIk::default().threshold,
-        max_damping=DifferentialIk::default().max_damping, info=false))]
+    /// "residual"}). `threshold` and `max_damping` are the deprecated names of `epsilon` and
+    /// `lambda_max`.
+    #[pyo3(signature = (q, twist, frame="base", weights=None, epsilon=DifferentialIk::default().epsilon,
+        lambda_max=DifferentialIk::default().lambda_max, info=false, *, threshold=None, max_damping=None))]
     #[allow(clippy::too_many_arguments)]
     fn joint_velocity<'py>(
         &self,
@@ -243,10 +244,20 @@ impl PyRobot {
         twist: &Any<'py>,
         frame: &str,
         weights: Option<&Any<'py>>,
-        threshold: f64,
-        max_damping: f64,
+        epsilon: f64,
+        lambda_max: f64,
         info: bool,
+        threshold: Option<f64>,
+        max_damping: Option<f64>,
     ) -> PyResult<Bound<'py, PyAny>> {
+        let epsilon = args::renamed(py, epsilon, threshold, "joint_velocity(threshold=...)", "epsilon=...")?;
+        let lambda_max = args::renamed(
+            py,
+            lambda_max,
+            max_damping,
+            "joint_velocity(max_damping=...)",
+            "lambda_max=...",
+        )?;
         let n = self.chain.dof();
         let q = vector(q, "q", n)?;
         let twist = vector(twist, "twist", 6)?;
@@ -254,12 +265,12 @@ impl PyRobot {
         let frame: JacobianFrame = frame.parse::<JacobianFrame>().py()?;
         // inf is meaningless for both: damping everywhere, or without bound (qdot = 0)
         let d = DifferentialIk {
-            threshold: args::non_negative("threshold", threshold)?,
-            max_damping: args::non_negative("max_damping", max_damping)?,
+            epsilon: args::non_negative("epsilon", epsilon)?,
+            lambda_max: args::non_negative("lambda_max", lambda_max)?,
             frame,
         };
         let r = d.solve(&self.chain, &q, &twist, weights.as_deref()).py()?;
-        let qdot = to_numpy(py, &[n], &r.qdot);
+        let qdot = to_numpy(py, &[n], &r.qd);
         if !info {
             return Ok(qdot.into_any());
         }

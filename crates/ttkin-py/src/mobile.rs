@@ -185,6 +185,18 @@ impl PyRobot {
         finite_to_numpy(py, &[task.dim(), n], je.transpose().as_slice())
     }
 
+    /// Jacobian (5, n) of seed 000's racket coordinates [centre x, y, z (m), polar, azimuth (rad)]
+    /// at `q` (`ttkin::task::racket_angle_jacobian_at`, racket centre 0.15 m along tool z): their
+    /// rates are ẋ = J q̇ (unlike `task_jacobian`'s residual rows); an error where the face normal
+    /// is along ±z (the azimuth is undefined there).
+    fn racket_angle_jacobian<'py>(&self, py: Python<'py>, q: &Any<'py>) -> PyResult<Array<'py>> {
+        let n = self.chain.dof();
+        let j =
+            ttkin::task::racket_angle_jacobian_at(&self.chain, &vector(q, "q", n)?, ttkin::task::SEED_RACKET_OFFSET)
+                .py()?;
+        finite_to_numpy(py, &[5, n], j.transpose().as_slice())
+    }
+
     /// Task coordinates of the tool pose at `q`: position (3,); position and rotation vector (6,);
     /// or seed 000's racket 5-vector [centre x, y, z (m), polar, azimuth (rad)].
     #[pyo3(signature = (q, task="racket5"))]
@@ -199,10 +211,12 @@ impl PyRobot {
 
 /// One weighted least-norm step: inputs q̇ (nu,) that realise task velocity `xdot` (residual
 /// coordinates, see `Robot.task_jacobian`) at `q`, with Chan–Dubey joint-limit weights (or none) and
-/// singularity-robust damping (λ_max = `damping`, starting below σ_min = `epsilon`).
+/// singularity-robust damping (rising to `lambda_max` below σ_min = `epsilon`); `qd_prev` (nu,)
+/// the previous step's inputs. `damping` and `qdot_prev` are the deprecated names of `lambda_max`
+/// and `qd_prev`.
 #[ttkin_py_guard::guarded]
 #[pyfunction]
-#[pyo3(signature = (robot, q, xdot, task="racket5", weights="chan-dubey", damping=Damping::default().lambda_max, epsilon=Damping::default().epsilon, qdot_prev=None, base=None, mount=None))]
+#[pyo3(signature = (robot, q, xdot, task="racket5", weights="chan-dubey", lambda_max=Damping::default().lambda_max, epsilon=Damping::default().epsilon, qd_prev=None, base=None, mount=None, *, damping=None, qdot_prev=None))]
 #[allow(clippy::too_many_arguments)]
 fn wls_step<'py>(
     py: Python<'py>,
@@ -211,20 +225,30 @@ fn wls_step<'py>(
     xdot: &Any<'py>,
     task: &str,
     weights: &str,
-    damping: f64,
+    lambda_max: f64,
     epsilon: f64,
-    qdot_prev: Option<&Any<'py>>,
+    qd_prev: Option<&Any<'py>>,
     base: Option<PyRef<'py, PyDiffDrive>>,
     mount: Option<&Any<'py>>,
+    damping: Option<f64>,
+    qdot_prev: Option<&Any<'py>>,
 ) -> PyResult<Array<'py>> {
+    let lambda_max = crate::args::renamed(py, lambda_max, damping, "wls_step(damping=...)", "lambda_max=...")?;
+    let qd_prev = crate::args::renamed(
+        py,
+        qd_prev,
+        qdot_prev.map(Some),
+        "wls_step(qdot_prev=...)",
+        "qd_prev=...",
+    )?;
     let task = Task::from_name(task).py()?;
     let weighting = Weighting::from_name(weights).py()?;
     let model = model(robot, base.as_deref(), mount)?;
     let q = vector(q, "q", model.nq())?;
     let xdot = vector(xdot, "xdot", task.dim())?;
-    let prev = qdot_prev.map(|p| vector(p, "qdot_prev", model.nu())).transpose()?;
+    let prev = qd_prev.map(|p| vector(p, "qd_prev", model.nu())).transpose()?;
     let prev = prev.unwrap_or_else(|| vec![0.0; model.nu()]);
-    let mut step = WlsStep::new(&model, task, weighting, Damping::new(epsilon, damping).py()?).py()?;
+    let mut step = WlsStep::new(&model, task, weighting, Damping::new(epsilon, lambda_max).py()?).py()?;
     let (qd, _) = step.try_solve(&q, &xdot, &prev).py()?;
     finite_to_numpy(py, &[qd.len()], &qd)
 }
@@ -266,7 +290,7 @@ array_getters!(PyTrackResult, |t| {
     /// Configurations (N, nq): m for prismatic, rad for revolute joints (base x, y, θ first).
     q => t.r.q, [t.r.len(), t.r.nq];
     /// Commanded inputs (N, nu): joint rates (m/s, rad/s), base (v, ω) first.
-    qd => t.r.qdot, [t.r.len(), t.r.nu];
+    qd => t.r.qd, [t.r.len(), t.r.nu];
     /// Task coordinates reached (N, dim).
     x => t.r.x, [t.r.len(), t.r.dim];
     /// Norm of the task residual (N,), task units.
@@ -290,7 +314,7 @@ impl PyTrackResult {
     #[getter]
     fn qdot<'py>(&self, py: Python<'py>) -> PyResult<Array<'py>> {
         crate::errors::deprecated(py, "TrackResult.qdot", "TrackResult.qd")?;
-        Ok(to_numpy(py, &[self.r.len(), self.r.nu], &self.r.qdot))
+        Ok(to_numpy(py, &[self.r.len(), self.r.nu], &self.r.qd))
     }
     fn __len__(&self) -> usize {
         self.r.len()
@@ -313,14 +337,15 @@ value_getters!(PyTrackResult, |t| {
 
 /// Closed-loop tracking of a task trajectory sampled at `rate_hz` (N, dim) from `q0`; the loop
 /// runs in Rust without the GIL. `velocities` (N, dim) are the task rates (default: finite
-/// differences). See `ttmanip.mobile.track` for the options.
+/// differences). See `ttmanip.mobile.track` for the options; `damping` is the deprecated name of
+/// `lambda_max`.
 #[ttkin_py_guard::guarded]
 #[pyfunction]
 #[pyo3(signature = (robot, q0, task_trajectory, rate_hz=ttkin::traj::SAMPLE_RATE, task="racket5", velocities=None, weights="chan-dubey",
-                    gain=None, damping=Damping::default().lambda_max, epsilon=Damping::default().epsilon, input_weights=None,
+                    gain=None, lambda_max=Damping::default().lambda_max, epsilon=Damping::default().epsilon, input_weights=None,
                     limit_gain=ClikOptions::default().limit_gain, manipulability_gain=ClikOptions::default().manipulability_gain,
                     respect_limits=ClikOptions::default().respect_limits, max_error=ClikOptions::default().max_error,
-                    corrector=ClikOptions::default().corrector, base=None, mount=None))]
+                    corrector=ClikOptions::default().corrector, base=None, mount=None, *, damping=None))]
 #[allow(clippy::too_many_arguments)]
 fn track<'py>(
     py: Python<'py>,
@@ -332,7 +357,7 @@ fn track<'py>(
     velocities: Option<&Any<'py>>,
     weights: &str,
     gain: Option<f64>,
-    damping: f64,
+    lambda_max: f64,
     epsilon: f64,
     input_weights: Option<&Any<'py>>,
     limit_gain: f64,
@@ -342,7 +367,9 @@ fn track<'py>(
     corrector: bool,
     base: Option<PyRef<'py, PyDiffDrive>>,
     mount: Option<&Any<'py>>,
+    damping: Option<f64>,
 ) -> PyResult<PyTrackResult> {
+    let lambda_max = crate::args::renamed(py, lambda_max, damping, "track(damping=...)", "lambda_max=...")?;
     let task = Task::from_name(task).py()?;
     let model = model(robot, base.as_deref(), mount)?;
     let q0 = vector(q0, "q0", model.nq())?;
@@ -369,7 +396,7 @@ fn track<'py>(
     let options = ClikOptions {
         gain,
         weighting: Weighting::from_name(weights).py()?,
-        damping: Damping::new(epsilon, damping).py()?,
+        damping: Damping::new(epsilon, lambda_max).py()?,
         input_weights,
         limit_gain,
         manipulability_gain,

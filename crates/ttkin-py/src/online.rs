@@ -31,6 +31,10 @@ fn wire_hit<'py>(
     seq: u64,
     sent: f64,
 ) -> PyResult<Bound<'py, PyBytes>> {
+    // a NaN time encodes, and the controller drops the datagram as non-finite without an answer:
+    // refused here, where the caller sees it
+    let t_hit = crate::args::finite("t_hit", t_hit)?;
+    let sent = crate::args::finite("sent", sent)?;
     let p = transform(pose, "pose")?;
     let (r, c) = (p.rotation.matrix(), p.translation.vector);
     let t = vector(twist, "twist", 6)?;
@@ -67,6 +71,8 @@ fn wire_observation<'py>(
     seq: u64,
     sent: f64,
 ) -> PyResult<Bound<'py, PyBytes>> {
+    let camera_time = crate::args::finite("camera_time", camera_time)?;
+    let sent = crate::args::finite("sent", sent)?;
     let p = vector(position, "position", 3)?;
     let m = Message::Observation(ObservationMsg {
         id,

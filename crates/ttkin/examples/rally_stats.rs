@@ -94,7 +94,7 @@ fn deepest(pl: &ReturnPlanner, ik: &Analytic, ball: &BallState, now: f64, target
                         continue;
                     }
                     best = best.max(4);
-                    if (0..q.len()).any(|i| jv.qdot[i].abs() > lim.velocity[i]) {
+                    if (0..q.len()).any(|i| jv.qd[i].abs() > lim.velocity[i]) {
                         continue;
                     }
                     best = best.max(5);
@@ -105,7 +105,7 @@ fn deepest(pl: &ReturnPlanner, ik: &Analytic, ball: &BallState, now: f64, target
                         continue;
                     }
                     best = best.max(6);
-                    if hit_leg(&start, q, &jv.qdot, t, lim).is_some() {
+                    if hit_leg(&start, q, &jv.qd, t, lim).is_some() {
                         return 7;
                     }
                 }

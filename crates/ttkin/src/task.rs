@@ -289,6 +289,13 @@ pub fn racket_angle_jacobian(j: &Matrix6xX<f64>, t: &IsometryMatrix3<f64>, offse
     Ok(out)
 }
 
+/// [`racket_angle_jacobian`] of `chain` at `q` (checked), the racket centre `offset` m along the
+/// tool z axis: the rates of [`racket_coordinates`] are ẋ = J q̇ (5 × n, base frame).
+pub fn racket_angle_jacobian_at(chain: &Chain, q: &[f64], offset: f64) -> Result<DMatrix<f64>> {
+    let j = chain.jacobian(q, JacobianFrame::Base)?;
+    racket_angle_jacobian(&j, &chain.fk_unchecked(q), offset)
+}
+
 /// Rotation vector θ·axis (rad) of a rotation matrix: the SO(3) logarithm, accurate at θ → 0 and
 /// θ → π. (nalgebra's `Rotation3::angle` is an unclamped acos: NaN when rounding pushes
 /// (tr R − 1)/2 past 1, and only √ε-accurate near 0.)

@@ -414,7 +414,7 @@ fn differential_ik_reproduces_the_twist_away_from_singularities() {
                 chain.dof(),
                 chain.jacobian(&q, JacobianFrame::Base).unwrap().iter().copied(),
             );
-            let qd = DVector::from_column_slice(&r.qdot);
+            let qd = DVector::from_column_slice(&r.qd);
             let v = DVector::from_column_slice(&twist);
             let res = &j * &qd - &v;
             if chain.dof() >= 6 {
@@ -442,9 +442,9 @@ fn redundant_chain_gets_the_weighted_least_norm_solution() {
         let winv = DMatrix::from_diagonal(&DVector::from_iterator(8, w.iter().map(|x| 1.0 / x)));
         let m = &j * &winv * j.transpose();
         let expected = &winv * j.transpose() * m.lu().solve(&DVector::from_column_slice(&twist)).unwrap();
-        let diff = (expected - DVector::from_column_slice(&r.qdot)).amax();
+        let diff = (expected - DVector::from_column_slice(&r.qd)).amax();
         assert!(
-            diff < 1e-8 * (1.0 + r.qdot.iter().map(|v| v.abs()).fold(0.0, f64::max)),
+            diff < 1e-8 * (1.0 + r.qd.iter().map(|v| v.abs()).fold(0.0, f64::max)),
             "{diff:e}"
         );
     }
@@ -476,8 +476,8 @@ fn gantry6_jacobian_determinant_is_minus_l3_c4_s45_and_singularities_stay_bounde
         let q = [0.1, 0.2, 0.3, t4, t5, 0.5];
         let r = settings.solve(&chain, &q, &twist, None).unwrap();
         assert!(r.singular, "θ4 = {t4}, θ5 = {t5}: σ_min = {}", r.sigma_min);
-        let bound = norm * (1.0 / settings.threshold).max(1.0 / (2.0 * r.damping));
-        let qd = r.qdot.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let bound = norm * (1.0 / settings.epsilon).max(1.0 / (2.0 * r.damping));
+        let qd = r.qd.iter().map(|v| v * v).sum::<f64>().sqrt();
         assert!(
             qd.is_finite() && qd <= bound * (1.0 + 1e-9),
             "θ4 = {t4}, θ5 = {t5}: |q̇| = {qd}, bound {bound}"

@@ -435,7 +435,7 @@ fn mobile_base_clik_tracks_a_position_line() {
     // wheels within their limits at every sample
     let d = drive();
     for k in 0..r.len() {
-        let u = &r.qdot[k * 8..k * 8 + 2];
+        let u = &r.qd[k * 8..k * 8 + 2];
         let ws = d.wheel_speeds(u[0], u[1]);
         assert!(ws[0].abs() <= d.max_wheel_speed() + 1e-9 && ws[1].abs() <= d.max_wheel_speed() + 1e-9);
     }

@@ -22,10 +22,10 @@ cannot bring it closer), while the arm from joint 2 to the racket centre spans a
   (0.02 m for the prismatic joint, 5° for the revolute ones) inside its limits, and the smallest
   singular value of the 5 × 8 racket task Jacobian at least ``SIGMA_MARGIN`` = 0.05 (half its value
   0.0998 at the start): the nearest centre is reached by stretching the arm toward x(4), i.e. at a
-  singularity, which the margin keeps away from. Found by BFGS on the smooth joint coordinates
-  q = mid + half·sin(u) of the shrunken box (a quadratic penalty on the σ_min margin), started
-  from the start configuration and from the 20 nearest of 20,000 random in-box configurations
-  (batch FK); the tests check that no one of 100,000 random configurations obeying the same
+  singularity, which the margin keeps away from. Found by SciPy's SLSQP within the shrunken
+  box (a quadratic penalty on the σ_min margin; the gradient from the core's task and geometric
+  Jacobians), started from the start configuration and from the 20 nearest of 20,000 random
+  in-box configurations; the tests check that no one of 100,000 random configurations obeying the same
   margins is nearer. Without the singularity margin the nearest distance is about 5.6 mm smaller.
 - Time law: the racket coordinates of FK along the quintic (rest-to-rest) joint-space path from
   the start to that configuration, 4 s, with their exact rates ẋ = J_x q̇ — reachable at every
@@ -134,63 +134,85 @@ def margin_box(robot: Robot) -> tuple[np.ndarray, np.ndarray]:
     return robot.limits[:, 0] + margin, robot.limits[:, 1] - margin
 
 
-def _objective(robot: Robot, q: np.ndarray) -> np.ndarray:
-    # the distance with the angle smoothed at 0 (by < 1e-5 m) and a quadratic σ_min-margin penalty
-    c, n = racket_centre_normal(robot, q)
-    _, n4 = x4_centre_normal()
-    angle = np.arctan2(np.linalg.norm(np.cross(n, n4), axis=-1), n @ n4)
-    c4 = X4_SEED[:3]
-    smooth = np.sqrt(angle * angle + 1e-10) - 1e-5
-    short = np.maximum(0.0, SIGMA_MARGIN + 1e-4 - task_sigma_min(robot, q))  # ends just above the margin
-    return np.linalg.norm(c - c4, axis=-1) + NORMAL_WEIGHT * smooth + 1e4 * short * short
+#: Smoothing of the normal angle at 0 in the optimiser's objective (rad²): changes it by < 1e-5 m.
+_ANGLE_SMOOTHING = 1e-10
+#: Weight of the quadratic penalty on the σ_min margin in the optimiser's objective.
+_SIGMA_PENALTY = 1e4
+#: Step of the central differences of the task Jacobian for the gradient of σ_min (rad or m).
+_SIGMA_STEP = 1e-7
 
 
-def _bfgs(robot: Robot, q0: np.ndarray, lo: np.ndarray, hi: np.ndarray, iterations: int = 400) -> np.ndarray:
-    """Local minimum of the objective in u, q = mid + half·sin(u) (inside [lo, hi] for every u)."""
-    mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
-    n = len(q0)
-    eye, h = np.eye(n), 1e-7
+def _sigma_min_gradient(robot: Robot, q: np.ndarray) -> tuple[float, np.ndarray]:
+    """σ_min of the racket5 task Jacobian J(q) and its gradient (n,): dσ/dq_k = uᵀ (∂J/∂q_k) v with
+    the singular vectors u, v of σ_min (a simple singular value), ∂J/∂q_k by central differences of
+    the core's task Jacobian."""
+    u_all, s, vt = np.linalg.svd(robot.task_jacobian(q, "racket5"), full_matrices=False)
+    u, v = u_all[:, -1], vt[-1]
+    grad = np.empty(len(q))
+    for k in range(len(q)):
+        dq = np.zeros(len(q))
+        dq[k] = _SIGMA_STEP
+        dj = robot.task_jacobian(q + dq, "racket5") - robot.task_jacobian(q - dq, "racket5")
+        grad[k] = u @ dj @ v / (2.0 * _SIGMA_STEP)
+    return float(s[-1]), grad
 
-    def f(u):
-        return _objective(robot, mid + half * np.sin(u))
 
-    def grad(u):
-        v = f(np.concatenate([u + h * eye, u - h * eye]))
-        return (v[:n] - v[n:]) / (2 * h)
+def _objective(robot: Robot, q: np.ndarray) -> tuple[float, np.ndarray]:
+    """The optimiser's objective and its gradient (n,) at q: the distance to x(4) with the normal
+    angle smoothed at 0, plus a quadratic penalty on the σ_min margin (ends just above it). The
+    gradient comes from the core's Jacobians: the centre rows of the racket task Jacobian (ċ = J_c
+    q̇) and the angular rows of the geometric Jacobian (ṅ = ω × n, so the angle θ to n₄ changes as
+    θ̇ = −ωᵀ(n × n₄)/sin θ)."""
+    x = robot.task_coordinates(q, "racket5")
+    c4, n4 = x4_centre_normal()
+    dc = x[:3] - c4
+    centre = float(np.linalg.norm(dc))
+    grad = dc / centre @ robot.task_jacobian(q, "racket5")[:3]
+    n = _normal(x[3], x[4])
+    axis = np.cross(n, n4)
+    sin_angle = float(np.linalg.norm(axis))
+    angle = float(np.arctan2(sin_angle, n @ n4))
+    root = np.sqrt(angle * angle + _ANGLE_SMOOTHING)
+    if sin_angle > 0.0:
+        angle_rate = -(axis / sin_angle) @ robot.jacobian(q)[3:]
+        grad = grad + NORMAL_WEIGHT * (angle / root) * angle_rate
+    value = centre + NORMAL_WEIGHT * (root - np.sqrt(_ANGLE_SMOOTHING))
+    short = SIGMA_MARGIN + 1e-4 - task_sigma_min(robot, q)
+    if short > 0.0:
+        _, dsigma = _sigma_min_gradient(robot, q)
+        value += _SIGMA_PENALTY * short * short
+        grad = grad - 2.0 * _SIGMA_PENALTY * short * dsigma
+    return value, grad
 
-    u = np.arcsin(np.clip((q0 - mid) / half, -1.0, 1.0))
-    fu, g, H = f(u[None])[0], grad(u), eye.copy()
-    for _ in range(iterations):
-        p = -H @ g
-        if g @ p >= 0.0:
-            H, p = eye.copy(), -g
-        step = 1.0
-        while step > 1e-10:
-            un = u + step * p
-            fn = f(un[None])[0]
-            if fn <= fu + 1e-4 * step * (g @ p):
-                break
-            step *= 0.5
-        if step <= 1e-10:
-            break
-        gn = grad(un)
-        s, y = un - u, gn - g
-        if s @ y > 1e-12:
-            rho = 1.0 / (s @ y)
-            H = (eye - rho * np.outer(s, y)) @ H @ (eye - rho * np.outer(y, s)) + rho * np.outer(s, s)
-        done = fu - fn < 1e-12
-        u, fu, g = un, fn, gn
-        if done:
-            break
-    return mid + half * np.sin(u)
+
+def _local_minimum(robot: Robot, q0: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Local minimum of :func:`_objective` within the box [lo, hi] from q0: SciPy's SLSQP with the
+    box as bounds and the objective's gradient from the core's Jacobians (L-BFGS-B finds the same
+    minimum, but its BLAS calls for an 8-vector cost milliseconds each on a loaded machine)."""
+    try:
+        from scipy.optimize import minimize
+    except ImportError:  # pragma: no cover - the experiments extra is installed with the tests
+        raise ImportError(
+            "seed000 finds its target with SciPy's optimiser: pip install 'ttmanip[experiments]'"
+        ) from None
+    result = minimize(
+        lambda q: _objective(robot, q),
+        np.clip(q0, lo, hi),
+        jac=True,
+        method="SLSQP",
+        bounds=list(zip(lo, hi, strict=True)),
+        options={"maxiter": 400, "ftol": 1e-12},
+    )
+    return np.clip(result.x, lo, hi)
 
 
 def nearest_reachable(
     robot: Robot, samples: int = 20_000, starts: int = 20, seed: int = 0
 ) -> tuple[np.ndarray, float]:
     """The configuration (n,) whose racket pose is nearest to x(4) under :func:`distance_to_x4`
-    within the margins (``LIMIT_MARGIN``, ``SIGMA_MARGIN``), and that distance: BFGS from the
-    start and from the ``starts`` nearest of ``samples`` random configurations (see module doc)."""
+    within the margins (``LIMIT_MARGIN``, ``SIGMA_MARGIN``), and that distance: a local minimum
+    (:func:`_local_minimum`) from the start and from each of the ``starts`` nearest of ``samples``
+    random configurations (see module doc)."""
     lo, hi = margin_box(robot)
     rng = np.random.default_rng(seed)
     q = lo + rng.random((samples, robot.dof)) * (hi - lo)
@@ -198,7 +220,7 @@ def nearest_reachable(
     d = np.where(task_sigma_min(robot, q) >= SIGMA_MARGIN, d, np.inf)
     best, best_d = None, np.inf
     for q0 in [np.clip(Q_START, lo, hi), *q[np.argsort(d)[:starts]]]:
-        qs = _bfgs(robot, q0, lo, hi)
+        qs = _local_minimum(robot, q0, lo, hi)
         if task_sigma_min(robot, qs) < SIGMA_MARGIN:
             continue  # the penalty left it a hair inside the margin: not admissible
         ds = float(distance_to_x4(*racket_centre_normal(robot, qs)))
@@ -215,20 +237,12 @@ def joint_path_task_trajectory(
     """Racket task samples x (N, 5) and exact rates ẋ (N, 5) along the quintic joint path
     q0 → q1, and that path (N, n); azimuth unwrapped."""
     count = int(round(duration * rate_hz)) + 1
-    q, qdot, _ = traj.quintic(q0, q1, duration).sample(np.linspace(0.0, duration, count))
-    # the core's racket task (the robot's racket mount): its centre rows of the task Jacobian are
-    # ċ = J q̇; its angle rows are residual coordinates, not the angles' rates, which follow from
-    # the face normal's ṅ = ω × n with ω = J_ω q̇ (the geometric Jacobian's angular rows)
+    q, qd, _ = traj.quintic(q0, q1, duration).sample(np.linspace(0.0, duration, count))
+    # the rates of the racket coordinates from the core's Jacobian of them (ẋ = J q̇; the racket
+    # task Jacobian's angle rows are residual coordinates, not the angles' rates)
     x = _task_rows(robot, q)
-    jc = np.array([robot.task_jacobian(row, "racket5")[:3] for row in q])
-    cdot = np.einsum("kij,kj->ki", jc, qdot)
-    omega = np.einsum("kij,kj->ki", robot.jacobian(q)[:, 3:, :], qdot)
-    n = _normal(x[:, 3], x[:, 4])
-    ndot = np.cross(omega, n)
-    polar_rate = -ndot[:, 2] / np.sin(x[:, 3])
-    azimuth_rate = (n[:, 0] * ndot[:, 1] - n[:, 1] * ndot[:, 0]) / (n[:, 0] ** 2 + n[:, 1] ** 2)
+    xdot = np.einsum("kij,kj->ki", np.array([robot.racket_angle_jacobian(row) for row in q]), qd)
     x[:, 4] = np.unwrap(x[:, 4])
-    xdot = np.column_stack([cdot, polar_rate, azimuth_rate])
     return x, xdot, q
 
 
@@ -474,7 +488,7 @@ def run(out_dir: str | Path) -> dict:
             f"x4_seed's racket centre is {float(np.hypot(X4_SEED[0], X4_SEED[1])):.2f} m from the axis "
             f"of prismatic joint 1 and the arm spans at most {ARM_SPAN:.2f} m: out of reach. The target "
             "is the reachable racket pose nearest to x4_seed under distance_metric, with target_margins "
-            "from the joint limits and from the singularity (BFGS from 21 starts); the task path is FK "
+            "from the joint limits and from the singularity (SLSQP from 21 starts); the task path is FK "
             "along a quintic joint path to it, reachable at every sample"
         ),
         "duration_s": DURATION,

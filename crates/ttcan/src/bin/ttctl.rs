@@ -163,6 +163,40 @@ fn main() {
             ));
         }
     }
+    if args.trajectory.is_some() {
+        // an axis whose joint is beyond the file's columns would hold still while the motion
+        // "completes": a mismatch of file and configuration, refused before anything moves
+        for ch in &cfg.channel {
+            for a in &ch.axis {
+                if let Some(j) = a.joint.filter(|&j| j >= traj.joints()) {
+                    fail(format!(
+                        "{} node {} follows joint {j}, but the trajectory has {} joints (0..{})",
+                        ch.interface,
+                        a.node,
+                        traj.joints(),
+                        traj.joints()
+                    ));
+                }
+                // every target must fit the drive's integers (a position of 1e300 rad passed the
+                // check and faulted the drive at the first cycle)
+                if let Some(j) = a.joint {
+                    for (k, s) in traj.samples(j).enumerate() {
+                        let fits = a
+                            .units
+                            .position_to_increments(s.q)
+                            .and(a.units.velocity_to_increments(s.qd));
+                        if let Err(e) = fits {
+                            fail(format!(
+                                "trajectory sample {k}, joint {j} (q = {}, qd = {}): {e} for {} node {} \
+                                 ({} increments per unit, 32-bit targets)",
+                                s.q, s.qd, ch.interface, a.node, a.units.increments_per_unit
+                            ));
+                        }
+                    }
+                }
+            }
+        }
+    }
     let online_planner = args.online.as_ref().map(|_| {
         let name = cfg
             .robot

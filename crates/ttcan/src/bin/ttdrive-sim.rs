@@ -29,7 +29,7 @@ struct Args {
     /// out-of-range (impossible statusword). Repeatable.
     #[arg(long = "fail")]
     fail: Vec<String>,
-    /// SYNC period the drives expect, s (sets the physics step).
+    /// SYNC period the drives expect, s, in [1e-6, 1] (sets the physics step).
     #[arg(long, default_value_t = 1e-3)]
     period: f64,
     /// Milliseconds without SYNC (power stage on) before a drive faults and stops.
@@ -134,8 +134,10 @@ fn main() {
             fail(format!("--fail: no node {} on interface {}", i.node, i.interface));
         }
     }
-    if !(args.period.is_finite() && args.period > 0.0) {
-        fail(format!("--period {}: must be > 0", args.period));
+    // CiA 301's communication cycle period (0x1006) is in µs; a SYNC period of 1e300 s passed
+    // and never stepped the physics
+    if !(args.period.is_finite() && (1e-6..=1.0).contains(&args.period)) {
+        fail(format!("--period {}: must be in [1e-6, 1] s", args.period));
     }
     let units = Units {
         increments_per_unit: args.increments_per_unit,

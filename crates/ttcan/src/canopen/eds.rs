@@ -252,7 +252,8 @@ impl DeviceFile {
     /// Reads and parses the file at `path`.
     pub fn load(path: &std::path::Path) -> Result<Self, DeviceFileError> {
         let name = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| DeviceFileError {
+        // within ttkin's file limit (16 MiB, UTF-8): a device such as /dev/zero ends the read
+        let text = ttkin::budget::read_text_limited(path).map_err(|e| DeviceFileError {
             path: name.clone(),
             line: None,
             message: format!("cannot read the device file: {e}"),

@@ -61,20 +61,37 @@ impl Journal {
     /// with `setpoint_period`, s). A call that failed was journaled too (it may have changed the
     /// state before failing): its replay fails alike, at the same point, and goes on.
     pub fn replay(&self, chain: &Chain, options: CoupledOptions, setpoint_period: f64) -> Result<CoupledSim> {
+        self.replay_until(chain, options, setpoint_period, &|| false)
+    }
+
+    /// [`Journal::replay`] that `stop` ends early (polled before each call and within ticks and
+    /// runs; a caller's cancellation, e.g. Ctrl-C): the simulation is then left part-way.
+    pub fn replay_until(
+        &self,
+        chain: &Chain,
+        options: CoupledOptions,
+        setpoint_period: f64,
+        stop: ttkin::budget::Stop<'_>,
+    ) -> Result<CoupledSim> {
         let mut sim = self.start(chain, options)?;
         for call in &self.calls {
+            if stop() {
+                break;
+            }
             match call {
                 Call::Setpoint(q, qd, qdd, tau) => {
                     let _ = sim.set_setpoint(q, qd, qdd, tau.as_deref());
                 }
-                Call::Tick(n) => sim.tick_n(*n),
+                Call::Tick(n) => {
+                    sim.tick_n_until(*n, stop);
+                }
                 Call::Run(t, q, qd, qdd, tau) => {
-                    let _ = sim.run(t, q, qd, qdd, tau.as_deref(), setpoint_period);
+                    let _ = sim.run_until(t, q, qd, qdd, tau.as_deref(), setpoint_period, stop);
                 }
                 Call::RunStopped(t, q, qd, qdd, tau, polls) => {
                     let seen = std::sync::atomic::AtomicU64::new(0);
-                    let stop = || seen.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1 >= *polls;
-                    let _ = sim.run_until(t, q, qd, qdd, tau.as_deref(), setpoint_period, &stop);
+                    let until = || stop() || seen.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1 >= *polls;
+                    let _ = sim.run_until(t, q, qd, qdd, tau.as_deref(), setpoint_period, &until);
                 }
             }
         }

@@ -16,6 +16,21 @@ use crate::canopen::eds::{DeviceFile, DeviceFileError};
 use crate::canopen::Units;
 use std::path::PathBuf;
 
+/// `v` as typed by a person: 1e300 as `1e300`, not its 301 digits.
+fn num(v: f64) -> String {
+    if v.is_finite() && v != 0.0 && !(1e-4..1e6).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
+/// Longest approach from the present position to the trajectory's start, s (an hour).
+pub const MAX_APPROACH_S: f64 = 3600.0;
+
+/// Most joints a configuration may drive (`joints`, and every axis's `joint` index below it).
+pub const MAX_JOINTS: usize = 1024;
+
 /// One axis of a channel.
 #[derive(Debug, Clone, PartialEq, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -221,17 +236,27 @@ impl ControllerConfig {
             message,
         };
         if !(self.cycle_hz.is_finite() && self.cycle_hz > 0.0 && self.cycle_hz <= 10_000.0) {
-            return Err(invalid(format!("cycle_hz = {}: must be in (0, 10000]", self.cycle_hz)));
+            return Err(invalid(format!(
+                "cycle_hz = {}: must be in (0, 10000]",
+                num(self.cycle_hz)
+            )));
         }
         self.online.check().map_err(invalid)?;
+        if let Some(n) = self.joints.filter(|&n| n == 0 || n > MAX_JOINTS) {
+            return Err(invalid(format!("joints = {n}: must be in 1..={MAX_JOINTS}")));
+        }
         if !(self.bitrate.is_finite() && self.bitrate >= 10_000.0 && self.bitrate <= 1e6) {
             return Err(invalid(format!(
                 "bitrate = {}: must be in [10000, 1000000] (classical CAN)",
-                self.bitrate
+                num(self.bitrate)
             )));
         }
-        if !(self.approach_s.is_finite() && self.approach_s >= 0.0) {
-            return Err(invalid(format!("approach_s = {}: must be >= 0", self.approach_s)));
+        if !(self.approach_s.is_finite() && (0.0..=MAX_APPROACH_S).contains(&self.approach_s)) {
+            // 1e300 s passed: the axes crept to the start for ever (until --max-seconds)
+            return Err(invalid(format!(
+                "approach_s = {}: must be in [0, {MAX_APPROACH_S}] s",
+                num(self.approach_s)
+            )));
         }
         if self.channel.is_empty() {
             return Err(invalid("no [[channel]]".into()));
@@ -267,6 +292,14 @@ impl ControllerConfig {
                         ax.node, ch.interface
                     )));
                 }
+                if ax.joint.is_some_and(|j| j >= MAX_JOINTS) {
+                    // the demo motion and the trajectory's columns are sized by the largest index:
+                    // joint = 10¹² aborted allocating them
+                    return Err(invalid(format!(
+                        "channel[{c}].axis[{a}].joint = {}: must be < {MAX_JOINTS}",
+                        ax.joint.unwrap_or_default()
+                    )));
+                }
                 if let (Some(j), Some(n)) = (ax.joint, self.joints) {
                     if j >= n {
                         return Err(invalid(format!(
@@ -283,7 +316,7 @@ impl ControllerConfig {
                     // NaN compared false and disabled the run-time current check.
                     return Err(invalid(format!(
                         "channel[{c}].axis[{a}].max_current = {}: must be finite and > 0 A",
-                        ax.max_current
+                        num(ax.max_current)
                     )));
                 }
                 if !(ax.following_error_limit.is_finite() && ax.following_error_limit > 0.0) {
@@ -375,6 +408,28 @@ mod tests {
                      [[channel]]\ninterface = \"can0\"\n[[channel.axis]]\nnode = 3\n";
         let e = ControllerConfig::from_toml(split, "ctl.toml").unwrap_err().to_string();
         assert!(e.contains("already channel[0]'s"), "{e}");
+    }
+
+    #[test]
+    fn huge_joint_indices_and_endless_device_files_are_refused() {
+        // joint = 10¹² aborted `ttctl --demo` allocating a demo motion of that many joints
+        let text = "[[channel]]\ninterface = \"can0\"\n[[channel.axis]]\nnode = 1\njoint = 1000000000000\n";
+        let e = ControllerConfig::from_toml(text, "ctl.toml").unwrap_err().to_string();
+        assert!(e.contains("joint = 1000000000000") && e.contains("1024"), "{e}");
+        for n in ["0", "100000"] {
+            let text = format!("joints = {n}\n[[channel]]\ninterface = \"can0\"\n[[channel.axis]]\nnode = 1\n");
+            let e = ControllerConfig::from_toml(&text, "ctl.toml").unwrap_err().to_string();
+            assert!(e.contains(&format!("joints = {n}")), "{e}");
+        }
+        let text = "approach_s = 1e300\n[[channel]]\ninterface = \"can0\"\n[[channel.axis]]\nnode = 1\n";
+        let e = ControllerConfig::from_toml(text, "ctl.toml").unwrap_err().to_string();
+        assert!(e.contains("approach_s = 1e300"), "{e}");
+        // a device file that never ends is read no further than 16 MiB
+        let text = "[[channel]]\ninterface = \"can0\"\n[[channel.axis]]\nnode = 1\ndevice_file = \"/dev/zero\"\n";
+        let e = ControllerConfig::from_toml(text, "/etc/ctl.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("16 MiB"), "{e}");
     }
 
     #[test]

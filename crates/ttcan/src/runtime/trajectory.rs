@@ -38,6 +38,9 @@ fn err(line: usize, message: impl Into<String>) -> TrajectoryError {
     }
 }
 
+/// The shortest controller cycle, s (`cycle_hz` ≤ 10 kHz): a trajectory's times must resolve it.
+pub const MIN_CYCLE_S: f64 = 1e-4;
+
 /// One sample: per joint (q, qd, qdd, tau).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct JointSample {
@@ -76,6 +79,11 @@ impl Trajectory {
             }
             if let Some(bad) = vals.iter().position(|v| !v.is_finite()) {
                 return Err(err(k + 1, format!("column {} ({}) is not finite", bad + 1, cols[bad])));
+            }
+            // the controller samples at up to 10 kHz from t[0] + t: far from zero float64 times
+            // are too coarse for that (at 1e17 s they are 16 s apart) and the targets would jump
+            if let Err(e) = ttkin::budget::check_clock("t", vals[0], MIN_CYCLE_S) {
+                return Err(err(k + 1, e.to_string()));
             }
             if t.last().is_some_and(|&p| vals[0] <= p) {
                 return Err(err(k + 1, "t must increase strictly"));
@@ -119,6 +127,17 @@ impl Trajectory {
     /// Number of joints.
     pub fn joints(&self) -> usize {
         self.n
+    }
+
+    /// The samples of joint `j` in file order (`j` < [`Self::joints`]).
+    pub fn samples(&self, j: usize) -> impl Iterator<Item = JointSample> + '_ {
+        let n = self.n;
+        self.rows.chunks_exact(4 * n).map(move |r| JointSample {
+            q: r[j],
+            qd: r[n + j],
+            qdd: r[2 * n + j],
+            tau: r[3 * n + j],
+        })
     }
 
     /// Duration from the first to the last sample, s.
@@ -177,6 +196,15 @@ mod tests {
         let e = Trajectory::parse("t,q1,qd1,qdd1,tau1\n0,0,0,0,0\n0,1,0,0,0\n").unwrap_err();
         assert!(e.message.contains("increase"));
         assert!(Trajectory::parse("t,q1\n0,1\n").is_err());
+        // times too far from zero for a 10 kHz cycle are refused with their line
+        let e = Trajectory::parse("t,q1,qd1,qdd1,tau1\n1e17,0,0,0,0\n1.0000000000001e17,0,0,0,0\n").unwrap_err();
+        assert!(e.line == 2 && e.message.contains("nearer origin"), "{e}");
+        assert!(Trajectory::parse("t,q1,qd1,qdd1,tau1\n0,0,0,0,0\n1e300,0,0,0,0\n").is_err());
+        let tr =
+            Trajectory::parse("t,q1,q2,qd1,qd2,qdd1,qdd2,tau1,tau2\n0,1,2,3,4,5,6,7,8\n1,9,10,11,12,13,14,15,16\n")
+                .unwrap();
+        let s: Vec<_> = tr.samples(1).map(|s| (s.q, s.qd, s.qdd, s.tau)).collect();
+        assert_eq!(s, vec![(2.0, 4.0, 6.0, 8.0), (10.0, 12.0, 14.0, 16.0)]);
     }
 
     #[test]

@@ -77,10 +77,13 @@ impl BallState {
             ("velocity", &self.v, MAX_SPEED, "m/s"),
             ("spin", &self.w, MAX_SPIN, "rad/s"),
         ] {
-            if !(v.norm() <= max) {
+            // scaled by the largest component: ‖(1e200, 0, 0)‖ is 1e200, not the inf of x² + y² + z²
+            let big = v.amax();
+            let norm = if big > 0.0 { big * (v / big).norm() } else { 0.0 };
+            if !(norm <= max) {
                 return Err(Error::invalid(
                     what,
-                    format!("‖{part}‖ = {:e} {unit}, at most {max:e} {unit} for a ball", v.norm()),
+                    format!("‖{part}‖ = {norm:e} {unit}, at most {max:e} {unit} for a ball"),
                 ));
             }
         }

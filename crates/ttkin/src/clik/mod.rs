@@ -129,8 +129,10 @@ pub struct ClikResult {
     pub time: Vec<f64>,
     /// Configurations, N × nq.
     pub q: Vec<f64>,
-    /// Inputs commanded at each sample (m/s, rad/s), N × nu.
-    pub qdot: Vec<f64>,
+    /// Inputs commanded at each sample (m/s, rad/s), N × nu (was `qdot`; the serde form reads
+    /// both names).
+    #[serde(alias = "qdot")]
+    pub qd: Vec<f64>,
     /// Task coordinates reached, N × dim.
     pub x: Vec<f64>,
     /// Norm of the task residual (task units: m and rad mixed), N.
@@ -158,6 +160,12 @@ pub struct ClikResult {
 }
 
 impl ClikResult {
+    /// Deprecated name of the field [`ClikResult::qd`] (inputs, N × nu, m/s and rad/s).
+    #[deprecated(note = "one name per concept: use the field `qd`")]
+    pub fn qdot(&self) -> &[f64] {
+        &self.qd
+    }
+
     /// Number of samples N.
     pub fn len(&self) -> usize {
         self.time.len()
@@ -377,7 +385,7 @@ impl<'a> Clik<'a> {
         let mut r = ClikResult {
             time: Vec::with_capacity(count),
             q: Vec::with_capacity(count * nq),
-            qdot: Vec::with_capacity(count * nu),
+            qd: Vec::with_capacity(count * nu),
             x: Vec::with_capacity(count * m),
             error: Vec::with_capacity(count),
             position_error: Vec::with_capacity(count),
@@ -425,7 +433,7 @@ impl<'a> Clik<'a> {
             self.task.coordinates(&t, &mut coords);
             r.time.push(time);
             r.q.extend_from_slice(&q);
-            r.qdot.extend_from_slice(&u);
+            r.qd.extend_from_slice(&u);
             r.x.extend_from_slice(&coords[..m]);
             r.error.push(err);
             r.position_error.push(pe);

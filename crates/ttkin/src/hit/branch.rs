@@ -118,13 +118,13 @@ impl HitPlanner {
     pub fn hit_joint_velocity(&self, q: &[f64], twist: &[f64; 6]) -> Option<Vec<f64>> {
         if q.len() != 6 {
             let jv = joint_velocity(&self.chain, q, twist).ok()?;
-            return (!jv.singular).then_some(jv.qdot);
+            return (!jv.singular).then_some(jv.qd);
         }
         let j = self.chain.jacobian(q, JacobianFrame::Base).ok()?;
         let m = Matrix6::from_iterator(j.iter().copied());
         // σ_min ≥ t exactly when JᵀJ − t²·I is positive definite: a 6 × 6 Cholesky instead of
         // an SVD (with t = 1e-3 the shift t² = 1e-6 is ten orders above the rounding of JᵀJ).
-        let t = DifferentialIk::default().threshold;
+        let t = DifferentialIk::default().epsilon;
         let mut shifted = m.transpose() * m - Matrix6::identity() * (t * t);
         if !m.iter().all(|x| x.is_finite()) || factor_in_place(shifted.as_mut_slice(), 6).is_err() {
             return None;
@@ -205,8 +205,8 @@ mod tests {
                 Some(qd) => {
                     regular += 1;
                     assert!(!jv.singular, "{q:?}");
-                    for (a, b) in qd.iter().zip(&jv.qdot) {
-                        assert!((a - b).abs() <= 1e-9 * (1.0 + b.abs()), "{qd:?} vs {:?}", jv.qdot);
+                    for (a, b) in qd.iter().zip(&jv.qd) {
+                        assert!((a - b).abs() <= 1e-9 * (1.0 + b.abs()), "{qd:?} vs {:?}", jv.qd);
                     }
                 }
                 None => {

@@ -99,7 +99,7 @@ fn pose(p: &HitPlanner, hit: &Hit, tool_target: &IsometryMatrix3<f64>, current: 
     }
     Ok(HitState {
         q,
-        qd: v.qdot,
+        qd: v.qd,
         sigma_min: v.sigma_min,
         branches,
     })

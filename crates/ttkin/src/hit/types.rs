@@ -34,7 +34,8 @@ impl Hit {
             // limit with an infinite ratio or a sample count of the stroke.
             return Err(crate::Error::invalid(
                 "t",
-                format!("the hit time must be at most {max} s from now (the longest stroke), got {t} s"),
+                // 1e300 as 1e300, not its 301 digits
+                format!("the hit time must be at most {max} s from now (the longest stroke), got {t:e} s"),
             ));
         }
         Ok(Hit { pose, twist, t })

@@ -6,9 +6,10 @@
 //! q̇ = W⁻¹Jᵀ(JW⁻¹Jᵀ)⁻¹V (eq. 20, with W tied to the joint-limit criterion by
 //! [`joint_limit_weights`], Chan & Dubey 1995); for n < 6 it is the least-squares q̇.
 //!
-//! Singularity: when the smallest singular value σ_min drops below `threshold`, the inverse is
+//! Singularity: when the smallest singular value σ_min drops below ε (`epsilon`), the inverse is
 //! damped (Nakamura & Hanafusa, Maciejewski): q̇ = Σ σ_i/(σ_i² + λ²)·v_i·u_iᵀV with
-//! λ² = (1 − (σ_min/threshold)²)·λ_max². Then ‖q̇‖ ≤ ‖V‖·max(1/threshold, 1/(2λ)) stays bounded,
+//! λ² = (1 − (σ_min/ε)²)·λ_max² (`lambda_max`), the damping of
+//! [`crate::redundancy::Damping`] with the same names. Then ‖q̇‖ ≤ ‖V‖·max(1/ε, 1/(2λ)) stays bounded,
 //! and the result says `singular = true`. For the gantry, det J = −L3·c4·s45: J is singular at
 //! c4 = 0 (arm along the shoulder axis) and at s45 = 0 (racket axis along θ3's axis).
 
@@ -20,20 +21,21 @@ use crate::error::{check_vector, Error, Result};
 /// Settings of differential IK.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DifferentialIk {
-    /// σ_min below which the inverse is damped (units of the Jacobian: m or rad per joint unit).
-    pub threshold: f64,
-    /// Damping λ_max reached at an exact singularity.
-    pub max_damping: f64,
+    /// ε: σ_min below which the inverse is damped (units of the Jacobian: m or rad per joint
+    /// unit); was `threshold`.
+    pub epsilon: f64,
+    /// Damping λ_max reached at an exact singularity; was `max_damping`.
+    pub lambda_max: f64,
     /// Frame of the twist's axes.
     pub frame: JacobianFrame,
 }
 
 impl Default for DifferentialIk {
-    /// threshold 1e-3, λ_max 1e-2, base-frame twist.
+    /// ε 1e-3, λ_max 1e-2, base-frame twist.
     fn default() -> Self {
         DifferentialIk {
-            threshold: 1e-3,
-            max_damping: 1e-2,
+            epsilon: 1e-3,
+            lambda_max: 1e-2,
             frame: JacobianFrame::Base,
         }
     }
@@ -42,9 +44,9 @@ impl Default for DifferentialIk {
 /// Joint velocities from a twist, with the conditioning that produced them.
 #[derive(Debug, Clone, PartialEq)]
 pub struct JointVelocity {
-    /// Joint velocities (m/s or rad/s), chain order.
-    pub qdot: Vec<f64>,
-    /// True when σ_min < threshold and the damped inverse was used.
+    /// Joint velocities (m/s or rad/s), chain order (was `qdot`).
+    pub qd: Vec<f64>,
+    /// True when σ_min < ε and the damped inverse was used.
     pub singular: bool,
     /// Smallest singular value of the (weighted) Jacobian.
     pub sigma_min: f64,
@@ -52,6 +54,14 @@ pub struct JointVelocity {
     pub damping: f64,
     /// ‖J·q̇ − V‖: 0 up to rounding for an exact solve, > 0 when damped or when n < 6.
     pub residual: f64,
+}
+
+impl JointVelocity {
+    /// Deprecated name of the field [`JointVelocity::qd`] (joint velocities, m/s or rad/s).
+    #[deprecated(note = "one name per concept: use the field `qd`")]
+    pub fn qdot(&self) -> &[f64] {
+        &self.qd
+    }
 }
 
 /// [`DifferentialIk::solve`] with default settings and no weights: q̇ for twist V = [v (m/s);
@@ -67,12 +77,12 @@ impl DifferentialIk {
     pub fn solve(&self, chain: &Chain, q: &[f64], twist: &[f64], weights: Option<&[f64]>) -> Result<JointVelocity> {
         chain.check_q("q", q)?;
         check_vector("twist", twist, 6)?;
-        if !(self.threshold > 0.0) || !(self.max_damping >= 0.0) {
+        if !(self.epsilon > 0.0) || !(self.lambda_max >= 0.0) {
             return Err(Error::invalid(
                 "differential IK",
                 format!(
-                    "threshold must be > 0 and max_damping ≥ 0, got {} and {}",
-                    self.threshold, self.max_damping
+                    "epsilon must be > 0 and lambda_max ≥ 0, got {} and {}",
+                    self.epsilon, self.lambda_max
                 ),
             ));
         }
@@ -105,9 +115,9 @@ impl DifferentialIk {
         // min(6, n) singular values: for n < 6 the twist directions no joint can produce do not
         // count as a singularity (they show up in `residual` instead).
         let sigma_min = sigma.iter().copied().fold(f64::INFINITY, f64::min);
-        let singular = sigma_min < self.threshold;
+        let singular = sigma_min < self.epsilon;
         let damping = if singular {
-            ((1.0 - (sigma_min / self.threshold).powi(2)).max(0.0)).sqrt() * self.max_damping
+            ((1.0 - (sigma_min / self.epsilon).powi(2)).max(0.0)).sqrt() * self.lambda_max
         } else {
             0.0
         };
@@ -125,7 +135,7 @@ impl DifferentialIk {
         }
         let residual = (&j * &qdot - v).norm();
         Ok(JointVelocity {
-            qdot: qdot.iter().copied().collect(),
+            qd: qdot.iter().copied().collect(),
             singular,
             sigma_min,
             damping,

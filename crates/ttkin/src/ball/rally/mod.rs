@@ -33,13 +33,15 @@
 //! One concept per file: [`serve`](mod@serve) (the incoming balls and each ball's world),
 //! [`camera`] (what the camera delivers, [`observe_ball`]), [`play`](mod@play) (one ball:
 //! observe, the decisions of [`crate::ball::decide`], re-plan, execute), [`score`](mod@score) (the
-//! impact, the return and the outcomes; [`score()`] also for the hardware-in-the-loop rally); here the settings
+//! impact, the return and the outcomes; [`score()`] also for the hardware-in-the-loop rally),
+//! [`stats`] (the counts and medians of a rally's outcomes, [`RallyStats`]); here the settings
 //! ([`RallyConfig`]), the set-up built once ([`Rally`]) and the parallel loops over balls.
 
 pub mod camera;
 pub mod play;
 pub mod score;
 pub mod serve;
+pub mod stats;
 
 pub use camera::{observe_ball, Camera, Observations};
 pub use play::{correct_hit, execution, play, play_with, Executor};
@@ -47,6 +49,7 @@ pub use score::{
     racket_state, score, score_executed, BallOutcome, Executed, Outcomes, RacketState, SampledPath, Score,
 };
 pub use serve::{serve, WorldSpread};
+pub use stats::{OutcomeColumns, RallyStats};
 
 use super::decide::DecideConfig;
 use super::flight::{BallState, Flight};

@@ -118,7 +118,7 @@ impl ReachRegion {
                 let Ok(jv) = joint_velocity(&self.chain, q, &twist) else {
                     continue;
                 };
-                if jv.singular || jv.qdot.iter().zip(&self.limits.velocity).any(|(qd, v)| qd.abs() > *v) {
+                if jv.singular || jv.qd.iter().zip(&self.limits.velocity).any(|(qd, v)| qd.abs() > *v) {
                     continue;
                 }
                 stage = Stage::Speed;
