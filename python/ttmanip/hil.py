@@ -242,11 +242,17 @@ def run(
                 raise HilError("no telemetry from the controller within 10 s")
             time.sleep(0.05)
         # The controller approaches its ready pose after enabling: the balls start once the
-        # measured joints have been at rest for 0.2 s (the rally's robot waits at ready).
+        # measured joints have been at rest for 0.2 s (the rally's robot waits at ready): each
+        # joint within 1 mrad (or mm) over the window and no speed above 0.1 rad/s. The measured
+        # speed comes from encoder counts (1e-5 per cycle = 0.01 per s), so a drive holding
+        # position dithers by a count or two: exact zero speed is not a rest test.
         while True:
             rows = listener.telemetry[-200:]
-            if len(rows) >= 200 and all(float(np.max(np.abs(r[3]))) < 1e-3 for r in rows):
-                break
+            if len(rows) >= 200:
+                q = np.array([r[2] for r in rows])
+                qd = np.array([r[3] for r in rows])
+                if float(np.max(np.ptp(q, axis=0))) < 1e-3 and float(np.max(np.abs(qd))) < 0.1:
+                    break
             if proc is not None and proc.poll() is not None:
                 raise HilError(f"ttctl exited with {proc.returncode}: see {out / 'ttctl.log'}")
             if time.monotonic() > deadline + 10.0:
