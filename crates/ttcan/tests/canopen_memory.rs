@@ -430,6 +430,7 @@ fn threaded(interrupt_after_ms: Option<u64>) -> ttcan::runtime::channel::Channel
         period_ns,
         t0_ns: rt::now_ns() + 5 * period_ns,
         max_cycles: 20_000,
+        telemetry_rows: 20_000 + 16,
     };
     std::thread::scope(|s| {
         s.spawn(|| {

@@ -176,6 +176,7 @@ fn run(
                     period_ns: PERIOD_NS,
                     t0_ns,
                     max_cycles: 120_000,
+                    telemetry_rows: 120_000 + 16,
                 };
                 let shared = &shared;
                 s.spawn(move || {
@@ -597,7 +598,11 @@ fn hits_at_random_times_are_all_answered_and_executed_continuously() {
             let h = demo_hit(id, stroke, controller_time() + 0.7 + 0.5 * u(), 0.1 * (u() - 0.5));
             sent.push(h);
             c.hit(h);
-            let (s, t) = c.drain(0.15 + 0.35 * u());
+            // every 10th hit, time to come to rest at ready: a stall of the shared machine while
+            // the joints move leaves the channels apart until the next rest (docs/online.md, one
+            // stroke clock), so without rests one stall would leave every later hit unchecked
+            let wait = 0.15 + 0.35 * u();
+            let (s, t) = c.drain(if id % 10 == 0 { 2.0 } else { wait });
             got.0.extend(s);
             got.1.extend(t);
         }
@@ -642,15 +647,20 @@ fn hits_at_random_times_are_all_answered_and_executed_continuously() {
     // A stall during a stroke leaves the channels apart by it until the next rest (no abrupt
     // hold of drives in motion): those hits are reported, not held to the bound. On a loaded
     // machine every stroke may see one; then only the statuses and the continuity are checked.
+    // The robot rests at ready after every 10th hit, so that a stall touches the hits up to the
+    // next rest only: how many were held to the bound is reported (no assertion on it: it
+    // depends on the machine's load).
     if stalled == executed.len() {
         eprintln!("every executed hit was touched by a stall: the racket bound was not checked");
     }
     let (dq, dv, jerk) = r.discontinuities();
     let step = r.acceleration_step();
     eprintln!(
-        "{} executed ({stalled} touched by a stall), {} replaced; worst racket error commanded {:.2e} m, measured {:.2e} m; \
+        "{} executed, {} of them held to the 1 mm racket bound ({stalled} touched by a stall), {} replaced; \
+         worst racket error commanded {:.2e} m, measured {:.2e} m; \
          discontinuity q {dq:.1e} qd {dv:.1e}, jerk {jerk:.0}, q̈ step {step:.2e}",
         executed.len(),
+        executed.len() - stalled,
         replaced.len(),
         worst.0,
         worst.1

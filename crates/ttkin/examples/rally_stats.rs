@@ -121,7 +121,7 @@ fn main() {
     let seed: u64 = args.get(2).map_or(0, |a| a.parse().expect("SEED"));
     let mut pl = ReturnPlanner::new(ttkin::robots::gantry6(), Flight::default()).expect("gantry6");
     // Experiments: ROLLS="0,30,-30" (degrees), RETURN_TIMES="0.8,0.55,1.05" (s), CONTACT_OFFSET=0.03 (m), CANDIDATES=3, GOOD_MARGIN=0.25,
-    // READY=-1.85,0,0.255 (racket centre facing forward, m, world; also the region's).
+    // READY=-1.85,0,0.255 (racket centre facing forward, m, world; also the region's), BUDGET_US.
     if let Ok(r) = std::env::var("ROLLS") {
         pl.rolls = r
             .split(',')
@@ -136,6 +136,13 @@ fn main() {
         let pose = pl.base_pose(&Vector3::new(c[0], c[1], c[2]), &Vector3::x());
         let ik = Analytic::for_chain(pl.chain()).expect("analytic IK");
         pl.ready = ik.nearest(&pose, &pl.ready, LimitFilter::Enforce).expect("ready IK");
+    }
+    // BUDGET_US: every plan's budget in thread CPU time (the controller's anytime search, issue 26).
+    if let Ok(r) = std::env::var("BUDGET_US") {
+        let us: u64 = r.parse().expect("BUDGET_US (µs of thread CPU time)");
+        pl.budget = Some(ttkin::ball::hitplan::PlanBudget::ThreadCpu(
+            std::time::Duration::from_micros(us),
+        ));
     }
     if let Ok(r) = std::env::var("CANDIDATES") {
         pl.candidates = r.parse().expect("CANDIDATES");
@@ -256,7 +263,10 @@ fn main() {
     // and the corrections, thread CPU time.
     let tail = |v: &mut Vec<f64>| {
         v.sort_by(f64::total_cmp);
-        let q = |p: f64| v.get(((v.len() as f64 * p) as usize).min(v.len().saturating_sub(1))).copied();
+        let q = |p: f64| {
+            v.get(((v.len() as f64 * p) as usize).min(v.len().saturating_sub(1)))
+                .copied()
+        };
         let q = |p: f64| q(p).unwrap_or(f64::NAN);
         format!(
             "n {} p50 {:.0} p90 {:.0} p99 {:.0} max {:.0} us",

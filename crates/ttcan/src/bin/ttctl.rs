@@ -301,6 +301,7 @@ fn main() {
                     period_ns,
                     t0_ns: t0,
                     max_cycles,
+                    telemetry_rows: if args.telemetry.is_some() { max_cycles + 16 } else { 0 },
                 };
                 let (traj, shared, prio) = (&traj, &shared, cfg.priority);
                 s.spawn(move || {

@@ -28,7 +28,7 @@ use std::collections::VecDeque;
 use std::sync::atomic::Ordering;
 use ttkin::ball::decide::{BallDecider, DecideConfig, Decision};
 use ttkin::ball::flight::Flight;
-use ttkin::ball::hitplan::{ReturnHit, ReturnPlanner, ReturnStatus};
+use ttkin::ball::hitplan::{PlanBudget, ReturnHit, ReturnPlanner, ReturnStatus};
 use ttkin::ball::rally::execution;
 use ttkin::chain::Chain;
 use ttkin::traj::JointState;
@@ -105,6 +105,9 @@ pub struct BallStats {
     pub lost: u64,
     /// Hits the runtime answered with another status than accepted or replaced.
     pub refused: u64,
+    /// Strokes ready after their splice cycle whose hit was kept, its leg planned again from a
+    /// later splice ([`Brain::retry`]).
+    pub retimed: u64,
 }
 
 /// The ball in play.
@@ -260,6 +263,27 @@ impl BallBrain {
         }))
     }
 
+    /// The hit just decided (the current ball's, still ahead), kept for the later splice `at`: its
+    /// hit leg planned again from the state there to the same hit state at the same time
+    /// (`HitPlanner::branch_leg`, the ball planner's leg and limits, effort included), as a new
+    /// stroke; `None` when that leg is not feasible.
+    fn retime(&mut self, at: &SpliceAt) -> Option<Command> {
+        let (t_abs, old) = self.ball.as_ref()?.hit.clone()?;
+        let t = t_abs - at.t;
+        if t.is_nan() || t <= 0.0 {
+            return None;
+        }
+        let hit = ttkin::hit::Hit { t, ..old.hit };
+        let robot = &self.planner.robot;
+        let twist = robot.tool_twist(&hit);
+        let branch = robot.branch_leg(&old.branch.q, &at.state, &twist, t, f64::NEG_INFINITY)?;
+        let new = ReturnHit { hit, branch, ..old };
+        self.stats.retimed += 1;
+        let c = self.command(&new, at);
+        self.ball.as_mut().expect("has a hit").hit = Some((t_abs, new));
+        Some(c)
+    }
+
     /// The observation `obs` on the controller's clock with the header's send time `sent`
     /// (camera clock; NaN when unknown); a stroke decided now starts at `at`.
     /// (`again`: the same observation taken again, its delay already sampled.)
@@ -303,6 +327,8 @@ impl BallBrain {
             return out;
         }
         ball.last_seen = now;
+        // Decided by the splice's deadline (an anytime search: the best hit found by then).
+        self.planner.budget = at.deadline.map(PlanBudget::Until);
         // The decision's `now` is the splice instant: the stroke it plans starts there, from the
         // state commanded then (the offline rally decides at the delivery and starts there).
         let decision = ball
@@ -387,6 +413,9 @@ impl Brain for BallBrain {
     }
 
     fn retry(&mut self, splice: &SpliceAt) -> Option<Command> {
+        if let Some(c) = self.retime(splice) {
+            return Some(c);
+        }
         let b = self.before.as_deref()?.clone();
         self.ball = b.ball;
         self.stroke = b.stroke;
@@ -409,6 +438,7 @@ impl Brain for BallBrain {
             (&c.ball_corrected, s.corrected),
             (&c.ball_lost, s.lost),
             (&c.ball_refused, s.refused),
+            (&c.ball_retimed, s.retimed),
         ] {
             a.store(v, Ordering::Relaxed);
         }

@@ -5,6 +5,7 @@
 
 use super::counters::Counters;
 use super::wire::{HitMsg, ObservationMsg, StatusMsg};
+use std::time::Instant;
 use ttkin::traj::{JointState, JointTrajectory};
 
 /// A stroke a brain built completely: the hit it executes and the joint trajectory from the
@@ -48,12 +49,22 @@ pub struct SpliceAt {
     pub t: f64,
     /// The state commanded at that cycle.
     pub state: JointState,
+    /// The instant (monotonic clock) by which a stroke for this splice must be built to be
+    /// handed over in time: a brain's planning budget (`ttkin::ball::hitplan::PlanBudget`);
+    /// `None`: no budget.
+    pub deadline: Option<Instant>,
 }
 
 impl SpliceAt {
-    /// A splice at controller time `t` (s) from `state`, cycle 0 (for a brain driven off-line).
+    /// A splice at controller time `t` (s) from `state`, cycle 0, no deadline (for a brain
+    /// driven off-line).
     pub fn at(t: f64, state: JointState) -> Self {
-        SpliceAt { cycle: 0, t, state }
+        SpliceAt {
+            cycle: 0,
+            t,
+            state,
+            deadline: None,
+        }
     }
 }
 
@@ -65,8 +76,9 @@ pub trait Brain: Send {
     /// anything changes.
     fn observe(&mut self, obs: &ObservationMsg, sent: f64, now: f64, splice: &SpliceAt) -> Option<Command>;
     /// The last observation's decision made again for a later splice instant (its stroke came
-    /// too late for the one it was planned for): the brain goes back to its state before that
-    /// observation and takes it again with `splice`. `None` when there is nothing to retry.
+    /// too late for the one it was planned for), from `splice`: the same hit with its leg planned
+    /// again from there when that is feasible, else the decision made again from the brain's
+    /// state before that observation. `None` when there is nothing to retry.
     fn retry(&mut self, splice: &SpliceAt) -> Option<Command> {
         let _ = splice;
         None

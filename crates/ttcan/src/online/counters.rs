@@ -147,6 +147,9 @@ counters! {
     ball_lost,
     /// Ball mode: the brain's hits answered otherwise than accepted or replaced.
     ball_refused,
+    /// Ball mode: late strokes whose hit was kept, its leg planned again from a later splice
+    /// (counted within `splices_redecided`).
+    ball_retimed,
 }
 
 /// Bins of the latency histogram, each [`LatencyHistogram::BIN_US`] wide (the last: beyond).

@@ -22,7 +22,7 @@ use std::net::{SocketAddr, UdpSocket};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
 use std::sync::Arc;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use nalgebra::{IsometryMatrix3, Matrix3, Rotation3, Translation3};
 use ttkin::hit::{Hit, HitPlanner, HitStatus};
@@ -82,6 +82,11 @@ impl Schedule {
             .map_or(0, |(s, t)| s + (t.duration() / self.period).ceil() as u64)
     }
 }
+
+/// Time (s) a brain's stroke needs from the end of its decision to its hand-over before the
+/// splice cycle (the stroke built, checked and pushed; the cycle thread's wake-up): the planning
+/// budget ends this long before the splice cycle ([`SpliceAt::deadline`]).
+pub const HANDOVER_MARGIN: f64 = 1.5e-4;
 
 /// Settings of the planning thread.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -217,17 +222,20 @@ impl Splicer {
     }
 
     /// The earliest splice a brain deciding now can plan from (cycle, time, commanded state):
-    /// `factor × splice_lead` ahead.
+    /// `factor × splice_lead` ahead; its deadline is [`HANDOVER_MARGIN`] before the cycle.
     pub fn splice_at(&self, factor: f64) -> SpliceAt {
         let cycle = self.splice_cycle(factor);
         let state = self
             .schedule
             .as_ref()
             .map_or_else(|| JointState::rest(&self.ready), |s| s.state_at(cycle));
+        let t = self.timeline.time_of(cycle);
+        let left = (t - controller_time() - HANDOVER_MARGIN).max(0.0);
         SpliceAt {
             cycle,
-            t: self.timeline.time_of(cycle),
+            t,
             state,
+            deadline: Some(Instant::now() + Duration::from_secs_f64(left)),
         }
     }
 
@@ -499,7 +507,6 @@ pub fn run_planner(
                 .unwrap_or_else(|| JointState::rest(sp.ready()))
         };
         let mut command = None;
-        let mut decided_in = 0.0;
         match msg {
             Ok(Inbound::Hit { hit, arrival }) => {
                 Counters::bump(&counters.hits);
@@ -516,7 +523,6 @@ pub fn run_planner(
                     tl_planning(&splicer, true);
                     command = b.observe(&obs, sent, now, &at).map(|c| (c, arrival));
                     tl_planning(&splicer, false);
-                    decided_in = controller_time() - now;
                     b.publish(counters);
                 }
             }
@@ -554,9 +560,7 @@ pub fn run_planner(
                             replaced: None,
                         })
                     }
-                    Command::Stroke(st) => {
-                        splice_stroke(&mut splicer, brain.as_deref_mut(), st, arrival, decided_in, counters)
-                    }
+                    Command::Stroke(st) => splice_stroke(&mut splicer, brain.as_deref_mut(), st, arrival, counters),
                     Command::Hit(h) => Some(splicer.hit(&h, arrival, counters)),
                     Command::Ready => None,
                 };
@@ -574,18 +578,21 @@ pub fn run_planner(
     }
 }
 
-/// Splices a brain's stroke; when its splice cycle passed before it was ready, the brain makes
-/// the decision again for a splice twice its decision time ahead (at most 3 times), then the hit
-/// is planned again from a later cycle; a stroke that does not start from the scheduled state is
-/// planned again at once. `None` when the decision made again has no hit (nothing to answer).
+/// Splices a brain's stroke; when its splice cycle passed before it was ready, the brain retries
+/// for a later splice ([`Brain::retry`]: the same hit with its leg planned again from there, a
+/// few tens of µs, or else the decision made again): first twice the lead ahead, then twice its
+/// last retry time ahead (at most 3 times), then the hit is planned again from a later cycle; a
+/// stroke that does not start from the scheduled state is planned again at once. `None` when the
+/// decision made again has no hit (nothing to answer).
 fn splice_stroke<'c>(
     splicer: &mut Splicer,
     mut brain: Option<&mut (dyn Brain + 'c)>,
     mut st: Box<PlannedStroke>,
     arrival: f64,
-    mut decided_in: f64,
     counters: &Counters,
 ) -> Option<HitOutcome> {
+    // the first retry (the same hit from a later splice) takes little time, whatever the decision took
+    let mut decided_in = 0.0;
     for _ in 0..3 {
         match splicer.stroke(&st, arrival, counters) {
             Ok(out) => return Some(out),

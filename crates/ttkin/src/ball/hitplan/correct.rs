@@ -42,9 +42,10 @@ impl ReturnPlanner {
         order.sort_by(|&a, &b| (list[a].t - t_prev).abs().total_cmp(&(list[b].t - t_prev).abs()));
         order.truncate(MOST_CANDIDATES);
         let poses = RacketPoses::new(self);
+        let deadline = search.deadline;
         let robot = |s: &BallState, shot: Shot| {
             let near = self.robot_hit_near(&poses, s, now, start, shot, &previous.branch.q);
-            near.or_else(|| self.robot_hit(&poses, s, now, start, shot))
+            near.or_else(|| self.robot_hit(&poses, s, now, start, shot, deadline))
         };
         for &i in &order {
             if search.best.is_some() && (search.good() || search.tried() >= self.candidates.max(1)) {

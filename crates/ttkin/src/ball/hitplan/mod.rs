@@ -41,6 +41,10 @@
 //!    joints' normalised distance to their position limits at the hit and the leg's margin
 //!    (1 − peak/limit ratio for a quintic, 1 − fastest duration / hit time for a jerk-limited leg). Candidates are tried from the middle of the spread outward and the search
 //!    stops at the first with a margin ≥ `good_margin` (0.25), which bounds the planning time.
+//!    With a [`PlanBudget`] (a controller deciding before its splice cycle) the search also stops
+//!    at the first candidate, shot or racket pose after the budget is spent that has a feasible
+//!    hit, with the best so far (an anytime search; without one found it goes on as without a
+//!    budget). The off-line rally plans without a budget.
 //!
 //! [`ReturnPlanner::plan_from`] and the correction [`ReturnPlanner::plan_near`] share the checks,
 //! the early exits, the return-time loop and the outcome choice (`search.rs`); they differ only in
@@ -55,6 +59,7 @@ mod shoot;
 
 use candidates::candidate_order;
 use poses::RacketPoses;
+pub use search::PlanBudget;
 use search::{Begin, Search};
 pub use shoot::shoot;
 
@@ -180,6 +185,9 @@ pub struct ReturnPlanner {
     /// Rolls (rad) of the racket about its face normal tried in order (0: handle up); the ball
     /// does not see the roll, the joints do.
     pub rolls: Vec<f64>,
+    /// Planning budget (an anytime search, [`PlanBudget`]); `None` (the default): every plan
+    /// searches to its end, as the off-line rally does.
+    pub budget: Option<PlanBudget>,
 }
 
 impl ReturnPlanner {
@@ -207,6 +215,7 @@ impl ReturnPlanner {
             good_margin: 0.25,
             contact_offset: 0.03,
             rolls: [0.0, 30.0, -30.0].iter().map(|d: &f64| d.to_radians()).collect(),
+            budget: None,
         };
         // Ready: racket facing forward 0.48 m behind the end line, across the table's centre line,
         // at mid-height of the band, so that a stroke accelerates forward into the hit.
@@ -318,7 +327,8 @@ impl ReturnPlanner {
         let mut placeable = |i: usize, t: usize| -> bool {
             *placeable_memo[i * nt + t].get_or_insert_with(|| self.roughly_placeable(&poses, &list[i], targets[t]))
         };
-        let robot = |s: &BallState, shot: search::Shot| self.robot_hit(&poses, s, now, start, shot);
+        let deadline = search.deadline;
+        let robot = |s: &BallState, shot: search::Shot| self.robot_hit(&poses, s, now, start, shot, deadline);
         for (rank, &i) in order.iter().enumerate() {
             // More than the first `candidates` only when none of those is feasible.
             if rank == first && search.best.is_some() {

@@ -3,7 +3,7 @@
 //! and the best of them.
 
 use super::super::flight::BallState;
-use super::search::Shot;
+use super::search::{Deadline, Shot};
 use super::{RacketPoses, ReturnHit, ReturnPlanner};
 use crate::hit::Hit;
 use crate::traj::JointState;
@@ -12,7 +12,8 @@ use nalgebra::Vector3;
 impl ReturnPlanner {
     /// The best robot hit (largest margin) of the shot `shot` at the ball `s` over the racket
     /// centres, the rolls about the face normal and (in the robot planner) every IK branch within
-    /// the limits, for a stroke from `start` at `now` (s); `None` when none is feasible.
+    /// the limits, for a stroke from `start` at `now` (s); `None` when none is feasible. Past the
+    /// `deadline`, the first feasible pose ends the search.
     pub(super) fn robot_hit(
         &self,
         poses: &RacketPoses,
@@ -20,6 +21,7 @@ impl ReturnPlanner {
         now: f64,
         start: &JointState,
         shot: Shot,
+        deadline: Deadline,
     ) -> Option<ReturnHit> {
         let (v_out, racket, landing) = shot;
         let twist = self.base_twist(&racket.velocity);
@@ -27,7 +29,10 @@ impl ReturnPlanner {
         let mut best: Option<ReturnHit> = None;
         let centres = self.racket_centres(&s.p, &racket.normal);
         for (k, roll) in (0..centres.len()).flat_map(|k| (0..poses.rolls()).map(move |r| (k, r))) {
-            if best.as_ref().is_some_and(|b| b.margin() >= self.good_margin || k > 0) {
+            if best
+                .as_ref()
+                .is_some_and(|b| b.margin() >= self.good_margin || k > 0 || deadline.passed())
+            {
                 break;
             }
             let hit = Hit {

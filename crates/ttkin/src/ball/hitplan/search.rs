@@ -8,6 +8,7 @@ use super::{ReturnHit, ReturnPlan, ReturnPlanner, ReturnStatus};
 use crate::error::{check_finite, Error, Result};
 use crate::traj::JointState;
 use nalgebra::Vector3;
+use std::time::{Duration, Instant};
 
 /// An outgoing shot: ball velocity after the impact (m/s, world), the racket producing it, and the
 /// landing point (m, world).
@@ -21,10 +22,56 @@ pub(super) enum Begin {
     Search(Vec<BallState>, Search),
 }
 
+/// How long a plan searches before it settles for the best feasible hit found so far (an
+/// anytime search, [`super::ReturnPlanner::budget`]): once the budget is spent, the search ends at
+/// the next candidate, shot or racket pose with the best hit it has; with none yet it goes on to
+/// the first feasible one (or the end of the search, as without a budget).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PlanBudget {
+    /// Until this instant of the monotonic clock (a controller's deadline: its splice cycle).
+    Until(Instant),
+    /// This much CPU time of the planning thread from the start of the plan (reproducible on a
+    /// loaded machine, for off-line studies of the budget).
+    ThreadCpu(Duration),
+}
+
+/// A plan's budget resolved at its start (see [`PlanBudget`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Deadline {
+    /// No budget: the search runs to its end.
+    None,
+    /// The monotonic clock's instant.
+    Until(Instant),
+    /// The thread's CPU clock reading (as a duration since its origin).
+    ThreadCpu(Duration),
+}
+
+impl Deadline {
+    /// The deadline of a plan starting now under `budget`.
+    pub(super) fn start(budget: Option<PlanBudget>) -> Self {
+        match budget {
+            None => Deadline::None,
+            Some(PlanBudget::Until(t)) => Deadline::Until(t),
+            Some(PlanBudget::ThreadCpu(d)) => Deadline::ThreadCpu(cpu_time::ThreadTime::now().as_duration() + d),
+        }
+    }
+
+    /// Whether the budget is spent.
+    pub(super) fn passed(&self) -> bool {
+        match self {
+            Deadline::None => false,
+            Deadline::Until(t) => Instant::now() >= *t,
+            Deadline::ThreadCpu(d) => cpu_time::ThreadTime::now().as_duration() >= *d,
+        }
+    }
+}
+
 /// A search in progress: the best hit so far, whether any shot returned the ball, candidates tried.
 pub(super) struct Search {
     /// The best hit so far (largest margin).
     pub(super) best: Option<ReturnHit>,
+    /// When the search settles for its best hit so far.
+    pub(super) deadline: Deadline,
     any_return: bool,
     tried: usize,
     good_margin: f64,
@@ -64,6 +111,7 @@ impl ReturnPlanner {
                     tried: 0,
                     good_margin: self.good_margin,
                     return_times: self.return_times,
+                    deadline: Deadline::start(self.budget),
                 };
                 return Ok(Begin::Search(list, search));
             }
@@ -77,9 +125,12 @@ impl ReturnPlanner {
 }
 
 impl Search {
-    /// Whether the best hit so far is good enough to end the search (margin ≥ `good_margin`).
+    /// Whether the best hit so far is good enough to end the search: margin ≥ `good_margin`, or
+    /// any hit once the budget is spent.
     pub(super) fn good(&self) -> bool {
-        self.best.as_ref().is_some_and(|b| b.margin() >= self.good_margin)
+        self.best
+            .as_ref()
+            .is_some_and(|b| b.margin() >= self.good_margin || self.deadline.passed())
     }
 
     /// Candidates tried so far.
