@@ -242,6 +242,7 @@ fn main() {
     }
     let period_ns = (1e9 / cfg.cycle_hz).round() as u64;
     let shared = Shared::new(cfg.channel.len(), interrupt);
+    let start_usage = (rt::Usage::process(), rt::steal_ms());
     let t0 = rt::now_ns() + 20 * period_ns;
     let max_cycles = (args.max_seconds * cfg.cycle_hz) as u64;
     let joint_map: Vec<[Option<usize>; MAX_AXES_PER_CHANNEL]> = cfg
@@ -321,10 +322,12 @@ fn main() {
             .collect()
     });
     let online = session.map(|s| s.stop());
-    report(&args, &reports, online.as_ref());
+    report(&args, &reports, online.as_ref(), start_usage);
 }
 
-fn report(args: &Args, reports: &[ChannelReport], online: Option<&CountersSnapshot>) {
+/// Prints and writes the run's statistics; `start` is the process's usage and the host's steal
+/// time (ms) read before the channel threads started.
+fn report(args: &Args, reports: &[ChannelReport], online: Option<&CountersSnapshot>, start: (rt::Usage, Option<f64>)) {
     let mut all = CycleStats::new();
     let mut quiet = CycleStats::new();
     let mut planning = CycleStats::new();
@@ -401,6 +404,23 @@ fn report(args: &Args, reports: &[ChannelReport], online: Option<&CountersSnapsh
     lines.push(format!("latency_max_us={:.1}", s.max_us));
     lines.push(format!("deadline_misses={}", s.deadline_misses));
     lines.push(format!("work_mean_us={:.1}", s.mean_work_us));
+    // What the system did to the cycles: page faults and preemptions of the channel threads in
+    // their loops, of the whole process, and the host's steal time over the run (a virtual
+    // machine's CPUs held by the hypervisor), to tell the controller's stalls from the machine's.
+    let cycle = reports.iter().fold(rt::Usage::default(), |a, r| rt::Usage {
+        minor_faults: a.minor_faults + r.usage.minor_faults,
+        major_faults: a.major_faults + r.usage.major_faults,
+        preempted: a.preempted + r.usage.preempted,
+    });
+    let process = rt::Usage::process().since(&start.0);
+    for (who, u) in [("cycle", cycle), ("process", process)] {
+        lines.push(format!("{who}_minor_faults={}", u.minor_faults));
+        lines.push(format!("{who}_major_faults={}", u.major_faults));
+        lines.push(format!("{who}_preempted={}", u.preempted));
+    }
+    if let (Some(a), Some(b)) = (start.1, rt::steal_ms()) {
+        lines.push(format!("host_steal_ms={:.0}", b - a));
+    }
     for (name, st) in [("quiet", quiet.summary()), ("planning", planning.summary())] {
         lines.push(format!("cycles_{name}={}", st.cycles));
         lines.push(format!("latency_p50_us_{name}={:.1}", st.p50_us));

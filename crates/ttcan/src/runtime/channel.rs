@@ -187,6 +187,8 @@ pub struct ChannelReport {
     pub completed: bool,
     /// The device name (0x1008) of each axis' drive, as read at boot-up.
     pub device_names: Vec<Option<String>>,
+    /// Page faults and involuntary context switches of the channel thread during its cycle loop.
+    pub usage: super::rt::Usage,
 }
 
 fn phase_code(p: Phase) -> u8 {
@@ -244,6 +246,7 @@ pub fn run_channel_with<B: CanBus, S: SetpointSource + ?Sized>(
     let mut k: u64 = 0;
     let mut executed: u64 = 0;
     let mut go_executed: Option<u64> = None;
+    let usage_before = super::rt::Usage::thread();
     loop {
         let deadline = plan.t0_ns + k * plan.period_ns;
         sleep_until(deadline);
@@ -364,6 +367,7 @@ pub fn run_channel_with<B: CanBus, S: SetpointSource + ?Sized>(
             master.hold_off_following_check((2 * skip + 2).min(u32::MAX as u64) as u32);
         }
     }
+    let usage = super::rt::Usage::thread().since(&usage_before);
     // drain what is still in flight (late TPDOs of the last SYNCs), so that the loss count is exact
     let drain_until = now_ns() + 100 * plan.period_ns.max(1_000_000);
     while now_ns() < drain_until {
@@ -387,5 +391,6 @@ pub fn run_channel_with<B: CanBus, S: SetpointSource + ?Sized>(
         skipped,
         completed,
         device_names: (0..n).map(|k| master.device_name(k)).collect(),
+        usage,
     }
 }

@@ -51,6 +51,62 @@ pub fn lock_memory() -> Result<(), String> {
         .map_err(|e| format!("mlockall refused ({e}): pages may fault in the cycle"))
 }
 
+/// What the system did to a thread (or the process) so far: page faults and involuntary context
+/// switches (`getrusage`), for the statistics of a run (read outside the cycle loop).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Usage {
+    /// Minor page faults (a page mapped on first touch; none once memory is locked and touched).
+    pub minor_faults: u64,
+    /// Major page faults (a page read from disk).
+    pub major_faults: u64,
+    /// Involuntary context switches (preempted by a thread of higher or equal priority, or by
+    /// the kernel's real-time throttling).
+    pub preempted: u64,
+}
+
+impl Usage {
+    /// The calling thread's usage so far (zeros when the system refuses).
+    pub fn thread() -> Self {
+        Self::of(nix::sys::resource::UsageWho::RUSAGE_THREAD)
+    }
+
+    /// The whole process's usage so far (zeros when the system refuses).
+    pub fn process() -> Self {
+        Self::of(nix::sys::resource::UsageWho::RUSAGE_SELF)
+    }
+
+    fn of(who: nix::sys::resource::UsageWho) -> Self {
+        match nix::sys::resource::getrusage(who) {
+            Ok(u) => Usage {
+                minor_faults: u.minor_page_faults() as u64,
+                major_faults: u.major_page_faults() as u64,
+                preempted: u.involuntary_context_switches() as u64,
+            },
+            Err(_) => Usage::default(),
+        }
+    }
+
+    /// What happened between `earlier` and this reading.
+    pub fn since(&self, earlier: &Usage) -> Usage {
+        Usage {
+            minor_faults: self.minor_faults.saturating_sub(earlier.minor_faults),
+            major_faults: self.major_faults.saturating_sub(earlier.major_faults),
+            preempted: self.preempted.saturating_sub(earlier.preempted),
+        }
+    }
+}
+
+/// Time (ms) the hypervisor ran something else while this virtual machine's CPUs wanted to run,
+/// summed over its CPUs since boot (`steal` of `/proc/stat`, in clock ticks of 10 ms); `None`
+/// where the system does not say. A stall of the host shows as steal, not as anything the
+/// controller can change.
+pub fn steal_ms() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/stat").ok()?;
+    let cpu = stat.lines().next()?.strip_prefix("cpu ")?;
+    let steal: u64 = cpu.split_whitespace().nth(7)?.parse().ok()?;
+    Some(steal as f64 * 10.0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -61,5 +117,20 @@ mod tests {
         sleep_until(t0 + 2_000_000);
         assert!(now_ns() >= t0 + 2_000_000);
         sleep_until(t0); // in the past: returns at once
+    }
+
+    #[test]
+    fn usage_counts_the_faults_of_fresh_pages() {
+        let before = Usage::thread();
+        // 4 MB touched for the first time: at least some pages fault (unless memory is locked,
+        // when mlockall touched them at allocation: this test does not lock)
+        let v = vec![1u8; 4 << 20];
+        let after = Usage::thread().since(&before);
+        assert!(v.iter().map(|&x| x as u64).sum::<u64>() == 4 << 20);
+        assert!(after.minor_faults > 0, "{after:?}");
+        assert!(Usage::process().minor_faults >= after.minor_faults);
+        if let Some(s) = steal_ms() {
+            assert!(s >= 0.0 && s.is_finite());
+        }
     }
 }
