@@ -37,6 +37,9 @@
 //!    would replace the best so far. A leg beyond the torque is replaced by a gentler jerk-limited
 //!    leg to the same hit state ([`crate::hit::leg::scaled_jerk_leg`], up to three, each checked
 //!    the same way) before the hit state is given up.
+//!    The follow-through after the hit back to rest at the ready configuration is checked against
+//!    the same limits (certified effort included; [`crate::hit::HitPlanner::follow_through`]: a
+//!    longer or gentler one when the 0.4 s quintic exceeds one) before the hit state is accepted.
 //! 5. **Choice.** Among feasible candidates, the one with the largest margin: the smallest of the
 //!    joints' normalised distance to their position limits at the hit and the leg's margin
 //!    (1 − peak/limit ratio for a quintic, 1 − fastest duration / hit time for a jerk-limited leg). Candidates are tried from the middle of the spread outward and the search
