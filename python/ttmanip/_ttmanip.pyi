@@ -828,7 +828,7 @@ def ball_crossing(
     state: ArrayLike, point: ArrayLike, normal: ArrayLike, t_max: float = 2.0, model: str = "default"
 ) -> dict[str, Any]: ...
 def ball_plan_return(
-    state: ArrayLike, now: float, target: ArrayLike, model: str = "default"
+    robot: Robot, state: ArrayLike, now: float, target: ArrayLike, model: str = "default"
 ) -> dict[str, Any]: ...
 def ball_fit(
     names: list[str],
@@ -841,6 +841,7 @@ def ball_racket_hit(
     state: ArrayLike, normal: ArrayLike, velocity: ArrayLike, model: str = "default"
 ) -> NDArray[np.float64]: ...
 def ball_plan_correct(
+    robot: Robot,
     state: ArrayLike,
     now: float,
     target: ArrayLike,

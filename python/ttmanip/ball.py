@@ -20,6 +20,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from . import _ttmanip as _t
+from . import robots
+from ._ttmanip import Robot
 
 __all__ = [
     "BallModel",
@@ -129,6 +131,11 @@ def _model(model: BallModel | str) -> str:
     return model.name if isinstance(model, BallModel) else BallModel(model).name
 
 
+def _robot(robot: Robot | None) -> Robot:
+    """The robot the ball planner plans for: ``robot``, or gantry6 when None."""
+    return robots.gantry6() if robot is None else robot
+
+
 def state(p: ArrayLike, v: ArrayLike, w: ArrayLike = (0.0, 0.0, 0.0), t: float = 0.0) -> NDArray[np.float64]:
     """A ball state (10,) from position (m), velocity (m/s), spin (rad/s) and time (s)."""
     parts = [np.array([_finite_scalar(t, "t")])]
@@ -197,17 +204,23 @@ def crossing(
 
 
 def plan_return(
-    state: ArrayLike, now: float, target: ArrayLike = (0.9, 0.0), model: BallModel | str = "default"
+    state: ArrayLike,
+    now: float,
+    target: ArrayLike = (0.9, 0.0),
+    model: BallModel | str = "default",
+    robot: Robot | None = None,
 ):
-    """Plans gantry6's return of the ball ``state`` for a stroke starting at rest at time ``now`` (s).
+    """Plans ``robot``'s return (default gantry6) of the ball ``state`` for a stroke starting at
+    rest at time ``now`` (s).
 
-    Returns a dict with ``status`` ("ok", "no_bounce", "out_of_reach", "no_return", "infeasible")
+    The robot needs analytic IK and must reach the ready racket pose from the rally's placement
+    (``ttkin::ball::hitplan::ReturnPlanner::new``); another robot raises ``ModelError``. Returns a dict with ``status`` ("ok", "no_bounce", "out_of_reach", "no_return", "infeasible")
     and, when ok, ``hit`` (a ``ttmanip.Hit`` when the pipeline module provides it, else the dict
     with ``pose`` (4×4, racket frame in the base frame), ``twist`` (6,), ``t_hit`` (s from now)),
     ``q_hit``, ``qd_hit``, ``v_out``, ``normal``, ``racket_velocity``, ``margin``, ``landing``.
     A target off the opponent's half raises ``TtmanipError``.
     """
-    d = _t.ball_plan_return(state, float(now), target, _model(model))
+    d = _t.ball_plan_return(_robot(robot), state, float(now), target, _model(model))
     if d["status"] == "ok":
         from . import pipeline
 
@@ -252,9 +265,10 @@ def plan_correct(
     t_c: float,
     after_bounce: bool,
     model: BallModel | str = "default",
+    robot: Robot | None = None,
 ) -> dict:
-    """The correction of a planned hit, as the rally makes it after the bounce: gantry6's return
-    of ``state`` planned for a stroke from rest at ``now`` (s) landing at ``target`` (x, y, m),
+    """The correction of a planned hit, as the rally makes it after the bounce: ``robot``'s
+    (default gantry6, as :func:`plan_return`) return of ``state`` planned for a stroke from rest at ``now`` (s) landing at ``target`` (x, y, m),
     then, that stroke under way, planned again at ``t_c`` (s) for the ball ``state_new`` (e.g.
     :func:`update`'s state; ``after_bounce`` when past its bounce) near the first hit
     (``ReturnPlanner::plan_near`` from the stroke's joint state at ``t_c``). Returns ``first`` and
@@ -263,4 +277,6 @@ def plan_correct(
         raise _t.TtmanipError(f"after_bounce: must be True or False, got {after_bounce!r}")
     now = _finite_scalar(now, "now")
     t_c = _finite_scalar(t_c, "t_c")
-    return _t.ball_plan_correct(state, now, target, state_new, t_c, bool(after_bounce), _model(model))
+    return _t.ball_plan_correct(
+        _robot(robot), state, now, target, state_new, t_c, bool(after_bounce), _model(model)
+    )

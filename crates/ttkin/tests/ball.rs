@@ -420,6 +420,30 @@ fn planner() -> ReturnPlanner {
 }
 
 #[test]
+fn the_ball_planner_refuses_a_robot_it_cannot_plan_for_with_the_reason() {
+    // ur5 has no analytic IK; arm4 has one, but its racket cannot reach the ready pose at the
+    // rally's placement. Both are model errors naming the robot and what is missing.
+    let err = ReturnPlanner::new(ttkin::robots::ur5(), Flight::default()).unwrap_err();
+    let msg = err.to_string();
+    assert!(matches!(err, ttkin::Error::Model(_)), "{msg}");
+    assert!(msg.contains("'ur5'") && msg.contains("analytic IK"), "{msg}");
+    let err = ReturnPlanner::new(ttkin::robots::arm4(), Flight::default()).unwrap_err();
+    let msg = err.to_string();
+    assert!(matches!(err, ttkin::Error::Model(_)), "{msg}");
+    assert!(msg.contains("'arm4'") && msg.contains("ready racket pose"), "{msg}");
+    // The chain given is the one planned for: a gantry6 with a longer first link has its own
+    // ready configuration (the same racket pose by other joint values).
+    let longer = ttkin::robots::gantry6_with(ttkin::robots::GantryLengths {
+        l1: 0.14,
+        ..Default::default()
+    })
+    .unwrap();
+    let pl = ReturnPlanner::new(longer.clone(), Flight::default()).unwrap();
+    assert_eq!(*pl.chain(), longer);
+    assert_ne!(pl.ready, planner().ready);
+}
+
+#[test]
 fn executed_hit_returns_the_ball_to_its_target() {
     let pl = planner();
     let mut rng = fastrand::Rng::with_seed(11);
