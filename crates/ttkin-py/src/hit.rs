@@ -178,20 +178,10 @@ impl Keywords<'_, '_> {
 
     /// Options from the Python keywords.
     fn options(&self, n: usize) -> PyResult<HitOptions> {
-        let task = match self.task {
-            "auto" => HitTask::Auto,
-            "pose" => HitTask::Pose,
-            "racket5" => HitTask::Racket5,
-            other => {
-                return Err(TtmanipError::new_err(format!(
-                    "task: expected 'auto', 'pose' or 'racket5', got '{other}'"
-                )))
-            }
-        };
         let jerk = self.jerk.map(|j| vector(j, "jerk", n)).transpose()?;
         Ok(HitOptions {
-            profile: StrokeProfile::from_name(self.profile).py()?,
-            task,
+            profile: self.profile.parse::<StrokeProfile>().py()?,
+            task: self.task.parse::<HitTask>().py()?,
             jerk,
             check_effort: self.effort,
             ..Default::default()
