@@ -14,7 +14,7 @@ z up, y = z × x; metres, m/s, rad/s, seconds. A ball state is the (10,) array
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -75,13 +75,22 @@ class Table:
     net_overhang: float = _TABLE["net_overhang"]
 
     def __post_init__(self):
-        for name in ("length", "width", "height", "net_height", "net_overhang"):
-            _finite_scalar(getattr(self, name), name, positive=True)
+        _t.ball_table_check(self._core())  # the core's checks (Table::validate)
+
+    def _core(self) -> dict[str, float]:
+        """The fields as the core's ``Table`` reads them (floats, m)."""
+        return {f.name: _finite_scalar(getattr(self, f.name), f.name) for f in fields(self)}
 
     def on_opponent_half(self, x: float, y: float) -> bool:
-        """Whether (x, y) (m, world) lies on the opponent's half of the surface."""
-        x, y = _finite_scalar(x, "x"), _finite_scalar(y, "y")
-        return 0.0 < x <= self.length / 2 and abs(y) <= self.width / 2
+        """Whether (x, y) (m, world) lies on the opponent's half of the surface (the core's
+        ``Table::on_opponent_half``)."""
+        return _t.ball_on_opponent_half(self._core(), _finite_scalar(x, "x"), _finite_scalar(y, "y"))
+
+    def outline(self) -> dict[str, NDArray[np.float64]]:
+        """The outline to draw (m, world; the core's ``Table::outline``): ``surface`` and ``net``
+        (5, 3) closed loops (the net in the plane x = 0, overhang included) and ``centre_line``
+        (2, 3)."""
+        return {k: np.asarray(v, float) for k, v in _t.ball_table_outline(self._core()).items()}
 
 
 def _finite_scalar(v, what: str, positive: bool = False) -> float:

@@ -7,7 +7,7 @@ use ttkin::ball::estimate::{estimate, EstimateError, EstimateOptions, Segment};
 use ttkin::ball::flight::{BallState, EventKind, Flight, Plane};
 use ttkin::ball::hitplan::{ReturnPlanner, ReturnStatus};
 use ttkin::ball::impact::Racket;
-use ttkin::ball::model::BallModel;
+use ttkin::ball::model::{BallModel, Table};
 use ttkin::ball::predict::{crossing, predict, CrossingOutcome};
 use ttkin::ball::rally::{self, Rally, RallyConfig};
 use ttkin::ball::reach::{walk_after_bounce, walk_after_bounce_clip};
@@ -781,4 +781,25 @@ fn a_rally_range_plays_the_balls_in_order_and_stops_when_asked() {
         ..RallyConfig::default()
     };
     assert!(Rally::new(bad).unwrap_err().to_string().contains("max_spin_rps"));
+}
+
+#[test]
+fn the_table_outline_is_drawn_from_its_geometry() {
+    let t = Table {
+        length: 3.0,
+        width: 1.5,
+        net_overhang: 0.1,
+        ..Table::default()
+    };
+    let o = t.outline();
+    assert_eq!(o.surface[0], o.surface[4]);
+    for c in &o.surface[..4] {
+        assert_eq!([c[0].abs(), c[1].abs(), c[2]], [1.5, 0.75, 0.0]);
+        // every corner is on the surface's edge: on a half, and off it a hair further out
+        assert!(t.on_opponent_half(c[0], c[1]) || t.on_robot_half(c[0], c[1]));
+        assert!(!t.on_opponent_half(c[0] * (1.0 + 1e-12), c[1]) && !t.on_robot_half(c[0] * (1.0 + 1e-12), c[1]));
+    }
+    assert_eq!(o.centre_line, [[-1.5, 0.0, 0.0], [1.5, 0.0, 0.0]]);
+    assert_eq!(o.net[0], o.net[4]);
+    assert_eq!(o.net[2], [0.0, 0.85, t.net_height]);
 }
