@@ -423,56 +423,10 @@ fn track<'py>(
     Ok(PyTrackResult { r, joint_names })
 }
 
+crate::pickle::pickled!(serde PyDiffDrive, _unpickle_diff_drive, "DiffDrive", |d| d.drive, |_, drive: _| Ok(PyDiffDrive { drive }));
+crate::pickle::pickled!(serde PyTrackResult, _unpickle_track_result, "TrackResult", |t| (&t.r, &t.joint_names), |_, (r, joint_names): _| Ok(PyTrackResult { r, joint_names }));
+
 /// Adds the mobile-manipulation classes and functions to the module.
-/// Pickle and copy: the core values in their serde form (issue 31).
-#[ttkin_py_guard::guarded]
-#[pymethods]
-impl PyDiffDrive {
-    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyTuple>> {
-        crate::pickle::reduce(py, "_unpickle_diff_drive", crate::pickle::to_state(py, &self.drive)?)
-    }
-}
-
-impl PyDiffDrive {
-    /// The drive back from `__reduce__`'s state.
-    pub fn from_state(state: &Bound<'_, PyAny>) -> PyResult<Self> {
-        Ok(PyDiffDrive {
-            drive: crate::pickle::from_state(state, "DiffDrive")?,
-        })
-    }
-}
-
-#[ttkin_py_guard::guarded]
-#[pymethods]
-impl PyTrackResult {
-    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyTuple>> {
-        let state = crate::pickle::to_state(py, &(&self.r, &self.joint_names))?;
-        crate::pickle::reduce(py, "_unpickle_track_result", state)
-    }
-}
-
-impl PyTrackResult {
-    /// The result back from `__reduce__`'s state.
-    pub fn from_state(state: &Bound<'_, PyAny>) -> PyResult<Self> {
-        let (r, joint_names) = crate::pickle::from_state(state, "TrackResult")?;
-        Ok(PyTrackResult { r, joint_names })
-    }
-}
-
-/// Rebuilds a `DiffDrive` from its pickle state (`DiffDrive.__reduce__`; not meant to be called directly).
-#[ttkin_py_guard::guarded]
-#[pyfunction]
-fn _unpickle_diff_drive(state: &Bound<'_, PyAny>) -> PyResult<PyDiffDrive> {
-    PyDiffDrive::from_state(state)
-}
-
-/// Rebuilds a `TrackResult` from its pickle state (`TrackResult.__reduce__`; not meant to be called directly).
-#[ttkin_py_guard::guarded]
-#[pyfunction]
-fn _unpickle_track_result(state: &Bound<'_, PyAny>) -> PyResult<PyTrackResult> {
-    PyTrackResult::from_state(state)
-}
-
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_unpickle_track_result, m)?)?;
     m.add_function(wrap_pyfunction!(_unpickle_diff_drive, m)?)?;
