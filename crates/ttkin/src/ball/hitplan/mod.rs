@@ -192,9 +192,11 @@ impl ReturnPlanner {
     pub fn new(chain: Chain, flight: Flight) -> Result<Self> {
         let robot = HitPlanner::new(&chain, HitOptions::default())?;
         if robot.analytic().is_none() {
-            return Err(Error::Model(
-                "hit planning needs a chain with analytic IK (gantry6)".into(),
-            ));
+            return Err(Error::Model(format!(
+                "robot '{}': the ball planner needs a chain with analytic IK (a gantry6 structure: \
+                 every IK branch of a racket pose); this chain has none",
+                chain.name()
+            )));
         }
         let mut planner = ReturnPlanner {
             ready: vec![0.0; chain.dof()],
@@ -219,7 +221,17 @@ impl ReturnPlanner {
             .racket()
             .tool_pose(&planner.base_pose(&centre, &Vector3::x()));
         let ik = planner.robot.analytic().expect("checked above");
-        planner.ready = ik.nearest(&pose, &planner.ready, LimitFilter::Enforce)?;
+        planner.ready = ik.nearest(&pose, &planner.ready, LimitFilter::Enforce).map_err(|e| {
+            Error::Model(format!(
+                "robot '{}': the ball planner's ready racket pose (facing +x at ({:.3}, {:.3}, {:.3}) m, \
+                 world, from the rally's placement) has no IK within the joint limits ({e}); the ball \
+                 planner needs a robot that reaches it (gantry6)",
+                chain.name(),
+                centre.x,
+                centre.y,
+                centre.z
+            ))
+        })?;
         Ok(planner)
     }
 
