@@ -170,9 +170,19 @@ fn main() {
     let cfg = RallyConfig {
         correction_delay: std::env::var("CORRECT").map_or(cfg.correction_delay, |r| r.parse().expect("CORRECT (s)")),
         // WORLD=mismatch: every ball in a world of its own (`ttmanip rally --world mismatch`).
-        world: std::env::var("WORLD")
-            .is_ok_and(|w| w == "mismatch")
-            .then(WorldSpread::measured),
+        world: std::env::var("WORLD").is_ok_and(|w| w == "mismatch").then(|| {
+            // Parts of the mismatch alone: SPREAD_KD, SPREAD_KM, SPREAD_E, SPREAD_MU, JITTER (s)
+            // override the measured spreads.
+            let m = WorldSpread::measured();
+            let get = |k: &str, d: f64| std::env::var(k).map_or(d, |v| v.parse().expect(k));
+            WorldSpread {
+                k_drag: get("SPREAD_KD", m.k_drag),
+                k_magnus: get("SPREAD_KM", m.k_magnus),
+                restitution: get("SPREAD_E", m.restitution),
+                friction: get("SPREAD_MU", m.friction),
+                latency_jitter: get("JITTER", m.latency_jitter),
+            }
+        }),
         ..cfg
     };
     let region = ReachRegion::new(pl.chain(), pl.placement, pl.ready.clone(), truth.model.radius).expect("region");
