@@ -264,9 +264,9 @@ impl BallBrain {
     }
 
     /// The hit just decided (the current ball's, still ahead), kept for the later splice `at`: its
-    /// hit leg planned again from the state there to the same hit state at the same time
-    /// (`HitPlanner::branch_leg`, the ball planner's leg and limits, effort included), as a new
-    /// stroke; `None` when that leg is not feasible.
+    /// hit leg planned again from the state there to the same hit state at the same time, its
+    /// follow-through to the ball planner's ready (`HitPlanner::branch_leg_to`, the ball planner's
+    /// legs and limits, effort included), as a new stroke; `None` when that is not feasible.
     fn retime(&mut self, at: &SpliceAt) -> Option<Command> {
         let (t_abs, old) = self.ball.as_ref()?.hit.clone()?;
         let t = t_abs - at.t;
@@ -276,7 +276,8 @@ impl BallBrain {
         let hit = ttkin::hit::Hit { t, ..old.hit };
         let robot = &self.planner.robot;
         let twist = robot.tool_twist(&hit);
-        let branch = robot.branch_leg(&old.branch.q, &at.state, &twist, t, f64::NEG_INFINITY)?;
+        let ready = &self.planner.ready;
+        let branch = robot.branch_leg_to(&old.branch.q, &at.state, &twist, t, ready, f64::NEG_INFINITY)?;
         let new = ReturnHit { hit, branch, ..old };
         self.stats.retimed += 1;
         let c = self.command(&new, at);
