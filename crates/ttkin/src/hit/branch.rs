@@ -3,9 +3,12 @@
 //! start state, each analytic IK branch within the position limits gets its joint velocities
 //! q̇ = J⁻¹V, its hit leg ([`super::leg`]: quintic or jerk-limited, on time) and its effort check
 //! (certified peak, [`crate::dynamics::peak`]); a leg beyond the effort limits is replaced by a
-//! gentler jerk-limited leg to the same hit state ([`super::leg::scaled_jerk_leg`]: acceleration
-//! and jerk limits scaled below the rejected leg's peak use by its torque excess, at most
-//! `EFFORT_RETRIES` times, each leg certified like the first) while that still arrives on time;
+//! gentler jerk-limited leg to the same hit state: first with only the joint beyond its torque
+//! slowed ([`super::leg::scaled_jerk_leg_joints`]: its acceleration and jerk limits scaled below the
+//! rejected leg's peak use by its torque excess; the other joints keep theirs, so the leg still
+//! arrives on time more often), then with every joint slowed alike
+//! ([`super::leg::scaled_jerk_leg`]), at most `EFFORT_RETRIES` legs each, each leg certified like
+//! the first, while that still arrives on time;
 //! the branch with the largest margin is kept. Every accepted hit state also gets its
 //! follow-through back to rest at the ready configuration ([`HitPlanner::follow_through`]), checked
 //! against every limit the hit leg is (position, speed, acceleration, jerk, certified effort): a
@@ -18,7 +21,7 @@
 
 use nalgebra::{IsometryMatrix3, Matrix6, Vector3, Vector6};
 
-use super::leg::{hit_leg_above, min_joint_time, scaled_jerk_leg, HitLeg};
+use super::leg::{hit_leg_above, min_joint_time, scaled_jerk_leg, scaled_jerk_leg_joints, HitLeg};
 use super::{Hit, HitPlanner};
 use crate::chain::JacobianFrame;
 use crate::dynamics::{DynamicsData, PeakStop};
@@ -132,19 +135,8 @@ impl HitPlanner {
         if qd.iter().zip(&lim.velocity).any(|(v, vmax)| v.abs() > *vmax) {
             return None;
         }
-        let mut leg = hit_leg_above(start, q, &qd, t_hit, &self.limits, floor)?;
-        // Beyond the drives' torque: the same hit state by a gentler jerk-limited leg, its
-        // acceleration and jerk limits scaled below what the rejected leg used by the excess
-        // (each leg checked as the first; none when the gentler leg is too slow for the hit).
-        let mut tries = 0;
-        while let Some(excess) = self.effort_excess(&leg.trajectory) {
-            if tries == EFFORT_RETRIES {
-                return None;
-            }
-            tries += 1;
-            let scale = self.used_acceleration(&leg.trajectory) * (EFFORT_SAFETY / excess).min(EFFORT_STEP);
-            leg = scaled_jerk_leg(start, q, &qd, t_hit, &self.limits, scale, floor)?;
-        }
+        let first = hit_leg_above(start, q, &qd, t_hit, &self.limits, floor)?;
+        let leg = self.within_torque(first, start, q, &qd, t_hit, floor)?;
         let margin = pos_margin.min(leg.margin);
         let at_hit = JointState {
             q: q.to_vec(),
@@ -204,6 +196,60 @@ impl HitPlanner {
         None
     }
 
+    /// `leg` when its torques are within the effective effort limits, else a gentler jerk-limited
+    /// leg to the same hit state (q, `qd` at `t_hit` from `start`) that is: first only the joint
+    /// beyond its limit slowed ([`scaled_jerk_leg_joints`]: its acceleration and jerk limits
+    /// scaled below what the rejected leg used by the excess; the joint found beyond next, if
+    /// another, too), then every joint alike ([`scaled_jerk_leg`]), at most `EFFORT_RETRIES`
+    /// legs each, each certified like the first; `None` when none is within the torque on time.
+    fn within_torque(
+        &self,
+        leg: HitLeg,
+        start: &JointState,
+        q: &[f64],
+        qd: &[f64],
+        t_hit: f64,
+        floor: f64,
+    ) -> Option<HitLeg> {
+        // The gentler legs are searched without the floor and the result filtered by it, so that
+        // a floor only removes the leg found without one (the best-margin search relies on it).
+        self.within_torque_any(leg, start, q, qd, t_hit)
+            .filter(|l| l.margin > floor)
+    }
+
+    /// [`Self::within_torque`] without a floor.
+    fn within_torque_any(&self, leg: HitLeg, start: &JointState, q: &[f64], qd: &[f64], t_hit: f64) -> Option<HitLeg> {
+        let floor = f64::NEG_INFINITY;
+        let Some((excess, joint)) = self.effort_excess_joint(&leg.trajectory) else {
+            return Some(leg);
+        };
+        let step = |excess: f64| (EFFORT_SAFETY / excess).min(EFFORT_STEP);
+        // Only the joints beyond their torque.
+        let mut scales = vec![1.0; q.len()];
+        let (mut cur, mut excess_j, mut joint_j) = (leg.clone(), excess, joint);
+        for _ in 0..EFFORT_RETRIES {
+            scales[joint_j] = self.used_acceleration_of(&cur.trajectory, joint_j) * step(excess_j);
+            let Some(next) = scaled_jerk_leg_joints(start, q, qd, t_hit, &self.limits, &scales, floor) else {
+                break;
+            };
+            match self.effort_excess_joint(&next.trajectory) {
+                None => return Some(next),
+                Some((e, j)) => (cur, excess_j, joint_j) = (next, e, j),
+            }
+        }
+        // Every joint alike.
+        let (mut cur, mut excess) = (leg, excess);
+        for _ in 0..EFFORT_RETRIES {
+            let scale = self.used_acceleration(&cur.trajectory) * step(excess);
+            let next = scaled_jerk_leg(start, q, qd, t_hit, &self.limits, scale, floor)?;
+            match self.effort_excess(&next.trajectory) {
+                None => return Some(next),
+                Some(e) => (cur, excess) = (next, e),
+            }
+        }
+        None
+    }
+
     /// Whether `leg`'s torques (inverse dynamics with friction under the options' gravity, base
     /// frame) stay within the effective effort limits at every instant (certified,
     /// [`crate::dynamics::peak`]); true without dynamics or with `check_effort` off.
@@ -215,6 +261,11 @@ impl HitPlanner {
     /// [`Self::within_effort`]), else the largest ratio |τ|/limit found at an instant (at least
     /// 1: a peak too close to the limit to decide counts as 1).
     pub fn effort_excess(&self, leg: &JointTrajectory) -> Option<f64> {
+        self.effort_excess_joint(leg).map(|(e, _)| e)
+    }
+
+    /// [`Self::effort_excess`] with the joint of the ratio found.
+    fn effort_excess_joint(&self, leg: &JointTrajectory) -> Option<(f64, usize)> {
         let dynamics = self.dynamics.as_ref()?;
         let mut data = DynamicsData::new(dynamics);
         let gravity = Vector3::from(self.gravity);
@@ -227,16 +278,24 @@ impl HitPlanner {
         for &t in leg.knots() {
             leg.sample_unchecked(t, &mut q, &mut qd, &mut qdd);
             let tau = dynamics.inverse_dynamics_unchecked(&mut data, &q, &qd, &qdd, &gravity);
-            let excess = (0..n)
-                .map(|j| tau[j].abs() / self.effort.at(j, qd[j]))
-                .fold(0.0, f64::max);
+            let (excess, joint) = (0..n)
+                .map(|j| (tau[j].abs() / self.effort.at(j, qd[j]), j))
+                .fold((0.0, 0), |a, b| if b.0 > a.0 { b } else { a });
             if excess > threshold {
-                return Some(excess);
+                return Some((excess, joint));
             }
         }
         let stop = PeakStop::decide(threshold, 1e-3);
         let peak = dynamics.effort_peak(&mut data, leg, &self.effort, &gravity, stop);
-        (peak.bound > threshold).then_some(peak.ratio.max(1.0))
+        (peak.bound > threshold).then_some((peak.ratio.max(1.0), peak.joint))
+    }
+
+    /// Joint `j`'s peak |q̈| of `traj` over its acceleration limit (exact, ≤ 1 for a leg within
+    /// the limits; 1 when the peak cannot be computed).
+    fn used_acceleration_of(&self, traj: &JointTrajectory, j: usize) -> f64 {
+        traj.peaks(2)
+            .map_or(1.0, |p| p[j].value.abs() / self.limits.acceleration[j])
+            .min(1.0)
     }
 
     /// The largest of `traj`'s joints' peak |q̈| over their acceleration limits (exact, ≤ 1 for
@@ -443,7 +502,7 @@ mod tests {
         let dy = pl.dynamics.as_ref().unwrap();
         let mut data = DynamicsData::new(dy);
         let mut rng = fastrand::Rng::with_seed(23);
-        let (mut rescued, mut lost) = (0, 0);
+        let (mut rescued, mut lost, mut uniform_rescued, mut torque_rescued) = (0, 0, 0, 0);
         for _ in 0..1500 {
             let d = Translation3::new(0.6 * rng.f64() - 0.3, 0.6 * rng.f64() - 0.3, 0.3 * rng.f64() - 0.15);
             let pose = IsometryMatrix3::from_parts(d, Rotation3::from_euler_angles(0.3 * rng.f64(), 0.0, 0.0)) * tool;
@@ -469,6 +528,29 @@ mod tests {
                 if pl.within_effort(&first.trajectory) {
                     continue;
                 }
+                // Every joint slowed alike only (the rescue before the joint-wise one).
+                let mut uniform = Some(first.clone());
+                for _ in 0..EFFORT_RETRIES {
+                    let leg = uniform.take().unwrap();
+                    let Some(e) = pl.effort_excess(&leg.trajectory) else {
+                        uniform = Some(leg);
+                        break;
+                    };
+                    let scale = pl.used_acceleration(&leg.trajectory) * (EFFORT_SAFETY / e).min(EFFORT_STEP);
+                    let Some(next) = scaled_jerk_leg(&start, q, &qd, hit.t, &pl.limits, scale, f64::NEG_INFINITY)
+                    else {
+                        break;
+                    };
+                    uniform = Some(next);
+                }
+                let by_uniform = uniform.is_some_and(|l| pl.within_effort(&l.trajectory));
+                let rescue = pl.within_torque(first.clone(), &start, q, &qd, hit.t, f64::NEG_INFINITY);
+                assert!(
+                    !by_uniform || rescue.is_some(),
+                    "the uniform rescue found a leg, the planner none"
+                );
+                torque_rescued += usize::from(rescue.is_some());
+                uniform_rescued += usize::from(by_uniform);
                 let Some(b) = pl.branch_leg(q, &start, &twist, hit.t, f64::NEG_INFINITY) else {
                     lost += 1;
                     continue;
@@ -500,6 +582,12 @@ mod tests {
             }
         }
         assert!(rescued > 5 && lost > 5, "{rescued} rescued, {lost} lost");
+        // Slowing only the joint beyond its torque first rescues hit states the uniform slowing
+        // does not (and loses none of its own).
+        assert!(
+            torque_rescued > uniform_rescued,
+            "{torque_rescued} within the torque, {uniform_rescued} by uniform slowing"
+        );
     }
 
     /// The largest ratio to its limit of every quantity of `traj` at 10 kHz (position: the excess

@@ -171,13 +171,29 @@ pub fn scaled_jerk_leg(
     scale: f64,
     floor: f64,
 ) -> Option<HitLeg> {
-    if !(scale > 0.0 && scale <= 1.0 && t_hit > 0.0 && t_hit.is_finite()) {
+    scaled_jerk_leg_joints(start, q, qd, t_hit, limits, &vec![scale; q.len()], floor)
+}
+
+/// [`scaled_jerk_leg`] with a scale of its own for each joint's acceleration and jerk limits
+/// (`scales`, each in (0, 1]): only the joints beyond their torque slowed, the others keeping
+/// their full limits (the effort-limited stroke of [`super::HitPlanner::branch_leg`] tries it
+/// first). `None` as [`scaled_jerk_leg`], or when `scales` has the wrong length.
+pub fn scaled_jerk_leg_joints(
+    start: &JointState,
+    q: &[f64],
+    qd: &[f64],
+    t_hit: f64,
+    limits: &KinematicLimits,
+    scales: &[f64],
+    floor: f64,
+) -> Option<HitLeg> {
+    if scales.len() != q.len() || !scales.iter().all(|s| *s > 0.0 && *s <= 1.0) || !(t_hit > 0.0 && t_hit.is_finite()) {
         return None;
     }
     let mut scaled = limits.clone();
-    for (a, j) in scaled.acceleration.iter_mut().zip(scaled.jerk.iter_mut()) {
-        *a *= scale;
-        *j *= scale;
+    for ((a, j), s) in scaled.acceleration.iter_mut().zip(scaled.jerk.iter_mut()).zip(scales) {
+        *a *= s;
+        *j *= s;
     }
     // The start state must lie within the scaled limits (a moving start's acceleration).
     if start.qdd.iter().zip(&scaled.acceleration).any(|(x, a)| x.abs() > *a) {
