@@ -205,7 +205,7 @@ API: dict[str, dict] = {
     "ball.predict": {"may_be_inf": True, "args": {"model": "ball_model_name"}},
     "ball.predict_batch": {"may_be_inf": True, "args": {"model": "ball_model_name"}},
     "ball.state": {},
-    "ball.racket_hit": {"args": {"model": "ball_model_name"}},
+    "ball.racket_impact": {"args": {"model": "ball_model_name"}},
     "ball.update": {"args": {"model": "ball_model_name"}},
     "ball.plan_correct": {"args": {"model": "ball_model_name"}},
     # --- IkResult (made by Robot.ik)

@@ -157,3 +157,18 @@ def test_reprs_print_the_current_names():
         warnings.simplefilter("error")  # the repr evaluates without a deprecated keyword
         again = eval(repr(drive), {"DiffDrive": ttmanip.DiffDrive})  # noqa: S307 - our own repr
     assert repr(again) == repr(drive)
+
+
+def test_ball_racket_hit_is_a_deprecated_racket_impact():
+    """Issue 30: `Racket` named the robot's racket mount and the ball's impact model; the impact
+    model is now `racket_impact` (Rust `RacketImpact`), the mount `racket_mount` (`RacketMount`)."""
+    from ttmanip import ball
+
+    s = ball.state([0.0, 0.0, 0.3], [-3.0, 0.5, 0.2], [0.0, 10.0, 0.0])
+    new = ball.racket_impact(s, [1.0, 0.0, 0.0], [2.0, 0.0, 0.0])
+    with pytest.warns(DeprecationWarning, match=r"ball\.racket_hit is deprecated; use ball\.racket_impact"):
+        old = ball.racket_hit(s, [1.0, 0.0, 0.0], [2.0, 0.0, 0.0])
+    np.testing.assert_array_equal(old, new)
+    assert new[4] > 0.0  # the ball leaves along the normal: the call did the impact
+    assert "racket_hit" not in ball.__all__
+

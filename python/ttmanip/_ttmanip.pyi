@@ -837,7 +837,7 @@ def ball_fit(
     window: int = 20,
     period: float | None = None,
 ) -> dict[str, Any]: ...
-def ball_racket_hit(
+def ball_racket_impact(
     state: ArrayLike, normal: ArrayLike, velocity: ArrayLike, model: str = "default"
 ) -> NDArray[np.float64]: ...
 def ball_plan_correct(

@@ -371,13 +371,13 @@ fn ball_rally_stats<'py>(
     serde_to_python(py, &stats)
 }
 
-/// The ball after a racket impact (`ttkin::ball::impact::Racket::hit_state` with the default
-/// racket): `state` (10,) just before, the racket's unit face `normal` (3,) and the face point's
+/// The ball after a racket impact (`ttkin::ball::impact::RacketImpact::hit_state` with the default
+/// impact model): `state` (10,) just before, the racket's unit face `normal` (3,) and the face point's
 /// `velocity` (3,, m/s, world); returns the state (10,) just after.
 #[ttkin_py_guard::guarded]
 #[pyfunction]
 #[pyo3(signature = (state, normal, velocity, model = "default"))]
-fn ball_racket_hit<'py>(
+fn ball_racket_impact<'py>(
     py: Python<'py>,
     state: &Bound<'py, PyAny>,
     normal: &Bound<'py, PyAny>,
@@ -388,7 +388,7 @@ fn ball_racket_hit<'py>(
     let n = nalgebra::Vector3::from(vec3(normal, "normal")?);
     let rv = nalgebra::Vector3::from(vec3(velocity, "velocity")?);
     let f = flight(model)?;
-    let out = ttkin::ball::impact::Racket::default()
+    let out = ttkin::ball::impact::RacketImpact::default()
         .hit_state(&f.model, &s, &n, &rv)
         .py()?;
     Ok(to_numpy(py, &[10], &state_vec(&out)).into_any())
@@ -562,7 +562,7 @@ fn ball_fit<'py>(
 /// Adds the ball functions to the module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ball_fit, m)?)?;
-    m.add_function(wrap_pyfunction!(ball_racket_hit, m)?)?;
+    m.add_function(wrap_pyfunction!(ball_racket_impact, m)?)?;
     m.add_function(wrap_pyfunction!(ball_update, m)?)?;
     m.add_function(wrap_pyfunction!(ball_plan_correct, m)?)?;
     m.add("MAX_RALLY_BALLS", rally::MAX_BALLS)?;

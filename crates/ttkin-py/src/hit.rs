@@ -381,7 +381,7 @@ fn racket_states<'py>(
 #[ttkin_py_guard::guarded]
 #[pyfunction]
 fn racket_mount<'py>(py: Python<'py>, robot: &PyRobot) -> Bound<'py, PyAny> {
-    pose_to_numpy(py, &hit::Racket::for_chain(&robot.chain).in_tool).into_any()
+    pose_to_numpy(py, &hit::RacketMount::for_chain(&robot.chain).in_tool).into_any()
 }
 
 /// Adds `HitPlan` and the hit functions to the module.
