@@ -264,17 +264,18 @@ API: dict[str, dict] = {
     },
     # --- motor
     "motor.DcMotor": {"record": True},
-    "motor.Drive": {"record": True},
     "motor.Gearbox": {"record": True},
     "motor.Load": {"record": True},
     "motor.Loops": {},
+    "motor.PowerStage": {"record": True},
     "motor.Response": {"skip_call": "made by Servo.step_response only"},
     "motor.Servo": {
         "args": {
             "motor": "dc_motor",
             "gearbox": "gearbox",
             "load": "load",
-            "drive": "drive",
+            "power_stage": "power_stage",
+            "drive": "power_stage",  # deprecated name of power_stage
             "loops": "loops",
         }
     },
@@ -292,7 +293,7 @@ API: dict[str, dict] = {
                 "torque_constant",
                 "viscous_friction",
             ),
-            "Drive": ("bus_voltage", "current_noise", "encoder_counts_per_rev", "max_duty"),
+            "PowerStage": ("bus_voltage", "current_noise", "encoder_counts_per_rev", "max_duty"),
             "Gearbox": ("efficiency", "inertia", "ratio"),
             "Load": ("inertia", "viscous_friction"),
             "Loops": (
@@ -434,7 +435,7 @@ PICKLE_PROBES: dict[str, object] = {
     "ball.Table": lambda t: t.on_opponent_half(0.5, 0.1),
     "dynamics.TorqueProfile": lambda p: (p.joint, p.motor, p.current, p.peak, p.violations),
     "motor.DcMotor": lambda m: ttmanip.motor.Servo(motor=m).tuning,
-    "motor.Drive": lambda d: ttmanip.motor.Servo(drive=d).tuning,
+    "motor.PowerStage": lambda d: ttmanip.motor.Servo(power_stage=d).tuning,
     "motor.Gearbox": lambda g: ttmanip.motor.Servo(gearbox=g).tuning,
     "motor.Load": lambda load: ttmanip.motor.Servo(load=load).tuning,
     "motor.Loops": lambda lo: ttmanip.motor.Servo(loops=lo).tuning,

@@ -172,3 +172,21 @@ def test_ball_racket_hit_is_a_deprecated_racket_impact():
     assert new[4] > 0.0  # the ball leaves along the normal: the call did the impact
     assert "racket_hit" not in ball.__all__
 
+
+def test_motor_drive_is_a_deprecated_power_stage():
+    """Issue 30: a *drive* is the joint's transmission (``ttkin::joint::Drive``); the H-bridge and
+    sensors of ``ttmanip.motor`` are its ``PowerStage``."""
+    from ttmanip import motor
+
+    with pytest.warns(DeprecationWarning, match=r"motor\.Drive is deprecated; use motor\.PowerStage"):
+        old_cls = motor.Drive
+    assert old_cls is motor.PowerStage and "Drive" not in motor.__all__
+    stage = motor.PowerStage(bus_voltage=28.0)
+    new = motor.Servo(power_stage=stage)
+    with pytest.warns(DeprecationWarning, match=r"Servo\(drive=\.\.\.\) is deprecated; use power_stage="):
+        old = motor.Servo(drive=stage)
+    assert old.params == new.params and new.params["model"]["bus_voltage"] == 28.0
+    with pytest.warns(DeprecationWarning), pytest.raises(ttmanip.TtmanipError, match="power_stage"):
+        motor.Servo(power_stage=stage, drive=stage)
+    with pytest.raises(AttributeError, match="no attribute 'Dirve'"):
+        motor.Dirve  # noqa: B018 - the module's __getattr__ still refuses unknown names
