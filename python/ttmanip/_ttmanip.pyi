@@ -150,7 +150,7 @@ class Robot:
     def racket_angle_jacobian(self, q: ArrayLike) -> NDArray[np.float64]:
         """Jacobian (5, n) of the racket 5-vector [centre (m), polar, azimuth (rad)]: ẋ = J q̇."""
     def task_coordinates(self, q: ArrayLike, task: str = "racket5") -> NDArray[np.float64]:
-        """Task coordinates of the tool pose: (3,), (6,) or the racket 5-vector (m, rad)."""
+        """Task coordinates of the tool pose: (3,) position, (6,) pose or (5,) racket 5-vector (m, rad)."""
 
     # --- dynamics (crates/ttkin-py/src/dynamics.rs); SI units, gravity in the base frame ---
     def rnea(
@@ -795,20 +795,29 @@ def hit_plan_batch(
     jerk: ArrayLike | None = None,
     effort: bool = True,
 ) -> list[HitPlan]: ...
-def racket_frame(normal: ArrayLike, handle: ArrayLike | None = None) -> _F: ...
-def racket_mount(robot: Robot) -> _F: ...
-def racket_states(robot: Robot, q: ArrayLike, qd: ArrayLike) -> _F: ...
+def racket_frame(normal: ArrayLike, handle: ArrayLike | None = None) -> _F:
+    """(3, 3) racket orientation (base axes): z along the face ``normal``, x (handle) near ``handle``."""
+
+def racket_mount(robot: Robot) -> _F:
+    """(4, 4) racket frame in the tool frame (m): where ``robot`` carries its racket."""
+
+def racket_states(robot: Robot, q: ArrayLike, qd: ArrayLike) -> _F:
+    """(N, 22) per joint state: racket pose (row-major 4×4, base frame, m), racket-centre twist (6,)."""
+
 def hit_check(pose: ArrayLike, twist: ArrayLike, t: float) -> None: ...
 
 # issue 29: the one array conversion, the rally's bound
-def real_array(obj: ArrayLike, what: str) -> _F: ...
+def real_array(obj: ArrayLike, what: str) -> _F:
+    """``obj`` as a float64 array of the same shape; complex, bool, string or object data is refused."""
 
 MAX_RALLY_BALLS: int
 
 # issue 13: ball flight, estimation, prediction, hit planning, rally (ttkin::ball)
 def ball_table() -> dict[str, float]: ...
 def ball_camera() -> dict[str, float]: ...
-def ball_placement() -> _F: ...
+def ball_placement() -> _F:
+    """(4, 4) base frame of the rally's robot in the world (table) frame, m."""
+
 def ball_rally_observations(index: int, seed: int = 0, world: bool = False) -> dict[str, Any]: ...
 def ball_rally_score(
     index: int,
@@ -821,9 +830,9 @@ def ball_rally_score(
 ) -> dict[str, Any]: ...
 def ball_estimate(t: ArrayLike, p: ArrayLike, model: str = "default") -> dict[str, Any]: ...
 def ball_predict(state: ArrayLike, times: ArrayLike, model: str = "default") -> dict[str, Any]: ...
-def ball_predict_batch(
-    states: ArrayLike, times: ArrayLike, model: str = "default"
-) -> NDArray[np.float64]: ...
+def ball_predict_batch(states: ArrayLike, times: ArrayLike, model: str = "default") -> NDArray[np.float64]:
+    """(N, K, 3) positions of N balls (``states`` (N, 10)) at ``times`` (K,); NaN after a terminal event."""
+
 def ball_crossing(
     state: ArrayLike, point: ArrayLike, normal: ArrayLike, t_max: float = 2.0, model: str = "default"
 ) -> dict[str, Any]: ...
@@ -839,7 +848,9 @@ def ball_fit(
 ) -> dict[str, Any]: ...
 def ball_racket_impact(
     state: ArrayLike, normal: ArrayLike, velocity: ArrayLike, model: str = "default"
-) -> NDArray[np.float64]: ...
+) -> NDArray[np.float64]:
+    """(10,) ball state just after the racket impact (``ttkin::ball::impact::RacketImpact``)."""
+
 def ball_plan_correct(
     state: ArrayLike,
     now: float,

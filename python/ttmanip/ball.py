@@ -239,9 +239,7 @@ def racket_hit(
     state: ArrayLike, normal: ArrayLike, velocity: ArrayLike, model: BallModel | str = "default"
 ) -> NDArray[np.float64]:
     """Deprecated name of :func:`racket_impact` (a *hit* is the robot's request, see the glossary)."""
-    warnings.warn(
-        "ball.racket_hit is deprecated; use ball.racket_impact", DeprecationWarning, stacklevel=2
-    )
+    warnings.warn("ball.racket_hit is deprecated; use ball.racket_impact", DeprecationWarning, stacklevel=2)
     return racket_impact(state, normal, velocity, model)
 
 
