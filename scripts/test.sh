@@ -16,6 +16,7 @@ echo "== cargo fmt / clippy / ruff / rustdoc"
 cargo fmt --all -- --check
 cargo clippy --workspace --all-targets --quiet -- -D warnings
 .venv/bin/ruff check python tests benches
+.venv/bin/ruff format --check python tests benches
 RUSTDOCFLAGS="-D warnings" cargo doc --quiet --no-deps -p ttkin -p ttcan
 
 echo "== cargo test"

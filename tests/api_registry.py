@@ -199,6 +199,7 @@ API: dict[str, dict] = {
     "ball.Table": {},
     **{f"ball.Table.{a}": {} for a in ("height", "length", "net_height", "net_overhang", "width")},
     "ball.Table.on_opponent_half": {},
+    "ball.Table.outline": {},
     "ball.crossing": {"may_be_inf": True, "args": {"model": "ball_model_name"}},
     "ball.estimate": {"args": {"model": "ball_model_name"}},
     "ball.plan_return": {"args": {"model": "ball_model_name"}},

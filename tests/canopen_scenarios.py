@@ -66,8 +66,16 @@ def python_master(net: canopen.Network) -> dict:
         return node.sdo[0x6041].raw & 0x6F
 
     assert state() & 0x4F == 0x40
-    for cw, want in [(0x06, 0x21), (0x07, 0x23), (0x0F, 0x27), (0x07, 0x23), (0x00, 0x40),
-                     (0x06, 0x21), (0x07, 0x23), (0x0F, 0x27)]:
+    for cw, want in [
+        (0x06, 0x21),
+        (0x07, 0x23),
+        (0x0F, 0x27),
+        (0x07, 0x23),
+        (0x00, 0x40),
+        (0x06, 0x21),
+        (0x07, 0x23),
+        (0x0F, 0x27),
+    ]:
         node.sdo[0x6040].raw = cw
         got = state() if want != 0x40 else state() & 0x4F
         assert got == want, f"controlword {cw:#x}: statusword state bits {got:#x}, expected {want:#x}"
@@ -210,7 +218,7 @@ class EmulatedDrive:
             if self.pending is not None:
                 data, self.pending, offset = self.pending, None, 0
                 for i, s, bits in self.mapping(0x1600):
-                    self.local.set_data(i, s, data[offset: offset + bits // 8])
+                    self.local.set_data(i, s, data[offset : offset + bits // 8])
                     offset += bits // 8
                 self.controlword(struct.unpack("<H", self.local.get_data(0x6040, 0))[0])
             if self.state == "QSA":
@@ -248,8 +256,18 @@ sdo = [{{ index = 0x2001, value = "ttmanip axis 0: shoulder pitch" }}]
 
 def ttctl_command(ttctl: Path, config: Path, stats: Path) -> list[str]:
     """The ttctl command line of scenario (b)."""
-    return [str(ttctl), "--config", str(config), "--demo", "--amplitude", "0.05", "--stats", str(stats),
-            "--max-seconds", "60"]
+    return [
+        str(ttctl),
+        "--config",
+        str(config),
+        "--demo",
+        "--amplitude",
+        "0.05",
+        "--stats",
+        str(stats),
+        "--max-seconds",
+        "60",
+    ]
 
 
 def check_ttctl_run(rc: int, out: str, stats: Path, local: canopen.LocalNode, drive: EmulatedDrive) -> None:

@@ -112,6 +112,60 @@ def test_plan_return_gives_a_reachable_hit_and_rejects_targets_off_the_table():
     assert ball.plan_return(net, 0.0)["status"] == "no_bounce"
 
 
+def test_plan_return_plans_for_the_robot_given_and_refuses_one_it_cannot_plan_for():
+    s = ball.state([1.6, 0.1, 0.3], [-6.0, -0.2, 1.5], [0.0, 40.0, 0.0])
+    g6 = ttmanip.robots.gantry6()
+    default = ball.plan_return(s, 0.2, (0.9, 0.0))
+    given = ball.plan_return(s, 0.2, (0.9, 0.0), robot=g6)
+    for key in ("q_hit", "qd_hit", "pose", "ready", "landing"):
+        np.testing.assert_array_equal(given[key], default[key])
+    # A gantry6 carrying its racket 5 cm further out along the tool z axis: the plan is made for
+    # that robot (its forward kinematics puts its racket at the planned pose), not for gantry6.
+    mount = np.eye(4)
+    mount[2, 3] = 0.05
+    moved = g6.with_racket(ttmanip.pipeline.racket_mount(g6) @ mount)
+    other = ball.plan_return(s, 0.2, (0.9, 0.0), robot=moved)
+    assert other["status"] == "ok"
+    assert not np.allclose(other["ready"], default["ready"])
+    fk = moved.fk(other["q_hit"]) @ ttmanip.pipeline.racket_mount(moved)
+    np.testing.assert_allclose(fk, other["pose"], atol=1e-9)
+    # ur5 has no analytic IK; arm4 has one but cannot reach the ready pose at the placement.
+    for robot, reason in [(ttmanip.robots.ur5(), "analytic IK"), (ttmanip.robots.arm4(), "ready racket pose")]:
+        with pytest.raises(ttmanip.ModelError, match=f"{robot.name}.*{reason}"):
+            ball.plan_return(s, 0.2, (0.9, 0.0), robot=robot)
+        with pytest.raises(ttmanip.ModelError, match=reason):
+            ball.plan_correct(s, 0.2, (0.9, 0.0), s, 0.25, False, robot=robot)
+
+
+def test_the_table_is_the_cores_predicate_checks_and_outline():
+    t = ball.Table()
+    # the core's predicate (Table::on_opponent_half): the end line and side lines belong to it
+    half_l, half_w = t.length / 2, t.width / 2
+    assert t.on_opponent_half(half_l, half_w) and t.on_opponent_half(1e-9, 0.0)
+    assert not t.on_opponent_half(0.0, 0.0) and not t.on_opponent_half(half_l + 1e-9, 0.0)
+    assert not t.on_opponent_half(-0.5, 0.0) and not t.on_opponent_half(0.5, -half_w - 1e-9)
+    small = ball.Table(length=2.0, width=1.0)
+    assert small.on_opponent_half(1.0, 0.5) and not small.on_opponent_half(1.2, 0.0)
+    with pytest.raises(ttmanip.TtmanipError, match="x"):
+        t.on_opponent_half(np.nan, 0.0)
+    # the core's checks (Table::validate): a net that does not overhang is a table, a flat one is not
+    assert ball.Table(net_overhang=0.0).net_overhang == 0.0
+    for field in ("length", "width", "height", "net_height"):
+        with pytest.raises(ttmanip.TtmanipError, match=field):
+            ball.Table(**{field: 0.0})
+    with pytest.raises(ttmanip.TtmanipError, match="net_overhang"):
+        ball.Table(net_overhang=-0.1)
+    with pytest.raises(ttmanip.TtmanipError, match="length"):
+        ball.Table(length="long")
+    # the outline: closed loops on the surface's edges and the net's, from the given geometry
+    o = small.outline()
+    assert o["surface"].shape == (5, 3) and o["net"].shape == (5, 3) and o["centre_line"].shape == (2, 3)
+    np.testing.assert_array_equal(o["surface"][0], o["surface"][-1])
+    np.testing.assert_array_equal(np.abs(o["surface"][:4, :2]), np.tile([1.0, 0.5], (4, 1)))
+    assert o["net"][:, 1].max() == 0.5 + small.net_overhang and o["net"][:, 2].max() == small.net_height
+    assert (o["net"][:, 0] == 0).all()
+
+
 def test_bad_state_and_model_are_errors():
     with pytest.raises(ttmanip.TtmanipError):
         ball.predict([np.nan] * 10, [0.1])

@@ -127,8 +127,19 @@ def test_python_canopen_master_drives_ttdrive_sim(bins: Path) -> None:
     net = canopen.Network()
     net.connect(interface="virtual", channel=channel, receive_own_messages=False)
     drive = Bridge(
-        [str(bins / "ttdrive-sim"), "--channel", "stdio:5", "--period", "0.004", "--sync-timeout-ms", "1000",
-         "--idle-exit", "5", "--duration", "120"],
+        [
+            str(bins / "ttdrive-sim"),
+            "--channel",
+            "stdio:5",
+            "--period",
+            "0.004",
+            "--sync-timeout-ms",
+            "1000",
+            "--idle-exit",
+            "5",
+            "--duration",
+            "120",
+        ],
         channel,
     )
     try:

@@ -83,3 +83,50 @@ def test_a_short_hil_rally_plays_every_ball_against_ttctl(ttctl, tmp_path):
     assert s["brain"]["ball_observations"] == sent and s["brain"]["balls"] == n
     assert s["brain"]["ball_planned"] >= s["offline_returned"] - 3
     assert {"quiet", "planning"} <= set(s["deadline_misses"])
+
+
+def test_ttctl_is_found_in_the_checkout_and_missing_says_what_to_build(tmp_path, monkeypatch):
+    from ttmanip.hil import HilError, find_ttctl
+
+    monkeypatch.setenv("PATH", str(tmp_path / "bin"))  # no ttctl on PATH
+    monkeypatch.delenv("CARGO_TARGET_DIR", raising=False)
+    # A checkout (workspace with crates/ttcan) without a release build: says what to run where.
+    repo = tmp_path / "repo"
+    (repo / "crates" / "ttcan").mkdir(parents=True)
+    (repo / "Cargo.toml").write_text("[workspace]\n")
+    (repo / "crates" / "ttcan" / "Cargo.toml").write_text("[package]\n")
+    (repo / "python").mkdir()
+    monkeypatch.chdir(repo / "python")
+    import ttmanip.hil as hil
+
+    monkeypatch.setattr(hil, "__file__", str(tmp_path / "site-packages" / "ttmanip" / "hil.py"))
+    with pytest.raises(HilError, match=r"cargo build --release -p ttcan"):
+        find_ttctl()
+    # Built: found from any directory of the checkout, and under $CARGO_TARGET_DIR.
+    exe = repo / "target" / "release" / "ttctl"
+    exe.parent.mkdir(parents=True)
+    exe.write_text("")
+    assert find_ttctl() == str(exe)
+    other = repo / "build" / "release" / "ttctl"
+    other.parent.mkdir(parents=True)
+    other.write_text("")
+    monkeypatch.setenv("CARGO_TARGET_DIR", "build")
+    assert find_ttctl() == str(other)
+    # Away from any checkout, as from an installed wheel: a clear message, and --ttctl checked.
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(HilError, match=r"not on PATH.*not in a ttmanip checkout.*--ttctl"):
+        find_ttctl()
+    with pytest.raises(HilError, match="no such file"):
+        find_ttctl(str(tmp_path / "nope"))
+    assert find_ttctl(str(exe)) == str(exe)
+
+
+def test_ttctl_of_this_checkout_is_found_from_it(monkeypatch):
+    from ttmanip.hil import find_ttctl
+
+    exe = ROOT / "target" / "release" / "ttctl"
+    if not exe.is_file() or os.environ.get("CARGO_TARGET_DIR"):
+        pytest.skip("no release ttctl in this checkout's target/")
+    monkeypatch.setenv("PATH", "/nonexistent")
+    monkeypatch.chdir(ROOT / "tests")
+    assert Path(find_ttctl()).resolve() == exe.resolve()

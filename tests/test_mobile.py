@@ -91,6 +91,32 @@ def test_task_jacobian_matches_finite_differences(mobile8, task):
             np.testing.assert_allclose(je, fd[: je.shape[0]], atol=1e-8)
 
 
+@pytest.mark.parametrize("task", ["pose", "position", "racket5"])
+def test_task_batches_are_one_call_equal_to_the_rows(mobile8, task):
+    # (N, n) in one core call (ttkin::task::Task::*_batch) equals N single calls, bit for bit.
+    q = random_q(mobile8, 300, seed=4)
+    x = mobile8.task_coordinates(q, task)
+    j = mobile8.task_jacobian(q, task)
+    target = mobile8.fk(q[0])
+    jt = mobile8.task_jacobian(q, task, target)
+    assert x.shape == (300, len(x[0])) and j.shape == (300, len(x[0]), mobile8.dof)
+    for k in (0, 1, 257, 299):
+        np.testing.assert_array_equal(x[k], mobile8.task_coordinates(q[k], task))
+        np.testing.assert_array_equal(j[k], mobile8.task_jacobian(q[k], task))
+        np.testing.assert_array_equal(jt[k], mobile8.task_jacobian(q[k], task, target))
+    if task == "racket5":
+        ja = mobile8.racket_angle_jacobian(q)
+        assert ja.shape == (300, 5, mobile8.dof)
+        for k in (0, 299):
+            np.testing.assert_array_equal(ja[k], mobile8.racket_angle_jacobian(q[k]))
+    bad = q[:3].copy()
+    bad[1, 2] = np.nan
+    with pytest.raises(ttmanip.NonFiniteError, match="q"):
+        mobile8.task_coordinates(bad, task)
+    with pytest.raises(ttmanip.ShapeError, match="q"):
+        mobile8.task_jacobian(q[:, :3], task)
+
+
 def test_wls_step_realises_the_task_velocity(mobile8):
     rng = np.random.default_rng(1)
     for q in random_q(mobile8, 20, seed=5):

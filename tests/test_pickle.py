@@ -143,6 +143,33 @@ def test_round_trip_gives_equal_results(key):
             _same(expected, (_properties(twin), _probe(probe, twin)), f"{key} sample {i} via {how}")
 
 
+_EXTENSION_CLASSES = sorted(
+    k for k, c in public_classes().items() if c.__module__ in ("ttmanip", "ttmanip._ttmanip")
+    and c.__reduce__ is not object.__reduce__
+)
+
+
+@pytest.mark.parametrize("key", _EXTENSION_CLASSES)
+def test_each_extension_class_reduces_through_its_own_unpickler(key):
+    """One mechanism (``ttkin_py::pickle::pickled!``): every class of the extension reduces to
+    ``(_unpickle_<class>, (state,))``, a function of the extension that takes that state back and
+    refuses a state of another shape with an error naming the class."""
+    for obj in SAMPLES[key]:
+        restore, args = obj.__reduce__()
+        assert restore.__module__ == "ttmanip._ttmanip" and restore.__name__.startswith("_unpickle_")
+        assert getattr(ttmanip._ttmanip, restore.__name__) is restore and len(args) == 1
+        assert type(restore(args[0])) is type(obj)
+        cls = type(obj).__name__
+        with pytest.raises(ttmanip.TtmanipError, match=f"unpickle {cls}: not a state of this version"):
+            restore({"not": "a state"})
+
+
+def test_every_unpickler_belongs_to_one_class():
+    unpicklers = {n for n in dir(ttmanip._ttmanip) if n.startswith("_unpickle_")}
+    used = {SAMPLES[k][0].__reduce__()[0].__name__ for k in _EXTENSION_CLASSES}
+    assert used == unpicklers and len(used) == len(_EXTENSION_CLASSES)
+
+
 @pytest.mark.parametrize("name", sorted(public_exceptions()))
 def test_exceptions_pickle(name):
     cls = public_exceptions()[name]

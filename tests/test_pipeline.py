@@ -169,6 +169,8 @@ def test_mobile8_racket_task_hit_is_planned_and_simulated():
         (lambda: ttmanip.plan_hit(GANTRY, "hit"), "hit"),
         (lambda: ttmanip.plan_hit(GANTRY, ttmanip.DEMO_HIT, [0.0] * 5), "state.q"),
         (lambda: ttmanip.plan_hit(GANTRY, ttmanip.DEMO_HIT, profile="fast"), "profile"),
+        (lambda: ttmanip.plan_hit(GANTRY, ttmanip.DEMO_HIT, task="racket6"), "task: expected 'auto'"),
+        (lambda: ttmanip.plan_hits(GANTRY, [ttmanip.DEMO_HIT], task="Pose"), "task: expected 'auto'"),
         (lambda: ttmanip.plan_hit(GANTRY, ttmanip.DEMO_HIT, ready=[0.0]), "ready"),
         (
             lambda: (

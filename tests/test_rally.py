@@ -146,3 +146,20 @@ def test_the_summary_statistics_are_the_cores_over_every_chunk():
         _ttmanip.ball_rally_stats([True], [], ["in_reach"], ["ok"], *[np.zeros(1)] * 6)
     with pytest.raises(ttmanip.TtmanipError, match="unknown verdict"):
         _ttmanip.ball_rally_stats([True], [True], ["far"], ["ok"], *[np.zeros(1)] * 6)
+
+
+def test_the_summary_states_the_cores_in_reach_definition():
+    """``in_reach_definition`` is the region's own sentence (``ReachRegion::definition``, written
+    from its grids), the same text the summary printed when it restated the constants."""
+    s = ttmanip.rally(3, seed=0)
+    before = (
+        "a return is possible: after its bounce on the robot's half the true "
+        "flight has a point in the hitting volume where a shot of a fixed grid (drag-free parabola "
+        "to x in {0.4, 0.8, 1.2} m, y in {-0.5, 0, 0.5} m in 0.45 to 1.05 s) with the racket of the "
+        "impact model lands on the opponent's half in the real flight model, a racket pose for it "
+        "(roll 0, +-30, +-60 deg) has IK within the joint position limits, q_dot = J^-1 V is within "
+        "the velocity limits and the joints' minimum time from rest at the ready configuration is "
+        "at most the time left (ttkin::ball::reach); independent of the planner"
+    )
+    assert s["in_reach_definition"] == before
+    assert "in_reach_definition" not in s["results"]

@@ -814,6 +814,9 @@ MAX_RALLY_BALLS: int
 
 # issue 13: ball flight, estimation, prediction, hit planning, rally (ttkin::ball)
 def ball_table() -> dict[str, float]: ...
+def ball_table_check(table: dict[str, float]) -> None: ...
+def ball_on_opponent_half(table: dict[str, float], x: float, y: float) -> bool: ...
+def ball_table_outline(table: dict[str, float]) -> dict[str, list[list[float]]]: ...
 def ball_camera() -> dict[str, float]: ...
 def ball_placement() -> _F:
     """(4, 4) base frame of the rally's robot in the world (table) frame, m."""
@@ -837,7 +840,7 @@ def ball_crossing(
     state: ArrayLike, point: ArrayLike, normal: ArrayLike, t_max: float = 2.0, model: str = "default"
 ) -> dict[str, Any]: ...
 def ball_plan_return(
-    state: ArrayLike, now: float, target: ArrayLike, model: str = "default"
+    robot: Robot, state: ArrayLike, now: float, target: ArrayLike, model: str = "default"
 ) -> dict[str, Any]: ...
 def ball_fit(
     names: list[str],
@@ -852,6 +855,7 @@ def ball_racket_impact(
     """(10,) ball state just after the racket impact (``ttkin::ball::impact::RacketImpact``)."""
 
 def ball_plan_correct(
+    robot: Robot,
     state: ArrayLike,
     now: float,
     target: ArrayLike,

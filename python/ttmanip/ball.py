@@ -15,12 +15,14 @@ z up, y = z × x; metres, m/s, rad/s, seconds. A ball state is the (10,) array
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from . import _ttmanip as _t
+from . import robots
+from ._ttmanip import Robot
 
 __all__ = [
     "BallModel",
@@ -74,13 +76,22 @@ class Table:
     net_overhang: float = _TABLE["net_overhang"]
 
     def __post_init__(self):
-        for name in ("length", "width", "height", "net_height", "net_overhang"):
-            _finite_scalar(getattr(self, name), name, positive=True)
+        _t.ball_table_check(self._core())  # the core's checks (Table::validate)
+
+    def _core(self) -> dict[str, float]:
+        """The fields as the core's ``Table`` reads them (floats, m)."""
+        return {f.name: _finite_scalar(getattr(self, f.name), f.name) for f in fields(self)}
 
     def on_opponent_half(self, x: float, y: float) -> bool:
-        """Whether (x, y) (m, world) lies on the opponent's half of the surface."""
-        x, y = _finite_scalar(x, "x"), _finite_scalar(y, "y")
-        return 0.0 < x <= self.length / 2 and abs(y) <= self.width / 2
+        """Whether (x, y) (m, world) lies on the opponent's half of the surface (the core's
+        ``Table::on_opponent_half``)."""
+        return _t.ball_on_opponent_half(self._core(), _finite_scalar(x, "x"), _finite_scalar(y, "y"))
+
+    def outline(self) -> dict[str, NDArray[np.float64]]:
+        """The outline to draw (m, world; the core's ``Table::outline``): ``surface`` and ``net``
+        (5, 3) closed loops (the net in the plane x = 0, overhang included) and ``centre_line``
+        (2, 3)."""
+        return {k: np.asarray(v, float) for k, v in _t.ball_table_outline(self._core()).items()}
 
 
 def _finite_scalar(v, what: str, positive: bool = False) -> float:
@@ -128,6 +139,11 @@ class Estimate:
 
 def _model(model: BallModel | str) -> str:
     return model.name if isinstance(model, BallModel) else BallModel(model).name
+
+
+def _robot(robot: Robot | None) -> Robot:
+    """The robot the ball planner plans for: ``robot``, or gantry6 when None."""
+    return robots.gantry6() if robot is None else robot
 
 
 def state(p: ArrayLike, v: ArrayLike, w: ArrayLike = (0.0, 0.0, 0.0), t: float = 0.0) -> NDArray[np.float64]:
@@ -198,17 +214,23 @@ def crossing(
 
 
 def plan_return(
-    state: ArrayLike, now: float, target: ArrayLike = (0.9, 0.0), model: BallModel | str = "default"
+    state: ArrayLike,
+    now: float,
+    target: ArrayLike = (0.9, 0.0),
+    model: BallModel | str = "default",
+    robot: Robot | None = None,
 ):
-    """Plans gantry6's return of the ball ``state`` for a stroke starting at rest at time ``now`` (s).
+    """Plans ``robot``'s return (default gantry6) of the ball ``state`` for a stroke starting at
+    rest at time ``now`` (s).
 
-    Returns a dict with ``status`` ("ok", "no_bounce", "out_of_reach", "no_return", "infeasible")
+    The robot needs analytic IK and must reach the ready racket pose from the rally's placement
+    (``ttkin::ball::hitplan::ReturnPlanner::new``); another robot raises ``ModelError``. Returns a dict with ``status`` ("ok", "no_bounce", "out_of_reach", "no_return", "infeasible")
     and, when ok, ``hit`` (a ``ttmanip.Hit`` when the pipeline module provides it, else the dict
     with ``pose`` (4×4, racket frame in the base frame), ``twist`` (6,), ``t_hit`` (s from now)),
     ``q_hit``, ``qd_hit``, ``v_out``, ``normal``, ``racket_velocity``, ``margin``, ``landing``.
     A target off the opponent's half raises ``TtmanipError``.
     """
-    d = _t.ball_plan_return(state, float(now), target, _model(model))
+    d = _t.ball_plan_return(_robot(robot), state, float(now), target, _model(model))
     if d["status"] == "ok":
         from . import pipeline
 
@@ -261,9 +283,10 @@ def plan_correct(
     t_c: float,
     after_bounce: bool,
     model: BallModel | str = "default",
+    robot: Robot | None = None,
 ) -> dict:
-    """The correction of a planned hit, as the rally makes it after the bounce: gantry6's return
-    of ``state`` planned for a stroke from rest at ``now`` (s) landing at ``target`` (x, y, m),
+    """The correction of a planned hit, as the rally makes it after the bounce: ``robot``'s
+    (default gantry6, as :func:`plan_return`) return of ``state`` planned for a stroke from rest at ``now`` (s) landing at ``target`` (x, y, m),
     then, that stroke under way, planned again at ``t_c`` (s) for the ball ``state_new`` (e.g.
     :func:`update`'s state; ``after_bounce`` when past its bounce) near the first hit
     (``ReturnPlanner::plan_near`` from the stroke's joint state at ``t_c``). Returns ``first`` and
@@ -272,4 +295,6 @@ def plan_correct(
         raise _t.TtmanipError(f"after_bounce: must be True or False, got {after_bounce!r}")
     now = _finite_scalar(now, "now")
     t_c = _finite_scalar(t_c, "t_c")
-    return _t.ball_plan_correct(state, now, target, state_new, t_c, bool(after_bounce), _model(model))
+    return _t.ball_plan_correct(
+        _robot(robot), state, now, target, state_new, t_c, bool(after_bounce), _model(model)
+    )

@@ -15,6 +15,7 @@ The controller's clock is related to this host's by the smallest delay of its te
 from __future__ import annotations
 
 import json
+import os
 import shutil
 import socket
 import subprocess
@@ -28,7 +29,7 @@ from . import TtmanipError
 from . import _ttmanip as _t
 from .ctl import Link
 
-__all__ = ["HilError", "play", "run"]
+__all__ = ["HilError", "find_ttctl", "play", "run"]
 
 
 class HilError(TtmanipError):
@@ -147,22 +148,71 @@ def play(
     return rec
 
 
-_REPO = Path(__file__).resolve().parents[2]
+def _checkout(start: Path) -> Path | None:
+    """The ttmanip checkout holding ``start`` (its root: the workspace with ``crates/ttcan``), if any."""
+    for d in (start, *start.parents):
+        if (d / "crates" / "ttcan" / "Cargo.toml").is_file() and (d / "Cargo.toml").is_file():
+            return d
+    return None
+
+
+def _checkouts() -> list[Path]:
+    """The checkouts to look in: the working directory's, then the one this package was loaded
+    from (a source or editable install; an installed wheel lives in site-packages, in none)."""
+    out: list[Path] = []
+    for start in (Path.cwd().resolve(), Path(__file__).resolve().parent):
+        root = _checkout(start)
+        if root is not None and root not in out:
+            out.append(root)
+    return out
+
+
+def find_ttctl(binary: str | None = None) -> str:
+    """The ``ttctl`` binary: ``binary`` when given, else ``ttctl`` on ``PATH``, else the release
+    build of the checkout the working directory is in (``cargo build --release -p ttcan``:
+    ``$CARGO_TARGET_DIR/release/ttctl`` or ``target/release/ttctl``), else of the checkout this
+    package was loaded from. Raises :class:`HilError` saying what to build or give."""
+    if binary is not None:
+        exe = Path(binary)
+        if not exe.is_file():
+            raise HilError(f"--ttctl {binary}: no such file (build it with cargo build --release -p ttcan)")
+        return str(exe)
+    on_path = shutil.which("ttctl")
+    if on_path is not None:
+        return on_path
+    roots = _checkouts()
+    target = os.environ.get("CARGO_TARGET_DIR")
+    for root in roots:
+        for t in ([Path(target) if Path(target).is_absolute() else root / target] if target else []) + [
+            root / "target"
+        ]:
+            exe = t / "release" / "ttctl"
+            if exe.is_file():
+                return str(exe)
+    if roots:
+        raise HilError(
+            f"ttctl not built in the checkout {roots[0]}: run `cargo build --release -p ttcan` there "
+            "(or give --ttctl PATH)"
+        )
+    raise HilError(
+        "ttctl not found: it is not on PATH and the working directory is not in a ttmanip checkout "
+        "(the wheel does not ship ttctl); build it in a checkout with `cargo build --release -p ttcan` "
+        "and give --ttctl PATH/TO/target/release/ttctl, or run ttmanip hil from the checkout"
+    )
 
 
 def _ttctl_command(
     binary: str | None, config: str | None, port: int, reply: int, stats: Path, max_seconds: float
 ) -> list[str]:
-    exe = binary or shutil.which("ttctl")
-    if exe is None:
-        local = _REPO / "target" / "release" / "ttctl"
-        exe = str(local) if local.exists() else None
-    if exe is None:
-        raise HilError("ttctl not found: build it (cargo build --release -p ttcan) or give --ttctl PATH")
+    exe = find_ttctl(binary)
     # The default configuration of the checkout: from the working directory (the package may be
-    # installed from the wheel, away from the repository), else next to the package's source.
+    # installed from the wheel, away from the repository), else in the checkouts found above.
     default = Path("tests") / "online" / "gantry6_hil.toml"
-    cfg = config or str(default if default.exists() else _REPO / default)
+    if config is not None:
+        cfg = config
+    else:
+        found = [r / default for r in _checkouts() if (r / default).exists()]
+        cfg = str(default if default.exists() else (found[0] if found else default))
     if not Path(cfg).exists():
         raise HilError(f"ttctl configuration {cfg} not found: give --config PATH")
     return [

@@ -21,7 +21,11 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, help="the rally's random seed (default 0)")
     p.add_argument("--out", default="out/hil", help="output folder (default: out/hil)")
     p.add_argument("--connect", metavar="HOST:PORT", help="a running ttctl's ball-mode address")
-    p.add_argument("--ttctl", metavar="PATH", help="the ttctl binary (default: on PATH or target/release)")
+    p.add_argument(
+        "--ttctl",
+        metavar="PATH",
+        help="the ttctl binary (default: on PATH, else target/release/ttctl of the checkout)",
+    )
     p.add_argument(
         "--config", metavar="PATH", help="ttctl configuration (default: tests/online/gantry6_hil.toml)"
     )

@@ -115,32 +115,30 @@ def joint_figure(
     return path
 
 
-def _draw_table(ax) -> None:
+def _table_outline() -> dict[str, np.ndarray]:
+    """The core's table outline (``Table::outline``: surface, centre line, net; m) moved from the
+    world frame into the figures' frame by :data:`TABLE_PLACEMENT`: world x (toward the opponent)
+    along −y from the near end line's centre, world y along +x, the surface at ``surface_z``."""
     x0, y0 = TABLE_PLACEMENT["near_end_centre"]
     z = TABLE_PLACEMENT["surface_z"]
-    w, length, net = TABLE["width"], TABLE["length"], TABLE["net"]
-    xs = [x0 - w / 2, x0 + w / 2, x0 + w / 2, x0 - w / 2, x0 - w / 2]
-    ys = [y0, y0, y0 - length, y0 - length, y0]
-    ax.plot(xs, ys, [z] * 5, color="darkgreen", lw=1.5, label="table")
-    ax.plot([x0, x0], [y0, y0 - length], [z, z], color="white", lw=0.8)
-    yn, o = y0 - length / 2, _T.net_overhang
-    ax.plot(
-        [x0 - w / 2 - o, x0 + w / 2 + o, x0 + w / 2 + o, x0 - w / 2 - o, x0 - w / 2 - o],
-        [yn] * 5,
-        [z, z, z + net, z + net, z],
-        color="gray",
-        lw=1.2,
-        label="net",
-    )
+    world = _T.outline()
+    near = world["surface"][:, 0].min()  # the near end line's x (world)
+    return {k: np.column_stack([x0 + p[:, 1], y0 - (p[:, 0] - near), z + p[:, 2]]) for k, p in world.items()}
+
+
+def _draw_table(ax) -> None:
+    o = _table_outline()
+    ax.plot(*o["surface"].T, color="darkgreen", lw=1.5, label="table")
+    ax.plot(*o["centre_line"].T, color="white", lw=0.8)
+    ax.plot(*o["net"].T, color="gray", lw=1.2, label="net")
 
 
 def _frame(ax, points: np.ndarray) -> None:
     """Axis limits spanning ``points`` and the near half of the table up to the net, equal scale."""
-    x0, y0 = TABLE_PLACEMENT["near_end_centre"]
-    z = TABLE_PLACEMENT["surface_z"]
-    w, half = TABLE["width"], TABLE["length"] / 2
-    table = np.array([[x0 - w / 2, y0 - half - 0.05, z], [x0 + w / 2, y0, z + TABLE["net"]]])
-    allp = np.vstack([points, table])
+    o = _table_outline()
+    y_net = o["net"][0, 1]
+    near_half = o["surface"][o["surface"][:, 1] >= y_net]
+    allp = np.vstack([points, near_half, o["net"]])
     lo, hi = allp.min(axis=0) - 0.05, allp.max(axis=0) + 0.05
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])

@@ -158,7 +158,7 @@ def rally(
     res = {
         k: np.concatenate([np.asarray(p[k]) for p in parts])
         for k in parts[0]
-        if k not in ("paths", "reach_names")
+        if k not in ("paths", "reach_names", "in_reach_definition")
     }
     # The extension gives the paths' serde form (lists of points); here as (K, 3) arrays.
     res["paths"] = [
@@ -193,13 +193,8 @@ def rally(
         "returned_out_of_reach": stats["returned_out_of_reach"],
         # every verdict of the region, counted (0 when none): the reasons a ball is out of reach
         "reach": dict(stats["reach"]),
-        "in_reach_definition": "a return is possible: after its bounce on the robot's half the true "
-        "flight has a point in the hitting volume where a shot of a fixed grid (drag-free parabola "
-        "to x in {0.4, 0.8, 1.2} m, y in {-0.5, 0, 0.5} m in 0.45 to 1.05 s) with the racket of the "
-        "impact model lands on the opponent's half in the real flight model, a racket pose for it "
-        "(roll 0, +-30, +-60 deg) has IK within the joint position limits, q_dot = J^-1 V is within "
-        "the velocity limits and the joints' minimum time from rest at the ready configuration is "
-        "at most the time left (ttkin::ball::reach); independent of the planner",
+        # the region's own sentence, written from its grids (ttkin::ball::reach::ReachRegion::definition)
+        "in_reach_definition": parts[0]["in_reach_definition"],
         "racket_error_m_median": stats["racket_error_m_median"],
         "plan_time_us_median": stats["plan_time_us_median"],  # thread CPU time
         "plan_wall_time_us_median": stats["plan_wall_time_us_median"],
@@ -285,14 +280,12 @@ def _drive_check(res: dict, in_reach: np.ndarray, count: int) -> dict:
 
 
 def _table(ax) -> None:
-    from matplotlib.patches import Rectangle
-
+    """The table from above: its outline and the net (the core's ``Table::outline``)."""
     from .ball import Table
 
-    t = Table()
-    ax.add_patch(Rectangle((-t.length / 2, -t.width / 2), t.length, t.width, fill=False))
-    net = t.width / 2 + t.net_overhang
-    ax.plot([0, 0], [-net, net], "k-", lw=2)
+    o = Table().outline()
+    ax.plot(o["surface"][:, 0], o["surface"][:, 1], "k-", lw=1)
+    ax.plot(o["net"][:, 0], o["net"][:, 1], "k-", lw=2)
 
 
 def _figures(res: dict, in_reach: np.ndarray, returned: np.ndarray, target, out: Path) -> list[str]:
@@ -300,6 +293,7 @@ def _figures(res: dict, in_reach: np.ndarray, returned: np.ndarray, target, out:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
     from . import robots
     from .ball import Table
@@ -324,12 +318,9 @@ def _figures(res: dict, in_reach: np.ndarray, returned: np.ndarray, target, out:
 
     fig = plt.figure(figsize=(9, 6), constrained_layout=True)
     ax = fig.add_subplot(projection="3d")
-    table = Table()
-    half_l, half_w = table.length / 2, table.width / 2
-    xs, ys = np.meshgrid([-half_l, half_l], [-half_w, half_w])
-    ax.plot_surface(xs, ys, np.zeros_like(xs), alpha=0.15, color="C2")
-    net = half_w + table.net_overhang
-    ax.plot([0, 0], [-net, net], [table.net_height, table.net_height], "k-")
+    outline = Table().outline()
+    ax.add_collection3d(Poly3DCollection([outline["surface"][:4]], alpha=0.15, color="C2"))
+    ax.plot(*outline["net"].T, "k-")
     # the gantry's travel: its d1 × d2 position limits along the prismatic axes (the Jacobian's
     # first two columns, base frame) from the base origin, placed in the world frame
     gantry = robots.gantry6()

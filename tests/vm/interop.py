@@ -27,8 +27,19 @@ import canopen_scenarios as sc  # noqa: E402
 
 def python_master(iface: str, bindir: Path) -> str:
     drive = subprocess.Popen(
-        [str(bindir / "ttdrive-sim"), "--channel", f"{iface}:5", "--period", "0.004",
-         "--sync-timeout-ms", "1000", "--idle-exit", "3", "--duration", "200"],
+        [
+            str(bindir / "ttdrive-sim"),
+            "--channel",
+            f"{iface}:5",
+            "--period",
+            "0.004",
+            "--sync-timeout-ms",
+            "1000",
+            "--idle-exit",
+            "3",
+            "--duration",
+            "200",
+        ],
         stdout=subprocess.PIPE,
         stderr=subprocess.STDOUT,
         text=True,
@@ -44,8 +55,10 @@ def python_master(iface: str, bindir: Path) -> str:
     print(out)
     assert "node 5: state SwitchOnDisabled" in out, out
     error = abs(r["position"] - r["target"])
-    return (f"segmented SDO both ways, abort codes, CiA 402 by SDO, PDOs remapped, CSP: final error "
-            f"{error} increments, worst {r['worst']}, quick stop to Switch On Disabled")
+    return (
+        f"segmented SDO both ways, abort codes, CiA 402 by SDO, PDOs remapped, CSP: final error "
+        f"{error} increments, worst {r['worst']}, quick stop to Switch On Disabled"
+    )
 
 
 def ttctl_master(iface: str, bindir: Path) -> str:
@@ -67,8 +80,10 @@ def ttctl_master(iface: str, bindir: Path) -> str:
             result = dict(line.split("=", 1) for line in stats.read_text().split())
     finally:
         net.disconnect()
-    return (f"vendor EDS: identity checked, 0x1008 uploaded, string downloaded, PDOs remapped; motion "
-            f"completed, {drive.syncs} SYNCs, max tracking error {result['max_tracking_error']}")
+    return (
+        f"vendor EDS: identity checked, 0x1008 uploaded, string downloaded, PDOs remapped; motion "
+        f"completed, {drive.syncs} SYNCs, max tracking error {result['max_tracking_error']}"
+    )
 
 
 def online_hit(ifaces: str, bindir: Path) -> str:
@@ -83,36 +98,80 @@ def online_hit(ifaces: str, bindir: Path) -> str:
     from ttmanip.ctl import Link
 
     names = ifaces.split(",")
-    lines = ['robot = "gantry6"', "joints = 6", "cycle_hz = 250", 'mode = "csp"', "",
-             "[watchdog]", "feedback_cycles = 100", "heartbeat_cycles = 1000", "sdo_cycles = 1000", "",
-             "[online]", "silence_s = 30.0", "latency_budget_s = 0.5", "splice_lead_s = 0.1",
-             "telemetry_decimation = 5", ""]
+    lines = [
+        'robot = "gantry6"',
+        "joints = 6",
+        "cycle_hz = 250",
+        'mode = "csp"',
+        "",
+        "[watchdog]",
+        "feedback_cycles = 100",
+        "heartbeat_cycles = 1000",
+        "sdo_cycles = 1000",
+        "",
+        "[online]",
+        "silence_s = 30.0",
+        "latency_budget_s = 0.5",
+        "splice_lead_s = 0.1",
+        "telemetry_decimation = 5",
+        "",
+    ]
     for c, name in enumerate(names):
         lines += ["[[channel]]", f'interface = "{name}"']
         for a in range(2):
             lines += ["[[channel.axis]]", f"node = {a + 1}", f"joint = {2 * c + a}"]
             lines += ["following_error_limit = 0.25"]
     drives = subprocess.Popen(
-        [str(bindir / "ttdrive-sim"), *sum((["--channel", f"{n}:1,2"] for n in names), []),
-         "--period", "0.004", "--sync-timeout-ms", "1000", "--idle-exit", "3", "--duration", "200"],
-        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+        [
+            str(bindir / "ttdrive-sim"),
+            *sum((["--channel", f"{n}:1,2"] for n in names), []),
+            "--period",
+            "0.004",
+            "--sync-timeout-ms",
+            "1000",
+            "--idle-exit",
+            "3",
+            "--duration",
+            "200",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
     )
     time.sleep(0.5)
     with tempfile.TemporaryDirectory() as d, Link(("127.0.0.1", 5005), bind=("127.0.0.1", 5006)) as link:
         cfg, stats = Path(d) / "online.toml", Path(d) / "stats.txt"
         cfg.write_text("\n".join(lines) + "\n")
         ctl = subprocess.Popen(
-            [str(bindir / "ttctl"), "-c", str(cfg), "--online", "hit", "--listen", "127.0.0.1:5005",
-             "--reply", "127.0.0.1:5006", "--max-seconds", "120", "--stats", str(stats)],
-            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+            [
+                str(bindir / "ttctl"),
+                "-c",
+                str(cfg),
+                "--online",
+                "hit",
+                "--listen",
+                "127.0.0.1:5005",
+                "--reply",
+                "127.0.0.1:5006",
+                "--max-seconds",
+                "120",
+                "--stats",
+                str(stats),
+            ],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
         )
         try:
             ready = ttmanip.Robot.builtin("gantry6").ready
             until, at_ready = time.monotonic() + 90, False
             while time.monotonic() < until and not at_ready:
                 m = link.receive(timeout=0.5)
-                at_ready = bool(m) and m.get("kind") == "telemetry" and all(
-                    abs(a - b) < 5e-3 for a, b in zip(m["q"][:6], ready, strict=True))
+                at_ready = (
+                    bool(m)
+                    and m.get("kind") == "telemetry"
+                    and all(abs(a - b) < 5e-3 for a, b in zip(m["q"][:6], ready, strict=True))
+                )
             if not at_ready:
                 raise RuntimeError("the robot did not reach the ready pose")
             s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
@@ -138,10 +197,12 @@ def online_hit(ifaces: str, bindir: Path) -> str:
         kv = dict(line.split("=", 1) for line in stats.read_text().split())
         if kv["online_truncated"] != "1" or kv["online_status_accepted"] != "1" or kv["fault"] != "none":
             raise RuntimeError(f"stats {kv}")
-    return (f"hit accepted (planning {status['planning_time'] * 1e3:.1f} ms) and executed on "
-            f"{len(names)} vcans at 250 Hz, truncated datagram counted, "
-            f"latency p99 quiet {kv['latency_p99_us_quiet']} us / "
-            f"planning {kv['latency_p99_us_planning']} us, deadline misses {kv['deadline_misses']}")
+    return (
+        f"hit accepted (planning {status['planning_time'] * 1e3:.1f} ms) and executed on "
+        f"{len(names)} vcans at 250 Hz, truncated datagram counted, "
+        f"latency p99 quiet {kv['latency_p99_us_quiet']} us / "
+        f"planning {kv['latency_p99_us_planning']} us, deadline misses {kv['deadline_misses']}"
+    )
 
 
 if __name__ == "__main__":

@@ -17,6 +17,8 @@ use ttkin::ball::reach::Placement;
 use crate::args;
 use crate::convert::{pose_to_numpy, rows_array, serde_to_python, str_refs, to_numpy, vector};
 use crate::errors::{PyResultExt, TtmanipError};
+use crate::robot::PyRobot;
+use ttkin::Chain;
 
 fn flight(model: &str) -> PyResult<Flight> {
     Ok(Flight::new(BallModel::by_name(model).py()?))
@@ -164,13 +166,15 @@ fn vec3(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<[f64; 3]> {
     Ok([v[0], v[1], v[2]])
 }
 
-/// Plans gantry6's return of the ball `state` for a stroke starting at time `now` (s), landing at
-/// `target` (x, y, m, world).
+/// Plans `robot`'s return of the ball `state` for a stroke starting at time `now` (s), landing at
+/// `target` (x, y, m, world) (`ttkin::ball::hitplan::ReturnPlanner::new`: a robot with analytic IK
+/// that reaches the ready pose at the rally's placement, else `ModelError`).
 #[ttkin_py_guard::guarded]
 #[pyfunction]
-#[pyo3(signature = (state, now, target, model = "default"))]
+#[pyo3(signature = (robot, state, now, target, model = "default"))]
 fn ball_plan_return<'py>(
     py: Python<'py>,
+    robot: &PyRobot,
     state: &Bound<'py, PyAny>,
     now: f64,
     target: &Bound<'py, PyAny>,
@@ -178,7 +182,7 @@ fn ball_plan_return<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let s = state_arg(state, "state")?;
     let tg = vector(target, "target", 2)?;
-    let planner = ReturnPlanner::new(ttkin::robots::gantry6(), flight(model)?).py()?;
+    let planner = ReturnPlanner::new(Chain::clone(&robot.chain), flight(model)?).py()?;
     let plan = py.detach(|| planner.plan(&s, now, [tg[0], tg[1]])).py()?;
     let d = PyDict::new(py);
     d.set_item("status", plan.status.name())?;
@@ -208,17 +212,18 @@ fn hit_items<'py>(py: Python<'py>, d: &Bound<'py, PyDict>, h: &ReturnHit) -> PyR
     Ok(())
 }
 
-/// The correction of a planned hit (`ttkin::ball::rally::correct_hit`, `plan_near`): gantry6's
+/// The correction of a planned hit (`ttkin::ball::rally::correct_hit`, `plan_near`): `robot`'s
 /// return of the ball `state` planned for a stroke from rest at `now` (s) landing at `target`,
 /// then, with that stroke under way, planned again at `t_c` (s) for the ball `state_new` (e.g.
 /// `ball.update`'s state; `after_bounce` when past its bounce) near the first hit. Returns
 /// `first` and `corrected` (the plan dicts of `ball_plan_return`).
 #[ttkin_py_guard::guarded]
 #[pyfunction]
-#[pyo3(signature = (state, now, target, state_new, t_c, after_bounce, model = "default"))]
+#[pyo3(signature = (robot, state, now, target, state_new, t_c, after_bounce, model = "default"))]
 #[allow(clippy::too_many_arguments)]
 fn ball_plan_correct<'py>(
     py: Python<'py>,
+    robot: &PyRobot,
     state: &Bound<'py, PyAny>,
     now: f64,
     target: &Bound<'py, PyAny>,
@@ -232,7 +237,7 @@ fn ball_plan_correct<'py>(
     s.validate("state").py()?;
     s_new.validate("state_new").py()?;
     let tg = vector(target, "target", 2)?;
-    let planner = ReturnPlanner::new(ttkin::robots::gantry6(), flight(model)?).py()?;
+    let planner = ReturnPlanner::new(Chain::clone(&robot.chain), flight(model)?).py()?;
     let first = py.detach(|| planner.plan(&s, now, [tg[0], tg[1]])).py()?;
     let d = PyDict::new(py);
     let fd = PyDict::new(py);
@@ -320,6 +325,7 @@ fn ball_rally<'py>(
     d.set_item("velocity_error", to_numpy(py, &[o.n], &o.velocity_error))?;
     d.set_item("landing", to_numpy(py, &[o.n, 3], &o.landing))?;
     d.set_item("paths", serde_to_python(py, &o.paths)?)?;
+    d.set_item("in_reach_definition", rally.region.definition())?;
     Ok(d)
 }
 
@@ -448,6 +454,39 @@ fn ball_table(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
     serde_to_python(py, &Table::default())
 }
 
+/// The table of the serde form `table` (a dict of `ttkin::ball::model::Table`'s fields, m; those
+/// left out are the default table's), checked (`Table::validate`).
+fn table_arg(table: &Bound<'_, PyAny>) -> PyResult<Table> {
+    let t: Table = serde_path_to_error::deserialize(&mut pythonize::Depythonizer::from_object(table))
+        .map_err(|e| TtmanipError::new_err(format!("table: {e}")))?;
+    t.validate().py()?;
+    Ok(t)
+}
+
+/// Checks the table `table` (a dict of `Table`'s fields, m) as the core does (`Table::validate`).
+#[ttkin_py_guard::guarded]
+#[pyfunction]
+fn ball_table_check(table: &Bound<'_, PyAny>) -> PyResult<()> {
+    table_arg(table).map(|_| ())
+}
+
+/// Whether (`x`, `y`) (m, world) lies on the opponent's half of `table`'s surface
+/// (`ttkin::ball::model::Table::on_opponent_half`).
+#[ttkin_py_guard::guarded]
+#[pyfunction]
+fn ball_on_opponent_half(table: &Bound<'_, PyAny>, x: f64, y: f64) -> PyResult<bool> {
+    let (x, y) = (args::finite("x", x)?, args::finite("y", y)?);
+    Ok(table_arg(table)?.on_opponent_half(x, y))
+}
+
+/// The outline of `table` to draw (`ttkin::ball::model::Table::outline`): "surface" and "net"
+/// (closed loops, 5 points) and "centre_line" (2 points), m, world frame.
+#[ttkin_py_guard::guarded]
+#[pyfunction]
+fn ball_table_outline<'py>(py: Python<'py>, table: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+    serde_to_python(py, &table_arg(table)?.outline())
+}
+
 /// (4, 4) base frame of the rally's robot in the world (table) frame, m
 /// (`ttkin::ball::reach::Placement::default()`).
 #[ttkin_py_guard::guarded]
@@ -567,6 +606,9 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ball_plan_correct, m)?)?;
     m.add("MAX_RALLY_BALLS", rally::MAX_BALLS)?;
     m.add_function(wrap_pyfunction!(ball_table, m)?)?;
+    m.add_function(wrap_pyfunction!(ball_table_check, m)?)?;
+    m.add_function(wrap_pyfunction!(ball_on_opponent_half, m)?)?;
+    m.add_function(wrap_pyfunction!(ball_table_outline, m)?)?;
     m.add_function(wrap_pyfunction!(ball_camera, m)?)?;
     m.add_function(wrap_pyfunction!(ball_placement, m)?)?;
     m.add_function(wrap_pyfunction!(ball_rally_observations, m)?)?;

@@ -173,36 +173,9 @@ impl PyCartesianTrajectory {
     }
 }
 
+crate::pickle::pickled!(serde PyCartesianTrajectory, _unpickle_cartesian_trajectory, "CartesianTrajectory", |c| c.inner, |_, inner: _| Ok(PyCartesianTrajectory { inner }));
+
 /// Adds `CartesianTrajectory` to the module.
-/// Pickle and copy: the core value in its serde form (issue 31).
-#[ttkin_py_guard::guarded]
-#[pymethods]
-impl PyCartesianTrajectory {
-    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyTuple>> {
-        crate::pickle::reduce(
-            py,
-            "_unpickle_cartesian_trajectory",
-            crate::pickle::to_state(py, &self.inner)?,
-        )
-    }
-}
-
-impl PyCartesianTrajectory {
-    /// The object back from `__reduce__`'s state.
-    pub fn from_state(state: &Bound<'_, PyAny>) -> PyResult<Self> {
-        Ok(PyCartesianTrajectory {
-            inner: crate::pickle::from_state(state, "CartesianTrajectory")?,
-        })
-    }
-}
-
-/// Rebuilds a `CartesianTrajectory` from its pickle state (`CartesianTrajectory.__reduce__`; not meant to be called directly).
-#[ttkin_py_guard::guarded]
-#[pyfunction]
-fn _unpickle_cartesian_trajectory(state: &Bound<'_, PyAny>) -> PyResult<PyCartesianTrajectory> {
-    PyCartesianTrajectory::from_state(state)
-}
-
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_unpickle_cartesian_trajectory, m)?)?;
     m.add_class::<PyCartesianTrajectory>()

@@ -30,11 +30,13 @@ pub struct DriveSim {
 }
 
 impl DriveSim {
-    /// The simulator back from `__reduce__`'s state: rebuilt, then the journal replayed (without
+    /// The simulator back from its pickle state (the robot's chain, the options, the setpoint
+    /// period and the journal of calls, issue 31): rebuilt, then the journal replayed (without
     /// the GIL, interruptible: a journal of 10¹⁵ ticks is Ctrl-C-able work, not a hang).
-    pub fn from_state(py: Python<'_>, state: &Bound<'_, PyAny>) -> PyResult<Self> {
-        let (chain, options, setpoint_period, journal): (ttkin::Chain, CoupledOptions, f64, Journal) =
-            crate::pickle::from_state(state, "DriveSim")?;
+    fn from_state(
+        py: Python<'_>,
+        (chain, options, setpoint_period, journal): (ttkin::Chain, CoupledOptions, f64, Journal),
+    ) -> PyResult<Self> {
         // the constructor's check (a NaN period unpickled and ran)
         let setpoint_period = args::positive("setpoint_period", setpoint_period)?;
         let sim = crate::interrupt::detach_interruptible(py, |cancel| {
@@ -243,12 +245,6 @@ impl DriveSim {
         Ok(d)
     }
 
-    /// Pickle and copy: the robot's chain, the options and the journal of calls (issue 31).
-    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyTuple>> {
-        let state = (&*self.chain, &self.options, self.setpoint_period, &self.journal);
-        crate::pickle::reduce(py, "_unpickle_drive_sim", crate::pickle::to_state(py, &state)?)
-    }
-
     fn __repr__(&self) -> String {
         format!("DriveSim({} axes, {} Hz)", self.sim.dof(), self.sim.tick_rate())
     }
@@ -272,12 +268,7 @@ fn step_metrics(t: &Bound<'_, PyAny>, y: &Bound<'_, PyAny>, target: f64) -> PyRe
     ttcan::sim::step_metrics(t.data(), &y, target).py()
 }
 
-/// Rebuilds a `DriveSim` from its pickle state (`DriveSim.__reduce__`; not meant to be called directly).
-#[ttkin_py_guard::guarded]
-#[pyfunction]
-fn _unpickle_drive_sim(py: Python<'_>, state: &Bound<'_, PyAny>) -> PyResult<DriveSim> {
-    DriveSim::from_state(py, state)
-}
+crate::pickle::pickled!(serde DriveSim, _unpickle_drive_sim, "DriveSim", |s| (&*s.chain, &s.options, s.setpoint_period, &s.journal), |py, state: _| DriveSim::from_state(py, state));
 
 /// Adds `DriveSim`, `drive_theta5_case`, `actuators` and `step_metrics` to the module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

@@ -178,20 +178,10 @@ impl Keywords<'_, '_> {
 
     /// Options from the Python keywords.
     fn options(&self, n: usize) -> PyResult<HitOptions> {
-        let task = match self.task {
-            "auto" => HitTask::Auto,
-            "pose" => HitTask::Pose,
-            "racket5" => HitTask::Racket5,
-            other => {
-                return Err(TtmanipError::new_err(format!(
-                    "task: expected 'auto', 'pose' or 'racket5', got '{other}'"
-                )))
-            }
-        };
         let jerk = self.jerk.map(|j| vector(j, "jerk", n)).transpose()?;
         Ok(HitOptions {
-            profile: StrokeProfile::from_name(self.profile).py()?,
-            task,
+            profile: self.profile.parse::<StrokeProfile>().py()?,
+            task: self.task.parse::<HitTask>().py()?,
             jerk,
             check_effort: self.effort,
             ..Default::default()
@@ -384,34 +374,12 @@ fn racket_mount<'py>(py: Python<'py>, robot: &PyRobot) -> Bound<'py, PyAny> {
     pose_to_numpy(py, &hit::RacketMount::for_chain(&robot.chain).in_tool).into_any()
 }
 
+// Pickle and copy: the planner's chain and options and the plan, in their serde forms (issue 31);
+// the planner is rebuilt from the first two (`HitPlanner::new` is deterministic).
+crate::pickle::pickled!(serde PyHitPlan, _unpickle_hit_plan, "HitPlan", |h| (h.planner.chain(), h.planner.options(), &h.plan),
+    |_, (chain, options, plan): (ttkin::Chain, HitOptions, HitPlan)| Ok(PyHitPlan { plan, planner: Arc::new(HitPlanner::new(&chain, options).py()?) }));
+
 /// Adds `HitPlan` and the hit functions to the module.
-/// Pickle and copy: the planner's chain and options and the plan, in their serde forms (issue 31);
-/// the planner is rebuilt from the first two (`HitPlanner::new` is deterministic).
-#[ttkin_py_guard::guarded]
-#[pymethods]
-impl PyHitPlan {
-    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyTuple>> {
-        let state = (self.planner.chain(), self.planner.options(), &self.plan);
-        crate::pickle::reduce(py, "_unpickle_hit_plan", crate::pickle::to_state(py, &state)?)
-    }
-}
-
-impl PyHitPlan {
-    /// The plan back from `__reduce__`'s state.
-    pub fn from_state(state: &Bound<'_, PyAny>) -> PyResult<Self> {
-        let (chain, options, plan): (ttkin::Chain, HitOptions, HitPlan) = crate::pickle::from_state(state, "HitPlan")?;
-        let planner = Arc::new(HitPlanner::new(&chain, options).py()?);
-        Ok(PyHitPlan { plan, planner })
-    }
-}
-
-/// Rebuilds a `HitPlan` from its pickle state (`HitPlan.__reduce__`; not meant to be called directly).
-#[ttkin_py_guard::guarded]
-#[pyfunction]
-fn _unpickle_hit_plan(state: &Bound<'_, PyAny>) -> PyResult<PyHitPlan> {
-    PyHitPlan::from_state(state)
-}
-
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_unpickle_hit_plan, m)?)?;
     m.add_class::<PyHitPlan>()?;

@@ -292,51 +292,12 @@ fn status_str(py: Python<'_>, status: IkStatus) -> &Bound<'_, pyo3::types::PyStr
     }
 }
 
+crate::pickle::pickled!(python PyIkResult, _unpickle_ik_result, "IkResult",
+    |r, py| [&r.q, &r.success, &r.position_error, &r.orientation_error, &r.iterations, &r.restarts, &r.status].map(|f| f.clone_ref(py)),
+    |_, [q, success, position_error, orientation_error, iterations, restarts, status]: [Py<PyAny>; 7]|
+        Ok(PyIkResult { q, success, position_error, orientation_error, iterations, restarts, status }));
+
 /// Adds `IkResult` to the module (the methods live on `Robot`).
-/// Pickle and copy: the seven fields as they are (Python objects, issue 31).
-#[ttkin_py_guard::guarded]
-#[pymethods]
-impl PyIkResult {
-    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyTuple>> {
-        let fields = [
-            &self.q,
-            &self.success,
-            &self.position_error,
-            &self.orientation_error,
-            &self.iterations,
-            &self.restarts,
-            &self.status,
-        ];
-        let state = pyo3::types::PyTuple::new(py, fields.map(|f| f.bind(py).clone()))?;
-        crate::pickle::reduce(py, "_unpickle_ik_result", state.into_any())
-    }
-}
-
-impl PyIkResult {
-    /// The result back from `__reduce__`'s state.
-    pub fn from_state(state: &Bound<'_, PyAny>) -> PyResult<Self> {
-        let (q, success, position_error, orientation_error, iterations, restarts, status) = state
-            .extract()
-            .map_err(|_| crate::errors::TtmanipError::new_err("unpickle IkResult: expected a tuple of 7 fields"))?;
-        Ok(PyIkResult {
-            q,
-            success,
-            position_error,
-            orientation_error,
-            iterations,
-            restarts,
-            status,
-        })
-    }
-}
-
-/// Rebuilds a `IkResult` from its pickle state (`IkResult.__reduce__`; not meant to be called directly).
-#[ttkin_py_guard::guarded]
-#[pyfunction]
-fn _unpickle_ik_result(state: &Bound<'_, PyAny>) -> PyResult<PyIkResult> {
-    PyIkResult::from_state(state)
-}
-
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_unpickle_ik_result, m)?)?;
     m.add_class::<PyIkResult>()

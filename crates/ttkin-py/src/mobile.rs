@@ -10,7 +10,8 @@ use ttkin::wholebody::WholeBody;
 
 use crate::args;
 use crate::convert::{
-    array_getters, f64_array, finite_to_numpy, to_numpy, transform, value_getters, vector, Any, Array,
+    array_getters, f64_array, filled_without_gil, finite_to_numpy, to_numpy, transform, value_getters, vector, Any,
+    Array,
 };
 use crate::errors::{PyResultExt, ShapeError, TtmanipError};
 use crate::robot::PyRobot;
@@ -165,9 +166,10 @@ fn model(robot: &PyRobot, base: Option<&PyDiffDrive>, mount: Option<&Any<'_>>) -
 #[ttkin_py_guard::guarded]
 #[pymethods]
 impl PyRobot {
-    /// Task Jacobian J_e (m, n) of `task` ("pose", "position", "racket5") at `q`, rows in the task's
-    /// residual coordinates (base axes): the residual against `target` (4×4, default: the current
-    /// pose) changes as ė = −J_e q̇; for the current pose as target, J_e q̇ is the task velocity.
+    /// Task Jacobian J_e (m, n) of `task` ("pose", "position", "racket5") at `q` (n,), or (N, m, n)
+    /// for q of shape (N, n) (in parallel), rows in the task's residual coordinates (base axes):
+    /// the residual against `target` (4×4, default: the current pose) changes as ė = −J_e q̇; for
+    /// the current pose as target, J_e q̇ is the task velocity.
     #[pyo3(signature = (q, task="racket5", target=None))]
     fn task_jacobian<'py>(
         &self,
@@ -177,35 +179,45 @@ impl PyRobot {
         target: Option<&Any<'py>>,
     ) -> PyResult<Array<'py>> {
         let task = Task::from_name(task).py()?;
-        let n = self.chain.dof();
         let target = target.map(|m| transform(m, "target")).transpose()?;
-        let je = task
-            .jacobian_at(&self.chain, &vector(q, "q", n)?, target.as_ref())
-            .py()?;
-        finite_to_numpy(py, &[task.dim(), n], je.transpose().as_slice())
+        let (a, batch) = self.configs(q, "q")?;
+        let (qs, chain, n) = (a.data(), &*self.chain, self.chain.dof());
+        let shape = match batch {
+            None => vec![task.dim(), n],
+            Some(count) => vec![count, task.dim(), n],
+        };
+        filled_without_gil(py, &shape, |o| task.jacobian_batch(chain, qs, target.as_ref(), o))
     }
 
     /// Jacobian (5, n) of seed 000's racket coordinates [centre x, y, z (m), polar, azimuth (rad)]
-    /// at `q` (`ttkin::task::racket_angle_jacobian_at`, racket centre 0.15 m along tool z): their
-    /// rates are ẋ = J q̇ (unlike `task_jacobian`'s residual rows); an error where the face normal
-    /// is along ±z (the azimuth is undefined there).
+    /// at `q` (n,), or (N, 5, n) for q of shape (N, n) (`ttkin::task::racket_angle_jacobian_batch`,
+    /// racket centre 0.15 m along tool z): their rates are ẋ = J q̇ (unlike `task_jacobian`'s
+    /// residual rows); an error where the face normal is along ±z (the azimuth is undefined there).
     fn racket_angle_jacobian<'py>(&self, py: Python<'py>, q: &Any<'py>) -> PyResult<Array<'py>> {
-        let n = self.chain.dof();
-        let j =
-            ttkin::task::racket_angle_jacobian_at(&self.chain, &vector(q, "q", n)?, ttkin::task::SEED_RACKET_OFFSET)
-                .py()?;
-        finite_to_numpy(py, &[5, n], j.transpose().as_slice())
+        let (a, batch) = self.configs(q, "q")?;
+        let (qs, chain, n) = (a.data(), &*self.chain, self.chain.dof());
+        let shape = match batch {
+            None => vec![5, n],
+            Some(count) => vec![count, 5, n],
+        };
+        filled_without_gil(py, &shape, |o| {
+            ttkin::task::racket_angle_jacobian_batch(chain, qs, ttkin::task::SEED_RACKET_OFFSET, o)
+        })
     }
 
-    /// Task coordinates of the tool pose at `q`: position (3,); position and rotation vector (6,);
-    /// or seed 000's racket 5-vector [centre x, y, z (m), polar, azimuth (rad)].
+    /// Task coordinates of the tool pose at `q` (n,): position (3,); position and rotation vector
+    /// (6,); or seed 000's racket 5-vector [centre x, y, z (m), polar, azimuth (rad)]; (N, dim) for
+    /// q of shape (N, n), in parallel.
     #[pyo3(signature = (q, task="racket5"))]
     fn task_coordinates<'py>(&self, py: Python<'py>, q: &Any<'py>, task: &str) -> PyResult<Array<'py>> {
         let task = Task::from_name(task).py()?;
-        let x = task
-            .coordinates_at(&self.chain, &vector(q, "q", self.chain.dof())?)
-            .py()?;
-        finite_to_numpy(py, &[task.dim()], &x)
+        let (a, batch) = self.configs(q, "q")?;
+        let (qs, chain) = (a.data(), &*self.chain);
+        let shape = match batch {
+            None => vec![task.dim()],
+            Some(count) => vec![count, task.dim()],
+        };
+        filled_without_gil(py, &shape, |o| task.coordinates_batch(chain, qs, o))
     }
 }
 
@@ -411,56 +423,10 @@ fn track<'py>(
     Ok(PyTrackResult { r, joint_names })
 }
 
+crate::pickle::pickled!(serde PyDiffDrive, _unpickle_diff_drive, "DiffDrive", |d| d.drive, |_, drive: _| Ok(PyDiffDrive { drive }));
+crate::pickle::pickled!(serde PyTrackResult, _unpickle_track_result, "TrackResult", |t| (&t.r, &t.joint_names), |_, (r, joint_names): _| Ok(PyTrackResult { r, joint_names }));
+
 /// Adds the mobile-manipulation classes and functions to the module.
-/// Pickle and copy: the core values in their serde form (issue 31).
-#[ttkin_py_guard::guarded]
-#[pymethods]
-impl PyDiffDrive {
-    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyTuple>> {
-        crate::pickle::reduce(py, "_unpickle_diff_drive", crate::pickle::to_state(py, &self.drive)?)
-    }
-}
-
-impl PyDiffDrive {
-    /// The drive back from `__reduce__`'s state.
-    pub fn from_state(state: &Bound<'_, PyAny>) -> PyResult<Self> {
-        Ok(PyDiffDrive {
-            drive: crate::pickle::from_state(state, "DiffDrive")?,
-        })
-    }
-}
-
-#[ttkin_py_guard::guarded]
-#[pymethods]
-impl PyTrackResult {
-    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyTuple>> {
-        let state = crate::pickle::to_state(py, &(&self.r, &self.joint_names))?;
-        crate::pickle::reduce(py, "_unpickle_track_result", state)
-    }
-}
-
-impl PyTrackResult {
-    /// The result back from `__reduce__`'s state.
-    pub fn from_state(state: &Bound<'_, PyAny>) -> PyResult<Self> {
-        let (r, joint_names) = crate::pickle::from_state(state, "TrackResult")?;
-        Ok(PyTrackResult { r, joint_names })
-    }
-}
-
-/// Rebuilds a `DiffDrive` from its pickle state (`DiffDrive.__reduce__`; not meant to be called directly).
-#[ttkin_py_guard::guarded]
-#[pyfunction]
-fn _unpickle_diff_drive(state: &Bound<'_, PyAny>) -> PyResult<PyDiffDrive> {
-    PyDiffDrive::from_state(state)
-}
-
-/// Rebuilds a `TrackResult` from its pickle state (`TrackResult.__reduce__`; not meant to be called directly).
-#[ttkin_py_guard::guarded]
-#[pyfunction]
-fn _unpickle_track_result(state: &Bound<'_, PyAny>) -> PyResult<PyTrackResult> {
-    PyTrackResult::from_state(state)
-}
-
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_unpickle_track_result, m)?)?;
     m.add_function(wrap_pyfunction!(_unpickle_diff_drive, m)?)?;

@@ -184,32 +184,9 @@ impl PyServoSim {
     }
 }
 
+crate::pickle::pickled!(serde PyServoSim, _unpickle_servo_sim, "ServoSim", |s| (&s.config, &s.plant), |_, (config, plant): _| Ok(PyServoSim { config, plant }));
+
 /// Adds `ServoSim` to the module.
-/// Pickle and copy: the controller and plant parameters in their serde forms (issue 31).
-#[ttkin_py_guard::guarded]
-#[pymethods]
-impl PyServoSim {
-    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyTuple>> {
-        let state = crate::pickle::to_state(py, &(&self.config, &self.plant))?;
-        crate::pickle::reduce(py, "_unpickle_servo_sim", state)
-    }
-}
-
-impl PyServoSim {
-    /// The simulator back from `__reduce__`'s state.
-    pub fn from_state(state: &Bound<'_, PyAny>) -> PyResult<Self> {
-        let (config, plant) = crate::pickle::from_state(state, "ServoSim")?;
-        Ok(PyServoSim { config, plant })
-    }
-}
-
-/// Rebuilds a `ServoSim` from its pickle state (`ServoSim.__reduce__`; not meant to be called directly).
-#[ttkin_py_guard::guarded]
-#[pyfunction]
-fn _unpickle_servo_sim(state: &Bound<'_, PyAny>) -> PyResult<PyServoSim> {
-    PyServoSim::from_state(state)
-}
-
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_unpickle_servo_sim, m)?)?;
     m.add_class::<PyServoSim>()?;

@@ -89,36 +89,9 @@ impl PyRobot {
     }
 }
 
+crate::pickle::pickled!(serde PyTorqueProfile, _unpickle_torque_profile, "TorqueProfile", |p| p.profile, |_, profile: _| Ok(PyTorqueProfile { profile }));
+
 /// Adds `TorqueProfile` to the module (`Robot.torques` lives on `Robot`).
-/// Pickle and copy: the core value in its serde form (issue 31).
-#[ttkin_py_guard::guarded]
-#[pymethods]
-impl PyTorqueProfile {
-    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyTuple>> {
-        crate::pickle::reduce(
-            py,
-            "_unpickle_torque_profile",
-            crate::pickle::to_state(py, &self.profile)?,
-        )
-    }
-}
-
-impl PyTorqueProfile {
-    /// The object back from `__reduce__`'s state.
-    pub fn from_state(state: &Bound<'_, PyAny>) -> PyResult<Self> {
-        Ok(PyTorqueProfile {
-            profile: crate::pickle::from_state(state, "TorqueProfile")?,
-        })
-    }
-}
-
-/// Rebuilds a `TorqueProfile` from its pickle state (`TorqueProfile.__reduce__`; not meant to be called directly).
-#[ttkin_py_guard::guarded]
-#[pyfunction]
-fn _unpickle_torque_profile(state: &Bound<'_, PyAny>) -> PyResult<PyTorqueProfile> {
-    PyTorqueProfile::from_state(state)
-}
-
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_unpickle_torque_profile, m)?)?;
     m.add_class::<PyTorqueProfile>()

@@ -315,30 +315,9 @@ value_getters!(PyRobot, |r| {
     joint_types: Vec<&'static str> => r.chain.joint_type_names();
 });
 
+crate::pickle::pickled!(serde PyRobot, _unpickle_robot, "Robot", |r| *r.chain, |_, chain: Chain| Ok(PyRobot::new(chain)));
+
 /// Adds `Robot` to the module.
-/// Pickle and copy: the chain in its serde form (issue 31).
-#[ttkin_py_guard::guarded]
-#[pymethods]
-impl PyRobot {
-    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyTuple>> {
-        crate::pickle::reduce(py, "_unpickle_robot", crate::pickle::to_state(py, &*self.chain)?)
-    }
-}
-
-impl PyRobot {
-    /// The robot back from `__reduce__`'s state.
-    pub fn from_state(state: &Any<'_>) -> PyResult<Self> {
-        Ok(PyRobot::new(crate::pickle::from_state(state, "Robot")?))
-    }
-}
-
-/// Rebuilds a `Robot` from its pickle state (`Robot.__reduce__`; not meant to be called directly).
-#[ttkin_py_guard::guarded]
-#[pyfunction]
-fn _unpickle_robot(state: &Bound<'_, PyAny>) -> PyResult<PyRobot> {
-    PyRobot::from_state(state)
-}
-
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_unpickle_robot, m)?)?;
     m.add_class::<PyRobot>()?;

@@ -417,36 +417,9 @@ fn traj_stroke<'py>(
         .into_any())
 }
 
+crate::pickle::pickled!(serde PyJointTrajectory, _unpickle_joint_trajectory, "JointTrajectory", |j| j.inner, |_, inner: _| Ok(PyJointTrajectory { inner }));
+
 /// Adds the trajectory classes and functions to the module.
-/// Pickle and copy: the core value in its serde form (issue 31).
-#[ttkin_py_guard::guarded]
-#[pymethods]
-impl PyJointTrajectory {
-    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyTuple>> {
-        crate::pickle::reduce(
-            py,
-            "_unpickle_joint_trajectory",
-            crate::pickle::to_state(py, &self.inner)?,
-        )
-    }
-}
-
-impl PyJointTrajectory {
-    /// The object back from `__reduce__`'s state.
-    pub fn from_state(state: &Bound<'_, PyAny>) -> PyResult<Self> {
-        Ok(PyJointTrajectory {
-            inner: crate::pickle::from_state(state, "JointTrajectory")?,
-        })
-    }
-}
-
-/// Rebuilds a `JointTrajectory` from its pickle state (`JointTrajectory.__reduce__`; not meant to be called directly).
-#[ttkin_py_guard::guarded]
-#[pyfunction]
-fn _unpickle_joint_trajectory(state: &Bound<'_, PyAny>) -> PyResult<PyJointTrajectory> {
-    PyJointTrajectory::from_state(state)
-}
-
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_unpickle_joint_trajectory, m)?)?;
     m.add_class::<PyJointTrajectory>()?;

@@ -163,9 +163,19 @@ fn main() {
     let cfg = RallyConfig {
         correction_delay: std::env::var("CORRECT").map_or(cfg.correction_delay, |r| r.parse().expect("CORRECT (s)")),
         // WORLD=mismatch: every ball in a world of its own (`ttmanip rally --world mismatch`).
-        world: std::env::var("WORLD")
-            .is_ok_and(|w| w == "mismatch")
-            .then(WorldSpread::measured),
+        world: std::env::var("WORLD").is_ok_and(|w| w == "mismatch").then(|| {
+            // Parts of the mismatch alone: SPREAD_KD, SPREAD_KM, SPREAD_E, SPREAD_MU, JITTER (s)
+            // override the measured spreads.
+            let m = WorldSpread::measured();
+            let get = |k: &str, d: f64| std::env::var(k).map_or(d, |v| v.parse().expect(k));
+            WorldSpread {
+                k_drag: get("SPREAD_KD", m.k_drag),
+                k_magnus: get("SPREAD_KM", m.k_magnus),
+                restitution: get("SPREAD_E", m.restitution),
+                friction: get("SPREAD_MU", m.friction),
+                latency_jitter: get("JITTER", m.latency_jitter),
+            }
+        }),
         ..cfg
     };
     let region = ReachRegion::new(pl.chain(), pl.placement, pl.ready.clone(), truth.model.radius).expect("region");
@@ -252,6 +262,28 @@ fn main() {
         corr.get(corr.len() / 2).copied().unwrap_or(f64::NAN),
         total.get(total.len() / 2).copied().unwrap_or(f64::NAN)
     );
+    // The tail the controller's decision latency sees (issue 26): the first plans that found a hit
+    // and the corrections, thread CPU time.
+    let tail = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        let q = |p: f64| v.get(((v.len() as f64 * p) as usize).min(v.len().saturating_sub(1))).copied();
+        let q = |p: f64| q(p).unwrap_or(f64::NAN);
+        format!(
+            "n {} p50 {:.0} p90 {:.0} p99 {:.0} max {:.0} us",
+            v.len(),
+            q(0.5),
+            q(0.9),
+            q(0.99),
+            v.last().copied().unwrap_or(f64::NAN)
+        )
+    };
+    let mut hit_plans: Vec<f64> = out
+        .iter()
+        .filter(|o| !o.profile.is_empty() && o.plan_time_us.is_finite())
+        .map(|o| o.plan_time_us)
+        .collect();
+    println!("first plans with a hit: CPU {}", tail(&mut hit_plans));
+    println!("corrections: CPU {}", tail(&mut corr.clone()));
     let median = |f: &dyn Fn(&rally::BallOutcome) -> f64| {
         let mut v: Vec<f64> = out
             .iter()

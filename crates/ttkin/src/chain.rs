@@ -23,7 +23,7 @@ pub enum JacobianFrame {
 }
 
 /// Configurations per rayon task in batch calls.
-const BATCH_CHUNK: usize = 256;
+pub(crate) const BATCH_CHUNK: usize = 256;
 
 /// A serial chain of revolute and prismatic joints between a base frame and a tool frame.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -430,7 +430,7 @@ impl Chain {
     }
 
     /// Validates a batch: `qs` is N × n finite values and `out_len` is N × `per_item`.
-    fn batch_count(&self, qs: &[f64], out_len: usize, per_item: usize) -> Result<usize> {
+    pub(crate) fn batch_count(&self, qs: &[f64], out_len: usize, per_item: usize) -> Result<usize> {
         let n = self.dof();
         if !qs.len().is_multiple_of(n) {
             return Err(Error::shape(

@@ -9,7 +9,9 @@
 
 use nalgebra::{DMatrix, DVector, IsometryMatrix3, Matrix3, Matrix6xX, Rotation3, Translation3, Unit, Vector3};
 
-use crate::chain::{Chain, JacobianFrame};
+use rayon::prelude::*;
+
+use crate::chain::{Chain, JacobianFrame, BATCH_CHUNK};
 use crate::error::{Error, Result};
 
 /// Distance of the racket centre along the z axis of the last frame in seed 000 (m).
@@ -198,6 +200,52 @@ impl Task {
         Ok(x)
     }
 
+    /// [`Task::coordinates_at`] of N configurations `qs` (N × n values, row-major; m, rad) into
+    /// `out` (N × `dim()` values), in parallel over fixed chunks (results independent of the
+    /// thread count).
+    pub fn coordinates_batch(&self, chain: &Chain, qs: &[f64], out: &mut [f64]) -> Result<()> {
+        let (m, n) = (self.dim(), chain.dof());
+        chain.batch_count(qs, out.len(), m)?;
+        out.par_chunks_mut(m * BATCH_CHUNK)
+            .zip(qs.par_chunks(n * BATCH_CHUNK))
+            .for_each(|(o, q)| {
+                for (oi, qi) in o.chunks_exact_mut(m).zip(q.chunks_exact(n)) {
+                    self.coordinates(&chain.fk_unchecked(qi), oi);
+                }
+            });
+        Ok(())
+    }
+
+    /// [`Task::jacobian_at`] of N configurations `qs` (N × n values, row-major; m, rad) against
+    /// `target` (the same for every row; `None`: each row's own tool pose) into `out`: N row-major
+    /// dim × n matrices, in parallel over fixed chunks.
+    pub fn jacobian_batch(
+        &self,
+        chain: &Chain,
+        qs: &[f64],
+        target: Option<&IsometryMatrix3<f64>>,
+        out: &mut [f64],
+    ) -> Result<()> {
+        let (m, n) = (self.dim(), chain.dof());
+        chain.batch_count(qs, out.len(), m * n)?;
+        out.par_chunks_mut(m * n * BATCH_CHUNK)
+            .zip(qs.par_chunks(n * BATCH_CHUNK))
+            .for_each(|(o, q)| {
+                let (mut j, mut je) = (Matrix6xX::zeros(n), vec![0.0; m * n]);
+                for (oi, qi) in o.chunks_exact_mut(m * n).zip(q.chunks_exact(n)) {
+                    let t = chain.jacobian_into(qi, JacobianFrame::Base, &mut j);
+                    self.jacobian_into(&j, &t, target.unwrap_or(&t), &mut je);
+                    // column-major dim × n → row-major
+                    for (c, col) in je.chunks_exact(m).enumerate() {
+                        for (r, v) in col.iter().enumerate() {
+                            oi[r * n + c] = *v;
+                        }
+                    }
+                }
+            });
+        Ok(())
+    }
+
     /// Task coordinates of a tool pose (base frame), `dim()` values: position (m); position (m)
     /// and rotation vector (rad); or seed 000's 5-vector [centre (m), polar, azimuth (rad)].
     pub fn coordinates(&self, pose: &IsometryMatrix3<f64>, out: &mut [f64]) {
@@ -296,6 +344,24 @@ pub fn racket_angle_jacobian_at(chain: &Chain, q: &[f64], offset: f64) -> Result
     racket_angle_jacobian(&j, &chain.fk_unchecked(q), offset)
 }
 
+/// [`racket_angle_jacobian_at`] of N configurations `qs` (N × n values, row-major; m, rad) into
+/// `out` (N row-major 5 × n matrices), in parallel over fixed chunks; the error of the first
+/// singular row (normal along ±z) otherwise.
+pub fn racket_angle_jacobian_batch(chain: &Chain, qs: &[f64], offset: f64, out: &mut [f64]) -> Result<()> {
+    let n = chain.dof();
+    chain.batch_count(qs, out.len(), 5 * n)?;
+    out.par_chunks_mut(5 * n * BATCH_CHUNK)
+        .zip(qs.par_chunks(n * BATCH_CHUNK))
+        .try_for_each(|(o, q)| {
+            let mut j = Matrix6xX::zeros(n);
+            for (oi, qi) in o.chunks_exact_mut(5 * n).zip(q.chunks_exact(n)) {
+                let t = chain.jacobian_into(qi, JacobianFrame::Base, &mut j);
+                oi.copy_from_slice(racket_angle_jacobian(&j, &t, offset)?.transpose().as_slice());
+            }
+            Ok(())
+        })
+}
+
 /// Rotation vector θ·axis (rad) of a rotation matrix: the SO(3) logarithm, accurate at θ → 0 and
 /// θ → π. (nalgebra's `Rotation3::angle` is an unclamped acos: NaN when rounding pushes
 /// (tr R − 1)/2 past 1, and only √ε-accurate near 0.)
@@ -390,5 +456,51 @@ mod tests {
         assert_eq!(task.coordinates_at(&chain, &q).unwrap(), x.to_vec());
         assert!(task.jacobian_at(&chain, &q[..3], None).is_err());
         assert!(task.coordinates_at(&chain, &[f64::NAN; 8]).is_err());
+    }
+
+    /// Each row of a batch (more rows than one chunk) equals the single call, bit for bit; a
+    /// ragged or non-finite batch is an error.
+    #[test]
+    fn batches_equal_single_calls_row_by_row() {
+        let chain = crate::robots::mobile8();
+        let n = chain.dof();
+        let rows = 2 * BATCH_CHUNK + 3;
+        let qs: Vec<f64> = (0..rows * n)
+            .map(|k| ((k * 37 % 101) as f64 / 101.0 - 0.5) * 2.0)
+            .collect();
+        let target = chain.fk(&qs[..n]).unwrap();
+        for task in [
+            Task::Pose,
+            Task::Position,
+            Task::Racket {
+                offset: SEED_RACKET_OFFSET,
+            },
+        ] {
+            let m = task.dim();
+            let mut x = vec![0.0; rows * m];
+            task.coordinates_batch(&chain, &qs, &mut x).unwrap();
+            let (mut je, mut jt) = (vec![0.0; rows * m * n], vec![0.0; rows * m * n]);
+            task.jacobian_batch(&chain, &qs, None, &mut je).unwrap();
+            task.jacobian_batch(&chain, &qs, Some(&target), &mut jt).unwrap();
+            for (r, q) in qs.chunks_exact(n).enumerate() {
+                assert_eq!(x[r * m..(r + 1) * m], task.coordinates_at(&chain, q).unwrap()[..]);
+                for (out, tg) in [(&je, None), (&jt, Some(&target))] {
+                    let single = task.jacobian_at(&chain, q, tg).unwrap();
+                    let row_major: Vec<f64> = single.transpose().as_slice().to_vec();
+                    assert_eq!(out[r * m * n..(r + 1) * m * n], row_major[..], "{task:?} row {r}");
+                }
+            }
+            assert!(task.coordinates_batch(&chain, &qs[..n + 1], &mut x[..m]).is_err());
+            let mut bad = qs[..n].to_vec();
+            bad[2] = f64::NAN;
+            assert!(task.jacobian_batch(&chain, &bad, None, &mut je[..m * n]).is_err());
+        }
+        let mut ja = vec![0.0; rows * 5 * n];
+        racket_angle_jacobian_batch(&chain, &qs, SEED_RACKET_OFFSET, &mut ja).unwrap();
+        for (r, q) in qs.chunks_exact(n).enumerate() {
+            let single = racket_angle_jacobian_at(&chain, q, SEED_RACKET_OFFSET).unwrap();
+            let row_major: Vec<f64> = single.transpose().as_slice().to_vec();
+            assert_eq!(ja[r * 5 * n..(r + 1) * 5 * n], row_major[..], "row {r}");
+        }
     }
 }

@@ -7,7 +7,7 @@ use ttkin::ball::estimate::{estimate, EstimateError, EstimateOptions, Segment};
 use ttkin::ball::flight::{BallState, EventKind, Flight, Plane};
 use ttkin::ball::hitplan::{ReturnPlanner, ReturnStatus};
 use ttkin::ball::impact::RacketImpact;
-use ttkin::ball::model::BallModel;
+use ttkin::ball::model::{BallModel, Table};
 use ttkin::ball::predict::{crossing, predict, CrossingOutcome};
 use ttkin::ball::rally::{self, Rally, RallyConfig};
 use ttkin::ball::reach::{walk_after_bounce, walk_after_bounce_clip};
@@ -420,6 +420,30 @@ fn planner() -> ReturnPlanner {
 }
 
 #[test]
+fn the_ball_planner_refuses_a_robot_it_cannot_plan_for_with_the_reason() {
+    // ur5 has no analytic IK; arm4 has one, but its racket cannot reach the ready pose at the
+    // rally's placement. Both are model errors naming the robot and what is missing.
+    let err = ReturnPlanner::new(ttkin::robots::ur5(), Flight::default()).unwrap_err();
+    let msg = err.to_string();
+    assert!(matches!(err, ttkin::Error::Model(_)), "{msg}");
+    assert!(msg.contains("'ur5'") && msg.contains("analytic IK"), "{msg}");
+    let err = ReturnPlanner::new(ttkin::robots::arm4(), Flight::default()).unwrap_err();
+    let msg = err.to_string();
+    assert!(matches!(err, ttkin::Error::Model(_)), "{msg}");
+    assert!(msg.contains("'arm4'") && msg.contains("ready racket pose"), "{msg}");
+    // The chain given is the one planned for: a gantry6 with a longer first link has its own
+    // ready configuration (the same racket pose by other joint values).
+    let longer = ttkin::robots::gantry6_with(ttkin::robots::GantryLengths {
+        l1: 0.14,
+        ..Default::default()
+    })
+    .unwrap();
+    let pl = ReturnPlanner::new(longer.clone(), Flight::default()).unwrap();
+    assert_eq!(*pl.chain(), longer);
+    assert_ne!(pl.ready, planner().ready);
+}
+
+#[test]
 fn executed_hit_returns_the_ball_to_its_target() {
     let pl = planner();
     let mut rng = fastrand::Rng::with_seed(11);
@@ -757,4 +781,25 @@ fn a_rally_range_plays_the_balls_in_order_and_stops_when_asked() {
         ..RallyConfig::default()
     };
     assert!(Rally::new(bad).unwrap_err().to_string().contains("max_spin_rps"));
+}
+
+#[test]
+fn the_table_outline_is_drawn_from_its_geometry() {
+    let t = Table {
+        length: 3.0,
+        width: 1.5,
+        net_overhang: 0.1,
+        ..Table::default()
+    };
+    let o = t.outline();
+    assert_eq!(o.surface[0], o.surface[4]);
+    for c in &o.surface[..4] {
+        assert_eq!([c[0].abs(), c[1].abs(), c[2]], [1.5, 0.75, 0.0]);
+        // every corner is on the surface's edge: on a half, and off it a hair further out
+        assert!(t.on_opponent_half(c[0], c[1]) || t.on_robot_half(c[0], c[1]));
+        assert!(!t.on_opponent_half(c[0] * (1.0 + 1e-12), c[1]) && !t.on_robot_half(c[0] * (1.0 + 1e-12), c[1]));
+    }
+    assert_eq!(o.centre_line, [[-1.5, 0.0, 0.0], [1.5, 0.0, 0.0]]);
+    assert_eq!(o.net[0], o.net[4]);
+    assert_eq!(o.net[2], [0.0, 0.85, t.net_height]);
 }

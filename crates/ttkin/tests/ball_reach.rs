@@ -261,3 +261,26 @@ fn racket_rotation_at_roll_zero_is_the_full_turn_and_rolls_about_the_normal() {
         assert!((r0.matrix() * r0.matrix().transpose() - nalgebra::Matrix3::identity()).norm() < 1e-14);
     }
 }
+
+#[test]
+fn the_definition_is_written_from_the_region_s_own_grids() {
+    let mut r = region();
+    let text = r.definition();
+    for part in [
+        "x in {0.4, 0.8, 1.2} m, y in {-0.5, 0, 0.5} m in 0.45 to 1.05 s",
+        "(roll 0, +-30, +-60 deg)",
+        "(ttkin::ball::reach)",
+    ] {
+        assert!(text.contains(part), "{part} not in: {text}");
+    }
+    // Another grid, another sentence: the numbers are read, not restated.
+    r.targets = vec![[0.5, 0.25], [1.0, 0.25]];
+    r.return_times = vec![0.7, 0.5];
+    r.rolls = vec![0.0, 45f64.to_radians()];
+    let text = r.definition();
+    assert!(
+        text.contains("x in {0.5, 1} m, y in {0.25} m in 0.5 to 0.7 s"),
+        "{text}"
+    );
+    assert!(text.contains("(roll 0, 45 deg)"), "{text}");
+}

@@ -92,11 +92,9 @@ def _normal(polar: np.ndarray, azimuth: np.ndarray) -> np.ndarray:
 
 
 def _task_rows(robot: Robot, q: np.ndarray) -> np.ndarray:
-    """The core's racket task coordinates (``Robot.task_coordinates``) of q (n,) or (N, n)."""
-    q = np.asarray(q, dtype=float)
-    rows = q.reshape(-1, q.shape[-1])
-    x = np.array([robot.task_coordinates(row, "racket5") for row in rows]).reshape(-1, 5)
-    return x.reshape(*q.shape[:-1], 5)
+    """The core's racket task coordinates of q (n,) or (N, n): one batched call
+    (``Robot.task_coordinates``, ``ttkin::task::Task::coordinates_batch``)."""
+    return robot.task_coordinates(q, "racket5")
 
 
 def racket_centre_normal(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -122,10 +120,8 @@ def distance_of_coordinates(x: np.ndarray) -> float:
 def task_sigma_min(robot: Robot, q: np.ndarray) -> np.ndarray:
     """Smallest singular value of the racket5 task Jacobian (``Robot.task_jacobian``) for q (n,)
     or (N, n)."""
-    q = np.asarray(q, dtype=float)
-    jacobians = np.array([robot.task_jacobian(row, "racket5") for row in q.reshape(-1, q.shape[-1])])
-    sigma = np.linalg.svd(jacobians, compute_uv=False)[:, -1]
-    return sigma.reshape(q.shape[:-1])
+    jacobians = robot.task_jacobian(q, "racket5")  # one batched call for (N, n)
+    return np.linalg.svd(jacobians, compute_uv=False)[..., -1]
 
 
 def margin_box(robot: Robot) -> tuple[np.ndarray, np.ndarray]:
@@ -241,7 +237,7 @@ def joint_path_task_trajectory(
     # the rates of the racket coordinates from the core's Jacobian of them (ẋ = J q̇; the racket
     # task Jacobian's angle rows are residual coordinates, not the angles' rates)
     x = _task_rows(robot, q)
-    xdot = np.einsum("kij,kj->ki", np.array([robot.racket_angle_jacobian(row) for row in q]), qd)
+    xdot = np.einsum("kij,kj->ki", robot.racket_angle_jacobian(q), qd)  # one batched call
     x[:, 4] = np.unwrap(x[:, 4])
     return x, xdot, q
 

@@ -186,7 +186,9 @@ impl BallModel {
 }
 
 /// ITTF table and net geometry in the world frame (m): surface at z = 0, centred at the origin.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+/// A serde form may leave fields out: they are the default table's.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct Table {
     /// Playing-surface length along x (m): 2.74.
     pub length: f64,
@@ -200,6 +202,18 @@ pub struct Table {
     pub net_height: f64,
     /// How far the net extends beyond each side line (m): 0.1525.
     pub net_overhang: f64,
+}
+
+/// A table's outline for drawing ([`Table::outline`]), points in m (world frame).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct TableOutline {
+    /// The playing surface's corners, a closed loop (the first corner again at the end).
+    pub surface: [[f64; 3]; 5],
+    /// The centre line's ends (the doubles line, x from end line to end line at y = 0).
+    pub centre_line: [[f64; 3]; 2],
+    /// The net's outline in the plane x = 0 (overhang included), a closed loop from the surface
+    /// to the net's top.
+    pub net: [[f64; 3]; 5],
 }
 
 impl Default for Table {
@@ -234,6 +248,19 @@ impl Table {
     /// Whether the point (x, y) (m, world) lies on the robot's half (x < 0) of the surface.
     pub fn on_robot_half(&self, x: f64, y: f64) -> bool {
         x < 0.0 && x >= -self.half_length() && y.abs() <= self.half_width()
+    }
+
+    /// The outline to draw (m, world): the playing surface and the net as closed loops, and the
+    /// centre line.
+    pub fn outline(&self) -> TableOutline {
+        let (l, w) = (self.half_length(), self.half_width());
+        let n = w + self.net_overhang;
+        let h = self.net_height;
+        TableOutline {
+            surface: [[-l, -w, 0.0], [l, -w, 0.0], [l, w, 0.0], [-l, w, 0.0], [-l, -w, 0.0]],
+            centre_line: [[-l, 0.0, 0.0], [l, 0.0, 0.0]],
+            net: [[0.0, -n, 0.0], [0.0, n, 0.0], [0.0, n, h], [0.0, -n, h], [0.0, -n, 0.0]],
+        }
     }
 
     /// Checks that the geometry is finite and positive.

@@ -6,7 +6,11 @@
 //! gentler jerk-limited leg to the same hit state ([`super::leg::scaled_jerk_leg`]: acceleration
 //! and jerk limits scaled below the rejected leg's peak use by its torque excess, at most
 //! `EFFORT_RETRIES` times, each leg certified like the first) while that still arrives on time;
-//! the branch with the largest margin is kept.
+//! the branch with the largest margin is kept. Every accepted hit state also gets its
+//! follow-through back to rest at the ready configuration ([`HitPlanner::follow_through`]), checked
+//! against every limit the hit leg is (position, speed, acceleration, jerk, certified effort): a
+//! 0.4 s quintic when that fits, else a longer quintic, else a jerk-limited leg with gentler
+//! acceleration and jerk limits; the hit state is given up only when none fits.
 //!
 //! [`HitPlanner::plan`] plans one whole stroke (hit and return legs) on the branch nearest the
 //! current state and moves a late hit; this is the cheaper question a search over thousands of
@@ -20,6 +24,8 @@ use crate::chain::JacobianFrame;
 use crate::dynamics::{DynamicsData, PeakStop};
 use crate::ik::{joint_velocity, DifferentialIk, Solutions};
 use crate::linalg::cholesky::factor_in_place;
+use crate::traj::duration::quintic_limit_ratio_above;
+use crate::traj::jerk::{jerk_limited, PositionLimits};
 use crate::traj::limits::LIMIT_TOLERANCE;
 use crate::traj::{JointState, JointTrajectory};
 
@@ -30,6 +36,13 @@ const EFFORT_RETRIES: usize = 3;
 const EFFORT_SAFETY: f64 = 0.95;
 /// ...and at most EFFORT_STEP times it (each retry is a real step down).
 const EFFORT_STEP: f64 = 0.85;
+
+/// Durations (s) of the quintic follow-throughs tried in order: the rally's 0.4 s first, then
+/// longer ones (lower accelerations after the hit, more travel past it).
+pub const FOLLOW_DURATIONS: [f64; 4] = [0.4, 0.55, 0.75, 1.0];
+/// Scales of the acceleration and jerk limits of the jerk-limited follow-throughs tried when no
+/// quintic fits (time-optimal to rest under the scaled limits, inside the position limits).
+const FOLLOW_SCALES: [f64; 5] = [1.0, 0.7, 0.5, 0.35, 0.25];
 
 /// One IK branch's hit: configuration, joint velocities, hit leg and margin.
 #[derive(Debug, Clone, PartialEq)]
@@ -43,20 +56,30 @@ pub struct BranchLeg {
     /// Margin in (0, 1]: the smaller of the joints' normalised distance to their position limits
     /// at the hit and the leg's margin ([`HitLeg::margin`]).
     pub margin: f64,
+    /// The follow-through from the hit state (q, q̇, the leg's q̈ at the hit) at 0 s to rest at
+    /// the ready configuration, within every limit ([`HitPlanner::follow_through`]).
+    pub follow: JointTrajectory,
 }
 
 impl HitPlanner {
     /// The branch of `hit` with the largest margin above `floor` (−∞: any) from the joint state
-    /// `start` (at 0 s): analytic IK within the position limits (the branch nearest `start` first
-    /// on ties), or `None` when no branch is feasible (no analytic IK, singular, a joint speed
-    /// beyond its limit, no leg on time within the limits, an effort limit exceeded).
+    /// `start` (at 0 s), its follow-through ending at rest at [`Self::default_ready`]: analytic
+    /// IK within the position limits (the branch nearest `start` first on ties), or `None` when no
+    /// branch is feasible (no analytic IK, singular, a joint speed beyond its limit, no leg on time
+    /// within the limits, an effort limit exceeded, no follow-through within the limits).
     pub fn best_leg(&self, hit: &Hit, start: &JointState, floor: f64) -> Option<BranchLeg> {
+        self.best_leg_to(hit, start, &self.ready, floor)
+    }
+
+    /// [`Self::best_leg`] with the follow-through ending at rest at `ready` (m, rad; the ball
+    /// planner's ready configuration).
+    pub fn best_leg_to(&self, hit: &Hit, start: &JointState, ready: &[f64], floor: f64) -> Option<BranchLeg> {
         let twist = self.tool_twist(hit);
         let mut best: Option<BranchLeg> = None;
         for q in self.branches(&hit.pose, Some(&start.q)).iter() {
             // Only a margin above the best so far can replace it: no solves for the rest.
             let floor = best.as_ref().map_or(floor, |b| b.margin);
-            if let Some(b) = self.branch_leg(q, start, &twist, hit.t, floor) {
+            if let Some(b) = self.branch_leg_to(q, start, &twist, hit.t, ready, floor) {
                 best = Some(b);
             }
         }
@@ -69,15 +92,29 @@ impl HitPlanner {
     }
 
     /// The hit at configuration `q` moving the tool with `tool_twist` (base axes) after `t_hit` s
-    /// from `start`: q̇, leg and margin, or `None` when it is singular, a joint speed exceeds its
-    /// limit, no leg is within the limits, the effort limits are exceeded or the margin is at most
-    /// `floor` (−∞: any margin).
+    /// from `start`: q̇, leg, margin and follow-through to rest at [`Self::default_ready`], or
+    /// `None` when it is singular, a joint speed exceeds its limit, no leg is within the limits,
+    /// the effort limits are exceeded, the margin is at most `floor` (−∞: any margin) or no
+    /// follow-through is within the limits.
     pub fn branch_leg(
         &self,
         q: &[f64],
         start: &JointState,
         tool_twist: &[f64; 6],
         t_hit: f64,
+        floor: f64,
+    ) -> Option<BranchLeg> {
+        self.branch_leg_to(q, start, tool_twist, t_hit, &self.ready, floor)
+    }
+
+    /// [`Self::branch_leg`] with the follow-through ending at rest at `ready` (m, rad).
+    pub fn branch_leg_to(
+        &self,
+        q: &[f64],
+        start: &JointState,
+        tool_twist: &[f64; 6],
+        t_hit: f64,
+        ready: &[f64],
         floor: f64,
     ) -> Option<BranchLeg> {
         let mut pos_margin = f64::INFINITY;
@@ -109,12 +146,62 @@ impl HitPlanner {
             leg = scaled_jerk_leg(start, q, &qd, t_hit, &self.limits, scale, floor)?;
         }
         let margin = pos_margin.min(leg.margin);
-        Some(BranchLeg {
+        let at_hit = JointState {
             q: q.to_vec(),
             qd,
+            qdd: leg.qdd_hit.clone(),
+        };
+        let follow = self.follow_through(&at_hit, ready)?;
+        Some(BranchLeg {
+            q: at_hit.q,
+            qd: at_hit.qd,
             leg,
             margin,
+            follow,
         })
+    }
+
+    /// The follow-through after a hit: from the joint state `at_hit` (at 0 s) to rest at `ready`
+    /// (m, rad), within the position, speed, acceleration and jerk limits (exact extrema) and the
+    /// effective effort limits at every instant (certified, as the hit leg): the first of the
+    /// quintics of [`FOLLOW_DURATIONS`] that fits, else the first time-optimal jerk-limited leg
+    /// under the acceleration and jerk limits scaled by 1, 0.7, 0.5, 0.35, 0.25 (position limits
+    /// respected) that fits; `None` when none does (or `ready` has the wrong length).
+    pub fn follow_through(&self, at_hit: &JointState, ready: &[f64]) -> Option<JointTrajectory> {
+        if ready.len() != self.chain.dof() || at_hit.q.len() != ready.len() {
+            return None;
+        }
+        let lim = &self.limits;
+        let rest = JointState::rest(ready);
+        let ceiling = 1.0 + LIMIT_TOLERANCE;
+        for t in FOLLOW_DURATIONS {
+            if quintic_limit_ratio_above(at_hit, &rest, t, lim, ceiling) > ceiling {
+                continue;
+            }
+            let traj = JointTrajectory::quintic_unchecked(at_hit, &rest, t);
+            if traj.position_violations(lim, 0.0).is_empty() && self.within_effort(&traj) {
+                return Some(traj);
+            }
+        }
+        for scale in FOLLOW_SCALES {
+            let mut scaled = lim.clone();
+            for (a, j) in scaled.acceleration.iter_mut().zip(scaled.jerk.iter_mut()) {
+                *a *= scale;
+                *j *= scale;
+            }
+            // The hit's acceleration must lie within the scaled limits.
+            if at_hit.qdd.iter().zip(&scaled.acceleration).any(|(x, a)| x.abs() > *a) {
+                break;
+            }
+            let Ok(leg) = jerk_limited(at_hit, &rest, &scaled, None, PositionLimits::Respect) else {
+                continue;
+            };
+            let traj = leg.trajectory;
+            if traj.check_limits(lim).is_ok_and(|v| v.is_empty()) && self.within_effort(&traj) {
+                return Some(traj);
+            }
+        }
+        None
     }
 
     /// Whether `leg`'s torques (inverse dynamics with friction under the options' gravity, base
@@ -413,5 +500,127 @@ mod tests {
             }
         }
         assert!(rescued > 5 && lost > 5, "{rescued} rescued, {lost} lost");
+    }
+
+    /// The largest ratio to its limit of every quantity of `traj` at 10 kHz (position: the excess
+    /// over the range in m or rad, 0 inside; speed, acceleration, jerk and torque against their
+    /// limits, the torque's at the sampled speed), as [position, speed, acceleration, jerk, effort].
+    fn dense_ratios(pl: &HitPlanner, traj: &JointTrajectory) -> [f64; 5] {
+        let dy = pl.dynamics.as_ref().unwrap();
+        let mut data = DynamicsData::new(dy);
+        let g = Vector3::from(pl.gravity);
+        let lim = &pl.limits;
+        let n = traj.dof();
+        let (mut q, mut qd, mut qdd, mut jerk) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        let k = (traj.duration() * 1e4).ceil() as usize;
+        let mut out = [0.0f64; 5];
+        for i in 0..=k {
+            let t = traj.duration() * i as f64 / k as f64;
+            traj.sample_unchecked(t, &mut q, &mut qd, &mut qdd);
+            traj.jerk(t, &mut jerk).unwrap();
+            let tau = dy.inverse_dynamics_unchecked(&mut data, &q, &qd, &qdd, &g);
+            for j in 0..n {
+                out[0] = out[0].max(q[j] - lim.upper[j]).max(lim.lower[j] - q[j]);
+                out[1] = out[1].max(qd[j].abs() / lim.velocity[j]);
+                out[2] = out[2].max(qdd[j].abs() / lim.acceleration[j]);
+                out[3] = out[3].max(jerk[j].abs() / lim.jerk[j]);
+                out[4] = out[4].max(tau[j].abs() / pl.effort.at(j, qd[j]));
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn follow_throughs_stay_within_every_limit_at_10_khz() {
+        // Fast hits around the ready pose's racket, to rest at the ready configuration: every
+        // accepted branch's follow-through starts at its hit state, ends at rest at `ready`, and
+        // is within every limit at 10 kHz. Where the rally's 0.4 s quintic is not (its torques or
+        // speeds beyond a limit), a longer or gentler follow-through is chosen, not the hit lost.
+        let pl = gantry();
+        let ready = pl.default_ready().to_vec();
+        let start = JointState::rest(&ready);
+        let tool = pl.chain().fk(&ready).unwrap();
+        let mut rng = fastrand::Rng::with_seed(31);
+        let (mut accepted, mut longer) = (0, 0);
+        for _ in 0..1500 {
+            let d = Translation3::new(0.6 * rng.f64() - 0.3, 0.6 * rng.f64() - 0.3, 0.3 * rng.f64() - 0.15);
+            let pose = IsometryMatrix3::from_parts(d, Rotation3::from_euler_angles(0.3 * rng.f64(), 0.0, 0.0)) * tool;
+            let v = Vector3::new(rng.f64() - 0.5, rng.f64() - 0.5, rng.f64() - 0.5) * 10.0;
+            let hit = Hit::new(pose, [v.x, v.y, v.z, 0.0, 0.0, 0.0], 0.15 + 0.4 * rng.f64()).unwrap();
+            let Some(b) = pl.best_leg_to(&hit, &start, &ready, f64::NEG_INFINITY) else {
+                continue;
+            };
+            accepted += 1;
+            let f = &b.follow;
+            let begin = f.state(0.0).unwrap();
+            let end = f.state(f.duration()).unwrap();
+            for (j, r) in ready.iter().enumerate() {
+                assert!((begin.q[j] - b.q[j]).abs() < 1e-9 && (begin.qd[j] - b.qd[j]).abs() < 1e-9);
+                assert!((begin.qdd[j] - b.leg.qdd_hit[j]).abs() < 1e-9);
+                assert!((end.q[j] - r).abs() < 1e-9 && end.qd[j].abs() < 1e-9 && end.qdd[j].abs() < 1e-9);
+            }
+            let r = dense_ratios(&pl, f);
+            assert!(r[0] <= 1e-9, "position {r:?}");
+            for (name, x) in ["speed", "acceleration", "jerk", "effort"].iter().zip(&r[1..]) {
+                assert!(*x <= 1.0 + 1e-6, "{name} {r:?}");
+            }
+            let first = JointTrajectory::quintic_unchecked(&begin, &JointState::rest(&ready), FOLLOW_DURATIONS[0]);
+            if f.duration() != FOLLOW_DURATIONS[0] || f.segments() > 1 {
+                longer += 1;
+                // Chosen only because the 0.4 s quintic exceeds a limit somewhere.
+                let r0 = dense_ratios(&pl, &first);
+                assert!(r0[0] > 0.0 || r0[1..].iter().any(|x| *x > 1.0 - 1e-3), "{r0:?}");
+            } else {
+                assert_eq!(f, &first);
+            }
+        }
+        assert!(
+            accepted > 80 && longer > 10,
+            "{accepted} accepted, {longer} with a longer follow-through"
+        );
+    }
+
+    #[test]
+    fn follow_through_is_found_where_the_short_quintic_exceeds_a_limit() {
+        // Hit states drawn in joint space (fast, near the ready pose): where the 0.4 s quintic to
+        // rest exceeds a limit at 10 kHz, `follow_through` gives a motion within every limit (or
+        // none); it keeps the 0.4 s quintic where that fits.
+        let pl = gantry();
+        let ready = pl.default_ready().to_vec();
+        let lim = pl.limits.clone();
+        let mut rng = fastrand::Rng::with_seed(5);
+        let (mut kept, mut rescued, mut none) = (0, 0, 0);
+        for _ in 0..400 {
+            let q: Vec<f64> = (0..6)
+                .map(|j| (ready[j] + 0.5 * (2.0 * rng.f64() - 1.0)).clamp(lim.lower[j] + 0.05, lim.upper[j] - 0.05))
+                .collect();
+            let qd: Vec<f64> = lim.velocity.iter().map(|v| 0.9 * v * (2.0 * rng.f64() - 1.0)).collect();
+            let at_hit = JointState {
+                q,
+                qd,
+                qdd: vec![0.0; 6],
+            };
+            let short = JointTrajectory::quintic_unchecked(&at_hit, &JointState::rest(&ready), 0.4);
+            let r0 = dense_ratios(&pl, &short);
+            let fits = r0[0] <= 0.0 && r0[1..].iter().all(|x| *x <= 1.0 - 1e-3);
+            match pl.follow_through(&at_hit, &ready) {
+                Some(f) => {
+                    let r = dense_ratios(&pl, &f);
+                    assert!(r[0] <= 1e-9 && r[1..].iter().all(|x| *x <= 1.0 + 1e-6), "{r:?}");
+                    if fits {
+                        assert_eq!(f, short);
+                        kept += 1;
+                    } else if f != short {
+                        rescued += 1;
+                    }
+                }
+                None => {
+                    assert!(!fits, "{r0:?}");
+                    none += 1;
+                }
+            }
+        }
+        assert!(kept > 20 && rescued > 20, "{kept} kept, {rescued} rescued, {none} none");
+        assert!(pl.follow_through(&JointState::rest(&ready), &ready[..5]).is_none());
     }
 }

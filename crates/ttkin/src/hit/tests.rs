@@ -370,3 +370,21 @@ fn hit_batch_matches_new_and_names_the_element() {
         Err(crate::Error::Shape { .. })
     ));
 }
+
+#[test]
+fn task_and_profile_names_parse_back_and_a_bad_name_says_the_choices() {
+    for task in [HitTask::Auto, HitTask::Pose, HitTask::Racket5] {
+        assert_eq!(task.name().parse::<HitTask>().unwrap(), task);
+    }
+    for profile in [StrokeProfile::Auto, StrokeProfile::Quintic, StrokeProfile::Jerk] {
+        assert_eq!(profile.name().parse::<StrokeProfile>().unwrap(), profile);
+    }
+    let err = "racket6".parse::<HitTask>().unwrap_err().to_string();
+    assert!(
+        err.contains("task") && err.contains("'racket5'") && err.contains("'racket6'"),
+        "{err}"
+    );
+    assert!("Pose".parse::<HitTask>().is_err(), "names are exact");
+    let err = "cubic".parse::<StrokeProfile>().unwrap_err().to_string();
+    assert!(err.contains("profile") && err.contains("'quintic'"), "{err}");
+}

@@ -130,6 +130,15 @@ impl StrokeProfile {
     }
 }
 
+impl std::str::FromStr for StrokeProfile {
+    type Err = Error;
+
+    /// [`StrokeProfile::from_name`].
+    fn from_str(s: &str) -> Result<StrokeProfile> {
+        StrokeProfile::from_name(s)
+    }
+}
+
 /// Which part of the racket pose the hit prescribes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum HitTask {
@@ -140,6 +149,34 @@ pub enum HitTask {
     /// Seed 000's 5-D racket task: centre and face normal (rotation about the normal free), the
     /// centre velocity and the normal's rate.
     Racket5,
+}
+
+impl std::str::FromStr for HitTask {
+    type Err = Error;
+
+    /// Parses `"auto"`, `"pose"` or `"racket5"` (the names [`HitTask::name`] gives).
+    fn from_str(s: &str) -> Result<HitTask> {
+        match s {
+            "auto" => Ok(HitTask::Auto),
+            "pose" => Ok(HitTask::Pose),
+            "racket5" => Ok(HitTask::Racket5),
+            other => Err(Error::invalid(
+                "task",
+                format!("expected 'auto', 'pose' or 'racket5', got '{other}'"),
+            )),
+        }
+    }
+}
+
+impl HitTask {
+    /// The name `str::parse` reads back.
+    pub fn name(&self) -> &'static str {
+        match self {
+            HitTask::Auto => "auto",
+            HitTask::Pose => "pose",
+            HitTask::Racket5 => "racket5",
+        }
+    }
 }
 
 /// Planner settings.

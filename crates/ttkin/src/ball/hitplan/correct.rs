@@ -102,7 +102,9 @@ impl ReturnPlanner {
             t: s.t - now,
         };
         let twist = self.robot.tool_twist(&hit);
-        let branch = self.robot.branch_leg(&q, start, &twist, hit.t, f64::NEG_INFINITY)?;
+        let branch = self
+            .robot
+            .branch_leg_to(&q, start, &twist, hit.t, &self.ready, f64::NEG_INFINITY)?;
         Some(ReturnHit {
             ball: *s,
             v_out,

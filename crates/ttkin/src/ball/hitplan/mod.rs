@@ -37,6 +37,9 @@
 //!    would replace the best so far. A leg beyond the torque is replaced by a gentler jerk-limited
 //!    leg to the same hit state ([`crate::hit::leg::scaled_jerk_leg`], up to three, each checked
 //!    the same way) before the hit state is given up.
+//!    The follow-through after the hit back to rest at the ready configuration is checked against
+//!    the same limits (certified effort included; [`crate::hit::HitPlanner::follow_through`]: a
+//!    longer or gentler one when the 0.4 s quintic exceeds one) before the hit state is accepted.
 //! 5. **Choice.** Among feasible candidates, the one with the largest margin: the smallest of the
 //!    joints' normalised distance to their position limits at the hit and the leg's margin
 //!    (1 − peak/limit ratio for a quintic, 1 − fastest duration / hit time for a jerk-limited leg). Candidates are tried from the middle of the spread outward and the search
@@ -189,9 +192,11 @@ impl ReturnPlanner {
     pub fn new(chain: Chain, flight: Flight) -> Result<Self> {
         let robot = HitPlanner::new(&chain, HitOptions::default())?;
         if robot.analytic().is_none() {
-            return Err(Error::Model(
-                "hit planning needs a chain with analytic IK (gantry6)".into(),
-            ));
+            return Err(Error::Model(format!(
+                "robot '{}': the ball planner needs a chain with analytic IK (a gantry6 structure: \
+                 every IK branch of a racket pose); this chain has none",
+                chain.name()
+            )));
         }
         let mut planner = ReturnPlanner {
             ready: vec![0.0; chain.dof()],
@@ -216,7 +221,17 @@ impl ReturnPlanner {
             .mount()
             .tool_pose(&planner.base_pose(&centre, &Vector3::x()));
         let ik = planner.robot.analytic().expect("checked above");
-        planner.ready = ik.nearest(&pose, &planner.ready, LimitFilter::Enforce)?;
+        planner.ready = ik.nearest(&pose, &planner.ready, LimitFilter::Enforce).map_err(|e| {
+            Error::Model(format!(
+                "robot '{}': the ball planner's ready racket pose (facing +x at ({:.3}, {:.3}, {:.3}) m, \
+                 world, from the rally's placement) has no IK within the joint limits ({e}); the ball \
+                 planner needs a robot that reaches it (gantry6)",
+                chain.name(),
+                centre.x,
+                centre.y,
+                centre.z
+            ))
+        })?;
         Ok(planner)
     }
 

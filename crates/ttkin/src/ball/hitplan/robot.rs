@@ -37,7 +37,7 @@ impl ReturnPlanner {
             };
             // Only a margin above the best so far can replace it.
             let floor = best.as_ref().map_or(f64::NEG_INFINITY, |b| b.margin());
-            if let Some(branch) = self.robot.best_leg(&hit, start, floor) {
+            if let Some(branch) = self.robot.best_leg_to(&hit, start, &self.ready, floor) {
                 best = Some(ReturnHit {
                     ball: *s,
                     v_out,

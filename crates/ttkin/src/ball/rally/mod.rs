@@ -19,7 +19,7 @@
 //! **Execution**: the planned stroke is executed exactly (no drive simulation): the racket follows
 //! the hit leg the planner accepted ([`crate::hit::leg`]: quintic or jerk-limited; on a re-plan the new
 //! leg from the state at that time; by default one correction 30 ms after the bounce with the
-//! estimate updated through it, [`RallyConfig::correction_delay`]) and then a 0.4 s quintic back to the ready configuration; the racket pose and
+//! estimate updated through it, [`RallyConfig::correction_delay`]) and then its follow-through back to the ready configuration (a 0.4 s quintic when that is within every limit, else a longer or gentler one: [`crate::hit::HitPlanner::follow_through`]); the racket pose and
 //! velocity at the impact come from forward kinematics and the Jacobian along it. The true ball is
 //! integrated at 1 ms; the impact happens when the ball's distance to the racket plane falls to its
 //! radius (bisection) and counts when the contact point lies within the racket radius of its

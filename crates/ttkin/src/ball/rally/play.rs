@@ -319,17 +319,24 @@ pub fn correct_hit(
     replanner.plan_near(ball, now, &start, after_bounce, first, t_prev)
 }
 
-/// The executed stroke of `hit` (joint frame, from the stroke start): its accepted hit leg, then a
-/// 0.4 s quintic from the hit state to rest at `ready`.
+/// The executed stroke of `hit` (joint frame, from the stroke start): its accepted hit leg, then
+/// its follow-through to rest at `ready` (the branch's [`crate::hit::BranchLeg::follow`], checked
+/// against every limit by the planner; 0.4 s when that fits). For a `ready` other than the
+/// follow-through's end (the planner's ready configuration), an unchecked 0.4 s quintic to it.
 pub fn execution(hit: &ReturnHit, ready: &JointState) -> JointTrajectory {
-    let at_hit = JointState {
-        q: hit.branch.q.clone(),
-        qd: hit.branch.qd.clone(),
-        qdd: hit.branch.leg.qdd_hit.clone(),
+    let follow = &hit.branch.follow;
+    let ends_at_ready = follow
+        .state(follow.duration())
+        .is_ok_and(|s| s.q.iter().zip(&ready.q).all(|(a, b)| (a - b).abs() <= 1e-9));
+    let back = if ends_at_ready && ready.qd.iter().chain(&ready.qdd).all(|x| *x == 0.0) {
+        follow.clone()
+    } else {
+        let at_hit = JointState {
+            q: hit.branch.q.clone(),
+            qd: hit.branch.qd.clone(),
+            qdd: hit.branch.leg.qdd_hit.clone(),
+        };
+        JointTrajectory::quintic_unchecked(&at_hit, ready, 0.4)
     };
-    hit.branch
-        .leg
-        .trajectory
-        .clone()
-        .append(JointTrajectory::quintic_unchecked(&at_hit, ready, 0.4))
+    hit.branch.leg.trajectory.clone().append(back)
 }

@@ -261,6 +261,45 @@ impl ReachRegion {
         })
     }
 
+    /// What "in reach" means for this region, in one sentence built from its grids (targets,
+    /// return times, rolls): the definition the rally's summary states.
+    pub fn definition(&self) -> String {
+        fn distinct(mut v: Vec<f64>) -> String {
+            v.sort_by(f64::total_cmp);
+            v.dedup();
+            v.iter().map(|x| format!("{x}")).collect::<Vec<_>>().join(", ")
+        }
+        let xs = distinct(self.targets.iter().map(|t| t[0]).collect());
+        let ys = distinct(self.targets.iter().map(|t| t[1]).collect());
+        let (t_lo, t_hi) = self
+            .return_times
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &t| {
+                (lo.min(t), hi.max(t))
+            });
+        let mut rolls: Vec<f64> = self.rolls.iter().map(|r| r.to_degrees().abs().round()).collect();
+        rolls.sort_by(f64::total_cmp);
+        rolls.dedup();
+        let signed = |r: &f64| {
+            let both = self.rolls.iter().any(|&x| x.to_degrees().round() == -r) && *r != 0.0;
+            if both {
+                format!("+-{r}")
+            } else {
+                format!("{r}")
+            }
+        };
+        let rolls = rolls.iter().map(signed).collect::<Vec<_>>().join(", ");
+        format!(
+            "a return is possible: after its bounce on the robot's half the true flight has a point in \
+             the hitting volume where a shot of a fixed grid (drag-free parabola to x in {{{xs}}} m, y in \
+             {{{ys}}} m in {t_lo} to {t_hi} s) with the racket of the impact model lands on the opponent's \
+             half in the real flight model, a racket pose for it (roll {rolls} deg) has IK within the \
+             joint position limits, q_dot = J^-1 V is within the velocity limits and the joints' minimum \
+             time from rest at the ready configuration is at most the time left (ttkin::ball::reach); \
+             independent of the planner"
+        )
+    }
+
     /// Minimum time (s) from rest at the ready configuration to `q` (m, rad) over every joint.
     pub fn min_time(&self, q: &[f64]) -> f64 {
         q.iter()
