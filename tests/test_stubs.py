@@ -388,6 +388,9 @@ def _returned(tmp: Path) -> dict[str, Callable[[], object]]:
         # ball
         "ball_table": t.ball_table,
         "ball_camera": t.ball_camera,
+        "ball_table_check": lambda: t.ball_table_check(t.ball_table()),
+        "ball_on_opponent_half": lambda: t.ball_on_opponent_half(t.ball_table(), 0.9, 0.1),
+        "ball_table_outline": lambda: t.ball_table_outline(t.ball_table()),
         "ball_placement": t.ball_placement,
         "ball_rally_observations": lambda: observed,
         "ball_rally_score": lambda: t.ball_rally_score(
@@ -397,11 +400,11 @@ def _returned(tmp: Path) -> dict[str, Callable[[], object]]:
         "ball_predict": lambda: t.ball_predict(s0, times),
         "ball_predict_batch": lambda: t.ball_predict_batch(np.stack([s0, s0]), times),
         "ball_crossing": lambda: t.ball_crossing(s0, np.array([-0.5, 0.0, 0.0]), np.array([1.0, 0.0, 0.0])),
-        "ball_plan_return": lambda: t.ball_plan_return(observed["incoming"], 0.1, observed["target"]),
+        "ball_plan_return": lambda: t.ball_plan_return(g6, observed["incoming"], 0.1, observed["target"]),
         "ball_fit": lambda: t.ball_fit([f"f{k}" for k in range(4)], flights, period=0.01),
         "ball_racket_impact": lambda: t.ball_racket_impact(s0, np.array([0.0, -1.0, 0.0]), np.zeros(3)),
         "ball_plan_correct": lambda: t.ball_plan_correct(
-            observed["incoming"], 0.1, observed["target"], observed["incoming"], 0.2, False
+            g6, observed["incoming"], 0.1, observed["target"], observed["incoming"], 0.2, False
         ),
         "ball_update": lambda: t.ball_update(obs_t, obs_p, later_t, later_p),
         "ball_rally": lambda: rally,
