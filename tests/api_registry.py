@@ -126,7 +126,8 @@ API: dict[str, dict] = {
         "args": {
             "plan": "hit_plan",
             "setpoint_rate": "rate",
-            "rate": "rate",
+            "rate_hz": "rate",
+            "rate": "rate",  # deprecated name of rate_hz
             "noise": "noise",
             "gravity": "flag",
         }
@@ -162,8 +163,8 @@ API: dict[str, dict] = {
     },
     "HitPlan.robot_name": {},
     "HitPlan.made_for": {},  # robot drawn from all four: pairs of different robots (issue 29)
-    "HitPlan.sample": {"args": {"rate": "rate"}},
-    "HitPlan.torques": {"args": {"rate": "rate"}},
+    "HitPlan.sample": {"args": {"rate_hz": "rate", "rate": "rate"}},
+    "HitPlan.torques": {"args": {"rate_hz": "rate", "rate": "rate"}},
     "SimResult": {"skip_call": "made by simulate only"},
     "SimResult.summary": {},
     "SimResult.t": {},
@@ -355,7 +356,17 @@ API: dict[str, dict] = {
     "traj.Stroke": {"skip_call": "made by traj.stroke only"},
     **{
         f"traj.CartesianTrajectory.{a}": {}
-        for a in ("arc_about", "arc_through", "check_limits", "duration", "line", "sample_rate", "to_joint")
+        for a in ("arc_about", "arc_through", "check_limits", "duration", "line")
+    },
+    # rate_hz is required; hz, its deprecated name, makes it a keyword with a None default: a
+    # missing or doubled rate is Python's TypeError
+    **{
+        f"traj.{c}.{a}": {"type_error": ("missing required argument", "given twice")}
+        for c, a in (
+            ("CartesianTrajectory", "sample_rate"),
+            ("CartesianTrajectory", "to_joint"),
+            ("JointTrajectory", "sample_rate"),
+        )
     },
     "traj.CartesianTrajectory.sample": {"args": {"t": "time"}},
     **{
@@ -368,7 +379,6 @@ API: dict[str, dict] = {
             "knots",
             "peaks",
             "sample",
-            "sample_rate",
             "sample_uniform",
         )
     },

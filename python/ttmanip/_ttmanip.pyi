@@ -508,8 +508,9 @@ class JointTrajectory:
         """(q, qd, qdd) at t: each (dof,) for a scalar t, (N, dof) for N times."""
     def jerk(self, t: float) -> _F:
         """Jerk (per s³) at t, (dof,)."""
-    def sample_rate(self, hz: float) -> tuple[_F, _F, _F, _F]:
-        """(t, q, qd, qdd) at a control rate, end time included."""
+    def sample_rate(self, rate_hz: float | None = None, *, hz: float | None = None) -> tuple[_F, _F, _F, _F]:
+        """(t, q, qd, qdd) at a control rate ``rate_hz`` (Hz, required), end time included; ``hz`` is
+        its deprecated name."""
     def sample_uniform(self, n: int) -> tuple[_F, _F, _F, _F]:
         """(t, q, qd, qdd) at n ≥ 2 evenly spaced times."""
     def peaks(self, order: int) -> tuple[_F, _F]:
@@ -551,16 +552,29 @@ class CartesianTrajectory:
         """Duration (s)."""
     def sample(self, t: float) -> tuple[_F, _F, _F]:
         """(pose (4, 4), twist [v; ω] (6,), twist derivative (6,)), base frame."""
-    def sample_rate(self, hz: float) -> tuple[_F, _F, _F, _F]:
-        """(t (N,), poses (N, 4, 4), twists (N, 6), twist derivatives (N, 6))."""
+    def sample_rate(self, rate_hz: float | None = None, *, hz: float | None = None) -> tuple[_F, _F, _F, _F]:
+        """(t (N,), poses (N, 4, 4), twists (N, 6), twist derivatives (N, 6)) at ``rate_hz`` (Hz,
+        required); ``hz`` is its deprecated name."""
     def to_joint(
-        self, hz: float, q_start: ArrayLike, ik: Callable[[_F, _F], ArrayLike]
+        self,
+        rate_hz: float | None = None,
+        q_start: ArrayLike | None = None,
+        ik: Callable[[_F, _F], ArrayLike] | None = None,
+        *,
+        hz: float | None = None,
     ) -> tuple[_F, _F, _F, _F]:
-        """(t, q, qd, qdd) by IK at every sample; raises naming the first unsolvable sample."""
+        """(t, q, qd, qdd) by IK at every sample at ``rate_hz`` (Hz); all three arguments required
+        (``hz`` is the deprecated name of ``rate_hz``); raises naming the first unsolvable sample."""
     def check_limits(
-        self, robot: Robot, ik: Callable[[_F, _F], ArrayLike], q_start: ArrayLike, hz: float = 1000.0
+        self,
+        robot: Robot,
+        ik: Callable[[_F, _F], ArrayLike],
+        q_start: ArrayLike,
+        rate_hz: float = 1000.0,
+        *,
+        hz: float | None = None,
     ) -> list[dict[str, Any]]:
-        """Sampled limit check through IK."""
+        """Sampled limit check through IK at ``rate_hz`` (Hz; ``hz`` is its deprecated name)."""
 
 def traj_cubic(
     q0: ArrayLike, q1: ArrayLike, duration: float, v0: ArrayLike | None = None, v1: ArrayLike | None = None
@@ -759,10 +773,10 @@ class HitPlan:
     @property
     def trajectory(self) -> JointTrajectory | None:
         """The stroke, None when none was planned."""
-    def sample(self, rate: float = 1000.0) -> tuple[_F, _F, _F, _F]:
-        """(t, q, qd, qdd) at ``rate`` Hz."""
-    def torques(self, rate: float = 1000.0) -> _F:
-        """(K, n) inverse-dynamics joint torques at ``rate`` Hz samples."""
+    def sample(self, rate_hz: float = 1000.0, *, rate: float | None = None) -> tuple[_F, _F, _F, _F]:
+        """(t, q, qd, qdd) at ``rate_hz`` (Hz); ``rate`` is its deprecated name."""
+    def torques(self, rate_hz: float = 1000.0, *, rate: float | None = None) -> _F:
+        """(K, n) inverse-dynamics joint torques at ``rate_hz`` (Hz) samples (``rate``: deprecated)."""
     @property
     def tau(self) -> _F:
         """(K, n) joint torques at the 1 kHz samples."""

@@ -438,8 +438,8 @@ fn ball_update<'py>(
     Ok(d)
 }
 
-/// The rally's camera of `ttkin::ball::rally::Camera::default()`: rate (Hz), latency (s), noise
-/// (m, σ per axis), outlier_rate, outlier_size (m), start and window (s).
+/// The rally's camera of `ttkin::ball::rally::Camera::default()`: rate_hz (frame rate, Hz),
+/// latency (s), noise (m, σ per axis), outlier_rate, outlier_size (m), start and window (s).
 #[ttkin_py_guard::guarded]
 #[pyfunction]
 fn ball_camera(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
@@ -509,7 +509,7 @@ fn rally_of(seed: i128, world: bool) -> PyResult<Rally> {
 /// Ball `index` of the rally of `seed` (`world`: the measured world spread) as its camera sees it
 /// (`ttkin::ball::rally::Rally::observe`): the incoming state (10,), the exposure times and the
 /// time stamps (K,) (s from the opponent's hit), the observed positions (K, 3) (m, world), and the
-/// camera's rate (Hz), latency (s) and window (s).
+/// camera's rate_hz (frame rate, Hz), latency (s) and window (s).
 #[ttkin_py_guard::guarded]
 #[pyfunction]
 #[pyo3(signature = (index, seed = RallyConfig::default().seed as i128, world = RallyConfig::default().world.is_some()))]
@@ -526,7 +526,7 @@ fn ball_rally_observations(py: Python<'_>, index: i128, seed: i128, world: bool)
         "positions",
         to_numpy(py, &[o.positions.len(), 3], o.positions.as_flattened()),
     )?;
-    d.set_item("rate", cfg.camera.rate)?;
+    d.set_item("rate_hz", cfg.camera.rate_hz)?;
     d.set_item("latency", cfg.camera.latency)?;
     d.set_item("window", cfg.camera.window)?;
     d.set_item("target", (cfg.target[0], cfg.target[1]))?;
