@@ -126,7 +126,8 @@ API: dict[str, dict] = {
         "args": {
             "plan": "hit_plan",
             "setpoint_rate": "rate",
-            "rate": "rate",
+            "rate_hz": "rate",
+            "rate": "rate",  # deprecated name of rate_hz
             "noise": "noise",
             "gravity": "flag",
         }
@@ -162,8 +163,8 @@ API: dict[str, dict] = {
     },
     "HitPlan.robot_name": {},
     "HitPlan.made_for": {},  # robot drawn from all four: pairs of different robots (issue 29)
-    "HitPlan.sample": {"args": {"rate": "rate"}},
-    "HitPlan.torques": {"args": {"rate": "rate"}},
+    "HitPlan.sample": {"args": {"rate_hz": "rate", "rate": "rate"}},
+    "HitPlan.torques": {"args": {"rate_hz": "rate", "rate": "rate"}},
     "SimResult": {"skip_call": "made by simulate only"},
     "SimResult.summary": {},
     "SimResult.t": {},
@@ -206,7 +207,7 @@ API: dict[str, dict] = {
     "ball.predict": {"may_be_inf": True, "args": {"model": "ball_model_name"}},
     "ball.predict_batch": {"may_be_inf": True, "args": {"model": "ball_model_name"}},
     "ball.state": {},
-    "ball.racket_hit": {"args": {"model": "ball_model_name"}},
+    "ball.racket_impact": {"args": {"model": "ball_model_name"}},
     "ball.update": {"args": {"model": "ball_model_name"}},
     "ball.plan_correct": {"args": {"model": "ball_model_name"}},
     # --- IkResult (made by Robot.ik)
@@ -265,17 +266,18 @@ API: dict[str, dict] = {
     },
     # --- motor
     "motor.DcMotor": {"record": True},
-    "motor.Drive": {"record": True},
     "motor.Gearbox": {"record": True},
     "motor.Load": {"record": True},
     "motor.Loops": {},
+    "motor.PowerStage": {"record": True},
     "motor.Response": {"skip_call": "made by Servo.step_response only"},
     "motor.Servo": {
         "args": {
             "motor": "dc_motor",
             "gearbox": "gearbox",
             "load": "load",
-            "drive": "drive",
+            "power_stage": "power_stage",
+            "drive": "power_stage",  # deprecated name of power_stage
             "loops": "loops",
         }
     },
@@ -293,7 +295,7 @@ API: dict[str, dict] = {
                 "torque_constant",
                 "viscous_friction",
             ),
-            "Drive": ("bus_voltage", "current_noise", "encoder_counts_per_rev", "max_duty"),
+            "PowerStage": ("bus_voltage", "current_noise", "encoder_counts_per_rev", "max_duty"),
             "Gearbox": ("efficiency", "inertia", "ratio"),
             "Load": ("inertia", "viscous_friction"),
             "Loops": (
@@ -354,7 +356,17 @@ API: dict[str, dict] = {
     "traj.Stroke": {"skip_call": "made by traj.stroke only"},
     **{
         f"traj.CartesianTrajectory.{a}": {}
-        for a in ("arc_about", "arc_through", "check_limits", "duration", "line", "sample_rate", "to_joint")
+        for a in ("arc_about", "arc_through", "check_limits", "duration", "line")
+    },
+    # rate_hz is required; hz, its deprecated name, makes it a keyword with a None default: a
+    # missing or doubled rate is Python's TypeError
+    **{
+        f"traj.{c}.{a}": {"type_error": ("missing required argument", "given twice")}
+        for c, a in (
+            ("CartesianTrajectory", "sample_rate"),
+            ("CartesianTrajectory", "to_joint"),
+            ("JointTrajectory", "sample_rate"),
+        )
     },
     "traj.CartesianTrajectory.sample": {"args": {"t": "time"}},
     **{
@@ -367,7 +379,6 @@ API: dict[str, dict] = {
             "knots",
             "peaks",
             "sample",
-            "sample_rate",
             "sample_uniform",
         )
     },
@@ -435,7 +446,7 @@ PICKLE_PROBES: dict[str, object] = {
     "ball.Table": lambda t: t.on_opponent_half(0.5, 0.1),
     "dynamics.TorqueProfile": lambda p: (p.joint, p.motor, p.current, p.peak, p.violations),
     "motor.DcMotor": lambda m: ttmanip.motor.Servo(motor=m).tuning,
-    "motor.Drive": lambda d: ttmanip.motor.Servo(drive=d).tuning,
+    "motor.PowerStage": lambda d: ttmanip.motor.Servo(power_stage=d).tuning,
     "motor.Gearbox": lambda g: ttmanip.motor.Servo(gearbox=g).tuning,
     "motor.Load": lambda load: ttmanip.motor.Servo(load=load).tuning,
     "motor.Loops": lambda lo: ttmanip.motor.Servo(loops=lo).tuning,

@@ -177,18 +177,18 @@ def test_bad_state_and_model_are_errors():
         ball.predict(np.zeros(10), [0.1], events=np.zeros(2))
 
 
-def test_racket_hit_reverses_the_relative_normal_speed():
+def test_racket_impact_reverses_the_relative_normal_speed():
     # Head-on, no spin: the relative normal speed reverses with the rubber's restitution 0.85.
     s = ball.state([-1.8, 0.0, 0.2], [-5.0, 0.0, 0.0])
-    out = ball.racket_hit(s, [1.0, 0.0, 0.0], [3.0, 0.0, 0.0])
+    out = ball.racket_impact(s, [1.0, 0.0, 0.0], [3.0, 0.0, 0.0])
     assert out[4] == pytest.approx(3.0 + 0.85 * 8.0, rel=1e-12)
     np.testing.assert_allclose(out[[0, 1, 2, 3, 5, 6, 7, 8, 9]], s[[0, 1, 2, 3, 5, 6, 7, 8, 9]], atol=1e-12)
     # Oblique with spin: the tangential impulse turns spin into speed and back (rolling cap).
     s2 = ball.state([-1.8, 0.0, 0.2], [-5.0, 1.0, 0.0], [0.0, 0.0, 100.0])
-    out2 = ball.racket_hit(s2, [1.0, 0.0, 0.0], [0.0, 0.0, 0.0])
+    out2 = ball.racket_impact(s2, [1.0, 0.0, 0.0], [0.0, 0.0, 0.0])
     assert out2[4] > 0 and out2[9] != 100.0
     with pytest.raises(ttmanip.TtmanipError, match="unit"):
-        ball.racket_hit(s, [2.0, 0.0, 0.0], [0.0, 0.0, 0.0])
+        ball.racket_impact(s, [2.0, 0.0, 0.0], [0.0, 0.0, 0.0])
 
 
 def test_update_through_the_bounce_follows_the_true_ball():

@@ -454,7 +454,7 @@ def test_a_single_ball_flight_stops_on_ctrl_c():
 @pytest.mark.parametrize(
     ("call", "name"),
     [
-        (lambda p, r: p.sample(10**400), "rate"),
+        (lambda p, r: p.sample(10**400), "rate_hz"),
         (lambda p, r: r.ik(r.fk(np.zeros(r.dof)), max_iterations=10**400), "max_iterations"),
         (lambda p, r: r.ik(r.fk(np.zeros(r.dof)), seed=-(2**130)), "seed"),
         (lambda p, r: ttmanip.motor.Servo().step_response("current", 1.0, 2**1024), "duration"),

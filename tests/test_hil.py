@@ -22,7 +22,7 @@ def test_the_camera_is_the_rallys():
     # Deterministic per seed and ball; 200 Hz from 20 ms for 1.2 s, 10 ms latency.
     assert np.array_equal(a["positions"], b["positions"], equal_nan=True)
     assert a["times"].shape == (240,) and a["positions"].shape == (240, 3)
-    assert np.allclose(np.diff(a["exposures"]), 1 / a["rate"]) and a["exposures"][0] == pytest.approx(0.02)
+    assert np.allclose(np.diff(a["exposures"]), 1 / a["rate_hz"]) and a["exposures"][0] == pytest.approx(0.02)
     assert a["latency"] == pytest.approx(0.010)
     # The ball the rally plays: its incoming state is the offline rally's.
     r = _t.ball_rally(1, seed=1, start=3)

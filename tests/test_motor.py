@@ -20,7 +20,7 @@ def test_defaults_are_the_documented_maxon_re25_axis():
     assert (m.resistance, m.inductance, m.torque_constant) == (2.32, 0.238e-3, 43.9e-3)
     assert m.rotor_inertia == pytest.approx(10.8e-7)
     assert (g.ratio, g.efficiency) == (14.0, 0.81)
-    assert motor.Drive().encoder_counts_per_rev == 4096
+    assert motor.PowerStage().encoder_counts_per_rev == 4096
 
 
 def test_dataclasses_are_the_rust_axis_schema():
@@ -32,7 +32,7 @@ def test_dataclasses_are_the_rust_axis_schema():
         motor.DcMotor: model["motor"],
         motor.Gearbox: model["gearbox"],
         motor.Load: model["load"],
-        motor.Drive: {k: v for k, v in model.items() if not isinstance(v, dict)},
+        motor.PowerStage: {k: v for k, v in model.items() if not isinstance(v, dict)},
     }
     for cls, entries in parts.items():
         assert asdict(cls()) == entries, cls.__name__

@@ -107,9 +107,9 @@ def test_the_summary_reports_the_cores_camera():
     from ttmanip.rally import _camera_summary
 
     core = _ttmanip.ball_camera()
-    assert set(core) == {"rate", "latency", "noise", "outlier_rate", "outlier_size", "start", "window"}
+    assert set(core) == {"rate_hz", "latency", "noise", "outlier_rate", "outlier_size", "start", "window"}
     assert _camera_summary() == {
-        "rate_hz": core["rate"],
+        "rate_hz": core["rate_hz"],
         "latency_s": core["latency"],
         "noise_m": core["noise"],
         "outliers": core["outlier_rate"],

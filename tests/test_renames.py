@@ -157,3 +157,91 @@ def test_reprs_print_the_current_names():
         warnings.simplefilter("error")  # the repr evaluates without a deprecated keyword
         again = eval(repr(drive), {"DiffDrive": ttmanip.DiffDrive})  # noqa: S307 - our own repr
     assert repr(again) == repr(drive)
+
+
+def test_ball_racket_hit_is_a_deprecated_racket_impact():
+    """Issue 30: `Racket` named the robot's racket mount and the ball's impact model; the impact
+    model is now `racket_impact` (Rust `RacketImpact`), the mount `racket_mount` (`RacketMount`)."""
+    from ttmanip import ball
+
+    s = ball.state([0.0, 0.0, 0.3], [-3.0, 0.5, 0.2], [0.0, 10.0, 0.0])
+    new = ball.racket_impact(s, [1.0, 0.0, 0.0], [2.0, 0.0, 0.0])
+    with pytest.warns(DeprecationWarning, match=r"ball\.racket_hit is deprecated; use ball\.racket_impact"):
+        old = ball.racket_hit(s, [1.0, 0.0, 0.0], [2.0, 0.0, 0.0])
+    np.testing.assert_array_equal(old, new)
+    assert new[4] > 0.0  # the ball leaves along the normal: the call did the impact
+    assert "racket_hit" not in ball.__all__
+
+
+def test_motor_drive_is_a_deprecated_power_stage():
+    """Issue 30: a *drive* is the joint's transmission (``ttkin::joint::Drive``); the H-bridge and
+    sensors of ``ttmanip.motor`` are its ``PowerStage``."""
+    from ttmanip import motor
+
+    with pytest.warns(DeprecationWarning, match=r"motor\.Drive is deprecated; use motor\.PowerStage"):
+        old_cls = motor.Drive
+    assert old_cls is motor.PowerStage and "Drive" not in motor.__all__
+    stage = motor.PowerStage(bus_voltage=28.0)
+    new = motor.Servo(power_stage=stage)
+    with pytest.warns(DeprecationWarning, match=r"Servo\(drive=\.\.\.\) is deprecated; use power_stage="):
+        old = motor.Servo(drive=stage)
+    assert old.params == new.params and new.params["model"]["bus_voltage"] == 28.0
+    with pytest.warns(DeprecationWarning), pytest.raises(ttmanip.TtmanipError, match="power_stage"):
+        motor.Servo(power_stage=stage, drive=stage)
+    with pytest.raises(AttributeError, match="no attribute 'Dirve'"):
+        motor.Dirve  # noqa: B018 - the module's __getattr__ still refuses unknown names
+
+
+def test_rate_and_hz_keywords_are_deprecated_rate_hz():
+    """Issue 30: a sampling rate in Hz is ``rate_hz`` everywhere; ``hz=`` and ``rate=`` warn."""
+    robot = ttmanip.robots.gantry6()
+    q0, q1 = np.zeros(6), np.array([0.1, -0.2, 0.3, 0.4, -0.5, 0.6])
+    quintic = ttmanip.traj.quintic(q0, q1, 0.2)
+    new = quintic.sample_rate(rate_hz=250.0)
+    assert len(new[0]) == 51  # 0.2 s at 250 Hz, end included: the rate is used
+    with pytest.warns(DeprecationWarning, match=r"JointTrajectory\.sample_rate\(hz=\.\.\.\) is deprecated"):
+        old = quintic.sample_rate(hz=250.0)
+    for a, b in zip(old, new, strict=True):
+        np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(quintic.sample_rate(250.0)[1], new[1])  # positional unchanged
+    with pytest.raises(TypeError, match="missing required argument 'rate_hz'"):
+        quintic.sample_rate()
+    with pytest.raises(TypeError, match="given twice"):
+        quintic.sample_rate(250.0, hz=250.0)
+
+    pose = robot.fk(q1)
+    shifted = pose.copy()
+    shifted[2, 3] += 0.02
+    line = ttmanip.traj.line(pose, shifted, 0.1)
+    assert len(line.sample_rate(rate_hz=100.0)[0]) == 11
+    with pytest.warns(DeprecationWarning, match=r"CartesianTrajectory\.sample_rate\(hz=\.\.\.\)"):
+        assert len(line.sample_rate(hz=100.0)[0]) == 11
+    new = line.to_joint(100.0, q1, robot.ik_nearest)
+    with pytest.warns(DeprecationWarning, match=r"CartesianTrajectory\.to_joint\(hz=\.\.\.\)"):
+        old = line.to_joint(hz=100.0, q_start=q1, ik=robot.ik_nearest)
+    np.testing.assert_array_equal(old[1], new[1])
+    with pytest.raises(TypeError, match="missing required argument 'ik'"):
+        line.to_joint(100.0, q1)
+    with pytest.warns(DeprecationWarning, match=r"check_limits\(hz=\.\.\.\) is deprecated; use rate_hz"):
+        assert line.check_limits(robot, robot.ik_nearest, q1, hz=100.0) == line.check_limits(
+            robot, robot.ik_nearest, q1, rate_hz=100.0
+        )
+    with pytest.warns(DeprecationWarning, match=r"check_cartesian_limits\(hz=\.\.\.\) is deprecated"):
+        ttmanip.traj.check_cartesian_limits(line, robot, robot.ik_nearest, q1, hz=100.0)
+
+    plan = ttmanip._ttmanip.hit_plan(robot, robot.fk(robot.ready), np.array([1.0, 0.0, 0.5, 0, 0, 0]), 0.4)
+    assert plan.ok
+    assert len(plan.sample(rate_hz=500.0)[0]) < len(plan.sample()[0])  # 500 Hz against 1 kHz
+    with pytest.warns(DeprecationWarning, match=r"HitPlan\.sample\(rate=\.\.\.\) is deprecated; use rate_hz"):
+        np.testing.assert_array_equal(plan.sample(rate=500.0)[1], plan.sample(rate_hz=500.0)[1])
+    with pytest.warns(DeprecationWarning, match=r"HitPlan\.torques\(rate=\.\.\.\)"):
+        np.testing.assert_array_equal(plan.torques(rate=500.0), plan.torques(rate_hz=500.0))
+
+
+def test_simulate_rate_is_a_deprecated_rate_hz():
+    robot = ttmanip.robots.gantry6()
+    plan = ttmanip._ttmanip.hit_plan(robot, robot.fk(robot.ready), np.array([1.0, 0.0, 0.5, 0, 0, 0]), 0.4)
+    new = ttmanip.simulate(robot, plan, rate_hz=500.0)
+    with pytest.warns(DeprecationWarning, match=r"simulate\(rate=\.\.\.\) is deprecated; use rate_hz"):
+        old = ttmanip.simulate(robot, plan, rate=500.0)
+    np.testing.assert_array_equal(old.arrays["q"], new.arrays["q"])

@@ -150,7 +150,7 @@ class Robot:
     def racket_angle_jacobian(self, q: ArrayLike) -> NDArray[np.float64]:
         """Jacobian (5, n) of the racket 5-vector [centre (m), polar, azimuth (rad)]: ẋ = J q̇."""
     def task_coordinates(self, q: ArrayLike, task: str = "racket5") -> NDArray[np.float64]:
-        """Task coordinates of the tool pose: (3,), (6,) or the racket 5-vector (m, rad)."""
+        """Task coordinates of the tool pose: (3,) position, (6,) pose or (5,) racket 5-vector (m, rad)."""
 
     # --- dynamics (crates/ttkin-py/src/dynamics.rs); SI units, gravity in the base frame ---
     def rnea(
@@ -508,8 +508,9 @@ class JointTrajectory:
         """(q, qd, qdd) at t: each (dof,) for a scalar t, (N, dof) for N times."""
     def jerk(self, t: float) -> _F:
         """Jerk (per s³) at t, (dof,)."""
-    def sample_rate(self, hz: float) -> tuple[_F, _F, _F, _F]:
-        """(t, q, qd, qdd) at a control rate, end time included."""
+    def sample_rate(self, rate_hz: float | None = None, *, hz: float | None = None) -> tuple[_F, _F, _F, _F]:
+        """(t, q, qd, qdd) at a control rate ``rate_hz`` (Hz, required), end time included; ``hz`` is
+        its deprecated name."""
     def sample_uniform(self, n: int) -> tuple[_F, _F, _F, _F]:
         """(t, q, qd, qdd) at n ≥ 2 evenly spaced times."""
     def peaks(self, order: int) -> tuple[_F, _F]:
@@ -551,16 +552,29 @@ class CartesianTrajectory:
         """Duration (s)."""
     def sample(self, t: float) -> tuple[_F, _F, _F]:
         """(pose (4, 4), twist [v; ω] (6,), twist derivative (6,)), base frame."""
-    def sample_rate(self, hz: float) -> tuple[_F, _F, _F, _F]:
-        """(t (N,), poses (N, 4, 4), twists (N, 6), twist derivatives (N, 6))."""
+    def sample_rate(self, rate_hz: float | None = None, *, hz: float | None = None) -> tuple[_F, _F, _F, _F]:
+        """(t (N,), poses (N, 4, 4), twists (N, 6), twist derivatives (N, 6)) at ``rate_hz`` (Hz,
+        required); ``hz`` is its deprecated name."""
     def to_joint(
-        self, hz: float, q_start: ArrayLike, ik: Callable[[_F, _F], ArrayLike]
+        self,
+        rate_hz: float | None = None,
+        q_start: ArrayLike | None = None,
+        ik: Callable[[_F, _F], ArrayLike] | None = None,
+        *,
+        hz: float | None = None,
     ) -> tuple[_F, _F, _F, _F]:
-        """(t, q, qd, qdd) by IK at every sample; raises naming the first unsolvable sample."""
+        """(t, q, qd, qdd) by IK at every sample at ``rate_hz`` (Hz); all three arguments required
+        (``hz`` is the deprecated name of ``rate_hz``); raises naming the first unsolvable sample."""
     def check_limits(
-        self, robot: Robot, ik: Callable[[_F, _F], ArrayLike], q_start: ArrayLike, hz: float = 1000.0
+        self,
+        robot: Robot,
+        ik: Callable[[_F, _F], ArrayLike],
+        q_start: ArrayLike,
+        rate_hz: float = 1000.0,
+        *,
+        hz: float | None = None,
     ) -> list[dict[str, Any]]:
-        """Sampled limit check through IK."""
+        """Sampled limit check through IK at ``rate_hz`` (Hz; ``hz`` is its deprecated name)."""
 
 def traj_cubic(
     q0: ArrayLike, q1: ArrayLike, duration: float, v0: ArrayLike | None = None, v1: ArrayLike | None = None
@@ -759,10 +773,10 @@ class HitPlan:
     @property
     def trajectory(self) -> JointTrajectory | None:
         """The stroke, None when none was planned."""
-    def sample(self, rate: float = 1000.0) -> tuple[_F, _F, _F, _F]:
-        """(t, q, qd, qdd) at ``rate`` Hz."""
-    def torques(self, rate: float = 1000.0) -> _F:
-        """(K, n) inverse-dynamics joint torques at ``rate`` Hz samples."""
+    def sample(self, rate_hz: float = 1000.0, *, rate: float | None = None) -> tuple[_F, _F, _F, _F]:
+        """(t, q, qd, qdd) at ``rate_hz`` (Hz); ``rate`` is its deprecated name."""
+    def torques(self, rate_hz: float = 1000.0, *, rate: float | None = None) -> _F:
+        """(K, n) inverse-dynamics joint torques at ``rate_hz`` (Hz) samples (``rate``: deprecated)."""
     @property
     def tau(self) -> _F:
         """(K, n) joint torques at the 1 kHz samples."""
@@ -795,13 +809,20 @@ def hit_plan_batch(
     jerk: ArrayLike | None = None,
     effort: bool = True,
 ) -> list[HitPlan]: ...
-def racket_frame(normal: ArrayLike, handle: ArrayLike | None = None) -> _F: ...
-def racket_mount(robot: Robot) -> _F: ...
-def racket_states(robot: Robot, q: ArrayLike, qd: ArrayLike) -> _F: ...
+def racket_frame(normal: ArrayLike, handle: ArrayLike | None = None) -> _F:
+    """(3, 3) racket orientation (base axes): z along the face ``normal``, x (handle) near ``handle``."""
+
+def racket_mount(robot: Robot) -> _F:
+    """(4, 4) racket frame in the tool frame (m): where ``robot`` carries its racket."""
+
+def racket_states(robot: Robot, q: ArrayLike, qd: ArrayLike) -> _F:
+    """(N, 22) per joint state: racket pose (row-major 4×4, base frame, m), racket-centre twist (6,)."""
+
 def hit_check(pose: ArrayLike, twist: ArrayLike, t: float) -> None: ...
 
 # issue 29: the one array conversion, the rally's bound
-def real_array(obj: ArrayLike, what: str) -> _F: ...
+def real_array(obj: ArrayLike, what: str) -> _F:
+    """``obj`` as a float64 array of the same shape; complex, bool, string or object data is refused."""
 
 MAX_RALLY_BALLS: int
 
@@ -809,9 +830,15 @@ MAX_RALLY_BALLS: int
 def ball_table() -> dict[str, float]: ...
 def ball_table_check(table: dict[str, float]) -> None: ...
 def ball_on_opponent_half(table: dict[str, float], x: float, y: float) -> bool: ...
-def ball_table_outline(table: dict[str, float]) -> dict[str, list[list[float]]]: ...
+def ball_table_outline(
+    table: dict[str, float],
+) -> dict[str, tuple[tuple[float, float, float], ...]]:
+    """Polylines (x, y, z) (m, world) of the table: surface, centre_line, net."""
+
 def ball_camera() -> dict[str, float]: ...
-def ball_placement() -> _F: ...
+def ball_placement() -> _F:
+    """(4, 4) base frame of the rally's robot in the world (table) frame, m."""
+
 def ball_rally_observations(index: int, seed: int = 0, world: bool = False) -> dict[str, Any]: ...
 def ball_rally_score(
     index: int,
@@ -824,9 +851,9 @@ def ball_rally_score(
 ) -> dict[str, Any]: ...
 def ball_estimate(t: ArrayLike, p: ArrayLike, model: str = "default") -> dict[str, Any]: ...
 def ball_predict(state: ArrayLike, times: ArrayLike, model: str = "default") -> dict[str, Any]: ...
-def ball_predict_batch(
-    states: ArrayLike, times: ArrayLike, model: str = "default"
-) -> NDArray[np.float64]: ...
+def ball_predict_batch(states: ArrayLike, times: ArrayLike, model: str = "default") -> NDArray[np.float64]:
+    """(N, K, 3) positions of N balls (``states`` (N, 10)) at ``times`` (K,); NaN after a terminal event."""
+
 def ball_crossing(
     state: ArrayLike, point: ArrayLike, normal: ArrayLike, t_max: float = 2.0, model: str = "default"
 ) -> dict[str, Any]: ...
@@ -840,9 +867,11 @@ def ball_fit(
     window: int = 20,
     period: float | None = None,
 ) -> dict[str, Any]: ...
-def ball_racket_hit(
+def ball_racket_impact(
     state: ArrayLike, normal: ArrayLike, velocity: ArrayLike, model: str = "default"
-) -> NDArray[np.float64]: ...
+) -> NDArray[np.float64]:
+    """(10,) ball state just after the racket impact (``ttkin::ball::impact::RacketImpact``)."""
+
 def ball_plan_correct(
     robot: Robot,
     state: ArrayLike,

@@ -14,6 +14,7 @@ z up, y = z × x; metres, m/s, rad/s, seconds. A ball state is the (10,) array
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field, fields
 
 import numpy as np
@@ -33,7 +34,7 @@ __all__ = [
     "plan_return",
     "predict",
     "predict_batch",
-    "racket_hit",
+    "racket_impact",
     "state",
     "update",
 ]
@@ -246,14 +247,22 @@ def plan_return(
     return d
 
 
-def racket_hit(
+def racket_impact(
     state: ArrayLike, normal: ArrayLike, velocity: ArrayLike, model: BallModel | str = "default"
 ) -> NDArray[np.float64]:
     """The racket impact model: the ball ``state`` (10,) just before, the racket's unit face
     ``normal`` (3,) and its face velocity (3,, m/s) at the contact (world frame) in; the ball state
-    (10,) just after out (``ttkin::ball::impact::Racket``: restitution 0.85, friction 0.9 with the
-    rolling cap, Nakashima's impulse relative to the racket)."""
-    return _t.ball_racket_hit(state, normal, velocity, _model(model))
+    (10,) just after out (``ttkin::ball::impact::RacketImpact``: restitution 0.85, friction 0.9
+    with the rolling cap, Nakashima's impulse relative to the racket)."""
+    return _t.ball_racket_impact(state, normal, velocity, _model(model))
+
+
+def racket_hit(
+    state: ArrayLike, normal: ArrayLike, velocity: ArrayLike, model: BallModel | str = "default"
+) -> NDArray[np.float64]:
+    """Deprecated name of :func:`racket_impact` (a *hit* is the robot's request, see the glossary)."""
+    warnings.warn("ball.racket_hit is deprecated; use ball.racket_impact", DeprecationWarning, stacklevel=2)
+    return racket_impact(state, normal, velocity, model)
 
 
 def update(

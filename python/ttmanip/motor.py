@@ -32,10 +32,10 @@ if TYPE_CHECKING:
 
 __all__ = [
     "DcMotor",
-    "Drive",
     "Gearbox",
     "Load",
     "Loops",
+    "PowerStage",
     "Response",
     "Servo",
     "actuators",
@@ -84,13 +84,26 @@ class Load:
 
 
 @dataclass(frozen=True)
-class Drive:
-    """Power stage and sensors."""
+class PowerStage:
+    """Power stage (H-bridge on the DC bus) and the drive's sensors. Not a *drive*: in the
+    glossary that is the joint's transmission (``ttkin::joint::Drive``)."""
 
     bus_voltage: float = _M["bus_voltage"]  # V
     max_duty: float = _M["max_duty"]  # largest |duty| in (0, 1]
     encoder_counts_per_rev: int = _M["encoder_counts_per_rev"]  # counts per motor turn (quadrature)
     current_noise: float = _M["current_noise"]  # current-sense noise standard deviation, A
+
+
+def __getattr__(name: str):
+    """``motor.Drive``: the deprecated name of :class:`PowerStage` (one release)."""
+    if name == "Drive":
+        warnings.warn(
+            "motor.Drive is deprecated; use motor.PowerStage (a drive is the joint's transmission)",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return PowerStage
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 @dataclass(frozen=True)
@@ -136,9 +149,9 @@ class Loops:
                 )
 
 
-def _model(motor: DcMotor, gearbox: Gearbox, load: Load, drive: Drive) -> dict[str, Any]:
+def _model(motor: DcMotor, gearbox: Gearbox, load: Load, power_stage: PowerStage) -> dict[str, Any]:
     """The parts as ``ttcan::MotorModel``'s entries (``ServoSim.defaults()["model"]``)."""
-    return {"motor": asdict(motor), "gearbox": asdict(gearbox), "load": asdict(load), **asdict(drive)}
+    return {"motor": asdict(motor), "gearbox": asdict(gearbox), "load": asdict(load), **asdict(power_stage)}
 
 
 def _axis(loops: Loops) -> dict[str, Any]:
@@ -253,20 +266,32 @@ def quintic(distance: float, duration: float, rate_hz: float, start: float = 0.0
 
 
 class Servo:
-    """One servo axis: the controller (built from ``motor``, ``gearbox``, ``load``, ``drive``,
-    ``loops``) on a simulated actuator with the same parameters, or with ``plant`` overriding some
-    of them (e.g. ``plant=Load(inertia=2e-3)``) to see how the tuning copes with a model error."""
+    """One servo axis: the controller (built from ``motor``, ``gearbox``, ``load``,
+    ``power_stage``, ``loops``) on a simulated actuator with the same parameters, or with ``plant``
+    overriding some of them (e.g. ``plant=Load(inertia=2e-3)``) to see how the tuning copes with a
+    model error. ``drive=`` is the deprecated name of ``power_stage=``."""
 
     def __init__(
         self,
         motor: DcMotor | None = None,
         gearbox: Gearbox | None = None,
         load: Load | None = None,
-        drive: Drive | None = None,
+        power_stage: PowerStage | None = None,
         loops: Loops | None = None,
-        plant: DcMotor | Gearbox | Load | Drive | dict[str, Any] | None = None,
+        plant: DcMotor | Gearbox | Load | PowerStage | dict[str, Any] | None = None,
+        *,
+        drive: PowerStage | None = None,
     ) -> None:
-        parts = (motor or DcMotor(), gearbox or Gearbox(), load or Load(), drive or Drive())
+        if drive is not None:
+            warnings.warn(
+                "Servo(drive=...) is deprecated; use power_stage= (a PowerStage)",
+                DeprecationWarning,
+                stacklevel=2,
+            )
+            if power_stage is not None:
+                raise TtmanipError("Servo: give power_stage= only (drive= is its deprecated name)")
+            power_stage = drive
+        parts = (motor or DcMotor(), gearbox or Gearbox(), load or Load(), power_stage or PowerStage())
         params = {"model": _model(*parts), **_axis(loops or Loops())}
         plant_params = None
         if isinstance(plant, dict):

@@ -20,6 +20,7 @@ The maths is Rust (``ttkin::hit``); this module is the user-facing layer:
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -285,14 +286,20 @@ def simulate(
     setpoint_rate: float = 1000.0,
     noise=None,
     seed: int = 0,
-    rate: float = 1000.0,
+    rate_hz: float = 1000.0,
     gravity: bool = True,
+    rate: float | None = None,
 ) -> SimResult:
-    """Executes ``plan`` on ``ttmanip.DriveSim``: the stroke sampled at ``rate`` Hz with its
+    """Executes ``plan`` on ``ttmanip.DriveSim``: the stroke sampled at ``rate_hz`` with its
     inverse-dynamics torques as feed-forward, setpoints handed to every axis's drive at
     ``setpoint_rate`` Hz, optional sensor ``noise`` (see ``DriveSim``), gravity on. Returns the
-    executed states, currents, the racket over time and its errors at the hit."""
+    executed states, currents, the racket over time and its errors at the hit. ``rate`` is the
+    deprecated name of ``rate_hz``."""
     from ._ttmanip import DriveSim
+
+    if rate is not None:
+        warnings.warn("simulate(rate=...) is deprecated; use rate_hz=...", DeprecationWarning, stacklevel=2)
+        rate_hz = rate
 
     if not isinstance(plan, HitPlan):
         raise TtmanipError(f"plan: expected a ttmanip.HitPlan, got {type(plan).__name__}")
@@ -303,8 +310,8 @@ def simulate(
         )
     if plan.trajectory is None:
         raise HitError(f"plan: nothing to simulate (status '{plan.status}': {plan.message})")
-    t, q, qd, qdd = plan.sample(rate)
-    tau = plan.torques(rate)
+    t, q, qd, qdd = plan.sample(rate_hz)
+    tau = plan.torques(rate_hz)
     sim = DriveSim(robot, gravity=gravity, setpoint_rate=setpoint_rate, noise=noise, seed=seed)
     sim.reset(q[0], qd[0])
     arrays = sim.run(t, q, qd, qdd, tau_ff=tau)

@@ -245,7 +245,7 @@ def _camera_summary() -> dict:
     (``ttkin::ball::rally::Camera::default``), with units in the keys."""
     c = _t.ball_camera()
     return {
-        "rate_hz": c["rate"],
+        "rate_hz": c["rate_hz"],
         "latency_s": c["latency"],
         "noise_m": c["noise"],
         "outliers": c["outlier_rate"],

@@ -5,7 +5,7 @@ the native trajectory objects. Units are SI: joint values in rad (revolute) or m
 time in s, poses 4×4 in the robot's base frame.
 
 Joint-space results are :class:`JointTrajectory` objects with ``duration``, ``sample(t)`` →
-``(q, qd, qdd)``, ``sample_rate(hz)`` → ``(t, q, qd, qdd)`` and ``check_limits(robot)`` (exact
+``(q, qd, qdd)``, ``sample_rate(rate_hz)`` → ``(t, q, qd, qdd)`` and ``check_limits(robot)`` (exact
 peaks, not sampled). Task-space results are :class:`CartesianTrajectory` objects whose
 ``sample(t)`` gives ``(pose, twist, twist_dot)``.
 
@@ -17,6 +17,7 @@ peaks, not sampled). Task-space results are :class:`CartesianTrajectory` objects
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -222,11 +223,23 @@ def stroke(
 
 
 def check_cartesian_limits(
-    traj: CartesianTrajectory, robot: Robot, ik: Callable, q_start: ArrayLike, hz: float = 1000.0
+    traj: CartesianTrajectory,
+    robot: Robot,
+    ik: Callable,
+    q_start: ArrayLike,
+    rate_hz: float = 1000.0,
+    *,
+    hz: float | None = None,
 ) -> list[dict[str, Any]]:
-    """Limit check of a task-space trajectory through IK at ``hz`` (sampled, finite differences).
+    """Limit check of a task-space trajectory through IK sampled at ``rate_hz`` (finite
+    differences); ``hz`` is its deprecated name.
 
     Returns the worst violation per joint and quantity (position, velocity, acceleration) as
     dicts like :meth:`JointTrajectory.check_limits`; unlike it, values are sampled, not exact.
     """
-    return traj.check_limits(robot, ik, q_start, hz)
+    if hz is not None:
+        warnings.warn(
+            "check_cartesian_limits(hz=...) is deprecated; use rate_hz=...", DeprecationWarning, stacklevel=2
+        )
+        rate_hz = hz
+    return traj.check_limits(robot, ik, q_start, rate_hz)

@@ -10,7 +10,7 @@
 //! (as in the demo).
 
 use nalgebra::Vector3;
-use ttkin::hit::{Hit, Racket};
+use ttkin::hit::{Hit, RacketMount};
 use ttkin::ik::{Analytic, LimitFilter};
 use ttkin::traj::limits::KinematicLimits;
 use ttkin::traj::{stroke::stroke, JointState, JointTrajectory};
@@ -43,7 +43,7 @@ pub fn gantry6_demo_stroke(chain: &Chain) -> Result<DemoStroke> {
     let hit = Hit::from_normal([0.35, -0.55, 0.05], normal.into(), v.into(), 0.30, None, None).map_err(ttkin_error)?;
     let ready = chain.ready();
     let ik = Analytic::for_chain(chain).ok_or_else(|| Error::Model("gantry6 has no analytic IK".into()))?;
-    let racket = Racket::for_chain(chain);
+    let racket = RacketMount::for_chain(chain);
     let target = racket.tool_pose(&hit.pose);
     let q_hit = ik.nearest(&target, &ready, LimitFilter::Enforce).map_err(ttkin_error)?;
     let twist = racket.tool_twist(&target, &hit.twist);

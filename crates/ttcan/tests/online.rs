@@ -341,7 +341,7 @@ impl Run {
         let skipped = self.lag as f64;
         let centre = |q: &[f64]| {
             let tool = self.planner.chain().fk(q).unwrap();
-            self.planner.racket().racket_pose(&tool).translation.vector
+            self.planner.mount().racket_pose(&tool).translation.vector
         };
         let p = Vector3::from(h.centre);
         let (mut best, mut at) = (f64::INFINITY, 0usize);

@@ -175,6 +175,32 @@ pub fn renamed<T>(py: Python<'_>, value: T, old: Option<T>, old_name: &str, new_
     }
 }
 
+/// The value of a renamed argument without a default: the new keyword's `value`, or the
+/// deprecated keyword's `old` (with a `DeprecationWarning` naming both); a `TypeError` naming
+/// `arg` when neither is given, as Python's own for a missing argument.
+pub fn renamed_required<T>(
+    py: Python<'_>,
+    value: Option<T>,
+    old: Option<T>,
+    old_name: &str,
+    new_name: &str,
+    arg: &str,
+) -> PyResult<T> {
+    match (value, old) {
+        (Some(v), None) => Ok(v),
+        (None, Some(v)) => {
+            crate::errors::deprecated(py, old_name, new_name)?;
+            Ok(v)
+        }
+        (Some(_), Some(_)) => Err(pyo3::exceptions::PyTypeError::new_err(format!(
+            "{arg}: given twice (once by its deprecated name {old_name})"
+        ))),
+        (None, None) => Err(pyo3::exceptions::PyTypeError::new_err(format!(
+            "missing required argument '{arg}'"
+        ))),
+    }
+}
+
 /// (q, qd, qdd) from `torques`' arguments: three arrays, a (q, qd, qdd) tuple, or an object with
 /// attributes q, qd, qdd (or position, velocity, acceleration).
 pub fn trajectory_arrays<'py>(

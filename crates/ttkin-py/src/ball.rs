@@ -377,13 +377,13 @@ fn ball_rally_stats<'py>(
     serde_to_python(py, &stats)
 }
 
-/// The ball after a racket impact (`ttkin::ball::impact::Racket::hit_state` with the default
-/// racket): `state` (10,) just before, the racket's unit face `normal` (3,) and the face point's
+/// The ball after a racket impact (`ttkin::ball::impact::RacketImpact::hit_state` with the default
+/// impact model): `state` (10,) just before, the racket's unit face `normal` (3,) and the face point's
 /// `velocity` (3,, m/s, world); returns the state (10,) just after.
 #[ttkin_py_guard::guarded]
 #[pyfunction]
 #[pyo3(signature = (state, normal, velocity, model = "default"))]
-fn ball_racket_hit<'py>(
+fn ball_racket_impact<'py>(
     py: Python<'py>,
     state: &Bound<'py, PyAny>,
     normal: &Bound<'py, PyAny>,
@@ -394,7 +394,7 @@ fn ball_racket_hit<'py>(
     let n = nalgebra::Vector3::from(vec3(normal, "normal")?);
     let rv = nalgebra::Vector3::from(vec3(velocity, "velocity")?);
     let f = flight(model)?;
-    let out = ttkin::ball::impact::Racket::default()
+    let out = ttkin::ball::impact::RacketImpact::default()
         .hit_state(&f.model, &s, &n, &rv)
         .py()?;
     Ok(to_numpy(py, &[10], &state_vec(&out)).into_any())
@@ -438,8 +438,8 @@ fn ball_update<'py>(
     Ok(d)
 }
 
-/// The rally's camera of `ttkin::ball::rally::Camera::default()`: rate (Hz), latency (s), noise
-/// (m, σ per axis), outlier_rate, outlier_size (m), start and window (s).
+/// The rally's camera of `ttkin::ball::rally::Camera::default()`: rate_hz (frame rate, Hz),
+/// latency (s), noise (m, σ per axis), outlier_rate, outlier_size (m), start and window (s).
 #[ttkin_py_guard::guarded]
 #[pyfunction]
 fn ball_camera(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
@@ -509,7 +509,7 @@ fn rally_of(seed: i128, world: bool) -> PyResult<Rally> {
 /// Ball `index` of the rally of `seed` (`world`: the measured world spread) as its camera sees it
 /// (`ttkin::ball::rally::Rally::observe`): the incoming state (10,), the exposure times and the
 /// time stamps (K,) (s from the opponent's hit), the observed positions (K, 3) (m, world), and the
-/// camera's rate (Hz), latency (s) and window (s).
+/// camera's rate_hz (frame rate, Hz), latency (s) and window (s).
 #[ttkin_py_guard::guarded]
 #[pyfunction]
 #[pyo3(signature = (index, seed = RallyConfig::default().seed as i128, world = RallyConfig::default().world.is_some()))]
@@ -526,7 +526,7 @@ fn ball_rally_observations(py: Python<'_>, index: i128, seed: i128, world: bool)
         "positions",
         to_numpy(py, &[o.positions.len(), 3], o.positions.as_flattened()),
     )?;
-    d.set_item("rate", cfg.camera.rate)?;
+    d.set_item("rate_hz", cfg.camera.rate_hz)?;
     d.set_item("latency", cfg.camera.latency)?;
     d.set_item("window", cfg.camera.window)?;
     d.set_item("target", (cfg.target[0], cfg.target[1]))?;
@@ -601,7 +601,7 @@ fn ball_fit<'py>(
 /// Adds the ball functions to the module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ball_fit, m)?)?;
-    m.add_function(wrap_pyfunction!(ball_racket_hit, m)?)?;
+    m.add_function(wrap_pyfunction!(ball_racket_impact, m)?)?;
     m.add_function(wrap_pyfunction!(ball_update, m)?)?;
     m.add_function(wrap_pyfunction!(ball_plan_correct, m)?)?;
     m.add("MAX_RALLY_BALLS", rally::MAX_BALLS)?;

@@ -101,9 +101,19 @@ impl PyCartesianTrajectory {
         state_to_py(py, &self.inner.sample(t).py()?)
     }
 
-    /// (t (N,), poses (N, 4, 4), twists (N, 6), twist derivatives (N, 6)) at `hz`.
-    fn sample_rate<'py>(&self, py: Python<'py>, hz: f64) -> PyResult<Bound<'py, PyAny>> {
-        let states = self.inner.sample_rate(hz).py()?;
+    /// (t (N,), poses (N, 4, 4), twists (N, 6), twist derivatives (N, 6)) at `rate_hz` (Hz);
+    /// `hz` is its deprecated name.
+    #[pyo3(signature = (rate_hz=None, *, hz=None))]
+    fn sample_rate<'py>(&self, py: Python<'py>, rate_hz: Option<f64>, hz: Option<f64>) -> PyResult<Bound<'py, PyAny>> {
+        let rate_hz = crate::args::renamed_required(
+            py,
+            rate_hz,
+            hz,
+            "CartesianTrajectory.sample_rate(hz=...)",
+            "rate_hz=...",
+            "rate_hz",
+        )?;
+        let states = self.inner.sample_rate(rate_hz).py()?;
         let s = &states[..];
         Ok((
             column(py, s, |s| s.t),
@@ -115,32 +125,55 @@ impl PyCartesianTrajectory {
             .into_any())
     }
 
-    /// Joint samples (t, q, qd, qdd) at `hz` from `ik(pose (4, 4), seed (n,)) -> q (n,)`, seeded
-    /// with `q_start` then the previous solution; qd, qdd by finite differences. The first sample
-    /// the IK cannot solve raises, naming its index and time.
+    /// Joint samples (t, q, qd, qdd) at `rate_hz` (Hz) from `ik(pose (4, 4), seed (n,)) -> q (n,)`,
+    /// seeded with `q_start` then the previous solution; qd, qdd by finite differences. The first
+    /// sample the IK cannot solve raises, naming its index and time. `hz` is the deprecated name
+    /// of `rate_hz`.
+    #[pyo3(signature = (rate_hz=None, q_start=None, ik=None, *, hz=None))]
     fn to_joint<'py>(
         &self,
         py: Python<'py>,
-        hz: f64,
-        q_start: &Any<'py>,
-        ik: &Any<'py>,
+        rate_hz: Option<f64>,
+        q_start: Option<&Any<'py>>,
+        ik: Option<&Any<'py>>,
+        hz: Option<f64>,
     ) -> PyResult<Bound<'py, PyAny>> {
-        samples_to_py(py, &self.joint_samples(py, hz, q_start, ik)?)
+        let rate_hz = crate::args::renamed_required(
+            py,
+            rate_hz,
+            hz,
+            "CartesianTrajectory.to_joint(hz=...)",
+            "rate_hz=...",
+            "rate_hz",
+        )?;
+        let missing = |arg: &str| pyo3::exceptions::PyTypeError::new_err(format!("missing required argument '{arg}'"));
+        let q_start = q_start.ok_or_else(|| missing("q_start"))?;
+        let ik = ik.ok_or_else(|| missing("ik"))?;
+        samples_to_py(py, &self.joint_samples(py, rate_hz, q_start, ik)?)
     }
 
     /// Sampled limit check through IK (see `to_joint`) against the robot's position, velocity and
     /// acceleration limits: the worst violation per joint and quantity, as dicts.
-    #[pyo3(signature = (robot, ik, q_start, hz=ttkin::traj::SAMPLE_RATE))]
+    /// Samples at `rate_hz` (Hz); `hz` is its deprecated name.
+    #[pyo3(signature = (robot, ik, q_start, rate_hz=ttkin::traj::SAMPLE_RATE, *, hz=None))]
     fn check_limits<'py>(
         &self,
         py: Python<'py>,
         robot: &PyRobot,
         ik: &Any<'py>,
         q_start: &Any<'py>,
-        hz: f64,
+        rate_hz: f64,
+        hz: Option<f64>,
     ) -> PyResult<Bound<'py, PyList>> {
+        let rate_hz = crate::args::renamed(
+            py,
+            rate_hz,
+            hz,
+            "CartesianTrajectory.check_limits(hz=...)",
+            "rate_hz=...",
+        )?;
         let limits = robot_limits(robot, None)?;
-        let samples = self.joint_samples(py, hz, q_start, ik)?;
+        let samples = self.joint_samples(py, rate_hz, q_start, ik)?;
         violations_to_py(py, &samples.check_limits(&limits).py()?)
     }
 
@@ -160,11 +193,17 @@ impl PyCartesianTrajectory {
 
 impl PyCartesianTrajectory {
     /// Joint samples through the Python callable `ik` (see `to_joint`).
-    fn joint_samples<'py>(&self, py: Python<'py>, hz: f64, q_start: &Any<'py>, ik: &Any<'py>) -> PyResult<Samples> {
+    fn joint_samples<'py>(
+        &self,
+        py: Python<'py>,
+        rate_hz: f64,
+        q_start: &Any<'py>,
+        ik: &Any<'py>,
+    ) -> PyResult<Samples> {
         let q0 = vector_of_len(q_start, "q_start", 1)?;
         let n = q0.len();
         let callback = Callback::default();
-        let result = self.inner.to_joint(hz, &q0, |pose, seed| {
+        let result = self.inner.to_joint(rate_hz, &q0, |pose, seed| {
             let call = ik.call1((pose_to_numpy(py, pose), to_numpy(py, &[n], seed)));
             call.and_then(|r| vector_of_len(&r, "ik result", 1))
                 .map_err(|e| callback.error(py, e))

@@ -104,17 +104,21 @@ impl PyHitPlan {
         violations_to_py(py, &self.plan.violations)
     }
 
-    /// Samples the stroke at `rate` Hz: (t (K,), q, qd, qdd (K, n)). TtmanipError when no stroke.
-    #[pyo3(signature = (rate=ttkin::traj::SAMPLE_RATE))]
-    fn sample<'py>(&self, py: Python<'py>, rate: f64) -> PyResult<Bound<'py, PyAny>> {
-        samples_to_py(py, &self.stroke()?.sample_rate(rate).py()?)
+    /// Samples the stroke at `rate_hz` (Hz): (t (K,), q, qd, qdd (K, n)). TtmanipError when no
+    /// stroke. `rate` is the deprecated name of `rate_hz`.
+    #[pyo3(signature = (rate_hz=ttkin::traj::SAMPLE_RATE, *, rate=None))]
+    fn sample<'py>(&self, py: Python<'py>, rate_hz: f64, rate: Option<f64>) -> PyResult<Bound<'py, PyAny>> {
+        let rate_hz = crate::args::renamed(py, rate_hz, rate, "HitPlan.sample(rate=...)", "rate_hz=...")?;
+        samples_to_py(py, &self.stroke()?.sample_rate(rate_hz).py()?)
     }
 
     /// (K, n) joint torques (N·m or N, inverse dynamics with friction and gravity: the drives'
-    /// feed-forward) at `rate` Hz samples of the stroke.
-    #[pyo3(signature = (rate=ttkin::traj::SAMPLE_RATE))]
-    fn torques<'py>(&self, py: Python<'py>, rate: f64) -> PyResult<Bound<'py, PyAny>> {
-        let s = self.stroke()?.sample_rate(rate).py()?;
+    /// feed-forward) at `rate_hz` (Hz) samples of the stroke. `rate` is the deprecated name of
+    /// `rate_hz`.
+    #[pyo3(signature = (rate_hz=ttkin::traj::SAMPLE_RATE, *, rate=None))]
+    fn torques<'py>(&self, py: Python<'py>, rate_hz: f64, rate: Option<f64>) -> PyResult<Bound<'py, PyAny>> {
+        let rate_hz = crate::args::renamed(py, rate_hz, rate, "HitPlan.torques(rate=...)", "rate_hz=...")?;
+        let s = self.stroke()?.sample_rate(rate_hz).py()?;
         let dy = Dynamics::new(self.planner.chain()).py()?;
         let profile = py
             .detach(|| dy.torque_profile(&s.q, &s.qd, &s.qdd, &self.planner.gravity(), None))
@@ -125,7 +129,7 @@ impl PyHitPlan {
     /// (K, n) joint torques at the 1 kHz samples of `sample()`.
     #[getter]
     fn tau<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        self.torques(py, 1000.0)
+        self.torques(py, ttkin::traj::SAMPLE_RATE, None)
     }
 
     /// Name of the robot this plan was made for.
@@ -371,7 +375,7 @@ fn racket_states<'py>(
 #[ttkin_py_guard::guarded]
 #[pyfunction]
 fn racket_mount<'py>(py: Python<'py>, robot: &PyRobot) -> Bound<'py, PyAny> {
-    pose_to_numpy(py, &hit::Racket::for_chain(&robot.chain).in_tool).into_any()
+    pose_to_numpy(py, &hit::RacketMount::for_chain(&robot.chain).in_tool).into_any()
 }
 
 // Pickle and copy: the planner's chain and options and the plan, in their serde forms (issue 31);

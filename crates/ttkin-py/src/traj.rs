@@ -112,10 +112,19 @@ impl PyJointTrajectory {
         Ok(out)
     }
 
-    /// (t, q, qd, qdd) at a control rate of `hz`: t (N,), the others (N, dof); the end time is
-    /// always included.
-    fn sample_rate<'py>(&self, py: Python<'py>, hz: f64) -> PyResult<Bound<'py, PyAny>> {
-        let s = self.inner.sample_rate(hz).py()?;
+    /// (t, q, qd, qdd) at a control rate of `rate_hz` (Hz): t (N,), the others (N, dof); the end
+    /// time is always included. `hz` is the deprecated name of `rate_hz`.
+    #[pyo3(signature = (rate_hz=None, *, hz=None))]
+    fn sample_rate<'py>(&self, py: Python<'py>, rate_hz: Option<f64>, hz: Option<f64>) -> PyResult<Bound<'py, PyAny>> {
+        let rate_hz = crate::args::renamed_required(
+            py,
+            rate_hz,
+            hz,
+            "JointTrajectory.sample_rate(hz=...)",
+            "rate_hz=...",
+            "rate_hz",
+        )?;
+        let s = self.inner.sample_rate(rate_hz).py()?;
         samples_to_py(py, &s)
     }
 

@@ -58,12 +58,12 @@ fn deepest(pl: &ReturnPlanner, ik: &Analytic, ball: &BallState, now: f64, target
     let mut best = 0;
     for s in &list {
         for &tf in &pl.return_times {
-            let spin = |v: &Vector3<f64>| pl.racket.solve(&f.model, &s.v, &s.w, v).ok().map(|r| r.spin_out);
+            let spin = |v: &Vector3<f64>| pl.impact.solve(&f.model, &s.v, &s.w, v).ok().map(|r| r.spin_out);
             let Some(v_out) = shoot(f, &s.p, &goal, tf, spin) else {
                 best = best.max(1);
                 continue;
             };
-            let Ok(racket) = pl.racket.solve(&f.model, &s.v, &s.w, &v_out) else {
+            let Ok(racket) = pl.impact.solve(&f.model, &s.v, &s.w, &v_out) else {
                 best = best.max(1);
                 continue;
             };

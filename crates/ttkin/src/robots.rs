@@ -115,7 +115,7 @@ pub fn mobile8() -> Chain {
         IsometryMatrix3::identity(),
     )
     .and_then(mobile8_dynamics)
-    .and_then(|c| c.with_racket(crate::hit::Racket::seed000().in_tool))
+    .and_then(|c| c.with_racket(crate::hit::RacketMount::seed000().in_tool))
     .and_then(|c| c.with_ready(&mobile8_start()))
     .and_then(|c| c.with_gravity(MOBILE8_GRAVITY))
     .expect("built-in mobile8 is valid")

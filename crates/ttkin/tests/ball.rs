@@ -6,7 +6,7 @@ use ttkin::ball::contact::{energy, impulse};
 use ttkin::ball::estimate::{estimate, EstimateError, EstimateOptions, Segment};
 use ttkin::ball::flight::{BallState, EventKind, Flight, Plane};
 use ttkin::ball::hitplan::{ReturnPlanner, ReturnStatus};
-use ttkin::ball::impact::Racket;
+use ttkin::ball::impact::RacketImpact;
 use ttkin::ball::model::{BallModel, Table};
 use ttkin::ball::predict::{crossing, predict, CrossingOutcome};
 use ttkin::ball::rally::{self, Rally, RallyConfig};
@@ -105,7 +105,7 @@ proptest! {
         vout in prop::array::uniform3(-1.0f64..1.0),
     ) {
         let m = BallModel::default();
-        let racket = Racket::default();
+        let racket = RacketImpact::default();
         let v_in = Vector3::new(-5.0 + vin[0], vin[1], -1.0 + vin[2]);
         let v_out = Vector3::new(5.0 + vout[0], vout[1], 2.0 + vout[2]);
         let w = Vector3::from(w);
@@ -455,7 +455,7 @@ fn executed_hit_returns_the_ball_to_its_target() {
         let Some(hit) = plan.hit else { continue };
         planned += 1;
         // Execute the impact exactly with the planned racket and fly the ball.
-        let (v, w) = pl.racket.hit(
+        let (v, w) = pl.impact.hit(
             &pl.flight.model,
             &hit.ball.v,
             &hit.ball.w,

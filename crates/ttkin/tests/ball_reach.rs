@@ -149,7 +149,7 @@ fn a_ball_the_racket_can_touch_but_not_return_is_out_with_no_return_pose() {
         for target in &r.targets {
             for &tf in &r.return_times {
                 let racket = r
-                    .racket
+                    .impact
                     .solve(&truth.model, &b.v, &b.w, &rig.v_out(&b.p, target, tf))
                     .unwrap();
                 assert!(placeable(r, ik, &b.p, &racket.normal).is_none(), "{target:?} {tf}");
@@ -175,10 +175,10 @@ fn a_ball_in_reach_is_returned_by_a_racket_the_joints_can_place_in_time() {
         let b = at(truth, &s, t);
         let ok = r.targets.iter().any(|target| {
             r.return_times.iter().any(|&tf| {
-                let Ok(racket) = r.racket.solve(&truth.model, &b.v, &b.w, &rig.v_out(&p, target, tf)) else {
+                let Ok(racket) = r.impact.solve(&truth.model, &b.v, &b.w, &rig.v_out(&p, target, tf)) else {
                     return false;
                 };
-                let (v, w) = r.racket.hit(&truth.model, &b.v, &b.w, &racket.normal, &racket.velocity);
+                let (v, w) = r.impact.hit(&truth.model, &b.v, &b.w, &racket.normal, &racket.velocity);
                 let (_, ev) = truth.run(&BallState { v, w, ..b }, t + 2.0, None);
                 let lands = ev.first().is_some_and(|e| {
                     e.kind == EventKind::Table && truth.table.on_opponent_half(e.before.p.x, e.before.p.y)

@@ -67,7 +67,7 @@ fn robot_file_errors_name_the_problem() {
 fn robot_facts_are_data_that_robot_files_carry() {
     // The racket mount and the ready configuration belong to the robot, not to a name match.
     let m8 = ttkin::robots::mobile8();
-    assert_eq!(*m8.racket(), ttkin::hit::Racket::seed000().in_tool);
+    assert_eq!(*m8.racket(), ttkin::hit::RacketMount::seed000().in_tool);
     assert_eq!(m8.ready(), ttkin::robots::mobile8_start().to_vec());
     assert_eq!(ttkin::robots::gantry6().ready(), ttkin::robots::GANTRY6_READY.to_vec());
     // Gravity too (base frame): mobile8's base frame has x up, the others z up.
@@ -93,7 +93,7 @@ fn robot_facts_are_data_that_robot_files_carry() {
         let planner = ttkin::hit::HitPlanner::new(&renamed, Default::default()).unwrap();
         assert_eq!(planner.gravity(), chain.gravity());
         assert_eq!(planner.default_ready(), &chain.ready()[..]);
-        assert!(pose_diff(&planner.racket().in_tool, chain.racket()) < 1e-15);
+        assert!(pose_diff(&planner.mount().in_tool, chain.racket()) < 1e-15);
     }
     // Units as typed; a ready pose outside the limits or of the wrong length is refused.
     let text = r#"

@@ -6,7 +6,7 @@
 //! the rolling cap (the rigid-ball part of Nakashima et al., "Modeling of rebound phenomenon of a
 //! rigid ball with friction and elastic effects", ACC 2010).
 //!
-//! Rubber constants, parameters of [`Racket`] (set `ReturnPlanner::racket` to change them):
+//! Rubber constants, parameters of [`RacketImpact`] (set `ReturnPlanner::impact` to change them):
 //! - **restitution e = 0.85**. Reference points: the ITTF ball rule (Technical Leaflet T3: dropped
 //!   from 305 mm on a steel block it bounces 240–260 mm, e = √(h₁/h₀) = 0.89–0.92) and the table
 //!   (ITTF Laws 2.1.3: about 23 cm from 30 cm, e ≈ 0.88) bound it from above, since rubber on a
@@ -23,7 +23,7 @@
 //!
 //! Inverse: the racket moves along its normal at the hit (velocity s·n, no brushing). Unknowns are
 //! the normal (two angles) and s; the frictionless solution n ∥ v_out − v_in,
-//! s = (v_out·n + e·v_in·n)/(1 + e) starts a Newton iteration (analytic 3×3 Jacobian, `Racket::jacobian`, private) on
+//! s = (v_out·n + e·v_in·n)/(1 + e) starts a Newton iteration (analytic 3×3 Jacobian, `RacketImpact::jacobian`, private) on
 //! the full model until the outgoing velocity matches to 1e-9 m/s.
 
 use super::contact::impulse;
@@ -32,9 +32,10 @@ use super::model::BallModel;
 use crate::error::{Error, Result};
 use nalgebra::{Matrix3, Vector3};
 
-/// Rubber contact parameters of the racket face.
+/// The racket's impact model: rubber contact parameters of the racket face (the robot side of
+/// the racket is [`crate::hit::RacketMount`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Racket {
+pub struct RacketImpact {
     /// Normal restitution ball–rubber (0.85).
     pub restitution: f64,
     /// Coulomb friction coefficient ball–rubber (0.9).
@@ -43,9 +44,9 @@ pub struct Racket {
     pub radius: f64,
 }
 
-impl Default for Racket {
+impl Default for RacketImpact {
     fn default() -> Self {
-        Racket {
+        RacketImpact {
             restitution: 0.85,
             friction: 0.9,
             radius: 0.075,
@@ -53,9 +54,9 @@ impl Default for Racket {
     }
 }
 
-/// A racket state at the impact that sends the ball off as wanted.
+/// The racket at the impact that sends the ball off as wanted (the inverse impact model's solution).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct RacketHit {
+pub struct RacketAtImpact {
     /// Unit face normal (world), pointing toward the outgoing ball.
     pub normal: Vector3<f64>,
     /// Racket-centre velocity (m/s, world) at the impact: speed·normal.
@@ -64,7 +65,16 @@ pub struct RacketHit {
     pub spin_out: Vector3<f64>,
 }
 
-impl Racket {
+/// Deprecated name of [`RacketImpact`] (`Racket` named the impact model and the robot's racket
+/// mount, `ttkin::hit::RacketMount`).
+#[deprecated(note = "one name per concept: use `RacketImpact` (the mount is `ttkin::hit::RacketMount`)")]
+pub type Racket = RacketImpact;
+
+/// Deprecated name of [`RacketAtImpact`].
+#[deprecated(note = "one name per concept: use `RacketAtImpact`")]
+pub type RacketHit = RacketAtImpact;
+
+impl RacketImpact {
     /// Ball velocity and spin (m/s, rad/s, world) after the impact of a ball with velocity `v`
     /// and spin `w` on a face with unit normal `n` whose contact point moves at `racket_v`.
     pub fn hit(
@@ -113,11 +123,11 @@ impl Racket {
         v_in: &Vector3<f64>,
         w_in: &Vector3<f64>,
         v_out: &Vector3<f64>,
-    ) -> Result<RacketHit> {
+    ) -> Result<RacketAtImpact> {
         self.solve_from(model, v_in, w_in, v_out, None)
     }
 
-    /// [`Racket::solve`] started from a nearby solution `guess` (e.g. that of a slightly different
+    /// [`RacketImpact::solve`] started from a nearby solution `guess` (e.g. that of a slightly different
     /// `v_out`) instead of the frictionless one.
     pub fn solve_from(
         &self,
@@ -125,8 +135,8 @@ impl Racket {
         v_in: &Vector3<f64>,
         w_in: &Vector3<f64>,
         v_out: &Vector3<f64>,
-        guess: Option<&RacketHit>,
-    ) -> Result<RacketHit> {
+        guess: Option<&RacketAtImpact>,
+    ) -> Result<RacketAtImpact> {
         let e = self.restitution;
         let dv = v_out - v_in;
         if !(dv.norm() > 1e-6) {
@@ -180,14 +190,14 @@ impl Racket {
         let n = fr.n;
         let velocity = speed * n;
         let (_, spin_out) = self.hit(model, v_in, w_in, &n, &velocity);
-        Ok(RacketHit {
+        Ok(RacketAtImpact {
             normal: n,
             velocity,
             spin_out,
         })
     }
 
-    /// Jacobian (m/s per rad, per rad, per m/s) of the outgoing ball velocity of [`Racket::hit`]
+    /// Jacobian (m/s per rad, per rad, per m/s) of the outgoing ball velocity of [`RacketImpact::hit`]
     /// with respect to (a, b, s) of a racket moving at s·n, n = (n₀ + a·t₁ + b·t₂)/|·| in the
     /// tangent basis of `fr` (n₀ = `fr.n`), at a = b = 0 and speed `s`: the impulse model of [`super::contact::impulse`] differentiated by
     /// hand. With rel = v − s·n: N = (1+e)(s − v·n), slip u = v − (v·n)n − r·ω×n (independent
@@ -303,10 +313,10 @@ mod tests {
         let (mut rolling, mut sliding) = (0, 0);
         // The default rubber grips (the ball leaves rolling); a slippery one makes it slide.
         for racket in [
-            Racket::default(),
-            Racket {
+            RacketImpact::default(),
+            RacketImpact {
                 friction: 0.1,
-                ..Racket::default()
+                ..RacketImpact::default()
             },
         ] {
             for (v_in, w_in, v_out) in cases() {
@@ -360,7 +370,7 @@ mod tests {
     #[test]
     fn solve_reproduces_the_outgoing_velocity_through_the_forward_model() {
         let m = BallModel::default();
-        let racket = Racket::default();
+        let racket = RacketImpact::default();
         for (v_in, w_in, v_out) in cases() {
             let sol = racket.solve(&m, &v_in, &w_in, &v_out).unwrap();
             assert!((sol.normal.norm() - 1.0).abs() < 1e-12);

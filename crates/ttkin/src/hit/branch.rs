@@ -91,7 +91,7 @@ impl HitPlanner {
 
     /// The tool-point twist (base axes) of `hit`'s racket-centre twist on this robot's racket.
     pub fn tool_twist(&self, hit: &Hit) -> [f64; 6] {
-        self.racket.tool_twist(&self.racket.tool_pose(&hit.pose), &hit.twist)
+        self.mount.tool_twist(&self.mount.tool_pose(&hit.pose), &hit.twist)
     }
 
     /// The hit at configuration `q` moving the tool with `tool_twist` (base axes) after `t_hit` s
@@ -356,7 +356,7 @@ impl HitPlanner {
             return Solutions::empty(n);
         };
         let mut sols = ik
-            .solve_quiet(&self.racket.tool_pose(pose), hint)
+            .solve_quiet(&self.mount.tool_pose(pose), hint)
             .unwrap_or_else(|| Solutions::empty(n));
         sols.retain_map(|_, i, q| {
             let kind = self.chain.joints()[i].kind();

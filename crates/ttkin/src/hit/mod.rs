@@ -36,7 +36,9 @@ mod types;
 pub use branch::BranchLeg;
 pub use leg::HitLeg;
 pub use planner::HitPlanner;
-pub use racket::{racket_axes, racket_frame, racket_state_batch, Racket, DEFAULT_HANDLE, RACKET_STATE_LEN};
+#[allow(deprecated)]
+pub use racket::Racket;
+pub use racket::{racket_axes, racket_frame, racket_state_batch, RacketMount, DEFAULT_HANDLE, RACKET_STATE_LEN};
 pub use types::{Hit, HitOptions, HitPlan, HitStatus, HitTask, StrokeProfile};
 
 /// Default jerk limit as a multiple of the acceleration limit (1/s): full acceleration is built up

@@ -3,7 +3,9 @@
 
 use rayon::prelude::*;
 
-use super::{solve, stroke, Hit, HitOptions, HitPlan, HitStatus, Racket, StrokeProfile, DEFAULT_JERK_PER_ACCELERATION};
+use super::{
+    solve, stroke, Hit, HitOptions, HitPlan, HitStatus, RacketMount, StrokeProfile, DEFAULT_JERK_PER_ACCELERATION,
+};
 use crate::chain::Chain;
 use crate::dynamics::{Dynamics, DynamicsData};
 use crate::effort::EffortLimits;
@@ -19,7 +21,7 @@ pub struct HitPlanner {
     pub(super) chain: Chain,
     pub(super) dynamics: Option<Dynamics>,
     pub(super) analytic: Option<Analytic>,
-    pub(super) racket: Racket,
+    pub(super) mount: RacketMount,
     pub(super) limits: KinematicLimits,
     pub(super) effort: EffortLimits,
     pub(super) options: HitOptions,
@@ -28,7 +30,7 @@ pub struct HitPlanner {
 }
 
 impl HitPlanner {
-    /// A planner for `chain` (its racket from [`Racket::for_chain`]). Errors for options that do
+    /// A planner for `chain` (its racket from [`RacketMount::for_chain`]). Errors for options that do
     /// not fit the chain (jerk limits of the wrong length or ≤ 0, fewer than 2 effort points,
     /// missing speed or acceleration limits).
     pub fn new(chain: &Chain, options: HitOptions) -> Result<HitPlanner> {
@@ -75,7 +77,7 @@ impl HitPlanner {
                 None
             },
             analytic: Analytic::for_chain(chain),
-            racket: Racket::for_chain(chain),
+            mount: RacketMount::for_chain(chain),
             limits,
             effort,
             ready: chain.ready(),
@@ -94,9 +96,15 @@ impl HitPlanner {
         self.analytic.as_ref()
     }
 
-    /// The racket mount.
-    pub fn racket(&self) -> &Racket {
-        &self.racket
+    /// The racket mount: where the chain carries its racket (racket frame in the tool frame).
+    pub fn mount(&self) -> &RacketMount {
+        &self.mount
+    }
+
+    /// Deprecated name of [`HitPlanner::mount`] (`racket` named the mount and the impact model).
+    #[deprecated(note = "one name per concept: use `mount()` (the racket mount)")]
+    pub fn racket(&self) -> &RacketMount {
+        &self.mount
     }
 
     /// Kinematic limits used (position, speed, acceleration, jerk).
@@ -220,7 +228,7 @@ impl HitPlanner {
         let hit = Hit::new(hit.pose, hit.twist, hit.t)?;
         let (start, ready) = self.start_and_ready(state, ready)?;
         let n = self.chain.dof();
-        let tool_target = self.racket.tool_pose(&hit.pose);
+        let tool_target = self.mount.tool_pose(&hit.pose);
         let mut plan = HitPlan {
             hit,
             status: HitStatus::Ok,

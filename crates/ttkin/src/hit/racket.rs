@@ -3,7 +3,7 @@
 //! Racket frame (one convention for every robot): origin at the racket centre, z axis along the
 //! face normal (the hitting side), x axis along the handle (from the grip towards the centre),
 //! y = z × x. A robot's tool frame carries the racket at a fixed pose
-//! [`Racket::in_tool`] (the racket frame in the tool frame), data of the robot
+//! [`RacketMount::in_tool`] (the racket frame in the tool frame), data of the robot
 //! ([`Chain::racket`], `racket = { xyz, rpy }` in a robot file):
 //! - `gantry6` (seed 002): the tool frame *is* the racket frame (identity);
 //! - `mobile8` (seed 000): the centre is 0.15 m along tool z and the face normal is tool x
@@ -17,32 +17,38 @@ use crate::chain::Chain;
 use crate::error::{check_finite, Error, Result};
 use crate::task::SEED_RACKET_OFFSET;
 
-/// Where the racket is mounted: the racket frame's pose in the tool frame (m).
+/// The racket mount: where the robot carries its racket, the racket frame's pose in the tool frame (m).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Racket {
+pub struct RacketMount {
     /// Racket frame in the tool frame (m).
     pub in_tool: IsometryMatrix3<f64>,
 }
 
-impl Racket {
+/// Deprecated name of [`RacketMount`] (`Racket` named the mount and the ball's impact model).
+#[deprecated(
+    note = "one name per concept: use `RacketMount` (the impact model is `ttkin::ball::impact::RacketImpact`)"
+)]
+pub type Racket = RacketMount;
+
+impl RacketMount {
     /// The racket a chain carries ([`Chain::racket`], data of the robot: see the module doc).
-    pub fn for_chain(chain: &Chain) -> Racket {
-        Racket {
+    pub fn for_chain(chain: &Chain) -> RacketMount {
+        RacketMount {
             in_tool: *chain.racket(),
         }
     }
 
     /// The racket frame is the tool frame.
-    pub fn at_tool() -> Racket {
-        Racket {
+    pub fn at_tool() -> RacketMount {
+        RacketMount {
             in_tool: IsometryMatrix3::identity(),
         }
     }
 
     /// Seed 000's racket: centre 0.15 m along tool z, face normal tool x.
-    pub fn seed000() -> Racket {
+    pub fn seed000() -> RacketMount {
         let r = Matrix3::from_columns(&[Vector3::z(), -Vector3::y(), Vector3::x()]);
-        Racket {
+        RacketMount {
             in_tool: IsometryMatrix3::from_parts(
                 Translation3::new(0.0, 0.0, SEED_RACKET_OFFSET),
                 Rotation3::from_matrix_unchecked(r),
@@ -152,7 +158,7 @@ pub fn racket_state_batch(chain: &Chain, qs: &[f64], qds: &[f64], out: &mut [f64
             out.len(),
         ));
     }
-    let racket = Racket::for_chain(chain);
+    let racket = RacketMount::for_chain(chain);
     const CHUNK: usize = 64;
     out.par_chunks_mut(RACKET_STATE_LEN * CHUNK)
         .zip(qs.par_chunks(n * CHUNK).zip(qds.par_chunks(n * CHUNK)))
@@ -175,6 +181,17 @@ pub fn racket_state_batch(chain: &Chain, qs: &[f64], qds: &[f64], out: &mut [f64
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    #[allow(deprecated)]
+    fn deprecated_racket_is_the_mount() {
+        // Issue 30: `Racket` was the mount here and the impact model in `ball::impact`; the old
+        // names stay one release as aliases of the new ones.
+        assert_eq!(Racket::seed000(), RacketMount::seed000());
+        let impact: crate::ball::impact::Racket = crate::ball::impact::RacketImpact::default();
+        assert_eq!(impact.restitution, 0.85);
+        assert_ne!(RacketMount::seed000(), RacketMount::at_tool());
+    }
 
     #[test]
     fn racket_frame_of_huge_or_tiny_vectors_is_a_rotation() {
@@ -208,7 +225,7 @@ mod tests {
             Translation3::new(0.2, 0.3, 0.4),
             Rotation3::from_euler_angles(0.3, -0.2, 1.1),
         );
-        let racket = Racket::seed000().racket_pose(&tool);
+        let racket = RacketMount::seed000().racket_pose(&tool);
         let c = crate::task::racket_centre(&tool, SEED_RACKET_OFFSET);
         let n = crate::task::racket_normal(&tool);
         assert!((racket.translation.vector - c).norm() < 1e-12);
@@ -222,7 +239,7 @@ mod tests {
             Translation3::new(0.2, 0.3, 0.4),
             Rotation3::from_euler_angles(0.3, -0.2, 1.1),
         );
-        let r = Racket::seed000();
+        let r = RacketMount::seed000();
         let t = [1.0, -2.0, 0.5, 3.0, -1.0, 2.0];
         let back = r.racket_twist(&tool, &r.tool_twist(&tool, &t));
         for k in 0..6 {

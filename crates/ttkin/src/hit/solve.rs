@@ -84,7 +84,7 @@ fn pose(p: &HitPlanner, hit: &Hit, tool_target: &IsometryMatrix3<f64>, current: 
             (r.q, 1)
         }
     };
-    let twist = p.racket.tool_twist(tool_target, &hit.twist);
+    let twist = p.mount.tool_twist(tool_target, &hit.twist);
     let v = DifferentialIk::default()
         .solve(chain, &q, &twist, None)
         .map_err(|e| (HitStatus::Singular, e.to_string()))?;
@@ -111,10 +111,10 @@ fn pose(p: &HitPlanner, hit: &Hit, tool_target: &IsometryMatrix3<f64>, current: 
 /// (a joint beyond its speed limit is reported by the stroke planner).
 fn racket5(p: &HitPlanner, hit: &Hit, tool_target: &IsometryMatrix3<f64>, current: &[f64]) -> Outcome {
     let chain = &p.chain;
-    let offset = p.racket.in_tool.translation.vector.z;
-    let seed = super::Racket::seed000();
-    if (p.racket.in_tool.rotation.matrix() - seed.in_tool.rotation.matrix()).norm() > 1e-12
-        || p.racket.in_tool.translation.vector.xy().norm() > 1e-12
+    let offset = p.mount.in_tool.translation.vector.z;
+    let seed = super::RacketMount::seed000();
+    if (p.mount.in_tool.rotation.matrix() - seed.in_tool.rotation.matrix()).norm() > 1e-12
+        || p.mount.in_tool.translation.vector.xy().norm() > 1e-12
     {
         return Err((
             HitStatus::Unreachable,
@@ -159,7 +159,7 @@ fn racket5(p: &HitPlanner, hit: &Hit, tool_target: &IsometryMatrix3<f64>, curren
     let n = chain.dof();
     let jac = chain.jacobian(&q, JacobianFrame::Base).map_err(unreachable)?;
     let tool = chain.fk_unchecked(&q);
-    let lever = p.racket.lever(&tool);
+    let lever = p.mount.lever(&tool);
     let normal = tool.rotation.matrix().column(0).into_owned();
     let (u1, u2) = tangent_basis(&normal);
     let mut jt = DMatrix::<f64>::zeros(5, n);

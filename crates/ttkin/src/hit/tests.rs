@@ -24,11 +24,11 @@ fn hit_errors(p: &HitPlanner, plan: &HitPlan) -> (f64, f64) {
     let s = traj.state(plan.t_hit).unwrap();
     let chain = p.chain();
     let tool = chain.fk(&s.q).unwrap();
-    let racket = p.racket().racket_pose(&tool);
+    let racket = p.mount().racket_pose(&tool);
     let pose_err = (racket.to_homogeneous() - plan.hit.pose.to_homogeneous()).abs().max();
     let jac = chain.jacobian(&s.q, crate::JacobianFrame::Base).unwrap();
     let tw = jac * nalgebra::DVector::from_column_slice(&s.qd);
-    let tw = p.racket().racket_twist(&tool, tw.as_slice());
+    let tw = p.mount().racket_twist(&tool, tw.as_slice());
     let twist_err = (0..6).map(|k| (tw[k] - plan.hit.twist[k]).abs()).fold(0.0, f64::max);
     (pose_err, twist_err)
 }
@@ -141,7 +141,7 @@ fn mobile8_racket_task_hit_meets_centre_and_normal() {
     let chain = robots::mobile8();
     let p = HitPlanner::new(&chain, HitOptions::default()).unwrap();
     let q0 = p.default_ready().to_vec();
-    let now = p.racket().racket_pose(&chain.fk(&q0).unwrap());
+    let now = p.mount().racket_pose(&chain.fk(&q0).unwrap());
     // The demo's mobile8 hit (python/ttmanip/demo.py: mobile8_hit).
     let c = now.translation.vector + Vector3::new(0.02, -0.04, -0.07);
     let n = now.rotation.matrix().column(2).into_owned();
@@ -155,14 +155,14 @@ fn mobile8_racket_task_hit_meets_centre_and_normal() {
     );
     let traj = plan.trajectory.as_ref().unwrap();
     let s = traj.state(plan.t_hit).unwrap();
-    let racket = p.racket().racket_pose(&chain.fk(&s.q).unwrap());
+    let racket = p.mount().racket_pose(&chain.fk(&s.q).unwrap());
     assert!((racket.translation.vector - hit.centre()).norm() < 1e-6);
     let normal = racket.rotation.matrix().column(2).into_owned();
     assert!(normal.angle(&hit.normal()) < 1e-6);
     // Centre velocity as requested.
     let jac = chain.jacobian(&s.q, crate::JacobianFrame::Base).unwrap();
     let tw = jac * nalgebra::DVector::from_column_slice(&s.qd);
-    let tw = p.racket().racket_twist(&chain.fk(&s.q).unwrap(), tw.as_slice());
+    let tw = p.mount().racket_twist(&chain.fk(&s.q).unwrap(), tw.as_slice());
     for k in 0..3 {
         assert!((tw[k] - hit.twist[k]).abs() < 1e-6, "{tw:?}");
     }
@@ -231,8 +231,8 @@ fn the_earliest_time_reported_is_accepted() {
         let tool = chain.fk(&q).unwrap();
         let jac = chain.jacobian(&q, crate::JacobianFrame::Base).unwrap();
         let tw = jac * nalgebra::DVector::from_column_slice(&qd);
-        let twist = p.racket().racket_twist(&tool, tw.as_slice());
-        let pose = p.racket().racket_pose(&tool);
+        let twist = p.mount().racket_twist(&tool, tw.as_slice());
+        let pose = p.mount().racket_pose(&tool);
         let start = (k % 2 == 1).then(|| crate::traj::JointState {
             q: ready.iter().zip(r(&mut rng, 0.2)).map(|(a, b)| a + b).collect(),
             qd: r(&mut rng, 0.3)
@@ -316,7 +316,7 @@ fn mobile8_plans_under_its_own_gravity() {
     )
     .unwrap();
     let q0 = own.default_ready().to_vec();
-    let now = own.racket().racket_pose(&chain.fk(&q0).unwrap());
+    let now = own.mount().racket_pose(&chain.fk(&q0).unwrap());
     let c = now.translation.vector + Vector3::new(0.02, -0.04, -0.07);
     let n = now.rotation.matrix().column(2).into_owned();
     let hit = Hit::from_normal([c.x, c.y, c.z], [n.x, n.y, n.z], [-0.29, 0.19, 0.25], 1.5, None, None).unwrap();

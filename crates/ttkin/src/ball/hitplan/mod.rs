@@ -19,7 +19,7 @@
 //!    integration, guards every 10 ms) clears the net and first touches the table at the target
 //!    (within 1 mm). The post-impact spin depends on the racket, which depends on v₀: every
 //!    evaluation of the map solves the racket for its v₀ and flies the ball with that spin.
-//! 3. **Racket.** [`super::impact::Racket::solve`] gives the face normal and the racket velocity
+//! 3. **Racket.** [`super::impact::RacketImpact::solve`] gives the face normal and the racket velocity
 //!    (along the normal); the racket centre is the ball centre minus r·n (the ball touches the face
 //!    centre; only when that has no IK, `contact_offset` across the table in the face plane); the racket frame has its z axis on the face normal and its x axis (the handle) as
 //!    close to world up as possible (the convention of `python/ttmanip/pipeline.py`).
@@ -67,7 +67,7 @@ use search::{Begin, Search};
 pub use shoot::shoot;
 
 use super::flight::{BallState, Flight};
-use super::impact::{Racket, RacketHit};
+use super::impact::{RacketAtImpact, RacketImpact};
 pub use super::reach::{racket_rotation, Placement, Reach};
 use crate::chain::Chain;
 use crate::error::{Error, Result};
@@ -118,7 +118,7 @@ pub struct ReturnHit {
     /// Outgoing ball velocity (m/s, world) and the racket producing it.
     pub v_out: Vector3<f64>,
     /// Racket normal, velocity and outgoing spin (world).
-    pub racket: RacketHit,
+    pub racket: RacketAtImpact,
     /// The hit (racket pose in the robot's base frame, m; racket-centre twist, base axes; time,
     /// s from `now`): the `ttmanip.Hit` of the plan.
     pub hit: crate::hit::Hit,
@@ -165,8 +165,8 @@ pub struct ReturnPlanner {
     pub reach: Reach,
     /// Ready configuration (m, rad) from which strokes start at rest.
     pub ready: Vec<f64>,
-    /// Racket rubber.
-    pub racket: Racket,
+    /// The racket's impact model (rubber restitution, friction, face radius).
+    pub impact: RacketImpact,
     /// Flight model used for planning (10 ms RK4 step).
     pub flight: Flight,
     /// Shortest stroke (s) between planning and hitting.
@@ -211,7 +211,7 @@ impl ReturnPlanner {
             robot,
             placement: Placement::default(),
             reach: Reach::default(),
-            racket: Racket::default(),
+            impact: RacketImpact::default(),
             flight: Flight { step: 0.01, ..flight },
             min_stroke_time: 0.12,
             candidates: 3,
@@ -227,7 +227,7 @@ impl ReturnPlanner {
         let centre = Vector3::new(-1.85, 0.0, 0.5 * (planner.reach.lo.z + planner.reach.hi.z));
         let pose = planner
             .robot
-            .racket()
+            .mount()
             .tool_pose(&planner.base_pose(&centre, &Vector3::x()));
         let ik = planner.robot.analytic().expect("checked above");
         planner.ready = ik.nearest(&pose, &planner.ready, LimitFilter::Enforce).map_err(|e| {

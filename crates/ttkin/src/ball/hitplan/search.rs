@@ -3,7 +3,7 @@
 //! reach), the return-time loop of one candidate and the outcome choice.
 
 use super::super::flight::BallState;
-use super::super::impact::RacketHit;
+use super::super::impact::RacketAtImpact;
 use super::{ReturnHit, ReturnPlan, ReturnPlanner, ReturnStatus};
 use crate::error::{check_finite, Error, Result};
 use crate::traj::JointState;
@@ -12,7 +12,7 @@ use std::time::{Duration, Instant};
 
 /// An outgoing shot: ball velocity after the impact (m/s, world), the racket producing it, and the
 /// landing point (m, world).
-pub(super) type Shot = (Vector3<f64>, RacketHit, Vector3<f64>);
+pub(super) type Shot = (Vector3<f64>, RacketAtImpact, Vector3<f64>);
 
 /// How a plan starts: already decided (no bounce, out of reach), or a search over candidates.
 pub(super) enum Begin {

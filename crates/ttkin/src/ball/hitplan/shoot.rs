@@ -2,7 +2,7 @@
 //! produces it, and the check that the return clears the net and lands there.
 
 use super::super::flight::{BallState, EventKind, Flight};
-use super::super::impact::RacketHit;
+use super::super::impact::RacketAtImpact;
 use super::ReturnPlanner;
 use nalgebra::{Matrix3, Vector3};
 use std::cell::Cell;
@@ -15,18 +15,18 @@ impl ReturnPlanner {
         s: &BallState,
         target: [f64; 2],
         tf: f64,
-    ) -> Option<(Vector3<f64>, RacketHit, Vector3<f64>)> {
+    ) -> Option<(Vector3<f64>, RacketAtImpact, Vector3<f64>)> {
         let f = &self.flight;
         let goal = Vector3::new(target[0], target[1], f.model.radius);
         // Each solve starts from the previous one (the shooting iterates move v₀ a little); the
         // last solved racket is kept with its v₀.
-        let last: Cell<Option<(Vector3<f64>, RacketHit)>> = Cell::new(None);
+        let last: Cell<Option<(Vector3<f64>, RacketAtImpact)>> = Cell::new(None);
         let racket = |v: &Vector3<f64>| {
             let guess = last.get().map(|(_, h)| h);
             let hit = self
-                .racket
+                .impact
                 .solve_from(&f.model, &s.v, &s.w, v, guess.as_ref())
-                .or_else(|_| self.racket.solve(&f.model, &s.v, &s.w, v))
+                .or_else(|_| self.impact.solve(&f.model, &s.v, &s.w, v))
                 .ok();
             if let Some(h) = hit {
                 last.set(Some((*v, h)));

@@ -10,7 +10,7 @@ use crate::ball::flight::{BallState, Flight};
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Camera {
     /// Frame rate (Hz).
-    pub rate: f64,
+    pub rate_hz: f64,
     /// Delay from exposure to delivery (s).
     pub latency: f64,
     /// Position noise σ per axis (m).
@@ -28,7 +28,7 @@ pub struct Camera {
 impl Default for Camera {
     fn default() -> Self {
         Camera {
-            rate: 200.0,
+            rate_hz: 200.0,
             latency: 0.010,
             noise: 0.002,
             outlier_rate: 0.02,
@@ -64,8 +64,8 @@ impl Camera {
     pub fn observe(&self, truth: &Flight, s0: &BallState, stamp_error: f64, rng: &mut fastrand::Rng) -> Observations {
         let cam = self;
         // The camera runs for the whole incoming flight; each plan sees what was delivered by then.
-        let count = (1.2 * cam.rate) as usize;
-        let exposures: Vec<f64> = (0..count).map(|k| cam.start + k as f64 / cam.rate).collect();
+        let count = (1.2 * cam.rate_hz) as usize;
+        let exposures: Vec<f64> = (0..count).map(|k| cam.start + k as f64 / cam.rate_hz).collect();
         let truth_path = crate::ball::predict::predict(truth, s0, &exposures).expect("valid times");
         // The time stamps the planner sees: the exposures, off by the ball's latency error.
         let times: Vec<f64> = exposures.iter().map(|t| t + stamp_error).collect();
@@ -84,7 +84,7 @@ impl Camera {
                 o
             })
             .collect();
-        let first = (cam.window * cam.rate).round() as usize + 1;
+        let first = (cam.window * cam.rate_hz).round() as usize + 1;
         Observations {
             incoming: *s0,
             world: *truth,

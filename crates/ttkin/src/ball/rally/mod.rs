@@ -117,8 +117,8 @@ impl DecideConfig {
     pub fn of(cfg: &RallyConfig) -> Self {
         DecideConfig {
             target: cfg.target,
-            window_frames: (cfg.camera.window * cfg.camera.rate).round() as usize + 1,
-            frame_period: 1.0 / cfg.camera.rate,
+            window_frames: (cfg.camera.window * cfg.camera.rate_hz).round() as usize + 1,
+            frame_period: 1.0 / cfg.camera.rate_hz,
             correction_delay: cfg.correction_delay,
         }
     }

@@ -195,7 +195,7 @@ pub fn score(
             let rkc = racket_at(b.t);
             let offset = off(&b, &rkc);
             // The face plane passing the ball outside the racket is no contact: keep looking.
-            if offset <= planner.racket.radius {
+            if offset <= planner.impact.radius {
                 contact = Some((b, rkc, offset));
             }
         }
@@ -210,7 +210,7 @@ pub fn score(
     out.contact = true;
     let point = b.p - r * rkc.normal;
     let v_point = rkc.velocity + rkc.omega.cross(&(point - rkc.centre));
-    let (v, w) = planner.racket.hit(&truth.model, &b.v, &b.w, &rkc.normal, &v_point);
+    let (v, w) = planner.impact.hit(&truth.model, &b.v, &b.w, &rkc.normal, &v_point);
     let after = BallState { v, w, ..b };
     let (_, events) = truth.run(&after, b.t + 2.0, None);
     out.after = Some(after);

@@ -10,7 +10,7 @@
 //!    `targets` (x ∈ {0.4, 0.8, 1.2} m, y ∈ {−0.5, 0, 0.5} m on the opponent's half) and a return
 //!    time T of `return_times` ({0.45, 0.6, 0.75, 0.9, 1.05} s), the drag-free parabola's
 //!    v_out = (goal − p − ½·g·T²)/T, the racket normal and velocity of the impact model that give
-//!    it ([`super::impact::Racket::solve`]), and the ball leaving with v_out and that racket's
+//!    it ([`super::impact::RacketImpact::solve`]), and the ball leaving with v_out and that racket's
 //!    outgoing spin **really** returns: in the flight model (drag and Magnus, 10 ms RK4) its first
 //!    contact is the table on the opponent's half (so it clears the net);
 //! 3. the racket can be **placed** for that shot: for some roll of `rolls` ({0, ±30°, ±60°}) of
@@ -41,7 +41,7 @@
 mod returns;
 
 use super::flight::{BallState, EventKind, Flight};
-use super::impact::Racket;
+use super::impact::RacketImpact;
 use crate::chain::Chain;
 use crate::error::{Error, Result};
 use crate::ik::{Analytic, LimitFilter};
@@ -136,7 +136,7 @@ pub struct ReachRegion {
     /// closest to world y (across the table): the racket centre is moved by the opposite.
     pub contact_offsets: Vec<f64>,
     /// Rubber of the racket whose impact model gives each shot's normal and velocity.
-    pub racket: Racket,
+    pub impact: RacketImpact,
     /// Touch region only: azimuths and elevations (rad) of the face normal, each combination one
     /// normal (cos e·cos a, cos e·sin a, sin e) in the world: toward the opponent.
     pub normal_angles: Vec<f64>,
@@ -252,7 +252,7 @@ impl ReachRegion {
             volume: Reach::default(),
             targets,
             return_times: vec![0.45, 0.6, 0.75, 0.9, 1.05],
-            racket: Racket::default(),
+            impact: RacketImpact::default(),
             contact_offsets: vec![0.0],
             normal_angles: vec![-30.0 * deg, 0.0, 30.0 * deg],
             rolls: vec![-60.0 * deg, -30.0 * deg, 0.0, 30.0 * deg, 60.0 * deg],

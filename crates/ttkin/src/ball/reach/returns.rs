@@ -5,7 +5,7 @@
 //! configuration.
 
 use super::super::flight::{BallState, EventKind, Flight};
-use super::super::impact::RacketHit;
+use super::super::impact::RacketAtImpact;
 use super::{ReachRegion, Reachability};
 use crate::ik::{joint_velocity, LimitFilter};
 use nalgebra::{IsometryMatrix3, Translation3, Vector3};
@@ -57,7 +57,7 @@ impl ReachRegion {
             let goal = Vector3::new(target[0], target[1], flight.model.radius);
             for &tf in &self.return_times {
                 let v_out = (goal - s.p - 0.5 * g * tf * tf) / tf;
-                let Ok(racket) = self.racket.solve(&flight.model, &s.v, &s.w, &v_out) else {
+                let Ok(racket) = self.impact.solve(&flight.model, &s.v, &s.w, &v_out) else {
                     continue;
                 };
                 // The robot's conditions first (IK and J⁻¹V cost about a µs, the landing check a
@@ -82,7 +82,7 @@ impl ReachRegion {
     /// rolls and IK branches (`Shot` when no pose is within the position limits) and, when one
     /// meets them all, its minimum joint time (s). J⁻¹V (the costly test) is skipped for a pose
     /// out of time once the stage it could show is reached (`deepest` or this shot's).
-    fn shot_stage(&self, s: &BallState, racket: &RacketHit, now: f64, deepest: Stage) -> (Stage, Option<f64>) {
+    fn shot_stage(&self, s: &BallState, racket: &RacketAtImpact, now: f64, deepest: Stage) -> (Stage, Option<f64>) {
         let base_from_world = self.placement.world_from_base().inverse();
         let v_b = base_from_world.rotation * racket.velocity;
         let twist = [v_b.x, v_b.y, v_b.z, 0.0, 0.0, 0.0];
