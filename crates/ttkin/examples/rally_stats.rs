@@ -266,7 +266,10 @@ fn main() {
     // and the corrections, thread CPU time.
     let tail = |v: &mut Vec<f64>| {
         v.sort_by(f64::total_cmp);
-        let q = |p: f64| v.get(((v.len() as f64 * p) as usize).min(v.len().saturating_sub(1))).copied();
+        let q = |p: f64| {
+            v.get(((v.len() as f64 * p) as usize).min(v.len().saturating_sub(1)))
+                .copied()
+        };
         let q = |p: f64| q(p).unwrap_or(f64::NAN);
         format!(
             "n {} p50 {:.0} p90 {:.0} p99 {:.0} max {:.0} us",
