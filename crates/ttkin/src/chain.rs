@@ -380,57 +380,85 @@ impl Chain {
     /// Batch forward kinematics: `qs` holds N configurations row-major (N × n), `out` receives N
     /// row-major 4×4 tool poses (N × 16). Runs in parallel; every configuration is checked first.
     pub fn fk_batch(&self, qs: &[f64], out: &mut [f64]) -> Result<()> {
-        let count = self.batch_count(qs, out.len(), 16)?;
-        let n = self.dof();
-        out.par_chunks_mut(16 * BATCH_CHUNK)
-            .zip(qs.par_chunks(n * BATCH_CHUNK))
-            .for_each(|(o, q)| {
-                for (oi, qi) in o.chunks_exact_mut(16).zip(q.chunks_exact(n)) {
-                    write_row_major(&self.fk_unchecked(qi), oi);
-                }
-            });
-        debug_assert_eq!(count * 16, out.len());
-        Ok(())
+        self.for_each_row(
+            qs,
+            out,
+            16,
+            || (),
+            |_, q, o| {
+                write_row_major(&self.fk_unchecked(q), o);
+                Ok(())
+            },
+        )
     }
 
     /// Batch of every link frame: `out` receives N × n row-major 4×4 frames (N × n × 16).
     pub fn fk_all_batch(&self, qs: &[f64], out: &mut [f64]) -> Result<()> {
-        let n = self.dof();
-        self.batch_count(qs, out.len(), 16 * n)?;
-        out.par_chunks_mut(16 * n * BATCH_CHUNK)
-            .zip(qs.par_chunks(n * BATCH_CHUNK))
-            .try_for_each(|(o, q)| {
-                for (oi, qi) in o.chunks_exact_mut(16 * n).zip(q.chunks_exact(n)) {
-                    for (frame, dst) in self.fk_all(qi)?.iter().zip(oi.chunks_exact_mut(16)) {
-                        write_row_major(frame, dst);
-                    }
+        self.for_each_row(
+            qs,
+            out,
+            16 * self.dof(),
+            || (),
+            |_, q, o| {
+                for (frame, dst) in self.fk_all(q)?.iter().zip(o.chunks_exact_mut(16)) {
+                    write_row_major(frame, dst);
                 }
                 Ok(())
-            })
+            },
+        )
     }
 
     /// Batch Jacobians: `out` receives N row-major 6 × n matrices (N × 6n).
     pub fn jacobian_batch(&self, qs: &[f64], frame: JacobianFrame, out: &mut [f64]) -> Result<()> {
         let n = self.dof();
-        self.batch_count(qs, out.len(), 6 * n)?;
-        out.par_chunks_mut(6 * n * BATCH_CHUNK)
-            .zip(qs.par_chunks(n * BATCH_CHUNK))
-            .for_each(|(o, q)| {
-                let mut jac = Matrix6xX::zeros(n);
-                for (oi, qi) in o.chunks_exact_mut(6 * n).zip(q.chunks_exact(n)) {
-                    self.jacobian_into(qi, frame, &mut jac);
-                    for r in 0..6 {
-                        for c in 0..n {
-                            oi[r * n + c] = jac[(r, c)];
-                        }
+        self.for_each_row(
+            qs,
+            out,
+            6 * n,
+            || Matrix6xX::zeros(n),
+            |jac, q, o| {
+                self.jacobian_into(q, frame, jac);
+                for r in 0..6 {
+                    for c in 0..n {
+                        o[r * n + c] = jac[(r, c)];
                     }
                 }
-            });
-        Ok(())
+                Ok(())
+            },
+        )
+    }
+
+    /// The one parallel loop of the batches over configurations: checks `qs` (N × n finite
+    /// values) against `out` (N × `per_item` values), then calls `row(scratch, q_i, out_i)` for
+    /// every row, in parallel over fixed chunks of rows (so results do not depend on the thread
+    /// count), with `scratch` made by `init` once per chunk; the first row error otherwise.
+    pub(crate) fn for_each_row<S, I, F>(
+        &self,
+        qs: &[f64],
+        out: &mut [f64],
+        per_item: usize,
+        init: I,
+        row: F,
+    ) -> Result<()>
+    where
+        I: Fn() -> S + Sync,
+        F: Fn(&mut S, &[f64], &mut [f64]) -> Result<()> + Sync,
+    {
+        let n = self.dof();
+        self.batch_count(qs, out.len(), per_item)?;
+        out.par_chunks_mut(per_item * BATCH_CHUNK)
+            .zip(qs.par_chunks(n * BATCH_CHUNK))
+            .try_for_each(|(o, q)| {
+                let mut scratch = init();
+                for (oi, qi) in o.chunks_exact_mut(per_item).zip(q.chunks_exact(n)) {
+                    row(&mut scratch, qi, oi)?;
+                }
+                Ok(())
+            })
     }
 
     /// Validates a batch: `qs` is N × n finite values and `out_len` is N × `per_item`.
-    pub(crate) fn batch_count(&self, qs: &[f64], out_len: usize, per_item: usize) -> Result<usize> {
+    fn batch_count(&self, qs: &[f64], out_len: usize, per_item: usize) -> Result<usize> {
         let n = self.dof();
         if !qs.len().is_multiple_of(n) {
             return Err(Error::shape(

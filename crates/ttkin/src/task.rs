@@ -9,9 +9,7 @@
 
 use nalgebra::{DMatrix, DVector, IsometryMatrix3, Matrix3, Matrix6xX, Rotation3, Translation3, Unit, Vector3};
 
-use rayon::prelude::*;
-
-use crate::chain::{Chain, JacobianFrame, BATCH_CHUNK};
+use crate::chain::{Chain, JacobianFrame};
 use crate::error::{Error, Result};
 
 /// Distance of the racket centre along the z axis of the last frame in seed 000 (m).
@@ -204,16 +202,16 @@ impl Task {
     /// `out` (N × `dim()` values), in parallel over fixed chunks (results independent of the
     /// thread count).
     pub fn coordinates_batch(&self, chain: &Chain, qs: &[f64], out: &mut [f64]) -> Result<()> {
-        let (m, n) = (self.dim(), chain.dof());
-        chain.batch_count(qs, out.len(), m)?;
-        out.par_chunks_mut(m * BATCH_CHUNK)
-            .zip(qs.par_chunks(n * BATCH_CHUNK))
-            .for_each(|(o, q)| {
-                for (oi, qi) in o.chunks_exact_mut(m).zip(q.chunks_exact(n)) {
-                    self.coordinates(&chain.fk_unchecked(qi), oi);
-                }
-            });
-        Ok(())
+        chain.for_each_row(
+            qs,
+            out,
+            self.dim(),
+            || (),
+            |_, q, o| {
+                self.coordinates(&chain.fk_unchecked(q), o);
+                Ok(())
+            },
+        )
     }
 
     /// [`Task::jacobian_at`] of N configurations `qs` (N × n values, row-major; m, rad) against
@@ -227,23 +225,18 @@ impl Task {
         out: &mut [f64],
     ) -> Result<()> {
         let (m, n) = (self.dim(), chain.dof());
-        chain.batch_count(qs, out.len(), m * n)?;
-        out.par_chunks_mut(m * n * BATCH_CHUNK)
-            .zip(qs.par_chunks(n * BATCH_CHUNK))
-            .for_each(|(o, q)| {
-                let (mut j, mut je) = (Matrix6xX::zeros(n), vec![0.0; m * n]);
-                for (oi, qi) in o.chunks_exact_mut(m * n).zip(q.chunks_exact(n)) {
-                    let t = chain.jacobian_into(qi, JacobianFrame::Base, &mut j);
-                    self.jacobian_into(&j, &t, target.unwrap_or(&t), &mut je);
-                    // column-major dim × n → row-major
-                    for (c, col) in je.chunks_exact(m).enumerate() {
-                        for (r, v) in col.iter().enumerate() {
-                            oi[r * n + c] = *v;
-                        }
-                    }
+        let scratch = || (Matrix6xX::zeros(n), vec![0.0; m * n]);
+        chain.for_each_row(qs, out, m * n, scratch, |(j, je), q, o| {
+            let t = chain.jacobian_into(q, JacobianFrame::Base, j);
+            self.jacobian_into(j, &t, target.unwrap_or(&t), je);
+            // column-major dim × n → row-major
+            for (c, col) in je.chunks_exact(m).enumerate() {
+                for (r, v) in col.iter().enumerate() {
+                    o[r * n + c] = *v;
                 }
-            });
-        Ok(())
+            }
+            Ok(())
+        })
     }
 
     /// Task coordinates of a tool pose (base frame), `dim()` values: position (m); position (m)
@@ -349,17 +342,17 @@ pub fn racket_angle_jacobian_at(chain: &Chain, q: &[f64], offset: f64) -> Result
 /// singular row (normal along ±z) otherwise.
 pub fn racket_angle_jacobian_batch(chain: &Chain, qs: &[f64], offset: f64, out: &mut [f64]) -> Result<()> {
     let n = chain.dof();
-    chain.batch_count(qs, out.len(), 5 * n)?;
-    out.par_chunks_mut(5 * n * BATCH_CHUNK)
-        .zip(qs.par_chunks(n * BATCH_CHUNK))
-        .try_for_each(|(o, q)| {
-            let mut j = Matrix6xX::zeros(n);
-            for (oi, qi) in o.chunks_exact_mut(5 * n).zip(q.chunks_exact(n)) {
-                let t = chain.jacobian_into(qi, JacobianFrame::Base, &mut j);
-                oi.copy_from_slice(racket_angle_jacobian(&j, &t, offset)?.transpose().as_slice());
-            }
+    chain.for_each_row(
+        qs,
+        out,
+        5 * n,
+        || Matrix6xX::zeros(n),
+        |j, q, o| {
+            let t = chain.jacobian_into(q, JacobianFrame::Base, j);
+            o.copy_from_slice(racket_angle_jacobian(j, &t, offset)?.transpose().as_slice());
             Ok(())
-        })
+        },
+    )
 }
 
 /// Rotation vector θ·axis (rad) of a rotation matrix: the SO(3) logarithm, accurate at θ → 0 and
@@ -464,7 +457,7 @@ mod tests {
     fn batches_equal_single_calls_row_by_row() {
         let chain = crate::robots::mobile8();
         let n = chain.dof();
-        let rows = 2 * BATCH_CHUNK + 3;
+        let rows = 2 * crate::chain::BATCH_CHUNK + 3;
         let qs: Vec<f64> = (0..rows * n)
             .map(|k| ((k * 37 % 101) as f64 / 101.0 - 0.5) * 2.0)
             .collect();

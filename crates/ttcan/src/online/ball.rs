@@ -373,25 +373,7 @@ impl BallBrain {
 /// The wire form of a ball planner's hit: racket pose and twist in the robot's base frame, the
 /// hit time `t_hit` (s, controller clock).
 pub fn hit_msg(hit: &ReturnHit, id: u32, stroke: u32, t_hit: f64) -> HitMsg {
-    let r = hit.hit.pose.rotation.matrix();
-    HitMsg {
-        id,
-        stroke,
-        t_hit,
-        rotation: [
-            r[(0, 0)],
-            r[(0, 1)],
-            r[(0, 2)],
-            r[(1, 0)],
-            r[(1, 1)],
-            r[(1, 2)],
-            r[(2, 0)],
-            r[(2, 1)],
-            r[(2, 2)],
-        ],
-        centre: hit.hit.pose.translation.vector.into(),
-        twist: hit.hit.twist,
-    }
+    HitMsg::from_pose(id, stroke, t_hit, &hit.hit.pose, hit.hit.twist)
 }
 
 impl Brain for BallBrain {

@@ -62,6 +62,29 @@ pub struct HitMsg {
     pub twist: [f64; 6],
 }
 
+impl HitMsg {
+    /// The hit `id` for `stroke` at `t_hit` (s, controller clock) with the racket at `pose`
+    /// (racket frame in the base frame, m) and the racket-centre `twist` [v (m/s); ω (rad/s)]
+    /// (base axes): the rotation written row-major, the one conversion of a pose to the wire.
+    pub fn from_pose(
+        id: u32,
+        stroke: u32,
+        t_hit: f64,
+        pose: &nalgebra::IsometryMatrix3<f64>,
+        twist: [f64; 6],
+    ) -> HitMsg {
+        let r = pose.rotation.matrix();
+        HitMsg {
+            id,
+            stroke,
+            t_hit,
+            rotation: std::array::from_fn(|k| r[(k / 3, k % 3)]),
+            centre: pose.translation.vector.into(),
+            twist,
+        }
+    }
+}
+
 /// A ball observation (camera → controller).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ObservationMsg {
@@ -445,6 +468,21 @@ mod tests {
             centre: [x, -0.55, 0.05],
             twist: [0.9, -2.8, -0.6, 0.0, 0.1, 0.0],
         })
+    }
+
+    #[test]
+    fn a_hit_from_a_pose_reads_back_as_that_pose() {
+        let r = nalgebra::Rotation3::from_euler_angles(0.3, -0.7, 1.1);
+        let pose = nalgebra::IsometryMatrix3::from_parts(nalgebra::Translation3::new(0.35, -0.55, 0.05), r);
+        let twist = [0.9, -2.8, -0.6, 0.0, 0.1, 0.0];
+        let h = HitMsg::from_pose(7, 2, 12.5, &pose, twist);
+        assert_eq!(
+            (h.id, h.stroke, h.t_hit, h.twist, h.centre),
+            (7, 2, 12.5, twist, [0.35, -0.55, 0.05])
+        );
+        assert_eq!(h.rotation[1], r.matrix()[(0, 1)], "row-major");
+        let back = crate::online::planner::hit_pose(&h).unwrap();
+        assert!((back.to_homogeneous() - pose.to_homogeneous()).abs().max() < 1e-15);
     }
 
     fn all() -> [Message; 4] {
