@@ -28,9 +28,14 @@ import types
 
 import numpy as np
 import ttmanip
+import ttmanip.ball_fit
+import ttmanip.ctl
+import ttmanip.files
 
-#: Submodules of ttmanip whose public names are part of the API.
-MODULES = ("ball", "dynamics", "motor", "robots", "traj")
+#: Submodules of ttmanip whose public names are part of the API (``ctl``, ``files`` and
+#: ``ball_fit`` since issue 29's leftovers: the controller link and trajectory writer, the file
+#: readers, and the ball calibration with its binding).
+MODULES = ("ball", "dynamics", "motor", "robots", "traj", "ctl", "files", "ball_fit")
 
 
 def _batched(*item):
@@ -385,6 +390,32 @@ API: dict[str, dict] = {
     "traj.JointTrajectory.jerk": {"args": {"t": "time"}},
     "traj.Stroke.feasible": {},
     "traj.Stroke.on_time": {},
+    # --- the controller link and trajectory files (issue 19, 29)
+    "ctl.Link": {"args": {"address": "address", "bind": "address"}},
+    "ctl.Link.hit": {"args": {"hit": "hit", "id": "wire_int", "stroke": "wire_int"}},
+    "ctl.Link.observation": {"args": {"id": "wire_int", "camera_time": "time", "position": "vector3"}},
+    "ctl.Link.receive": {"args": {"timeout": "timeout"}},
+    "ctl.Link.close": {},
+    "ctl.write_trajectory": {"args": {"path": "out_csv", "tau_ff": "array_or_none"}, "os_error": True},
+    "ctl.write_stroke": {"args": {"path": "out_csv", "rate_hz": "rate"}, "os_error": True},
+    # --- the file readers (issue 29): a missing input file is Python's FileNotFoundError
+    "files.read_limited": {
+        "args": {"f": "binary_file", "what": "label", "limit": "byte_limit"},
+        "type_error": ("f: expected a binary file",),
+    },
+    "files.read_text": {"args": {"path": "text_path", "what": "label"}, "os_error": True},
+    "files.json_depth": {"args": {"text": "json_text"}},
+    # integers are read as floats, so a 401-digit one is inf, and JSON's NaN is NaN (documented:
+    # the caller checks finiteness)
+    "files.load_json": {"args": {"text": "json_text_or_bytes", "what": "label"}, "may_be_inf": True},
+    # --- the ball calibration on recorded flights (issue 28) and its binding
+    "ball_fit.read_flights": {"args": {"path": "flights_path"}, "os_error": True},
+    # std is NaN where a parameter is not identified (documented: table friction)
+    "ball_fit.fit": {
+        "args": {"path": "flights_path", "window": "window", "period": "period"},
+        "os_error": True,
+        "may_be_inf": True,
+    },
 }
 
 
@@ -456,6 +487,8 @@ PICKLE_PROBES: dict[str, object] = {
     "traj.CartesianTrajectory": lambda c: (c.sample(0.2), c.sample_rate(100.0)),
     "traj.JointTrajectory": lambda j: (j.sample(np.linspace(0.0, j.duration, 7)), j.coefficients, j.knots),
     "traj.Stroke": lambda s: (s.trajectory.sample(0.1), s.on_time, s.feasible),
+    # a link pickles as its addresses and opens a socket of its own when unpickled
+    "ctl.Link": lambda link: (link.address, link.bind),
 }
 
 

@@ -245,6 +245,7 @@ def sample_objects() -> dict[str, object]:
         "ball.Estimate": _demo_estimate(),
         "HitPlan": _demo_plan(),
         "SimResult": _demo_sim(),
+        "ctl.Link": _link(),
         "traj.Stroke": ttmanip.traj.stroke(
             None, (qg, np.zeros(n), np.zeros(n)), qg + 0.1, np.zeros(n), 0.6, qg
         ),
@@ -387,7 +388,169 @@ def pose_or_junk(d: Draw, ctx):
     return poses(d, ctx["robot"]) if d(st.booleans()) else d.array([(4, 4), (3, 3)])
 
 
+# -- the controller link, trajectory files, file readers and ball calibration (issue 29)
+
+
+@functools.cache
+def _link():
+    return ttmanip.ctl.Link(("127.0.0.1", 9))  # the discard port: nothing answers
+
+
+def address(d: Draw, _ctx):
+    return d(
+        st.sampled_from(
+            [
+                ("127.0.0.1", 9),
+                ("", 0),
+                ("127.0.0.1", 0),
+                ("localhost", 65536),
+                ("127.0.0.1", -1),
+                ("127.0.0.1", 10**400),
+                ("127.0.0.1", 1e300),
+                ("127.0.0.1", float("nan")),
+                ("127.0.0.1", True),
+                ("127.0.0.1",),
+                (1.0, 5),
+                "ab",
+                None,
+                np.array([1.0, 2.0]),
+            ]
+        )
+    )
+
+
+def wire_int(d: Draw, _ctx):
+    return d(st.one_of(st.integers(-3, 10), st.sampled_from([2**32, 2**64, -(2**63) - 1, *HUGE_INTS])))
+
+
+def timeout(d: Draw, _ctx):
+    return d(st.sampled_from([0.0, 0.001, 5e-324, -1.0, float("nan"), float("inf"), 1e300, *HUGE_INTS]))
+
+
+def out_csv(d: Draw, _ctx):
+    return d(st.sampled_from([os.path.join(TMP, "trajectory.csv"), "/nonexistent-dir/trajectory.csv"]))
+
+
+def array_or_none(d: Draw, ctx):
+    return None if d(st.booleans()) else d.array([(2, ctx["n"]), (ctx["n"],), (3, ctx["n"])])
+
+
+def binary_file(d: Draw, _ctx):
+    import io
+
+    contents = [b"", b'{"ob": [[1, 2, 3]]}', b"\xff\xfe\x00", b"x" * 100, b"[" * 70 + b"]" * 70]
+    return d(st.one_of(st.sampled_from(contents).map(io.BytesIO), st.sampled_from([None, "a.json", 1.0])))
+
+
+def byte_limit(d: Draw, _ctx):
+    return d(st.sampled_from([-1, 0, 5, 16 << 20, (512 << 20) + 1, 2**64, 1.5, True, *HUGE_INTS]))
+
+
+def label(d: Draw, _ctx):
+    return d(st.sampled_from(["a.json", "", "x" * 300, None]))
+
+
+JSON_TEXTS = [
+    "",
+    "{}",
+    '{"ob": [[1, 2, 3], [4, 5, 6]]}',
+    "[" * 64 + "]" * 64,
+    "[" * 65 + "]" * 65,
+    "[" * 100000,
+    '{"a": 1e400}',
+    "1" * 401,
+    "NaN",
+    '"\\ud800"',
+    '{"a": "[[[["}',
+    "garbage",
+]
+
+
+def json_text(d: Draw, _ctx):
+    return d(st.sampled_from(JSON_TEXTS))
+
+
+def json_text_or_bytes(d: Draw, _ctx):
+    text = d(st.sampled_from(JSON_TEXTS))
+    return d(st.sampled_from([text, text.encode(), b"\xff" + text.encode()]))
+
+
+@functools.cache
+def _files() -> dict[str, str]:
+    """Files and folders the readers are called on: valid synthetic flights (a folder and a zip),
+    a folder of malformed ones, an empty folder, a non-UTF-8 file, a folder given as a file."""
+    import json
+    import zipfile
+
+    out = {}
+    rng = np.random.default_rng(29)
+    good = os.path.join(TMP, "flights")
+    os.makedirs(good, exist_ok=True)
+    t = np.arange(40) * 0.0108  # 40 frames of the recorded data's 10.8 ms
+    for i in range(8):
+        s = ttmanip.ball.state(
+            [-1.3, rng.uniform(-0.2, 0.2), 0.25],
+            [2.5 + rng.uniform(-0.3, 0.3), 0.0, 1.0],
+            [0.0, rng.uniform(-40, 40), 0.0],
+        )
+        p = ttmanip.ball.predict(s, t)  # short of the net: every frame finite
+        rows = np.column_stack([p, np.gradient(p, t, axis=0)])
+        with open(os.path.join(good, f"{i}.json"), "w") as f:
+            json.dump({"ob": rows.tolist()}, f)
+    out["folder"] = good
+    out["zip"] = os.path.join(TMP, "flights.zip")
+    with zipfile.ZipFile(out["zip"], "w") as z:
+        for i in range(8):
+            z.write(os.path.join(good, f"{i}.json"), f"{i}.json")
+    bad = os.path.join(TMP, "bad-flights")
+    os.makedirs(bad, exist_ok=True)
+    for i, text in enumerate(['{"ob": [[1, 2]]}', '{"ob": [[true, 1, 2]]}', "[" * 100, '{"ob": "x"}']):
+        with open(os.path.join(bad, f"{i}.json"), "w") as f:
+            f.write(text)
+    out["bad"] = bad
+    out["empty"] = os.path.join(TMP, "no-flights")
+    os.makedirs(out["empty"], exist_ok=True)
+    out["binary"] = os.path.join(TMP, "binary.json")
+    with open(out["binary"], "wb") as f:
+        f.write(b'{"ob": \xff}')
+    out["one"] = os.path.join(good, "0.json")
+    return out
+
+
+def flights_path(d: Draw, _ctx):
+    f = _files()
+    return d(st.sampled_from([f["folder"], f["zip"], f["bad"], f["empty"], f["one"], "/nonexistent/flights"]))
+
+
+def text_path(d: Draw, _ctx):
+    f = _files()
+    return d(st.sampled_from([f["one"], f["binary"], f["folder"], "/dev/zero", "/nonexistent/x.json"]))
+
+
+def window(d: Draw, _ctx):
+    return d(st.sampled_from([-1, 0, 1, 3, 20, 10**6, 2**64, 1.5, *HUGE_INTS]))
+
+
+def period(d: Draw, _ctx):
+    return None if d(st.booleans()) else d.value()
+
+
 SPECIAL_STRATEGIES = {
+    "address": address,
+    "wire_int": wire_int,
+    "timeout": timeout,
+    "out_csv": out_csv,
+    "array_or_none": array_or_none,
+    "binary_file": binary_file,
+    "byte_limit": byte_limit,
+    "label": label,
+    "json_text": json_text,
+    "json_text_or_bytes": json_text_or_bytes,
+    "flights_path": flights_path,
+    "text_path": text_path,
+    "window": window,
+    "period": period,
+    "vector3": lambda d, _ctx: d.array([(3,), (2,), (2, 3)]),
     "ball_model_name": lambda d, _ctx: d(
         st.sampled_from(["default", "muelling", "mpi", "tt3d", "vacuum", "bogus"])
     ),
@@ -648,11 +811,8 @@ def run_huge_int(d: Draw, key: str, obj):
     except ttmanip.TtmanipError as e:
         # a refusal of the huge int names its argument and the accepted range
         if "is out of range; expected" in str(e):
-            huge = [
-                k
-                for k, v in kwargs.items()
-                if isinstance(v, int) and not isinstance(v, bool) and v in HUGE_INTS
-            ]
+            # (another int argument, e.g. a negative id, may be the one refused first)
+            huge = [k for k, v in kwargs.items() if isinstance(v, int) and not isinstance(v, bool)]
             assert any(f"{k}: " in str(e) for k in huge), f"{key}({p.name}={value}): {e}"
     except BaseException as e:  # noqa: BLE001 - the point: nothing else may escape
         if isinstance(e, KeyboardInterrupt):

@@ -819,6 +819,7 @@ def racket_states(robot: Robot, q: ArrayLike, qd: ArrayLike) -> _F:
     """(N, 22) per joint state: racket pose (row-major 4×4, base frame, m), racket-centre twist (6,)."""
 
 def hit_check(pose: ArrayLike, twist: ArrayLike, t: float) -> None: ...
+def hit_batch_check(robot: Robot, count: int) -> None: ...
 
 # issue 29: the one array conversion, the rally's bound
 def real_array(obj: ArrayLike, what: str) -> _F:

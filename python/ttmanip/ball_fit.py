@@ -34,6 +34,10 @@ def _parse(name: str, text: str | bytes) -> tuple[np.ndarray, np.ndarray | None]
         raise _t.TtmanipError(
             f"{name}: 'ob' must be at least 10 rows of 3 or 6 numbers, got shape {ob.shape}"
         )
+    bad = np.flatnonzero(~np.isfinite(ob).all(axis=1))
+    if bad.size:
+        # JSON's NaN and Infinity, or a 401-digit integer read as inf: a position that is no number
+        raise _t.TtmanipError(f"{name}: 'ob' row {bad[0]} is not finite: {ob[bad[0]].tolist()}")
     return ob[:, :3].copy(), (ob[:, 3:6].copy() if ob.shape[1] == 6 else None)
 
 
@@ -73,8 +77,8 @@ def _items(p: Path) -> list[tuple[str, bytes]]:
 def read_flights(path: str | Path) -> tuple[list[str], list[np.ndarray], list[np.ndarray | None]]:
     """Flights from a zip or a folder of ``*.json`` (searched recursively), sorted by path: names,
     positions (N, 3) m, tracker velocities (N, 3) m/s or None. A file over 16 MiB, flights over
-    512 MiB in all, JSON that is not UTF-8 or nested over 64 deep, or rows that are not numbers
-    are refused with a :class:`ttmanip.TtmanipError` naming the file."""
+    512 MiB in all, JSON that is not UTF-8 or nested over 64 deep, or rows that are not finite
+    numbers are refused with a :class:`ttmanip.TtmanipError` naming the file."""
     p = Path(path)
     items = _items(p)
     if not items:

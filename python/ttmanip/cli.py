@@ -3,7 +3,8 @@
 Every subcommand takes ``--out DIR`` and writes its products there (PNG, CSV, JSON). Exit status,
 shared with ``ttctl`` and ``ttdrive-sim``: 0 done; 1 bad input (usage error, bad file, unwritable
 folder, bad value, missing or unknown key), with one line ``ttmanip: error: KEY: problem``; 2 not
-done (a hit that cannot be planned, a simulated run that faulted).
+done (a hit that cannot be planned, a simulated run that faulted); 130 interrupted by Ctrl-C
+(every long call stops within about a second).
 
 examples:
   ttmanip demo --out out/demo
@@ -46,6 +47,8 @@ are refused (as in robot files); at most 16 MiB, UTF-8, nested at most 64 deep."
 
 #: Exit statuses shared with ``ttctl`` and ``ttdrive-sim`` (``ttcan::runtime::exit``).
 EXIT_SUCCESS, EXIT_BAD_INPUT, EXIT_NOT_DONE = 0, 1, 2
+#: Exit status after Ctrl-C: 128 + SIGINT, as a shell reports a command the signal ended.
+EXIT_INTERRUPTED = 130
 
 #: Largest hit file read (bytes) and deepest JSON nesting accepted.
 
@@ -711,6 +714,11 @@ def main(argv: list[str] | None = None) -> int:
     except OSError as e:
         print(f"ttmanip: error: {e.filename or ''}: {e.strerror or e}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        # every long call stops on Ctrl-C (the bindings poll for it while they work): one line,
+        # no traceback, the shell's status for a command SIGINT ended
+        print("\nttmanip: interrupted (Ctrl-C): stopped before the end", file=sys.stderr)
+        return EXIT_INTERRUPTED
 
 
 if __name__ == "__main__":

@@ -90,10 +90,21 @@ def write_stroke(path: str | Path, rate_hz: float = 1000.0) -> Path:
     drives of ``ttdrive-sim`` carry their motor model's load, not the robot's)."""
     from . import pipeline, robots
 
+    try:
+        rate = float(rate_hz)
+    except (TypeError, ValueError, OverflowError):
+        rate = float("nan")  # a huge int (10**400) or a non-number: refused below, named
+    if isinstance(rate_hz, bool) or not (np.isfinite(rate) and rate > 0):
+        shown = f"an integer of {len(str(rate_hz))} digits" if isinstance(rate_hz, int) else repr(rate_hz)
+        raise TtmanipError(f"rate_hz: expected a sample rate > 0 Hz, got {shown}")
     robot = robots.gantry6()
     plan = pipeline.plan_hit(robot, pipeline.DEMO_HIT, raise_on_failure=True)
-    t, q, qd, qdd = plan.sample(rate_hz)
+    t, q, qd, qdd = plan.sample(rate)
     return write_trajectory(path, t, q, qd, qdd)
+
+
+#: Longest wait of :meth:`Link.receive`, s (about 11 days; ``None`` waits without end).
+MAX_RECEIVE_TIMEOUT = 1e6
 
 
 def _address(name: str, address) -> tuple[str, int]:
@@ -122,15 +133,30 @@ class Link:
 
     def __init__(self, address: tuple[str, int], bind: tuple[str, int] = ("", 0)):
         self.address = _address("address", address)
-        bind = _address("bind", bind)
+        #: The local (host, port) the socket was asked to bind (port 0: any free port).
+        self.bind = _address("bind", bind)
         self._sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self._sock.bind(bind)
+        try:
+            self._sock.bind(self.bind)
+        except BaseException:
+            self._sock.close()
+            raise
         self._seq = itertools.count(1)
+
+    def __reduce__(self):
+        # A socket does not pickle: a copy is a new link to the same controller, with a socket
+        # of its own bound as this one was asked to be (issue 31: every public class pickles).
+        return (Link, (self.address, self.bind))
 
     def hit(self, hit, t_hit: float, id: int, stroke: int = 0) -> bytes:
         """Sends ``hit`` (a :class:`ttmanip.Hit`: racket pose and twist) for the hit time ``t_hit``
         (s, controller clock); a newer hit with the same ``stroke`` replaces an older one."""
+        from .pipeline import Hit
+
+        if not isinstance(hit, Hit):
+            raise TtmanipError(f"hit: expected a ttmanip.Hit, got {type(hit).__name__}")
         data = _t.wire_hit(id, stroke, t_hit, hit.pose, hit.twist, next(self._seq), time.monotonic())
+        self._open()
         self._sock.sendto(data, self.address)
         return data
 
@@ -138,12 +164,27 @@ class Link:
         """Sends one camera observation of ball ``id``: its centre ``position`` (m, world frame)
         at ``camera_time`` (s, camera clock)."""
         data = _t.wire_observation(id, camera_time, position, next(self._seq), time.monotonic())
+        self._open()
         self._sock.sendto(data, self.address)
         return data
 
     def receive(self, timeout: float | None = None) -> dict | None:
-        """The next datagram from the controller, decoded (``None`` after ``timeout`` s); a
-        malformed one raises :class:`ttmanip.TtmanipError` saying why."""
+        """The next datagram from the controller, decoded (``None`` after ``timeout`` s, a real
+        number in [0, 1e6]; ``None``: wait for one); a malformed one raises
+        :class:`ttmanip.TtmanipError` saying why."""
+        if timeout is not None:
+            # the socket's own errors (ValueError for NaN or < 0, OverflowError for 1e300 or
+            # 10**400) named no argument
+            if isinstance(timeout, bool) or not isinstance(timeout, (int, float, np.integer, np.floating)):
+                raise TypeError(
+                    f"timeout: expected a number of seconds or None, got {type(timeout).__name__}"
+                )
+            if not 0.0 <= timeout <= MAX_RECEIVE_TIMEOUT:
+                raise TtmanipError(
+                    f"timeout: expected seconds in [0, {MAX_RECEIVE_TIMEOUT:g}] or None, got {timeout!r}"
+                )
+            timeout = float(timeout)
+        self._open()
         self._sock.settimeout(timeout)
         try:
             data, _ = self._sock.recvfrom(_t.WIRE_MAX_LEN + 1)
@@ -152,8 +193,13 @@ class Link:
         return _t.wire_decode(data)
 
     def close(self) -> None:
-        """Closes the socket."""
+        """Closes the socket (the link sends and receives no more)."""
         self._sock.close()
+
+    def _open(self) -> None:
+        # a closed socket's own error was "[Errno 9] Bad file descriptor"
+        if self._sock.fileno() < 0:
+            raise TtmanipError("link: closed; make a new ttmanip.ctl.Link to talk to the controller")
 
     def __enter__(self) -> Link:
         return self

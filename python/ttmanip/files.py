@@ -34,8 +34,22 @@ MAX_JSON_DEPTH = 64
 
 def read_limited(f: IO[bytes], what: str, limit: int = MAX_FILE_BYTES) -> bytes:
     """At most ``limit`` bytes of the open binary file ``f`` (reads one byte more to tell); a
-    longer file is refused naming ``what``."""
+    longer file is refused naming ``what``. ``limit``: an integer in 0..=:data:`MAX_TOTAL_BYTES`."""
+    if not callable(getattr(f, "read", None)):
+        raise TypeError(f"f: expected a binary file open for reading, got {type(f).__name__}")
+    if isinstance(limit, bool) or not isinstance(limit, int) or not 0 <= limit <= MAX_TOTAL_BYTES:
+        # f.read(10**400) raised a bare OverflowError; a limit over 512 MiB is no limit
+        shown = (
+            f"an integer of {len(str(limit))} digits"
+            if isinstance(limit, int) and abs(limit) > 10**30
+            else repr(limit)
+        )
+        raise TtmanipError(
+            f"limit: expected an integer number of bytes in 0..={MAX_TOTAL_BYTES}, got {shown}"
+        )
     raw = f.read(limit + 1)
+    if not isinstance(raw, bytes):
+        raise TypeError(f"f: expected a binary file (read() gave {type(raw).__name__}, not bytes)")
     if len(raw) > limit:
         raise TtmanipError(f"{what}: larger than {limit} bytes ({limit >> 20} MiB), the most a file may be")
     return raw

@@ -204,11 +204,18 @@ def plan_hits(
     effort: bool = True,
     raise_on_failure: bool = False,
 ) -> list[HitPlan]:
-    """:func:`plan_hit` for a sequence of hits from the same state, planned in parallel in Rust."""
+    """:func:`plan_hit` for a sequence of hits from the same state, planned in parallel in Rust.
+
+    The plans of one call are bounded in bytes (512 MiB, ``ttkin::budget::MAX_BYTES``): a list
+    too long for that (about 2·10⁵ hits on a 6-joint robot) is refused before planning starts, and
+    a batch whose plans outgrow it (jerk-limited strokes are larger) ends with an error; both say
+    how many hits a call may take. Ctrl-C stops the batch within one hit per thread."""
     if isinstance(hits, Hit) or not isinstance(hits, (list, tuple)):
         raise TtmanipError(
             f"hits: expected a list or tuple of ttmanip.Hit, got {type(hits).__name__} (one hit: plan_hit)"
         )
+    # The plans' bytes bounded before anything is stacked (10⁷ hits stacked 1.19 GiB of poses).
+    _ttmanip.hit_batch_check(robot, len(hits))
     hits = [_check_hit(h) for h in hits]
     # An empty list still has its other arguments checked (by the planner, on no hits).
     poses = np.stack([h.pose for h in hits]) if hits else np.zeros((0, 4, 4))

@@ -243,17 +243,22 @@ def sweep(
 
         client, cluster = _client(scheduler, workers)
         t0 = time.perf_counter()  # the cluster is up: wall_s is the work's time
+        futures = []
         try:
             used = len(client.scheduler_info()["workers"])
-            futures = [
-                client.submit(_task, *args, pure=False, key=f"ttmanip-sweep-{k}")
-                for k, args in enumerate(tasks)
-            ]
+            for k, args in enumerate(tasks):
+                futures.append(client.submit(_task, *args, pure=False, key=f"ttmanip-sweep-{k}"))
             index = {f.key: k for k, f in enumerate(futures)}
             for done, f in enumerate(distributed.as_completed(futures), start=1):
                 results[index[f.key]] = f.result()
                 if progress:
                     _progress(done, len(tasks), t0)
+        except BaseException:
+            # Ctrl-C (or a failed task): the tasks still queued are dropped at once, so that the
+            # cluster closes without running them (20 000 points queued minutes of work)
+            if futures:
+                client.cancel(futures)
+            raise
         finally:
             client.close()
             if cluster is not None:

@@ -271,6 +271,11 @@ fn hit_plan_batch(
     jerk: Option<&Bound<'_, PyAny>>,
     effort: bool,
 ) -> PyResult<Vec<PyHitPlan>> {
+    // The plans' bytes bounded before the poses are read (10⁷ hits asked for 1.2 GiB of poses
+    // and hours of planning; issue 29).
+    if let Ok(count) = poses.len() {
+        HitPlanner::check_batch(robot.chain.dof(), count).py()?;
+    }
     // Poses rigid to the precision of their dtype, as `hit_plan` reads its one pose (float32
     // accepted in both).
     let (poses, batch) = crate::convert::transforms(poses, "poses")?;
@@ -309,6 +314,15 @@ fn hit_plan_batch(
         plan,
         planner: planner.clone(),
     }))
+}
+
+/// Checks that `count` hits fit one `hit_plan_batch` call for `robot`: their plans within
+/// `ttkin::budget::MAX_BYTES` (`ttkin::hit::HitPlanner::check_batch`); `plan_hits` asks before it
+/// stacks the hits' poses.
+#[ttkin_py_guard::guarded]
+#[pyfunction]
+fn hit_batch_check(robot: &PyRobot, count: usize) -> PyResult<()> {
+    HitPlanner::check_batch(robot.chain.dof(), count).py()
 }
 
 /// (3, 3) racket orientation (base axes) with z along the face `normal` and x (the handle) as
@@ -393,5 +407,6 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(racket_mount, m)?)?;
     m.add_function(wrap_pyfunction!(racket_states, m)?)?;
     m.add_function(wrap_pyfunction!(hit_check, m)?)?;
+    m.add_function(wrap_pyfunction!(hit_batch_check, m)?)?;
     Ok(())
 }

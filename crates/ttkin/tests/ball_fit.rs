@@ -248,3 +248,20 @@ fn experiment_report_and_recordings_from_columns() {
     assert_eq!(err["index"].as_integer(), Some(e.comparisons[0].errors[0].0 as i64));
     assert_eq!(err["path"][0].as_array().unwrap().len(), 3);
 }
+
+/// Issue 29: a frame period no camera has (1e300 s ran for hours) and a window no flight can use
+/// are refused; a period far from the data's (twice the true one: the ball then rolls on the
+/// plane for most of a flight, which bounced without end before) ends in a plain fit.
+#[test]
+fn experiment_refuses_unusable_periods_and_windows_and_ends_with_a_wrong_period() {
+    let recs = flights(8, 0.001, 3);
+    let opts = FitOptions::default();
+    for p in [1e300, 0.5, 1e-9, -0.01, f64::NAN] {
+        let e = experiment(&recs, 20, Some(p), &opts).unwrap_err().to_string();
+        assert!(e.starts_with("period:") && e.contains("camera frame period"), "{e}");
+    }
+    let e = experiment(&recs, 4, None, &opts).unwrap_err().to_string();
+    assert!(e.starts_with("window:") && e.contains("at least 5"), "{e}");
+    let period = truth().period;
+    assert!(experiment(&recs, 20, Some(2.0 * period), &opts).is_ok());
+}

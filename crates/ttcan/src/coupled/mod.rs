@@ -34,7 +34,7 @@
 //! Δ(kinetic + potential + magnetic) closes to the integration error.
 
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
-use ttkin::{Chain, Dynamics, DynamicsData, JointType};
+use ttkin::{Chain, Dynamics, DynamicsData, JointType, Limits};
 
 use crate::axis::{Axis, AxisConfig, Mode};
 
@@ -58,6 +58,13 @@ pub const SETPOINT_RATE: f64 = 1000.0;
 /// The longest whole-trajectory run [`CoupledSim::run`] accepts, in current-loop ticks (50 s at
 /// 20 kHz): its trace keeps every tick (about 100 bytes per tick and axis).
 pub const MAX_RUN_TICKS: u64 = 1_000_000;
+/// How far beyond a joint's position limits a setpoint may lie, rad or m (the rounding of a
+/// stroke sampled at its limit); further is refused (see [`CoupledSim::set_setpoint`]).
+pub const SETPOINT_POSITION_MARGIN: f64 = 1e-6;
+
+/// How far over a joint's velocity limit a setpoint's speed may lie, as a share of the limit.
+pub const SETPOINT_VELOCITY_MARGIN: f64 = 1e-6;
+
 /// Ticks one step of a caller that names no count advances (the Python `DriveSim.tick()`).
 pub const TICKS_PER_CALL: u64 = 1;
 
@@ -118,6 +125,8 @@ pub struct CoupledSim {
     dynamics: Dynamics,
     data: DynamicsData,
     axes: Vec<Axis>,
+    /// The joints' limits (the robot file's), which every setpoint must keep.
+    limits: Vec<Limits>,
     windings: Vec<Winding>,
     coulomb: Vec<f64>,
     viscous: Vec<f64>,
@@ -205,6 +214,7 @@ impl CoupledSim {
             dynamics,
             data,
             axes,
+            limits: chain.limits(),
             windings,
             coulomb,
             viscous,
@@ -381,7 +391,11 @@ impl CoupledSim {
     }
 
     /// Hands every axis a position setpoint (joint space: rad or m, per s, per s²) and a
-    /// joint-side torque feed-forward (N·m or N; `None`: zero). Non-finite values fault the axis.
+    /// joint-side torque feed-forward (N·m or N; `None`: zero). A finite position outside the
+    /// joint's limits or a speed over its velocity limit (beyond [`SETPOINT_POSITION_MARGIN`],
+    /// [`SETPOINT_VELOCITY_MARGIN`]) is refused with [`Error::InvalidParameter`] before any axis
+    /// takes it (a setpoint of 1e300 drove the axis into its following-error fault); a non-finite
+    /// value faults the axis (`InvalidReference`), as a drive does.
     pub fn set_setpoint(&mut self, q: &[f64], qd: &[f64], qdd: &[f64], tau_ff: Option<&[f64]>) -> Result<()> {
         let n = self.dof();
         check_len("q", q, n)?;
@@ -390,10 +404,59 @@ impl CoupledSim {
         if let Some(t) = tau_ff {
             check_len("tau_ff", t, n)?;
         }
+        self.check_within_limits(None, q, qd)?;
         for k in 0..n {
             self.axes[k].set_position(q[k], qd[k], qdd[k]);
             if let Some(t) = tau_ff {
                 self.axes[k].set_torque_feedforward(t[k]);
+            }
+        }
+        Ok(())
+    }
+
+    /// Checks a setpoint (q, qd: one value per joint) against the joints' position and velocity
+    /// limits with their margins; `row` names the sample of a run (`q[12, 3]`), `None` a single
+    /// setpoint (`q[3]`). Non-finite values pass (they fault the axis that takes them).
+    pub(crate) fn check_within_limits(&self, row: Option<usize>, q: &[f64], qd: &[f64]) -> Result<()> {
+        let joints = self.dynamics.chain().joints();
+        for (k, lim) in self.limits.iter().enumerate() {
+            let (unit, speed) = match joints[k].kind() {
+                JointType::Revolute => ("rad", "rad/s"),
+                JointType::Prismatic => ("m", "m/s"),
+            };
+            let what = |name: &str| match row {
+                Some(i) => format!("{name}[{i}, {k}]"),
+                None => format!("{name}[{k}]"),
+            };
+            let (lo, hi) = (
+                lim.lower - SETPOINT_POSITION_MARGIN,
+                lim.upper + SETPOINT_POSITION_MARGIN,
+            );
+            if q[k].is_finite() && !(lo..=hi).contains(&q[k]) {
+                return Err(Error::InvalidParameter {
+                    what: what("q"),
+                    value: q[k],
+                    reason: format!(
+                        "outside joint '{}' position limits [{}, {}] {unit}: the drives take setpoints within \
+                         the robot's limits only",
+                        joints[k].name(),
+                        lim.lower,
+                        lim.upper
+                    ),
+                });
+            }
+            if let Some(v) = lim.velocity.filter(|v| v.is_finite() && *v > 0.0) {
+                if qd[k].is_finite() && qd[k].abs() > v * (1.0 + SETPOINT_VELOCITY_MARGIN) {
+                    return Err(Error::InvalidParameter {
+                        what: what("qd"),
+                        value: qd[k],
+                        reason: format!(
+                            "over joint '{}' velocity limit {v} {speed}: the drives take setpoints within \
+                             the robot's limits only",
+                            joints[k].name()
+                        ),
+                    });
+                }
             }
         }
         Ok(())

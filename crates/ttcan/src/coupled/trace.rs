@@ -106,7 +106,9 @@ impl CoupledSim {
     /// Runs a reference trajectory sampled at `times` (s from now, increasing, at any rate; q, qd,
     /// qdd and the optional torque feed-forward K × n row-major), handing setpoints to the drives
     /// every `setpoint_period` s (linear interpolation between the samples, each sent one period
-    /// ahead, see [`crate::setpoint`]) until the last sample's time; records every tick.
+    /// ahead, see [`crate::setpoint`]) until the last sample's time; records every tick. Every
+    /// sample must keep the joints' limits ([`CoupledSim::set_setpoint`]); one that does not is
+    /// refused before the first tick.
     pub fn run(
         &mut self,
         times: &[f64],
@@ -168,6 +170,11 @@ impl CoupledSim {
                     value: t[i],
                 });
             }
+        }
+        // every sample within the joints' limits before the first tick (the interpolated
+        // setpoints lie between samples, so within them too)
+        for (i, (qi, qdi)) in q.chunks_exact(n).zip(qd.chunks_exact(n)).enumerate() {
+            self.check_within_limits(Some(i), qi, qdi)?;
         }
         crate::error::positive("setpoint period (s)", setpoint_period)?;
         let ticks_per_setpoint = (setpoint_period / self.period).round().max(1.0) as u64;

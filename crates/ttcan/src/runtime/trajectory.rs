@@ -2,6 +2,16 @@
 //! (header `t,q1..qn,qd1..qdn,qdd1..qddn,tau1..taun`, SI, strictly increasing t), a built-in demo
 //! motion, and sampling with linear interpolation (no allocation) preceded by a quintic approach
 //! from where the axes are to the first sample.
+//!
+//! A file is checked as the run would meet it: rows at least [`MIN_STEP_S`] apart (a subnormal
+//! step made the target jump in zero time, which the drives refuse at run time) and, per joint
+//! and step, the change of q equal to the integral of its velocity column within
+//! [`POSITION_TOLERANCE`] + [`RELATIVE_TOLERANCE`]·|Δq| (a position jump the velocity column
+//! does not show is refused by the drives as a target beyond their step limit, EMCY 0xFF01).
+//! The integral is the trapezoid rule with its end correction from the acceleration column,
+//! Δt/2·(q̇ₐ + q̇_b) − Δt²/12·(q̈_b − q̈ₐ) (Euler–Maclaurin; exact for a cubic q, that is for
+//! piecewise-constant jerk), so files sampled from smooth or jerk-limited strokes pass at any
+//! rate down to tens of Hz.
 
 use std::fmt;
 
@@ -41,6 +51,50 @@ fn err(line: usize, message: impl Into<String>) -> TrajectoryError {
 /// The shortest controller cycle, s (`cycle_hz` ≤ 10 kHz): a trajectory's times must resolve it.
 pub const MIN_CYCLE_S: f64 = 1e-4;
 
+/// The shortest step between two rows of a trajectory file, s (1 µs: 100 rows within the
+/// shortest controller cycle).
+pub const MIN_STEP_S: f64 = 1e-6;
+
+/// Absolute part of the tolerance between a step's change of q and the integral of qd over it,
+/// rad or m (files written with 9 significant digits round to about 1e-9 of their values).
+pub const POSITION_TOLERANCE: f64 = 1e-6;
+
+/// Relative part of that tolerance (of the larger of |Δq| and |∫qd|).
+pub const RELATIVE_TOLERANCE: f64 = 1e-3;
+
+/// The change of q over a step of `dt` s that the velocity and acceleration columns imply:
+/// the trapezoid rule with its end correction (exact for a cubic q).
+pub fn integrated_step(dt: f64, qd: (f64, f64), qdd: (f64, f64)) -> f64 {
+    0.5 * dt * (qd.0 + qd.1) - dt * dt / 12.0 * (qdd.1 - qdd.0)
+}
+
+/// Checks the step from row `a` to row `b` (values `t, q1..qn, qd1..qdn, qdd1..qddn, ...`) of a
+/// trajectory of `n` joints: [`MIN_STEP_S`] and q against ∫qd (see the module's documentation).
+fn check_step(n: usize, cols: &[&str], a: &[f64], b: &[f64], prev_line: usize) -> Result<(), String> {
+    let dt = b[0] - a[0];
+    if dt < MIN_STEP_S {
+        return Err(format!(
+            "t steps by {dt:e} s from line {prev_line}, less than the {MIN_STEP_S:e} s rows must be apart"
+        ));
+    }
+    for j in 0..n {
+        let (q, qd, qdd) = (1 + j, 1 + n + j, 1 + 2 * n + j);
+        let moved = b[q] - a[q];
+        let integral = integrated_step(dt, (a[qd], b[qd]), (a[qdd], b[qdd]));
+        let tolerance = POSITION_TOLERANCE + RELATIVE_TOLERANCE * moved.abs().max(integral.abs());
+        // an overflow to inf or NaN (values near the double range) is refused too
+        if !(moved.is_finite() && integral.is_finite() && (moved - integral).abs() <= tolerance) {
+            return Err(format!(
+                "{} moves by {moved:e} from line {prev_line} in {dt:e} s, but {} and {} integrate to {integral:e}: \
+                 a position jump the velocity column does not show (the drives refuse it as a target step); \
+                 they must agree within {POSITION_TOLERANCE:e} + {RELATIVE_TOLERANCE:e}·|Δq|",
+                cols[q], cols[qd], cols[qdd]
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// One sample: per joint (q, qd, qdd, tau).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct JointSample {
@@ -68,6 +122,7 @@ impl Trajectory {
         }
         let n = (cols.len() - 1) / 4;
         let (mut t, mut rows) = (Vec::new(), Vec::new());
+        let mut prev: Option<(usize, Vec<f64>)> = None;
         for (k, line) in lines {
             let vals: Result<Vec<f64>, _> = line.split(',').map(|s| s.trim().parse::<f64>()).collect();
             let vals = vals.map_err(|e| err(k + 1, format!("not a number: {e}")))?;
@@ -88,8 +143,12 @@ impl Trajectory {
             if t.last().is_some_and(|&p| vals[0] <= p) {
                 return Err(err(k + 1, "t must increase strictly"));
             }
+            if let Some((line, a)) = &prev {
+                check_step(n, &cols, a, &vals, *line).map_err(|m| err(k + 1, m))?;
+            }
             t.push(vals[0]);
             rows.extend_from_slice(&vals[1..]);
+            prev = Some((k + 1, vals));
         }
         if t.len() < 2 {
             return Err(err(0, "a trajectory needs at least two samples"));
@@ -200,11 +259,76 @@ mod tests {
         let e = Trajectory::parse("t,q1,qd1,qdd1,tau1\n1e17,0,0,0,0\n1.0000000000001e17,0,0,0,0\n").unwrap_err();
         assert!(e.line == 2 && e.message.contains("nearer origin"), "{e}");
         assert!(Trajectory::parse("t,q1,qd1,qdd1,tau1\n0,0,0,0,0\n1e300,0,0,0,0\n").is_err());
-        let tr =
-            Trajectory::parse("t,q1,q2,qd1,qd2,qdd1,qdd2,tau1,tau2\n0,1,2,3,4,5,6,7,8\n1,9,10,11,12,13,14,15,16\n")
-                .unwrap();
+        let tr = Trajectory::parse("t,q1,q2,qd1,qd2,qdd1,qdd2,tau1,tau2\n0,1,2,3,4,5,6,7,8\n1,8,10,11,12,5,6,15,16\n")
+            .unwrap();
         let s: Vec<_> = tr.samples(1).map(|s| (s.q, s.qd, s.qdd, s.tau)).collect();
-        assert_eq!(s, vec![(2.0, 4.0, 6.0, 8.0), (10.0, 12.0, 14.0, 16.0)]);
+        assert_eq!(s, vec![(2.0, 4.0, 6.0, 8.0), (10.0, 12.0, 6.0, 16.0)]);
+    }
+
+    /// The rows of `tr` as the CSV text `ttmanip.ctl.write_trajectory` writes (9 digits).
+    fn csv(tr: &Trajectory) -> String {
+        let n = tr.joints();
+        let mut text = String::from("t");
+        for c in ["q", "qd", "qdd", "tau"] {
+            for j in 0..n {
+                text += &format!(",{c}{}", j + 1);
+            }
+        }
+        text.push('\n');
+        for (t, row) in tr.t.iter().zip(tr.rows.chunks_exact(4 * n)) {
+            text += &format!("{t:.9e}");
+            for v in row {
+                text += &format!(",{v:.9e}");
+            }
+            text.push('\n');
+        }
+        text
+    }
+
+    #[test]
+    fn smooth_motions_pass_the_consistency_check_at_coarse_rates() {
+        // the demo's cosine bump sampled at 1 kHz, and at 50 Hz (every 20th row)
+        let tr = Trajectory::demo(3, 0.3, 2.0);
+        assert_eq!(Trajectory::parse(&csv(&tr)).unwrap().joints(), 3);
+        let coarse = Trajectory {
+            n: 3,
+            t: tr.t.iter().step_by(20).copied().collect(),
+            rows: tr.rows.chunks_exact(12).step_by(20).flatten().copied().collect(),
+        };
+        Trajectory::parse(&csv(&coarse)).unwrap();
+        // a jerk-limited piece: q = j t³/6 (constant jerk j) at 10 Hz is integrated exactly
+        let j = 500.0;
+        let mut text = String::from("t,q1,qd1,qdd1,tau1\n");
+        for k in 0..6 {
+            let t = 0.1 * k as f64;
+            text += &format!("{t},{},{},{},0\n", j * t * t * t / 6.0, j * t * t / 2.0, j * t);
+        }
+        Trajectory::parse(&text).unwrap();
+    }
+
+    #[test]
+    fn position_jumps_and_subnormal_steps_are_refused_with_their_line() {
+        // q jumps by 0.5 rad in 1 ms while qd says the joint stands still
+        let e = Trajectory::parse("t,q1,qd1,qdd1,tau1\n0,0,0,0,0\n0.001,0,0,0,0\n0.002,0.5,0,0,0\n").unwrap_err();
+        assert_eq!(e.line, 4, "{e}");
+        assert!(
+            e.message.contains("q1 moves by 5e-1 from line 3") && e.message.contains("qd1"),
+            "{e}"
+        );
+        // the second joint of two: the message names its columns
+        let e = Trajectory::parse("t,q1,q2,qd1,qd2,qdd1,qdd2,tau1,tau2\n0,0,0,1,0,0,0,0,0\n1,1,-2,1,0,0,0,0,0\n")
+            .unwrap_err();
+        assert!(e.line == 3 && e.message.starts_with("q2 moves by -2e0"), "{e}");
+        // within the tolerance: 1e-7 rad of rounding is no jump
+        Trajectory::parse("t,q1,qd1,qdd1,tau1\n0,0,0,0,0\n1,1e-7,0,0,0\n").unwrap();
+        // a subnormal step, and one just under the minimum
+        for dt in ["5e-324", "9e-7"] {
+            let e = Trajectory::parse(&format!("t,q1,qd1,qdd1,tau1\n0,0,0,0,0\n{dt},0,0,0,0\n")).unwrap_err();
+            assert!(e.line == 3 && e.message.contains("rows must be apart"), "{e}");
+        }
+        // velocities that overflow the integral are refused, not compared as inf
+        let e = Trajectory::parse("t,q1,qd1,qdd1,tau1\n0,0,1e308,0,0\n1,1e308,1.7e308,0,0\n").unwrap_err();
+        assert_eq!(e.line, 3, "{e}");
     }
 
     #[test]

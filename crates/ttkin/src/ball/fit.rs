@@ -277,7 +277,13 @@ impl FitModel {
                 guard += 1;
                 let h = step.min(t - cur.t);
                 let next = flight.rk4(&cur, h);
-                if cur.p.z >= zc && next.p.z < zc {
+                if cur.p.z <= zc && cur.v.z == 0.0 && next.p.z < zc {
+                    // Rolling on the plane (after a rebound below MIN_REBOUND_SPEED): the plane
+                    // holds the ball up, no bounce to look for.
+                    cur = next;
+                    cur.p.z = zc;
+                    cur.v.z = 0.0;
+                } else if cur.p.z >= zc && next.p.z < zc {
                     // Bisection on the RK4 step from `cur` for the contact time.
                     let (mut lo, mut hi) = (0.0, h);
                     for _ in 0..60 {
@@ -291,11 +297,17 @@ impl FitModel {
                     let b = flight.rk4(&cur, lo);
                     on_bounce(&b);
                     cur = self.bounce(&b);
-                    if cur.v.z <= 0.0 {
-                        // No rebound (e = 0): the ball stays on the plane's level.
+                    if cur.v.z <= MIN_REBOUND_SPEED {
+                        // No rebound (e = 0), or one below 0.1 mm: the ball stays on the plane's
+                        // level. Without the floor a ball bouncing ever lower (e < 1) bounced
+                        // without end in finite time, each bounce a bisection: a frame period far
+                        // from the data's ran the fit for hours (issue 29).
                         cur.v.z = 0.0;
                         cur = flight.rk4(&cur, (h - lo).max(0.0));
-                        cur.p.z = cur.p.z.max(zc);
+                        if cur.p.z <= zc {
+                            cur.p.z = zc;
+                            cur.v.z = cur.v.z.max(0.0);
+                        }
                     }
                 } else {
                     cur = next;
@@ -830,7 +842,7 @@ pub fn prediction_error(
     opts: &FitOptions,
 ) -> Option<PredictionError> {
     let (end, b) = segment(recording, level, opts.bounce_band)?;
-    if window < 5 || window + 2 > b {
+    if window < MIN_WINDOW || window + 2 > b {
         return None;
     }
     let x = start(recording, fm.period);
@@ -962,6 +974,18 @@ pub struct Experiment {
 /// prediction starts from.
 pub const WINDOW: usize = 20;
 
+/// Slowest rebound (m/s) a bounce of [`FitModel::path`] keeps: √(2 g · 0.1 mm); a slower one
+/// leaves the ball on the plane, rolling.
+pub const MIN_REBOUND_SPEED: f64 = 0.044;
+
+/// The shortest prediction window, frames: the observations a predicted state is fitted on.
+pub const MIN_WINDOW: usize = 5;
+
+/// The camera frame periods [`experiment`] takes, s (10 µs to 0.1 s: 100 kHz to 10 Hz), given
+/// or estimated: the flights are integrated over their frames, and a period of 1e300 s ran for
+/// hours (issue 29).
+pub const FRAME_PERIOD_RANGE: (f64, f64) = (1e-5, 0.1);
+
 /// Runs the calibration experiment (see [`Experiment`]); `period` overrides the estimate when given.
 pub fn experiment(
     recordings: &[Recording],
@@ -971,6 +995,13 @@ pub fn experiment(
 ) -> Result<Experiment> {
     if recordings.is_empty() {
         return Err(Error::invalid("recordings", "no flights given"));
+    }
+    if window < MIN_WINDOW {
+        // no flight could be compared: the experiment would report no prediction error at all
+        return Err(Error::invalid(
+            "window",
+            format!("at least {MIN_WINDOW} frames (the observations a prediction starts from), got {window}"),
+        ));
     }
     for r in recordings {
         if !r.velocities.is_empty() && r.velocities.len() != r.positions.len() {
@@ -985,10 +1016,27 @@ pub fn experiment(
             ));
         }
     }
+    let (lo, hi) = FRAME_PERIOD_RANGE;
     let period_estimate = match period {
-        Some(p) if p > 0.0 && p.is_finite() => p,
-        Some(p) => return Err(Error::invalid("period", format!("must be finite and > 0, got {p}"))),
-        None => estimate_period(recordings)?,
+        Some(p) if (lo..=hi).contains(&p) => p,
+        Some(p) => {
+            return Err(Error::invalid(
+                "period",
+                format!("a camera frame period in [{lo:e}, {hi}] s, got {p}"),
+            ))
+        }
+        None => match estimate_period(recordings)? {
+            p if (lo..=hi).contains(&p) => p,
+            p => {
+                return Err(Error::invalid(
+                    "period",
+                    format!(
+                        "the frame period estimated from the flights' velocities, {p} s, is not a camera's \
+                         (in [{lo:e}, {hi}] s): give the period"
+                    ),
+                ))
+            }
+        },
     };
     let level = bounce_level(recordings)?;
     let names: Vec<&str> = recordings.iter().map(|r| r.name.as_str()).collect();

@@ -173,8 +173,33 @@ impl HitPlanner {
         self.plan_batch_until(hits, state, ready, &|| false)
     }
 
+    /// Checks that the plans of `count` hits for a robot of `dof` joints can fit in
+    /// [`crate::budget::MAX_BYTES`]: `count` times a lower bound of one plan's bytes
+    /// ([`HitPlan::bytes_at_least`]); the refusal says how many hits one call may take.
+    pub fn check_batch(dof: usize, count: usize) -> Result<()> {
+        let per_plan = HitPlan::bytes_at_least(dof);
+        let most = crate::budget::MAX_BYTES / per_plan;
+        if count > most {
+            return Err(Error::invalid(
+                "hits",
+                format!(
+                    "{count} hits: their plans take at least {per_plan} bytes each ({:.3e} bytes), more than the \
+                     {} bytes (512 MiB) one call may hold: split the batch into calls of at most {most} hits",
+                    count as f64 * per_plan as f64,
+                    crate::budget::MAX_BYTES
+                ),
+            ));
+        }
+        Ok(())
+    }
+
     /// [`HitPlanner::plan_batch`] that stops early when `stop()` turns true (checked before each
     /// hit; a caller's cancellation, e.g. Ctrl-C seen by the Python binding): then an error.
+    ///
+    /// The plans are bounded in bytes: the batch is checked by [`Self::check_batch`] before it
+    /// starts, and the bytes of the plans made are counted as they come ([`HitPlan::bytes`]; a
+    /// jerk-limited stroke has many more segments than a quintic one): past
+    /// [`crate::budget::MAX_BYTES`] the batch ends with an error saying how many hits fit a call.
     pub fn plan_batch_until(
         &self,
         hits: &[Hit],
@@ -182,7 +207,10 @@ impl HitPlanner {
         ready: Option<&[f64]>,
         stop: &(dyn Fn() -> bool + Sync),
     ) -> Result<Vec<HitPlan>> {
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        Self::check_batch(self.chain.dof(), hits.len())?;
         let (start, ready) = self.start_and_ready(state, ready)?;
+        let (held, made) = (AtomicUsize::new(0), AtomicUsize::new(0));
         hits.par_iter()
             .map_init(
                 || self.dynamics.as_ref().map(DynamicsData::new),
@@ -190,7 +218,25 @@ impl HitPlanner {
                     if stop() {
                         return Err(crate::Error::invalid("hits", "planning stopped before this hit"));
                     }
-                    self.plan_with(hit, Some(&start), Some(&ready), data.as_mut())
+                    let plan = self.plan_with(hit, Some(&start), Some(&ready), data.as_mut())?;
+                    let bytes = plan.bytes();
+                    let total = held.fetch_add(bytes, Ordering::Relaxed) + bytes;
+                    let count = made.fetch_add(1, Ordering::Relaxed) + 1;
+                    if total > crate::budget::MAX_BYTES {
+                        let fit = (crate::budget::MAX_BYTES as f64 / (total as f64 / count as f64)) as usize;
+                        return Err(Error::invalid(
+                            "hits",
+                            format!(
+                                "the plans of {count} of the {} hits take {total} bytes, more than the {} bytes \
+                                 (512 MiB) one call may hold ({} bytes a plan): split the batch into calls of at \
+                                 most {fit} hits",
+                                hits.len(),
+                                crate::budget::MAX_BYTES,
+                                total / count
+                            ),
+                        ));
+                    }
+                    Ok(plan)
                 },
             )
             .collect()

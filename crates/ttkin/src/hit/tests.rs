@@ -182,6 +182,39 @@ fn batch_equals_single_calls() {
     }
 }
 
+#[test]
+fn batches_are_bounded_by_the_bytes_of_their_plans() {
+    let p = planner();
+    // the lower bound of a plan's bytes holds for quintic, jerk-limited and strokeless plans
+    let floor = HitPlan::bytes_at_least(6);
+    for (t, profile) in [
+        (0.6, StrokeProfile::Quintic),
+        (0.3, StrokeProfile::Jerk),
+        (0.6, StrokeProfile::Auto),
+    ] {
+        let options = HitOptions {
+            profile,
+            ..Default::default()
+        };
+        let q = HitPlanner::new(&robots::gantry6(), options).unwrap();
+        let plan = q.plan(&demo_hit(t), None, None).unwrap();
+        assert!(
+            plan.trajectory.is_some() && plan.bytes() >= floor,
+            "{profile:?}: {} < {floor}",
+            plan.bytes()
+        );
+    }
+    // 10⁷ hits are refused before any is planned, with the number one call may take
+    let most = crate::budget::MAX_BYTES / floor;
+    assert!(HitPlanner::check_batch(6, most).is_ok());
+    let e = HitPlanner::check_batch(6, 10_000_000).unwrap_err().to_string();
+    assert!(
+        e.starts_with("hits:") && e.contains(&format!("at most {most} hits")),
+        "{e}"
+    );
+    assert!(p.plan_batch(&vec![demo_hit(0.6); most + 1], None, None).is_err());
+}
+
 /// A random reachable gantry6 hit: centre in the box x ∈ [−0.3, 0.3], y ∈ [−0.6, −0.2],
 /// z ∈ [−0.15, 0.15] m, face normal within 45° of −y, racket speed 1–4 m/s along the normal, hit
 /// time 0.15–0.6 s.

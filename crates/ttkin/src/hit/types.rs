@@ -309,4 +309,29 @@ impl HitPlan {
     pub fn ok(&self) -> bool {
         self.status == HitStatus::Ok
     }
+
+    /// Bytes this plan holds: the struct and everything it owns on the heap.
+    pub fn bytes(&self) -> usize {
+        let f = std::mem::size_of::<f64>();
+        let vectors = self.start.q.capacity()
+            + self.start.qd.capacity()
+            + self.start.qdd.capacity()
+            + self.ready.capacity()
+            + self.q_hit.capacity()
+            + self.qd_hit.capacity()
+            + self.peak_effort.capacity();
+        std::mem::size_of::<HitPlan>()
+            + vectors * f
+            + self.message.capacity()
+            + self.violations.capacity() * std::mem::size_of::<Violation>()
+            + self.trajectory.as_ref().map_or(0, JointTrajectory::heap_bytes)
+    }
+
+    /// A lower bound of [`HitPlan::bytes`] for a robot of `dof` joints: the struct, its seven
+    /// per-joint vectors and a stroke of two segments (hit leg and return leg).
+    pub fn bytes_at_least(dof: usize) -> usize {
+        std::mem::size_of::<HitPlan>()
+            + 7 * dof * std::mem::size_of::<f64>()
+            + JointTrajectory::heap_bytes_at_least(dof, 2)
+    }
 }

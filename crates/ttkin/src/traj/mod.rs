@@ -251,6 +251,16 @@ impl JointTrajectory {
         self.dof
     }
 
+    /// Bytes this trajectory holds on the heap (knots and coefficient table).
+    pub fn heap_bytes(&self) -> usize {
+        (self.knots.capacity() + self.powers.capacity()) * std::mem::size_of::<f64>()
+    }
+
+    /// Heap bytes of the smallest stroke of `dof` joints that has `segments` segments.
+    pub fn heap_bytes_at_least(dof: usize, segments: usize) -> usize {
+        (segments + 1 + ROWS * segments * dof) * std::mem::size_of::<f64>()
+    }
+
     /// Total duration (s).
     pub fn duration(&self) -> f64 {
         self.knots[self.knots.len() - 1]
