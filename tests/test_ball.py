@@ -130,7 +130,8 @@ def test_plan_return_plans_for_the_robot_given_and_refuses_one_it_cannot_plan_fo
     fk = moved.fk(other["q_hit"]) @ ttmanip.pipeline.racket_mount(moved)
     np.testing.assert_allclose(fk, other["pose"], atol=1e-9)
     # ur5 has no analytic IK; arm4 has one but cannot reach the ready pose at the placement.
-    for robot, reason in [(ttmanip.robots.ur5(), "analytic IK"), (ttmanip.robots.arm4(), "ready racket pose")]:
+    cases = [(ttmanip.robots.ur5(), "analytic IK"), (ttmanip.robots.arm4(), "ready racket pose")]
+    for robot, reason in cases:
         with pytest.raises(ttmanip.ModelError, match=f"{robot.name}.*{reason}"):
             ball.plan_return(s, 0.2, (0.9, 0.0), robot=robot)
         with pytest.raises(ttmanip.ModelError, match=reason):

@@ -144,8 +144,9 @@ def test_round_trip_gives_equal_results(key):
 
 
 _EXTENSION_CLASSES = sorted(
-    k for k, c in public_classes().items() if c.__module__ in ("ttmanip", "ttmanip._ttmanip")
-    and c.__reduce__ is not object.__reduce__
+    k
+    for k, c in public_classes().items()
+    if c.__module__ in ("ttmanip", "ttmanip._ttmanip") and c.__reduce__ is not object.__reduce__
 )
 
 

@@ -224,8 +224,10 @@ def plan_return(
     rest at time ``now`` (s).
 
     The robot needs analytic IK and must reach the ready racket pose from the rally's placement
-    (``ttkin::ball::hitplan::ReturnPlanner::new``); another robot raises ``ModelError``. Returns a dict with ``status`` ("ok", "no_bounce", "out_of_reach", "no_return", "infeasible")
-    and, when ok, ``hit`` (a ``ttmanip.Hit`` when the pipeline module provides it, else the dict
+    (``ttkin::ball::hitplan::ReturnPlanner::new``); another robot raises ``ModelError``.
+
+    Returns a dict with ``status`` ("ok", "no_bounce", "out_of_reach", "no_return",
+    "infeasible") and, when ok, ``hit`` (a ``ttmanip.Hit`` when the pipeline module provides it, else the dict
     with ``pose`` (4×4, racket frame in the base frame), ``twist`` (6,), ``t_hit`` (s from now)),
     ``q_hit``, ``qd_hit``, ``v_out``, ``normal``, ``racket_velocity``, ``margin``, ``landing``.
     A target off the opponent's half raises ``TtmanipError``.
@@ -286,7 +288,8 @@ def plan_correct(
     robot: Robot | None = None,
 ) -> dict:
     """The correction of a planned hit, as the rally makes it after the bounce: ``robot``'s
-    (default gantry6, as :func:`plan_return`) return of ``state`` planned for a stroke from rest at ``now`` (s) landing at ``target`` (x, y, m),
+    (default gantry6, as :func:`plan_return`) return of ``state`` planned for a stroke from rest
+    at ``now`` (s) landing at ``target`` (x, y, m),
     then, that stroke under way, planned again at ``t_c`` (s) for the ball ``state_new`` (e.g.
     :func:`update`'s state; ``after_bounce`` when past its bounce) near the first hit
     (``ReturnPlanner::plan_near`` from the stroke's joint state at ``t_c``). Returns ``first`` and
