@@ -364,26 +364,27 @@ impl Run {
         }
         // from the last rest of every joint before: a stall while the joints move leaves the
         // channels apart by it until the next rest (docs/online.md, one stroke clock)
-        let resting: std::collections::HashSet<u64> = self
-            .commanded()
+        // (the commanded record is built once here: rebuilding it for every row tested, as a
+        // per-deadline `moving` lookup did, made this check quadratic in the run's length and
+        // the 100-hit test spin for minutes)
+        let commanded = self.commanded();
+        let resting: std::collections::HashSet<u64> = commanded
             .iter()
             .filter(|r| r.1.iter().all(|j| j[1] == 0.0))
+            .map(|r| r.0)
+            .collect();
+        // deadlines at which the commanded joints move (a velocity above 1e-6)
+        let moving: std::collections::HashSet<u64> = commanded
+            .iter()
+            .filter(|r| r.1.iter().any(|j| j[1].abs() > 1e-6))
             .map(|r| r.0)
             .collect();
         let from = rows[..at].iter().rposition(|r| resting.contains(&r.0)).unwrap_or(0);
         let near = &rows[from..(at + 21).min(rows.len())];
         let stalled = near
             .windows(2)
-            .any(|w| w[1].0 != w[0].0 + 1 || (w[1].1 == w[0].1 && self.moving(w[0].0)));
+            .any(|w| w[1].0 != w[0].0 + 1 || (w[1].1 == w[0].1 && moving.contains(&w[0].0)));
         (best, stalled)
-    }
-
-    /// Whether the commanded joints move at deadline `k` (a velocity above 1e-6).
-    fn moving(&self, k: u64) -> bool {
-        self.commanded()
-            .iter()
-            .find(|r| r.0 == k)
-            .is_some_and(|r| r.1.iter().any(|j| j[1].abs() > 1e-6))
     }
 }
 
