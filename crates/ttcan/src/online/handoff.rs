@@ -506,6 +506,11 @@ impl SetpointSource for StrokeFollower {
         self.timeline.planning.load(Ordering::Relaxed)
     }
 
+    fn clock(&self) -> Option<u64> {
+        // the executed cycle the last fill sampled (the strokes' clock)
+        self.started.then(|| self.executed - 1)
+    }
+
     fn after_cycle(&mut self, c: &CycleInfo, master: &ChannelMaster) {
         let tl = &self.timeline;
         let seq = &tl.measured_seq[self.ch];

@@ -118,6 +118,9 @@ pub struct Splicer {
     schedule: Option<Schedule>,
     seq: u64,
     last: Option<Committed>,
+    /// The hit of another stroke that `last`'s stroke was spliced after (its hit still ahead at
+    /// that splice): a replacement of `last` is spliced after it too, or it would be cut off.
+    earlier: Option<Committed>,
 }
 
 /// What came of a hit: its status and, when it replaced one, the older hit's `replaced` status.
@@ -174,6 +177,7 @@ impl Splicer {
             schedule: None,
             seq: 0,
             last: None,
+            earlier: None,
         }
     }
 
@@ -297,6 +301,7 @@ impl Splicer {
                 Counters::bump(&counters.splices);
                 // a hit still ahead will not happen
                 self.last = None;
+                self.earlier = None;
                 return true;
             }
             Counters::bump(&counters.splices_late);
@@ -324,14 +329,25 @@ impl Splicer {
             let began = controller_time();
             let mut s = self.splice_cycle(factor);
             let mut replaces = None;
+            let mut after = None;
             if let Some(last) = self.last.filter(|l| l.hit_cycle > s) {
                 if last.stroke == h.stroke {
                     replaces = Some(last);
+                    // spliced after the hit the replaced stroke was spliced after, while that
+                    // one is still ahead (a replacement from the present state cut it off)
+                    if let Some(e) = self.earlier.filter(|e| e.hit_cycle >= s) {
+                        if h.t_hit <= tl.time_of(e.hit_cycle) + 2.0 * tl.period() {
+                            return reject(arrival);
+                        }
+                        s = s.max(e.hit_cycle + 1);
+                        after = Some(e);
+                    }
                 } else if h.t_hit <= tl.time_of(last.hit_cycle) + 2.0 * tl.period() {
                     // another stroke's hit comes first
                     return reject(arrival);
                 } else {
                     s = s.max(last.hit_cycle + 1);
+                    after = Some(last);
                 }
             } else if self.last.is_some_and(|l| l.stroke == h.stroke) {
                 // that stroke's hit is done: nothing left to replace
@@ -389,6 +405,7 @@ impl Splicer {
             Counters::bump(&counters.splices);
             counters.latency.record(t_s - arrival);
             let t_hit = t_s + plan.t_hit;
+            self.earlier = after;
             self.last = Some(Committed {
                 id: h.id,
                 stroke: h.stroke,
@@ -429,7 +446,7 @@ impl Splicer {
         };
         let mut replaces = None;
         if let Some(last) = self.last.filter(|l| l.hit_cycle > s) {
-            if last.stroke == h.stroke {
+            if last.stroke == h.stroke && self.earlier.is_none_or(|e| e.hit_cycle < s) {
                 replaces = Some(last);
             } else {
                 // another stroke's hit is still to come: spliced into its return leg as a hit
@@ -459,6 +476,7 @@ impl Splicer {
         }
         Counters::bump(&counters.splices);
         counters.latency.record(tl.time_of(s) - arrival);
+        self.earlier = None;
         self.last = Some(Committed {
             id: h.id,
             stroke: h.stroke,

@@ -87,6 +87,12 @@ pub trait SetpointSource {
     }
     /// Called after the cycle's frames were sent (feedback of this cycle in `master`).
     fn after_cycle(&mut self, _c: &CycleInfo, _master: &ChannelMaster) {}
+    /// The cycle of the source's own clock that the last [`SetpointSource::fill`] sampled (online
+    /// strokes: the executed cycle, which skipped deadlines and held cycles do not advance);
+    /// `None`: the channel's executed cycles are the source's clock.
+    fn clock(&self) -> Option<u64> {
+        None
+    }
 }
 
 /// A trajectory (file or demo) preceded by a quintic approach from the held positions.
@@ -153,6 +159,10 @@ pub struct TelemetryRow {
     pub current: [f64; MAX_AXES_PER_CHANNEL],
     /// Wake-up latency, µs.
     pub latency_us: f32,
+    /// The setpoint source's clock at this cycle ([`SetpointSource::clock`]; else executed cycles
+    /// of this channel): channels whose rows of one deadline differ in it were commanded from
+    /// different instants of the strokes (a stall of one channel thread, measured).
+    pub source_cycle: u64,
 }
 
 /// What a channel thread reports when it ends.
@@ -319,6 +329,7 @@ pub fn run_channel_with<B: CanBus, S: SetpointSource + ?Sized>(
             t,
             phase: phase_code(master.phase()),
             latency_us: (latency as f64 / 1000.0) as f32,
+            source_cycle: source.clock().unwrap_or(executed),
             ..Default::default()
         };
         for a in 0..n {
