@@ -130,7 +130,8 @@ API: dict[str, dict] = {
     "simulate": {
         "args": {
             "plan": "hit_plan",
-            "setpoint_rate": "rate",
+            "setpoint_hz": "rate",
+            "setpoint_rate": "rate",  # deprecated name of setpoint_hz
             "rate_hz": "rate",
             "rate": "rate",  # deprecated name of rate_hz
             "noise": "noise",
@@ -174,10 +175,22 @@ API: dict[str, dict] = {
     "SimResult.summary": {},
     "SimResult.t": {},
     # --- drives (issue 10)
-    "DriveSim": {"args": {"setpoint_rate": "rate", "noise": "noise", "gravity": "flag"}},
+    "DriveSim": {
+        "args": {"setpoint_hz": "rate", "setpoint_rate": "rate", "noise": "noise", "gravity": "flag"}
+    },
     **{
         f"DriveSim.{a}": {}
-        for a in ("current", "current_reference", "current_ref", "faults", "q", "qd", "t", "tick_rate")
+        for a in (
+            "current",
+            "current_reference",
+            "current_ref",
+            "faults",
+            "q",
+            "qd",
+            "t",
+            "tick_hz",
+            "tick_rate",
+        )
     },
     "DriveSim.reset": {},
     "DriveSim.set_setpoint": {},

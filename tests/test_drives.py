@@ -22,13 +22,13 @@ def _stroke(robot, rate=1000.0):
 
 def test_run_returns_the_documented_arrays_and_tracks_with_feedforward():
     robot = robots.gantry6()
-    sim = ttmanip.DriveSim(robot, setpoint_rate=1000.0, seed=1)
+    sim = ttmanip.DriveSim(robot, setpoint_hz=1000.0, seed=1)
     t, q, qd, qdd = _stroke(robot)
     sim.reset(q[0])
     tau = robot.inverse_dynamics(q, qd, qdd)
     out = sim.run(t, q, qd, qdd, tau_ff=tau)
     k = len(out["t"])
-    assert k == round(0.4 * sim.tick_rate) + 1
+    assert k == round(0.4 * sim.tick_hz) + 1
     for key in ("q", "qd", "q_ref", "current", "current_ref", "torque"):
         assert out[key].shape == (k, 6), key
     assert out["faults"] == [""] * 6
@@ -44,7 +44,7 @@ def test_tick_by_tick_holds_against_gravity_and_reports_state():
     for _ in range(200):  # 0.2 s of 1 kHz setpoints
         sim.set_setpoint(q0, tau_ff=g)
         sim.tick(20)
-    assert sim.t == pytest.approx(0.2 + 1.0 / sim.tick_rate, abs=1e-9)
+    assert sim.t == pytest.approx(0.2 + 1.0 / sim.tick_hz, abs=1e-9)
     assert np.abs(sim.q - q0).max() < 1e-3
     assert sim.current.shape == sim.current_reference.shape == (6,)
     assert sim.faults == [""] * 6
@@ -62,8 +62,8 @@ def test_lost_setpoints_stop_every_axis_with_a_named_fault():
 
 def test_bad_input_raises_ttmanip_errors():
     robot = robots.gantry6()
-    with pytest.raises(ttmanip.TtmanipError, match="setpoint_rate"):
-        ttmanip.DriveSim(robot, setpoint_rate=0.0)
+    with pytest.raises(ttmanip.TtmanipError, match="setpoint_hz"):
+        ttmanip.DriveSim(robot, setpoint_hz=0.0)
     sim = ttmanip.DriveSim(robot)
     with pytest.raises(ttmanip.TtmanipError):
         sim.set_setpoint([0.0, 1.0])

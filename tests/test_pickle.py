@@ -40,7 +40,7 @@ def _samples() -> dict[str, list[object]]:
     ran.set_setpoint(np.full(6, 0.01), tau_ff=np.full(6, 0.1))
     ran.tick(25)
     ran.tick(5)
-    reset = ttmanip.DriveSim(g6, gravity=False, setpoint_rate=500.0)
+    reset = ttmanip.DriveSim(g6, gravity=False, setpoint_hz=500.0)
     reset.reset(np.full(6, 0.2), np.full(6, 0.01))
     t = np.linspace(0.0, 0.01, 11)
     q = np.full((11, 6), 0.2)

@@ -245,3 +245,70 @@ def test_simulate_rate_is_a_deprecated_rate_hz():
     with pytest.warns(DeprecationWarning, match=r"simulate\(rate=\.\.\.\) is deprecated; use rate_hz"):
         old = ttmanip.simulate(robot, plan, rate=500.0)
     np.testing.assert_array_equal(old.arrays["q"], new.arrays["q"])
+
+
+def test_setpoint_rate_and_tick_rate_are_deprecated_setpoint_hz_and_tick_hz():
+    """Issue 30: a rate of one named thing in Hz is ``<thing>_hz`` (the glossary's rule):
+    ``setpoint_rate`` and ``tick_rate`` warn and give what ``setpoint_hz`` and ``tick_hz`` give."""
+    robot = ttmanip.robots.gantry6()
+    new = ttmanip.DriveSim(robot, setpoint_hz=500.0)
+    with pytest.warns(DeprecationWarning, match=r"DriveSim\(setpoint_rate=\.\.\.\) is deprecated"):
+        old = ttmanip.DriveSim(robot, setpoint_rate=500.0)
+    with pytest.warns(DeprecationWarning, match=r"DriveSim\.tick_rate is deprecated; use DriveSim\.tick_hz"):
+        assert old.tick_rate == new.tick_hz == 20000.0
+    q0 = np.full(6, 0.05)
+    for sim in (old, new):
+        sim.reset(q0)
+        sim.set_setpoint(q0 + 0.01)
+        sim.tick(100)
+    np.testing.assert_array_equal(old.q, new.q)
+    with pytest.warns(DeprecationWarning), pytest.raises(ttmanip.TtmanipError, match="setpoint_hz"):
+        ttmanip.DriveSim(robot, setpoint_rate=0.0)  # the value is checked under its new name
+
+    case = ttmanip._ttmanip.drive_theta5_case(setpoint_hz=250.0)
+    with pytest.warns(DeprecationWarning, match=r"drive_theta5_case\(setpoint_rate=\.\.\.\) is deprecated"):
+        old_case = ttmanip._ttmanip.drive_theta5_case(setpoint_rate=250.0)
+    assert case["setpoint_hz"] == case["setpoint_rate"] == old_case["setpoint_hz"] == 250.0
+    assert case["max_following_error"] == old_case["max_following_error"]
+
+    plan = ttmanip._ttmanip.hit_plan(robot, robot.fk(robot.ready), np.array([1.0, 0.0, 0.5, 0, 0, 0]), 0.4)
+    new = ttmanip.simulate(robot, plan, setpoint_hz=500.0)
+    with pytest.warns(DeprecationWarning, match=r"simulate\(setpoint_rate=\.\.\.\) is deprecated"):
+        old = ttmanip.simulate(robot, plan, setpoint_rate=500.0)
+    np.testing.assert_array_equal(old.arrays["q"], new.arrays["q"])
+    default = ttmanip.simulate(robot, plan)  # None: DriveSim's default, 1 kHz
+    assert not np.array_equal(default.arrays["current"], new.arrays["current"])
+
+
+def test_the_cli_setpoint_rate_flag_is_a_deprecated_setpoint_hz(tmp_path):
+    import json
+    import subprocess
+    import sys
+
+    hit = tmp_path / "hit.json"
+    one = {
+        "centre": [0.35, -0.55, 0.05],
+        "normal": [0.3, -1.0, -0.2],
+        "velocity": [0.86, -2.87, -0.57],
+        "t": 0.55,
+    }
+    hit.write_text(json.dumps({"robot": "gantry6", "hits": [one]}))
+
+    def cli(*args):
+        return subprocess.run(
+            [sys.executable, "-m", "ttmanip.cli", "simulate", str(hit), "--out", str(tmp_path / "o"), *args],
+            capture_output=True,
+            text=True,
+            timeout=600,
+        )
+
+    r = cli("--setpoint-rate", "0")  # refused before any work, under the new name
+    assert r.returncode != 0
+    assert "--setpoint-rate is deprecated; use --setpoint-hz" in r.stderr
+    assert "--setpoint-hz: expected a rate > 0 Hz, got 0.0" in r.stderr
+    r = cli("--setpoint-rate", "500", "--setpoint-hz", "500")
+    assert r.returncode != 0 and "given twice" in r.stderr
+    r = cli("--setpoint-hz", "-1")
+    assert r.returncode != 0 and "--setpoint-hz: expected a rate > 0 Hz" in r.stderr
+    assert "deprecated" not in r.stderr
+    assert "--setpoint-rate" not in cli("--help").stdout  # the old flag is not advertised

@@ -379,6 +379,7 @@ def _returned(tmp: Path) -> dict[str, Callable[[], object]]:
         "hit_plan_batch": lambda: t.hit_plan_batch(
             g6, np.stack([hit_pose, hit_pose]), np.tile([1.0, 0.0, 0.5, 0, 0, 0], (2, 1)), [0.4, 0.5]
         ),
+        "hit_batch_check": lambda: t.hit_batch_check(g6, 2),
         "racket_frame": lambda: t.racket_frame(np.array([1.0, 0.0, 0.0])),
         "racket_mount": lambda: t.racket_mount(m8),
         "racket_states": lambda: t.racket_states(g6, np.stack([q6, q6]), np.zeros((2, 6))),

@@ -634,14 +634,16 @@ class DriveSim:
         robot: Robot,
         *,
         gravity: bool = True,
-        setpoint_rate: float = 1000.0,
+        setpoint_hz: float = 1000.0,
         noise: float | None = None,
         seed: int = 0,
         ideal_current: bool = False,
+        setpoint_rate: float | None = None,
     ) -> None:
         """Drives from the robot file's drive section (``ttcan::coupled::axis_config_from_drive``);
-        ``noise``: current-sense noise (A RMS, None: 5 mA); ``setpoint_rate``: cyclic setpoint rate
-        (Hz) the drives interpolate; ``ideal_current``: winding current = reference. At q = 0."""
+        ``noise``: current-sense noise (A RMS, None: 5 mA); ``setpoint_hz``: cyclic setpoint rate
+        (Hz) the drives interpolate (``setpoint_rate`` is its deprecated name); ``ideal_current``:
+        winding current = reference. At q = 0."""
     def reset(self, q0: ArrayLike, qd0: ArrayLike | None = None) -> None:
         """Rebuilds the drives around (q0, qd0 or rest): time 0, every axis holding q0."""
     def set_setpoint(
@@ -676,8 +678,11 @@ class DriveSim:
     def faults(self) -> list[str]:
         """Fault of each axis ("" when none)."""
     @property
-    def tick_rate(self) -> float:
+    def tick_hz(self) -> float:
         """Current-loop (tick) rate, Hz."""
+    @property
+    def tick_rate(self) -> float:
+        """Deprecated name of `tick_hz`."""
     def run(
         self,
         t: ArrayLike,
@@ -688,8 +693,9 @@ class DriveSim:
     ) -> dict[str, Any]:
         """Runs a reference trajectory: t (K,); q, qd, q_ref, current, current_ref, torque (K, n); faults."""
 
-def drive_theta5_case(setpoint_rate: float = 1000.0) -> dict[str, Any]:
-    """Issue 10's θ5 case (gantry6 demo stroke on θ5, RE 25 + 14:1, 4096 counts): RMS numbers and traces."""
+def drive_theta5_case(setpoint_hz: float = 1000.0, *, setpoint_rate: float | None = None) -> dict[str, Any]:
+    """Issue 10's θ5 case (gantry6 demo stroke on θ5, RE 25 + 14:1, 4096 counts): RMS numbers and
+    traces (``setpoint_rate``, the deprecated name of ``setpoint_hz``, also as the result's key)."""
 
 def actuators(robot: Robot) -> list[dict[str, Any]]:
     """Each joint's actuator from the robot file's drive section: joint, drive (as given),

@@ -420,8 +420,13 @@ def _simulate(args: argparse.Namespace) -> int:
 
     spec = read_hit_file(args.file)
     out = _out_dir(args.out)
-    if not args.setpoint_rate > 0:
-        raise CliError(f"--setpoint-rate: expected a rate > 0 Hz, got {args.setpoint_rate}")
+    if args.setpoint_rate is not None:  # the deprecated spelling of --setpoint-hz (one release)
+        print("ttmanip: warning: --setpoint-rate is deprecated; use --setpoint-hz", file=sys.stderr)
+        if args.setpoint_hz is not None:
+            raise CliError("--setpoint-hz: given twice (once by its deprecated name --setpoint-rate)")
+        args.setpoint_hz = args.setpoint_rate
+    if args.setpoint_hz is not None and not args.setpoint_hz > 0:
+        raise CliError(f"--setpoint-hz: expected a rate > 0 Hz, got {args.setpoint_hz}")
     if args.noise is not None and not args.noise >= 0:
         raise CliError(f"--noise: expected a current-sense noise >= 0 A, got {args.noise}")
     results = []
@@ -448,7 +453,7 @@ def _simulate(args: argparse.Namespace) -> int:
                     gif=args.gif,
                     state=spec["state"],
                     noise=args.noise,
-                    setpoint_rate=args.setpoint_rate,
+                    setpoint_hz=args.setpoint_hz,
                     progress=bar,
                     recording=rec,
                     t0=t0,
@@ -646,7 +651,8 @@ def build_parser() -> argparse.ArgumentParser:
         _arg("file", help="hit file (.json)"),
         _arg("--out", default="out/simulate", help="output folder (default: out/simulate)"),
         _arg("--noise", type=float, help="current-sense noise (A, DriveSim's default if unset)"),
-        _arg("--setpoint-rate", type=float, default=1000.0, help="setpoint rate to the drives (Hz)"),
+        _arg("--setpoint-hz", type=float, help="setpoint rate to the drives (Hz, DriveSim's default: 1000)"),
+        _arg("--setpoint-rate", type=float, help=argparse.SUPPRESS),  # deprecated name of --setpoint-hz
         _arg("--gif", action="store_true", help="also write a GIF of each stroke"),
         _arg("--rerun", metavar="FILE.rrd", help="also write a Rerun recording (needs ttmanip[viz])"),
     )

@@ -18,6 +18,7 @@ from __future__ import annotations
 import csv
 import json
 import time
+import warnings
 from pathlib import Path
 
 import matplotlib
@@ -98,15 +99,23 @@ def run_hit(
     gif: bool = True,
     state=None,
     noise=None,
-    setpoint_rate: float = 1000.0,
+    setpoint_hz: float | None = None,
     progress=None,
     recording=None,
     t0: float = 0.0,
     world_from_base=None,
+    setpoint_rate: float | None = None,
 ) -> dict:
     """Plans and simulates ``hit`` on ``robot``; writes figures and CSVs named ``prefix_*`` into
     ``out``; returns the JSON-ready summary. With ``recording`` (a ``ttmanip.viz.Recording``) the
-    simulated stroke is also logged there from ``t0`` (s) on its timeline."""
+    simulated stroke is also logged there from ``t0`` (s) on its timeline. ``setpoint_hz``: the
+    drives' setpoint rate (Hz; None: ``DriveSim``'s default); ``setpoint_rate``, its deprecated
+    name, warns."""
+    if setpoint_rate is not None:
+        warnings.warn(
+            "run_hit(setpoint_rate=...) is deprecated; use setpoint_hz=...", DeprecationWarning, stacklevel=2
+        )
+        setpoint_hz = setpoint_rate
     step = progress or (lambda _msg: None)
     step("plan")
     plan = plan_hit(robot, hit, state)
@@ -132,7 +141,7 @@ def run_hit(
     tau = plan.torques(1000.0)
     write_csv(out / f"{prefix}_plan.csv", {"t": t, "q": q, "qd": qd, "qdd": qdd, "tau": tau})
     step("simulate")
-    sim = simulate(robot, plan, setpoint_rate=setpoint_rate, noise=noise)
+    sim = simulate(robot, plan, setpoint_hz=setpoint_hz, noise=noise)
     ex = sim.arrays
     write_csv(
         out / f"{prefix}_sim.csv",

@@ -290,23 +290,30 @@ def simulate(
     robot: Robot,
     plan: HitPlan,
     *,
-    setpoint_rate: float = 1000.0,
+    setpoint_hz: float | None = None,
     noise=None,
     seed: int = 0,
     rate_hz: float = 1000.0,
     gravity: bool = True,
     rate: float | None = None,
+    setpoint_rate: float | None = None,
 ) -> SimResult:
     """Executes ``plan`` on ``ttmanip.DriveSim``: the stroke sampled at ``rate_hz`` with its
     inverse-dynamics torques as feed-forward, setpoints handed to every axis's drive at
-    ``setpoint_rate`` Hz, optional sensor ``noise`` (see ``DriveSim``), gravity on. Returns the
-    executed states, currents, the racket over time and its errors at the hit. ``rate`` is the
-    deprecated name of ``rate_hz``."""
+    ``setpoint_hz`` Hz (None: ``DriveSim``'s default, 1 kHz), optional sensor ``noise`` (see
+    ``DriveSim``), gravity on. Returns the executed states, currents, the racket over time and
+    its errors at the hit. ``rate`` and ``setpoint_rate`` are the deprecated names of ``rate_hz``
+    and ``setpoint_hz``."""
     from ._ttmanip import DriveSim
 
     if rate is not None:
         warnings.warn("simulate(rate=...) is deprecated; use rate_hz=...", DeprecationWarning, stacklevel=2)
         rate_hz = rate
+    if setpoint_rate is not None:
+        warnings.warn(
+            "simulate(setpoint_rate=...) is deprecated; use setpoint_hz=...", DeprecationWarning, stacklevel=2
+        )
+        setpoint_hz = setpoint_rate
 
     if not isinstance(plan, HitPlan):
         raise TtmanipError(f"plan: expected a ttmanip.HitPlan, got {type(plan).__name__}")
@@ -319,7 +326,8 @@ def simulate(
         raise HitError(f"plan: nothing to simulate (status '{plan.status}': {plan.message})")
     t, q, qd, qdd = plan.sample(rate_hz)
     tau = plan.torques(rate_hz)
-    sim = DriveSim(robot, gravity=gravity, setpoint_rate=setpoint_rate, noise=noise, seed=seed)
+    rates = {} if setpoint_hz is None else {"setpoint_hz": setpoint_hz}
+    sim = DriveSim(robot, gravity=gravity, noise=noise, seed=seed, **rates)
     sim.reset(q[0], qd[0])
     arrays = sim.run(t, q, qd, qdd, tau_ff=tau)
     te = np.asarray(arrays["t"])

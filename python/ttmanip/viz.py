@@ -107,31 +107,25 @@ class Recording:
         )
 
     def table(self, table=None) -> None:
-        """The table top and the net (static), from ``ttmanip.ball.Table`` (default ITTF)."""
+        """The table top and the net (static): the boxes around ``ttmanip.ball.Table.outline()``
+        (the core's ``Table::outline``, default ITTF), the top drawn 3 cm thick below the surface
+        and the net 4 mm thick."""
         from .ball import Table
 
-        rr, tb = self.rr, table or Table()
-        self.rec.log(
-            "world/table",
-            rr.Boxes3D(
-                centers=[[0.0, 0.0, -0.015]],
-                half_sizes=[[tb.length / 2, tb.width / 2, 0.015]],
-                colors=[[20, 70, 140]],
-                fill_mode="solid",
-            ),
-            static=True,
-        )
-        half = tb.width / 2 + tb.net_overhang
-        self.rec.log(
-            "world/net",
-            rr.Boxes3D(
-                centers=[[0.0, 0.0, tb.net_height / 2]],
-                half_sizes=[[0.002, half, tb.net_height / 2]],
-                colors=[[230, 230, 230]],
-                fill_mode="solid",
-            ),
-            static=True,
-        )
+        rr, outline = self.rr, (table or Table()).outline()
+        for entity, loop, pad, color in (
+            ("world/table", outline["surface"], [0.0, 0.0, 0.015], [20, 70, 140]),
+            ("world/net", outline["net"], [0.002, 0.0, 0.0], [230, 230, 230]),
+        ):
+            lo, hi = loop.min(axis=0), loop.max(axis=0)
+            centre = (lo + hi) / 2 - [0.0, 0.0, pad[2]]  # the top's slab lies below the surface
+            self.rec.log(
+                entity,
+                rr.Boxes3D(
+                    centers=[centre], half_sizes=[(hi - lo) / 2 + pad], colors=[color], fill_mode="solid"
+                ),
+                static=True,
+            )
 
     def robot(
         self,

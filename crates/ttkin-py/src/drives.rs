@@ -21,7 +21,7 @@ use crate::robot::PyRobot as Robot;
 pub struct DriveSim {
     chain: std::sync::Arc<ttkin::Chain>,
     options: CoupledOptions,
-    /// The cyclic setpoint period the drives interpolate, s (1 / `setpoint_rate`).
+    /// The cyclic setpoint period the drives interpolate, s (1 / `setpoint_hz`).
     setpoint_period: f64,
     sim: CoupledSim,
     /// What made `sim` from a fresh `from_chain` (issue 31): the last reset and every call
@@ -58,17 +58,28 @@ impl DriveSim {
 #[ttkin_py_guard::guarded]
 #[pymethods]
 impl DriveSim {
+    /// `setpoint_rate` is the deprecated name of `setpoint_hz`.
     #[new]
-    #[pyo3(signature = (robot, *, gravity=true, setpoint_rate=ttcan::coupled::SETPOINT_RATE, noise=None, seed=CoupledOptions::default().seed as i128, ideal_current=false))]
+    #[pyo3(signature = (robot, *, gravity=true, setpoint_hz=ttcan::coupled::SETPOINT_HZ, noise=None, seed=CoupledOptions::default().seed as i128, ideal_current=false, setpoint_rate=None))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
+        py: Python<'_>,
         robot: &Robot,
         gravity: bool,
-        setpoint_rate: f64,
+        setpoint_hz: f64,
         noise: Option<f64>,
         seed: i128,
         ideal_current: bool,
+        setpoint_rate: Option<f64>,
     ) -> PyResult<Self> {
-        let setpoint_period = 1.0 / args::positive("setpoint_rate", setpoint_rate)?;
+        let setpoint_hz = args::renamed(
+            py,
+            setpoint_hz,
+            setpoint_rate,
+            "DriveSim(setpoint_rate=...)",
+            "setpoint_hz=...",
+        )?;
+        let setpoint_period = 1.0 / args::positive("setpoint_hz", setpoint_hz)?;
         let noise = noise.map(|a| args::non_negative("noise", a)).transpose()?;
         let options = CoupledOptions {
             // On: the robot's own gravity (`Chain::gravity`, the core's default).
@@ -246,7 +257,14 @@ impl DriveSim {
     }
 
     fn __repr__(&self) -> String {
-        format!("DriveSim({} axes, {} Hz)", self.sim.dof(), self.sim.tick_rate())
+        format!("DriveSim({} axes, {} Hz)", self.sim.dof(), self.sim.tick_hz())
+    }
+
+    /// Deprecated name of `tick_hz`.
+    #[getter]
+    fn tick_rate(&self, py: Python<'_>) -> PyResult<f64> {
+        crate::errors::deprecated(py, "DriveSim.tick_rate", "DriveSim.tick_hz")?;
+        Ok(self.sim.tick_hz())
     }
 }
 
@@ -256,7 +274,7 @@ value_getters!(DriveSim, |s| {
     /// Fault of each axis ("" when none).
     faults: Vec<String> => s.sim.fault_names();
     /// Current-loop (tick) rate, Hz.
-    tick_rate: f64 => s.sim.tick_rate();
+    tick_hz: f64 => s.sim.tick_hz();
 });
 
 /// (10–90 % rise time in s, overshoot as a fraction) of `y` sampled at `t` towards `target`.
@@ -279,16 +297,29 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(drive_theta5_case, m)?)
 }
 
-/// Issue 10's θ5 case (`ttcan::cases::theta5_case`): its RMS numbers and traces.
+/// Issue 10's θ5 case (`ttcan::cases::theta5_case`): its RMS numbers and traces. `setpoint_rate`
+/// is the deprecated name of `setpoint_hz` (and of the result's key, kept beside it one release).
 #[ttkin_py_guard::guarded]
 #[pyfunction]
-#[pyo3(signature = (setpoint_rate=ttcan::coupled::SETPOINT_RATE))]
-fn drive_theta5_case<'py>(py: Python<'py>, setpoint_rate: f64) -> PyResult<Bound<'py, PyDict>> {
-    let setpoint_rate = args::positive("setpoint_rate", setpoint_rate)?;
-    let c = py.detach(|| ttcan::cases::theta5_case(setpoint_rate)).py()?;
+#[pyo3(signature = (setpoint_hz=ttcan::coupled::SETPOINT_HZ, *, setpoint_rate=None))]
+fn drive_theta5_case<'py>(
+    py: Python<'py>,
+    setpoint_hz: f64,
+    setpoint_rate: Option<f64>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let setpoint_hz = args::renamed(
+        py,
+        setpoint_hz,
+        setpoint_rate,
+        "drive_theta5_case(setpoint_rate=...)",
+        "setpoint_hz=...",
+    )?;
+    let setpoint_hz = args::positive("setpoint_hz", setpoint_hz)?;
+    let c = py.detach(|| ttcan::cases::theta5_case(setpoint_hz)).py()?;
     let d = PyDict::new(py);
     d.set_item("load_inertia", c.load_inertia)?;
-    d.set_item("setpoint_rate", c.setpoint_hz)?;
+    d.set_item("setpoint_hz", c.setpoint_hz)?;
+    d.set_item("setpoint_rate", c.setpoint_hz)?; // the old key, one release (a dict cannot warn)
     d.set_item("current_ripple_rms", c.current_ripple_rms)?;
     d.set_item("current_error_rms", c.current_error_rms)?;
     d.set_item("max_following_error", c.max_following_error)?;

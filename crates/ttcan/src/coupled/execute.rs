@@ -16,7 +16,7 @@ pub struct DriveExecutor {
 }
 
 /// Period (s) of the setpoints handed to the drives by [`DriveExecutor::with_defaults`].
-pub const SETPOINT_PERIOD: f64 = 1.0 / super::SETPOINT_RATE;
+pub const SETPOINT_PERIOD: f64 = 1.0 / super::SETPOINT_HZ;
 
 impl DriveExecutor {
     /// For `chain` with the default simulation options and setpoints every [`SETPOINT_PERIOD`].

@@ -53,7 +53,11 @@ use winding::{open_winding_step, winding_step, Winding};
 
 /// Default rate (Hz) of the setpoints handed to the simulated drives (Python `DriveSim`, the θ5
 /// case, the rally's drive execution).
-pub const SETPOINT_RATE: f64 = 1000.0;
+pub const SETPOINT_HZ: f64 = 1000.0;
+
+/// Deprecated name of [`SETPOINT_HZ`] (a rate in Hz is `*_hz`, see the glossary).
+#[deprecated(since = "0.1.0", note = "use SETPOINT_HZ (a rate in Hz is named *_hz)")]
+pub const SETPOINT_RATE: f64 = SETPOINT_HZ;
 
 /// The longest whole-trajectory run [`CoupledSim::run`] accepts, in current-loop ticks (50 s at
 /// 20 kHz): its trace keeps every tick (about 100 bytes per tick and axis).
@@ -468,8 +472,14 @@ impl CoupledSim {
     }
 
     /// Current-loop (tick) rate, Hz.
-    pub fn tick_rate(&self) -> f64 {
+    pub fn tick_hz(&self) -> f64 {
         1.0 / self.period
+    }
+
+    /// Deprecated name of [`CoupledSim::tick_hz`].
+    #[deprecated(since = "0.1.0", note = "use tick_hz (a rate in Hz is named *_hz)")]
+    pub fn tick_rate(&self) -> f64 {
+        self.tick_hz()
     }
 
     /// True joint positions, rad or m.

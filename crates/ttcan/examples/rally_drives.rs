@@ -1,0 +1,134 @@
+//! The acceptance rally of issue 28 in release without Python: `rally_drives [N] [SEED]`
+//! (defaults 1000, 0) plays the same balls in the planner's own world and in the mismatched one
+//! (`WorldSpread::measured`), every stroke through the coupled drive simulation, and prints the
+//! in-reach outcomes side by side (what `ttmanip rally --world both --execution drives` reports),
+//! the balls lost only in the mismatched world by outcome, and, for every `execution_failed`,
+//! why the drive simulation refused or faulted (`IDEAL=1`: exact execution instead).
+use std::collections::BTreeMap;
+use std::sync::Mutex;
+use ttcan::coupled::{CoupledOptions, CoupledSim, SETPOINT_RATE};
+use ttkin::ball::rally::{BallOutcome, Executed, Executor, Rally, RallyConfig, WorldSpread};
+use ttkin::chain::Chain;
+
+/// [`ttcan::coupled::execute::DriveExecutor`]'s execution, recording why a stroke failed.
+struct Diagnosing {
+    chain: Chain,
+    options: CoupledOptions,
+    failures: Mutex<Vec<String>>,
+}
+
+impl Executor for Diagnosing {
+    fn execute(&self, times: &[f64], q: &[f64], qd: &[f64], qdd: &[f64]) -> Option<Executed> {
+        let n = self.chain.dof();
+        let fail = |why: String| {
+            self.failures.lock().unwrap().push(why);
+            None
+        };
+        let mut sim = match CoupledSim::from_chain(&self.chain, &q[..n], self.options) {
+            Ok(s) => s,
+            Err(e) => return fail(format!("build: {e}")),
+        };
+        let mut tau = vec![0.0; q.len()];
+        if let Err(e) =
+            sim.dynamics()
+                .inverse_dynamics_batch(q, qd, qdd, &self.options.gravity_on(&self.chain), None, &mut tau)
+        {
+            return fail(format!("inverse dynamics: {e}"));
+        }
+        let tr = match sim.run(times, q, qd, qdd, Some(&tau), 1.0 / SETPOINT_RATE) {
+            Ok(t) => t,
+            Err(e) => return fail(format!("run refused: {e}")),
+        };
+        if tr.faults.iter().any(|f| !f.is_empty()) {
+            // the largest feed-forward per joint over the stroke, against the drive's torque
+            let peak: Vec<String> = (0..n)
+                .map(|j| {
+                    let m = tau.chunks_exact(n).map(|r| r[j].abs()).fold(0.0, f64::max);
+                    format!("{m:.1}")
+                })
+                .collect();
+            return fail(format!("faults {:?}; |tau_ff| peaks {peak:?}", tr.faults));
+        }
+        Some(Executed {
+            dof: n,
+            t: tr.t,
+            q: tr.q,
+            qd: tr.qd,
+        })
+    }
+}
+
+fn counts(out: &[BallOutcome]) -> (usize, usize, BTreeMap<String, usize>) {
+    let mut m = BTreeMap::new();
+    let in_reach: Vec<_> = out.iter().filter(|o| o.in_reach).collect();
+    for o in &in_reach {
+        let k = if o.returned {
+            "returned".to_string()
+        } else {
+            o.status.clone()
+        };
+        *m.entry(k).or_insert(0) += 1;
+    }
+    (in_reach.len(), in_reach.iter().filter(|o| o.returned).count(), m)
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let n: usize = args.get(1).map_or(1000, |a| a.parse().expect("N"));
+    let seed: u64 = args.get(2).map_or(0, |a| a.parse().expect("SEED"));
+    let cfg = RallyConfig {
+        seed,
+        paths: 0,
+        ..RallyConfig::default()
+    };
+    let matched = Rally::new(cfg).expect("rally");
+    let mismatched = Rally::new(RallyConfig {
+        world: Some(WorldSpread::measured()),
+        ..cfg
+    })
+    .expect("rally");
+    let ex = Diagnosing {
+        chain: matched.planner.chain().clone(),
+        options: CoupledOptions::default(),
+        failures: Mutex::new(Vec::new()),
+    };
+    let ideal = std::env::var_os("IDEAL").is_some();
+    let exr = (!ideal).then_some(&ex as &dyn Executor);
+    let clock = std::time::Instant::now();
+    let a = matched.play_range(0, n, None, exr, &|| false).expect("matched");
+    let b = mismatched.play_range(0, n, None, exr, &|| false).expect("mismatched");
+    let wall = clock.elapsed().as_secs_f64();
+    let (ra, rb) = (counts(&a), counts(&b));
+    println!(
+        "balls {n} seed {seed} ({}; {wall:.0} s wall)",
+        if ideal { "ideal execution" } else { "drives" }
+    );
+    for (name, (inr, ret, m)) in [("matched", &ra), ("mismatched", &rb)] {
+        println!(
+            "{name:>10}: in reach {inr}, returned {ret} ({:.2} %), {m:?}",
+            100.0 * *ret as f64 / (*inr).max(1) as f64
+        );
+    }
+    // Balls in reach in both worlds: returned in the model world, lost in the mismatched one.
+    let mut lost = BTreeMap::new();
+    for (x, y) in a.iter().zip(&b) {
+        if x.in_reach && y.in_reach && x.returned && !y.returned {
+            *lost.entry(y.status.clone()).or_insert(0) += 1;
+        }
+    }
+    println!("returned in the model world, lost in the mismatched one: {lost:?}");
+    let med = |o: &[BallOutcome], f: &dyn Fn(&BallOutcome) -> f64| {
+        let mut v: Vec<f64> = o.iter().map(f).filter(|x| x.is_finite()).collect();
+        v.sort_by(f64::total_cmp);
+        let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
+        (v.get(v.len() / 2).copied().unwrap_or(f64::NAN), mean)
+    };
+    for (name, o) in [("matched", &a), ("mismatched", &b)] {
+        let (pm, pa) = med(o, &|o| o.plan_time_us);
+        let (cm, ca) = med(o, &|o| o.correction_time_us);
+        println!("{name:>10}: plan CPU median {pm:.0} (mean {pa:.0}) us, correction {cm:.0} ({ca:.0}) us");
+    }
+    for f in ex.failures.lock().unwrap().iter() {
+        println!("execution failed: {f}");
+    }
+}
