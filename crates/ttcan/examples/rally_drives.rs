@@ -6,7 +6,7 @@
 //! why the drive simulation refused or faulted (`IDEAL=1`: exact execution instead).
 use std::collections::BTreeMap;
 use std::sync::Mutex;
-use ttcan::coupled::{CoupledOptions, CoupledSim, SETPOINT_RATE};
+use ttcan::coupled::{CoupledOptions, CoupledSim, SETPOINT_HZ};
 use ttkin::ball::rally::{BallOutcome, Executed, Executor, Rally, RallyConfig, WorldSpread};
 use ttkin::chain::Chain;
 
@@ -35,7 +35,7 @@ impl Executor for Diagnosing {
         {
             return fail(format!("inverse dynamics: {e}"));
         }
-        let tr = match sim.run(times, q, qd, qdd, Some(&tau), 1.0 / SETPOINT_RATE) {
+        let tr = match sim.run(times, q, qd, qdd, Some(&tau), 1.0 / SETPOINT_HZ) {
             Ok(t) => t,
             Err(e) => return fail(format!("run refused: {e}")),
         };
