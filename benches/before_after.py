@@ -28,6 +28,7 @@ import json
 import os
 import re
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -80,8 +81,9 @@ def _executables(tree: Path, cargo_args: list[str], target_dir: Path, kind: str)
     return found
 
 
-def _build(side: str, tree: Path, target_dir: Path, copies: Path) -> dict:
-    """rally_stats and every bench binary of one side, copied out of the shared target directory."""
+def _build(side: str, tree: Path, target_dir: Path, copies: Path, benches: bool) -> dict:
+    """rally_stats and (with ``benches``) every bench binary of one side, copied out of the shared
+    target directory."""
     t0 = time.monotonic()
     dest = copies / side
     dest.mkdir(parents=True, exist_ok=True)
@@ -89,13 +91,13 @@ def _build(side: str, tree: Path, target_dir: Path, copies: Path) -> dict:
     rally = _executables(
         tree, ["build", "--release", "-p", "ttkin", "--example", "rally_stats"], target_dir, "example"
     )
-    benches = _executables(
-        tree, ["bench", "-p", "ttkin", "-p", "ttcan", "--benches", "--no-run"], target_dir, "bench"
-    )
-    for name, exe in [("rally_stats", rally["rally_stats"]), *sorted(benches.items())]:
+    bench_args = ["bench", "-p", "ttkin", "-p", "ttcan", "--benches", "--no-run"]
+    found = _executables(tree, bench_args, target_dir, "bench") if benches else {}
+    for name, exe in [("rally_stats", rally["rally_stats"]), *sorted(found.items())]:
         exes[name] = dest / name
         shutil.copy2(exe, exes[name])
-    print(f"[{side}] built in {time.monotonic() - t0:.0f} s: {', '.join(sorted(benches))}", file=sys.stderr)
+    built = ", ".join(sorted(found)) or "no benches"
+    print(f"[{side}] built in {time.monotonic() - t0:.0f} s: {built}", file=sys.stderr)
     return exes
 
 
@@ -179,12 +181,17 @@ def main() -> None:
     if a.balls < 1:
         ap.error(f"--balls: expected at least 1 ball, got {a.balls}")
 
+    # a SIGTERM (e.g. a killed run) still removes the /tmp worktrees (the `finally` below)
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit("terminated"))
     load0 = os.getloadavg()
     scratch = Path(tempfile.mkdtemp(prefix="ttmanip-before-after-"))
     trees = {"before": _checkout(a.rev, scratch)}
     trees["after"] = _checkout(a.after, scratch) if a.after else REPO
     try:
-        exes = {side: _build(side, tree, a.target_dir, scratch / "bin") for side, tree in trees.items()}
+        exes = {
+            side: _build(side, tree, a.target_dir, scratch / "bin", not a.no_bench)
+            for side, tree in trees.items()
+        }
         rally = {}
         for seed in a.seeds:
             for side in ("before", "after"):

@@ -389,6 +389,8 @@ def _returned(tmp: Path) -> dict[str, Callable[[], object]]:
         # ball
         "ball_table": t.ball_table,
         "ball_camera": t.ball_camera,
+        "ball_rally_config": t.ball_rally_config,
+        "hit_stroke_profiles": t.hit_stroke_profiles,
         "ball_table_check": lambda: t.ball_table_check(t.ball_table()),
         "ball_on_opponent_half": lambda: t.ball_on_opponent_half(t.ball_table(), 0.9, 0.1),
         "ball_table_outline": lambda: t.ball_table_outline(t.ball_table()),

@@ -825,6 +825,9 @@ def racket_states(robot: Robot, q: ArrayLike, qd: ArrayLike) -> _F:
     """(N, 22) per joint state: racket pose (row-major 4×4, base frame, m), racket-centre twist (6,)."""
 
 def hit_check(pose: ArrayLike, twist: ArrayLike, t: float) -> None: ...
+def hit_stroke_profiles() -> list[str]:
+    """The stroke profile names ``plan_hit(profile=...)`` accepts (``StrokeProfile::ALL``)."""
+
 def hit_batch_check(robot: Robot, count: int) -> None: ...
 
 # issue 29: the one array conversion, the rally's bound
@@ -843,6 +846,10 @@ def ball_table_outline(
     """Polylines (x, y, z) (m, world) of the table: surface, centre_line, net."""
 
 def ball_camera() -> dict[str, float]: ...
+def ball_rally_config() -> dict[str, Any]:
+    """``RallyConfig::default()``: camera, target (x, y), max_spin_rps, corkscrew, seed, paths,
+    replan_period, max_window, correction_delay, world (None)."""
+
 def ball_placement() -> _F:
     """(4, 4) base frame of the rally's robot in the world (table) frame, m."""
 

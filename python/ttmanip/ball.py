@@ -42,6 +42,7 @@ __all__ = [
 MODELS = ("default", "measured", "aero", "muelling", "mpi", "tt3d", "vacuum")
 
 _TABLE = _t.ball_table()  # ttkin::ball::model::Table::default(), the one source of the numbers
+_RALLY_TARGET = tuple(_t.ball_rally_config()["target"])  # RallyConfig::default()'s landing target
 
 
 @dataclass(frozen=True)
@@ -216,7 +217,7 @@ def crossing(
 def plan_return(
     state: ArrayLike,
     now: float,
-    target: ArrayLike = (0.9, 0.0),
+    target: ArrayLike = _RALLY_TARGET,
     model: BallModel | str = "default",
     robot: Robot | None = None,
 ):

@@ -185,6 +185,13 @@ def _hit(entry, where: str):
         raise CliError(f"{where}: {e}") from e
 
 
+def _ttmanip_profiles() -> list[str]:
+    """The stroke profile names of the core (``ttkin::hit::StrokeProfile::ALL``)."""
+    from . import _ttmanip
+
+    return _ttmanip.hit_stroke_profiles()
+
+
 def read_hit_file(path: str) -> dict:
     """Reads and checks a hit file (see ``--help``): ``{"robot", "hits", "state", "ready", "profile"}``."""
     p = Path(path)
@@ -255,8 +262,10 @@ def read_hit_file(path: str) -> dict:
         state = {k: _vector(s, k, "state", robot.dof) for k in ("q", "qd", "qdd") if k in s}
     ready = _vector(data, "ready", "file", robot.dof, required=False)
     profile = data.get("profile", "auto")
-    if profile not in ("auto", "quintic", "jerk"):
-        raise CliError(f"profile: expected 'auto', 'quintic' or 'jerk', got {profile!r}")
+    profiles = _ttmanip_profiles()
+    if profile not in profiles:
+        names = ", ".join(repr(p) for p in profiles[:-1]) + f" or {profiles[-1]!r}"
+        raise CliError(f"profile: expected {names}, got {profile!r}")
     return {"robot": robot, "hits": hits, "state": state, "ready": ready, "profile": profile}
 
 

@@ -17,6 +17,10 @@ from . import _ttmanip as _t
 
 __all__ = ["rally"]
 
+# The rally's defaults are the core's (`ttkin::ball::rally::RallyConfig::default()`), not restated.
+_RALLY = _t.ball_rally_config()
+_TARGET: tuple[float, float] = tuple(_RALLY["target"])
+
 
 def _median(a: np.ndarray) -> float | None:
     a = a[np.isfinite(a)]
@@ -36,8 +40,8 @@ def rally(
     n: int = 1000,
     seed: int = 0,
     *,
-    target: tuple[float, float] = (0.9, 0.0),
-    max_spin_rps: float = 40.0,
+    target: tuple[float, float] = _TARGET,
+    max_spin_rps: float = _RALLY["max_spin_rps"],
     out: str | Path | None = None,
     progress: bool = False,
     chunk: int = 1000,

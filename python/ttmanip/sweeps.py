@@ -35,10 +35,20 @@ from . import _ttmanip as _t
 
 __all__ = ["sweep", "STUDIES"]
 
+_RALLY = _t.ball_rally_config()  # the rally study's defaults: RallyConfig::default()'s
+
 #: Study name -> (its parameters with their defaults, trials per point by default, trials per task).
 STUDIES: dict[str, tuple[dict[str, float], int, int]] = {
     "hits": ({"base_x": 0.0, "base_y": 0.0, "speed": 3.0, "drive_scale": 1.0}, 10000, 10000),
-    "rally": ({"target_x": 0.9, "target_y": 0.0, "max_spin_rps": 40.0}, 400, 200),
+    "rally": (
+        {
+            "target_x": _RALLY["target"][0],
+            "target_y": _RALLY["target"][1],
+            "max_spin_rps": _RALLY["max_spin_rps"],
+        },
+        400,
+        200,
+    ),
 }
 
 

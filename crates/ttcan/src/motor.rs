@@ -25,6 +25,23 @@ use crate::noise::Gaussian;
 use nalgebra::{SMatrix, SVector};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
+use ttkin::joint::Drive;
+use ttkin::robots::drives::Friction;
+
+/// No joint-side friction: the catalogue drives below are read for their motor values only.
+const NO_JOINT_FRICTION: Friction = Friction {
+    viscous: 0.0,
+    coulomb: 0.0,
+};
+
+/// A datasheet value `what` of a drive, or the error that it is missing.
+fn datasheet(what: &str, value: Option<f64>) -> Result<f64> {
+    value.ok_or_else(|| crate::Error::InvalidParameter {
+        what: format!("motor {what}"),
+        value: f64::NAN,
+        reason: "missing from the drive's datasheet".into(),
+    })
+}
 
 /// Brushed DC motor parameters, SI units, motor shaft.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -54,15 +71,31 @@ impl DcMotor {
     /// Coulomb and 1e-6 N·m·s/rad viscous friction. These are the values this crate was designed
     /// and tested with; check them against the current maxon datasheet before driving hardware.
     pub fn maxon_re25() -> Self {
+        // The datasheet values are the RE 25 class drive's of the built-in robots (one source);
+        // the no-load friction split is this model's own (the drive's friction is joint-side).
+        let drive = ttkin::robots::drives::maxon_re25(1.0, 1.0, NO_JOINT_FRICTION);
         DcMotor {
-            resistance: 2.32,
-            inductance: 0.238e-3,
-            torque_constant: 43.9e-3,
-            back_emf_constant: 43.9e-3,
-            rotor_inertia: 10.8e-7,
             viscous_friction: 1.0e-6,
             coulomb_friction: 0.6e-3,
+            ..DcMotor::from_drive(&drive).expect("the RE 25 class drive carries its datasheet")
         }
+    }
+
+    /// The motor of a joint's drive (`ttkin::joint::Drive`'s datasheet values, motor side):
+    /// resistance, inductance, torque constant (= back-EMF constant in SI units) and rotor
+    /// inertia, no friction (a drive's friction is joint-side). A value the drive lacks is an
+    /// error naming it.
+    pub fn from_drive(drive: &Drive) -> Result<Self> {
+        let kt = datasheet("torque constant (N·m/A)", drive.torque_constant)?;
+        Ok(DcMotor {
+            resistance: datasheet("resistance (Ω)", drive.resistance)?,
+            inductance: datasheet("inductance (H)", drive.inductance)?,
+            torque_constant: kt,
+            back_emf_constant: kt,
+            rotor_inertia: drive.rotor_inertia,
+            viscous_friction: 0.0,
+            coulomb_friction: 0.0,
+        })
     }
 
     /// Checks that every parameter is physical (positive R, L, Kt, Ke, inertia; non-negative friction).
@@ -160,16 +193,19 @@ pub const DEFAULT_CURRENT_NOISE: f64 = 0.005;
 impl MotorModel {
     /// maxon RE 25 + GP 26 A 14:1 + 1024-CPT encoder (4096 counts/rev), 24 V bus, 1e-3 kg·m² load.
     pub fn maxon_re25_gp26() -> Self {
+        let gearbox = Gearbox::maxon_gp26a_14();
+        // bus and encoder from the RE 25 class drive of the built-in robots (one source)
+        let drive = ttkin::robots::drives::maxon_re25(gearbox.ratio, gearbox.efficiency, NO_JOINT_FRICTION);
         MotorModel {
             motor: DcMotor::maxon_re25(),
-            gearbox: Gearbox::maxon_gp26a_14(),
+            gearbox,
             load: Load {
                 inertia: 1.0e-3,
                 viscous_friction: 0.0,
             },
-            bus_voltage: 24.0,
+            bus_voltage: drive.bus_voltage.expect("the RE 25 class drive names its bus"),
             max_duty: 0.95,
-            encoder_counts_per_rev: 4096,
+            encoder_counts_per_rev: drive.encoder_counts.expect("the RE 25 class drive names its encoder"),
             current_noise: DEFAULT_CURRENT_NOISE,
         }
     }
@@ -464,4 +500,39 @@ fn discretise(model: &MotorModel, dt: f64) -> (SMatrix<f64, 3, 3>, SMatrix<f64, 
         e.fixed_view::<3, 3>(0, 0).into_owned(),
         e.fixed_view::<3, 2>(0, 3).into_owned(),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_re25_model_reads_the_catalogue_drive_and_keeps_its_values() {
+        let m = MotorModel::maxon_re25_gp26();
+        let d = &m.motor;
+        // the values this crate was designed and tested with (module doc of DcMotor::maxon_re25)
+        assert_eq!(
+            (
+                d.resistance,
+                d.inductance,
+                d.torque_constant,
+                d.back_emf_constant,
+                d.rotor_inertia
+            ),
+            (2.32, 0.238e-3, 43.9e-3, 43.9e-3, 10.8e-7)
+        );
+        assert_eq!((d.viscous_friction, d.coulomb_friction), (1.0e-6, 0.6e-3));
+        assert_eq!(
+            (m.gearbox.ratio, m.gearbox.efficiency, m.gearbox.inertia),
+            (14.0, 0.81, 0.4e-7)
+        );
+        assert_eq!((m.bus_voltage, m.encoder_counts_per_rev), (24.0, 4096));
+        m.validate().unwrap();
+    }
+
+    #[test]
+    fn a_drive_without_its_datasheet_names_the_missing_value() {
+        let e = DcMotor::from_drive(&Drive::geared(10.0)).unwrap_err().to_string();
+        assert!(e.contains("torque constant") && e.contains("missing"), "{e}");
+    }
 }

@@ -37,6 +37,25 @@ fn rows3(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<[f64; 3]>> {
     Ok(crate::convert::triples(rows_array(obj, what, "N", &[3])?.data()))
 }
 
+/// Observation times (`rows`,) and positions (`rows`, 3) (s, m) from `t` and `p`, the arguments
+/// named `names`.
+fn observations(
+    t: &Bound<'_, PyAny>,
+    p: &Bound<'_, PyAny>,
+    names: [&str; 2],
+    rows: &str,
+) -> PyResult<(Vec<f64>, Vec<[f64; 3]>)> {
+    Ok((rows_array(t, names[0], rows, &[])?.data().to_vec(), rows3(p, names[1])?))
+}
+
+/// The estimator's options for the ball model named `model` (the rest `EstimateOptions::default()`).
+fn estimate_options(model: &str) -> PyResult<EstimateOptions> {
+    Ok(EstimateOptions {
+        flight: flight(model)?,
+        ..EstimateOptions::default()
+    })
+}
+
 /// Fits a ball state to observed positions `p` (N, 3) at times `t` (N,); see `ttkin::ball::estimate`.
 #[ttkin_py_guard::guarded]
 #[pyfunction]
@@ -47,12 +66,8 @@ fn ball_estimate<'py>(
     p: &Bound<'py, PyAny>,
     model: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let times = rows_array(t, "t", "N", &[])?.data().to_vec();
-    let obs = rows3(p, "p")?;
-    let opts = EstimateOptions {
-        flight: flight(model)?,
-        ..EstimateOptions::default()
-    };
+    let (times, obs) = observations(t, p, ["t", "p"], "N")?;
+    let opts = estimate_options(model)?;
     let e = py
         .detach(|| estimate(&times, &obs, &opts))
         .map_err(ttkin::Error::from)
@@ -413,14 +428,9 @@ fn ball_update<'py>(
     p_new: &Bound<'py, PyAny>,
     model: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let times = rows_array(t, "t", "N", &[])?.data().to_vec();
-    let obs = rows3(p, "p")?;
-    let times_new = rows_array(t_new, "t_new", "M", &[])?.data().to_vec();
-    let obs_new = rows3(p_new, "p_new")?;
-    let opts = EstimateOptions {
-        flight: flight(model)?,
-        ..EstimateOptions::default()
-    };
+    let (times, obs) = observations(t, p, ["t", "p"], "N")?;
+    let (times_new, obs_new) = observations(t_new, p_new, ["t_new", "p_new"], "M")?;
+    let opts = estimate_options(model)?;
     let up = py
         .detach(|| {
             let est = estimate(&times, &obs, &opts)?;
@@ -444,6 +454,15 @@ fn ball_update<'py>(
 #[pyfunction]
 fn ball_camera(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
     serde_to_python(py, &rally::Camera::default())
+}
+
+/// The rally's settings of `ttkin::ball::rally::RallyConfig::default()`: camera (as
+/// `ball_camera`), target (x, y, m, world), max_spin_rps, corkscrew, seed, paths, replan_period,
+/// max_window and correction_delay (s), world (None: the world is the model).
+#[ttkin_py_guard::guarded]
+#[pyfunction]
+fn ball_rally_config(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
+    serde_to_python(py, &RallyConfig::default())
 }
 
 /// The ITTF table of `ttkin::ball::model::Table::default()` (m): length, width, height (surface
@@ -610,6 +629,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ball_on_opponent_half, m)?)?;
     m.add_function(wrap_pyfunction!(ball_table_outline, m)?)?;
     m.add_function(wrap_pyfunction!(ball_camera, m)?)?;
+    m.add_function(wrap_pyfunction!(ball_rally_config, m)?)?;
     m.add_function(wrap_pyfunction!(ball_placement, m)?)?;
     m.add_function(wrap_pyfunction!(ball_rally_observations, m)?)?;
     m.add_function(wrap_pyfunction!(ball_rally_score, m)?)?;

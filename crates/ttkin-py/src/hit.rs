@@ -398,7 +398,15 @@ crate::pickle::pickled!(serde PyHitPlan, _unpickle_hit_plan, "HitPlan", |h| (h.p
     |_, (chain, options, plan): (ttkin::Chain, HitOptions, HitPlan)| Ok(PyHitPlan { plan, planner: Arc::new(HitPlanner::new(&chain, options).py()?) }));
 
 /// Adds `HitPlan` and the hit functions to the module.
+/// The stroke profile names `plan_hit(profile=...)` accepts (`StrokeProfile::ALL`'s names).
+#[ttkin_py_guard::guarded]
+#[pyfunction]
+fn hit_stroke_profiles() -> Vec<&'static str> {
+    StrokeProfile::ALL.map(|p| p.name()).to_vec()
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(hit_stroke_profiles, m)?)?;
     m.add_function(wrap_pyfunction!(_unpickle_hit_plan, m)?)?;
     m.add_class::<PyHitPlan>()?;
     m.add_function(wrap_pyfunction!(hit_plan, m)?)?;

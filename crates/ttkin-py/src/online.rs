@@ -35,27 +35,10 @@ fn wire_hit<'py>(
     // refused here, where the caller sees it
     let t_hit = crate::args::finite("t_hit", t_hit)?;
     let sent = crate::args::finite("sent", sent)?;
-    let p = transform(pose, "pose")?;
-    let (r, c) = (p.rotation.matrix(), p.translation.vector);
+    let pose = transform(pose, "pose")?;
     let t = vector(twist, "twist", 6)?;
-    let m = Message::Hit(HitMsg {
-        id,
-        stroke,
-        t_hit,
-        rotation: [
-            r[(0, 0)],
-            r[(0, 1)],
-            r[(0, 2)],
-            r[(1, 0)],
-            r[(1, 1)],
-            r[(1, 2)],
-            r[(2, 0)],
-            r[(2, 1)],
-            r[(2, 2)],
-        ],
-        centre: [c.x, c.y, c.z],
-        twist: [t[0], t[1], t[2], t[3], t[4], t[5]],
-    });
+    let twist = [t[0], t[1], t[2], t[3], t[4], t[5]];
+    let m = Message::Hit(HitMsg::from_pose(id, stroke, t_hit, &pose, twist));
     Ok(bytes_of(py, &m, seq, sent))
 }
 

@@ -459,19 +459,8 @@ impl Chain {
 
     /// Validates a batch: `qs` is N × n finite values and `out_len` is N × `per_item`.
     fn batch_count(&self, qs: &[f64], out_len: usize, per_item: usize) -> Result<usize> {
-        let n = self.dof();
-        if !qs.len().is_multiple_of(n) {
-            return Err(Error::shape(
-                "q",
-                format!("N × {n} values"),
-                format!("{} values", qs.len()),
-            ));
-        }
-        crate::error::check_finite("q", qs)?;
-        let count = qs.len() / n;
-        if out_len != count * per_item {
-            return Err(Error::shape("output buffer", count * per_item, out_len));
-        }
+        let count = crate::error::check_rows("q", qs, self.dof())?;
+        crate::error::check_len("output buffer", out_len, count, per_item)?;
         Ok(count)
     }
 }

@@ -122,6 +122,29 @@ pub fn check_vector(what: &str, values: &[f64], expected: usize) -> Result<()> {
     check_finite(what, values)
 }
 
+/// Checks that `values` holds N × `per_row` finite values (a batch of N rows, row-major) and
+/// returns N: the one shape check of every batch (chain, task and dynamics batches).
+pub(crate) fn check_rows(what: &str, values: &[f64], per_row: usize) -> Result<usize> {
+    if !values.len().is_multiple_of(per_row) {
+        return Err(Error::shape(
+            what,
+            format!("N × {per_row} values"),
+            format!("{} values", values.len()),
+        ));
+    }
+    check_finite(what, values)?;
+    Ok(values.len() / per_row)
+}
+
+/// Checks that a buffer of `len` values holds `count` rows of `per_row` (a batch's other inputs
+/// and its output).
+pub(crate) fn check_len(what: &str, len: usize, count: usize, per_row: usize) -> Result<()> {
+    if len != count * per_row {
+        return Err(Error::shape(what, count * per_row, len));
+    }
+    Ok(())
+}
+
 /// Checks that every element of `values` is finite.
 pub fn check_finite(what: &str, values: &[f64]) -> Result<()> {
     match values.iter().position(|v| !v.is_finite()) {

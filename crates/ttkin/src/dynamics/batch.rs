@@ -5,7 +5,7 @@ use rayon::prelude::*;
 
 use super::model::{check_wrench, vec3, Dynamics, DynamicsData};
 use super::Wrench;
-use crate::error::{check_finite, Error, Result};
+use crate::error::{check_finite, check_len, check_rows as batch_count, Result};
 
 /// Configurations per rayon task in batch calls.
 const BATCH_CHUNK: usize = 64;
@@ -52,7 +52,7 @@ impl Dynamics {
     pub fn mass_matrix_batch(&self, q: &[f64], out: &mut [f64]) -> Result<()> {
         let n = self.dof();
         let count = batch_count("q", q, n)?;
-        same_count("output buffer", out, count, n * n)?;
+        check_len("output buffer", out.len(), count, n * n)?;
         out.par_chunks_mut(n * n * BATCH_CHUNK)
             .zip(q.par_chunks(n * BATCH_CHUNK))
             .for_each(|(o, q)| {
@@ -119,7 +119,7 @@ impl Dynamics {
     pub fn friction_batch(&self, qd: &[f64], out: &mut [f64]) -> Result<()> {
         let n = self.dof();
         let count = batch_count("qd", qd, n)?;
-        same_count("output buffer", out, count, n)?;
+        check_len("output buffer", out.len(), count, n)?;
         for (o, v) in out.chunks_exact_mut(n).zip(qd.chunks_exact(n)) {
             for ((o, d), &v) in o.iter_mut().zip(&self.drives).zip(v) {
                 *o = d.map_or(0.0, |d| d.friction(v));
@@ -136,9 +136,9 @@ impl Dynamics {
     {
         let n = self.dof();
         let count = batch_count("q", q, n)?;
-        same_count(names[0], b, count, n)?;
-        same_count(names[1], c, count, n)?;
-        same_count("output buffer", out, count, n)?;
+        check_len(names[0], b.len(), count, n)?;
+        check_len(names[1], c.len(), count, n)?;
+        check_len("output buffer", out.len(), count, n)?;
         check_finite(names[0], b)?;
         check_finite(names[1], c)?;
         let chunk = n * BATCH_CHUNK;
@@ -153,24 +153,4 @@ impl Dynamics {
                 Ok(())
             })
     }
-}
-
-/// Checks that `values` holds N × n finite values and returns N.
-pub(super) fn batch_count(what: &str, values: &[f64], n: usize) -> Result<usize> {
-    if !values.len().is_multiple_of(n) {
-        return Err(Error::shape(
-            what,
-            format!("N × {n} values"),
-            format!("{} values", values.len()),
-        ));
-    }
-    check_finite(what, values)?;
-    Ok(values.len() / n)
-}
-
-pub(super) fn same_count(what: &str, values: &[f64], count: usize, per_item: usize) -> Result<()> {
-    if values.len() != count * per_item {
-        return Err(Error::shape(what, count * per_item, values.len()));
-    }
-    Ok(())
 }

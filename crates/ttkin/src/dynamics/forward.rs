@@ -7,9 +7,9 @@
 
 use nalgebra::{DVector, Vector3};
 
-use super::batch::batch_count;
 use super::model::{check_wrench, vec3, Dynamics, DynamicsData};
 use super::Wrench;
+use crate::error::check_rows as batch_count;
 use crate::error::{check_finite, Error, Result};
 
 impl Dynamics {

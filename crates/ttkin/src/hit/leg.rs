@@ -5,8 +5,9 @@
 //! 1. **Quintic** (cheap, tried first): from the start state to (q, q̇, q̈) at `t_hit`, with q̈ = 0
 //!    or a fraction (½, 1) of the end acceleration of the cubic through the same boundary
 //!    positions and velocities, −6·Δq/T² + 2·(q̇0 + 2·q̇1)/T, whichever has the lowest exact
-//!    peak/limit ratio r over velocity, acceleration and jerk. Accepted when r ≤ 1; its margin is
-//!    1 − r.
+//!    peak/limit ratio r over velocity, acceleration and jerk. Accepted when r ≤ 1 and it stays
+//!    inside the position limits (exact extrema: a hit near a joint's limit moving away from it
+//!    can overshoot the limit before the hit, which the drives refuse); its margin is 1 − r.
 //! 2. **Jerk-limited** (Ruckig, [`crate::traj::jerk`]), only when the quintic is beyond the
 //!    limits: the time-optimal leg to (q, q̇, q̈ = 0) gives the shortest duration T*; when
 //!    T* ≤ `t_hit`, the leg with `t_hit` as minimum duration is accepted if it reaches the hit
@@ -96,18 +97,21 @@ pub fn hit_leg_above(
     }
     let (ratio, alpha) = best.expect("three trials");
     if ratio <= 1.0 {
-        if 1.0 - ratio <= floor {
-            return None;
-        }
         for (a, c) in end.qdd.iter_mut().zip(&cubic) {
             *a = alpha * c;
         }
-        return Some(HitLeg {
-            profile: StrokeProfile::Quintic,
-            trajectory: JointTrajectory::quintic_unchecked(start, &end, t_hit),
-            qdd_hit: end.qdd,
-            margin: 1.0 - ratio,
-        });
+        // The quintic may overshoot a position limit between its ends (a hit near a joint's
+        // limit, moving away from it): the drives refuse such a stroke, so it is no leg; the
+        // jerk-limited leg, which can keep the position limits, is tried instead.
+        let trajectory = JointTrajectory::quintic_unchecked(start, &end, t_hit);
+        if inside(&trajectory, limits) {
+            return (1.0 - ratio > floor).then_some(HitLeg {
+                profile: StrokeProfile::Quintic,
+                trajectory,
+                qdd_hit: end.qdd,
+                margin: 1.0 - ratio,
+            });
+        }
     }
     jerk_leg(start, q, qd, t_hit, limits, floor)
 }
@@ -278,6 +282,52 @@ mod tests {
         assert!(
             quintic > 10 && jerk > 10 && none > 10,
             "{quintic} quintic, {jerk} jerk, {none} none"
+        );
+    }
+
+    /// Hits within 2 cm (or 0.02 rad) of a joint's limit, moving away from it: the quintic to such
+    /// a hit often overshoots the limit before the hit (the drives refuse that stroke: issue 28's
+    /// `execution_failed`); every accepted leg stays inside the position limits at every instant.
+    #[test]
+    fn legs_to_hits_near_a_joint_limit_stay_inside_the_position_limits() {
+        let pl = crate::ball::hitplan::ReturnPlanner::new(crate::robots::gantry6(), Default::default()).unwrap();
+        let lim = pl.robot.limits();
+        let mut rng = fastrand::Rng::with_seed(11);
+        let (mut accepted, mut overshooting_quintics) = (0, 0);
+        for _ in 0..400 {
+            let start = JointState::rest(&pl.ready);
+            let mut q: Vec<f64> = pl.ready.iter().map(|x| x + 0.05 * (2.0 * rng.f64() - 1.0)).collect();
+            let mut qd = vec![0.0; q.len()];
+            let j = rng.usize(..q.len());
+            let up = rng.bool();
+            let edge = if up { lim.upper[j] } else { lim.lower[j] };
+            if !edge.is_finite() {
+                continue;
+            }
+            let away = if up { -1.0 } else { 1.0 };
+            q[j] = edge + away * 0.02 * rng.f64();
+            qd[j] = away * lim.velocity[j] * (0.1 + 0.4 * rng.f64());
+            let t_hit = 0.3 + 0.4 * rng.f64();
+            let end = JointState {
+                q: q.clone(),
+                qd: qd.clone(),
+                qdd: vec![0.0; q.len()],
+            };
+            if !inside(&JointTrajectory::quintic_unchecked(&start, &end, t_hit), lim) {
+                overshooting_quintics += 1;
+            }
+            if let Some(leg) = hit_leg(&start, &q, &qd, t_hit, lim) {
+                accepted += 1;
+                assert!(
+                    leg.trajectory.position_violations(lim, 0.0).is_empty(),
+                    "{:?} leg leaves the position limits",
+                    leg.profile
+                );
+            }
+        }
+        assert!(
+            accepted >= 10 && overshooting_quintics > 100,
+            "{accepted} accepted, {overshooting_quintics} overshooting quintics"
         );
     }
 

@@ -107,6 +107,9 @@ pub enum StrokeProfile {
 }
 
 impl StrokeProfile {
+    /// Every profile, in the order the names are listed to users.
+    pub const ALL: [StrokeProfile; 3] = [StrokeProfile::Auto, StrokeProfile::Quintic, StrokeProfile::Jerk];
+
     /// Parses `"auto"`, `"quintic"` or `"jerk"`.
     pub fn from_name(name: &str) -> Result<StrokeProfile> {
         match name {

@@ -59,7 +59,7 @@ use crate::error::{Error, Result};
 use rayon::prelude::*;
 
 /// Rally settings.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct RallyConfig {
     /// Camera.
     pub camera: Camera,

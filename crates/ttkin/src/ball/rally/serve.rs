@@ -12,7 +12,7 @@ use nalgebra::Vector3;
 /// by σ·N(0, 1) (clamped to their physical ranges), and the camera's time stamps off by a constant
 /// uniform in ±`latency_jitter` for the ball (the delivery latency differs from the one the
 /// planner assumes).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct WorldSpread {
     /// Relative standard deviation of k_d.
     pub k_drag: f64,
