@@ -363,6 +363,8 @@ fn a_late_decision_is_planned_again_from_the_newer_observations_for_the_same_hit
         let mut first = None;
         let mut next = 0;
         for (i, (t, p)) in times.iter().zip(&obs).enumerate() {
+            // the first plan comes with the window's last observation, as said beforehand
+            assert_eq!(d.may_decide(*t), i + 1 >= cfg.window_frames);
             if let Some(Decision::Planned { now, plan, .. }) = d.observe(&pl, *t, *p, *t, &|_| ready.clone()) {
                 first = plan.hit.map(|h| (now + h.hit.t, h));
                 next = i + 1;

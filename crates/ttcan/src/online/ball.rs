@@ -135,8 +135,9 @@ pub struct BallBrain {
     hit_id: u32,
     sent_ids: VecDeque<u32>,
     stats: BallStats,
-    /// The brain as it was before the last observation, with that observation: a decision whose
-    /// splice instant passed before it was ready is made again from there ([`Brain::retry`]).
+    /// The brain as it was before the last observation, with that observation, when that one
+    /// may have led to a decision: a decision whose splice instant passed before it was ready is
+    /// made again from there ([`Brain::retry`]).
     before: Option<Box<Before>>,
     /// The last stroke sent is a decision (first plan or correction) not yet planned again: if
     /// it comes too late for its splice, its hit is planned again from a newer observation
@@ -389,6 +390,19 @@ pub fn hit_msg(hit: &ReturnHit, id: u32, stroke: u32, t_hit: f64) -> HitMsg {
 
 impl Brain for BallBrain {
     fn observe(&mut self, obs: &ObservationMsg, sent: f64, now: f64, splice: &SpliceAt) -> Option<Command> {
+        // The state before the observation is kept (cloned: the decider's observations, estimate
+        // and hits) only when the observation may lead to a decision: a new ball, or the
+        // decider's window or correction time near (a frame period either side, the offset may
+        // move); otherwise nothing is kept and there is nothing to decide again.
+        let t_guess = obs.camera_time + self.offset().unwrap_or(f64::NAN);
+        let may_decide = match &self.ball {
+            Some(b) if b.id == obs.id => !b.ended && b.decider.may_decide(t_guess),
+            _ => true,
+        };
+        if !may_decide || t_guess.is_nan() {
+            self.before = None;
+            return self.receive(obs, sent, now, splice, false);
+        }
         let before = Before {
             ball: self.ball.clone(),
             stroke: self.stroke,

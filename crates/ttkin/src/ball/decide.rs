@@ -121,6 +121,17 @@ impl BallDecider {
         self.phase == Phase::Done
     }
 
+    /// Whether an observation at time `t` (s), or one up to a frame period either side of it,
+    /// may lead to a decision ([`BallDecider::observe`] returning one): a caller that keeps its
+    /// state from before each decision (to decide again) needs to keep it only then.
+    pub fn may_decide(&self, t: f64) -> bool {
+        match self.phase {
+            Phase::Done => false,
+            Phase::Observing => self.times.len() + 1 >= self.cfg.window_frames,
+            Phase::Correcting(at) => t + 2.0 * self.cfg.frame_period > at,
+        }
+    }
+
     /// The observations so far: times (s) and positions (m, world).
     pub fn observations(&self) -> (&[f64], &[[f64; 3]]) {
         (&self.times, &self.obs)
