@@ -349,9 +349,10 @@ def run(
     # Measured in the controller: the arrival of the datagram a stroke was decided on (the last
     # observation used) to the stroke's first cycle, the first changed setpoint.
     summary["decision_latency_ms"] = {
-        p: stat(f"online_decision_latency_{p}_us", 1e-3) for p in ("p50", "p99", "max")
+        p: stat(f"online_decision_latency_{p}_us", 1e-3) for p in ("p50", "p90", "p99", "max")
     }
     summary["decision_latency_ms"]["strokes"] = stat("online_decision_latency_count")
+    summary["decision_latency_ms"]["over_2ms"] = stat("online_decision_latency_over_2ms")
     # Cycle wake-up latency and deadline misses, split by whether the planning thread planned.
     summary["cycle_latency_us"] = {p: stat(f"latency_{p}_us") for p in ("p50", "p99", "max")}
     summary["deadline_misses"] = {

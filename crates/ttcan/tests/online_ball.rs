@@ -447,3 +447,85 @@ fn the_rally_scoring_of_the_brains_strokes_is_the_rallys_outcome() {
     let e = rally::score_executed(&pl, &seen.world, cfg.target, &seen.incoming, 0.5, &bad, 0.0).unwrap_err();
     assert!(e.to_string().contains("increase"), "{e}");
 }
+
+#[test]
+fn a_late_decision_waits_for_the_next_frame_and_keeps_its_hit() {
+    use ttcan::online::brain::Observed;
+    let pl = planner();
+    let cfg = RallyConfig::default();
+    let mut b = brain(&pl, &cfg);
+    let (mut tried, mut refined) = (0, 0);
+    for i in 0..10u64 {
+        let id = 200 + i as u32;
+        let seen = rally::observe_ball(&truth(), &cfg, i, None);
+        let frames: Vec<(f64, [f64; 3])> = seen.times.iter().copied().zip(seen.positions.iter().copied()).collect();
+        for (k, &(t, p)) in frames.iter().enumerate() {
+            let now = t + cfg.camera.latency;
+            let state = commanded(&pl, &b, now);
+            let obs = ObservationMsg {
+                id,
+                camera_time: t,
+                position: p,
+            };
+            let Some(Command::Stroke(first)) = b.observe(&obs, f64::NAN, now, &SpliceAt::at(now, state)) else {
+                // nothing to wait for without a stroke
+                assert!(b.awaits().is_none() || b.hit().is_some());
+                continue;
+            };
+            // The stroke came too late for its splice: the brain waits for this ball's next frame.
+            let aw = b.awaits().expect("a decision to plan again");
+            assert_eq!(aw.ball, id);
+            assert!(aw.wait > 0.0 && aw.wait <= 2.0 / cfg.camera.rate_hz);
+            let Some(&(tn, pn)) = frames.get(k + 1) else { break };
+            tried += 1;
+            let arrival = tn + cfg.camera.latency;
+            let other = Observed {
+                obs: ObservationMsg {
+                    id: id + 1000,
+                    camera_time: tn,
+                    position: pn,
+                },
+                sent: f64::NAN,
+                arrival,
+            };
+            let next = Observed {
+                obs: ObservationMsg {
+                    id,
+                    camera_time: tn,
+                    position: pn,
+                },
+                sent: f64::NAN,
+                arrival,
+            };
+            let at = arrival + 1e-3;
+            let state = commanded(&pl, &b, at);
+            let before = b.stats().refined;
+            match b.refine(&[other, next], &SpliceAt::at(at, state.clone())) {
+                Some((Command::Stroke(st), used)) => {
+                    refined += 1;
+                    // decided on the next frame of this ball (not the other ball's)
+                    assert_eq!(used, 1);
+                    assert_eq!(b.stats().refined, before + 1);
+                    // the same hit time, the same stroke; from the state at the new splice
+                    assert!((st.hit.t_hit - first.hit.t_hit).abs() < 1e-9);
+                    assert_eq!(st.hit.stroke, first.hit.stroke);
+                    assert_ne!(st.hit.id, first.hit.id);
+                    assert_eq!(st.start, at);
+                    let s0 = st.traj.state(0.0).unwrap();
+                    for j in 0..s0.q.len() {
+                        assert!((s0.q[j] - state.q[j]).abs() < 1e-9 && (s0.qd[j] - state.qd[j]).abs() < 1e-9);
+                    }
+                    // planned again once: a second late stroke is retried, not refined
+                    assert!(b.awaits().is_none());
+                }
+                other => assert!(other.is_none(), "{other:?}"),
+            }
+            assert!(b.refine(&[next], &SpliceAt::at(at, commanded(&pl, &b, at))).is_none());
+        }
+        b.tick(1e3, &JointState::rest(&pl.ready));
+    }
+    assert!(
+        tried >= 6 && refined * 10 >= tried * 7,
+        "{refined} of {tried} planned again"
+    );
+}

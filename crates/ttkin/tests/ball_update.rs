@@ -291,3 +291,114 @@ fn plan_and_plan_near_refuse_the_same_bad_input_with_the_same_error() {
     let c = pl.plan_near(&s, 0.23, &ready, false, &hit, f64::NAN).unwrap_err();
     assert!(matches!(c, ttkin::Error::NonFinite { .. }), "{c:?}");
 }
+
+#[test]
+fn the_same_hit_planned_again_keeps_where_and_when_and_refuses_bad_input() {
+    // `plan_same_hit` with the ball of the plan itself: the one candidate is the chosen one (the
+    // same ball state at the same time), shot to the same landing point, from the same start.
+    let pl = planner();
+    let ready = JointState::rest(&pl.ready);
+    let mut rng = fastrand::Rng::with_seed(33);
+    let mut same = 0;
+    for _ in 0..30 {
+        let s = rally::serve(&pl.flight, &mut rng, 30.0, 0.2);
+        let (s, _) = pl.flight.run(&s, 0.22, None);
+        let now = 0.23;
+        let Some(hit) = pl.plan(&s, now, [0.9, 0.0]).unwrap().hit else {
+            continue;
+        };
+        let t_prev = now + hit.hit.t;
+        let plan = pl.plan_same_hit(&s, now, &ready, false, &hit, t_prev).unwrap();
+        assert_eq!(plan.candidates, 1);
+        let Some(again) = plan.hit else {
+            continue;
+        };
+        same += 1;
+        assert!((again.hit.t - hit.hit.t).abs() < 1e-12);
+        assert!(
+            (again.ball.p - hit.ball.p).norm() < 1e-6,
+            "{} vs {}",
+            again.ball.p,
+            hit.ball.p
+        );
+        assert!((again.landing - hit.landing).xy().norm() < 2e-3);
+        let n = hit.branch.q.len();
+        let (mut q0, mut qd0, mut qdd0) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        again
+            .branch
+            .leg
+            .trajectory
+            .sample(0.0, &mut q0, &mut qd0, &mut qdd0)
+            .unwrap();
+        for i in 0..n {
+            assert!((q0[i] - ready.q[i]).abs() < 1e-9 && qd0[i].abs() < 1e-9);
+        }
+        // A hit time before `now`: no candidate.
+        let late = pl
+            .plan_same_hit(&s, t_prev + 0.01, &ready, false, &hit, t_prev)
+            .unwrap();
+        assert_eq!(late.status, ReturnStatus::OutOfReach);
+        assert!(late.hit.is_none());
+        // The same bad input, the same error as the other plans.
+        let e = pl.plan_same_hit(&s, f64::NAN, &ready, false, &hit, t_prev).unwrap_err();
+        assert!(matches!(e, ttkin::Error::NonFinite { .. }), "{e:?}");
+        let e = pl.plan_same_hit(&s, now, &ready, false, &hit, f64::NAN).unwrap_err();
+        assert!(matches!(e, ttkin::Error::NonFinite { .. }), "{e:?}");
+    }
+    assert!(same >= 10, "{same} planned again");
+}
+
+#[test]
+fn a_late_decision_is_planned_again_from_the_newer_observations_for_the_same_hit() {
+    use ttkin::ball::decide::{BallDecider, DecideConfig, Decision};
+    let pl = planner();
+    let ready = JointState::rest(&pl.ready);
+    let cfg = DecideConfig::default();
+    let mut rng = fastrand::Rng::with_seed(5);
+    let mut refined = 0;
+    for k in 0..20 {
+        let s = rally::serve(&truth(), &mut rng, 30.0, 0.2);
+        let (times, obs) = observe(&s, 0.6, 0.002, k);
+        let mut d = BallDecider::new(&pl, cfg);
+        let mut first = None;
+        let mut next = 0;
+        for (i, (t, p)) in times.iter().zip(&obs).enumerate() {
+            // the first plan comes with the window's last observation, as said beforehand
+            assert_eq!(d.may_decide(*t), i + 1 >= cfg.window_frames);
+            if let Some(Decision::Planned { now, plan, .. }) = d.observe(&pl, *t, *p, *t, &|_| ready.clone()) {
+                first = plan.hit.map(|h| (now + h.hit.t, h));
+                next = i + 1;
+                break;
+            }
+        }
+        let Some((t_hit, hit)) = first else { continue };
+        // Nothing newer than the decision's observations: nothing to plan again.
+        let (t0, p0) = (times[next - 1], obs[next - 1]);
+        assert!(d.refine(&pl, &[(t0, p0)], t0 + 0.002, &ready).is_none());
+        // The next two frames came while the decision ran: the same hit time, to the same
+        // landing point, from the state at the later start.
+        let now = times[next + 1] + 0.001;
+        let newer = [(times[next], obs[next]), (times[next + 1], obs[next + 1])];
+        let Some(again) = d.refine(&pl, &newer, now, &ready) else {
+            continue;
+        };
+        refined += 1;
+        assert!(
+            (now + again.hit.t - t_hit).abs() < 1e-9,
+            "{} vs {t_hit}",
+            now + again.hit.t
+        );
+        assert!((again.landing - hit.landing).xy().norm() < 2e-3);
+        // The ball moved by the newer estimate, not by another candidate (10 ms apart).
+        assert!(
+            (again.ball.p - hit.ball.p).norm() < 0.03,
+            "{}",
+            (again.ball.p - hit.ball.p).norm()
+        );
+        // Observed as usual afterwards, the newer frames change nothing already decided.
+        for (t, p) in &newer {
+            assert!(d.observe(&pl, *t, *p, *t, &|_| ready.clone()).is_none());
+        }
+    }
+    assert!(refined >= 8, "{refined} planned again");
+}

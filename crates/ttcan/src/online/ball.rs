@@ -21,7 +21,7 @@
 //! **Latency budget.** An observation whose exposure is more than `latency_budget` old on arrival
 //! (controller clock) is dropped and counted (`stale`): a plan from it would start too late.
 
-use super::brain::{Brain, Command, PlannedStroke, SpliceAt};
+use super::brain::{Awaiting, Brain, Command, Observed, PlannedStroke, SpliceAt};
 use super::counters::Counters;
 use super::wire::{HitMsg, ObservationMsg, PlanStatus, StatusMsg};
 use std::collections::VecDeque;
@@ -108,6 +108,9 @@ pub struct BallStats {
     /// Strokes ready after their splice cycle whose hit was kept, its leg planned again from a
     /// later splice ([`Brain::retry`]).
     pub retimed: u64,
+    /// Strokes ready after their splice cycle whose hit was planned again, without a search, from
+    /// a newer observation ([`Brain::refine`]).
+    pub refined: u64,
 }
 
 /// The ball in play.
@@ -132,9 +135,14 @@ pub struct BallBrain {
     hit_id: u32,
     sent_ids: VecDeque<u32>,
     stats: BallStats,
-    /// The brain as it was before the last observation, with that observation: a decision whose
-    /// splice instant passed before it was ready is made again from there ([`Brain::retry`]).
+    /// The brain as it was before the last observation, with that observation, when that one
+    /// may have led to a decision: a decision whose splice instant passed before it was ready is
+    /// made again from there ([`Brain::retry`]).
     before: Option<Box<Before>>,
+    /// The last stroke sent is a decision (first plan or correction) not yet planned again: if
+    /// it comes too late for its splice, its hit is planned again from a newer observation
+    /// ([`Brain::refine`]).
+    refinable: bool,
 }
 
 /// The brain's state before an observation, and the observation (see [`BallBrain`]'s `before`).
@@ -211,6 +219,7 @@ impl BallBrain {
             sent_ids: VecDeque::with_capacity(16),
             stats: BallStats::default(),
             before: None,
+            refinable: false,
         })
     }
 
@@ -280,6 +289,7 @@ impl BallBrain {
         let branch = robot.branch_leg_to(&old.branch.q, &at.state, &twist, t, ready, f64::NEG_INFINITY)?;
         let new = ReturnHit { hit, branch, ..old };
         self.stats.retimed += 1;
+        self.refinable = false;
         let c = self.command(&new, at);
         self.ball.as_mut().expect("has a hit").hit = Some((t_abs, new));
         Some(c)
@@ -344,6 +354,7 @@ impl BallBrain {
                 Some(hit) => {
                     self.stroke = self.stroke.wrapping_add(1);
                     self.stats.planned += 1;
+                    self.refinable = true;
                     out = Some(self.command(&hit, at));
                     self.ball.as_mut().expect("set above").hit = Some((now + hit.hit.t, hit));
                 }
@@ -358,6 +369,7 @@ impl BallBrain {
                             self.stroke = self.stroke.wrapping_add(1);
                         }
                         self.stats.corrected += 1;
+                        self.refinable = true;
                         out = Some(self.command(&hit, at));
                         self.ball.as_mut().expect("set above").hit = Some((now + hit.hit.t, *hit));
                     }
@@ -378,6 +390,19 @@ pub fn hit_msg(hit: &ReturnHit, id: u32, stroke: u32, t_hit: f64) -> HitMsg {
 
 impl Brain for BallBrain {
     fn observe(&mut self, obs: &ObservationMsg, sent: f64, now: f64, splice: &SpliceAt) -> Option<Command> {
+        // The state before the observation is kept (cloned: the decider's observations, estimate
+        // and hits) only when the observation may lead to a decision: a new ball, or the
+        // decider's window or correction time near (a frame period either side, the offset may
+        // move); otherwise nothing is kept and there is nothing to decide again.
+        let t_guess = obs.camera_time + self.offset().unwrap_or(f64::NAN);
+        let may_decide = match &self.ball {
+            Some(b) if b.id == obs.id => !b.ended && b.decider.may_decide(t_guess),
+            _ => true,
+        };
+        if !may_decide || t_guess.is_nan() {
+            self.before = None;
+            return self.receive(obs, sent, now, splice, false);
+        }
         let before = Before {
             ball: self.ball.clone(),
             stroke: self.stroke,
@@ -408,6 +433,52 @@ impl Brain for BallBrain {
         self.receive(&b.obs, b.sent, b.now, splice, true)
     }
 
+    fn awaits(&self) -> Option<Awaiting> {
+        let b = self.ball.as_ref()?;
+        (self.refinable && b.hit.is_some() && !b.ended).then_some(Awaiting {
+            ball: b.id,
+            wait: 1.5 * self.cfg.decide.frame_period,
+        })
+    }
+
+    fn refine(&mut self, newer: &[Observed], splice: &SpliceAt) -> Option<(Command, usize)> {
+        if !std::mem::take(&mut self.refinable) {
+            return None;
+        }
+        let offset = self.offset()?;
+        let ball = self.ball.as_ref()?;
+        let t_hit = ball.hit.as_ref().map(|(t, _)| *t)?;
+        if t_hit <= splice.t {
+            return None;
+        }
+        // The current ball's observations after the last one the decider has, within the budget.
+        let mut last = ball
+            .decider
+            .observations()
+            .0
+            .last()
+            .copied()
+            .unwrap_or(f64::NEG_INFINITY);
+        let mut used = Vec::with_capacity(newer.len());
+        let mut newest = None;
+        for (i, o) in newer.iter().enumerate() {
+            let t = o.obs.camera_time + offset;
+            if o.obs.id == ball.id && t > last && o.arrival - t <= self.cfg.latency_budget {
+                used.push((t, o.obs.position));
+                newest = Some(i);
+                last = t;
+            }
+        }
+        let newest = newest?;
+        self.planner.budget = None;
+        let ball = self.ball.as_mut().expect("checked above");
+        let hit = ball.decider.refine(&self.planner, &used, splice.t, &splice.state)?;
+        self.stats.refined += 1;
+        let c = self.command(&hit, splice);
+        self.ball.as_mut().expect("checked above").hit = Some((t_hit, hit));
+        Some((c, newest))
+    }
+
     fn publish(&self, c: &Counters) {
         let s = &self.stats;
         for (a, v) in [
@@ -422,6 +493,7 @@ impl Brain for BallBrain {
             (&c.ball_lost, s.lost),
             (&c.ball_refused, s.refused),
             (&c.ball_retimed, s.retimed),
+            (&c.ball_refined, s.refined),
         ] {
             a.store(v, Ordering::Relaxed);
         }

@@ -68,6 +68,26 @@ impl SpliceAt {
     }
 }
 
+/// A camera observation as the planning thread received it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Observed {
+    /// The observation.
+    pub obs: ObservationMsg,
+    /// The header's send time on the camera's clock, s.
+    pub sent: f64,
+    /// Controller clock at its arrival, s.
+    pub arrival: f64,
+}
+
+/// A brain's late stroke waiting for a newer observation ([`Brain::awaits`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Awaiting {
+    /// The ball (observation id) whose next observation is awaited.
+    pub ball: u32,
+    /// Longest wait (s) for it, from now; then the brain retries without it ([`Brain::retry`]).
+    pub wait: f64,
+}
+
 /// A ball-mode decision maker: camera observations in, commands out.
 pub trait Brain: Send {
     /// One camera observation received at controller time `now` (s), with the header's send time
@@ -81,6 +101,22 @@ pub trait Brain: Send {
     /// state before that observation. `None` when there is nothing to retry.
     fn retry(&mut self, splice: &SpliceAt) -> Option<Command> {
         let _ = splice;
+        None
+    }
+    /// Whether the brain's last stroke, ready after its splice cycle, is better planned again
+    /// from an observation newer than the one it was decided on ([`Brain::refine`]) than retried
+    /// at once: which ball's observation to wait for, and how long at most. `None` (the
+    /// default): retry at once.
+    fn awaits(&self) -> Option<Awaiting> {
+        None
+    }
+    /// The last stroke's hit, ready after its splice cycle, planned again for `splice` with the
+    /// observations received since (`newer`, in arrival order; they are also observed as usual
+    /// afterwards, [`Brain::observe`]): the stroke and the index in `newer` of the newest
+    /// observation it used (its decision latency counts from that one's arrival). `None`: no
+    /// such stroke (the caller retries, [`Brain::retry`]).
+    fn refine(&mut self, newer: &[Observed], splice: &SpliceAt) -> Option<(Command, usize)> {
+        let _ = (newer, splice);
         None
     }
     /// Called on the planning thread at least every 10 ms (controller time `now`, s), for

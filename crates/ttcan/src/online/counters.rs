@@ -26,8 +26,12 @@ macro_rules! counters {
             pub decision_latency_count: u64,
             /// Decision latency (arrival → first changed setpoint), median, µs (0 without strokes).
             pub decision_latency_p50_us: u64,
+            /// Decision latency, 90th percentile, µs.
+            pub decision_latency_p90_us: u64,
             /// Decision latency, 99th percentile, µs.
             pub decision_latency_p99_us: u64,
+            /// Strokes whose decision latency exceeded 2 ms.
+            pub decision_latency_over_2ms: u64,
             /// Decision latency, largest, µs.
             pub decision_latency_max_us: u64,
         }
@@ -39,7 +43,9 @@ macro_rules! counters {
                     $($name: self.$name.load(Ordering::Relaxed),)*
                     decision_latency_count: self.latency.count(),
                     decision_latency_p50_us: self.latency.percentile_us(0.50),
+                    decision_latency_p90_us: self.latency.percentile_us(0.90),
                     decision_latency_p99_us: self.latency.percentile_us(0.99),
+                    decision_latency_over_2ms: self.latency.count_above_us(2000),
                     decision_latency_max_us: self.latency.max_us(),
                 }
             }
@@ -52,7 +58,9 @@ macro_rules! counters {
                     $((stringify!($name), self.$name),)*
                     ("decision_latency_count", self.decision_latency_count),
                     ("decision_latency_p50_us", self.decision_latency_p50_us),
+                    ("decision_latency_p90_us", self.decision_latency_p90_us),
                     ("decision_latency_p99_us", self.decision_latency_p99_us),
+                    ("decision_latency_over_2ms", self.decision_latency_over_2ms),
                     ("decision_latency_max_us", self.decision_latency_max_us),
                 ]
             }
@@ -150,6 +158,9 @@ counters! {
     /// Ball mode: late strokes whose hit was kept, its leg planned again from a later splice
     /// (counted within `splices_redecided`).
     ball_retimed,
+    /// Ball mode: late strokes whose hit was planned again, without a search, from the
+    /// observations that came after their decision (counted within `splices_redecided`).
+    ball_refined,
 }
 
 /// Bins of the latency histogram, each [`LatencyHistogram::BIN_US`] wide (the last: beyond).
@@ -190,6 +201,12 @@ impl LatencyHistogram {
     /// Latencies recorded.
     pub fn count(&self) -> u64 {
         self.bins.iter().map(|b| b.load(Ordering::Relaxed)).sum()
+    }
+
+    /// Latencies recorded above `us` µs (a multiple of [`Self::BIN_US`]).
+    pub fn count_above_us(&self, us: u64) -> u64 {
+        let from = ((us / Self::BIN_US) as usize).min(LATENCY_BINS);
+        self.bins[from..].iter().map(|b| b.load(Ordering::Relaxed)).sum()
     }
 
     /// Largest latency recorded, µs.

@@ -18,6 +18,7 @@
 //! into the return leg after the pending hit. Silence longer than the timeout, or a
 //! [`Command::Ready`], brings the robot back to the ready pose and holds it.
 
+use std::collections::VecDeque;
 use std::net::{SocketAddr, UdpSocket};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
@@ -29,7 +30,7 @@ use ttkin::hit::{Hit, HitPlanner, HitStatus};
 use ttkin::traj::duration::minimal_quintic_duration;
 use ttkin::traj::{JointState, JointTrajectory};
 
-use super::brain::{Brain, Command, PlannedStroke, SpliceAt};
+use super::brain::{Awaiting, Brain, Command, Observed, PlannedStroke, SpliceAt};
 use super::counters::Counters;
 use super::handoff::{Decision, Sender, Timeline};
 use super::receiver::{controller_time, send_status, Inbound};
@@ -514,9 +515,15 @@ pub fn run_planner(
     let mut seq = 0u64;
     let mut last_heard: Option<f64> = None;
     let mut silent = false;
+    // Datagrams taken off the queue while a late stroke waited for a newer observation
+    // (`splice_stroke`), handled next, in order.
+    let mut pending: VecDeque<Inbound> = VecDeque::with_capacity(64);
     while !stop.load(Ordering::Relaxed) {
         let started = splicer.start(counters);
-        let msg = inbound.recv_timeout(Duration::from_millis(5));
+        let msg = match pending.pop_front() {
+            Some(m) => Ok(m),
+            None => inbound.recv_timeout(Duration::from_millis(5)),
+        };
         let now = controller_time();
         let commanded = |sp: &Splicer| {
             let tl = &sp.timeline;
@@ -578,7 +585,13 @@ pub fn run_planner(
                             replaced: None,
                         })
                     }
-                    Command::Stroke(st) => splice_stroke(&mut splicer, brain.as_deref_mut(), st, arrival, counters),
+                    Command::Stroke(st) => {
+                        let queue = Queue {
+                            inbound,
+                            pending: &mut pending,
+                        };
+                        splice_stroke(&mut splicer, brain.as_deref_mut(), st, arrival, queue, counters)
+                    }
                     Command::Hit(h) => Some(splicer.hit(&h, arrival, counters)),
                     Command::Ready => None,
                 };
@@ -596,22 +609,69 @@ pub fn run_planner(
     }
 }
 
-/// Splices a brain's stroke; when its splice cycle passed before it was ready, the brain retries
-/// for a later splice ([`Brain::retry`]: the same hit with its leg planned again from there, a
-/// few tens of µs, or else the decision made again): first twice the lead ahead, then twice its
-/// last retry time ahead (at most 3 times), then the hit is planned again from a later cycle; a
-/// stroke that does not start from the scheduled state is planned again at once. `None` when the
-/// decision made again has no hit (nothing to answer).
+/// The planning thread's inbound datagrams: the receiver's queue and those taken off it early.
+struct Queue<'q> {
+    inbound: &'q Receiver<Inbound>,
+    pending: &'q mut VecDeque<Inbound>,
+}
+
+impl Queue<'_> {
+    /// The observations of the awaited ball that came after the one being handled: those queued
+    /// already, else the next one within the wait (every datagram taken off the receiver's queue
+    /// stays pending, to be handled as usual afterwards).
+    fn newer(&mut self, aw: Awaiting) -> Vec<Observed> {
+        while let Ok(m) = self.inbound.try_recv() {
+            self.pending.push_back(m);
+        }
+        let of_ball = |m: &Inbound| matches!(m, Inbound::Observation { obs, .. } if obs.id == aw.ball);
+        if !self.pending.iter().any(of_ball) {
+            let until = Instant::now() + Duration::from_secs_f64(aw.wait.clamp(0.0, 0.1));
+            loop {
+                let left = until.saturating_duration_since(Instant::now());
+                if left.is_zero() {
+                    break;
+                }
+                let Ok(m) = self.inbound.recv_timeout(left) else { break };
+                let found = of_ball(&m);
+                self.pending.push_back(m);
+                if found {
+                    break;
+                }
+            }
+        }
+        self.pending
+            .iter()
+            .filter_map(|m| match *m {
+                Inbound::Observation { obs, sent, arrival } if obs.id == aw.ball => {
+                    Some(Observed { obs, sent, arrival })
+                }
+                _ => None,
+            })
+            .collect()
+    }
+}
+
+/// Splices a brain's stroke. When its splice cycle passed before it was ready (the decision took
+/// longer than the lead), the brain first plans its hit again, without a search, from the
+/// observations that came since, waiting for the next one when none has ([`Brain::awaits`],
+/// [`Brain::refine`]; the latency then counts from the newest observation used); then, and when
+/// that stroke is late too, it retries for a later splice ([`Brain::retry`]: the same hit with
+/// its leg planned again from there, a few tens of µs, or else the decision made again): first
+/// twice the lead ahead, then twice its last retry time ahead (at most 3 times), then the hit
+/// is planned again from a later cycle; a stroke that does not start from the scheduled state
+/// is planned again at once. `None` when the decision made again has no hit (nothing to answer).
 fn splice_stroke<'c>(
     splicer: &mut Splicer,
     mut brain: Option<&mut (dyn Brain + 'c)>,
     mut st: Box<PlannedStroke>,
-    arrival: f64,
+    mut arrival: f64,
+    mut queue: Queue<'_>,
     counters: &Counters,
 ) -> Option<HitOutcome> {
     // the first retry (the same hit from a later splice) takes little time, whatever the decision took
     let mut decided_in = 0.0;
-    for _ in 0..3 {
+    let mut refined = false;
+    for _ in 0..4 {
         match splicer.stroke(&st, arrival, counters) {
             Ok(out) => return Some(out),
             Err(StrokeMiss::Discontinuous) => break,
@@ -619,6 +679,22 @@ fn splice_stroke<'c>(
         }
         let Some(b) = brain.as_deref_mut() else { break };
         Counters::bump(&counters.splices_redecided);
+        if let (false, Some(aw)) = (refined, b.awaits()) {
+            refined = true;
+            let newer = queue.newer(aw);
+            if !newer.is_empty() {
+                let at = splicer.splice_at(1.0);
+                tl_planning(splicer, true);
+                let next = b.refine(&newer, &at);
+                tl_planning(splicer, false);
+                b.publish(counters);
+                if let Some((Command::Stroke(n), i)) = next {
+                    st = n;
+                    arrival = newer[i].arrival;
+                    continue;
+                }
+            }
+        }
         let factor = (2.0 * decided_in / splicer.cfg.splice_lead).max(2.0);
         let at = splicer.splice_at(factor);
         let t0 = controller_time();

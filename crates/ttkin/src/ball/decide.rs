@@ -93,6 +93,9 @@ pub struct BallDecider {
     estimate: Option<Estimate>,
     /// The first hit and its absolute time (s).
     first: Option<(ReturnHit, f64)>,
+    /// The hit of the last decision with a hit (first plan or correction) and its absolute time
+    /// (s), and whether it is the first plan's: what [`BallDecider::refine`] plans again.
+    last: Option<(ReturnHit, f64, bool)>,
 }
 
 impl BallDecider {
@@ -109,12 +112,24 @@ impl BallDecider {
             phase: Phase::Observing,
             estimate: None,
             first: None,
+            last: None,
         }
     }
 
     /// Whether this ball needs no more observations (planned and corrected, or given up).
     pub fn done(&self) -> bool {
         self.phase == Phase::Done
+    }
+
+    /// Whether an observation at time `t` (s), or one up to a frame period either side of it,
+    /// may lead to a decision ([`BallDecider::observe`] returning one): a caller that keeps its
+    /// state from before each decision (to decide again) needs to keep it only then.
+    pub fn may_decide(&self, t: f64) -> bool {
+        match self.phase {
+            Phase::Done => false,
+            Phase::Observing => self.times.len() + 1 >= self.cfg.window_frames,
+            Phase::Correcting(at) => t + 2.0 * self.cfg.frame_period > at,
+        }
     }
 
     /// The observations so far: times (s) and positions (m, world).
@@ -183,6 +198,7 @@ impl BallDecider {
             .as_ref()
             .filter(|_| plan.status == ReturnStatus::Ok)
             .map(|h| (h.clone(), now + h.hit.t));
+        self.last = self.first.clone().map(|(h, t)| (h, t, true));
         if self.cfg.correction_delay > 0.0 {
             if let Some(tb) = bounce_time(&planner.flight, &est.state) {
                 let at = tb + self.cfg.correction_delay;
@@ -206,10 +222,62 @@ impl BallDecider {
         commanded: &dyn Fn(f64) -> JointState,
     ) -> Decision {
         self.phase = Phase::Done;
+        let hit = self.correction(planner, at, now, commanded);
+        if let Some(h) = &hit {
+            self.last = Some((h.clone(), now + h.hit.t, false));
+        }
         Decision::Corrected {
             now,
-            hit: self.correction(planner, at, now, commanded).map(Box::new),
+            hit: hit.map(Box::new),
         }
+    }
+
+    /// The last decision's hit (the first plan's or the correction's) planned again at `now`
+    /// (s) for a stroke from `start`, with the observations that came after the decision: the
+    /// first estimate updated ([`update`]) with every observation after it recorded so far and
+    /// `newer` (times, s, and positions, m, world; those later than the last recorded one are
+    /// used, in increasing time; they are not recorded: feed them to [`BallDecider::observe`]
+    /// as usual), and the one hit at the same absolute time to the same landing point
+    /// ([`ReturnPlanner::plan_same_hit`], no search). For a controller whose decision came after
+    /// its splice: the hit it chose, from the newest observation, decided again in a fraction of
+    /// a search. Returns the new hit (`hit.t` from `now`), which becomes the decision's hit (a
+    /// later correction starts near it), or `None` (nothing changes) without a hit to plan
+    /// again, without an observation after the estimate, or when the update or the plan fails.
+    /// The off-line rally never calls it (it decides in zero time).
+    pub fn refine(
+        &mut self,
+        planner: &ReturnPlanner,
+        newer: &[(f64, [f64; 3])],
+        now: f64,
+        start: &JointState,
+    ) -> Option<ReturnHit> {
+        let (hit, t_hit, first) = self.last.as_ref()?;
+        let est = self.estimate.as_ref()?;
+        let from = self.times.partition_point(|&t| t <= est.state.t);
+        let mut last = self.times.last().copied().unwrap_or(f64::NEG_INFINITY);
+        let mut times = self.times[from..].to_vec();
+        let mut obs = self.obs[from..].to_vec();
+        for &(t, p) in newer {
+            if t > last && t > est.state.t && t.is_finite() && p.iter().all(|x| x.is_finite()) {
+                times.push(t);
+                obs.push(p);
+                last = t;
+            }
+        }
+        if times.is_empty() {
+            return None;
+        }
+        let up = update(est, &times, &obs, &self.opts).ok()?;
+        let plan = planner
+            .plan_same_hit(&up.state, now, start, up.bounced, hit, *t_hit)
+            .ok()?;
+        let new = plan.hit.filter(|_| plan.status == ReturnStatus::Ok)?;
+        let (t_hit, first) = (*t_hit, *first);
+        if first {
+            self.first = Some((new.clone(), t_hit));
+        }
+        self.last = Some((new.clone(), t_hit, first));
+        Some(new)
     }
 
     fn correction(

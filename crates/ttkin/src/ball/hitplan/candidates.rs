@@ -123,7 +123,7 @@ const LATEST_AFTER_BOUNCE: f64 = 0.3;
 /// 10 000 balls of seed 0 the prediction stopped 19 in-reach balls at the net without it
 /// (`no_bounce`; 9 before the flight checked the net's plane, when the 10 ms steps at times
 /// passed through the net), none with it.
-const NET_CLIP: f64 = 0.02;
+pub(super) const NET_CLIP: f64 = 0.02;
 
 /// Fallback landing targets (x, y, m, world) on the opponent's half, at least 0.2 m inside its
 /// end and side lines and 0.5 m past the net.

@@ -9,8 +9,10 @@
 //! targets: the landing point planned before already has a placeable racket near there.
 
 use super::super::flight::BallState;
-use super::search::{Begin, Shot};
-use super::{RacketPoses, ReturnHit, ReturnPlan, ReturnPlanner};
+use super::super::reach::walk_after_bounce_clip;
+use super::candidates::NET_CLIP;
+use super::search::{Begin, Search, Shot};
+use super::{RacketPoses, ReturnHit, ReturnPlan, ReturnPlanner, ReturnStatus};
 use crate::error::{check_finite, Result};
 use crate::hit::Hit;
 use crate::traj::JointState;
@@ -53,6 +55,62 @@ impl ReturnPlanner {
             }
             search.attempt(self, &list[i], goal, &robot);
         }
+        Ok(search.finish())
+    }
+
+    /// The hit `previous`, planned before for the absolute time `t_prev` (s), planned again without
+    /// a search for a newer estimate `ball` and a stroke in the joint state `start` at `now` (s):
+    /// the one candidate at `t_prev` (the ball predicted there, through its bounce on the robot's
+    /// half; `after_bounce`: `ball` is past it), shot to `previous`'s landing point (the return
+    /// times in order), the racket through the IK branch nearest `previous`'s (the joints' ranges
+    /// as unit; no other pose is tried). For a decision that came too late for its splice: the
+    /// same hit, where and when, from the newest observations, at a fraction of a search's cost.
+    /// `NoBounce` when the new prediction does not bounce on the robot's half, `OutOfReach` when
+    /// it has no free flight after the bounce at `t_prev` or `t_prev` is not after `now`,
+    /// `Infeasible`/`NoReturn` as [`ReturnPlanner::plan_from`].
+    pub fn plan_same_hit(
+        &self,
+        ball: &BallState,
+        now: f64,
+        start: &JointState,
+        after_bounce: bool,
+        previous: &ReturnHit,
+        t_prev: f64,
+    ) -> Result<ReturnPlan> {
+        let goal = [previous.landing.x, previous.landing.y];
+        check_finite("t_prev", &[t_prev])?;
+        self.check_inputs(ball, now, goal, start)?;
+        self.flight.check_span("t_prev", ball, t_prev)?;
+        let none = |status| {
+            Ok(ReturnPlan {
+                status,
+                hit: None,
+                candidates: 0,
+            })
+        };
+        // The last sample after the bounce at or before `t_prev`, then on to `t_prev` exactly.
+        let mut before: Option<BallState> = None;
+        let bounced = walk_after_bounce_clip(&self.flight, ball, 0.01, after_bounce, NET_CLIP, |s| {
+            let on = s.t <= t_prev;
+            if on {
+                before = Some(*s);
+            }
+            on
+        });
+        if !bounced {
+            return none(ReturnStatus::NoBounce);
+        }
+        let at = match before {
+            Some(b) if t_prev > now && t_prev - b.t < 0.02 => match self.flight.advance(&b, t_prev, None) {
+                (s, None) => s,
+                (_, Some(_)) => return none(ReturnStatus::OutOfReach),
+            },
+            _ => return none(ReturnStatus::OutOfReach),
+        };
+        let mut search = Search::new(self);
+        let poses = RacketPoses::new(self);
+        let robot = |s: &BallState, shot: Shot| self.robot_hit_near(&poses, s, now, start, shot, &previous.branch.q);
+        search.attempt(self, &at, goal, &robot);
         Ok(search.finish())
     }
 

@@ -79,16 +79,10 @@ pub(super) struct Search {
 }
 
 impl ReturnPlanner {
-    /// Checks the inputs of a plan for `ball` at `now` (s) toward `goal` from the joint state
-    /// `start` and predicts the candidates: the early exits, or the search to run.
-    pub(super) fn begin(
-        &self,
-        ball: &BallState,
-        now: f64,
-        goal: [f64; 2],
-        start: &JointState,
-        after_bounce: bool,
-    ) -> Result<Begin> {
+    /// The checks of a plan's inputs (one error for the same bad input in every plan): `goal` on
+    /// the opponent's half, `start` of the chain's joint count and finite, `ball` valid, `now`
+    /// finite and within the flight's span from `ball`.
+    pub(super) fn check_inputs(&self, ball: &BallState, now: f64, goal: [f64; 2], start: &JointState) -> Result<()> {
         self.check_target(goal)?;
         if start.check("start")? != self.chain().dof() {
             return Err(Error::shape(
@@ -99,22 +93,25 @@ impl ReturnPlanner {
         }
         ball.validate("ball")?;
         check_finite("now", &[now])?;
-        self.flight.check_span("now", ball, now)?;
+        self.flight.check_span("now", ball, now)
+    }
+
+    /// Checks the inputs of a plan for `ball` at `now` (s) toward `goal` from the joint state
+    /// `start` and predicts the candidates: the early exits, or the search to run.
+    pub(super) fn begin(
+        &self,
+        ball: &BallState,
+        now: f64,
+        goal: [f64; 2],
+        start: &JointState,
+        after_bounce: bool,
+    ) -> Result<Begin> {
+        self.check_inputs(ball, now, goal, start)?;
         let (list, bounced) = self.candidate_states(&self.flight, ball, now, self.search_margin, after_bounce);
         let status = match (bounced, list.is_empty()) {
             (false, _) => ReturnStatus::NoBounce,
             (true, true) => ReturnStatus::OutOfReach,
-            (true, false) => {
-                let search = Search {
-                    best: None,
-                    any_return: false,
-                    tried: 0,
-                    good_margin: self.good_margin,
-                    return_times: self.return_times,
-                    deadline: Deadline::start(self.budget),
-                };
-                return Ok(Begin::Search(list, search));
-            }
+            (true, false) => return Ok(Begin::Search(list, Search::new(self))),
         };
         Ok(Begin::Done(ReturnPlan {
             status,
@@ -125,6 +122,18 @@ impl ReturnPlanner {
 }
 
 impl Search {
+    /// An empty search with `planner`'s settings, its budget starting now.
+    pub(super) fn new(planner: &ReturnPlanner) -> Self {
+        Search {
+            best: None,
+            any_return: false,
+            tried: 0,
+            good_margin: planner.good_margin,
+            return_times: planner.return_times,
+            deadline: Deadline::start(planner.budget),
+        }
+    }
+
     /// Whether the best hit so far is good enough to end the search: margin ≥ `good_margin`, or
     /// any hit once the budget is spent.
     pub(super) fn good(&self) -> bool {
