@@ -196,9 +196,13 @@ def test_ik_all_batch_uses_the_hint():
         {"lambda_max": np.inf},
         {"epsilon": np.inf, "lambda_max": np.inf},
         {"lambda_max": -1.0},
+        {"epsilon": 0.0},
+        {"epsilon": np.nan},
     ],
 )
 def test_joint_velocity_refuses_meaningless_thresholds(kw):
+    """One check, the core's: epsilon finite and > 0, lambda_max finite and ≥ 0 (the binding's own
+    epsilon ≥ 0 check, which disagreed with the core's > 0, is gone: issue 30)."""
     name = next(iter(kw))
     with pytest.raises(ttmanip.TtmanipError, match=name):
         G6.joint_velocity(Q6, np.ones(6), **kw)

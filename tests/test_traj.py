@@ -195,6 +195,17 @@ def test_stroke_on_time_and_adjusted():
     assert max(robot_like) > 1.0
 
 
+def test_stroke_binding_refuses_half_position_limits():
+    """Position limits with only one side given are an error, not silently dropped (issue 30)."""
+    from ttmanip import _ttmanip
+
+    n, inf = 2, np.full(2, np.inf)
+    start = hit = (np.zeros(n), np.zeros(n), np.zeros(n))
+    with pytest.raises(ttmanip.TtmanipError, match="lower.*upper"):
+        _ttmanip.traj_stroke(start, hit, 0.5, np.zeros(n), inf, inf, inf, np.full(n, -1.0), None, None)
+    _ttmanip.traj_stroke(start, hit, 0.5, np.zeros(n), inf, inf, inf, np.full(n, -1.0), np.ones(n), None)
+
+
 def test_bad_input():
     with pytest.raises(ttmanip.TtmanipError, match="duration"):
         tt.cubic([0.0], [1.0], 0.0)

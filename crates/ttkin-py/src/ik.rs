@@ -263,10 +263,9 @@ impl PyRobot {
         let twist = vector(twist, "twist", 6)?;
         let weights = weights.map(|w| vector(w, "weights", n)).transpose()?;
         let frame: JacobianFrame = frame.parse::<JacobianFrame>().py()?;
-        // inf is meaningless for both: damping everywhere, or without bound (qdot = 0)
         let d = DifferentialIk {
-            epsilon: args::non_negative("epsilon", epsilon)?,
-            lambda_max: args::non_negative("lambda_max", lambda_max)?,
+            epsilon,
+            lambda_max,
             frame,
         };
         let r = d.solve(&self.chain, &q, &twist, weights.as_deref()).py()?;

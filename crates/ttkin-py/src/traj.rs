@@ -409,8 +409,16 @@ fn traj_stroke<'py>(
         &raw(jerk, "jerk")?,
     )
     .py()?;
-    if let (Some(lo), Some(hi)) = (lower, upper) {
-        limits = limits.with_position(&raw(lo, "lower")?, &raw(hi, "upper")?).py()?;
+    match (lower, upper) {
+        (Some(lo), Some(hi)) => limits = limits.with_position(&raw(lo, "lower")?, &raw(hi, "upper")?).py()?,
+        (None, None) => {}
+        _ => {
+            let e = ttkin::Error::invalid(
+                "stroke: lower/upper",
+                "position limits need both `lower` and `upper`, or neither",
+            );
+            return Err(e).py();
+        }
     }
     let s = py
         .detach(|| ttkin::traj::stroke(&s0, &s1, t_hit, &ready, return_duration, &limits))

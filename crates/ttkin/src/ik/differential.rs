@@ -16,7 +16,7 @@
 use nalgebra::{DMatrix, DVector};
 
 use crate::chain::{Chain, JacobianFrame};
-use crate::error::{check_vector, Error, Result};
+use crate::error::{check_finite, check_vector, Error, Result};
 
 /// Settings of differential IK.
 #[derive(Debug, Clone, PartialEq)]
@@ -77,6 +77,9 @@ impl DifferentialIk {
     pub fn solve(&self, chain: &Chain, q: &[f64], twist: &[f64], weights: Option<&[f64]>) -> Result<JointVelocity> {
         chain.check_q("q", q)?;
         check_vector("twist", twist, 6)?;
+        // inf is meaningless for both: damping everywhere, or without bound (q̇ = 0)
+        check_finite("epsilon", &[self.epsilon])?;
+        check_finite("lambda_max", &[self.lambda_max])?;
         if !(self.epsilon > 0.0) || !(self.lambda_max >= 0.0) {
             return Err(Error::invalid(
                 "differential IK",
