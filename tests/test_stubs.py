@@ -395,6 +395,7 @@ def _returned(tmp: Path) -> dict[str, Callable[[], object]]:
         "ball_on_opponent_half": lambda: t.ball_on_opponent_half(t.ball_table(), 0.9, 0.1),
         "ball_table_outline": lambda: t.ball_table_outline(t.ball_table()),
         "ball_placement": t.ball_placement,
+        "ball_placement_for": lambda: _Each(t.ball_placement_for(r) for r in (g6, ur5)),
         "ball_rally_observations": lambda: observed,
         "ball_rally_score": lambda: t.ball_rally_score(
             0, 0.1, t_stroke, np.tile(g6.ready, (21, 1)), np.zeros((21, 6))
