@@ -835,6 +835,7 @@ def real_array(obj: ArrayLike, what: str) -> _F:
     """``obj`` as a float64 array of the same shape; complex, bool, string or object data is refused."""
 
 MAX_RALLY_BALLS: int
+EARTH_GRAVITY: list[float]
 
 # issue 13: ball flight, estimation, prediction, hit planning, rally (ttkin::ball)
 def ball_table() -> dict[str, float]: ...
