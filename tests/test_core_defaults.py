@@ -64,7 +64,6 @@ def test_the_rally_place_of_a_robot_is_the_cores_fact_not_its_name():
 
 def test_earth_gravity_is_the_cores():
     import numpy as np
-
     from ttmanip.dynamics import EARTH_GRAVITY
 
     assert list(EARTH_GRAVITY) == _ttmanip.EARTH_GRAVITY == [0.0, 0.0, -9.81]
