@@ -16,14 +16,21 @@ The rally counts are deterministic (seeded, fixed chunks), so any difference is 
 behaviour; the bench medians are wall times on a shared machine (compare them with the load).
 
 Run: ``.venv/bin/python benches/before_after.py 0057ae6 [--balls 2000] [--seeds 0 1 2]
-[--bench kinematics ...] [--quick]``. The target directory is shared (``--target-dir``, default
-this checkout's ``target``: dependencies compile once); the ``/tmp`` worktrees and copies are
-removed at the end unless ``--keep``.
+[--bench kinematics ...] [--quick]``. Each side builds in its own target directory
+(``--target-dir``/before, /after, or /worktree for this checkout's working tree, default under
+this checkout's ``target/before-after``; kept between runs, so a second run rebuilds only what
+changed): one directory shared by both sides
+gave the second side the first side's binaries, because cargo names a workspace member's
+artifacts by its path relative to the workspace root (the same in both checkouts) and judges them
+fresh by file times (the second checkout's files are older than the first side's build). A side
+whose ``rally_stats`` is byte-identical to the other's although their sources differ stops the
+script. The ``/tmp`` worktrees and copies are removed at the end unless ``--keep``.
 """
 
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import os
 import re
@@ -101,6 +108,26 @@ def _build(side: str, tree: Path, target_dir: Path, copies: Path, benches: bool)
     return exes
 
 
+def _target_name(side: str, tree: Path) -> str:
+    """The target folder of a side: the working tree builds in ``worktree`` (cargo's own freshness
+    rules hold: one source folder per target folder); a detached checkout, made afresh by each run
+    (its files newer than any earlier build there), in ``before`` or ``after``."""
+    return "worktree" if tree == REPO else side
+
+
+def _check_distinct(a, exes: dict) -> None:
+    """Stops the script when both sides' ``rally_stats`` are the same file although the sources
+    they were built from differ (a stale build taken for the other side's)."""
+    digest = {side: hashlib.sha256(e["rally_stats"].read_bytes()).hexdigest() for side, e in exes.items()}
+    if digest["before"] != digest["after"]:
+        return
+    paths = ["crates", "Cargo.toml", "Cargo.lock"]
+    revs = [a.rev, a.after] if a.after else [a.rev]
+    same = subprocess.run(["git", "diff", "--quiet", *revs, "--", *paths], cwd=REPO).returncode == 0
+    if not same:
+        sys.exit("before and after built to the same rally_stats although their sources differ")
+
+
 def _bench_crate(tree: Path, name: str) -> Path:
     """The crate folder whose benches/ holds bench ``name`` (criterion benches may read files there)."""
     for crate in ("ttkin", "ttcan"):
@@ -174,7 +201,12 @@ def main() -> None:
     ap.add_argument("--bench", nargs="*", help="only these bench targets (default: all of both builds)")
     ap.add_argument("--no-bench", action="store_true", help="rally counts only")
     ap.add_argument("--quick", action="store_true", help="criterion warm-up 1 s, measurement 2 s")
-    ap.add_argument("--target-dir", type=Path, default=REPO / "target", help="shared cargo target dir")
+    ap.add_argument(
+        "--target-dir",
+        type=Path,
+        default=REPO / "target" / "before-after",
+        help="cargo target dirs go in its subfolders before/ and after/",
+    )
     ap.add_argument("--out", type=Path, help="also write the table to this file")
     ap.add_argument("--keep", action="store_true", help="keep the /tmp worktrees and copies")
     a = ap.parse_args()
@@ -189,9 +221,10 @@ def main() -> None:
     trees["after"] = _checkout(a.after, scratch) if a.after else REPO
     try:
         exes = {
-            side: _build(side, tree, a.target_dir, scratch / "bin", not a.no_bench)
+            side: _build(side, tree, a.target_dir / _target_name(side, tree), scratch / "bin", not a.no_bench)
             for side, tree in trees.items()
         }
+        _check_distinct(a, exes)
         rally = {}
         for seed in a.seeds:
             for side in ("before", "after"):

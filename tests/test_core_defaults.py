@@ -46,3 +46,26 @@ def test_the_cli_takes_its_profile_names_from_the_core(tmp_path):
     )
     assert r.returncode != 0
     assert "profile: expected 'auto', 'quintic' or 'jerk', got 'bogus'" in r.stderr
+
+
+def test_the_rally_place_of_a_robot_is_the_cores_fact_not_its_name():
+    import numpy as np
+
+    g6 = _ttmanip.Robot.builtin("gantry6")
+    at_table = _ttmanip.ball_placement()
+    assert np.array_equal(_ttmanip.ball_placement_for(g6), at_table)
+    # the same model under another name is still the robot the rally plays
+    renamed = _ttmanip.Robot.from_toml(g6.to_toml().replace('name = "gantry6"', 'name = "my_arm"'))
+    assert renamed.name == "my_arm"
+    assert np.array_equal(_ttmanip.ball_placement_for(renamed), at_table)
+    for name in ("ur5", "mobile8"):  # no analytic IK: the ball planner does not play them
+        assert _ttmanip.ball_placement_for(_ttmanip.Robot.builtin(name)) is None
+
+
+def test_earth_gravity_is_the_cores():
+    import numpy as np
+    from ttmanip.dynamics import EARTH_GRAVITY
+
+    assert list(EARTH_GRAVITY) == _ttmanip.EARTH_GRAVITY == [0.0, 0.0, -9.81]
+    # a robot file without a gravity key gets the core's
+    assert np.array_equal(_ttmanip.Robot.builtin("gantry6").gravity_vector, EARTH_GRAVITY)

@@ -386,6 +386,7 @@ def _returned(tmp: Path) -> dict[str, Callable[[], object]]:
         "hit_check": lambda: t.hit_check(hit_pose, np.zeros(6), 0.3),
         "real_array": lambda: t.real_array([1, 2], "x"),
         "MAX_RALLY_BALLS": lambda: t.MAX_RALLY_BALLS,
+        "EARTH_GRAVITY": lambda: t.EARTH_GRAVITY,
         # ball
         "ball_table": t.ball_table,
         "ball_camera": t.ball_camera,
@@ -395,6 +396,7 @@ def _returned(tmp: Path) -> dict[str, Callable[[], object]]:
         "ball_on_opponent_half": lambda: t.ball_on_opponent_half(t.ball_table(), 0.9, 0.1),
         "ball_table_outline": lambda: t.ball_table_outline(t.ball_table()),
         "ball_placement": t.ball_placement,
+        "ball_placement_for": lambda: _Each(t.ball_placement_for(r) for r in (g6, ur5)),
         "ball_rally_observations": lambda: observed,
         "ball_rally_score": lambda: t.ball_rally_score(
             0, 0.1, t_stroke, np.tile(g6.ready, (21, 1)), np.zeros((21, 6))

@@ -835,6 +835,7 @@ def real_array(obj: ArrayLike, what: str) -> _F:
     """``obj`` as a float64 array of the same shape; complex, bool, string or object data is refused."""
 
 MAX_RALLY_BALLS: int
+EARTH_GRAVITY: list[float]
 
 # issue 13: ball flight, estimation, prediction, hit planning, rally (ttkin::ball)
 def ball_table() -> dict[str, float]: ...
@@ -852,6 +853,10 @@ def ball_rally_config() -> dict[str, Any]:
 
 def ball_placement() -> _F:
     """(4, 4) base frame of the rally's robot in the world (table) frame, m."""
+
+def ball_placement_for(robot: Robot) -> _F | None:
+    """(4, 4) base frame of ``robot`` in the world (table) frame where the rally places it, m;
+    None for a robot the ball planner does not play (no analytic IK)."""
 
 def ball_rally_observations(index: int, seed: int = 0, world: bool = False) -> dict[str, Any]: ...
 def ball_rally_score(

@@ -446,11 +446,11 @@ def _simulate(args: argparse.Namespace) -> int:
 
         rec = Recording(args.rerun, "ttmanip-simulate")
     t0 = 0.0
-    # The rally's robot (the same model, whatever its name) stands at its rally place by the table.
+    # A robot the rally plays (the core decides: its structure, whatever its name) stands at its
+    # rally place by the table.
     from . import _ttmanip
 
-    rally_robot = spec["robot"].to_toml() == _ttmanip.Robot.builtin("gantry6").to_toml()
-    at_table = _ttmanip.ball_placement() if rally_robot else None
+    at_table = _ttmanip.ball_placement_for(spec["robot"])
     try:
         for i, hit in enumerate(spec["hits"]):
             results.append(

@@ -25,12 +25,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import _ttmanip
 from ._ttmanip import Robot, ShapeError, TorqueProfile, TtmanipError, real_array
 
 __all__ = ["EARTH_GRAVITY", "MOBILE8_GRAVITY", "TorqueProfile", "gantry6_example", "torque_figure"]
 
-#: Standard gravity in a z-up base frame, m/s².
-EARTH_GRAVITY = np.array([0.0, 0.0, -9.81])
+#: Standard gravity in a z-up base frame, m/s² (the core's ``ttkin::dynamics::EARTH_GRAVITY``).
+EARTH_GRAVITY = np.array(_ttmanip.EARTH_GRAVITY)
 
 #: Gravity for ``robots.mobile8()`` in its base frame (Table 1's frame 0), m/s²: joint 1 moves the
 #: base along z0, horizontally, and the waist joint 2 turns about x0, so x0 is up (our reading of

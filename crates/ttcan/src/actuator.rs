@@ -48,15 +48,7 @@ pub fn thermal_model(joint: &str, drive: &ttkin::Drive) -> Result<ThermalModel> 
     if let Some((name, _)) = values.iter().find(|(_, v)| v.is_none()) {
         return Err(missing(joint, name, "give all five thermal values or none"));
     }
-    let v = |k: usize| values[k].1.unwrap_or(f64::NAN);
-    let model = ThermalModel {
-        winding_housing_resistance: v(0),
-        housing_ambient_resistance: v(1),
-        winding_time_constant: v(2),
-        housing_time_constant: v(3),
-        max_winding_temperature: v(4),
-        ..ThermalModel::maxon_re25()
-    };
+    let model = ThermalModel::from_datasheet(values.map(|(_, v)| v.unwrap_or(f64::NAN)));
     model
         .validate()
         .map_err(|e| Error::Model(format!("drive of joint '{joint}': {e}")))?;

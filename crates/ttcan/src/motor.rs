@@ -29,7 +29,7 @@ use ttkin::joint::Drive;
 use ttkin::robots::drives::Friction;
 
 /// No joint-side friction: the catalogue drives below are read for their motor values only.
-const NO_JOINT_FRICTION: Friction = Friction {
+pub(crate) const NO_JOINT_FRICTION: Friction = Friction {
     viscous: 0.0,
     coulomb: 0.0,
 };

@@ -41,17 +41,31 @@ pub struct ThermalModel {
 impl ThermalModel {
     /// A Ø25 mm graphite-brush DC motor of the maxon RE 25 class: R_wh 4.0 K/W, R_ha 13.2 K/W,
     /// τ_w 12.5 s, τ_h 700 s, 125 °C winding, 25 °C ambient, derating over the last 20 K.
-    /// Catalogue-class values (maxon catalogue, RE 25 page, thermal data): check them against the
-    /// datasheet of the motor actually fitted.
+    /// Catalogue-class values, read from the RE 25 class drive of the built-in robots
+    /// (`ttkin::robots::drives::maxon_re25`, the one copy): check them against the datasheet of the
+    /// motor actually fitted.
     pub fn maxon_re25() -> Self {
+        let drive = ttkin::robots::drives::maxon_re25(1.0, 1.0, crate::motor::NO_JOINT_FRICTION);
+        let values = drive
+            .thermal_values()
+            .map(|(_, v)| v.expect("the RE 25 class drive carries its thermal data"));
+        ThermalModel::from_datasheet(values)
+    }
+
+    /// The model of a drive's five datasheet values in the order of
+    /// `ttkin::joint::Drive::thermal_values` (R_wh, R_ha in K/W; τ_w, τ_h in s; largest winding
+    /// temperature in °C), at 25 °C ambient with derating over the last 20 K. Not checked: see
+    /// [`ThermalModel::validate`].
+    pub fn from_datasheet(values: [f64; 5]) -> Self {
+        let [r_wh, r_ha, tau_w, tau_h, t_max] = values;
         ThermalModel {
-            winding_housing_resistance: 4.0,
-            housing_ambient_resistance: 13.2,
-            winding_time_constant: 12.5,
-            housing_time_constant: 700.0,
-            max_winding_temperature: 125.0,
-            ambient_temperature: 25.0,
-            derating_start: 20.0,
+            winding_housing_resistance: r_wh,
+            housing_ambient_resistance: r_ha,
+            winding_time_constant: tau_w,
+            housing_time_constant: tau_h,
+            max_winding_temperature: t_max,
+            ambient_temperature: DATASHEET_AMBIENT,
+            derating_start: DATASHEET_DERATING_START,
         }
     }
 
@@ -88,6 +102,12 @@ impl ThermalModel {
         (dt / ((self.winding_housing_resistance + self.housing_ambient_resistance) * r)).sqrt()
     }
 }
+
+/// Ambient temperature of a model read from datasheet values, °C.
+const DATASHEET_AMBIENT: f64 = 25.0;
+
+/// Derating band below the largest winding temperature of a model read from datasheet values, K.
+const DATASHEET_DERATING_START: f64 = 20.0;
 
 /// Temperature coefficient of copper resistance, 1/K.
 pub const COPPER_ALPHA: f64 = 0.0039;
@@ -165,5 +185,29 @@ impl ThermalState {
             self.winding = winding;
             self.housing = housing;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_re25_model_is_the_re25_drives_datasheet() {
+        let m = ThermalModel::maxon_re25();
+        let drive = ttkin::robots::drives::maxon_re25(30.0, 0.75, crate::motor::NO_JOINT_FRICTION);
+        let from_drive = drive.thermal_values().map(|(_, v)| v.unwrap());
+        let of_model = [
+            m.winding_housing_resistance,
+            m.housing_ambient_resistance,
+            m.winding_time_constant,
+            m.housing_time_constant,
+            m.max_winding_temperature,
+        ];
+        assert_eq!(of_model, from_drive);
+        // the catalogue values this model always had (unchanged by reading them from the drive)
+        assert_eq!(of_model, [4.0, 13.2, 12.5, 700.0, 125.0]);
+        assert_eq!((m.ambient_temperature, m.derating_start), (25.0, 20.0));
+        m.validate().unwrap();
     }
 }

@@ -514,6 +514,14 @@ fn ball_placement(py: Python<'_>) -> Bound<'_, PyAny> {
     pose_to_numpy(py, &Placement::default().world_from_base()).into_any()
 }
 
+/// (4, 4) base frame of `robot` in the world (table) frame where the rally places it, m, or `None`
+/// for a robot the ball planner does not play (`ttkin::ball::reach::Placement::for_chain`).
+#[ttkin_py_guard::guarded]
+#[pyfunction]
+fn ball_placement_for<'py>(py: Python<'py>, robot: &PyRobot) -> Option<Bound<'py, PyAny>> {
+    Placement::for_chain(&robot.chain).map(|p| pose_to_numpy(py, &p.world_from_base()).into_any())
+}
+
 /// The served rally of `seed` (`world`: the measured world spread), the other settings the core's
 /// defaults.
 fn rally_of(seed: i128, world: bool) -> PyResult<Rally> {
@@ -631,6 +639,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ball_camera, m)?)?;
     m.add_function(wrap_pyfunction!(ball_rally_config, m)?)?;
     m.add_function(wrap_pyfunction!(ball_placement, m)?)?;
+    m.add_function(wrap_pyfunction!(ball_placement_for, m)?)?;
     m.add_function(wrap_pyfunction!(ball_rally_observations, m)?)?;
     m.add_function(wrap_pyfunction!(ball_rally_score, m)?)?;
     m.add_function(wrap_pyfunction!(ball_estimate, m)?)?;

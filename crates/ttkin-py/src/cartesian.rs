@@ -155,7 +155,7 @@ impl PyCartesianTrajectory {
     /// Sampled limit check through IK (see `to_joint`) against the robot's position, velocity and
     /// acceleration limits: the worst violation per joint and quantity, as dicts.
     /// Samples at `rate_hz` (Hz); `hz` is its deprecated name.
-    #[pyo3(signature = (robot, ik, q_start, rate_hz=ttkin::traj::SAMPLE_RATE, *, hz=None))]
+    #[pyo3(signature = (robot, ik, q_start, rate_hz=ttkin::traj::SAMPLE_HZ, *, hz=None))]
     fn check_limits<'py>(
         &self,
         py: Python<'py>,

@@ -106,7 +106,7 @@ impl PyHitPlan {
 
     /// Samples the stroke at `rate_hz` (Hz): (t (K,), q, qd, qdd (K, n)). TtmanipError when no
     /// stroke. `rate` is the deprecated name of `rate_hz`.
-    #[pyo3(signature = (rate_hz=ttkin::traj::SAMPLE_RATE, *, rate=None))]
+    #[pyo3(signature = (rate_hz=ttkin::traj::SAMPLE_HZ, *, rate=None))]
     fn sample<'py>(&self, py: Python<'py>, rate_hz: f64, rate: Option<f64>) -> PyResult<Bound<'py, PyAny>> {
         let rate_hz = crate::args::renamed(py, rate_hz, rate, "HitPlan.sample(rate=...)", "rate_hz=...")?;
         samples_to_py(py, &self.stroke()?.sample_rate(rate_hz).py()?)
@@ -115,7 +115,7 @@ impl PyHitPlan {
     /// (K, n) joint torques (N·m or N, inverse dynamics with friction and gravity: the drives'
     /// feed-forward) at `rate_hz` (Hz) samples of the stroke. `rate` is the deprecated name of
     /// `rate_hz`.
-    #[pyo3(signature = (rate_hz=ttkin::traj::SAMPLE_RATE, *, rate=None))]
+    #[pyo3(signature = (rate_hz=ttkin::traj::SAMPLE_HZ, *, rate=None))]
     fn torques<'py>(&self, py: Python<'py>, rate_hz: f64, rate: Option<f64>) -> PyResult<Bound<'py, PyAny>> {
         let rate_hz = crate::args::renamed(py, rate_hz, rate, "HitPlan.torques(rate=...)", "rate_hz=...")?;
         let s = self.stroke()?.sample_rate(rate_hz).py()?;
@@ -129,7 +129,7 @@ impl PyHitPlan {
     /// (K, n) joint torques at the 1 kHz samples of `sample()`.
     #[getter]
     fn tau<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        self.torques(py, ttkin::traj::SAMPLE_RATE, None)
+        self.torques(py, ttkin::traj::SAMPLE_HZ, None)
     }
 
     /// Name of the robot this plan was made for.

@@ -269,7 +269,7 @@ fn wls_step<'py>(
 /// `duration` s with the quintic rest-to-rest time law, at `rate_hz` (both ends included).
 #[ttkin_py_guard::guarded]
 #[pyfunction]
-#[pyo3(signature = (x0, x1, duration, rate_hz=ttkin::traj::SAMPLE_RATE, task="racket5"))]
+#[pyo3(signature = (x0, x1, duration, rate_hz=ttkin::traj::SAMPLE_HZ, task="racket5"))]
 fn task_line<'py>(
     py: Python<'py>,
     x0: &Any<'py>,
@@ -353,7 +353,7 @@ value_getters!(PyTrackResult, |t| {
 /// `lambda_max`.
 #[ttkin_py_guard::guarded]
 #[pyfunction]
-#[pyo3(signature = (robot, q0, task_trajectory, rate_hz=ttkin::traj::SAMPLE_RATE, task="racket5", velocities=None, weights="chan-dubey",
+#[pyo3(signature = (robot, q0, task_trajectory, rate_hz=ttkin::traj::SAMPLE_HZ, task="racket5", velocities=None, weights="chan-dubey",
                     gain=None, lambda_max=Damping::default().lambda_max, epsilon=Damping::default().epsilon, input_weights=None,
                     limit_gain=ClikOptions::default().limit_gain, manipulability_gain=ClikOptions::default().manipulability_gain,
                     respect_limits=ClikOptions::default().respect_limits, max_error=ClikOptions::default().max_error,

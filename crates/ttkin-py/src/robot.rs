@@ -321,6 +321,8 @@ crate::pickle::pickled!(serde PyRobot, _unpickle_robot, "Robot", |r| *r.chain, |
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_unpickle_robot, m)?)?;
     m.add_class::<PyRobot>()?;
+    // standard gravity in a z-up base frame, m/s² (ttkin::dynamics::EARTH_GRAVITY)
+    m.add("EARTH_GRAVITY", ttkin::dynamics::EARTH_GRAVITY)?;
     let _ = shape_str;
     Ok(())
 }

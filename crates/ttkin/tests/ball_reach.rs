@@ -5,7 +5,7 @@ use nalgebra::{IsometryMatrix3, Translation3, Vector3};
 use ttkin::ball::flight::{BallState, EventKind, Flight};
 use ttkin::ball::hitplan::ReturnPlanner;
 use ttkin::ball::rally;
-use ttkin::ball::reach::{min_joint_time, racket_rotation, ReachRegion, Reachability};
+use ttkin::ball::reach::{min_joint_time, racket_rotation, Placement, ReachRegion, Reachability};
 use ttkin::chain::Chain;
 use ttkin::ik::{Analytic, LimitFilter};
 
@@ -19,6 +19,20 @@ fn truth() -> Flight {
 fn region() -> ReachRegion {
     let pl = ReturnPlanner::new(ttkin::robots::gantry6(), Flight::default()).unwrap();
     ReachRegion::new(pl.chain(), pl.placement, pl.ready.clone(), pl.flight.model.radius).unwrap()
+}
+
+#[test]
+fn the_rally_places_a_robot_by_its_structure_not_its_name() {
+    let g6 = ttkin::robots::gantry6();
+    assert_eq!(Placement::for_chain(&g6), Some(Placement::default()));
+    // the same model under another name stands at the same place
+    let renamed = Chain::new("not_gantry6", g6.joints().to_vec(), *g6.base(), *g6.tool()).unwrap();
+    assert_eq!(Placement::for_chain(&renamed), Some(Placement::default()));
+    // robots the ball planner cannot play (no analytic IK) have no place by the table
+    for chain in [ttkin::robots::ur5(), ttkin::robots::mobile8()] {
+        assert_eq!(Placement::for_chain(&chain), None, "{}", chain.name());
+        assert!(ReturnPlanner::new(chain, Flight::default()).is_err());
+    }
 }
 
 #[test]

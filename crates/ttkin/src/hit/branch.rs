@@ -377,6 +377,37 @@ mod tests {
         HitPlanner::new(&crate::robots::gantry6(), Default::default()).unwrap()
     }
 
+    /// gantry6's planner, its ready configuration, the rest there and the tool pose there.
+    fn at_ready() -> (HitPlanner, Vec<f64>, JointState, IsometryMatrix3<f64>) {
+        let pl = gantry();
+        let ready = pl.default_ready().to_vec();
+        let start = JointState::rest(&ready);
+        let tool = pl.chain().fk(&ready).unwrap();
+        (pl, ready, start, tool)
+    }
+
+    /// A hit near the tool pose `tool`: moved by up to ±`reach` (m, base x, y, z), turned about x
+    /// by up to `turn` rad, its racket-centre velocity up to ±`speed`/2 m/s per axis, at a time in
+    /// [`t.0`, `t.0 + t.1`) s.
+    fn hit_near(
+        tool: IsometryMatrix3<f64>,
+        reach: [f64; 3],
+        turn: f64,
+        speed: f64,
+        t: (f64, f64),
+        rng: &mut fastrand::Rng,
+    ) -> Hit {
+        let [x, y, z] = reach;
+        let d = Translation3::new(
+            2.0 * x * rng.f64() - x,
+            2.0 * y * rng.f64() - y,
+            2.0 * z * rng.f64() - z,
+        );
+        let pose = IsometryMatrix3::from_parts(d, Rotation3::from_euler_angles(turn * rng.f64(), 0.0, 0.0)) * tool;
+        let v = Vector3::new(rng.f64() - 0.5, rng.f64() - 0.5, rng.f64() - 0.5) * speed;
+        Hit::new(pose, [v.x, v.y, v.z, 0.0, 0.0, 0.0], t.0 + t.1 * rng.f64()).unwrap()
+    }
+
     #[test]
     fn hit_joint_velocity_matches_differential_ik() {
         let pl = gantry();
@@ -457,17 +488,11 @@ mod tests {
     fn best_leg_is_the_best_branch_and_its_floor_cuts() {
         // Hits around the ready pose's racket: best_leg's margin is the largest over the branches
         // (each through branch_leg), and a floor at or above it gives None.
-        let pl = gantry();
-        let ready = pl.default_ready().to_vec();
-        let start = JointState::rest(&ready);
-        let tool = pl.chain().fk(&ready).unwrap();
+        let (pl, _, start, tool) = at_ready();
         let mut rng = fastrand::Rng::with_seed(11);
         let (mut some, mut none) = (0, 0);
         for _ in 0..300 {
-            let d = Translation3::new(0.3 * rng.f64() - 0.15, 0.3 * rng.f64() - 0.15, 0.2 * rng.f64() - 0.1);
-            let pose = IsometryMatrix3::from_parts(d, Rotation3::from_euler_angles(0.2 * rng.f64(), 0.0, 0.0)) * tool;
-            let v = Vector3::new(rng.f64() - 0.5, rng.f64() - 0.5, rng.f64() - 0.5) * 4.0;
-            let hit = Hit::new(pose, [v.x, v.y, v.z, 0.0, 0.0, 0.0], 0.15 + 0.4 * rng.f64()).unwrap();
+            let hit = hit_near(tool, [0.15, 0.15, 0.1], 0.2, 4.0, (0.15, 0.4), &mut rng);
             let each: Vec<f64> = pl
                 .branches(&hit.pose, Some(&start.q))
                 .iter()
@@ -495,19 +520,13 @@ mod tests {
         // Fast hits around the ready pose's racket: where the leg of `hit_leg_above` exceeds the
         // effort limits, `branch_leg` either gives up or returns a gentler jerk-limited leg to the
         // same hit state on time, whose torques sampled at 10 kHz stay within the limits.
-        let pl = gantry();
-        let ready = pl.default_ready().to_vec();
-        let start = JointState::rest(&ready);
-        let tool = pl.chain().fk(&ready).unwrap();
+        let (pl, _, start, tool) = at_ready();
         let dy = pl.dynamics.as_ref().unwrap();
         let mut data = DynamicsData::new(dy);
         let mut rng = fastrand::Rng::with_seed(23);
         let (mut rescued, mut lost, mut uniform_rescued, mut torque_rescued) = (0, 0, 0, 0);
         for _ in 0..1500 {
-            let d = Translation3::new(0.6 * rng.f64() - 0.3, 0.6 * rng.f64() - 0.3, 0.3 * rng.f64() - 0.15);
-            let pose = IsometryMatrix3::from_parts(d, Rotation3::from_euler_angles(0.3 * rng.f64(), 0.0, 0.0)) * tool;
-            let v = Vector3::new(rng.f64() - 0.5, rng.f64() - 0.5, rng.f64() - 0.5) * 8.0;
-            let hit = Hit::new(pose, [v.x, v.y, v.z, 0.0, 0.0, 0.0], 0.12 + 0.3 * rng.f64()).unwrap();
+            let hit = hit_near(tool, [0.3, 0.3, 0.15], 0.3, 8.0, (0.12, 0.3), &mut rng);
             let twist = pl.tool_twist(&hit);
             for q in pl.branches(&hit.pose, Some(&start.q)).iter() {
                 let Some(qd) = pl.hit_joint_velocity(q, &twist) else {
@@ -624,17 +643,11 @@ mod tests {
         // accepted branch's follow-through starts at its hit state, ends at rest at `ready`, and
         // is within every limit at 10 kHz. Where the rally's 0.4 s quintic is not (its torques or
         // speeds beyond a limit), a longer or gentler follow-through is chosen, not the hit lost.
-        let pl = gantry();
-        let ready = pl.default_ready().to_vec();
-        let start = JointState::rest(&ready);
-        let tool = pl.chain().fk(&ready).unwrap();
+        let (pl, ready, start, tool) = at_ready();
         let mut rng = fastrand::Rng::with_seed(31);
         let (mut accepted, mut longer) = (0, 0);
         for _ in 0..1500 {
-            let d = Translation3::new(0.6 * rng.f64() - 0.3, 0.6 * rng.f64() - 0.3, 0.3 * rng.f64() - 0.15);
-            let pose = IsometryMatrix3::from_parts(d, Rotation3::from_euler_angles(0.3 * rng.f64(), 0.0, 0.0)) * tool;
-            let v = Vector3::new(rng.f64() - 0.5, rng.f64() - 0.5, rng.f64() - 0.5) * 10.0;
-            let hit = Hit::new(pose, [v.x, v.y, v.z, 0.0, 0.0, 0.0], 0.15 + 0.4 * rng.f64()).unwrap();
+            let hit = hit_near(tool, [0.3, 0.3, 0.15], 0.3, 10.0, (0.15, 0.4), &mut rng);
             let Some(b) = pl.best_leg_to(&hit, &start, &ready, f64::NEG_INFINITY) else {
                 continue;
             };

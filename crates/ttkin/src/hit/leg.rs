@@ -256,15 +256,25 @@ mod tests {
     use super::*;
     use crate::traj::jerk::jerk_limited;
 
+    /// gantry6's ball planner (its ready configuration and limits) and a generator seeded `seed`.
+    fn rig(seed: u64) -> (crate::ball::hitplan::ReturnPlanner, fastrand::Rng) {
+        let pl = crate::ball::hitplan::ReturnPlanner::new(crate::robots::gantry6(), Default::default()).unwrap();
+        (pl, fastrand::Rng::with_seed(seed))
+    }
+
+    /// `ready` with every joint moved by a uniform draw of ±`spread` (m, rad).
+    fn around(ready: &[f64], spread: f64, rng: &mut fastrand::Rng) -> Vec<f64> {
+        ready.iter().map(|x| x + spread * (2.0 * rng.f64() - 1.0)).collect()
+    }
+
     #[test]
     fn leg_above_a_floor_is_the_leg_when_its_margin_exceeds_the_floor() {
-        let pl = crate::ball::hitplan::ReturnPlanner::new(crate::robots::gantry6(), Default::default()).unwrap();
+        let (pl, mut rng) = rig(5);
         let lim = pl.robot.limits();
-        let mut rng = fastrand::Rng::with_seed(5);
         let (mut quintic, mut jerk, mut none) = (0, 0, 0);
+        let start = JointState::rest(&pl.ready);
         for _ in 0..400 {
-            let start = JointState::rest(&pl.ready);
-            let q: Vec<f64> = pl.ready.iter().map(|x| x + 0.6 * (2.0 * rng.f64() - 1.0)).collect();
+            let q = around(&pl.ready, 0.6, &mut rng);
             let qd: Vec<f64> = lim.velocity.iter().map(|v| 0.8 * v * (2.0 * rng.f64() - 1.0)).collect();
             let t_hit = 0.15 + 0.5 * rng.f64();
             let full = hit_leg(&start, &q, &qd, t_hit, lim);
@@ -290,13 +300,12 @@ mod tests {
     /// `execution_failed`); every accepted leg stays inside the position limits at every instant.
     #[test]
     fn legs_to_hits_near_a_joint_limit_stay_inside_the_position_limits() {
-        let pl = crate::ball::hitplan::ReturnPlanner::new(crate::robots::gantry6(), Default::default()).unwrap();
+        let (pl, mut rng) = rig(11);
         let lim = pl.robot.limits();
-        let mut rng = fastrand::Rng::with_seed(11);
         let (mut accepted, mut overshooting_quintics) = (0, 0);
+        let start = JointState::rest(&pl.ready);
         for _ in 0..400 {
-            let start = JointState::rest(&pl.ready);
-            let mut q: Vec<f64> = pl.ready.iter().map(|x| x + 0.05 * (2.0 * rng.f64() - 1.0)).collect();
+            let mut q = around(&pl.ready, 0.05, &mut rng);
             let mut qd = vec![0.0; q.len()];
             let j = rng.usize(..q.len());
             let up = rng.bool();
@@ -366,13 +375,12 @@ mod tests {
 
     #[test]
     fn scaled_leg_keeps_its_scaled_limits_and_reaches_the_hit_on_time() {
-        let pl = crate::ball::hitplan::ReturnPlanner::new(crate::robots::gantry6(), Default::default()).unwrap();
+        let (pl, mut rng) = rig(8);
         let lim = pl.robot.limits();
-        let mut rng = fastrand::Rng::with_seed(8);
         let (mut some, mut none) = (0, 0);
+        let start = JointState::rest(&pl.ready);
         for _ in 0..300 {
-            let start = JointState::rest(&pl.ready);
-            let q: Vec<f64> = pl.ready.iter().map(|x| x + 0.4 * (2.0 * rng.f64() - 1.0)).collect();
+            let q = around(&pl.ready, 0.4, &mut rng);
             let qd: Vec<f64> = lim.velocity.iter().map(|v| 0.5 * v * (2.0 * rng.f64() - 1.0)).collect();
             let t_hit = 0.2 + 0.4 * rng.f64();
             let scale = 0.2 + 0.8 * rng.f64();

@@ -12,8 +12,12 @@
 //! s², s³. Time runs from 0 to [`JointTrajectory::duration`].
 
 /// Default rate (Hz) at which sampled trajectories are handed out (Python's `sample`, `check_limits`,
-/// task trajectories).
-pub const SAMPLE_RATE: f64 = 1000.0;
+/// task trajectories: their `rate_hz`).
+pub const SAMPLE_HZ: f64 = 1000.0;
+
+/// Deprecated name of [`SAMPLE_HZ`] (a rate in Hz is named `*_hz`, see the glossary).
+#[deprecated(since = "0.1.0", note = "use SAMPLE_HZ (a rate in Hz is named *_hz)")]
+pub const SAMPLE_RATE: f64 = SAMPLE_HZ;
 
 /// Default number of evenly spaced samples of a sampled segment (`traj_quintic_samples`).
 pub const SAMPLES: usize = 101;

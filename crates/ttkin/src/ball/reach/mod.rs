@@ -172,6 +172,14 @@ impl Default for Placement {
 }
 
 impl Placement {
+    /// Where the rally places `chain` by the table: the default placement when the ball planner
+    /// plays with it (an analytic-IK chain, the gantry6 structure: [`Analytic::for_chain`], as
+    /// [`crate::ball::hitplan::ReturnPlanner::new`] requires), `None` for any other robot. A fact
+    /// of the chain's structure, whatever its name.
+    pub fn for_chain(chain: &Chain) -> Option<Placement> {
+        Analytic::for_chain(chain).map(|_| Placement::default())
+    }
+
     /// The base frame in the world frame.
     pub fn world_from_base(&self) -> IsometryMatrix3<f64> {
         IsometryMatrix3::from_parts(
