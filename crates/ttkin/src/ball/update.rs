@@ -102,9 +102,12 @@ fn positions(
 fn run_kicked(flight: &Flight, s: &BallState, t_end: f64, kick: &Vector3<f64>) -> (BallState, bool) {
     let mut cur = *s;
     let mut bounced = false;
-    while cur.t < t_end {
+    // At most 64 events, as `Flight::run`.
+    let mut events = 0;
+    while cur.t < t_end && events < 64 {
         let (mut next, ev) = flight.advance(&cur, t_end, None);
         if let Some(e) = ev {
+            events += 1;
             if e.kind == EventKind::Table && !bounced {
                 next.v += kick;
             }
@@ -156,7 +159,7 @@ pub fn update_kick(
     bounce_spread: Option<[f64; 3]>,
 ) -> Result<Update, EstimateError> {
     let Some(sd) = bounce_spread else {
-        return fit(prior, t, p, opts, None).map(|(u, _)| u);
+        return fit(prior, t, p, opts, None, false).map(|(u, _)| u);
     };
     if !sd.iter().all(|x| *x > 0.0 && x.is_finite()) {
         return Err(EstimateError::Option {
@@ -164,8 +167,8 @@ pub fn update_kick(
             message: format!("must be positive and finite, got {sd:?}"),
         });
     }
-    let fixed = fit(prior, t, p, opts, None);
-    let free = fit(prior, t, p, opts, Some(sd));
+    let fixed = fit(prior, t, p, opts, None, true);
+    let free = fit(prior, t, p, opts, Some(sd), true);
     match (fixed, free) {
         (Ok((a, ca)), Ok((b, cb))) => Ok(if ca - cb > KICK_GATE { b } else { a }),
         (Ok((a, _)), Err(_)) => Ok(a),
@@ -184,14 +187,16 @@ const KICK_GATE: f64 = 11.34;
 /// restitution spread's 0.008·3 m/s (docs/ball.md: chosen among 0.15–0.5 m/s on seed 0's rally).
 pub const BOUNCE_SPREAD: [f64; 3] = [0.3, 0.3, 0.05];
 
-/// The update with the kick fitted (`Some(spread)`) or fixed at 0, and its final cost: the prior
-/// term plus Σ min(|r_i|/σ, 6)² over the new observations (a robust cost shared by both fits).
+/// The update with the kick fitted (`Some(spread)`) or fixed at 0, and, with `want_cost`, its
+/// final cost (else 0): the prior term plus Σ min(|r_i|/σ, 6)² over the new observations (a
+/// robust cost shared by both fits).
 fn fit(
     prior: &Estimate,
     t: &[f64],
     p: &[[f64; 3]],
     opts: &EstimateOptions,
     bounce_spread: Option<[f64; 3]>,
+    want_cost: bool,
 ) -> Result<(Update, f64), EstimateError> {
     if t.len() != p.len() {
         return Err(EstimateError::Shape {
@@ -318,14 +323,22 @@ fn fit(
         return Err(EstimateError::Degenerate("non-finite state".into()));
     }
     let t_last = times.last().copied().unwrap_or(t0);
-    let (state, bounced) = run_kicked(flight, &at_prior, t_last, &kick_of(&x));
+    let (state, bounced) = if fitted {
+        run_kicked(flight, &at_prior, t_last, &kick_of(&x))
+    } else {
+        let (state, events) = flight.run(&at_prior, t_last, None);
+        (state, events.iter().any(|e| e.kind == EventKind::Table))
+    };
     let used = weights.iter().filter(|w| **w > 0.0).count();
-    positions(flight, &at_prior, &times, &mut base, &kick_of(&x));
-    let dx = x - x0;
-    let mut cost = dx.dot(&(info * dx));
-    for i in 0..n {
-        if let Some(b) = base[i] {
-            cost += ((ys[i] - b).norm() / sigma).min(6.0).powi(2);
+    let mut cost = 0.0;
+    if want_cost {
+        positions(flight, &at_prior, &times, &mut base, &kick_of(&x));
+        let dx = x - x0;
+        cost = dx.dot(&(info * dx));
+        for i in 0..n {
+            if let Some(b) = base[i] {
+                cost += ((ys[i] - b).norm() / sigma).min(6.0).powi(2);
+            }
         }
     }
     Ok((
