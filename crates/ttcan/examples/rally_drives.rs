@@ -3,7 +3,10 @@
 //! (`WorldSpread::measured`), every stroke through the coupled drive simulation, and prints the
 //! in-reach outcomes side by side (what `ttmanip rally --world both --execution drives` reports),
 //! the balls lost only in the mismatched world by outcome, and, for every `execution_failed`,
-//! why the drive simulation refused or faulted (`IDEAL=1`: exact execution instead).
+//! why the drive simulation refused or faulted (for a fault: where each faulted axis's following
+//! error peaked, the reference and the currents (`TRACE_FAULTS=1`: their whole record); the failed
+//! balls' indices; `IDEAL=1`: exact
+//! execution instead; `START=k`: balls k..k+N).
 use std::collections::BTreeMap;
 use std::sync::Mutex;
 use ttcan::coupled::{CoupledOptions, CoupledSim, SETPOINT_HZ};
@@ -47,7 +50,57 @@ impl Executor for Diagnosing {
                     format!("{m:.1}")
                 })
                 .collect();
-            return fail(format!("faults {:?}; |tau_ff| peaks {peak:?}", tr.faults));
+            // Each faulted axis: where its following error |q − q_ref| peaked, with the
+            // reference's speed and acceleration there, the current against its reference and the
+            // end of the record (the fault's tick).
+            let mut detail = String::new();
+            for (j, f) in tr.faults.iter().enumerate().filter(|(_, f)| !f.is_empty()) {
+                let rows = tr.t.len();
+                let (k, e) = (0..rows)
+                    .map(|k| (k, (tr.q[k * n + j] - tr.q_ref[k * n + j]).abs()))
+                    .fold((0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
+                // The input reference at the time of the worst error (nearest sample).
+                let tk = tr.t[k];
+                let i = times.partition_point(|&x| x < tk).min(times.len() - 1);
+                let (qd_ref, qdd_ref) = (qd[i * n + j], qdd[i * n + j]);
+                let max_qd = (0..times.len()).map(|i| qd[i * n + j].abs()).fold(0.0, f64::max);
+                let max_qdd = (0..times.len()).map(|i| qdd[i * n + j].abs()).fold(0.0, f64::max);
+                let max_cur = (0..rows).map(|k| tr.current[k * n + j].abs()).fold(0.0, f64::max);
+                let max_cur_ref = (0..rows).map(|k| tr.current_ref[k * n + j].abs()).fold(0.0, f64::max);
+                detail += &format!(
+                    "; axis {j} {f}: worst |q-q_ref| {e:.4} at {tk:.4} s of {:.4} s (rows {rows}), reference there qd {qd_ref:.2} qdd {qdd_ref:.1}; \
+                     stroke max |qd| {max_qd:.2} |qdd| {max_qdd:.1} (of {:.3} s), max |I| {max_cur:.2} A, max |I_ref| {max_cur_ref:.2} A",
+                    tr.t.last().copied().unwrap_or(0.0),
+                    times.last().copied().unwrap_or(0.0)
+                );
+            }
+            if std::env::var_os("TRACE_FAULTS").is_some() {
+                // The faulted axes: the reference every 5 ms (input samples) and the record every 100 ticks.
+                let rows = tr.t.len();
+                for (j, _) in tr.faults.iter().enumerate().filter(|(_, f)| !f.is_empty()) {
+                    for i in (0..times.len()).step_by(5) {
+                        println!(
+                            "ref axis {j} t {:.4} q {:.5} qd {:.4} qdd {:.3}",
+                            times[i],
+                            q[i * n + j],
+                            qd[i * n + j],
+                            qdd[i * n + j]
+                        );
+                    }
+                    for k in (0..rows).step_by(100) {
+                        println!(
+                            "rec axis {j} t {:.5} q {:.5} q_ref {:.5} qd {:.4} I {:.3} I_ref {:.3}",
+                            tr.t[k],
+                            tr.q[k * n + j],
+                            tr.q_ref[k * n + j],
+                            tr.qd[k * n + j],
+                            tr.current[k * n + j],
+                            tr.current_ref[k * n + j]
+                        );
+                    }
+                }
+            }
+            return fail(format!("faults {:?}; |tau_ff| peaks {peak:?}{detail}", tr.faults));
         }
         Some(Executed {
             dof: n,
@@ -95,8 +148,12 @@ fn main() {
     let ideal = std::env::var_os("IDEAL").is_some();
     let exr = (!ideal).then_some(&ex as &dyn Executor);
     let clock = std::time::Instant::now();
-    let a = matched.play_range(0, n, None, exr, &|| false).expect("matched");
-    let b = mismatched.play_range(0, n, None, exr, &|| false).expect("mismatched");
+    // START=k: balls k..k+N (one ball's diagnosis).
+    let first: u64 = std::env::var("START").map_or(0, |s| s.parse().expect("START"));
+    let a = matched.play_range(first, n, None, exr, &|| false).expect("matched");
+    let b = mismatched
+        .play_range(first, n, None, exr, &|| false)
+        .expect("mismatched");
     let wall = clock.elapsed().as_secs_f64();
     let (ra, rb) = (counts(&a), counts(&b));
     println!(
@@ -127,6 +184,15 @@ fn main() {
         let (pm, pa) = med(o, &|o| o.plan_time_us);
         let (cm, ca) = med(o, &|o| o.correction_time_us);
         println!("{name:>10}: plan CPU median {pm:.0} (mean {pa:.0}) us, correction {cm:.0} ({ca:.0}) us");
+    }
+    for (name, o) in [("matched", &a), ("mismatched", &b)] {
+        let idx: Vec<u64> = (0..o.len())
+            .filter(|&i| o[i].status == "execution_failed")
+            .map(|i| first + i as u64)
+            .collect();
+        if !idx.is_empty() {
+            println!("{name:>10}: execution_failed balls {idx:?}");
+        }
     }
     for f in ex.failures.lock().unwrap().iter() {
         println!("execution failed: {f}");

@@ -312,7 +312,7 @@ fn main() {
     if std::env::var_os("NO_DIAG").is_some() {
         return;
     }
-    miss_diagnosis(&truth, &in_reach);
+    miss_diagnosis(&truth, &cfg, &out);
     // The infeasible balls planned again from their true state (same time, same `now`): what the
     // estimate's error costs, against what the search itself misses.
     let mut from_truth = std::collections::BTreeMap::new();
@@ -368,26 +368,37 @@ fn main() {
 /// against the prediction the plan hit, split into the error in the planned face plane (beyond the
 /// racket radius the face cannot meet it) and along the normal (the impact happens earlier or
 /// later, elsewhere on the face), with the time from the bounce to the hit.
-fn miss_diagnosis(truth: &Flight, in_reach: &[&rally::BallOutcome]) {
-    let bounce = |o: &rally::BallOutcome| {
-        let (_, ev) = truth.run(&o.incoming, 1.5, None);
+fn miss_diagnosis(truth: &Flight, cfg: &RallyConfig, out: &[rally::BallOutcome]) {
+    // Each ball's own world (the planner's model unless `WORLD=mismatch`).
+    let worlds: Vec<Flight> = (0..out.len())
+        .map(|i| {
+            if cfg.world.is_some() {
+                rally::observe_ball(truth, cfg, i as u64, None).world
+            } else {
+                *truth
+            }
+        })
+        .collect();
+    let in_reach: Vec<(usize, &rally::BallOutcome)> = out.iter().enumerate().filter(|(_, o)| o.in_reach).collect();
+    let bounce = |i: usize, o: &rally::BallOutcome| {
+        let (_, ev) = worlds[i].run(&o.incoming, 1.5, None);
         ev.first().map_or(f64::NAN, |e| e.before.t)
     };
     let stats = |pick: &dyn Fn(&rally::BallOutcome) -> bool| {
         let (mut plane, mut normal, mut after) = (Vec::new(), Vec::new(), Vec::new());
-        for o in in_reach.iter().filter(|o| pick(o)) {
+        for (i, o) in in_reach.iter().filter(|(_, o)| pick(o)) {
             let Some((b, n)) = o.planned else { continue };
-            let (t, _) = truth.run(&o.incoming, b.t, None);
+            let (t, _) = worlds[*i].run(&o.incoming, b.t, None);
             let e = t.p - b.p;
             if std::env::var_os("SHOW_E").is_some() && o.status == "missed" {
                 println!(
-                    "  miss e = {:.3?} (m, world), n = {:.2?}, v_true {:.2?}, v_pred {:.2?}",
-                    e, n, t.v, b.v
+                    "  miss {i}: e = {:.3?} (m, world), in plane {:.3}, n = {:.2?}, v_true {:.2?}, v_pred {:.2?}, racket_error {:.3}, replans {}, bounce to hit {:.3} s",
+                    e, (e - n * n.dot(&e)).norm(), n, t.v, b.v, o.racket_error, o.replans, b.t - bounce(*i, o)
                 );
             }
             normal.push(n.dot(&e).abs());
             plane.push((e - n * n.dot(&e)).norm());
-            after.push(b.t - bounce(o));
+            after.push(b.t - bounce(*i, o));
         }
         for v in [&mut plane, &mut normal, &mut after] {
             v.sort_by(f64::total_cmp);
@@ -397,9 +408,9 @@ fn miss_diagnosis(truth: &Flight, in_reach: &[&rally::BallOutcome]) {
     let med = |v: &[f64]| v.get(v.len() / 2).copied().unwrap_or(f64::NAN);
     if std::env::var_os("MISS_HISTOGRAM").is_some() {
         let mut bins = std::collections::BTreeMap::new();
-        for o in in_reach {
+        for (i, o) in &in_reach {
             let Some((b, _)) = o.planned else { continue };
-            let k = ((b.t - bounce(o)) / 0.05).floor() as i64 * 50;
+            let k = ((b.t - bounce(*i, o)) / 0.05).floor() as i64 * 50;
             let e = bins.entry(k).or_insert((0usize, 0usize));
             e.0 += usize::from(o.returned);
             e.1 += usize::from(o.status == "missed");

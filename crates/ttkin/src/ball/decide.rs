@@ -10,7 +10,8 @@
 //!   ([`ReturnPlanner::plan`]).
 //! - **Correction**, once, at the delivery of the last observation taken at most
 //!   `correction_delay` after the bounce the first estimate predicts: the estimate updated with
-//!   the observations since ([`update`]) and the hit planned again from the state the robot is
+//!   the observations since ([`update_kick`]: the ball's own bounce fitted where the observations
+//!   after it depart from the model's) and the hit planned again from the state the robot is
 //!   commanded then ([`ReturnPlanner::plan_near`] near the first hit; without a first hit
 //!   [`ReturnPlanner::plan_from`] from rest), shortest stroke 60 ms; skipped (the first hit stands)
 //!   when less than that is left before the first hit, or when the update or the plan fails.
@@ -25,7 +26,7 @@
 use super::estimate::{estimate, Estimate, EstimateError, EstimateOptions};
 use super::flight::{BallState, EventKind, Flight};
 use super::hitplan::{ReturnHit, ReturnPlan, ReturnPlanner, ReturnStatus};
-use super::update::update;
+use super::update::update_kick;
 use crate::error::Error;
 use crate::traj::JointState;
 
@@ -42,6 +43,10 @@ pub struct DecideConfig {
     pub frame_period: f64,
     /// Time (s) after the predicted bounce at which the hit is corrected once; 0 for none.
     pub correction_delay: f64,
+    /// Prior standard deviation (m/s, world x, y, z) of the ball's own bounce kick fitted by the
+    /// correction's update ([`update_kick`], kept only where the observations call for it);
+    /// `None`: the model's bounce. The rally's: [`super::update::BOUNCE_SPREAD`].
+    pub bounce_spread: Option<[f64; 3]>,
 }
 
 /// What one observation led to.
@@ -299,7 +304,14 @@ impl BallDecider {
         replanner.min_stroke_time = CORRECTION_MIN_STROKE;
         let from = self.times.partition_point(|&t| t <= est.state.t);
         let last = self.times.partition_point(|&t| t <= at);
-        let up = update(est, &self.times[from..last], &self.obs[from..last], &self.opts).ok()?;
+        let up = update_kick(
+            est,
+            &self.times[from..last],
+            &self.obs[from..last],
+            &self.opts,
+            self.cfg.bounce_spread,
+        )
+        .ok()?;
         let plan = match &self.first {
             Some((hit, t_prev)) => replanner.plan_near(&up.state, now, &commanded(now), up.bounced, hit, *t_prev),
             None => replanner.plan_from(

@@ -17,6 +17,13 @@
 //! Weights are Huber's (3 s) with rejection beyond 6 s, s = max(σ, the median residual's σ): the
 //! larger scale while the prediction is still off. It stops when a step moves θ by less than 2 %
 //! of its standard deviation.
+//!
+//! The ball's own bounce ([`update_kick`]): a real ball's table friction, restitution and Magnus
+//! constant depart from the model's (the calibration's groups of flights differ by ±45 % in k_m,
+//! whose error shows as a spin error at the bounce, docs/ball.md), so the velocity leaving the
+//! bounce departs from the model's prediction. With a bounce spread σ_b (m/s per axis) the
+//! update's parameters gain a velocity kick Δv added at the first table bounce (prior mean 0,
+//! standard deviation σ_b); the observations after the bounce decide it.
 
 use super::estimate::{huber, robust_sigma, Estimate, EstimateError, EstimateOptions, Segment, SPIN_PRIOR};
 use super::flight::{hermite, BallState, EventKind, Flight};
@@ -51,7 +58,13 @@ const DIFF_STEP: f64 = 0.01;
 /// bounces, written to `out` (`None` after a net or floor contact): RK4 steps of the flight's
 /// step, cubic Hermite positions between them (from p and v at both ends, as the flight's event
 /// location); whether a table bounce happened.
-fn positions(flight: &Flight, s: &BallState, times: &[f64], out: &mut [Option<Vector3<f64>>]) -> bool {
+fn positions(
+    flight: &Flight,
+    s: &BallState,
+    times: &[f64],
+    out: &mut [Option<Vector3<f64>>],
+    kick: &Vector3<f64>,
+) -> bool {
     let mut cur = *s;
     let mut bounced = false;
     let mut k = 0;
@@ -68,7 +81,11 @@ fn positions(flight: &Flight, s: &BallState, times: &[f64], out: &mut [Option<Ve
             });
             k += 1;
         }
+        let mut next = next;
         if let Some(e) = ev {
+            if e.kind == EventKind::Table && !bounced {
+                next.v += kick;
+            }
             bounced |= e.kind == EventKind::Table;
             if e.kind.terminal() {
                 out[k..].fill(None);
@@ -80,7 +97,38 @@ fn positions(flight: &Flight, s: &BallState, times: &[f64], out: &mut [Option<Ve
     bounced
 }
 
-fn state_of(t: f64, x: &SVector<f64, 9>) -> BallState {
+/// The flight from `s` to `t_end` (s) with `kick` (m/s) added to the velocity at its first table
+/// bounce: the state at `t_end` (or at a terminal contact) and whether it bounced on the table.
+fn run_kicked(flight: &Flight, s: &BallState, t_end: f64, kick: &Vector3<f64>) -> (BallState, bool) {
+    let mut cur = *s;
+    let mut bounced = false;
+    // At most 64 events, as `Flight::run`.
+    let mut events = 0;
+    while cur.t < t_end && events < 64 {
+        let (mut next, ev) = flight.advance(&cur, t_end, None);
+        if let Some(e) = ev {
+            events += 1;
+            if e.kind == EventKind::Table && !bounced {
+                next.v += kick;
+            }
+            bounced |= e.kind == EventKind::Table;
+            if e.kind.terminal() {
+                return (next, bounced);
+            }
+        }
+        cur = next;
+    }
+    (cur, bounced)
+}
+
+/// Parameters of the update: p, v, ω (9) and the bounce's velocity kick (3).
+const N: usize = 12;
+
+fn kick_of(x: &SVector<f64, N>) -> Vector3<f64> {
+    Vector3::new(x[9], x[10], x[11])
+}
+
+fn state_of(t: f64, x: &SVector<f64, N>) -> BallState {
     BallState {
         t,
         p: Vector3::new(x[0], x[1], x[2]),
@@ -94,6 +142,62 @@ fn state_of(t: f64, x: &SVector<f64, 9>) -> BallState {
 /// Errors: `t` and `p` of different lengths, times not increasing, a prior predicted through a
 /// bounce (its covariance is not at its state's time), a degenerate covariance.
 pub fn update(prior: &Estimate, t: &[f64], p: &[[f64; 3]], opts: &EstimateOptions) -> Result<Update, EstimateError> {
+    update_kick(prior, t, p, opts, None)
+}
+
+/// [`update`] with the ball's own bounce (module doc) when `bounce_spread` (m/s, world axes, the
+/// prior standard deviation of the bounce's velocity kick along x, y, z, each > 0; e.g.
+/// [`BOUNCE_SPREAD`]) is given: the update is made with the kick fixed at 0 and with it fitted,
+/// and the fitted one is kept only when it lowers the fit's cost by more than the 99 % point of
+/// χ² with 3 degrees of freedom (so a ball that bounces as the model says keeps the plain
+/// update). Errors as [`update`], and a spread that is not positive and finite.
+pub fn update_kick(
+    prior: &Estimate,
+    t: &[f64],
+    p: &[[f64; 3]],
+    opts: &EstimateOptions,
+    bounce_spread: Option<[f64; 3]>,
+) -> Result<Update, EstimateError> {
+    let Some(sd) = bounce_spread else {
+        return fit(prior, t, p, opts, None, false).map(|(u, _)| u);
+    };
+    if !sd.iter().all(|x| *x > 0.0 && x.is_finite()) {
+        return Err(EstimateError::Option {
+            what: "bounce_spread",
+            message: format!("must be positive and finite, got {sd:?}"),
+        });
+    }
+    let fixed = fit(prior, t, p, opts, None, true);
+    let free = fit(prior, t, p, opts, Some(sd), true);
+    match (fixed, free) {
+        (Ok((a, ca)), Ok((b, cb))) => Ok(if ca - cb > KICK_GATE { b } else { a }),
+        (Ok((a, _)), Err(_)) => Ok(a),
+        (Err(_), Ok((b, _))) => Ok(b),
+        (Err(e), Err(_)) => Err(e),
+    }
+}
+
+/// The kick is kept only when it lowers the fit's cost by more than this: the 99 % point of χ²
+/// with 3 degrees of freedom (a kick of zero, the model's bounce, explains the observations).
+const KICK_GATE: f64 = 11.34;
+
+/// Prior standard deviation (m/s, world x, y, z) of the bounce's velocity kick the rally's
+/// correction fits ([`update_kick`]): horizontally the calibration's friction spread at a typical
+/// incoming vertical speed, 0.05·(1 + e)·3 m/s ≈ 0.3 m/s; vertically 0.05 m/s, twice the
+/// restitution spread's 0.008·3 m/s (docs/ball.md: chosen among 0.15–0.5 m/s on seed 0's rally).
+pub const BOUNCE_SPREAD: [f64; 3] = [0.3, 0.3, 0.05];
+
+/// The update with the kick fitted (`Some(spread)`) or fixed at 0, and, with `want_cost`, its
+/// final cost (else 0): the prior term plus Σ min(|r_i|/σ, 6)² over the new observations (a
+/// robust cost shared by both fits).
+fn fit(
+    prior: &Estimate,
+    t: &[f64],
+    p: &[[f64; 3]],
+    opts: &EstimateOptions,
+    bounce_spread: Option<[f64; 3]>,
+    want_cost: bool,
+) -> Result<(Update, f64), EstimateError> {
     if t.len() != p.len() {
         return Err(EstimateError::Shape {
             expected: t.len(),
@@ -125,13 +229,31 @@ pub fn update(prior: &Estimate, t: &[f64], p: &[[f64; 3]], opts: &EstimateOption
             cov[(k, k)] = SPIN_PRIOR * SPIN_PRIOR;
         }
     }
-    let info = cov
+    let info9 = cov
         .cholesky()
         .ok_or_else(|| EstimateError::Degenerate("the prior's covariance is not positive definite".into()))?
         .inverse();
+    // The kick's prior is independent of the state's; without a spread the kick is fixed at 0
+    // (no Jacobian column, unit information, a zero step: the 9-parameter update exactly).
+    let fitted = bounce_spread.is_some();
+    let sd_kick = bounce_spread.unwrap_or([1.0; 3]);
+    let mut info = SMatrix::<f64, N, N>::zeros();
+    info.fixed_view_mut::<9, 9>(0, 0).copy_from(&info9);
+    for (k, sd) in sd_kick.iter().enumerate() {
+        info[(9 + k, 9 + k)] = 1.0 / (sd * sd);
+    }
     let st = &prior.state;
-    let x0 = SVector::<f64, 9>::from_iterator(st.p.iter().chain(st.v.iter()).chain(st.w.iter()).copied());
-    let steps: [f64; 9] = std::array::from_fn(|k| DIFF_STEP * cov[(k, k)].sqrt().max(1e-6));
+    let x0 = SVector::<f64, N>::from_iterator(
+        st.p.iter()
+            .chain(st.v.iter())
+            .chain(st.w.iter())
+            .copied()
+            .chain([0.0; 3]),
+    );
+    let steps: [f64; N] = std::array::from_fn(|k| {
+        let sd = if k >= 9 { sd_kick[k - 9] } else { cov[(k, k)].sqrt() };
+        DIFF_STEP * sd.max(1e-6)
+    });
     let sigma = prior.sigma.max(opts.sigma_floor);
     let flight = &Flight {
         step: opts.step,
@@ -141,19 +263,19 @@ pub fn update(prior: &Estimate, t: &[f64], p: &[[f64; 3]], opts: &EstimateOption
     let mut x = x0;
     let mut base = vec![None; n];
     let mut shifted = vec![None; n];
-    let mut jac = vec![SMatrix::<f64, 3, 9>::zeros(); n];
+    let mut jac = vec![SMatrix::<f64, 3, N>::zeros(); n];
     let mut weights = vec![0.0; n];
     let mut scratch: Vec<f64> = Vec::with_capacity(n);
     let mut normal = info;
     let mut iterations = 0;
     for iter in 0..opts.iterations.max(1) {
         iterations = iter + 1;
-        positions(flight, &state_of(t0, &x), &times, &mut base);
+        positions(flight, &state_of(t0, &x), &times, &mut base, &kick_of(&x));
         // The Jacobian of the first iteration only (a chord method, as the window fit).
-        for k in (0..9).filter(|_| iter == 0) {
+        for k in (0..if fitted { N } else { 9 }).filter(|_| iter == 0) {
             let mut xk = x;
             xk[k] += steps[k];
-            positions(flight, &state_of(t0, &xk), &times, &mut shifted);
+            positions(flight, &state_of(t0, &xk), &times, &mut shifted, &kick_of(&xk));
             for i in 0..n {
                 if let (Some(a), Some(b)) = (base[i], shifted[i]) {
                     jac[i].set_column(k, &((b - a) / steps[k]));
@@ -201,15 +323,34 @@ pub fn update(prior: &Estimate, t: &[f64], p: &[[f64; 3]], opts: &EstimateOption
         return Err(EstimateError::Degenerate("non-finite state".into()));
     }
     let t_last = times.last().copied().unwrap_or(t0);
-    let (state, events) = flight.run(&at_prior, t_last, None);
+    let (state, bounced) = if fitted {
+        run_kicked(flight, &at_prior, t_last, &kick_of(&x))
+    } else {
+        let (state, events) = flight.run(&at_prior, t_last, None);
+        (state, events.iter().any(|e| e.kind == EventKind::Table))
+    };
     let used = weights.iter().filter(|w| **w > 0.0).count();
-    Ok(Update {
-        state,
-        at_prior,
-        covariance: std::array::from_fn(|r| std::array::from_fn(|c| post[(r, c)])),
-        used,
-        outliers: n - used,
-        bounced: events.iter().any(|e| e.kind == EventKind::Table),
-        iterations,
-    })
+    let mut cost = 0.0;
+    if want_cost {
+        positions(flight, &at_prior, &times, &mut base, &kick_of(&x));
+        let dx = x - x0;
+        cost = dx.dot(&(info * dx));
+        for i in 0..n {
+            if let Some(b) = base[i] {
+                cost += ((ys[i] - b).norm() / sigma).min(6.0).powi(2);
+            }
+        }
+    }
+    Ok((
+        Update {
+            state,
+            at_prior,
+            covariance: std::array::from_fn(|r| std::array::from_fn(|c| post[(r, c)])),
+            used,
+            outliers: n - used,
+            bounced,
+            iterations,
+        },
+        cost,
+    ))
 }

@@ -113,13 +113,15 @@ pub const FIRST_BALL: u64 = 0;
 
 impl DecideConfig {
     /// The rules of the rally `cfg`: its target, its camera's window and frame period, its
-    /// correction delay.
+    /// correction delay; the correction fits the ball's own bounce
+    /// ([`crate::ball::update::BOUNCE_SPREAD`]).
     pub fn of(cfg: &RallyConfig) -> Self {
         DecideConfig {
             target: cfg.target,
             window_frames: (cfg.camera.window * cfg.camera.rate_hz).round() as usize + 1,
             frame_period: 1.0 / cfg.camera.rate_hz,
             correction_delay: cfg.correction_delay,
+            bounce_spread: Some(crate::ball::update::BOUNCE_SPREAD),
         }
     }
 }
