@@ -401,6 +401,8 @@ fn a_late_decision_is_planned_again_from_the_newer_observations_for_the_same_hit
         }
     }
     assert!(refined >= 8, "{refined} planned again");
+}
+
 /// Observations of `s` flying in `world`, every 5 ms from 0.02 s to `t_end` (s), noise `sigma` (m).
 fn observe_in(world: &Flight, s: &BallState, t_end: f64, sigma: f64, seed: u64) -> (Vec<f64>, Vec<[f64; 3]>) {
     let times: Vec<f64> = (0..)
