@@ -239,7 +239,7 @@ impl BallDecider {
 
     /// The last decision's hit (the first plan's or the correction's) planned again at `now`
     /// (s) for a stroke from `start`, with the observations that came after the decision: the
-    /// first estimate updated ([`update`]) with every observation after it recorded so far and
+    /// first estimate updated as the correction's is ([`update_kick`]) with every observation after it recorded so far and
     /// `newer` (times, s, and positions, m, world; those later than the last recorded one are
     /// used, in increasing time; they are not recorded: feed them to [`BallDecider::observe`]
     /// as usual), and the one hit at the same absolute time to the same landing point
@@ -272,7 +272,7 @@ impl BallDecider {
         if times.is_empty() {
             return None;
         }
-        let up = update(est, &times, &obs, &self.opts).ok()?;
+        let up = update_kick(est, &times, &obs, &self.opts, self.cfg.bounce_spread).ok()?;
         let plan = planner
             .plan_same_hit(&up.state, now, start, up.bounced, hit, *t_hit)
             .ok()?;
