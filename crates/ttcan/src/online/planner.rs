@@ -679,9 +679,14 @@ fn splice_stroke<'c>(
     // the first retry (the same hit from a later splice) takes little time, whatever the decision took
     let mut decided_in = 0.0;
     let mut refined = false;
-    for _ in 0..4 {
+    for tries in 0..4 {
         match splicer.stroke(&st, arrival, counters) {
-            Ok(out) => return Some(out),
+            Ok(out) => {
+                if tries > 0 && out.status.status == PlanStatus::Accepted {
+                    counters.latency_late.record(st.start - arrival);
+                }
+                return Some(out);
+            }
             Err(StrokeMiss::Discontinuous) => break,
             Err(StrokeMiss::Late) => {}
         }
