@@ -16,6 +16,9 @@ macro_rules! counters {
             /// Latency from the arrival of the datagram a stroke was decided on (the hit, or the
             /// last observation used) to the stroke's first cycle (its first changed setpoint).
             pub latency: LatencyHistogram,
+            /// The same for the strokes of a brain that were ready after their first splice cycle
+            /// (planned again from a newer observation, retimed or decided again).
+            pub latency_late: LatencyHistogram,
         }
 
         /// A copy of the counters at one moment.
@@ -34,6 +37,10 @@ macro_rules! counters {
             pub decision_latency_over_2ms: u64,
             /// Decision latency, largest, µs.
             pub decision_latency_max_us: u64,
+            /// Strokes of a brain handed over after a missed splice cycle (`latency_late`).
+            pub decision_latency_late_count: u64,
+            /// Of those, the strokes whose decision latency exceeded 2 ms.
+            pub decision_latency_late_over_2ms: u64,
         }
 
         impl Counters {
@@ -47,6 +54,8 @@ macro_rules! counters {
                     decision_latency_p99_us: self.latency.percentile_us(0.99),
                     decision_latency_over_2ms: self.latency.count_above_us(2000),
                     decision_latency_max_us: self.latency.max_us(),
+                    decision_latency_late_count: self.latency_late.count(),
+                    decision_latency_late_over_2ms: self.latency_late.count_above_us(2000),
                 }
             }
         }
@@ -62,6 +71,8 @@ macro_rules! counters {
                     ("decision_latency_p99_us", self.decision_latency_p99_us),
                     ("decision_latency_over_2ms", self.decision_latency_over_2ms),
                     ("decision_latency_max_us", self.decision_latency_max_us),
+                    ("decision_latency_late_count", self.decision_latency_late_count),
+                    ("decision_latency_late_over_2ms", self.decision_latency_late_over_2ms),
                 ]
             }
         }

@@ -609,6 +609,10 @@ pub fn run_planner(
     }
 }
 
+/// How recent (s) a queued observation must be for a late stroke to be planned again from it
+/// without waiting for the next frame ([`Queue::newer`]).
+const FRESH: f64 = 2.5e-4;
+
 /// The planning thread's inbound datagrams: the receiver's queue and those taken off it early.
 struct Queue<'q> {
     inbound: &'q Receiver<Inbound>,
@@ -617,14 +621,18 @@ struct Queue<'q> {
 
 impl Queue<'_> {
     /// The observations of the awaited ball that came after the one being handled: those queued
-    /// already, else the next one within the wait (every datagram taken off the receiver's queue
-    /// stays pending, to be handled as usual afterwards).
+    /// already, and the next one within the wait unless one of them arrived within the last
+    /// [`FRESH`] (a stroke decided on an observation that waited in the queue for most of a frame
+    /// would start that much later after it); every datagram taken off the receiver's queue stays
+    /// pending, to be handled as usual afterwards.
     fn newer(&mut self, aw: Awaiting) -> Vec<Observed> {
         while let Ok(m) = self.inbound.try_recv() {
             self.pending.push_back(m);
         }
         let of_ball = |m: &Inbound| matches!(m, Inbound::Observation { obs, .. } if obs.id == aw.ball);
-        if !self.pending.iter().any(of_ball) {
+        let since = controller_time() - FRESH;
+        let fresh = |m: &Inbound| of_ball(m) && matches!(m, Inbound::Observation { arrival, .. } if *arrival >= since);
+        if !self.pending.iter().any(fresh) {
             let until = Instant::now() + Duration::from_secs_f64(aw.wait.clamp(0.0, 0.1));
             loop {
                 let left = until.saturating_duration_since(Instant::now());
@@ -671,9 +679,14 @@ fn splice_stroke<'c>(
     // the first retry (the same hit from a later splice) takes little time, whatever the decision took
     let mut decided_in = 0.0;
     let mut refined = false;
-    for _ in 0..4 {
+    for tries in 0..4 {
         match splicer.stroke(&st, arrival, counters) {
-            Ok(out) => return Some(out),
+            Ok(out) => {
+                if tries > 0 && out.status.status == PlanStatus::Accepted {
+                    counters.latency_late.record(st.start - arrival);
+                }
+                return Some(out);
+            }
             Err(StrokeMiss::Discontinuous) => break,
             Err(StrokeMiss::Late) => {}
         }
