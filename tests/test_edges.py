@@ -33,6 +33,14 @@ def _limits():
     resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
 
 
+def _interactive():
+    """The caps, and SIGINT at its default as in a terminal: a test run in the background (``&``
+    or ``nohup``) starts its children with SIGINT ignored, and Python then installs no Ctrl-C
+    handler, which is right for such a process but not what these tests are about."""
+    _limits()
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def capped(code: str, timeout: float = CAP_SECONDS) -> subprocess.CompletedProcess:
     """Runs ``code`` in a fresh interpreter under the caps; returns it (failing on a hang)."""
     try:
@@ -434,7 +442,11 @@ def _stops_on_ctrl_c(
     started = threading.Event()
     with tempfile.TemporaryFile("w+") as err:
         p = subprocess.Popen(
-            [sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=err, text=True, preexec_fn=_limits
+            [sys.executable, "-c", code],
+            stdout=subprocess.PIPE,
+            stderr=err,
+            text=True,
+            preexec_fn=_interactive,
         )
 
         def read():
