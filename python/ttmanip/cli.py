@@ -171,16 +171,14 @@ def _hit(entry, where: str):
             entry = {**entry, "centre": entry["center"]}
         centre = _vector(entry, "centre", where, 3)
         normal = _vector(entry, "normal", where, 3)
-        if np.linalg.norm(normal) < 1e-12:
-            raise CliError(f"{where}.normal: the face normal must be a nonzero vector")
-        return Hit.from_normal(
-            centre,
-            normal,
-            _vector(entry, "velocity", where, 3),
-            float(t),
-            omega=_vector(entry, "omega", where, 3, required=False),
-            handle=_vector(entry, "handle", where, 3, required=False),
-        )
+        velocity = _vector(entry, "velocity", where, 3)
+        omega = _vector(entry, "omega", where, 3, required=False)
+        handle = _vector(entry, "handle", where, 3, required=False)
+        try:
+            # the core checks the normal (nonzero) and the handle; its message names the argument
+            return Hit.from_normal(centre, normal, velocity, float(t), omega=omega, handle=handle)
+        except TtmanipError as e:
+            raise CliError(f"{where}.{e}") from e
     except TtmanipError as e:
         raise CliError(f"{where}: {e}") from e
 
@@ -355,8 +353,6 @@ def _ik(args: argparse.Namespace) -> int:
     robot = _robot(args.robot)
     centre = _numbers(args.centre, "--centre", 3)
     normal = _numbers(args.normal, "--normal", 3)
-    if np.linalg.norm(normal) < 1e-12:
-        raise CliError("--normal: the face normal must be a nonzero vector")
     try:
         hit = Hit.from_normal(centre, normal, np.zeros(3), 1.0)
         # within the joint limits: a branch with d2 = 4.9 m on a ±0.6 m axis is not in reach
