@@ -29,24 +29,9 @@ fn corkscrew(w_along: f64) -> BallState {
     BallState { t: 0.0, p, v, w }
 }
 
-/// Observations every 5 ms from 0.02 s to `t_end` (s) with noise `sigma` (m) per axis.
+/// Observations of `s` flying in the model's world ([`observe_in`] with `truth()`).
 fn observe(s: &BallState, t_end: f64, sigma: f64, seed: u64) -> (Vec<f64>, Vec<[f64; 3]>) {
-    let times: Vec<f64> = (0..)
-        .map(|k| 0.02 + k as f64 * 0.005)
-        .take_while(|t| *t <= t_end)
-        .collect();
-    let path = predict(&truth(), s, &times).unwrap();
-    let mut rng = fastrand::Rng::with_seed(seed);
-    let mut g = || {
-        let (u, v) = (rng.f64().max(1e-300), rng.f64());
-        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
-    };
-    let p = path
-        .positions
-        .iter()
-        .map(|q| [q[0] + sigma * g(), q[1] + sigma * g(), q[2] + sigma * g()])
-        .collect();
-    (times, p)
+    observe_in(&truth(), s, t_end, sigma, seed)
 }
 
 fn bounce_time(s: &BallState) -> f64 {
