@@ -43,7 +43,7 @@ pub const MAX_PENDING: usize = 4;
 /// Boxes in circulation per channel (the return ring holds them all, so it never overflows).
 pub const POOL: usize = 2 * MAX_PENDING + 4;
 /// Hit records kept per channel (by stroke sequence number modulo this).
-pub const HIT_SLOTS: usize = 8;
+pub const HIT_SLOTS: usize = 32;
 /// No hit in the stroke.
 pub const NO_HIT: u64 = u64::MAX;
 /// Bits of a packed clock word (and of a hit record) that hold the cycle or deadline.
@@ -514,7 +514,11 @@ impl SetpointSource for StrokeFollower {
             _ => false,
         };
         // the deadline at which this channel commands the stroke's hit
-        if let Some(st) = self.active.as_ref().filter(|s| s.hit_cycle != NO_HIT && s.hit_cycle <= k) {
+        if let Some(st) = self
+            .active
+            .as_ref()
+            .filter(|s| s.hit_cycle != NO_HIT && s.hit_cycle <= k)
+        {
             if st.seq != self.hit_recorded {
                 self.hit_recorded = st.seq;
                 let slot = &self.timeline.hits[self.ch][st.seq as usize % HIT_SLOTS];

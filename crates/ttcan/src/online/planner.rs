@@ -404,7 +404,11 @@ impl Splicer {
         let Some(last) = self.last.clone() else { return };
         let tl = self.timeline.clone();
         let now_skips = tl.skips();
-        let drift: Vec<i64> = now_skips.iter().zip(&last.skips).map(|(a, b)| *a as i64 - *b as i64).collect();
+        let drift: Vec<i64> = now_skips
+            .iter()
+            .zip(&last.skips)
+            .map(|(a, b)| *a as i64 - *b as i64)
+            .collect();
         if drift.iter().all(|d| *d == drift[0]) || self.stopped() {
             return;
         }
@@ -435,9 +439,9 @@ impl Splicer {
                 if rel <= 2.0 * tl.period() {
                     continue;
                 }
-                let b = self
-                    .planner
-                    .branch_leg_to(&last.q_hit, &state, &last.twist, rel, &self.ready, f64::NEG_INFINITY);
+                let b =
+                    self.planner
+                        .branch_leg_to(&last.q_hit, &state, &last.twist, rel, &self.ready, f64::NEG_INFINITY);
                 if let Some(b) = b {
                     found = Some((b, t, rel));
                     break;
@@ -543,11 +547,16 @@ impl Splicer {
             let mut sp = self.splice(factor);
             let mut replaces = None;
             let mut after = None;
-            if let Some(last) = self.last.clone().filter(|l| self.hit_span(l).0 > sp.deadline) {
+            // a hit some channel has not commanded by the splice is still ahead
+            if let Some(last) = self.last.clone().filter(|l| self.hit_span(l).1 >= sp.deadline) {
+                if last.stroke == h.stroke && self.hit_span(&last).0 <= sp.deadline {
+                    // a channel commands it before the splice: being done, nothing to replace
+                    return reject(arrival);
+                }
                 if last.stroke == h.stroke {
                     // spliced after the hit the replaced stroke was spliced after, while that
                     // one is still ahead (a replacement from the present state cut it off)
-                    if let Some(e) = self.earlier.clone().filter(|e| self.hit_span(e).0 >= sp.deadline) {
+                    if let Some(e) = self.earlier.clone().filter(|e| self.hit_span(e).1 >= sp.deadline) {
                         let e_end = self.hit_span(&e).1;
                         if h.t_hit <= tl.time_of(e_end) + 2.0 * tl.period() {
                             return reject(arrival);
@@ -666,9 +675,9 @@ impl Splicer {
             skips: tl.skips(),
         };
         let mut replaces = None;
-        if let Some(last) = self.last.clone().filter(|l| self.hit_span(l).0 > sp.deadline) {
+        if let Some(last) = self.last.clone().filter(|l| self.hit_span(l).1 >= sp.deadline) {
             let before = self.earlier.as_ref().is_none_or(|e| self.hit_span(e).1 < sp.deadline);
-            if last.stroke == h.stroke && before {
+            if last.stroke == h.stroke && before && self.hit_span(&last).0 > sp.deadline {
                 replaces = Some(last);
             } else {
                 // another stroke's hit is still to come: spliced into its return leg as a hit

@@ -202,7 +202,11 @@ impl JointTrajectory {
     /// this one's duration. An error when the joint counts differ.
     pub fn then(self, next: JointTrajectory) -> Result<Self> {
         if next.dof() != self.dof() {
-            return Err(Error::shape("next", format!("{} joints", self.dof()), format!("{}", next.dof())));
+            return Err(Error::shape(
+                "next",
+                format!("{} joints", self.dof()),
+                format!("{}", next.dof()),
+            ));
         }
         Ok(self.append(next))
     }
