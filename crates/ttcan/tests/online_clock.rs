@@ -1,9 +1,10 @@
-//! The online handoff's one stroke clock: two channels follow the same stroke; when one channel
-//! thread stalls and skips deadlines during the stroke, the other keeps moving (holding drives in
-//! motion would stop them abruptly) and holds its stroke as long once at rest, so that from then
-//! on both command the stroke clock at the same time again (without the rule the joints on the
-//! two channels would stay apart by the stall for the rest of the run). Stepped by hand: no
-//! threads, no timing.
+//! The online handoff's per-channel stroke clocks: two channels follow the same stroke; when one
+//! channel thread stalls and skips deadlines during the stroke, the other keeps moving (holding
+//! drives in motion would stop them abruptly) and the stalled one resumes where it stopped, its
+//! stroke clock behind by the stall. The next stroke, handed to each channel with its own start
+//! cycle (the same deadline less the deadlines that channel skipped), brings them back in step:
+//! both start it, and command its hit, at the same deadline. Stepped by hand: no threads, no
+//! timing.
 
 #[path = "support/channel.rs"]
 mod channel;
@@ -27,7 +28,7 @@ fn step(f: &mut handoff::StrokeFollower, master: &ChannelMaster, k: u64) -> [f64
 }
 
 #[test]
-fn a_stall_during_a_stroke_is_made_up_at_rest() {
+fn a_stall_during_a_stroke_is_made_up_by_the_next_strokes_per_channel_start() {
     let (ma, _) = channel::running_channel();
     let (mb, _) = channel::running_channel();
     let tl = Arc::new(Timeline::new(2, 4, 1_000_000, 0));
@@ -53,8 +54,8 @@ fn a_stall_during_a_stroke_is_made_up_at_rest() {
     // The stroke sample at an executed cycle (the stroke starts at executed cycle 2).
     let sample = |k_exec: u64| traj.state(((k_exec as f64 - 2.0) * 1e-3).clamp(0.0, 0.5)).unwrap().q;
     // A never stalled and does not hold drives in motion: it follows the deadlines through the
-    // stroke; B resumes where it stopped, 5 cycles behind.
-    for (k, q) in qa.iter().filter(|(k, _)| *k <= 502) {
+    // stroke; B resumes where it stopped, 5 cycles behind, and nothing is held at rest either.
+    for (k, q) in &qa {
         let want = sample(*k);
         assert!((q[0] - want[0]).abs() < 1e-12, "A at deadline {k}: {q:?} vs {want:?}");
     }
@@ -63,8 +64,23 @@ fn a_stall_during_a_stroke_is_made_up_at_rest() {
         let want = sample(exec);
         assert!((q[0] - want[2]).abs() < 1e-12, "B at deadline {k}: {q:?} vs {want:?}");
     }
-    // At rest after the stroke, A holds for the 5 cycles B skipped: one stroke clock again.
-    assert_eq!(tl.paused(), 5);
+    assert_eq!(tl.skips(), vec![0, 5]);
     assert_eq!(tl.skipped(), 5);
-    assert_eq!(tl.present_cycle(), 555);
+    assert_eq!((tl.present_cycle(), tl.present_deadline()), (560, 560));
+    // The next stroke at deadline 600, its hit 100 cycles in: each channel's start is the
+    // deadline less its skips.
+    let back = JointTrajectory::quintic_between(&JointState::rest(&end), &JointState::rest(&hold), 0.2).unwrap();
+    tl.open(2);
+    let d = 600;
+    assert!(sa.push_hit(2, d, d + 100, &back) && sb.push_hit(2, d - 5, d - 5 + 100, &back));
+    assert_eq!(tl.hit_deadlines(2), None, "no hit commanded yet");
+    for k in 561..=900u64 {
+        let (a, b) = (step(&mut fa, &ma, k), step(&mut fb, &mb, k));
+        let want = back.state(((k as f64 - d as f64) * 1e-3).clamp(0.0, 0.2)).unwrap().q;
+        assert!((a[0] - want[0]).abs() < 1e-12, "A at deadline {k}: {a:?} vs {want:?}");
+        assert!((b[0] - want[2]).abs() < 1e-12, "B at deadline {k}: {b:?} vs {want:?}");
+    }
+    assert_eq!(tl.decision(2), Decision::Taken);
+    assert_eq!(tl.hit_deadlines(2), Some(vec![d + 100, d + 100]), "the hit in step");
+    assert_eq!(tl.hit_deadlines(1), None, "stroke 1 had no hit");
 }

@@ -14,7 +14,8 @@ use ttkin::traj::{JointState, JointTrajectory};
 pub struct PlannedStroke {
     /// The hit (robot base frame, controller clock), as the status and a re-plan see it.
     pub hit: HitMsg,
-    /// Executed cycle the stroke starts at (its time 0), the [`SpliceAt::cycle`] it was planned for.
+    /// Deadline the stroke starts at (its time 0; each channel at its own executed cycle), the
+    /// [`SpliceAt::cycle`] it was planned for.
     pub cycle: u64,
     /// Controller time of that cycle, s.
     pub start: f64,
@@ -38,12 +39,12 @@ pub enum Command {
 }
 
 /// The earliest instant a stroke decided now can start at, as the runtime offers it to a brain
-/// with each observation: the executed cycle, its controller time (s) and the joint state the
+/// with each observation: the deadline, its controller time (s) and the joint state the
 /// controller commands then (m or rad; velocities, accelerations). A stroke planned from it is
 /// continuous with what runs.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SpliceAt {
-    /// Executed cycle (the runtime's stroke clock).
+    /// Deadline index (each channel starts at it less the deadlines it skipped).
     pub cycle: u64,
     /// Controller time of that cycle, s.
     pub t: f64,

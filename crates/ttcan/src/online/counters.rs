@@ -143,9 +143,18 @@ counters! {
     /// Online threads (receiver, planning, telemetry) whose SCHED_FIFO priority the system
     /// refused: they run on normal scheduling.
     realtime_refused,
-    /// Cycles a channel held its stroke to keep the stroke clock of a channel that skipped
-    /// deadlines after a stall (all channels summed; read at the end).
-    paused_cycles,
+    /// Re-plans of a pending hit that brought the channels back in step after a channel thread
+    /// stalled while the joints moved (`Splicer::resync`).
+    resyncs,
+    /// Such re-plans that found no feasible leg, or came too close to the hit.
+    resyncs_failed,
+    /// Executed hits every channel commanded at the same deadline.
+    hits_in_step,
+    /// Executed hits the channels commanded at different deadlines (a stall too close to the hit
+    /// to re-plan, or no feasible re-plan): the commanded racket was not the planned one.
+    hits_out_of_step,
+    /// Largest spread (cycles) of the deadlines at which the channels commanded one hit.
+    hit_skew_max_cycles,
     /// Ball mode: observations the brain received.
     ball_observations,
     /// Ball mode: observations older than the latency budget on arrival (dropped).

@@ -15,6 +15,16 @@
 //! sees it decides for all (compare-and-swap): taken when it arrives before its start cycle is
 //! commanded (at the latest in the cycle that commands it), refused (late) otherwise, so the
 //! channels never split on a stroke.
+//!
+//! Each channel follows its strokes on its own stroke clock (its executed cycles: a stall of its
+//! thread pauses them, the target never jumps), and each stroke is handed to each channel with
+//! its own start cycle on that clock: the planner puts every channel's start at the same
+//! deadline (its start = the deadline less the deadlines it skipped), so the channels start each
+//! stroke in step wherever their clocks are, and a channel that stalled during a stroke is
+//! brought back in step by the next stroke (the planning thread re-plans a pending hit from the
+//! state each channel commands when their skips drift apart). Each channel records the deadline
+//! at which it commanded a stroke's hit ([`Timeline::hit_deadlines`]): the hit was in step when
+//! every channel commanded it at the same deadline.
 
 use std::sync::atomic::{fence, AtomicBool, AtomicU32, AtomicU64, AtomicUsize, Ordering};
 use std::sync::Arc;
@@ -32,6 +42,13 @@ pub const MAX_CHANNELS: usize = 8;
 pub const MAX_PENDING: usize = 4;
 /// Boxes in circulation per channel (the return ring holds them all, so it never overflows).
 pub const POOL: usize = 2 * MAX_PENDING + 4;
+/// Hit records kept per channel (by stroke sequence number modulo this).
+pub const HIT_SLOTS: usize = 32;
+/// No hit in the stroke.
+pub const NO_HIT: u64 = u64::MAX;
+/// Bits of a packed clock word (and of a hit record) that hold the cycle or deadline.
+const LOW: u32 = 40;
+const LOW_MASK: u64 = (1 << LOW) - 1;
 
 const PENDING: u64 = 0;
 const TAKEN: u64 = 1;
@@ -43,8 +60,11 @@ const LATE: u64 = 2;
 pub struct Stroke {
     /// Handoff sequence number (strictly increasing).
     pub seq: u64,
-    /// Deadline index of the cycle that commands the stroke's time 0.
+    /// This channel's executed cycle (its stroke clock) that commands the stroke's time 0.
     pub start_cycle: u64,
+    /// This channel's executed cycle of the stroke's hit ([`NO_HIT`]: none); the deadline at
+    /// which the channel commands it is recorded ([`Timeline::hit_deadlines`]).
+    pub hit_cycle: u64,
     /// The joint trajectory (all joints of the robot).
     pub traj: Option<JointTrajectory>,
 }
@@ -69,8 +89,11 @@ pub struct Timeline {
     pub t0_ns: u64,
     channels: usize,
     dof: usize,
-    cycle: [AtomicU64; MAX_CHANNELS],
-    skipped: [AtomicU64; MAX_CHANNELS],
+    /// Per channel: deadlines skipped (high bits) and the executed cycle sampled (low bits),
+    /// one word so that they are read together.
+    clock: [AtomicU64; MAX_CHANNELS],
+    /// Per channel and slot: stroke seq (high bits) and the deadline its hit was commanded at.
+    hits: [[AtomicU64; HIT_SLOTS]; MAX_CHANNELS],
     enabled: AtomicUsize,
     hold: [AtomicU64; MAX_JOINTS],
     decision: AtomicU64,
@@ -84,7 +107,6 @@ pub struct Timeline {
     measured_qd: [AtomicU64; MAX_JOINTS],
     faults: AtomicU32,
     late: AtomicU64,
-    paused: AtomicU64,
 }
 
 /// The measured joint state as the telemetry thread reads it.
@@ -117,8 +139,8 @@ impl Timeline {
             t0_ns,
             channels: channels.min(MAX_CHANNELS),
             dof: dof.min(MAX_JOINTS),
-            cycle: std::array::from_fn(|_| AtomicU64::new(0)),
-            skipped: std::array::from_fn(|_| AtomicU64::new(0)),
+            clock: std::array::from_fn(|_| AtomicU64::new(0)),
+            hits: std::array::from_fn(|_| std::array::from_fn(|_| AtomicU64::new(u64::MAX))),
             enabled: AtomicUsize::new(0),
             hold: std::array::from_fn(|_| AtomicU64::new(0)),
             decision: AtomicU64::new(0),
@@ -130,7 +152,6 @@ impl Timeline {
             measured_qd: std::array::from_fn(|_| AtomicU64::new(0)),
             faults: AtomicU32::new(0),
             late: AtomicU64::new(0),
-            paused: AtomicU64::new(0),
         }
     }
 
@@ -144,24 +165,30 @@ impl Timeline {
         self.channels
     }
 
-    /// Deadlines skipped so far (the most of any channel): a stall pauses the strokes.
+    /// Channel `ch`'s (deadlines skipped, executed cycle sampled) as of its last cycle.
+    pub fn clock_of(&self, ch: usize) -> (u64, u64) {
+        let w = self.clock[ch.min(MAX_CHANNELS - 1)].load(Ordering::Acquire);
+        (w >> LOW, w & LOW_MASK)
+    }
+
+    /// Deadlines each channel skipped so far (one entry per channel).
+    pub fn skips(&self) -> Vec<u64> {
+        (0..self.channels).map(|c| self.clock_of(c).0).collect()
+    }
+
+    /// Deadlines skipped so far by the channel that skipped the most.
     pub fn skipped(&self) -> u64 {
-        self.skipped[..self.channels]
-            .iter()
-            .map(|c| c.load(Ordering::Acquire))
-            .max()
-            .unwrap_or(0)
+        (0..self.channels).map(|c| self.clock_of(c).0).max().unwrap_or(0)
     }
 
-    /// Controller time (s, monotonic clock) of executed cycle `k` (deadline k + skipped).
-    pub fn time_of(&self, k: u64) -> f64 {
-        (self.t0_ns as f64 + (k + self.skipped()) as f64 * self.period_ns as f64) * 1e-9
+    /// Controller time (s, monotonic clock) of deadline `d`.
+    pub fn time_of(&self, d: u64) -> f64 {
+        (self.t0_ns as f64 + d as f64 * self.period_ns as f64) * 1e-9
     }
 
-    /// The first executed cycle at or after controller time `t` (s), skips so far counted.
-    pub fn cycle_at(&self, t: f64) -> u64 {
-        let d = ((t * 1e9 - self.t0_ns as f64) / self.period_ns as f64).ceil().max(0.0) as u64;
-        d.saturating_sub(self.skipped())
+    /// The first deadline at or after controller time `t` (s).
+    pub fn deadline_at(&self, t: f64) -> u64 {
+        ((t * 1e9 - self.t0_ns as f64) / self.period_ns as f64).ceil().max(0.0) as u64
     }
 
     /// Period, s.
@@ -169,13 +196,31 @@ impl Timeline {
         self.period_ns as f64 * 1e-9
     }
 
-    /// The newest cycle (executed cycles since deadline 0) any channel has started.
+    /// The newest executed cycle any channel has started (its stroke clock).
     pub fn present_cycle(&self) -> u64 {
-        self.cycle[..self.channels]
-            .iter()
-            .map(|c| c.load(Ordering::Acquire))
+        (0..self.channels).map(|c| self.clock_of(c).1).max().unwrap_or(0)
+    }
+
+    /// The newest deadline any channel has executed.
+    pub fn present_deadline(&self) -> u64 {
+        (0..self.channels)
+            .map(|c| {
+                let (s, k) = self.clock_of(c);
+                s + k
+            })
             .max()
             .unwrap_or(0)
+    }
+
+    /// The deadline at which each channel commanded the hit of stroke `seq`, once every channel
+    /// has (`None` before, or when the record was overwritten by later strokes).
+    pub fn hit_deadlines(&self, seq: u64) -> Option<Vec<u64>> {
+        (0..self.channels)
+            .map(|c| {
+                let w = self.hits[c][seq as usize % HIT_SLOTS].load(Ordering::Acquire);
+                (w != u64::MAX && w >> LOW == seq & (u64::MAX >> LOW)).then_some(w & LOW_MASK)
+            })
+            .collect()
     }
 
     /// True when every channel runs and has published its held positions.
@@ -192,12 +237,6 @@ impl Timeline {
     /// channel had taken them): a discontinuity, counted.
     pub fn late_applied(&self) -> u64 {
         self.late.load(Ordering::Relaxed)
-    }
-
-    /// Cycles a channel held its stroke still to stay with a channel that had skipped more
-    /// deadlines (summed over the channels).
-    pub fn paused(&self) -> u64 {
-        self.paused.load(Ordering::Relaxed)
     }
 
     /// Opens the decision on stroke `seq` (planning thread, before pushing it).
@@ -265,12 +304,18 @@ pub struct Sender {
     to_cycle: rtrb::Producer<Box<Stroke>>,
     back: rtrb::Consumer<Box<Stroke>>,
     boxes: usize,
+    joints: [Option<usize>; MAX_AXES_PER_CHANNEL],
 }
 
 impl Sender {
     /// Hands `stroke` (a copy of it) to the channel: a returned box is reused, a new one made only
     /// while fewer than [`POOL`] are in circulation. `false` when the ring is full.
     pub fn push(&mut self, seq: u64, start_cycle: u64, traj: &JointTrajectory) -> bool {
+        self.push_hit(seq, start_cycle, NO_HIT, traj)
+    }
+
+    /// [`Sender::push`] of a stroke whose hit comes at this channel's executed cycle `hit_cycle`.
+    pub fn push_hit(&mut self, seq: u64, start_cycle: u64, hit_cycle: u64, traj: &JointTrajectory) -> bool {
         let mut b = match self.back.pop() {
             Ok(b) => b,
             Err(_) if self.boxes < POOL => {
@@ -281,6 +326,7 @@ impl Sender {
         };
         b.seq = seq;
         b.start_cycle = start_cycle;
+        b.hit_cycle = hit_cycle;
         b.traj = Some(traj.clone());
         match self.to_cycle.push(b) {
             Ok(()) => true,
@@ -291,6 +337,11 @@ impl Sender {
                 false
             }
         }
+    }
+
+    /// The robot joint of each axis of this channel.
+    pub fn joints(&self) -> &[Option<usize>; MAX_AXES_PER_CHANNEL] {
+        &self.joints
     }
 }
 
@@ -315,6 +366,8 @@ pub struct StrokeFollower {
     executed: u64,
     /// A cycle was executed already.
     started: bool,
+    /// The stroke whose hit this channel recorded last.
+    hit_recorded: u64,
 }
 
 /// The two ends of channel `ch`'s handoff (`joints`: the robot joint of each axis).
@@ -330,6 +383,7 @@ pub fn channel(
             to_cycle,
             back: back_rx,
             boxes: 0,
+            joints,
         },
         StrokeFollower {
             ch,
@@ -347,6 +401,7 @@ pub fn channel(
             qdd: [0.0; MAX_JOINTS],
             executed: 0,
             started: false,
+            hit_recorded: 0,
         },
     )
 }
@@ -409,34 +464,16 @@ impl SetpointSource for StrokeFollower {
     fn fill(&mut self, c: &CycleInfo, master: &ChannelMaster, out: &mut [AxisSetpoint], qdd: &mut [f64]) -> bool {
         let n = out.len();
         // The strokes run on executed cycles: a stall of this thread pauses them (the drives'
-        // physics advance per SYNC too), the target never jumps. The channels keep one stroke
-        // clock: a channel whose thread skipped fewer deadlines than another's holds its stroke
-        // (repeats its setpoint) until their counts agree, but only while its joints are at
-        // rest (a held target of drives in motion stops them abruptly: their tracking error
-        // jumps and a drive may refuse the next target, EMCY 0xFF01). So the joints of
-        // different channels are apart by the stalls of one stroke at most and agree again at
-        // the next rest (the ready pose between balls). The skipped deadlines are published
-        // so that the planner maps the controller clock onto this count.
-        let next = self.executed;
-        let own = c.k.saturating_sub(next);
-        let lag = &self.timeline.skipped[self.ch];
-        lag.fetch_max(own, Ordering::AcqRel);
-        let most = self.timeline.skipped();
-        let dof = self.timeline.dof;
-        let resting = self.qd[..dof].iter().chain(&self.qdd[..dof]).all(|v| v.abs() < 1e-9);
-        let k = if self.started && resting {
-            next.min(c.k.saturating_sub(most)).max(next - 1)
-        } else {
-            next
-        };
-        let paused = self.started && k < next;
+        // physics advance per SYNC too), the target never jumps. Each channel keeps its own
+        // stroke clock; the planner gives each channel its own start cycle so that every stroke
+        // starts at the same deadline on all channels, and re-plans a pending hit when a stall
+        // during a stroke put them apart (nothing is held: a held target of drives in motion
+        // stops them abruptly, EMCY 0xFF01). The skips are published with the executed cycle.
+        let k = self.executed;
+        let own = c.k.saturating_sub(k).min(LOW_MASK >> 16);
         self.started = true;
         self.executed = k + 1;
-        lag.store(c.k.saturating_sub(k), Ordering::Release);
-        if paused {
-            self.timeline.paused.fetch_add(1, Ordering::Relaxed);
-        }
-        self.timeline.cycle[self.ch].store(k, Ordering::Release);
+        self.timeline.clock[self.ch].store(own << LOW | (k & LOW_MASK), Ordering::Release);
         if c.phase != Phase::Run {
             if matches!(c.phase, Phase::Stopping | Phase::Stopped) {
                 self.timeline.stopped.store(true, Ordering::Relaxed);
@@ -471,14 +508,23 @@ impl SetpointSource for StrokeFollower {
         {
             Some((start, traj)) if traj.dof() == dof => {
                 let t = ((k - start.min(k)) as f64 * c.period).min(traj.duration());
-                let ok = traj
-                    .sample(t, &mut self.q[..dof], &mut self.qd[..dof], &mut self.qdd[..dof])
-                    .is_ok();
-                // paused: the same sample as the cycle before (the target held)
-                ok
+                traj.sample(t, &mut self.q[..dof], &mut self.qd[..dof], &mut self.qdd[..dof])
+                    .is_ok()
             }
             _ => false,
         };
+        // the deadline at which this channel commands the stroke's hit
+        if let Some(st) = self
+            .active
+            .as_ref()
+            .filter(|s| s.hit_cycle != NO_HIT && s.hit_cycle <= k)
+        {
+            if st.seq != self.hit_recorded {
+                self.hit_recorded = st.seq;
+                let slot = &self.timeline.hits[self.ch][st.seq as usize % HIT_SLOTS];
+                slot.store(st.seq << LOW | (c.k & LOW_MASK), Ordering::Release);
+            }
+        }
         for a in 0..n {
             out[a] = match self.joints[a].filter(|&j| sampled && j < dof) {
                 Some(j) => {

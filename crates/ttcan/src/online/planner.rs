@@ -32,7 +32,7 @@ use ttkin::traj::{JointState, JointTrajectory};
 
 use super::brain::{Awaiting, Brain, Command, Observed, PlannedStroke, SpliceAt};
 use super::counters::Counters;
-use super::handoff::{Decision, Sender, Timeline};
+use super::handoff::{Decision, Sender, Timeline, NO_HIT};
 use super::receiver::{controller_time, send_status, Inbound};
 use super::wire::{HitMsg, PlanStatus, StatusMsg};
 
@@ -98,15 +98,43 @@ pub struct PlannerConfig {
     pub silence: f64,
 }
 
+/// Lead (s) of a re-plan that brings the channels back in step ([`Splicer::resync`]), at least
+/// [`RESYNC_MIN_CYCLES`] cycles: a hit leg planned again to a known hit state takes tens of µs
+/// (a debug build a few ms).
+pub const RESYNC_LEAD: f64 = 0.005;
+/// Fewest cycles from the present to a re-plan's splice.
+const RESYNC_MIN_CYCLES: u64 = 3;
+
 /// The hit that the robot is executing or will execute next.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 struct Committed {
     id: u32,
     stroke: u32,
     t_hit: f64,
-    /// The executed cycle of the hit: the strokes' clock (a stall after the plan makes the hit
-    /// later on the controller clock, not on this one).
-    hit_cycle: u64,
+    /// Each channel's executed cycle of the hit: its stroke clock (a stall after the plan makes
+    /// the hit later on the controller clock, not on this one).
+    hit: Vec<u64>,
+    /// The deadlines each channel had skipped when the stroke was handed over: the channels are
+    /// in step while their skips since then agree.
+    skips: Vec<u64>,
+    /// The hit configuration (m, rad) and the tool twist at the hit (base axes), for a re-plan.
+    q_hit: Vec<f64>,
+    twist: [f64; 6],
+}
+
+/// Where a stroke starts: one deadline for all channels, each channel's start cycle on its own
+/// stroke clock that deadline less the deadlines it had skipped (`skips`, read together).
+#[derive(Debug, Clone, PartialEq)]
+struct Splice {
+    deadline: u64,
+    skips: Vec<u64>,
+}
+
+impl Splice {
+    /// Channel `c`'s executed cycle of the splice.
+    fn start(&self, c: usize) -> u64 {
+        self.deadline.saturating_sub(self.skips.get(c).copied().unwrap_or(0))
+    }
 }
 
 /// The planning state: the planner, the schedule, the handoff senders.
@@ -116,8 +144,11 @@ pub struct Splicer {
     timeline: Arc<Timeline>,
     senders: Vec<Sender>,
     cfg: PlannerConfig,
-    schedule: Option<Schedule>,
+    /// Per channel, on its own stroke clock.
+    schedules: Option<Vec<Schedule>>,
     seq: u64,
+    /// Strokes whose hit is to be checked in step (seq, controller time of the hit).
+    watch: Vec<(u64, f64)>,
     last: Option<Committed>,
     /// The hit of another stroke that `last`'s stroke was spliced after (its hit still ahead at
     /// that splice): a replacement of `last` is spliced after it too, or it would be cut off.
@@ -175,8 +206,9 @@ impl Splicer {
             timeline,
             senders,
             cfg,
-            schedule: None,
+            schedules: None,
             seq: 0,
+            watch: Vec::new(),
             last: None,
             earlier: None,
         }
@@ -185,7 +217,7 @@ impl Splicer {
     /// Sets the ready pose (m or rad, one per joint; ball mode: the ball planner's, from which
     /// its strokes start); refused (`false`) once the schedule runs or with another joint count.
     pub fn set_ready(&mut self, ready: &[f64]) -> bool {
-        if self.schedule.is_some() || ready.len() != self.ready.len() || ready.iter().any(|x| !x.is_finite()) {
+        if self.schedules.is_some() || ready.len() != self.ready.len() || ready.iter().any(|x| !x.is_finite()) {
             return false;
         }
         self.ready = ready.to_vec();
@@ -197,62 +229,119 @@ impl Splicer {
         &self.ready
     }
 
-    /// The schedule (`None` before every channel is enabled).
-    pub fn schedule(&self) -> Option<&Schedule> {
-        self.schedule.as_ref()
+    /// The state commanded at deadline `d` as the channels' skips stand now (each joint from its
+    /// channel's schedule at that channel's executed cycle); `None` before every channel is
+    /// enabled.
+    pub fn state_at_deadline(&self, d: u64) -> Option<JointState> {
+        self.state_of(&Splice {
+            deadline: d,
+            skips: self.timeline.skips(),
+        })
+    }
+
+    /// The state commanded at the present deadline ([`Splicer::state_at_deadline`]).
+    pub fn commanded(&self) -> Option<JointState> {
+        self.state_at_deadline(self.timeline.present_deadline())
+    }
+
+    /// The mixed state at splice `sp`: each channel's joints from its schedule at its start.
+    fn state_of(&self, sp: &Splice) -> Option<JointState> {
+        let sch = self.schedules.as_ref()?;
+        let mut out = sch.first()?.state_at(sp.start(0));
+        for (c, snd) in self.senders.iter().enumerate().skip(1) {
+            let st = sch.get(c)?.state_at(sp.start(c));
+            for &j in snd.joints().iter().flatten() {
+                if j < out.q.len() && j < st.q.len() {
+                    out.q[j] = st.q[j];
+                    out.qd[j] = st.qd[j];
+                    out.qdd[j] = st.qdd[j];
+                }
+            }
+        }
+        Some(out)
+    }
+
+    /// True when some channel has already commanded its start cycle of `sp`.
+    fn is_late(&self, sp: &Splice) -> bool {
+        (0..self.timeline.channels()).any(|c| self.timeline.clock_of(c).1 >= sp.start(c))
+    }
+
+    /// The deadlines (earliest, latest over the channels) at which the channels will command the
+    /// hit of `c`, as their skips stand now.
+    fn hit_span(&self, c: &Committed) -> (u64, u64) {
+        let skips = self.timeline.skips();
+        let d = c.hit.iter().zip(&skips).map(|(h, s)| h + s);
+        let lo = d.clone().min().unwrap_or(0);
+        (lo, d.max().unwrap_or(0))
     }
 
     /// Once every channel runs: starts the schedule at the held positions and approaches the
     /// ready pose. True when the schedule exists.
     pub fn start(&mut self, counters: &Counters) -> bool {
-        if self.schedule.is_some() {
+        if self.schedules.is_some() {
             return true;
         }
         if !self.timeline.all_enabled() {
             return false;
         }
-        self.schedule = Some(Schedule::new(self.timeline.hold(), self.timeline.period()));
+        let one = Schedule::new(self.timeline.hold(), self.timeline.period());
+        self.schedules = Some(vec![one; self.timeline.channels().max(1)]);
         self.to_ready(counters);
         true
     }
 
-    /// The splice cycle of a decision made now: the first executed cycle at least
-    /// `factor × splice_lead` from now, after the present one. A stroke handed over before the
-    /// cycle threads command that cycle starts there.
-    fn splice_cycle(&self, factor: f64) -> u64 {
+    /// The splice of a decision made now: the first deadline at least `lead` s from now, after
+    /// the present one, with the channels' skips. A stroke handed over before a channel commands
+    /// its start cycle starts there.
+    fn splice_in(&self, lead: f64) -> Splice {
         let tl = &self.timeline;
-        let present = tl.present_cycle();
-        let at = tl.cycle_at(controller_time() + self.cfg.splice_lead * factor);
-        at.max(present + 1)
+        let skips = tl.skips();
+        let present = (0..skips.len())
+            .map(|c| {
+                let (s, k) = tl.clock_of(c);
+                s + k
+            })
+            .max()
+            .unwrap_or(0);
+        let at = tl.deadline_at(controller_time() + lead);
+        Splice {
+            deadline: at.max(present + 1),
+            skips,
+        }
+    }
+
+    /// [`Splicer::splice_in`] `factor × splice_lead` ahead.
+    fn splice(&self, factor: f64) -> Splice {
+        self.splice_in(self.cfg.splice_lead * factor)
     }
 
     /// The earliest splice a brain deciding now can plan from (cycle, time, commanded state):
     /// `factor × splice_lead` ahead; its deadline is [`HANDOVER_MARGIN`] before the cycle.
     pub fn splice_at(&self, factor: f64) -> SpliceAt {
-        let cycle = self.splice_cycle(factor);
-        let state = self
-            .schedule
-            .as_ref()
-            .map_or_else(|| JointState::rest(&self.ready), |s| s.state_at(cycle));
-        let t = self.timeline.time_of(cycle);
+        let sp = self.splice(factor);
+        let state = self.state_of(&sp).unwrap_or_else(|| JointState::rest(&self.ready));
+        let t = self.timeline.time_of(sp.deadline);
         let left = (t - controller_time() - HANDOVER_MARGIN).max(0.0);
         SpliceAt {
-            cycle,
+            cycle: sp.deadline,
             t,
             state,
             deadline: Some(Instant::now() + Duration::from_secs_f64(left)),
         }
     }
 
-    /// Hands `traj` over to start at `start`; waits until every channel has decided. True when
-    /// the channels took it.
-    fn hand_over(&mut self, start: u64, traj: &JointTrajectory) -> bool {
+    /// Hands `traj` over to start at splice `sp` (each channel at its own start cycle; its hit,
+    /// if any, `hit_after` cycles later); waits until every channel has decided. The stroke's
+    /// seq when the channels took it.
+    fn hand_over(&mut self, sp: &Splice, traj: &JointTrajectory, hit_after: Option<u64>) -> Option<u64> {
         self.seq += 1;
         let seq = self.seq;
         self.timeline.open(seq);
-        for s in &mut self.senders {
-            if !s.push(seq, start, traj) {
-                return false;
+        for (c, s) in self.senders.iter_mut().enumerate() {
+            let start = sp.start(c);
+            let hit = hit_after.map_or(NO_HIT, |n| start + n);
+            if !s.push_hit(seq, start, hit, traj) {
+                return None;
             }
         }
         // the channels see it at their next cycle; a stopped channel never will
@@ -265,26 +354,153 @@ impl Splicer {
         }
         let taken = self.timeline.decision(seq) == Decision::Taken;
         if taken {
-            if let Some(s) = self.schedule.as_mut() {
-                s.push(start, traj.clone());
+            if let Some(sch) = self.schedules.as_mut() {
+                for (c, s) in sch.iter_mut().enumerate() {
+                    s.push(sp.start(c), traj.clone());
+                }
             }
         }
-        taken
+        taken.then_some(seq)
+    }
+
+    /// Watches the hit of stroke `seq` (at controller time `t_hit`): [`Splicer::check_hits`].
+    fn watch_hit(&mut self, seq: u64, t_hit: f64) {
+        self.watch.push((seq, t_hit));
+    }
+
+    /// Counts the watched hits every channel has commanded: in step (every channel at the same
+    /// deadline) or not (`hits_out_of_step`, the largest spread in `hit_skew_max_cycles`); a hit
+    /// no channel reaches (replaced, called off) is forgotten 2 s after its time.
+    pub fn check_hits(&mut self, counters: &Counters) {
+        let tl = self.timeline.clone();
+        let now = controller_time();
+        self.watch.retain(|&(seq, t)| match tl.hit_deadlines(seq) {
+            Some(d) => {
+                let skew = d.iter().max().unwrap_or(&0) - d.iter().min().unwrap_or(&0);
+                if skew == 0 {
+                    Counters::bump(&counters.hits_in_step);
+                } else {
+                    Counters::bump(&counters.hits_out_of_step);
+                }
+                counters.hit_skew_max_cycles.fetch_max(skew, Ordering::Relaxed);
+                false
+            }
+            None => now < t + 2.0,
+        });
+    }
+
+    /// Brings the channels back in step for the pending hit: when their skips have drifted apart
+    /// since its stroke was handed over (a channel thread stalled while the joints moved, so its
+    /// joints follow the stroke later than the others'), the hit leg is planned again from the
+    /// state each channel commands at one splice deadline (each channel's joints at its own start
+    /// cycle: continuous on every channel) to the same hit state, at the hit time answered when
+    /// that is feasible (the lagging joints catch up), else when the channel furthest behind
+    /// would reach it; handed to each channel with its own start cycle, so that every channel
+    /// commands the hit at the same deadline. Not while an earlier stroke's hit is still to come
+    /// (the pending stroke is spliced after it), nor within a few cycles of the hit. Counted
+    /// `resyncs`, or `resyncs_failed` when no leg is feasible (the channels stay apart: the hit
+    /// is counted out of step when it comes).
+    pub fn resync(&mut self, counters: &Counters) {
+        let Some(last) = self.last.clone() else { return };
+        let tl = self.timeline.clone();
+        let now_skips = tl.skips();
+        let drift: Vec<i64> = now_skips
+            .iter()
+            .zip(&last.skips)
+            .map(|(a, b)| *a as i64 - *b as i64)
+            .collect();
+        if drift.iter().all(|d| *d == drift[0]) || self.stopped() {
+            return;
+        }
+        if let Some(e) = self.earlier.as_ref() {
+            if self.hit_span(e).1 >= tl.present_deadline() {
+                return;
+            }
+        }
+        if self.hit_span(&last).0 <= tl.present_deadline() {
+            // the hit is done (or being done): nothing to bring in step
+            self.settle(&now_skips);
+            return;
+        }
+        let mut lead = RESYNC_LEAD.max(RESYNC_MIN_CYCLES as f64 * tl.period());
+        for _ in 0..3 {
+            let began = controller_time();
+            let sp = self.splice_in(lead);
+            let (first, latest) = self.hit_span(&last);
+            if sp.deadline + 2 >= first {
+                break;
+            }
+            let Some(state) = self.state_of(&sp) else { return };
+            let t_s = tl.time_of(sp.deadline);
+            tl.planning.store(true, Ordering::Relaxed);
+            let mut found = None;
+            for t in [last.t_hit, tl.time_of(latest)] {
+                let rel = t - t_s;
+                if rel <= 2.0 * tl.period() {
+                    continue;
+                }
+                let b =
+                    self.planner
+                        .branch_leg_to(&last.q_hit, &state, &last.twist, rel, &self.ready, f64::NEG_INFINITY);
+                if let Some(b) = b {
+                    found = Some((b, t, rel));
+                    break;
+                }
+            }
+            tl.planning.store(false, Ordering::Relaxed);
+            Counters::bump(&counters.plans);
+            let Some((b, t, rel)) = found else {
+                break;
+            };
+            let Ok(traj) = b.leg.trajectory.then(b.follow) else {
+                break;
+            };
+            if self.is_late(&sp) {
+                // planning took longer than the lead: twice as far ahead or twice the planning time
+                lead = (2.0 * lead).max(2.0 * (controller_time() - began));
+                continue;
+            }
+            let n = (rel / tl.period()).round() as u64;
+            let Some(seq) = self.hand_over(&sp, &traj, Some(n)) else {
+                break;
+            };
+            Counters::bump(&counters.resyncs);
+            self.watch_hit(seq, t);
+            self.last = Some(Committed {
+                t_hit: t,
+                hit: (0..sp.skips.len()).map(|c| sp.start(c) + n).collect(),
+                skips: sp.skips,
+                ..last
+            });
+            return;
+        }
+        Counters::bump(&counters.resyncs_failed);
+        self.settle(&now_skips);
+    }
+
+    /// The pending hit's channels taken as they are (no re-plan until their skips drift again).
+    fn settle(&mut self, skips: &[u64]) {
+        if let Some(l) = self.last.as_mut() {
+            l.skips = skips.to_vec();
+        }
+    }
+
+    fn stopped(&self) -> bool {
+        self.timeline.stopped.load(Ordering::Relaxed)
     }
 
     /// Brings the robot back to the ready pose from the state commanded a splice lead from now
     /// (nothing when it holds there already). True when a stroke was handed over.
     pub fn to_ready(&mut self, counters: &Counters) -> bool {
         for factor in [1.0, 2.0, 4.0] {
-            let Some(schedule) = self.schedule.as_ref() else {
+            let sp = self.splice(factor);
+            let (Some(schedules), Some(state)) = (self.schedules.as_ref(), self.state_of(&sp)) else {
                 return false;
             };
-            let s = self.splice_cycle(factor);
-            let state = schedule.state_at(s);
-            let end_cycle = schedule.end_cycle();
+            let ended = schedules.iter().enumerate().all(|(c, s)| sp.start(c) >= s.end_cycle());
             let at_ready = state.q.iter().zip(&self.ready).all(|(a, b)| (a - b).abs() < 1e-9)
                 && state.qd.iter().chain(&state.qdd).all(|v| v.abs() < 1e-9);
-            if at_ready && s >= end_cycle {
+            if at_ready && ended {
                 return false;
             }
             let end = JointState::rest(&self.ready);
@@ -295,10 +511,10 @@ impl Splicer {
                 return false;
             };
             Counters::bump(&counters.plans);
-            if self.timeline.present_cycle() >= s {
+            if self.is_late(&sp) {
                 continue;
             }
-            if self.hand_over(s, &traj) {
+            if self.hand_over(&sp, &traj, None).is_some() {
                 Counters::bump(&counters.splices);
                 // a hit still ahead will not happen
                 self.last = None;
@@ -321,44 +537,51 @@ impl Splicer {
         let (Some(pose), true) = (hit_pose(h), h.t_hit > now) else {
             return reject(arrival);
         };
-        if self.schedule.is_none() || self.timeline.stopped.load(Ordering::Relaxed) {
+        if self.schedules.is_none() || self.stopped() {
             return reject(arrival);
         }
         let tl = self.timeline.clone();
         let mut factor: f64 = 1.0;
         for _ in 0..3 {
             let began = controller_time();
-            let mut s = self.splice_cycle(factor);
+            let mut sp = self.splice(factor);
             let mut replaces = None;
             let mut after = None;
-            if let Some(last) = self.last.filter(|l| l.hit_cycle > s) {
+            // a hit some channel has not commanded by the splice is still ahead
+            if let Some(last) = self.last.clone().filter(|l| self.hit_span(l).1 >= sp.deadline) {
+                if last.stroke == h.stroke && self.hit_span(&last).0 <= sp.deadline {
+                    // a channel commands it before the splice: being done, nothing to replace
+                    return reject(arrival);
+                }
                 if last.stroke == h.stroke {
-                    replaces = Some(last);
                     // spliced after the hit the replaced stroke was spliced after, while that
                     // one is still ahead (a replacement from the present state cut it off)
-                    if let Some(e) = self.earlier.filter(|e| e.hit_cycle >= s) {
-                        if h.t_hit <= tl.time_of(e.hit_cycle) + 2.0 * tl.period() {
+                    if let Some(e) = self.earlier.clone().filter(|e| self.hit_span(e).1 >= sp.deadline) {
+                        let e_end = self.hit_span(&e).1;
+                        if h.t_hit <= tl.time_of(e_end) + 2.0 * tl.period() {
                             return reject(arrival);
                         }
-                        s = s.max(e.hit_cycle + 1);
+                        sp.deadline = sp.deadline.max(e_end + 1);
                         after = Some(e);
                     }
-                } else if h.t_hit <= tl.time_of(last.hit_cycle) + 2.0 * tl.period() {
-                    // another stroke's hit comes first
-                    return reject(arrival);
+                    replaces = Some(last);
                 } else {
-                    s = s.max(last.hit_cycle + 1);
+                    let l_end = self.hit_span(&last).1;
+                    if h.t_hit <= tl.time_of(l_end) + 2.0 * tl.period() {
+                        // another stroke's hit comes first
+                        return reject(arrival);
+                    }
+                    sp.deadline = sp.deadline.max(l_end + 1);
                     after = Some(last);
                 }
-            } else if self.last.is_some_and(|l| l.stroke == h.stroke) {
+            } else if self.last.as_ref().is_some_and(|l| l.stroke == h.stroke) {
                 // that stroke's hit is done: nothing left to replace
                 return reject(arrival);
             }
-            let Some(schedule) = self.schedule.as_ref() else {
+            let Some(state) = self.state_of(&sp) else {
                 return reject(arrival);
             };
-            let state = schedule.state_at(s);
-            let t_s = tl.time_of(s);
+            let t_s = tl.time_of(sp.deadline);
             let t_rel = (h.t_hit - t_s).max(1e-3);
             let hit = Hit {
                 pose,
@@ -382,7 +605,7 @@ impl Splicer {
             let elapsed = controller_time() - arrival;
             if code != PlanStatus::Accepted {
                 let earliest = match code {
-                    PlanStatus::TooEarly => tl.time_of(s) + self.planner.earliest_t_hit(&plan),
+                    PlanStatus::TooEarly => t_s + self.planner.earliest_t_hit(&plan),
                     _ => f64::NAN,
                 };
                 return HitOutcome {
@@ -393,25 +616,30 @@ impl Splicer {
             let Some(traj) = plan.trajectory.as_ref() else {
                 return reject(arrival);
             };
-            if tl.present_cycle() >= s {
+            if self.is_late(&sp) {
                 // planning took longer than the lead: again, twice as far ahead or twice the
                 // planning time, whichever is further
                 factor = (2.0 * factor).max(2.0 * (controller_time() - began) / self.cfg.splice_lead);
                 continue;
             }
-            if !self.hand_over(s, traj) {
+            let n = (plan.t_hit / tl.period()).round() as u64;
+            let Some(seq) = self.hand_over(&sp, traj, Some(n)) else {
                 Counters::bump(&counters.splices_late);
                 return reject(arrival);
-            }
+            };
             Counters::bump(&counters.splices);
             counters.latency.record(t_s - arrival);
             let t_hit = t_s + plan.t_hit;
+            self.watch_hit(seq, t_hit);
             self.earlier = after;
             self.last = Some(Committed {
                 id: h.id,
                 stroke: h.stroke,
                 t_hit,
-                hit_cycle: s + (plan.t_hit / tl.period()).round() as u64,
+                hit: (0..sp.skips.len()).map(|c| sp.start(c) + n).collect(),
+                skips: sp.skips.clone(),
+                q_hit: plan.q_hit.clone(),
+                twist: self.planner.tool_twist(&hit),
             });
             let elapsed = controller_time() - arrival;
             let us = (elapsed * 1e6) as u64;
@@ -424,9 +652,9 @@ impl Splicer {
         reject(arrival)
     }
 
-    /// Splices a stroke a brain built for its splice cycle (decided on a datagram received at
-    /// controller time `arrival`, s): handed over as it is when that cycle is still ahead and the
-    /// stroke starts from the state scheduled there; otherwise nothing changes and the error
+    /// Splices a stroke a brain built for its splice deadline (decided on a datagram received at
+    /// controller time `arrival`, s): handed over as it is when that deadline is still ahead and
+    /// the stroke starts from the state scheduled there; otherwise nothing changes and the error
     /// says why (the caller decides again or re-plans the hit, [`Splicer::replan`]). The
     /// replacement rules are [`Splicer::hit`]'s; while another stroke's hit is still to come,
     /// the hit is planned into that one's return leg.
@@ -437,27 +665,31 @@ impl Splicer {
             replaced: None,
         };
         let now = controller_time();
-        if hit_pose(h).is_none() || h.t_hit <= now || self.timeline.stopped.load(Ordering::Relaxed) {
+        let pose = hit_pose(h);
+        if pose.is_none() || h.t_hit <= now || self.stopped() {
             return Ok(reject(arrival));
         }
         let tl = self.timeline.clone();
-        let s = st.cycle;
-        let Some(schedule) = self.schedule.as_ref() else {
-            return Ok(reject(arrival));
+        let sp = Splice {
+            deadline: st.cycle,
+            skips: tl.skips(),
         };
         let mut replaces = None;
-        if let Some(last) = self.last.filter(|l| l.hit_cycle > s) {
-            if last.stroke == h.stroke && self.earlier.is_none_or(|e| e.hit_cycle < s) {
+        if let Some(last) = self.last.clone().filter(|l| self.hit_span(l).1 >= sp.deadline) {
+            let before = self.earlier.as_ref().is_none_or(|e| self.hit_span(e).1 < sp.deadline);
+            if last.stroke == h.stroke && before && self.hit_span(&last).0 > sp.deadline {
                 replaces = Some(last);
             } else {
                 // another stroke's hit is still to come: spliced into its return leg as a hit
                 return Ok(self.replan(h, arrival, counters));
             }
-        } else if self.last.is_some_and(|l| l.stroke == h.stroke) {
+        } else if self.last.as_ref().is_some_and(|l| l.stroke == h.stroke) {
             return Ok(reject(arrival));
         }
-        // Continuous with what runs: the stroke starts from the state scheduled at its cycle.
-        let from = schedule.state_at(s);
+        // Continuous with what runs: the stroke starts from the state scheduled at its splice.
+        let Some(from) = self.state_of(&sp) else {
+            return Ok(reject(arrival));
+        };
         let Ok(start) = st.traj.state(0.0) else {
             return Err(StrokeMiss::Discontinuous);
         };
@@ -468,21 +700,35 @@ impl Splicer {
         if !continuous {
             return Err(StrokeMiss::Discontinuous);
         }
-        if tl.present_cycle() >= s || (tl.time_of(s) - st.start).abs() > 0.25 * tl.period() {
+        if self.is_late(&sp) || (tl.time_of(sp.deadline) - st.start).abs() > 0.25 * tl.period() {
             return Err(StrokeMiss::Late);
         }
-        if !self.hand_over(s, &st.traj) {
+        let t_rel = (h.t_hit - st.start).max(0.0);
+        let n = (t_rel / tl.period()).round() as u64;
+        let Some(seq) = self.hand_over(&sp, &st.traj, Some(n)) else {
             Counters::bump(&counters.splices_late);
             return Err(StrokeMiss::Late);
-        }
+        };
         Counters::bump(&counters.splices);
-        counters.latency.record(tl.time_of(s) - arrival);
+        counters.latency.record(tl.time_of(sp.deadline) - arrival);
+        self.watch_hit(seq, h.t_hit);
         self.earlier = None;
+        let q_hit = st.traj.state(t_rel).map(|s| s.q).unwrap_or_default();
+        let twist = pose.map_or([0.0; 6], |pose| {
+            self.planner.tool_twist(&Hit {
+                pose,
+                twist: h.twist,
+                t: t_rel,
+            })
+        });
         self.last = Some(Committed {
             id: h.id,
             stroke: h.stroke,
             t_hit: h.t_hit,
-            hit_cycle: s + ((h.t_hit - st.start) / tl.period()).round().max(0.0) as u64,
+            hit: (0..sp.skips.len()).map(|c| sp.start(c) + n).collect(),
+            skips: sp.skips.clone(),
+            q_hit,
+            twist,
         });
         let elapsed = controller_time() - arrival;
         counters
@@ -520,17 +766,16 @@ pub fn run_planner(
     let mut pending: VecDeque<Inbound> = VecDeque::with_capacity(64);
     while !stop.load(Ordering::Relaxed) {
         let started = splicer.start(counters);
+        if started {
+            splicer.resync(counters);
+            splicer.check_hits(counters);
+        }
         let msg = match pending.pop_front() {
             Some(m) => Ok(m),
             None => inbound.recv_timeout(Duration::from_millis(5)),
         };
         let now = controller_time();
-        let commanded = |sp: &Splicer| {
-            let tl = &sp.timeline;
-            sp.schedule()
-                .map(|s| s.state_at(tl.present_cycle()))
-                .unwrap_or_else(|| JointState::rest(sp.ready()))
-        };
+        let commanded = |sp: &Splicer| sp.commanded().unwrap_or_else(|| JointState::rest(sp.ready()));
         let mut command = None;
         match msg {
             Ok(Inbound::Hit { hit, arrival }) => {

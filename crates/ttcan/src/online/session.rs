@@ -133,7 +133,6 @@ impl Session {
         }
         let mut c = self.counters.snapshot();
         c.splices_late += self.timeline.late_applied();
-        c.paused_cycles = self.timeline.paused();
         c
     }
 }

@@ -198,6 +198,19 @@ impl JointTrajectory {
         JointTrajectory { dof, knots, powers }
     }
 
+    /// This trajectory, then `next` (m or rad, s; same joints) from this one's end: its time 0 at
+    /// this one's duration. An error when the joint counts differ.
+    pub fn then(self, next: JointTrajectory) -> Result<Self> {
+        if next.dof() != self.dof() {
+            return Err(Error::shape(
+                "next",
+                format!("{} joints", self.dof()),
+                format!("{}", next.dof()),
+            ));
+        }
+        Ok(self.append(next))
+    }
+
     /// Appends the segments of `next` (same dof) after this trajectory's end.
     pub(crate) fn append(mut self, next: JointTrajectory) -> Self {
         let end = self.duration();
