@@ -208,6 +208,41 @@ def test_update_through_the_bounce_follows_the_true_ball():
     assert np.asarray(up["covariance"]).shape == (9, 9)
 
 
+def test_update_with_the_bounce_kick_follows_a_ball_that_bounces_off_the_model():
+    # The true ball leaves the table (on the robot's half) 0.1 m/s faster in x than the model's
+    # bounce says: the plain update (the model's bounce exactly) cannot follow it, the kick
+    # (update_kick, the rally's correction) does; a ball that bounces as the model says keeps the
+    # plain update (the χ² gate).
+    s = ball.state([1.2, 0.1, 0.35], [-6.0, -0.2, 0.9], [0.0, 60.0, 0.0])
+    t = 0.02 + 0.005 * np.arange(41)
+    p = ball.predict(s, t)
+    _, events = ball.predict(s, [1.0], events=True)
+    bounce = next(e for e in events if e["kind"] == "table")
+    assert bounce["before"][1] < 0  # on the robot's half
+    after = np.array(bounce["after"], dtype=float)
+    kicked = after.copy()
+    kicked[4] += 0.1
+    t_new = np.arange(t[-1] + 0.005, after[0] + 0.06, 0.005)
+    before = t_new < after[0]
+    p_new = np.vstack([ball.predict(s, t_new[before]), ball.predict(kicked, t_new[~before])])
+    plain = ball.update(t, p, t_new, p_new)
+    kick = ball.update(t, p, t_new, p_new, bounce_spread=ball.BOUNCE_SPREAD)
+    ahead = kick["state"][0] + 0.03
+    truth = ball.predict(kicked, [ahead])[0]
+    err_plain = np.linalg.norm(ball.predict(plain["state"], [ahead])[0] - truth)
+    err_kick = np.linalg.norm(ball.predict(kick["state"], [ahead])[0] - truth)
+    assert kick["bounced"] and err_kick < 1e-4 < 5e-3 < err_plain, (err_kick, err_plain)
+    assert kick["outliers"] == 0 and plain["outliers"] > 0
+    # The model's own bounce: the gate keeps the plain update.
+    p_model = ball.predict(s, t_new)
+    a = ball.update(t, p, t_new, p_model)
+    b = ball.update(t, p, t_new, p_model, bounce_spread=ball.BOUNCE_SPREAD)
+    np.testing.assert_array_equal(a["state"], b["state"])
+    for bad in ([0.3, 0.0, 0.05], [0.3, 0.3], [0.3, np.nan, 0.05]):
+        with pytest.raises(ttmanip.TtmanipError, match="bounce_spread"):
+            ball.update(t, p, t_new, p_new, bounce_spread=bad)
+
+
 def test_plan_correct_replans_near_the_first_hit_from_the_moving_stroke():
     incoming = ttmanip.rally(8, seed=0)["results"]["incoming"]
     s = next(b for b in incoming if ball.plan_return(b, 0.23, [0.9, 0.0])["status"] == "ok")

@@ -171,6 +171,37 @@ def test_info_shows_which_effort_limit_governs(capsys):
     assert "drive peak current governs" in out and "robot file governs" in out
 
 
+def test_gantry6_effective_velocity_limits_are_within_its_drives():
+    # The drive's largest speed min(ω_rated, 0.9·(0.95·U − R·I_nom)/k_t)/G (ttkin::speed, also
+    # ttcan::actuator's speed clamp), from the catalogue values of docs/drives.md: G, k_t (N·m/A),
+    # R (Ω), U (V), I_nom (A), rated motor speed (rpm).
+    g, kt, r, u_bus, i_nom, rpm = np.array(
+        [
+            [200, 0.45, 2.3, 325, 2.8, 6000],
+            [200, 0.45, 2.3, 325, 2.8, 6000],
+            [50, 60.3e-3, 1.16, 48, 3.0, 12000],
+            [50, 60.3e-3, 1.16, 48, 3.0, 12000],
+            [30, 25.9e-3, 0.611, 24, 3.44, 12000],
+            [30, 43.9e-3, 2.32, 24, 1.2, 14000],
+        ]
+    ).T
+    drive = np.minimum(rpm * np.pi / 30, 0.9 * (0.95 * u_bus - r * i_nom) / kt) / g
+    np.testing.assert_allclose(GANTRY.drive_velocity_limits, drive, rtol=1e-12)
+    eff = GANTRY.effective_velocity_limits
+    np.testing.assert_allclose(eff, np.minimum(GANTRY.velocity_limits, drive), rtol=1e-12)
+    # θ6's RE 25 on 24 V behind 30:1 reaches ≈ 13.6 rad/s, below the file's 20 rad/s.
+    assert 13 < eff[5] < 14 and GANTRY.velocity_limit_sources[5] == "drive"
+    assert GANTRY.velocity_limit_sources[:5] == ["robot file"] * 5
+
+
+def test_info_shows_which_velocity_limit_governs(capsys):
+    from ttmanip.cli import main
+
+    assert main(["info", "gantry6"]) == 0
+    out = capsys.readouterr().out
+    assert "(drive governs)" in out and "13.6" in out
+
+
 def test_ok_plans_track_within_the_racket_bound_in_the_coupled_simulation():
     checked, worst = 0, np.zeros(3)
     rng = np.random.default_rng(7)

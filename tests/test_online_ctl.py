@@ -31,6 +31,10 @@ def _free_port() -> int:
     return port
 
 
+# joint band (rad or m) the virtual drives hunt in at rest: a few encoder counts
+HUNT = 3e-4
+
+
 def _telemetry(link: Link, timeout: float) -> list[dict]:
     out, until = [], time.monotonic() + timeout
     while time.monotonic() < until:
@@ -61,7 +65,7 @@ def test_bad_input_hits_and_planning_load_through_link(tmp_path):
                 "--reply",
                 f"{reply[0]}:{reply[1]}",
                 "--max-seconds",
-                "30",
+                "90",  # ended by SIGINT below; on a loaded machine the steps take tens of seconds
                 "--stats",
                 str(stats),
             ],
@@ -77,13 +81,20 @@ def test_bad_input_hits_and_planning_load_through_link(tmp_path):
                 tel = [m for m in _telemetry(link, 0.2) if m.get("kind") == "telemetry"]
                 at_ready = bool(tel) and np.allclose(np.asarray(tel[-1]["q"])[:6], ready, atol=2e-3)
             assert at_ready, "the robot did not reach the ready pose"
-            # settled: the drives' last motion (a few 1e-4 after the approach) has died out
-            settled = False
+            # settled: the approach's motion has died out. At rest the virtual drives hunt by a few
+            # encoder counts (their position loop's integral against Coulomb friction: steps of
+            # about 8e-5 every few hundred ms, each joint at its own phase), so "at rest" is a band
+            # of HUNT around the window's mean, not a constant; any stroke moves by far more.
+            # (Its own deadline: a loaded machine may take most of the first one to reach ready,
+            # and a 0.2 s window may bring no telemetry at all.)
+            settled, before = False, None
+            until = time.monotonic() + 20
             while time.monotonic() < until and not settled:
                 tel = [m for m in _telemetry(link, 0.2) if m.get("kind") == "telemetry"]
                 q = np.asarray([m["q"][:6] for m in tel])
-                settled = len(q) > 1 and np.ptp(q, axis=0).max() < 1e-5
-            before = np.asarray(tel[-1]["q"])[:6]
+                settled = len(q) > 1 and np.ptp(q, axis=0).max() < HUNT
+                before = q.mean(axis=0) if settled else before
+            assert settled, "the robot did not settle at ready"
             now = time.monotonic()
             hit = ttmanip.DEMO_HIT
             past = _t.wire_hit(7, 7, now - 0.1, hit.pose, hit.twist, 100, now)
@@ -104,8 +115,8 @@ def test_bad_input_hits_and_planning_load_through_link(tmp_path):
             got = _telemetry(link, 0.5)
             statuses = [m for m in got if m.get("kind") == "status"]
             assert [(s["id"], s["status"]) for s in statuses] == [(7, "Rejected")], statuses
-            after = np.asarray([m for m in got if m.get("kind") == "telemetry"][-1]["q"])[:6]
-            assert np.allclose(after, before, atol=1e-4), (before, after)
+            after = np.asarray([m["q"][:6] for m in got if m.get("kind") == "telemetry"])
+            assert len(after) > 1 and np.abs(after - before).max() < HUNT, (before, after)
             # a hit, accepted
             link._seq = iter(range(1000, 10**9))
             link.hit(hit, t_hit=time.monotonic() + 0.8, id=20, stroke=20)

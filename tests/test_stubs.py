@@ -386,6 +386,7 @@ def _returned(tmp: Path) -> dict[str, Callable[[], object]]:
         "hit_check": lambda: t.hit_check(hit_pose, np.zeros(6), 0.3),
         "real_array": lambda: t.real_array([1, 2], "x"),
         "MAX_RALLY_BALLS": lambda: t.MAX_RALLY_BALLS,
+        "BOUNCE_SPREAD": lambda: t.BOUNCE_SPREAD,
         "EARTH_GRAVITY": lambda: t.EARTH_GRAVITY,
         # ball
         "ball_table": t.ball_table,

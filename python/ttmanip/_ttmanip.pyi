@@ -129,6 +129,15 @@ class Robot:
     @property
     def effort_limit_sources(self) -> list[str]:
         """Which limit governs each joint at rest: "robot file", "drive peak current", "drive voltage"."""
+    @property
+    def drive_velocity_limits(self) -> NDArray[np.float64]:
+        """(n,) the drive's largest speed min(ω_rated, 0.9·(0.95·U − R·I_cont)/k_t)/G (inf: no data)."""
+    @property
+    def effective_velocity_limits(self) -> NDArray[np.float64]:
+        """(n,) the smaller of velocity_limits and drive_velocity_limits: what the planners use."""
+    @property
+    def velocity_limit_sources(self) -> list[str]:
+        """Which limit governs each joint's speed: "robot file", "drive" or "none"."""
     def effort_limits_at(self, qd: ArrayLike) -> NDArray[np.float64]:
         """Effective effort limits at joint speeds qd: (n,) or (N, n); they fall with speed."""
     @property
@@ -835,6 +844,7 @@ def real_array(obj: ArrayLike, what: str) -> _F:
     """``obj`` as a float64 array of the same shape; complex, bool, string or object data is refused."""
 
 MAX_RALLY_BALLS: int
+BOUNCE_SPREAD: list[float]
 EARTH_GRAVITY: list[float]
 
 # issue 13: ball flight, estimation, prediction, hit planning, rally (ttkin::ball)
@@ -902,7 +912,12 @@ def ball_plan_correct(
     model: str = "default",
 ) -> dict[str, Any]: ...
 def ball_update(
-    t: ArrayLike, p: ArrayLike, t_new: ArrayLike, p_new: ArrayLike, model: str = "default"
+    t: ArrayLike,
+    p: ArrayLike,
+    t_new: ArrayLike,
+    p_new: ArrayLike,
+    model: str = "default",
+    bounce_spread: ArrayLike | None = None,
 ) -> dict[str, Any]: ...
 def ball_rally(
     n: int,

@@ -268,14 +268,28 @@ def racket_hit(
     return racket_impact(state, normal, velocity, model)
 
 
+BOUNCE_SPREAD: tuple[float, float, float] = tuple(_t.BOUNCE_SPREAD)
+"""The rally's prior spread (m/s, world x, y, z) of the ball's own bounce kick (``update``)."""
+
+
 def update(
-    t: ArrayLike, p: ArrayLike, t_new: ArrayLike, p_new: ArrayLike, model: BallModel | str = "default"
+    t: ArrayLike,
+    p: ArrayLike,
+    t_new: ArrayLike,
+    p_new: ArrayLike,
+    model: BallModel | str = "default",
+    bounce_spread: ArrayLike | None = None,
 ) -> dict:
     """The estimate of observations ``p`` (N, 3) at ``t`` (N,) updated with later observations
     ``p_new`` (M, 3) at ``t_new`` (M,), through a bounce between them (``ttkin::ball::update``):
     ``state`` (10,) at the last new observation, ``at_prior`` (10,), ``covariance`` (9, 9) of
-    [p; v; ω] at the prior's time, ``used``, ``outliers``, ``bounced``."""
-    return _t.ball_update(t, p, t_new, p_new, _model(model))
+    [p; v; ω] at the prior's time, ``used``, ``outliers``, ``bounced``.
+
+    ``bounce_spread`` (3,) (m/s, each > 0; e.g. :data:`BOUNCE_SPREAD`): the ball's own bounce, as
+    the rally's correction makes it (``update_kick``): a velocity kick at the bounce is fitted
+    with that prior spread and kept only when the observations after the bounce call for it (a
+    χ² gate). None: the plain update, the model's bounce exactly."""
+    return _t.ball_update(t, p, t_new, p_new, _model(model), bounce_spread)
 
 
 def plan_correct(

@@ -507,12 +507,16 @@ def _info(args: argparse.Namespace) -> int:
     drives = _actuators(robot)
     drive_peak, effective = robot.drive_effort_limits, robot.effective_effort_limits
     sources = robot.effort_limit_sources
+    drive_v, effective_v = robot.drive_velocity_limits, robot.effective_velocity_limits
+    v_sources = robot.velocity_limit_sources
     columns = zip(robot.joint_names, robot.joint_types, robot.limits, strict=True)
     for j, (name, kind, (lo, hi)) in enumerate(columns):
         v, a, e = robot.velocity_limits[j], robot.acceleration_limits[j], robot.effort_limits[j]
         d, eff, src = drive_peak[j], effective[j], sources[j]
+        dv, ev, vsrc = drive_v[j], effective_v[j], v_sources[j]
         print(
-            f"  {name:10s} {kind:9s} [{lo: .4f}, {hi: .4f}]  v {v:g}  a {a:g}  effort {e:g}"
+            f"  {name:10s} {kind:9s} [{lo: .4f}, {hi: .4f}]  v {v:g}  drive speed {dv:.4g}"
+            f"  -> {ev:.4g} ({vsrc} governs)  a {a:g}  effort {e:g}"
             f"  drive peak {d:.4g}  -> {eff:.4g} ({src} governs)"
         )
         if drives is not None:
@@ -524,6 +528,9 @@ def _info(args: argparse.Namespace) -> int:
                 "lower": lo,
                 "upper": hi,
                 "velocity": v,
+                "drive_velocity": dv,
+                "effective_velocity": ev,
+                "velocity_source": vsrc,
                 "acceleration": a,
                 "effort": e,
                 "drive_effort": d,

@@ -17,7 +17,8 @@
 //! | all five thermal values | the RE 25 class thermal model ([`ThermalModel::maxon_re25`]); some but not all is an error naming the missing one |
 //!
 //! Always derived (not datasheet values): the over-current trip 5/3 of the peak current; the
-//! largest output speed min(motor limit, 0.9·(V_bus d_max − R I_nom)/K_e)/G; overspeed at 1.2× it;
+//! largest output speed min(motor limit, 0.9·(V_bus d_max − R I_nom)/K_e)/G
+//! ([`ttkin::speed::drive_speed_limit`], the planners' drive speed: one formula); overspeed at 1.2× it;
 //! the following-error limit 10 mrad + 5 ms × speed; bus over/under-voltage at 125 % / 70 %.
 //!
 //! Armature: the motor model holds the drive's rotor inertia and the load is the caller's
@@ -70,7 +71,7 @@ pub fn axis_config(joint: &Joint, link_inertia: f64) -> Result<AxisConfig> {
     let kt = drive.torque_constant.unwrap_or(re25.torque_constant);
     let s = kt / re25.torque_constant;
     let speed_limit = joint.limits().velocity.unwrap_or(10.0).abs();
-    let max_duty = 0.95;
+    let max_duty = ttkin::speed::DRIVE_MAX_DUTY;
     let bus_voltage = drive.bus_voltage.unwrap_or_else(|| {
         let emf = kt * g * speed_limit;
         [24.0, 48.0, 325.0]
@@ -109,8 +110,15 @@ pub fn axis_config(joint: &Joint, link_inertia: f64) -> Result<AxisConfig> {
     c.continuous_current = drive.nominal_current.unwrap_or(c.peak_current / 3.0);
     c.overcurrent_trip = c.peak_current * 5.0 / 3.0;
     c.thermal = thermal_model(name, drive)?;
-    let bus_limit = 0.9 * (model.max_voltage() - model.motor.resistance * c.continuous_current) / kt;
-    c.max_speed = drive.max_motor_speed.map_or(bus_limit, |w| w.min(bus_limit)) / g;
+    // ttkin's formula, the planners' velocity limit (`ttkin::speed`), on the filled-in values.
+    c.max_speed = ttkin::speed::drive_speed_limit(
+        g,
+        kt,
+        model.motor.resistance,
+        bus_voltage,
+        c.continuous_current,
+        drive.max_motor_speed,
+    );
     c.following_error_limit = 0.01;
     c.following_error_per_speed = 0.005;
     c.overspeed_limit = 1.2 * c.max_speed;

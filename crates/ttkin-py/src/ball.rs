@@ -416,10 +416,13 @@ fn ball_racket_impact<'py>(
 }
 
 /// The estimate from the observations `t` (N,), `p` (N, 3) updated with later ones `t_new`
-/// (M,), `p_new` (M, 3), through a bounce between them (`ttkin::ball::update`).
+/// (M,), `p_new` (M, 3), through a bounce between them (`ttkin::ball::update::update_kick`):
+/// with `bounce_spread` (3,) (m/s, world x, y, z, each > 0) the bounce's velocity kick is
+/// fitted too and kept past the χ² gate, as the rally's correction does; None: the plain update.
 #[ttkin_py_guard::guarded]
 #[pyfunction]
-#[pyo3(signature = (t, p, t_new, p_new, model = "default"))]
+#[pyo3(signature = (t, p, t_new, p_new, model = "default", bounce_spread = None))]
+#[allow(clippy::too_many_arguments)]
 fn ball_update<'py>(
     py: Python<'py>,
     t: &Bound<'py, PyAny>,
@@ -427,14 +430,16 @@ fn ball_update<'py>(
     t_new: &Bound<'py, PyAny>,
     p_new: &Bound<'py, PyAny>,
     model: &str,
+    bounce_spread: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let (times, obs) = observations(t, p, ["t", "p"], "N")?;
     let (times_new, obs_new) = observations(t_new, p_new, ["t_new", "p_new"], "M")?;
+    let spread = bounce_spread.map(|s| vec3(s, "bounce_spread")).transpose()?;
     let opts = estimate_options(model)?;
     let up = py
         .detach(|| {
             let est = estimate(&times, &obs, &opts)?;
-            ttkin::ball::update::update(&est, &times_new, &obs_new, &opts)
+            ttkin::ball::update::update_kick(&est, &times_new, &obs_new, &opts, spread)
         })
         .map_err(ttkin::Error::from)
         .py()?;
@@ -632,6 +637,8 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ball_update, m)?)?;
     m.add_function(wrap_pyfunction!(ball_plan_correct, m)?)?;
     m.add("MAX_RALLY_BALLS", rally::MAX_BALLS)?;
+    // the rally's prior spread of the bounce's velocity kick (m/s, world x, y, z)
+    m.add("BOUNCE_SPREAD", ttkin::ball::update::BOUNCE_SPREAD.to_vec())?;
     m.add_function(wrap_pyfunction!(ball_table, m)?)?;
     m.add_function(wrap_pyfunction!(ball_table_check, m)?)?;
     m.add_function(wrap_pyfunction!(ball_on_opponent_half, m)?)?;

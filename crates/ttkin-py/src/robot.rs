@@ -299,6 +299,12 @@ array_getters!(PyRobot, |r| {
     /// (n,) effective effort limits at standstill: the smaller of `effort_limits` and
     /// `drive_effort_limits` (N or N·m; inf where neither); the limit the planners use.
     effective_effort_limits => ttkin::effort::EffortLimits::of(&r.chain).at_rest(), [r.chain.dof()];
+    /// (n,) the largest speed each joint's drive delivers, min(ω_motor,max, 0.9·(U·d_max −
+    /// R·I_cont)/k_t)/G (m/s or rad/s; inf where the drive data lacks it).
+    drive_velocity_limits => ttkin::speed::drive_velocity_limits(&r.chain), [r.chain.dof()];
+    /// (n,) effective speed limits: the smaller of `velocity_limits` and `drive_velocity_limits`
+    /// (m/s or rad/s; inf where neither); the limit the planners use.
+    effective_velocity_limits => ttkin::speed::effective_velocity_limits(&r.chain), [r.chain.dof()];
 });
 
 value_getters!(PyRobot, |r| {
@@ -311,6 +317,8 @@ value_getters!(PyRobot, |r| {
     /// Which limit governs each joint's effective effort limit at standstill: "robot file",
     /// "drive peak current", "drive voltage" or "none".
     effort_limit_sources: Vec<&'static str> => ttkin::effort::EffortLimits::of(&r.chain).sources_at_rest();
+    /// Which limit governs each joint's effective speed limit: "robot file", "drive" or "none".
+    velocity_limit_sources: Vec<&'static str> => ttkin::speed::velocity_limit_sources(&r.chain);
     /// Joint types, "revolute" or "prismatic".
     joint_types: Vec<&'static str> => r.chain.joint_type_names();
 });

@@ -25,6 +25,7 @@ pub mod joint;
 pub mod linalg;
 pub mod redundancy;
 pub mod robots;
+pub mod speed;
 pub mod tables;
 pub mod task;
 pub mod traj;

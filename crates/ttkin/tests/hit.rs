@@ -107,3 +107,53 @@ fn plans_match_the_stored_ones() {
     }
     assert_eq!(checked, 150);
 }
+
+#[test]
+fn ok_plans_stay_within_the_speed_the_drives_deliver() {
+    // Issue 28, "one truth for what a joint can do", for speed: gantry6's θ6 file limit (20 rad/s)
+    // is above what its drive reaches (ttkin::speed, ≈ 13.6 rad/s), so the planner must keep every
+    // `ok` stroke (hit leg and return) within the drive's speed, sampled at 10 kHz.
+    let chain = ttkin::robots::gantry6();
+    let drive = ttkin::speed::drive_velocity_limits(&chain);
+    assert!(drive[5] < chain.joints()[5].limits().velocity.unwrap(), "{drive:?}");
+    let planner = HitPlanner::new(&chain, HitOptions::default()).unwrap();
+    let (mut ok, mut fast) = (0, 0);
+    let (mut qd, mut q, mut qdd) = ([0.0; 6], [0.0; 6], [0.0; 6]);
+    for name in gantry_hits::SETS {
+        let hits = gantry_hits::set_hits(name);
+        let state = gantry_hits::set(name).1;
+        for hit in hits.iter().step_by(4) {
+            let p = planner.plan(hit, state.as_ref(), None).unwrap();
+            if !p.ok() {
+                continue;
+            }
+            ok += 1;
+            let t = p.trajectory.as_ref().unwrap();
+            let steps = (t.duration() * 1e4).ceil() as usize;
+            let mut peak = [0.0f64; 6];
+            for k in 0..=steps {
+                t.sample((k as f64 * 1e-4).min(t.duration()), &mut q, &mut qd, &mut qdd)
+                    .unwrap();
+                for j in 0..6 {
+                    peak[j] = peak[j].max(qd[j].abs());
+                }
+            }
+            for j in 0..6 {
+                assert!(
+                    peak[j] <= drive[j] * (1.0 + 1e-9),
+                    "{name}: joint {j} at {} > {}",
+                    peak[j],
+                    drive[j]
+                );
+            }
+            if peak[5] > 0.5 * drive[5] {
+                fast += 1;
+            }
+        }
+    }
+    // Enough plans, some of them driving θ6 fast, for the bound to mean something.
+    assert!(
+        ok > 200 && fast > 0,
+        "{ok} ok plans, {fast} with θ6 above half its drive speed"
+    );
+}

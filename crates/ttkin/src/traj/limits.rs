@@ -45,7 +45,9 @@ impl KinematicLimits {
     }
 
     /// The limits of a chain's joints (absent velocity or acceleration limits are +∞) with the
-    /// given jerk limits (+∞ when `None`; robot files carry none).
+    /// given jerk limits (+∞ when `None`; robot files carry none). The velocity limits are the
+    /// effective ones ([`crate::speed::effective_velocity_limits`]): the robot file's or the
+    /// drive's largest speed, the smaller.
     pub fn from_chain(chain: &Chain, jerk: Option<&[f64]>) -> Result<Self> {
         let lim = chain.limits();
         let n = lim.len();
@@ -56,7 +58,7 @@ impl KinematicLimits {
         let l = KinematicLimits {
             lower: lim.iter().map(|l| l.lower).collect(),
             upper: lim.iter().map(|l| l.upper).collect(),
-            velocity: lim.iter().map(|l| l.velocity.unwrap_or(f64::INFINITY)).collect(),
+            velocity: crate::speed::effective_velocity_limits(chain),
             acceleration: lim.iter().map(|l| l.acceleration.unwrap_or(f64::INFINITY)).collect(),
             jerk,
         };
