@@ -6,7 +6,9 @@
 //! why the drive simulation refused or faulted (for a fault: where each faulted axis's following
 //! error peaked, the reference and the currents (`TRACE_FAULTS=1`: their whole record); the failed
 //! balls' indices; `IDEAL=1`: exact
-//! execution instead; `START=k`: balls k..k+N).
+//! execution instead; `START=k`: balls k..k+N; `ROLLS`, `CANDIDATES`, `MAX_CANDIDATES`,
+//! `FALLBACK_ATTEMPTS`, `CONTACT_OFFSET`, `RETURN_TIMES`: the ball planner's settings, for
+//! experiments).
 use std::collections::BTreeMap;
 use std::sync::Mutex;
 use ttcan::coupled::{CoupledOptions, CoupledSim, SETPOINT_HZ};
@@ -125,21 +127,61 @@ fn counts(out: &[BallOutcome]) -> (usize, usize, BTreeMap<String, usize>) {
     (in_reach.len(), in_reach.iter().filter(|o| o.returned).count(), m)
 }
 
+/// Experiment settings of the ball planner from the environment (both worlds alike): `ROLLS`
+/// (degrees, comma-separated), `CANDIDATES`, `MAX_CANDIDATES`, `FALLBACK_ATTEMPTS`,
+/// `CONTACT_OFFSET` (m), `RETURN_TIMES` (three, s).
+fn tweak(p: &mut ttkin::ball::hitplan::ReturnPlanner) {
+    let list = |name: &str| -> Option<Vec<f64>> {
+        std::env::var(name)
+            .ok()
+            .map(|s| s.split(',').map(|x| x.trim().parse().expect(name)).collect())
+    };
+    if let Some(r) = list("ROLLS") {
+        p.rolls = r.iter().map(|d| d.to_radians()).collect();
+    }
+    if let Some(c) = list("CANDIDATES") {
+        p.candidates = c[0] as usize;
+    }
+    if let Some(c) = list("MAX_CANDIDATES") {
+        p.max_candidates = c[0] as usize;
+    }
+    if let Some(c) = list("FALLBACK_ATTEMPTS") {
+        p.fallback_attempts = c[0] as usize;
+    }
+    if let Some(c) = list("CONTACT_OFFSET") {
+        p.contact_offset = c[0];
+    }
+    if let Some(t) = list("RETURN_TIMES") {
+        p.return_times = [t[0], t[1], t[2]];
+    }
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let n: usize = args.get(1).map_or(1000, |a| a.parse().expect("N"));
     let seed: u64 = args.get(2).map_or(0, |a| a.parse().expect("SEED"));
-    let cfg = RallyConfig {
+    let mut cfg = RallyConfig {
         seed,
         paths: 0,
         ..RallyConfig::default()
     };
-    let matched = Rally::new(cfg).expect("rally");
-    let mismatched = Rally::new(RallyConfig {
+    // SECOND=s: a second correction s after the first, for experiments.
+    if let Ok(t) = std::env::var("SECOND") {
+        cfg.second_correction = t.parse().expect("SECOND");
+    }
+    // TARGET=x,y: the landing target (m, world), for experiments.
+    if let Ok(t) = std::env::var("TARGET") {
+        let v: Vec<f64> = t.split(',').map(|x| x.trim().parse().expect("TARGET")).collect();
+        cfg.target = [v[0], v[1]];
+    }
+    let mut matched = Rally::new(cfg).expect("rally");
+    let mut mismatched = Rally::new(RallyConfig {
         world: Some(WorldSpread::measured()),
         ..cfg
     })
     .expect("rally");
+    tweak(&mut matched.planner);
+    tweak(&mut mismatched.planner);
     let ex = Diagnosing {
         chain: matched.planner.chain().clone(),
         options: CoupledOptions::default(),

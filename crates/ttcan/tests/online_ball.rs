@@ -129,10 +129,14 @@ fn brain_makes_the_rally_decisions_on_the_rally_observations() {
                 let sent = (after.planned - before.planned) + (after.corrected - before.corrected);
                 assert_eq!(hits.len() as u64, sent);
                 assert_eq!(after.corrected - before.corrected, outcome.replans as u64, "ball {i}");
-                if hits.len() == 2 {
+                // (up to two corrections: the rally's second one, `second_correction`)
+                if hits.len() >= 2 {
                     corrected += 1;
-                    assert_eq!(hits[0].stroke, hits[1].stroke);
-                    assert_ne!(hits[0].id, hits[1].id);
+                    assert!(hits.len() <= 3, "ball {i}: {} hits", hits.len());
+                    for h in &hits[1..] {
+                        assert_eq!(hits[0].stroke, h.stroke);
+                        assert_ne!(hits[0].id, h.id);
+                    }
                 }
             }
             None => assert!(hits.is_empty(), "ball {i}: {} ({:?})", outcome.status, hits),

@@ -146,7 +146,7 @@ mod tests {
         let chain = crate::robots::gantry6();
         let v = effective_velocity_limits(&chain);
         // θ6: RE 25 on 24 V behind 30:1, R 2.32 Ω, I_nom 1.2 A.
-        let d = crate::robots::drives::gantry6()[5].clone();
+        let d = crate::robots::drives::gantry6()[5];
         let (kt, r) = (d.torque_constant.unwrap(), d.resistance.unwrap());
         let expect = 0.9 * (24.0 * 0.95 - r * d.nominal_current.unwrap()) / kt / 30.0;
         assert!((v[5] - expect).abs() < 1e-12, "{} vs {expect}", v[5]);
@@ -168,7 +168,7 @@ mod tests {
                 assert_eq!(effective_velocity_limits(&chain)[j], file);
             }
         }
-        let mut d = crate::robots::drives::gantry6()[5].clone();
+        let mut d = crate::robots::drives::gantry6()[5];
         d.torque_constant = None;
         d.max_motor_speed = Some(300.0);
         assert_eq!(drive_speed(&d), Some(10.0));

@@ -407,7 +407,8 @@ impl BallBrain {
                         out = Some(self.command(&hit, at));
                         self.ball.as_mut().expect("set above").hit = Some((now + hit.hit.t, *hit));
                     }
-                    None if !first => self.stats.no_hit += 1,
+                    // Counted once, at the last correction (a second may still come).
+                    None if !first && done => self.stats.no_hit += 1,
                     None => {}
                 }
             }

@@ -1,5 +1,5 @@
 //! The robot's decisions for one incoming ball, observation by observation: when to plan the
-//! first hit, from which estimate, when and how to correct it once after the bounce. The rally
+//! first hit, from which estimate, when and how to correct it after the bounce. The rally
 //! ([`super::rally`]) and the controller's ball mode (`ttcan::online::ball`) both drive this one
 //! state machine, so that the same observations give the same hits offline and at run time.
 //!
@@ -19,6 +19,9 @@
 //!   passes the correction time (with every frame delivered, the rally's choice exactly); when
 //!   frames are missing, the first observation past the correction time triggers it with the
 //!   observations before it.
+//! - **Second correction** (`second_correction` > 0; the rally's default 0.05 s): the same, that
+//!   long after the first correction's time, with every observation since the first estimate,
+//!   near the hit under way (the corrected one, else the first); skipped the same way.
 //!
 //! - **Speculation** (the controller's, never the rally's): a caller that cannot search within
 //!   its latency may make a decision's search a few observations ahead of it
@@ -47,12 +50,16 @@ pub struct DecideConfig {
     /// The camera's frame period (s): how the last observation before the correction time is
     /// recognised on arrival.
     pub frame_period: f64,
-    /// Time (s) after the predicted bounce at which the hit is corrected once; 0 for none.
+    /// Time (s) after the predicted bounce at which the hit is corrected; 0 for none.
     pub correction_delay: f64,
     /// Prior standard deviation (m/s, world x, y, z) of the ball's own bounce kick fitted by the
     /// correction's update ([`update_kick`], kept only where the observations call for it);
     /// `None`: the model's bounce. The rally's: [`super::update::BOUNCE_SPREAD`].
     pub bounce_spread: Option<[f64; 3]>,
+    /// Time (s) after the correction at which the hit is corrected a second time (the estimate
+    /// updated with every observation since the first estimate, the hit planned again near the
+    /// corrected one); 0 for none.
+    pub second_correction: f64,
 }
 
 /// What one observation led to.
@@ -86,8 +93,9 @@ pub enum Decision {
 enum Phase {
     /// Collecting observations for the first plan.
     Observing,
-    /// First plan made; the correction is due at this time (s; observation clock).
-    Correcting(f64),
+    /// First plan made; a correction is due at this time (s; observation clock); whether it is
+    /// the second.
+    Correcting(f64, bool),
     /// Nothing more to decide for this ball.
     Done,
 }
@@ -111,11 +119,20 @@ pub struct BallDecider {
     /// again from its own estimate instead of searching.
     held: Option<Speculation>,
     /// The decisions a speculation was made for (see [`BallDecider::speculation_due`]): bit 0
-    /// the first plan, bit 1 the correction.
+    /// the first plan, bit 1 the correction, bit 2 the second correction.
     speculated: u8,
     /// How the last decision used a held hit: `Some(true)` planned again from it, `Some(false)`
     /// it could not be and the decision searched in full, `None` no hit held.
     spec_used: Option<bool>,
+}
+
+/// The bit of [`BallDecider`]'s `speculated` for a correction: the first's or the second's.
+fn correction_bit(second: bool) -> u8 {
+    if second {
+        4
+    } else {
+        2
+    }
 }
 
 /// A hit decided ahead of the decision that will use it, from the observations a few frames
@@ -165,7 +182,7 @@ impl BallDecider {
         match self.phase {
             Phase::Done => false,
             Phase::Observing => self.times.len() + 1 >= self.cfg.window_frames,
-            Phase::Correcting(at) => t + 2.0 * self.cfg.frame_period > at,
+            Phase::Correcting(at, _) => t + 2.0 * self.cfg.frame_period > at,
         }
     }
 
@@ -191,8 +208,8 @@ impl BallDecider {
         match self.phase {
             Phase::Done => false,
             Phase::Observing => self.speculated & 1 == 0 && self.times.len() + frames >= self.cfg.window_frames,
-            Phase::Correcting(at) => {
-                self.speculated & 2 == 0
+            Phase::Correcting(at, second) => {
+                self.speculated & correction_bit(second) == 0
                     && self
                         .times
                         .last()
@@ -215,8 +232,8 @@ impl BallDecider {
                 self.speculated |= 1;
                 self.speculate_first(planner, now)
             }
-            Phase::Correcting(at) => {
-                self.speculated |= 2;
+            Phase::Correcting(at, second) => {
+                self.speculated |= correction_bit(second);
                 self.speculate_correction(planner, at, now, start)
             }
         };
@@ -293,15 +310,15 @@ impl BallDecider {
                 self.obs.push(position);
                 (self.times.len() >= self.cfg.window_frames).then(|| self.first_plan(planner, now))
             }
-            Phase::Correcting(at) => {
+            Phase::Correcting(at, second) => {
                 if t <= at {
                     self.times.push(t);
                     self.obs.push(position);
-                    (t + self.cfg.frame_period > at).then(|| self.correct(planner, at, now, commanded))
+                    (t + self.cfg.frame_period > at).then(|| self.correct(planner, at, second, now, commanded))
                 } else {
                     // The last frame before the correction time is missing: correct now with
                     // what came before it.
-                    let d = self.correct(planner, at, now, commanded);
+                    let d = self.correct(planner, at, second, now, commanded);
                     self.times.push(t);
                     self.obs.push(position);
                     Some(d)
@@ -346,7 +363,7 @@ impl BallDecider {
             if let Some(tb) = bounce_time(&planner.flight, &est.state) {
                 let at = tb + self.cfg.correction_delay;
                 if at >= *self.times.last().expect("observed") {
-                    self.phase = Phase::Correcting(at);
+                    self.phase = Phase::Correcting(at, false);
                 }
             }
         }
@@ -361,10 +378,15 @@ impl BallDecider {
         &mut self,
         planner: &ReturnPlanner,
         at: f64,
+        second: bool,
         now: f64,
         commanded: &dyn Fn(f64) -> JointState,
     ) -> Decision {
-        self.phase = Phase::Done;
+        self.phase = if !second && self.cfg.second_correction > 0.0 {
+            Phase::Correcting(at + self.cfg.second_correction, true)
+        } else {
+            Phase::Done
+        };
         let held = self.held.take().filter(|h| h.correction);
         let mut used = None;
         let hit = self.correction(planner, at, now, commanded, held, &mut used);
@@ -437,11 +459,9 @@ impl BallDecider {
     ) -> Option<ReturnHit> {
         *used = held.as_ref().map(|_| false);
         let est = self.estimate.as_ref()?;
-        if self
-            .first
-            .as_ref()
-            .is_some_and(|(_, t)| t - now <= CORRECTION_MIN_STROKE)
-        {
+        // The hit under way: the first plan's, or the first correction's at the second.
+        let current = self.last.as_ref().map(|(h, t, _)| (h, *t));
+        if current.is_some_and(|(_, t)| t - now <= CORRECTION_MIN_STROKE) {
             return None;
         }
         let mut replanner = planner.clone();
@@ -456,9 +476,9 @@ impl BallDecider {
             self.cfg.bounce_spread,
         )
         .ok()?;
-        // The stroke under way (the first hit's), else one from rest at ready; asked only then,
-        // as before any speculation (the rally's motion has no state without a first hit).
-        let start = match &self.first {
+        // The stroke under way (the hit's), else one from rest at ready; asked only then, as
+        // before any speculation (the rally's motion has no state without a hit).
+        let start = match current {
             Some(_) => commanded(now),
             None => JointState::rest(&planner.ready),
         };
@@ -469,8 +489,8 @@ impl BallDecider {
                 return Some(hit);
             }
         }
-        let plan = match &self.first {
-            Some((hit, t_prev)) => replanner.plan_near(&up.state, now, &start, up.bounced, hit, *t_prev),
+        let plan = match current {
+            Some((hit, t_prev)) => replanner.plan_near(&up.state, now, &start, up.bounced, hit, t_prev),
             None => replanner.plan_from(&up.state, now, self.cfg.target, &start, up.bounced),
         }
         .ok()?;

@@ -146,11 +146,11 @@ const FALLBACK_TARGETS: [[f64; 2]; 15] = [
 ];
 
 /// Indices into a list of `len` candidates in the order tried: `first` evenly spread, middle of
-/// the spread first (the likeliest to have the largest margin), then up to 12 evenly spread
+/// the spread first (the likeliest to have the largest margin), then up to `max` evenly spread
 /// (middle first), each index once.
-pub(super) fn candidate_order(len: usize, first: usize) -> Vec<usize> {
+pub(super) fn candidate_order(len: usize, first: usize, max: usize) -> Vec<usize> {
     let mut out: Vec<usize> = Vec::new();
-    for count in [first.min(len), len.min(12)] {
+    for count in [first.min(len), len.min(max.max(first))] {
         let mut spread: Vec<usize> = (0..count).collect();
         spread.sort_by_key(|&j| (2 * j + 1).abs_diff(count));
         for j in spread {

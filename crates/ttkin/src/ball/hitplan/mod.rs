@@ -6,7 +6,7 @@
 //!    clearing the net, the estimate's uncertainty) and every 10 ms sample inside the hitting volume ([`Reach`],
 //!    world frame; the same volume as the reachable region of [`super::reach`]), after the bounce
 //!    and at least `min_stroke_time` after `now`, is a candidate; `candidates` of them, evenly
-//!    spread, are tried (up to 12 when none of those is feasible). Each aims at the requested
+//!    spread, are tried (up to `max_candidates`, 40, when none of those is feasible). Each aims at the requested
 //!    target or, when no racket with the approximate normal toward it has IK (see
 //!    `roughly_placeable`), at the nearest fallback target on the opponent's half that has one; a
 //!    candidate with none is tried in full only when no other gives a hit, and then the other
@@ -77,8 +77,14 @@ use crate::traj::limits::KinematicLimits;
 use crate::traj::JointState;
 use nalgebra::{IsometryMatrix3, Translation3, Vector3};
 
-/// Most shooting solves for the fallback targets of a ball no candidate hit otherwise.
-const FALLBACK_ATTEMPTS: usize = 24;
+/// Most shooting solves for the fallback targets of a ball no candidate hit otherwise (24 before
+/// issue 28's seventh stop; 60 with `MAX_CANDIDATES` 40 returned 7 more of 906 in-reach balls of
+/// seed 0's matched rally, docs/ball.md).
+const FALLBACK_ATTEMPTS: usize = 60;
+
+/// Most candidates tried when none of the first `candidates` is feasible (12 before issue 28's
+/// seventh stop, docs/ball.md).
+const MAX_CANDIDATES: usize = 40;
 
 /// Why a ball got no return, or that it got one: the ball side's outcome. The robot side's
 /// statuses are [`crate::hit::HitStatus`]; a ball with hit points but no feasible robot hit is `Infeasible`.
@@ -171,8 +177,15 @@ pub struct ReturnPlanner {
     pub flight: Flight,
     /// Shortest stroke (s) between planning and hitting.
     pub min_stroke_time: f64,
-    /// Candidates tried first (evenly spread); all of them (up to 12) when none of these is feasible.
+    /// Candidates tried first (evenly spread); all of them (up to `max_candidates`) when none of
+    /// these is feasible.
     pub candidates: usize,
+    /// Most candidates (evenly spread) tried when none of the first `candidates` is feasible
+    /// (`MAX_CANDIDATES`, 40).
+    pub max_candidates: usize,
+    /// Most shooting solves for the other landing targets of a ball no candidate hit otherwise
+    /// (`FALLBACK_ATTEMPTS`, 60).
+    pub fallback_attempts: usize,
     /// How far (m) beyond the hitting volume the planner still looks for hits, so that a ball whose
     /// estimate lies just outside the box is still tried (IK decides).
     pub search_margin: f64,
@@ -215,6 +228,8 @@ impl ReturnPlanner {
             flight: Flight { step: 0.01, ..flight },
             min_stroke_time: 0.12,
             candidates: 3,
+            max_candidates: MAX_CANDIDATES,
+            fallback_attempts: FALLBACK_ATTEMPTS,
             search_margin: 0.03,
             return_times: [0.8, 0.55, 1.05],
             good_margin: 0.25,
@@ -326,7 +341,7 @@ impl ReturnPlanner {
 
     /// The search of [`Self::plan_from`] over the candidate states `list` into `search`.
     fn search_list(&self, list: &[BallState], now: f64, target: [f64; 2], start: &JointState, search: &mut Search) {
-        let order = candidate_order(list.len(), self.candidates.max(1));
+        let order = candidate_order(list.len(), self.candidates.max(1), self.max_candidates);
         let first = self.candidates.max(1).min(list.len());
         let targets = self.targets(target);
         // Candidates that fail the cheap placement test for every target are skipped, and tried
@@ -368,7 +383,7 @@ impl ReturnPlanner {
         }
         // Still nothing: the other placeable targets of each candidate (another face normal, other
         // joint positions and velocities at the hit), at most `FALLBACK_ATTEMPTS` shooting solves.
-        let mut budget = FALLBACK_ATTEMPTS;
+        let mut budget = self.fallback_attempts;
         'fallback: for (&i, &tried_goal) in order.iter().zip(&first_goal) {
             if search.best.is_some() || search.deadline.abandoned() {
                 break;
