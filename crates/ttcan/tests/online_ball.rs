@@ -22,14 +22,21 @@ fn truth() -> Flight {
     }
 }
 
-/// The brain of the rally `cfg` on the rally's own clock (offset 0), budget wide open.
+/// The brain of the rally `cfg` on the rally's own clock (offset 0), budget wide open, each
+/// decision searched when its observation comes (as the rally does).
 fn brain(pl: &ReturnPlanner, cfg: &RallyConfig) -> BallBrain {
+    speculating_brain(pl, cfg, 0)
+}
+
+/// [`brain`] with each decision's search made `frames` observations ahead of it.
+fn speculating_brain(pl: &ReturnPlanner, cfg: &RallyConfig, frames: usize) -> BallBrain {
     BallBrain::with_planner(
         pl.clone(),
         BallBrainConfig {
             decide: DecideConfig::of(cfg),
             clock: ClockRelation::Offset(0.0),
             latency_budget: 1.0,
+            speculate_frames: frames,
             ..BallBrainConfig::default()
         },
     )
@@ -143,6 +150,43 @@ fn brain_makes_the_rally_decisions_on_the_rally_observations() {
     );
     // A new ball id starts a new stroke.
     assert_eq!(b.stats().stale, 0);
+}
+
+#[test]
+fn a_speculating_brain_decides_from_the_hits_it_found_ahead() {
+    let pl = planner();
+    let truth = truth();
+    let region = ReachRegion::new(pl.chain(), pl.placement, pl.ready.clone(), truth.model.radius).unwrap();
+    let cfg = RallyConfig::default();
+    let mut b = speculating_brain(&pl, &cfg, 3);
+    let mut agree = 0;
+    for i in 0..10u64 {
+        let outcome = rally::play(&pl, &region, &truth, &cfg, i);
+        let hits = feed(&pl, &cfg, &mut b, i, 200 + i as u32);
+        agree += (hits.is_empty() == outcome.planned.is_none()) as u32;
+        if let (Some((ball, _)), Some(last)) = (outcome.planned, hits.last()) {
+            // found ahead and planned again: the rally's hit time but for another candidate
+            assert!(
+                (last.t_hit - ball.t).abs() < 0.05,
+                "ball {i}: {} vs {}",
+                last.t_hit,
+                ball.t
+            );
+        }
+        b.tick(1e3, &JointState::rest(&pl.ready));
+    }
+    let s = b.stats();
+    // Every decision after a search ahead counted one way or the other; most used its hit.
+    let decisions = s.planned + s.corrected;
+    assert!(s.speculated >= s.planned && s.planned > 0, "{s:?}");
+    assert!(s.speculation_used + s.speculation_unused <= s.speculated, "{s:?}");
+    assert!(s.speculation_used * 10 >= decisions * 7, "{s:?}");
+    assert!(agree >= 8, "{agree} of 10 balls hit or not as the rally");
+    // Without speculation nothing is counted.
+    let mut plain = brain(&pl, &cfg);
+    feed(&pl, &cfg, &mut plain, 0, 1);
+    let p = plain.stats();
+    assert_eq!((p.speculated, p.speculation_used, p.speculation_unused), (0, 0, 0));
 }
 
 #[test]

@@ -64,12 +64,18 @@ pub struct BallBrainConfig {
     pub lost_after: f64,
     /// Time (s) after a hit at which the robot is sent back to ready.
     pub ready_after: f64,
+    /// Observations ahead of each decision at which its search is made
+    /// ([`BallDecider::speculate`]), so that the deciding observation only plans that hit again
+    /// (a fraction of the search, within the splice lead); 0: every decision searches when its
+    /// observation comes, as the offline rally does.
+    pub speculate_frames: usize,
 }
 
 impl Default for BallBrainConfig {
     /// The rally's rules; the offset estimated from the send times over 2 s at 200 Hz; a 30 ms
     /// budget (the rally's camera delivers 10 ms after the exposure); lost after 50 ms of
-    /// silence; ready 60 ms after the hit (the rally looks for the contact up to then).
+    /// silence; ready 60 ms after the hit (the rally looks for the contact up to then); each
+    /// decision's search made 3 observations (15 ms at 200 Hz) ahead of it.
     fn default() -> Self {
         BallBrainConfig {
             decide: DecideConfig::default(),
@@ -78,6 +84,7 @@ impl Default for BallBrainConfig {
             latency_budget: 0.030,
             lost_after: 0.050,
             ready_after: 0.060,
+            speculate_frames: 3,
         }
     }
 }
@@ -111,6 +118,14 @@ pub struct BallStats {
     /// Strokes ready after their splice cycle whose hit was planned again, without a search, from
     /// a newer observation ([`Brain::refine`]).
     pub refined: u64,
+    /// Searches made ahead of a decision ([`BallBrainConfig::speculate_frames`]).
+    pub speculated: u64,
+    /// Decisions (first plans and corrections) that planned the hit found ahead again instead
+    /// of searching.
+    pub speculation_used: u64,
+    /// Decisions with a hit found ahead that could not use it (not feasible from the decision's
+    /// estimate and state, or no correction made) and searched as without one.
+    pub speculation_unused: u64,
 }
 
 /// The ball in play.
@@ -346,6 +361,25 @@ impl BallBrain {
             .decider
             .observe(&self.planner, t, obs.position, at.t, &|_| at.state.clone());
         let done = ball.decider.done();
+        if decision.is_some() {
+            match ball.decider.speculation_used() {
+                Some(true) => self.stats.speculation_used += 1,
+                Some(false) => self.stats.speculation_unused += 1,
+                None => {}
+            }
+        } else if ball.decider.speculation_due(self.cfg.speculate_frames) {
+            // The next decision's search, made now (on this thread, before its observation
+            // comes), given up 2 ms before that observation is due (the decision then searches
+            // itself): it must not hold that observation up.
+            let frames = self.cfg.speculate_frames as f64;
+            let left = (frames * self.cfg.decide.frame_period - 2e-3).max(0.0);
+            self.planner.budget = Some(PlanBudget::Abandon(
+                std::time::Instant::now() + std::time::Duration::from_secs_f64(left),
+            ));
+            self.stats.speculated += 1;
+            ball.decider.speculate(&self.planner, at.t, &at.state);
+            self.planner.budget = None;
+        }
         match decision {
             None => {}
             Some(Decision::EstimateFailed(_)) => self.stats.estimate_failed += 1,
@@ -495,6 +529,9 @@ impl Brain for BallBrain {
             (&c.ball_refused, s.refused),
             (&c.ball_retimed, s.retimed),
             (&c.ball_refined, s.refined),
+            (&c.ball_speculated, s.speculated),
+            (&c.ball_speculation_used, s.speculation_used),
+            (&c.ball_speculation_unused, s.speculation_unused),
         ] {
             a.store(v, Ordering::Relaxed);
         }

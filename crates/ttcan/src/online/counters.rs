@@ -181,6 +181,12 @@ counters! {
     /// Ball mode: late strokes whose hit was planned again, without a search, from the
     /// observations that came after their decision (counted within `splices_redecided`).
     ball_refined,
+    /// Ball mode: decisions' searches made a few observations ahead of them.
+    ball_speculated,
+    /// Ball mode: decisions that planned the hit found ahead again instead of searching.
+    ball_speculation_used,
+    /// Ball mode: decisions with a hit found ahead that could not use it and searched.
+    ball_speculation_unused,
 }
 
 /// Bins of the latency histogram, each [`LatencyHistogram::BIN_US`] wide (the last: beyond).

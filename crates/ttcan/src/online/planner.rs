@@ -98,11 +98,9 @@ pub struct PlannerConfig {
     pub silence: f64,
 }
 
-/// Lead (s) of a re-plan that brings the channels back in step ([`Splicer::resync`]), at least
-/// [`RESYNC_MIN_CYCLES`] cycles: a hit leg planned again to a known hit state takes tens of µs
-/// (a debug build a few ms).
-pub const RESYNC_LEAD: f64 = 0.005;
-/// Fewest cycles from the present to a re-plan's splice.
+/// Fewest cycles from the present to the splice of a re-plan that brings the channels back in
+/// step ([`Splicer::resync`]; its lead is the splice lead: a lead of 5 ms left the stroke to a
+/// planning thread preempted between its late check and the hand-over).
 const RESYNC_MIN_CYCLES: u64 = 3;
 
 /// The hit that the robot is executing or will execute next.
@@ -149,6 +147,8 @@ pub struct Splicer {
     seq: u64,
     /// Strokes whose hit is to be checked in step (seq, controller time of the hit).
     watch: Vec<(u64, f64)>,
+    /// Each channel's start cycle of the last stroke the channels took.
+    last_starts: Vec<u64>,
     last: Option<Committed>,
     /// The hit of another stroke that `last`'s stroke was spliced after (its hit still ahead at
     /// that splice): a replacement of `last` is spliced after it too, or it would be cut off.
@@ -209,6 +209,7 @@ impl Splicer {
             schedules: None,
             seq: 0,
             watch: Vec::new(),
+            last_starts: Vec::new(),
             last: None,
             earlier: None,
         }
@@ -269,8 +270,13 @@ impl Splicer {
     /// The deadlines (earliest, latest over the channels) at which the channels will command the
     /// hit of `c`, as their skips stand now.
     fn hit_span(&self, c: &Committed) -> (u64, u64) {
-        let skips = self.timeline.skips();
-        let d = c.hit.iter().zip(&skips).map(|(h, s)| h + s);
+        Self::span_with(c, &self.timeline.skips())
+    }
+
+    /// [`Splicer::hit_span`] with the skips `skips` (those of a splice: its start cycles and the
+    /// hit's are then compared on each channel's own clock, whatever the channels skip since).
+    fn span_with(c: &Committed, skips: &[u64]) -> (u64, u64) {
+        let d = c.hit.iter().zip(skips).map(|(h, s)| h + s);
         let lo = d.clone().min().unwrap_or(0);
         (lo, d.max().unwrap_or(0))
     }
@@ -354,6 +360,7 @@ impl Splicer {
         }
         let taken = self.timeline.decision(seq) == Decision::Taken;
         if taken {
+            self.last_starts = (0..self.senders.len()).map(|c| sp.start(c)).collect();
             if let Some(sch) = self.schedules.as_mut() {
                 for (c, s) in sch.iter_mut().enumerate() {
                     s.push(sp.start(c), traj.clone());
@@ -417,16 +424,22 @@ impl Splicer {
                 return;
             }
         }
+        // One re-plan waiting at a time: a channel holds few strokes waiting for their start
+        // ([`super::handoff::MAX_PENDING`]); re-plans a lead apart, none superseding the one
+        // before, filled them (the first channel took a stroke another had no room for).
+        if self.last_starts.iter().enumerate().any(|(c, &s)| tl.clock_of(c).1 < s) {
+            return;
+        }
         if self.hit_span(&last).0 <= tl.present_deadline() {
             // the hit is done (or being done): nothing to bring in step
             self.settle(&now_skips);
             return;
         }
-        let mut lead = RESYNC_LEAD.max(RESYNC_MIN_CYCLES as f64 * tl.period());
+        let mut lead = self.cfg.splice_lead.max(RESYNC_MIN_CYCLES as f64 * tl.period());
         for _ in 0..3 {
             let began = controller_time();
             let sp = self.splice_in(lead);
-            let (first, latest) = self.hit_span(&last);
+            let (first, latest) = Self::span_with(&last, &sp.skips);
             if sp.deadline + 2 >= first {
                 break;
             }
@@ -548,16 +561,24 @@ impl Splicer {
             let mut replaces = None;
             let mut after = None;
             // a hit some channel has not commanded by the splice is still ahead
-            if let Some(last) = self.last.clone().filter(|l| self.hit_span(l).1 >= sp.deadline) {
-                if last.stroke == h.stroke && self.hit_span(&last).0 <= sp.deadline {
+            if let Some(last) = self
+                .last
+                .clone()
+                .filter(|l| Self::span_with(l, &sp.skips).1 >= sp.deadline)
+            {
+                if last.stroke == h.stroke && Self::span_with(&last, &sp.skips).0 <= sp.deadline {
                     // a channel commands it before the splice: being done, nothing to replace
                     return reject(arrival);
                 }
                 if last.stroke == h.stroke {
                     // spliced after the hit the replaced stroke was spliced after, while that
                     // one is still ahead (a replacement from the present state cut it off)
-                    if let Some(e) = self.earlier.clone().filter(|e| self.hit_span(e).1 >= sp.deadline) {
-                        let e_end = self.hit_span(&e).1;
+                    if let Some(e) = self
+                        .earlier
+                        .clone()
+                        .filter(|e| Self::span_with(e, &sp.skips).1 >= sp.deadline)
+                    {
+                        let e_end = Self::span_with(&e, &sp.skips).1;
                         if h.t_hit <= tl.time_of(e_end) + 2.0 * tl.period() {
                             return reject(arrival);
                         }
@@ -566,7 +587,7 @@ impl Splicer {
                     }
                     replaces = Some(last);
                 } else {
-                    let l_end = self.hit_span(&last).1;
+                    let l_end = Self::span_with(&last, &sp.skips).1;
                     if h.t_hit <= tl.time_of(l_end) + 2.0 * tl.period() {
                         // another stroke's hit comes first
                         return reject(arrival);
@@ -675,9 +696,16 @@ impl Splicer {
             skips: tl.skips(),
         };
         let mut replaces = None;
-        if let Some(last) = self.last.clone().filter(|l| self.hit_span(l).1 >= sp.deadline) {
-            let before = self.earlier.as_ref().is_none_or(|e| self.hit_span(e).1 < sp.deadline);
-            if last.stroke == h.stroke && before && self.hit_span(&last).0 > sp.deadline {
+        if let Some(last) = self
+            .last
+            .clone()
+            .filter(|l| Self::span_with(l, &sp.skips).1 >= sp.deadline)
+        {
+            let before = self
+                .earlier
+                .as_ref()
+                .is_none_or(|e| Self::span_with(e, &sp.skips).1 < sp.deadline);
+            if last.stroke == h.stroke && before && Self::span_with(&last, &sp.skips).0 > sp.deadline {
                 replaces = Some(last);
             } else {
                 // another stroke's hit is still to come: spliced into its return leg as a hit

@@ -23,6 +23,12 @@
 //!   long after the first correction's time, with every observation since the first estimate,
 //!   near the hit under way (the corrected one, else the first); skipped the same way.
 //!
+//! - **Speculation** (the controller's, never the rally's): a caller that cannot search within
+//!   its latency may make a decision's search a few observations ahead of it
+//!   ([`BallDecider::speculate`]); the decision then plans the hit so found again from its own
+//!   estimate and state ([`ReturnPlanner::plan_same_hit`], the same absolute hit time and
+//!   landing point, no search) and searches as above only when that fails.
+//!
 //! Times are on one clock, the caller's: observation times, `now` and the hits' times (a hit's
 //! `hit.t` counts from the `now` of its decision).
 
@@ -109,6 +115,38 @@ pub struct BallDecider {
     /// The hit of the last decision with a hit (first plan or correction) and its absolute time
     /// (s), and whether it is the first plan's: what [`BallDecider::refine`] plans again.
     last: Option<(ReturnHit, f64, bool)>,
+    /// A hit found ahead of the next decision ([`BallDecider::hold`]), which that decision plans
+    /// again from its own estimate instead of searching.
+    held: Option<Speculation>,
+    /// The decisions a speculation was made for (see [`BallDecider::speculation_due`]): bit 0
+    /// the first plan, bit 1 the correction, bit 2 the second correction.
+    speculated: u8,
+    /// How the last decision used a held hit: `Some(true)` planned again from it, `Some(false)`
+    /// it could not be and the decision searched in full, `None` no hit held.
+    spec_used: Option<bool>,
+}
+
+/// The bit of [`BallDecider`]'s `speculated` for a correction: the first's or the second's.
+fn correction_bit(second: bool) -> u8 {
+    if second {
+        4
+    } else {
+        2
+    }
+}
+
+/// A hit decided ahead of the decision that will use it, from the observations a few frames
+/// before the deciding one ([`BallDecider::speculate`]): the controller's way to decide within
+/// its splice lead (the search runs before the deciding observation, that observation only
+/// plans the same hit again, [`ReturnPlanner::plan_same_hit`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Speculation {
+    /// The hit found (`hit.t` from the `now` it was speculated at).
+    pub hit: ReturnHit,
+    /// Its absolute hit time (s, the decider's clock).
+    pub t_hit: f64,
+    /// For the correction after the bounce (else for the first plan).
+    pub correction: bool,
 }
 
 impl BallDecider {
@@ -126,6 +164,9 @@ impl BallDecider {
             estimate: None,
             first: None,
             last: None,
+            held: None,
+            speculated: 0,
+            spec_used: None,
         }
     }
 
@@ -153,6 +194,97 @@ impl BallDecider {
     /// The first estimate, once made.
     pub fn estimate(&self) -> Option<&Estimate> {
         self.estimate.as_ref()
+    }
+
+    /// Whether the next decision is at most `frames` observations away (every frame delivered)
+    /// and no hit was speculated for it yet: the moment to [`BallDecider::speculate`]. The first
+    /// plan's is `frames` observations before the window is full; the correction's, the
+    /// observation whose time plus `frames + 1` frame periods passes the correction time.
+    /// Never with `frames` 0.
+    pub fn speculation_due(&self, frames: usize) -> bool {
+        if frames == 0 {
+            return false;
+        }
+        match self.phase {
+            Phase::Done => false,
+            Phase::Observing => self.speculated & 1 == 0 && self.times.len() + frames >= self.cfg.window_frames,
+            Phase::Correcting(at, second) => {
+                self.speculated & correction_bit(second) == 0
+                    && self
+                        .times
+                        .last()
+                        .is_some_and(|&t| t + (frames as f64 + 1.0) * self.cfg.frame_period > at)
+            }
+        }
+    }
+
+    /// The search of the next decision (first plan or correction) made ahead of it at `now` (s),
+    /// from the observations so far, for a stroke from `start` (a correction's; the first plan's
+    /// starts from rest at ready), and its hit held: that decision then plans this hit again from
+    /// its own estimate and state ([`ReturnPlanner::plan_same_hit`], no search), and searches in
+    /// full only when that fails. Made once per decision (see [`BallDecider::speculation_due`]);
+    /// true when a hit is held. The off-line rally never calls it.
+    pub fn speculate(&mut self, planner: &ReturnPlanner, now: f64, start: &JointState) -> bool {
+        self.held = None;
+        let spec = match self.phase {
+            Phase::Done => return false,
+            Phase::Observing => {
+                self.speculated |= 1;
+                self.speculate_first(planner, now)
+            }
+            Phase::Correcting(at, second) => {
+                self.speculated |= correction_bit(second);
+                self.speculate_correction(planner, at, now, start)
+            }
+        };
+        self.held = spec;
+        self.held.is_some()
+    }
+
+    /// Holds `spec` for the next decision of its kind (a first plan's, or a correction's), as
+    /// [`BallDecider::speculate`] does with the hit it finds (e.g. one searched on another
+    /// thread from a clone of this decider).
+    pub fn hold(&mut self, spec: Speculation) {
+        self.held = Some(spec);
+    }
+
+    /// The hit held for the next decision ([`BallDecider::speculate`]), if any.
+    pub fn held(&self) -> Option<&Speculation> {
+        self.held.as_ref()
+    }
+
+    /// How the last decision used a held hit: `Some(true)` it planned that hit again (no
+    /// search), `Some(false)` a hit was held but not used (not feasible from the decision's
+    /// estimate and state, or no correction made), `None` none was held.
+    pub fn speculation_used(&self) -> Option<bool> {
+        self.spec_used
+    }
+
+    fn speculate_first(&self, planner: &ReturnPlanner, now: f64) -> Option<Speculation> {
+        let est = estimate(&self.times, &self.obs, &self.opts).ok()?;
+        let plan = planner.plan(&est.state, now, self.cfg.target).ok()?;
+        let hit = plan.hit.filter(|_| plan.status == ReturnStatus::Ok)?;
+        Some(Speculation {
+            t_hit: now + hit.hit.t,
+            hit,
+            correction: false,
+        })
+    }
+
+    fn speculate_correction(
+        &self,
+        planner: &ReturnPlanner,
+        at: f64,
+        now: f64,
+        start: &JointState,
+    ) -> Option<Speculation> {
+        let mut used = None;
+        let hit = self.correction(planner, at, now, &|_| start.clone(), None, &mut used)?;
+        Some(Speculation {
+            t_hit: now + hit.hit.t,
+            hit,
+            correction: true,
+        })
     }
 
     /// One observation: the ball at `position` (m, world) at time `t` (s), delivered at `now`
@@ -202,9 +334,24 @@ impl BallDecider {
             Err(e) => return Decision::EstimateFailed(e),
         };
         self.estimate = Some(est.clone());
-        let plan = match planner.plan(&est.state, now, self.cfg.target) {
-            Ok(p) => p,
-            Err(e) => return Decision::PlanFailed(e),
+        let held = self.held.take().filter(|h| !h.correction);
+        self.spec_used = held.as_ref().map(|_| false);
+        let again = held.and_then(|h| {
+            let start = JointState::rest(&planner.ready);
+            let p = planner
+                .plan_same_hit(&est.state, now, &start, false, &h.hit, h.t_hit)
+                .ok()?;
+            (p.status == ReturnStatus::Ok && p.hit.is_some()).then_some(p)
+        });
+        let plan = match again {
+            Some(p) => {
+                self.spec_used = Some(true);
+                p
+            }
+            None => match planner.plan(&est.state, now, self.cfg.target) {
+                Ok(p) => p,
+                Err(e) => return Decision::PlanFailed(e),
+            },
         };
         self.first = plan
             .hit
@@ -240,7 +387,10 @@ impl BallDecider {
         } else {
             Phase::Done
         };
-        let hit = self.correction(planner, at, now, commanded);
+        let held = self.held.take().filter(|h| h.correction);
+        let mut used = None;
+        let hit = self.correction(planner, at, now, commanded, held, &mut used);
+        self.spec_used = used;
         if let Some(h) = &hit {
             self.last = Some((h.clone(), now + h.hit.t, false));
         }
@@ -304,7 +454,10 @@ impl BallDecider {
         at: f64,
         now: f64,
         commanded: &dyn Fn(f64) -> JointState,
+        held: Option<Speculation>,
+        used: &mut Option<bool>,
     ) -> Option<ReturnHit> {
+        *used = held.as_ref().map(|_| false);
         let est = self.estimate.as_ref()?;
         // The hit under way: the first plan's, or the first correction's at the second.
         let current = self.last.as_ref().map(|(h, t, _)| (h, *t));
@@ -323,15 +476,22 @@ impl BallDecider {
             self.cfg.bounce_spread,
         )
         .ok()?;
+        // The stroke under way (the hit's), else one from rest at ready; asked only then, as
+        // before any speculation (the rally's motion has no state without a hit).
+        let start = match current {
+            Some(_) => commanded(now),
+            None => JointState::rest(&planner.ready),
+        };
+        if let Some(h) = held {
+            let again = replanner.plan_same_hit(&up.state, now, &start, up.bounced, &h.hit, h.t_hit);
+            if let Some(hit) = again.ok().and_then(|p| p.hit.filter(|_| p.status == ReturnStatus::Ok)) {
+                *used = Some(true);
+                return Some(hit);
+            }
+        }
         let plan = match current {
-            Some((hit, t_prev)) => replanner.plan_near(&up.state, now, &commanded(now), up.bounced, hit, t_prev),
-            None => replanner.plan_from(
-                &up.state,
-                now,
-                self.cfg.target,
-                &JointState::rest(&planner.ready),
-                up.bounced,
-            ),
+            Some((hit, t_prev)) => replanner.plan_near(&up.state, now, &start, up.bounced, hit, t_prev),
+            None => replanner.plan_from(&up.state, now, self.cfg.target, &start, up.bounced),
         }
         .ok()?;
         plan.hit.filter(|_| plan.status == ReturnStatus::Ok)

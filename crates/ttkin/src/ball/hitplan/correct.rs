@@ -50,7 +50,9 @@ impl ReturnPlanner {
             near.or_else(|| self.robot_hit(&poses, s, now, start, shot, deadline))
         };
         for &i in &order {
-            if search.best.is_some() && (search.good() || search.tried() >= self.candidates.max(1)) {
+            if search.deadline.abandoned()
+                || search.best.is_some() && (search.good() || search.tried() >= self.candidates.max(1))
+            {
                 break;
             }
             search.attempt(self, &list[i], goal, &robot);

@@ -376,7 +376,7 @@ impl ReturnPlanner {
             search.attempt(self, &list[i], goal, &robot);
         }
         for &i in &skipped {
-            if search.best.is_some() {
+            if search.best.is_some() || search.deadline.abandoned() {
                 break;
             }
             search.attempt(self, &list[i], target, &robot);
@@ -385,7 +385,7 @@ impl ReturnPlanner {
         // joint positions and velocities at the hit), at most `FALLBACK_ATTEMPTS` shooting solves.
         let mut budget = self.fallback_attempts;
         'fallback: for (&i, &tried_goal) in order.iter().zip(&first_goal) {
-            if search.best.is_some() {
+            if search.best.is_some() || search.deadline.abandoned() {
                 break;
             }
             for (t, &goal) in targets.iter().enumerate().filter(|(_, g)| Some(**g) != tried_goal) {

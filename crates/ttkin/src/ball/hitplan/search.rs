@@ -33,6 +33,10 @@ pub enum PlanBudget {
     /// This much CPU time of the planning thread from the start of the plan (reproducible on a
     /// loaded machine, for off-line studies of the budget).
     ThreadCpu(Duration),
+    /// Until this instant of the monotonic clock, then the search ends at the next candidate or
+    /// shot even with no feasible hit found (a search made ahead of its need, which must not hold
+    /// up what comes after it: a controller's speculation).
+    Abandon(Instant),
 }
 
 /// A plan's budget resolved at its start (see [`PlanBudget`]).
@@ -44,6 +48,8 @@ pub(super) enum Deadline {
     Until(Instant),
     /// The thread's CPU clock reading (as a duration since its origin).
     ThreadCpu(Duration),
+    /// The monotonic clock's instant, after which the search ends even with no hit.
+    Abandon(Instant),
 }
 
 impl Deadline {
@@ -53,14 +59,20 @@ impl Deadline {
             None => Deadline::None,
             Some(PlanBudget::Until(t)) => Deadline::Until(t),
             Some(PlanBudget::ThreadCpu(d)) => Deadline::ThreadCpu(cpu_time::ThreadTime::now().as_duration() + d),
+            Some(PlanBudget::Abandon(t)) => Deadline::Abandon(t),
         }
+    }
+
+    /// Whether the budget is spent and the search is to end even with no hit.
+    pub(super) fn abandoned(&self) -> bool {
+        matches!(self, Deadline::Abandon(t) if Instant::now() >= *t)
     }
 
     /// Whether the budget is spent.
     pub(super) fn passed(&self) -> bool {
         match self {
             Deadline::None => false,
-            Deadline::Until(t) => Instant::now() >= *t,
+            Deadline::Until(t) | Deadline::Abandon(t) => Instant::now() >= *t,
             Deadline::ThreadCpu(d) => cpu_time::ThreadTime::now().as_duration() >= *d,
         }
     }
@@ -135,11 +147,12 @@ impl Search {
     }
 
     /// Whether the best hit so far is good enough to end the search: margin ≥ `good_margin`, or
-    /// any hit once the budget is spent.
+    /// any hit once the budget is spent; anything once a [`PlanBudget::Abandon`] budget is.
     pub(super) fn good(&self) -> bool {
         self.best
             .as_ref()
             .is_some_and(|b| b.margin() >= self.good_margin || self.deadline.passed())
+            || self.deadline.abandoned()
     }
 
     /// Candidates tried so far.
