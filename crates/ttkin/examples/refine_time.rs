@@ -5,48 +5,14 @@
 //! `ttctl --online ball` does when a decision came after its splice cycle): percentiles, and how
 //! many refinements found the hit again. The stroke under way at the correction is the first
 //! hit's (`rally::execution`), as in the rally.
+mod common;
+
+use common::{cpu_us, row, state_of};
 use ttkin::ball::decide::{BallDecider, DecideConfig, Decision};
 use ttkin::ball::flight::Flight;
 use ttkin::ball::hitplan::ReturnPlanner;
 use ttkin::ball::rally::{self, observe_ball, RallyConfig};
 use ttkin::traj::{JointState, JointTrajectory};
-
-fn cpu_us<T>(f: impl FnOnce() -> T) -> (T, f64) {
-    let c = cpu_time::ThreadTime::now();
-    let out = f();
-    (out, c.elapsed().as_secs_f64() * 1e6)
-}
-
-fn row(name: &str, v: &mut [f64]) {
-    v.sort_by(f64::total_cmp);
-    let q = |p: f64| {
-        v.get(((v.len() as f64 - 1.0) * p).round() as usize)
-            .copied()
-            .unwrap_or(f64::NAN)
-    };
-    println!(
-        "{name:<28} n {:>5}  p50 {:>7.0} µs  p90 {:>7.0}  p99 {:>7.0}  max {:>7.0}",
-        v.len(),
-        q(0.5),
-        q(0.9),
-        q(0.99),
-        q(1.0)
-    );
-}
-
-/// The joint state commanded at `tc` (s): the stroke under way (start time, trajectory), else ready.
-fn state_of(stroke: &Option<(f64, JointTrajectory)>, ready: &JointState, tc: f64) -> JointState {
-    match stroke {
-        Some((t0, tr)) => {
-            let n = ready.q.len();
-            let (mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-            tr.sample((tc - t0).clamp(0.0, tr.duration()), &mut q, &mut qd, &mut qdd)
-                .expect("sample");
-            JointState { q, qd, qdd }
-        }
-        None => ready.clone(),
-    }
-}
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();

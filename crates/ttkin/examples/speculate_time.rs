@@ -6,48 +6,14 @@
 //! `ttctl --online ball` does. Prints the thread CPU time of the speculation and of the deciding
 //! observation on both, how often the held hit was used, and how the two deciders' hits
 //! compare (hit or none, hit time, landing point).
+mod common;
+
+use common::{cpu_us, row, state_of};
 use ttkin::ball::decide::{BallDecider, DecideConfig, Decision};
 use ttkin::ball::flight::Flight;
 use ttkin::ball::hitplan::{ReturnHit, ReturnPlanner, ReturnStatus};
 use ttkin::ball::rally::{self, observe_ball, RallyConfig};
 use ttkin::traj::{JointState, JointTrajectory};
-
-fn cpu_us<T>(f: impl FnOnce() -> T) -> (T, f64) {
-    let c = cpu_time::ThreadTime::now();
-    let out = f();
-    (out, c.elapsed().as_secs_f64() * 1e6)
-}
-
-fn row(name: &str, v: &mut [f64]) {
-    v.sort_by(f64::total_cmp);
-    let q = |p: f64| {
-        v.get(((v.len() as f64 - 1.0) * p).round() as usize)
-            .copied()
-            .unwrap_or(f64::NAN)
-    };
-    println!(
-        "{name:<34} n {:>5}  p50 {:>7.0} µs  p90 {:>7.0}  p99 {:>7.0}  max {:>7.0}",
-        v.len(),
-        q(0.5),
-        q(0.9),
-        q(0.99),
-        q(1.0)
-    );
-}
-
-/// The joint state commanded at `tc` (s): the stroke under way (start time, trajectory), else ready.
-fn state_of(stroke: &Option<(f64, JointTrajectory)>, ready: &JointState, tc: f64) -> JointState {
-    match stroke {
-        Some((t0, tr)) => {
-            let n = ready.q.len();
-            let (mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-            tr.sample((tc - t0).clamp(0.0, tr.duration()), &mut q, &mut qd, &mut qdd)
-                .expect("sample");
-            JointState { q, qd, qdd }
-        }
-        None => ready.clone(),
-    }
-}
 
 /// One decider over one ball's observations: the decisions' hits (first, correction; absolute
 /// time), CPU times, and the held hits' use.
