@@ -326,14 +326,38 @@ impl Run {
     }
 
     /// Racket centre error (m) of the commanded joints at the hit `h` planned for controller time
-    /// `t` at controller time `planned` or later ([`Run::closest`]).
+    /// `t` at controller time `planned` or later ([`Run::closest`]). Each chord runs from the
+    /// joints commanded at a deadline to each channel's next executed cycle (its next sample of
+    /// the stroke, wherever a stall of that channel put it): a stall just after an in-step hit
+    /// that falls between two cycles removes the row after it, and the error would then be the
+    /// distance from the row before, up to half a cycle of racket motion (the 0.1–0.85 mm "in
+    /// step" errors of earlier runs; the measured racket was within 3e-5 m there).
     fn commanded_error_at(&self, t: f64, h: &HitMsg, planned: f64) -> f64 {
         let rows: Vec<Row> = self
             .commanded_clocked()
             .into_iter()
             .map(|(k, s, c)| (k, (0..6).map(|j| s[j][0]).collect(), c))
             .collect();
-        self.closest(&rows, t, h, planned)
+        // each channel's commanded joints by its executed cycle (Run phase)
+        let by_exec: Vec<std::collections::HashMap<u64, [f64; 2]>> = self
+            .reports
+            .iter()
+            .map(|r| {
+                r.telemetry
+                    .iter()
+                    .filter(|x| x.phase == 2)
+                    .map(|x| (x.source_cycle, [x.q_ref[0], x.q_ref[1]]))
+                    .collect()
+            })
+            .collect();
+        let next = |r: &Row| -> Option<Vec<f64>> {
+            let mut q = Vec::with_capacity(6);
+            for (c, m) in by_exec.iter().enumerate() {
+                q.extend_from_slice(m.get(&(r.2[c] + 1))?);
+            }
+            Some(q)
+        };
+        self.closest_with(&rows, t, h, planned, Some(&next))
     }
 
     /// The closest approach (m) of the racket centre of `rows` (joints by deadline, with each
@@ -351,6 +375,20 @@ impl Run {
     /// leaves the channels apart at the hit shows as a large error here; the controller counts
     /// such hits (`hits_out_of_step`).
     fn closest(&self, rows: &[Row], t: f64, h: &HitMsg, planned: f64) -> f64 {
+        self.closest_with(rows, t, h, planned, None)
+    }
+
+    /// [`Run::closest`] with chords from each row to `next` of it (else to the row of the next
+    /// deadline).
+    #[allow(clippy::type_complexity)]
+    fn closest_with(
+        &self,
+        rows: &[Row],
+        t: f64,
+        h: &HitMsg,
+        planned: f64,
+        next: Option<&dyn Fn(&Row) -> Option<Vec<f64>>>,
+    ) -> f64 {
         let deadline = |t: f64| (t * 1e9 - self.t0_ns as f64) / PERIOD_NS as f64;
         let x = deadline(t);
         // each channel's skipped deadlines as of deadline d: from the last row at or before it
@@ -375,12 +413,17 @@ impl Run {
         };
         let p = Vector3::from(h.centre);
         let mut best = f64::INFINITY;
-        for w in rows.windows(2) {
-            let k = w[0].0 as f64;
-            if k < lo || k > hi || w[1].0 != w[0].0 + 1 {
+        for (i, r) in rows.iter().enumerate() {
+            let k = r.0 as f64;
+            if k < lo || k > hi {
                 continue;
             }
-            let (a, b) = (centre(&w[0].1), centre(&w[1].1));
+            let end = match next {
+                Some(f) => f(r),
+                None => rows.get(i + 1).filter(|n| n.0 == r.0 + 1).map(|n| n.1.clone()),
+            };
+            let Some(end) = end else { continue };
+            let (a, b) = (centre(&r.1), centre(&end));
             let d = b - a;
             let s = if d.norm_squared() > 0.0 {
                 ((p - a).dot(&d) / d.norm_squared()).clamp(0.0, 1.0)
