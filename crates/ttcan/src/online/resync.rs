@@ -108,7 +108,9 @@ impl Splicer {
         // late, `super::handoff`), so a short lead risks a retry, not a split.
         let period = tl.period();
         let mut lead = (RESYNC_MIN_CYCLES as f64 * period).max(RESYNC_PLAN_FACTOR * self.resync_plan_s);
+        let mut late = false;
         for _ in 0..RESYNC_TRIES {
+            late = false;
             let began = controller_time();
             let sp = self.splice_in(lead);
             let (first, latest) = Self::span_with(&last, &sp.skips);
@@ -147,12 +149,14 @@ impl Splicer {
             if self.is_late(&sp) {
                 // planning took longer than the lead: twice as far ahead or twice the planning time
                 lead = (2.0 * lead).max(2.0 * planned_in);
+                late = true;
                 continue;
             }
             let Some(seq) = self.hand_over(&sp, &traj, Some(n)) else {
                 // refused: a channel commanded its start before the stroke reached it (the
                 // planning thread was preempted after its late check); again, further ahead
                 lead = (2.0 * lead).max(2.0 * (controller_time() - began));
+                late = true;
                 continue;
             };
             Counters::bump(&counters.resyncs);
@@ -163,6 +167,11 @@ impl Splicer {
                 skips: sp.skips,
                 ..last
             });
+            return;
+        }
+        if late {
+            // every try came too late (a preempted planning thread): again at the next turn,
+            // from the lead of the planning time (the hit's closeness ends it)
             return;
         }
         Counters::bump(&counters.resyncs_failed);
