@@ -467,8 +467,13 @@ fn a_hit_is_planned_spliced_and_executed_end_to_end() {
         c.drain(2.5)
     });
     let h = sent.unwrap();
-    assert_eq!(r.statuses.len(), 1, "{:?}", r.statuses);
-    let st = r.statuses[0];
+    // its status; a second one, `out_of_step`, when a stall left the channels apart too close to
+    // the hit to re-plan (a loaded machine)
+    let (own, late): (Vec<StatusMsg>, Vec<StatusMsg>) =
+        r.statuses.iter().partition(|s| s.status != PlanStatus::OutOfStep);
+    assert_eq!(own.len(), 1, "{:?}", r.statuses);
+    assert!(late.iter().all(|s| s.id == 1) && late.len() <= 1, "{:?}", r.statuses);
+    let st = own[0];
     assert_eq!((st.id, st.status), (1, PlanStatus::Accepted), "{st:?}");
     assert!((st.t_hit - h.t_hit).abs() < 1e-6, "{st:?}");
     assert!(st.planning_time > 0.0 && st.planning_time < 0.5, "{st:?}");
@@ -679,7 +684,12 @@ fn hits_at_random_times_are_all_answered_and_executed_continuously() {
     });
     let k = r.counters;
     eprintln!("{k:?}");
-    let own: Vec<&StatusMsg> = r.statuses.iter().filter(|s| s.status != PlanStatus::Replaced).collect();
+    // a hit's own status; `replaced` and `out_of_step` come as second statuses of accepted hits
+    let own: Vec<&StatusMsg> = r
+        .statuses
+        .iter()
+        .filter(|s| !matches!(s.status, PlanStatus::Replaced | PlanStatus::OutOfStep))
+        .collect();
     assert_eq!(own.len(), n as usize, "one status per hit: {:?}", r.statuses);
     for id in 1..=n {
         assert!(own.iter().any(|s| s.id == id), "hit {id} unanswered");
@@ -715,18 +725,33 @@ fn hits_at_random_times_are_all_answered_and_executed_continuously() {
             outside.push((h.id, e));
         }
     }
-    // Each executed hit is counted at most once by the controller, in step or not (once in a few
-    // loaded runs one was counted by neither: docs/online.md, known problems); those outside the
-    // bound are at most the ones it counted out of step (a stall within a few cycles of the hit,
-    // too close to re-plan: the controller says so, the test does not exclude them itself).
+    // Each executed hit is counted once by the controller, in step or not (before, in two loaded
+    // runs one was counted by neither: docs/online.md); those outside the bound are at most the
+    // ones it counted out of step (a stall within a few cycles of the hit, too close to re-plan:
+    // the controller says so, the test does not exclude them itself). A hit answered
+    // `out_of_step` before its time was accepted, and is counted out of step or (brought back
+    // in step by a later re-plan) in step.
     let counted = k.hits_in_step + k.hits_out_of_step;
-    if counted != executed.len() as u64 {
-        eprintln!(
-            "{counted} hits counted in or out of step of {} executed",
-            executed.len()
-        );
+    assert_eq!(counted, executed.len() as u64, "hits counted in or out of step: {k:?}");
+    let announced: Vec<u32> = r
+        .statuses
+        .iter()
+        .filter(|s| s.status == PlanStatus::OutOfStep)
+        .map(|s| s.id)
+        .collect();
+    for id in &announced {
+        let known = executed.iter().any(|(s, _)| s.id == *id) || replaced.contains(id);
+        assert!(known, "hit {id} answered out_of_step was not accepted");
     }
-    assert!(counted <= executed.len() as u64, "{counted} hits counted: {k:?}");
+    eprintln!("answered out_of_step before the hit: {announced:?}");
+    // A hit in step is exact: the re-plans keep its joint state and the commanded racket meets
+    // the centre to 1e-5 m (a cycle of skew is 0.3–0.9 mm): the hits off by more are at most
+    // those counted out of step.
+    let off = executed
+        .iter()
+        .filter(|(s, h)| r.commanded_error_at(s.t_hit, &h.0, h.1) > 1e-5)
+        .count() as u64;
+    assert!(off <= k.hits_out_of_step, "{off} hits off by more than 1e-5 m: {k:?}");
     assert!(
         outside.len() as u64 <= k.hits_out_of_step,
         "hits outside the 1 mm bound {outside:?} but {} counted out of step: {k:?}",

@@ -8,7 +8,8 @@ use std::sync::atomic::Ordering;
 
 use super::counters::Counters;
 use super::receiver::controller_time;
-use super::splicer::{Committed, Splicer};
+use super::splicer::{status, Committed, Splicer};
+use super::wire::{PlanStatus, StatusMsg};
 
 /// Fewest cycles from the present to the splice of a re-plan that brings the channels back in
 /// step ([`Splicer::resync`]; its lead is also [`RESYNC_PLAN_FACTOR`] × its planning time; the
@@ -73,9 +74,10 @@ impl Splicer {
     /// refused as late (it reached a channel after that channel commanded its start) is tried
     /// again further ahead. Counted
     /// `resyncs`, or `resyncs_failed` when no leg is feasible (the channels stay apart: the hit
-    /// is counted out of step when it comes).
-    pub fn resync(&mut self, counters: &Counters) {
-        let Some(last) = self.last.clone() else { return };
+    /// is counted out of step when it comes), and the hit, still ahead, is answered again
+    /// `out_of_step` (returned, once per hit).
+    pub fn resync(&mut self, counters: &Counters) -> Option<StatusMsg> {
+        let last = self.last.clone()?;
         let tl = self.timeline.clone();
         let now_skips = tl.skips();
         let drift: Vec<i64> = now_skips
@@ -84,23 +86,23 @@ impl Splicer {
             .map(|(a, b)| *a as i64 - *b as i64)
             .collect();
         if drift.iter().all(|d| *d == drift[0]) || self.stopped() {
-            return;
+            return None;
         }
         if let Some(e) = self.earlier.as_ref() {
             if self.hit_span(e).1 >= tl.present_deadline() {
-                return;
+                return None;
             }
         }
         // One re-plan waiting at a time: a channel holds few strokes waiting for their start
         // ([`super::handoff::MAX_PENDING`]); re-plans a lead apart, none superseding the one
         // before, filled them (the first channel took a stroke another had no room for).
         if self.last_starts.iter().enumerate().any(|(c, &s)| tl.clock_of(c).1 < s) {
-            return;
+            return None;
         }
         if self.hit_span(&last).0 <= tl.present_deadline() {
             // the hit is done (or being done): nothing to bring in step
             self.settle(&now_skips);
-            return;
+            return None;
         }
         // A short lead (a re-plan is one leg: a few ms in a debug build, tens of µs optimised):
         // the window before the hit in which a stall cannot be made good shrinks with it. A
@@ -118,11 +120,15 @@ impl Splicer {
                 // too close to the hit: the channels stay apart
                 break;
             }
-            let Some(state) = self.state_of(&sp) else { return };
+            let state = self.state_of(&sp)?;
             let t_s = tl.time_of(sp.deadline);
             tl.planning.store(true, Ordering::Relaxed);
             let mut found = None;
-            for t in [last.t_hit, tl.time_of(latest)] {
+            // the hit time answered (the lagging joints catch up), halfway to the instant the
+            // channel furthest behind would reach it (both give way), that instant (the others
+            // wait)
+            let behind = tl.time_of(latest);
+            for t in [last.t_hit, 0.5 * (last.t_hit + behind), behind] {
                 let rel = t - t_s;
                 if rel <= 2.0 * period {
                     continue;
@@ -167,15 +173,21 @@ impl Splicer {
                 skips: sp.skips,
                 ..last
             });
-            return;
+            return None;
         }
         if late {
             // every try came too late (a preempted planning thread): again at the next turn,
             // from the lead of the planning time (the hit's closeness ends it)
-            return;
+            return None;
         }
         Counters::bump(&counters.resyncs_failed);
         self.settle(&now_skips);
+        // the hit still ahead will be out of step: said now, once
+        if self.announced == Some(last.id) || self.hit_span(&last).0 <= tl.present_deadline() {
+            return None;
+        }
+        self.announced = Some(last.id);
+        Some(status(last.id, PlanStatus::OutOfStep, f64::NAN, last.t_hit, 0.0))
     }
 
     /// The pending hit's channels taken as they are (no re-plan until their skips drift again).

@@ -63,6 +63,8 @@ pub struct Splicer {
     pub(super) seq: u64,
     /// Strokes whose hit is to be checked in step (seq, controller time of the hit).
     pub(super) watch: Vec<(u64, f64)>,
+    /// The id of the hit last answered `out_of_step` (once per hit).
+    pub(super) announced: Option<u32>,
     /// Planning time of the re-plans (s, smoothed, the latest one at least): their lead.
     pub(super) resync_plan_s: f64,
     /// Each channel's start cycle of the last stroke the channels took.
@@ -129,6 +131,7 @@ impl Splicer {
             watch: Vec::new(),
             last_starts: Vec::new(),
             resync_plan_s: 0.0,
+            announced: None,
             last: None,
             earlier: None,
         }
