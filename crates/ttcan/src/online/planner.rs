@@ -59,7 +59,13 @@ pub fn run_planner(
     while !stop.load(Ordering::Relaxed) {
         let started = splicer.start(counters);
         if started {
-            splicer.resync(counters);
+            if let Some(s) = splicer.resync(counters) {
+                seq += 1;
+                send_status(socket, reply, seq, controller_time(), &s, counters);
+                if let Some(b) = brain.as_deref_mut() {
+                    b.outcome(&s);
+                }
+            }
             splicer.check_hits(counters);
         }
         let msg = match pending.pop_front() {

@@ -63,6 +63,10 @@ pub struct Splicer {
     pub(super) seq: u64,
     /// Strokes whose hit is to be checked in step (seq, controller time of the hit).
     pub(super) watch: Vec<(u64, f64)>,
+    /// The id of the hit last answered `out_of_step` (once per hit).
+    pub(super) announced: Option<u32>,
+    /// Planning time of the re-plans (s, smoothed, the latest one at least): their lead.
+    pub(super) resync_plan_s: f64,
     /// Each channel's start cycle of the last stroke the channels took.
     pub(super) last_starts: Vec<u64>,
     pub(super) last: Option<Committed>,
@@ -126,6 +130,8 @@ impl Splicer {
             seq: 0,
             watch: Vec::new(),
             last_starts: Vec::new(),
+            resync_plan_s: 0.0,
+            announced: None,
             last: None,
             earlier: None,
         }
@@ -258,14 +264,18 @@ impl Splicer {
     pub(super) fn hand_over(&mut self, sp: &Splice, traj: &JointTrajectory, hit_after: Option<u64>) -> Option<u64> {
         self.seq += 1;
         let seq = self.seq;
-        self.timeline.open(seq);
-        for (c, s) in self.senders.iter_mut().enumerate() {
-            let start = sp.start(c);
-            let hit = hit_after.map_or(NO_HIT, |n| start + n);
-            if !s.push_hit(seq, start, hit, traj) {
+        let starts: Vec<u64> = (0..self.senders.len()).map(|c| sp.start(c)).collect();
+        for s in self.senders.iter_mut() {
+            let hit = hit_after.map_or(NO_HIT, |n| s.own(&starts) + n);
+            if !s.push_joint(seq, &starts, hit, traj) {
+                // the channels that hold it discard it
+                self.timeline.refuse(seq);
                 return None;
             }
         }
+        // open once it is in every ring: the channel that decides takes it only while no
+        // channel has commanded its start cycle, and every channel then takes it in time
+        self.timeline.open(seq);
         // the channels see it at their next cycle; a stopped channel never will
         let give_up = controller_time() + 0.5;
         while !self.timeline.seen_by_all(seq) {
@@ -273,6 +283,10 @@ impl Splicer {
                 break;
             }
             std::thread::sleep(Duration::from_micros(100));
+        }
+        if self.timeline.decision(seq) == Decision::Pending {
+            // no channel saw it in time: withdrawn, unless one decides meanwhile
+            self.timeline.refuse(seq);
         }
         let taken = self.timeline.decision(seq) == Decision::Taken;
         if taken {
