@@ -124,11 +124,7 @@ impl Splicer {
             let t_s = tl.time_of(sp.deadline);
             tl.planning.store(true, Ordering::Relaxed);
             let mut found = None;
-            // the hit time answered (the lagging joints catch up), halfway to the instant the
-            // channel furthest behind would reach it (both give way), that instant (the others
-            // wait)
-            let behind = tl.time_of(latest);
-            for t in [last.t_hit, 0.5 * (last.t_hit + behind), behind] {
+            for t in [last.t_hit, tl.time_of(latest)] {
                 let rel = t - t_s;
                 if rel <= 2.0 * period {
                     continue;
