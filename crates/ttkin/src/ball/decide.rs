@@ -19,6 +19,10 @@
 //!   passes the correction time (with every frame delivered, the rally's choice exactly); when
 //!   frames are missing, the first observation past the correction time triggers it with the
 //!   observations before it.
+//! - **Wider correction** (`widen_correction`; the rally's default): when the search near the
+//!   hit under way ([`ReturnPlanner::plan_near`]) finds no feasible hit, the correction searches
+//!   in full from the commanded state ([`ReturnPlanner::plan_from`]: every candidate, the
+//!   requested target and its fallbacks) before the hit under way is kept; it costs only then.
 //! - **Second correction** (`second_correction` > 0; the rally's default 0.05 s): the same, that
 //!   long after the first correction's time, with every observation since the first estimate,
 //!   near the hit under way (the corrected one, else the first); skipped the same way.
@@ -60,6 +64,9 @@ pub struct DecideConfig {
     /// updated with every observation since the first estimate, the hit planned again near the
     /// corrected one); 0 for none.
     pub second_correction: f64,
+    /// Whether a correction whose search near the hit under way finds no feasible hit searches
+    /// in full from the commanded state (module doc) before keeping the hit under way.
+    pub widen_correction: bool,
 }
 
 /// What one observation led to.
@@ -489,12 +496,14 @@ impl BallDecider {
                 return Some(hit);
             }
         }
-        let plan = match current {
-            Some((hit, t_prev)) => replanner.plan_near(&up.state, now, &start, up.bounced, hit, t_prev),
-            None => replanner.plan_from(&up.state, now, self.cfg.target, &start, up.bounced),
+        let full = || replanner.plan_from(&up.state, now, self.cfg.target, &start, up.bounced);
+        let ok =
+            |plan: Result<ReturnPlan, Error>| plan.ok().and_then(|p| p.hit.filter(|_| p.status == ReturnStatus::Ok));
+        match current {
+            Some((hit, t_prev)) => ok(replanner.plan_near(&up.state, now, &start, up.bounced, hit, t_prev))
+                .or_else(|| self.cfg.widen_correction.then(|| ok(full())).flatten()),
+            None => ok(full()),
         }
-        .ok()?;
-        plan.hit.filter(|_| plan.status == ReturnStatus::Ok)
     }
 }
 
