@@ -34,8 +34,9 @@ impl Splicer {
     }
 
     /// Counts the watched hits every channel has commanded: in step (every channel at the same
-    /// deadline) or not (`hits_out_of_step`, the largest spread in `hit_skew_max_cycles`); a hit
-    /// no channel reaches (replaced, called off) is forgotten 2 s after its time.
+    /// deadline) or not (`hits_out_of_step`, the largest spread in `hit_skew_max_cycles`); 2 s
+    /// after its time, a hit some channels commanded and others not is counted out of step, and
+    /// one no channel reached (replaced, called off) is forgotten.
     pub fn check_hits(&mut self, counters: &Counters) {
         let tl = self.timeline.clone();
         let now = controller_time();
