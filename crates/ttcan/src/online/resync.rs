@@ -34,8 +34,9 @@ impl Splicer {
     }
 
     /// Counts the watched hits every channel has commanded: in step (every channel at the same
-    /// deadline) or not (`hits_out_of_step`, the largest spread in `hit_skew_max_cycles`); a hit
-    /// no channel reaches (replaced, called off) is forgotten 2 s after its time.
+    /// deadline) or not (`hits_out_of_step`, the largest spread in `hit_skew_max_cycles`); 2 s
+    /// after its time, a hit some channels commanded and others not is counted out of step, and
+    /// one no channel reached (replaced, called off) is forgotten.
     pub fn check_hits(&mut self, counters: &Counters) {
         let tl = self.timeline.clone();
         let now = controller_time();
@@ -124,11 +125,7 @@ impl Splicer {
             let t_s = tl.time_of(sp.deadline);
             tl.planning.store(true, Ordering::Relaxed);
             let mut found = None;
-            // the hit time answered (the lagging joints catch up), halfway to the instant the
-            // channel furthest behind would reach it (both give way), that instant (the others
-            // wait)
-            let behind = tl.time_of(latest);
-            for t in [last.t_hit, 0.5 * (last.t_hit + behind), behind] {
+            for t in [last.t_hit, tl.time_of(latest)] {
                 let rel = t - t_s;
                 if rel <= 2.0 * period {
                     continue;
