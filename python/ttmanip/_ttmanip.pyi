@@ -859,7 +859,7 @@ def ball_table_outline(
 def ball_camera() -> dict[str, float]: ...
 def ball_rally_config() -> dict[str, Any]:
     """``RallyConfig::default()``: camera, target (x, y), max_spin_rps, corkscrew, seed, paths,
-    replan_period, max_window, correction_delay, second_correction, world (None)."""
+    replan_period, max_window, correction_delay, second_correction, widen_correction, world (None)."""
 
 def ball_placement() -> _F:
     """(4, 4) base frame of the rally's robot in the world (table) frame, m."""

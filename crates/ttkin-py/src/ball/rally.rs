@@ -127,7 +127,8 @@ fn ball_camera(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
 
 /// The rally's settings of `ttkin::ball::rally::RallyConfig::default()`: camera (as
 /// `ball_camera`), target (x, y, m, world), max_spin_rps, corkscrew, seed, paths, replan_period,
-/// max_window, correction_delay and second_correction (s), world (None: the world is the model).
+/// max_window, correction_delay and second_correction (s), widen_correction (bool), world (None:
+/// the world is the model).
 #[ttkin_py_guard::guarded]
 #[pyfunction]
 fn ball_rally_config(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
