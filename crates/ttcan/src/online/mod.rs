@@ -1,7 +1,7 @@
 //! The controller's contact with the world at run time (issue 26): what an upper computer or a
 //! camera process sends to a running `ttctl`, and what it answers. The datagram format
 //! ([`wire`]), the seam between deciding hits and executing them ([`brain`]) and the ball mode's
-//! brain ([`ball`]); the run time of the online modes: the receiver thread ([`receiver`]) with its
+//! brain ([`ball`]) with its search-ahead worker ([`speculator`]); the run time of the online modes: the receiver thread ([`receiver`]) with its
 //! [`counters`], the planning thread ([`planner`]), the wait-free handoff to the cycle threads
 //! ([`handoff`]) and the session that starts them with the telemetry thread ([`session`]).
 
@@ -12,4 +12,5 @@ pub mod handoff;
 pub mod planner;
 pub mod receiver;
 pub mod session;
+pub mod speculator;
 pub mod wire;
