@@ -403,8 +403,11 @@ def _binding_defaults(text: str) -> list[str]:
 
 
 def _binding_files() -> dict[str, str]:
+    files = sorted(BINDING_SRC.rglob("*.rs"))
     return {
-        f.name: f.read_text() for f in sorted(BINDING_SRC.glob("*.rs")) if f.name not in CONVERSION_HELPERS
+        f.relative_to(BINDING_SRC).as_posix(): f.read_text()
+        for f in files
+        if f.relative_to(BINDING_SRC).as_posix() not in CONVERSION_HELPERS
     }
 
 
@@ -444,7 +447,7 @@ def test_bindings_convert_only():
 def test_the_binding_check_finds_a_planted_loop_and_default():
     files = _binding_files()
     planted = dict(files)
-    planted["ball.rs"] = files["ball.rs"] + (
+    planted["ball/mod.rs"] = files["ball/mod.rs"] + (
         "\nfn ball_speeds(py: Python<'_>, states: &[BallState]) -> Vec<f64> {\n"
         "    let mut out = Vec::new();\n"
         "    for s in states {\n"
@@ -452,7 +455,7 @@ def test_the_binding_check_finds_a_planted_loop_and_default():
         "    }\n"
         "    out\n}\n"
     )
-    assert _binding_violations(planted) == ["ball.rs::ball_speeds: 1 loops over data (listed: 0)"]
+    assert _binding_violations(planted) == ["ball/mod.rs::ball_speeds: 1 loops over data (listed: 0)"]
     planted = dict(files)
     planted["traj.rs"] = files["traj.rs"] + '\n#[pyo3(signature = (q, step = 0.001, name = "x"))]\n'
     assert _binding_violations(planted) == ["traj.rs: literal default step=0.001 (take it from the core)"]

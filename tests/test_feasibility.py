@@ -121,6 +121,22 @@ def test_no_feasible_plan_exceeds_a_limit_at_10_khz_and_effort_ratio_is_the_dens
     print(f"within {worst_gap:.1e} of the dense peak; {stepped_over} peaks between the 10 kHz samples")
 
 
+# The catalogue values of gantry6's drives (docs/drives.md, crates/ttkin/src/robots/drives.rs),
+# one column per joint after the transpose: gear ratio G, torque constant k_t (N·m/A), peak
+# current (A), gear efficiency η, bus voltage U (V), winding resistance R (Ω), nominal current
+# I_nom (A), rated motor speed (rpm).
+GANTRY_DRIVES = np.array(
+    [
+        [200, 0.45, 8.4, 0.9, 325, 2.3, 2.8, 6000],
+        [200, 0.45, 8.4, 0.9, 325, 2.3, 2.8, 6000],
+        [50, 60.3e-3, 9, 0.72, 48, 1.16, 3.0, 12000],
+        [50, 60.3e-3, 9, 0.72, 48, 1.16, 3.0, 12000],
+        [30, 25.9e-3, 10, 0.75, 24, 0.611, 3.44, 12000],
+        [30, 43.9e-3, 3.6, 0.75, 24, 2.32, 1.2, 14000],
+    ]
+).T
+
+
 def test_issue_example_is_not_ok_with_an_effort_above_its_limit():
     q = np.array([-0.3205, -0.2153, 0.7574, 1.3635, 2.3812, 1.0477])
     qd = np.array([0.0023, 0.8334, 2.1938, -4.7879, -3.9945, -9.3762])
@@ -131,19 +147,7 @@ def test_issue_example_is_not_ok_with_an_effort_above_its_limit():
 
 
 def test_gantry6_effective_effort_limits_are_within_its_drives():
-    # The catalogue values of gantry6's drives (docs/drives.md, crates/ttkin/src/robots/drives.rs):
-    # gear ratio G, torque constant k_t (N·m/A), peak current (A), gear efficiency η, bus voltage
-    # (V), winding resistance (Ω).
-    g, kt, i_peak, eta, u_bus, r = np.array(
-        [
-            [200, 0.45, 8.4, 0.9, 325, 2.3],
-            [200, 0.45, 8.4, 0.9, 325, 2.3],
-            [50, 60.3e-3, 9, 0.72, 48, 1.16],
-            [50, 60.3e-3, 9, 0.72, 48, 1.16],
-            [30, 25.9e-3, 10, 0.75, 24, 0.611],
-            [30, 43.9e-3, 3.6, 0.75, 24, 2.32],
-        ]
-    ).T
+    g, kt, i_peak, eta, u_bus, r, _, _ = GANTRY_DRIVES
     peak = g * kt * i_peak * eta
     np.testing.assert_allclose(GANTRY.drive_effort_limits, peak, rtol=1e-12)
     eff = GANTRY.effective_effort_limits
@@ -173,18 +177,8 @@ def test_info_shows_which_effort_limit_governs(capsys):
 
 def test_gantry6_effective_velocity_limits_are_within_its_drives():
     # The drive's largest speed min(ω_rated, 0.9·(0.95·U − R·I_nom)/k_t)/G (ttkin::speed, also
-    # ttcan::actuator's speed clamp), from the catalogue values of docs/drives.md: G, k_t (N·m/A),
-    # R (Ω), U (V), I_nom (A), rated motor speed (rpm).
-    g, kt, r, u_bus, i_nom, rpm = np.array(
-        [
-            [200, 0.45, 2.3, 325, 2.8, 6000],
-            [200, 0.45, 2.3, 325, 2.8, 6000],
-            [50, 60.3e-3, 1.16, 48, 3.0, 12000],
-            [50, 60.3e-3, 1.16, 48, 3.0, 12000],
-            [30, 25.9e-3, 0.611, 24, 3.44, 12000],
-            [30, 43.9e-3, 2.32, 24, 1.2, 14000],
-        ]
-    ).T
+    # ttcan::actuator's speed clamp).
+    g, kt, _, _, u_bus, r, i_nom, rpm = GANTRY_DRIVES
     drive = np.minimum(rpm * np.pi / 30, 0.9 * (0.95 * u_bus - r * i_nom) / kt) / g
     np.testing.assert_allclose(GANTRY.drive_velocity_limits, drive, rtol=1e-12)
     eff = GANTRY.effective_velocity_limits

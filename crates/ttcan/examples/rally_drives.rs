@@ -7,8 +7,8 @@
 //! error peaked, the reference and the currents (`TRACE_FAULTS=1`: their whole record); the failed
 //! balls' indices; `IDEAL=1`: exact
 //! execution instead; `START=k`: balls k..k+N; `ROLLS`, `CANDIDATES`, `MAX_CANDIDATES`,
-//! `FALLBACK_ATTEMPTS`, `CONTACT_OFFSET`, `RETURN_TIMES`: the ball planner's settings, for
-//! experiments).
+//! `FALLBACK_ATTEMPTS`, `CONTACT_OFFSET`, `RETURN_TIMES`: the ball planner's settings, `WIDEN=0`: no wider
+//! correction search, for experiments; `DUMP=file`: every ball's outcome, one row per ball and world).
 use std::collections::BTreeMap;
 use std::sync::Mutex;
 use ttcan::coupled::{CoupledOptions, CoupledSim, SETPOINT_HZ};
@@ -174,6 +174,10 @@ fn main() {
         let v: Vec<f64> = t.split(',').map(|x| x.trim().parse().expect("TARGET")).collect();
         cfg.target = [v[0], v[1]];
     }
+    // WIDEN=0: no full search when a correction's near search fails (before issue 28's eighth stop).
+    if std::env::var("WIDEN").is_ok_and(|w| w == "0") {
+        cfg.widen_correction = false;
+    }
     let mut matched = Rally::new(cfg).expect("rally");
     let mut mismatched = Rally::new(RallyConfig {
         world: Some(WorldSpread::measured()),
@@ -226,6 +230,27 @@ fn main() {
         let (pm, pa) = med(o, &|o| o.plan_time_us);
         let (cm, ca) = med(o, &|o| o.correction_time_us);
         println!("{name:>10}: plan CPU median {pm:.0} (mean {pa:.0}) us, correction {cm:.0} ({ca:.0}) us");
+    }
+    // DUMP=file: one row per ball and world (index, world, in reach, status, returned, replans,
+    // landing x y, racket error m), to compare variants ball by ball.
+    if let Ok(path) = std::env::var("DUMP") {
+        let mut rows = String::from("ball\tworld\tin_reach\tstatus\treturned\treplans\tland_x\tland_y\tracket_error\n");
+        for (name, o) in [("matched", &a), ("mismatched", &b)] {
+            for (i, x) in o.iter().enumerate() {
+                rows += &format!(
+                    "{}\t{name}\t{}\t{}\t{}\t{}\t{:.4}\t{:.4}\t{:.4}\n",
+                    first + i as u64,
+                    x.in_reach,
+                    x.status,
+                    x.returned,
+                    x.replans,
+                    x.landing[0],
+                    x.landing[1],
+                    x.racket_error
+                );
+            }
+        }
+        std::fs::write(&path, rows).expect("DUMP");
     }
     for (name, o) in [("matched", &a), ("mismatched", &b)] {
         let idx: Vec<u64> = (0..o.len())

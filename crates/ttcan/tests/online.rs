@@ -326,14 +326,38 @@ impl Run {
     }
 
     /// Racket centre error (m) of the commanded joints at the hit `h` planned for controller time
-    /// `t` at controller time `planned` or later ([`Run::closest`]).
+    /// `t` at controller time `planned` or later ([`Run::closest`]). Each chord runs from the
+    /// joints commanded at a deadline to each channel's next executed cycle (its next sample of
+    /// the stroke, wherever a stall of that channel put it): a stall just after an in-step hit
+    /// that falls between two cycles removes the row after it, and the error would then be the
+    /// distance from the row before, up to half a cycle of racket motion (the 0.1–0.85 mm "in
+    /// step" errors of earlier runs; the measured racket was within 3e-5 m there).
     fn commanded_error_at(&self, t: f64, h: &HitMsg, planned: f64) -> f64 {
         let rows: Vec<Row> = self
             .commanded_clocked()
             .into_iter()
             .map(|(k, s, c)| (k, (0..6).map(|j| s[j][0]).collect(), c))
             .collect();
-        self.closest(&rows, t, h, planned)
+        // each channel's commanded joints by its executed cycle (Run phase)
+        let by_exec: Vec<std::collections::HashMap<u64, [f64; 2]>> = self
+            .reports
+            .iter()
+            .map(|r| {
+                r.telemetry
+                    .iter()
+                    .filter(|x| x.phase == 2)
+                    .map(|x| (x.source_cycle, [x.q_ref[0], x.q_ref[1]]))
+                    .collect()
+            })
+            .collect();
+        let next = |r: &Row| -> Option<Vec<f64>> {
+            let mut q = Vec::with_capacity(6);
+            for (c, m) in by_exec.iter().enumerate() {
+                q.extend_from_slice(m.get(&(r.2[c] + 1))?);
+            }
+            Some(q)
+        };
+        self.closest_with(&rows, t, h, planned, Some(&next))
     }
 
     /// The closest approach (m) of the racket centre of `rows` (joints by deadline, with each
@@ -351,6 +375,20 @@ impl Run {
     /// leaves the channels apart at the hit shows as a large error here; the controller counts
     /// such hits (`hits_out_of_step`).
     fn closest(&self, rows: &[Row], t: f64, h: &HitMsg, planned: f64) -> f64 {
+        self.closest_with(rows, t, h, planned, None)
+    }
+
+    /// [`Run::closest`] with chords from each row to `next` of it (else to the row of the next
+    /// deadline).
+    #[allow(clippy::type_complexity)]
+    fn closest_with(
+        &self,
+        rows: &[Row],
+        t: f64,
+        h: &HitMsg,
+        planned: f64,
+        next: Option<&dyn Fn(&Row) -> Option<Vec<f64>>>,
+    ) -> f64 {
         let deadline = |t: f64| (t * 1e9 - self.t0_ns as f64) / PERIOD_NS as f64;
         let x = deadline(t);
         // each channel's skipped deadlines as of deadline d: from the last row at or before it
@@ -375,12 +413,17 @@ impl Run {
         };
         let p = Vector3::from(h.centre);
         let mut best = f64::INFINITY;
-        for w in rows.windows(2) {
-            let k = w[0].0 as f64;
-            if k < lo || k > hi || w[1].0 != w[0].0 + 1 {
+        for (i, r) in rows.iter().enumerate() {
+            let k = r.0 as f64;
+            if k < lo || k > hi {
                 continue;
             }
-            let (a, b) = (centre(&w[0].1), centre(&w[1].1));
+            let end = match next {
+                Some(f) => f(r),
+                None => rows.get(i + 1).filter(|n| n.0 == r.0 + 1).map(|n| n.1.clone()),
+            };
+            let Some(end) = end else { continue };
+            let (a, b) = (centre(&r.1), centre(&end));
             let d = b - a;
             let s = if d.norm_squared() > 0.0 {
                 ((p - a).dot(&d) / d.norm_squared()).clamp(0.0, 1.0)
@@ -424,8 +467,13 @@ fn a_hit_is_planned_spliced_and_executed_end_to_end() {
         c.drain(2.5)
     });
     let h = sent.unwrap();
-    assert_eq!(r.statuses.len(), 1, "{:?}", r.statuses);
-    let st = r.statuses[0];
+    // its status; a second one, `out_of_step`, when a stall left the channels apart too close to
+    // the hit to re-plan (a loaded machine)
+    let (own, late): (Vec<StatusMsg>, Vec<StatusMsg>) =
+        r.statuses.iter().partition(|s| s.status != PlanStatus::OutOfStep);
+    assert_eq!(own.len(), 1, "{:?}", r.statuses);
+    assert!(late.iter().all(|s| s.id == 1) && late.len() <= 1, "{:?}", r.statuses);
+    let st = own[0];
     assert_eq!((st.id, st.status), (1, PlanStatus::Accepted), "{st:?}");
     assert!((st.t_hit - h.t_hit).abs() < 1e-6, "{st:?}");
     assert!(st.planning_time > 0.0 && st.planning_time < 0.5, "{st:?}");
@@ -636,7 +684,12 @@ fn hits_at_random_times_are_all_answered_and_executed_continuously() {
     });
     let k = r.counters;
     eprintln!("{k:?}");
-    let own: Vec<&StatusMsg> = r.statuses.iter().filter(|s| s.status != PlanStatus::Replaced).collect();
+    // a hit's own status; `replaced` and `out_of_step` come as second statuses of accepted hits
+    let own: Vec<&StatusMsg> = r
+        .statuses
+        .iter()
+        .filter(|s| !matches!(s.status, PlanStatus::Replaced | PlanStatus::OutOfStep))
+        .collect();
     assert_eq!(own.len(), n as usize, "one status per hit: {:?}", r.statuses);
     for id in 1..=n {
         assert!(own.iter().any(|s| s.id == id), "hit {id} unanswered");
@@ -672,18 +725,33 @@ fn hits_at_random_times_are_all_answered_and_executed_continuously() {
             outside.push((h.id, e));
         }
     }
-    // Each executed hit is counted at most once by the controller, in step or not (once in a few
-    // loaded runs one was counted by neither: docs/online.md, known problems); those outside the
-    // bound are at most the ones it counted out of step (a stall within a few cycles of the hit,
-    // too close to re-plan: the controller says so, the test does not exclude them itself).
+    // Each executed hit is counted once by the controller, in step or not (before, in two loaded
+    // runs one was counted by neither: docs/online.md); those outside the bound are at most the
+    // ones it counted out of step (a stall within a few cycles of the hit, too close to re-plan:
+    // the controller says so, the test does not exclude them itself). A hit answered
+    // `out_of_step` before its time was accepted, and is counted out of step or (brought back
+    // in step by a later re-plan) in step.
     let counted = k.hits_in_step + k.hits_out_of_step;
-    if counted != executed.len() as u64 {
-        eprintln!(
-            "{counted} hits counted in or out of step of {} executed",
-            executed.len()
-        );
+    assert_eq!(counted, executed.len() as u64, "hits counted in or out of step: {k:?}");
+    let announced: Vec<u32> = r
+        .statuses
+        .iter()
+        .filter(|s| s.status == PlanStatus::OutOfStep)
+        .map(|s| s.id)
+        .collect();
+    for id in &announced {
+        let known = executed.iter().any(|(s, _)| s.id == *id) || replaced.contains(id);
+        assert!(known, "hit {id} answered out_of_step was not accepted");
     }
-    assert!(counted <= executed.len() as u64, "{counted} hits counted: {k:?}");
+    eprintln!("answered out_of_step before the hit: {announced:?}");
+    // A hit in step is exact: the re-plans keep its joint state and the commanded racket meets
+    // the centre to 1e-5 m (a cycle of skew is 0.3–0.9 mm): the hits off by more are at most
+    // those counted out of step.
+    let off = executed
+        .iter()
+        .filter(|(s, h)| r.commanded_error_at(s.t_hit, &h.0, h.1) > 1e-5)
+        .count() as u64;
+    assert!(off <= k.hits_out_of_step, "{off} hits off by more than 1e-5 m: {k:?}");
     assert!(
         outside.len() as u64 <= k.hits_out_of_step,
         "hits outside the 1 mm bound {outside:?} but {} counted out of step: {k:?}",

@@ -84,3 +84,56 @@ fn a_stall_during_a_stroke_is_made_up_by_the_next_strokes_per_channel_start() {
     assert_eq!(tl.hit_deadlines(2), Some(vec![d + 100, d + 100]), "the hit in step");
     assert_eq!(tl.hit_deadlines(1), None, "stroke 1 had no hit");
 }
+
+/// The decision on a stroke is taken for every channel by the first one that sees it: taken only
+/// while no channel has commanded its start cycle yet, so no channel follows a stroke late (a jump
+/// of its setpoints). Scripted: channel A's thread stalls, channel B runs past the stroke's start;
+/// when A wakes first, within its own start, the stroke is refused for both (before: A took it
+/// and B followed it late). A stroke in the rings whose decision is not open is left there.
+#[test]
+fn a_stroke_one_channel_would_follow_late_is_refused_for_all() {
+    let (ma, _) = channel::running_channel();
+    let (mb, _) = channel::running_channel();
+    let tl = Arc::new(Timeline::new(2, 4, 1_000_000, 0));
+    let (mut sa, mut fa) = handoff::channel(0, [Some(0), Some(1), None, None], tl.clone());
+    let (mut sb, mut fb) = handoff::channel(1, [Some(2), Some(3), None, None], tl.clone());
+    step(&mut fa, &ma, 0);
+    step(&mut fb, &mb, 0);
+    let hold = tl.hold();
+    let end: Vec<f64> = hold.iter().map(|h| h + 0.3).collect();
+    let traj = JointTrajectory::quintic_between(&JointState::rest(&hold), &JointState::rest(&end), 0.5).unwrap();
+    // A stalls after deadline 5; B runs on to deadline 12, past the stroke's start (cycle 10 on
+    // both clocks: no skips when it was planned)
+    for k in 1..=5u64 {
+        step(&mut fa, &ma, k);
+    }
+    for k in 1..=12u64 {
+        step(&mut fb, &mb, k);
+    }
+    assert!(sa.push_joint(1, &[10, 10], 30, &traj) && sb.push_joint(1, &[10, 10], 30, &traj));
+    // not opened yet: left in the rings
+    step(&mut fb, &mb, 13);
+    assert_eq!(tl.decision(1), Decision::Pending);
+    assert!(!tl.seen_by_all(1));
+    tl.open(1);
+    // A wakes at deadline 14, its executed cycle 6: within its own start, but B commanded its
+    // start already
+    let a = step(&mut fa, &ma, 14);
+    assert_eq!(tl.decision(1), Decision::Late);
+    let b = step(&mut fb, &mb, 14);
+    assert!(tl.seen_by_all(1));
+    assert_eq!(tl.late_applied(), 0, "no channel followed it late");
+    assert_eq!((a, b), ([hold[0], hold[1]], [hold[2], hold[3]]), "both hold");
+    // The same stroke at deadline 28 for both (A skipped 8 deadlines: its start cycle 20; B
+    // none: 28), its hit at deadline 48: taken, and both command the hit at that deadline.
+    assert!(sa.push_joint(2, &[20, 28], 40, &traj) && sb.push_joint(2, &[20, 28], 48, &traj));
+    tl.open(2);
+    for k in 15..=60u64 {
+        step(&mut fa, &ma, k);
+        step(&mut fb, &mb, k);
+    }
+    assert_eq!(tl.decision(2), Decision::Taken);
+    assert_eq!(tl.late_applied(), 0);
+    assert_eq!(tl.skips(), vec![8, 0]);
+    assert_eq!(tl.hit_deadlines(2), Some(vec![48, 48]), "the hit in step");
+}

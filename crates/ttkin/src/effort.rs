@@ -29,6 +29,20 @@
 use crate::chain::Chain;
 use crate::joint::Joint;
 
+/// The smallest of the given limits and the source that sets it (the first on a tie), or
+/// (+∞, `none`) when none is given: "limit + which governs", for efforts and speeds alike.
+pub(crate) fn governing<S: Copy>(limits: impl IntoIterator<Item = (Option<f64>, S)>, none: S) -> (f64, S) {
+    let mut best = (f64::INFINITY, none);
+    for (v, s) in limits {
+        if let Some(v) = v {
+            if v < best.0 {
+                best = (v, s);
+            }
+        }
+    }
+    best
+}
+
 /// Which limit governs a joint's effort.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum EffortSource {
@@ -97,20 +111,15 @@ impl JointEffort {
 
     /// The effective limit at `speed` and the limit that governs it (the file's on a tie).
     pub fn with_source(&self, speed: f64) -> (f64, EffortSource) {
-        let mut best = (f64::INFINITY, EffortSource::None);
         let voltage = self.voltage.map(|(a, b)| (a - b * speed.abs()).max(0.0));
-        for (v, s) in [
-            (self.file, EffortSource::RobotFile),
-            (self.peak, EffortSource::DrivePeak),
-            (voltage, EffortSource::DriveVoltage),
-        ] {
-            if let Some(v) = v {
-                if v < best.0 {
-                    best = (v, s);
-                }
-            }
-        }
-        best
+        governing(
+            [
+                (self.file, EffortSource::RobotFile),
+                (self.peak, EffortSource::DrivePeak),
+                (voltage, EffortSource::DriveVoltage),
+            ],
+            EffortSource::None,
+        )
     }
 }
 

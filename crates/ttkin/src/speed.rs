@@ -17,6 +17,7 @@
 //! fallback). Without k_t, R and U_bus only the motor's speed rating bounds the drive.
 
 use crate::chain::Chain;
+use crate::effort::governing;
 use crate::joint::{Drive, Joint};
 
 /// Largest PWM duty of a drive's power stage: the winding sees at most d_max·U_bus.
@@ -97,15 +98,10 @@ impl JointSpeed {
 
     /// The effective limit (rad/s or m/s; +∞ when none) and which governs (the file's on a tie).
     pub fn with_source(&self) -> (f64, SpeedSource) {
-        let mut best = (f64::INFINITY, SpeedSource::None);
-        for (v, s) in [(self.file, SpeedSource::RobotFile), (self.drive, SpeedSource::Drive)] {
-            if let Some(v) = v {
-                if v < best.0 {
-                    best = (v, s);
-                }
-            }
-        }
-        best
+        governing(
+            [(self.file, SpeedSource::RobotFile), (self.drive, SpeedSource::Drive)],
+            SpeedSource::None,
+        )
     }
 
     /// The effective limit (rad/s or m/s; +∞ when none).

@@ -9,7 +9,7 @@ use ttkin::ball::hitplan::{ReturnPlanner, ReturnStatus};
 use ttkin::ball::impact::RacketImpact;
 use ttkin::ball::model::{BallModel, Table};
 use ttkin::ball::predict::{crossing, predict, CrossingOutcome};
-use ttkin::ball::rally::{self, Rally, RallyConfig};
+use ttkin::ball::rally::{self, BallOutcome, Rally, RallyConfig};
 use ttkin::ball::reach::{walk_after_bounce, walk_after_bounce_clip};
 use ttkin::hit::StrokeProfile;
 use ttkin::traj::duration::quintic_limit_ratio;
@@ -539,6 +539,42 @@ fn rally_returns_most_balls_in_reach() {
     // With the measured ball model (issue 28) and the drive-limited effort no stroke of this
     // sample needs a jerk-limited hit leg (before, some returns did); the jerk-limited planning and
     // execution of a ball beyond the quintic is tested in the next test.
+}
+
+/// A correction whose search near the hit under way finds no feasible hit searches in full from
+/// the commanded state (`RallyConfig::widen_correction`, issue 28's eighth stop): balls of seed 0
+/// where the near search fails (found in `rally_drives 1000 0`, missed without the wider search)
+/// are corrected with it and returned at least as often.
+#[test]
+fn a_correction_the_near_search_cannot_make_is_searched_in_full() {
+    let balls = [311, 401, 737, 925];
+    let play = |widen: bool| -> Vec<BallOutcome> {
+        let r = gantry_rally(RallyConfig {
+            widen_correction: widen,
+            paths: 0,
+            ..RallyConfig::default()
+        });
+        balls
+            .iter()
+            .map(|&k| r.play_range(k, 1, None, None, &|| false).unwrap().remove(0))
+            .collect()
+    };
+    let (narrow, wide) = (play(false), play(true));
+    for ((k, n), w) in balls.iter().zip(&narrow).zip(&wide) {
+        assert!(
+            w.replans > n.replans,
+            "ball {k}: {} corrections with the wider search, {} without",
+            w.replans,
+            n.replans
+        );
+    }
+    let returned = |o: &[BallOutcome]| o.iter().filter(|o| o.returned).count();
+    assert!(
+        returned(&wide) >= returned(&narrow),
+        "{} < {}",
+        returned(&wide),
+        returned(&narrow)
+    );
 }
 
 #[test]

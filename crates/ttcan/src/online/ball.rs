@@ -668,7 +668,12 @@ impl Brain for BallBrain {
     }
 
     fn outcome(&mut self, status: &StatusMsg) {
-        if self.sent_ids.contains(&status.id) && !matches!(status.status, PlanStatus::Accepted | PlanStatus::Replaced) {
+        if self.sent_ids.contains(&status.id)
+            && !matches!(
+                status.status,
+                PlanStatus::Accepted | PlanStatus::Replaced | PlanStatus::OutOfStep
+            )
+        {
             self.stats.refused += 1;
         }
     }

@@ -120,6 +120,8 @@ counters! {
     status_replaced,
     /// Statuses sent: rejected.
     status_rejected,
+    /// Statuses sent: out of step (a second status of an accepted hit, before it).
+    status_out_of_step,
     /// Strokes handed over to the cycle threads and taken on time.
     splices,
     /// Strokes refused by a cycle thread because they came after their splice cycle.
@@ -320,6 +322,7 @@ impl Counters {
             PlanStatus::Infeasible => &self.status_infeasible,
             PlanStatus::Replaced => &self.status_replaced,
             PlanStatus::Rejected => &self.status_rejected,
+            PlanStatus::OutOfStep => &self.status_out_of_step,
         };
         c.fetch_add(1, Ordering::Relaxed);
     }
@@ -353,5 +356,6 @@ impl CountersSnapshot {
             + self.status_infeasible
             + self.status_replaced
             + self.status_rejected
+            + self.status_out_of_step
     }
 }

@@ -67,6 +67,10 @@ pub struct Stroke {
     pub hit_cycle: u64,
     /// The joint trajectory (all joints of the robot).
     pub traj: Option<JointTrajectory>,
+    /// Every channel's start cycle of the stroke, each on its own stroke clock (`u64::MAX`: no
+    /// constraint): the channel that decides takes the stroke only while no channel has
+    /// commanded its start cycle yet, so that no channel follows it late.
+    pub starts: [u64; MAX_CHANNELS],
 }
 
 /// How a cycle thread decided on a stroke.
@@ -215,6 +219,12 @@ impl Timeline {
     /// The deadline at which each channel commanded the hit of stroke `seq`, once every channel
     /// has (`None` before, or when the record was overwritten by later strokes).
     pub fn hit_deadlines(&self, seq: u64) -> Option<Vec<u64>> {
+        self.hit_records(seq).into_iter().collect()
+    }
+
+    /// The deadline at which each channel commanded the hit of stroke `seq` (`None`: not yet, or
+    /// the record was overwritten by later strokes).
+    pub fn hit_records(&self, seq: u64) -> Vec<Option<u64>> {
         (0..self.channels)
             .map(|c| {
                 let w = self.hits[c][seq as usize % HIT_SLOTS].load(Ordering::Acquire);
@@ -239,9 +249,33 @@ impl Timeline {
         self.late.load(Ordering::Relaxed)
     }
 
-    /// Opens the decision on stroke `seq` (planning thread, before pushing it).
+    /// Opens the decision on stroke `seq` (planning thread, once it is pushed to every channel:
+    /// a channel leaves a stroke whose decision is not open in its ring).
     pub fn open(&self, seq: u64) {
         self.decision.store(seq << 2 | PENDING, Ordering::Release);
+    }
+
+    /// Refuses stroke `seq` unless a channel has decided on it already (planning thread: it could
+    /// not be pushed to every channel, or no channel saw it in time); the channels that hold it
+    /// then discard it. The decision that stands.
+    pub fn refuse(&self, seq: u64) -> Decision {
+        if self.decision.load(Ordering::Acquire) >> 2 < seq {
+            // not opened: no channel decides on it before this
+            self.decision.store(seq << 2 | LATE, Ordering::Release);
+        } else {
+            let _ = self.decision.compare_exchange(
+                seq << 2 | PENDING,
+                seq << 2 | LATE,
+                Ordering::AcqRel,
+                Ordering::Acquire,
+            );
+        }
+        self.decision(seq)
+    }
+
+    /// True when the decision on stroke `seq` is open or made (or a later stroke's is).
+    fn opened(&self, seq: u64) -> bool {
+        self.decision.load(Ordering::Acquire) >> 2 >= seq
     }
 
     /// The decision on stroke `seq`.
@@ -301,6 +335,7 @@ impl Timeline {
 /// The planning thread's side of one channel's handoff: the stroke ring and the return ring.
 #[derive(Debug)]
 pub struct Sender {
+    ch: usize,
     to_cycle: rtrb::Producer<Box<Stroke>>,
     back: rtrb::Consumer<Box<Stroke>>,
     boxes: usize,
@@ -316,6 +351,16 @@ impl Sender {
 
     /// [`Sender::push`] of a stroke whose hit comes at this channel's executed cycle `hit_cycle`.
     pub fn push_hit(&mut self, seq: u64, start_cycle: u64, hit_cycle: u64, traj: &JointTrajectory) -> bool {
+        let mut starts = [u64::MAX; MAX_CHANNELS];
+        starts[self.ch] = start_cycle;
+        self.push_joint(seq, &starts, hit_cycle, traj)
+    }
+
+    /// [`Sender::push_hit`] of a stroke every channel starts at one deadline: `starts` holds each
+    /// channel's start cycle on its own stroke clock (this channel's among them); the stroke is
+    /// taken only while no channel has commanded its start cycle yet.
+    pub fn push_joint(&mut self, seq: u64, starts: &[u64], hit_cycle: u64, traj: &JointTrajectory) -> bool {
+        let start_cycle = starts.get(self.ch).copied().unwrap_or(u64::MAX);
         let mut b = match self.back.pop() {
             Ok(b) => b,
             Err(_) if self.boxes < POOL => {
@@ -327,6 +372,10 @@ impl Sender {
         b.seq = seq;
         b.start_cycle = start_cycle;
         b.hit_cycle = hit_cycle;
+        b.starts = [u64::MAX; MAX_CHANNELS];
+        for (d, s) in b.starts.iter_mut().zip(starts) {
+            *d = *s;
+        }
         b.traj = Some(traj.clone());
         match self.to_cycle.push(b) {
             Ok(()) => true,
@@ -337,6 +386,11 @@ impl Sender {
                 false
             }
         }
+    }
+
+    /// This channel's entry of `starts` (one start cycle per channel).
+    pub fn own(&self, starts: &[u64]) -> u64 {
+        starts.get(self.ch).copied().unwrap_or(u64::MAX)
     }
 
     /// The robot joint of each axis of this channel.
@@ -380,6 +434,7 @@ pub fn channel(
     let (back_tx, back_rx) = rtrb::RingBuffer::new(POOL);
     (
         Sender {
+            ch: ch.min(MAX_CHANNELS - 1),
             to_cycle,
             back: back_rx,
             boxes: 0,
@@ -415,13 +470,26 @@ impl StrokeFollower {
         }
     }
 
+    /// True when no other channel has commanded its start cycle of `s` yet (its clock word holds
+    /// the executed cycle of its last fill; it takes the stroke at its next fill at the latest).
+    fn others_before_start(&self, s: &Stroke) -> bool {
+        (0..self.timeline.channels)
+            .filter(|&c| c != self.ch)
+            .all(|c| self.timeline.clock_of(c).1 < s.starts[c])
+    }
+
     fn receive(&mut self, k: u64) {
-        while let Ok(s) = self.from_planner.pop() {
+        // a stroke whose decision is not open yet is not yet in every channel's ring: left
+        // there until it is (the planning thread opens it after the last push)
+        while let Ok(seq) = self.from_planner.peek().map(|s| s.seq) {
+            if !self.timeline.opened(seq) {
+                break;
+            }
+            let Ok(s) = self.from_planner.pop() else { break };
             let free = self.pending.iter().position(|p| p.is_none());
             let stopped = self.timeline.stopped.load(Ordering::Relaxed);
-            let taken = self
-                .timeline
-                .decide(s.seq, k <= s.start_cycle && free.is_some() && !stopped);
+            let on_time = k <= s.start_cycle && free.is_some() && !stopped && self.others_before_start(&s);
+            let taken = self.timeline.decide(s.seq, on_time);
             self.timeline.seen[self.ch].store(s.seq, Ordering::Release);
             if !taken {
                 self.give_back(s);
@@ -443,7 +511,12 @@ impl StrokeFollower {
             }
             match self.pending.iter().position(|p| p.is_none()) {
                 Some(p) => self.pending[p] = Some(s),
-                None => self.give_back(s),
+                None => {
+                    // taken by another channel, no room here: this channel does not follow it
+                    // (counted with the late ones: the channels split on it)
+                    self.timeline.late.fetch_add(1, Ordering::Relaxed);
+                    self.give_back(s);
+                }
             }
         }
         // the latest pending stroke whose start has come becomes the active one

@@ -112,6 +112,10 @@ pub enum PlanStatus {
     Replaced = 4,
     /// Refused: in the past, malformed values, or the robot not ready.
     Rejected = 5,
+    /// A second status of an accepted hit, before its time: a channel thread's stall left the
+    /// channels apart and no re-plan brings them back in step before the hit (too close to it,
+    /// or no feasible leg): the hit will be executed out of step, off the racket pose.
+    OutOfStep = 6,
 }
 
 impl PlanStatus {
@@ -123,6 +127,7 @@ impl PlanStatus {
             3 => PlanStatus::Infeasible,
             4 => PlanStatus::Replaced,
             5 => PlanStatus::Rejected,
+            6 => PlanStatus::OutOfStep,
             _ => return None,
         })
     }

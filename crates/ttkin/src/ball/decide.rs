@@ -19,6 +19,10 @@
 //!   passes the correction time (with every frame delivered, the rally's choice exactly); when
 //!   frames are missing, the first observation past the correction time triggers it with the
 //!   observations before it.
+//! - **Wider correction** (`widen_correction`; the rally's default): when the search near the
+//!   hit under way ([`ReturnPlanner::plan_near`]) finds no feasible hit, the correction searches
+//!   in full from the commanded state ([`ReturnPlanner::plan_from`]: every candidate, the
+//!   requested target and its fallbacks) before the hit under way is kept; it costs only then.
 //! - **Second correction** (`second_correction` > 0; the rally's default 0.05 s): the same, that
 //!   long after the first correction's time, with every observation since the first estimate,
 //!   near the hit under way (the corrected one, else the first); skipped the same way.
@@ -61,6 +65,9 @@ pub struct DecideConfig {
     /// updated with every observation since the first estimate, the hit planned again near the
     /// corrected one); 0 for none.
     pub second_correction: f64,
+    /// Whether a correction whose search near the hit under way finds no feasible hit searches
+    /// in full from the commanded state (module doc) before keeping the hit under way.
+    pub widen_correction: bool,
 }
 
 /// What one observation led to.
@@ -549,13 +556,18 @@ impl BallDecider {
                 }
             }
         }
-        let plan = match current {
-            Some((hit, t_prev)) => replanner.plan_near(&up.state, now, &start, up.bounced, hit, t_prev),
-            None => replanner.plan_from(&up.state, now, self.cfg.target, &start, up.bounced),
+        let full = || replanner.plan_from(&up.state, now, self.cfg.target, &start, up.bounced);
+        // the hit with the search's next best (for a speculation: `Speculation::others`)
+        let ok = |plan: Result<ReturnPlan, Error>| {
+            let p = plan.ok()?;
+            let found = p.status == ReturnStatus::Ok;
+            p.hit.filter(|_| found).map(|h| (h, p.alternatives))
+        };
+        match current {
+            Some((hit, t_prev)) => ok(replanner.plan_near(&up.state, now, &start, up.bounced, hit, t_prev))
+                .or_else(|| self.cfg.widen_correction.then(|| ok(full())).flatten()),
+            None => ok(full()),
         }
-        .ok()?;
-        let hit = plan.hit.filter(|_| plan.status == ReturnStatus::Ok)?;
-        Some((hit, plan.alternatives))
     }
 }
 

@@ -89,6 +89,11 @@ pub struct RallyConfig {
     /// none. 0.05 s (issue 28's seventh stop: 802 → 812 of 874 in-reach balls of seed 0's
     /// mismatched rally through the drives, misses 19 → 7; 0.08 s: 811; docs/ball.md).
     pub second_correction: f64,
+    /// Whether a correction whose search near the hit under way finds no feasible hit searches
+    /// in full from the commanded state before keeping that hit
+    /// ([`DecideConfig::widen_correction`]; issue 28's eighth stop: seed 0's matched rally
+    /// through the drives 858 → 862 of 906 in-reach balls, docs/ball.md).
+    pub widen_correction: bool,
     /// The world's departure from the planner's model per ball; `None`: the world is the model.
     pub world: Option<WorldSpread>,
 }
@@ -106,6 +111,7 @@ impl Default for RallyConfig {
             max_window: 0.25,
             correction_delay: 0.03,
             second_correction: 0.05,
+            widen_correction: true,
             world: None,
         }
     }
@@ -130,6 +136,7 @@ impl DecideConfig {
             correction_delay: cfg.correction_delay,
             bounce_spread: Some(crate::ball::update::BOUNCE_SPREAD),
             second_correction: cfg.second_correction,
+            widen_correction: cfg.widen_correction,
         }
     }
 }
