@@ -365,6 +365,10 @@ def run(
         "latency_p99_us_planning": stat("latency_p99_us_planning"),
     }
     summary["brain"] = {k[len("online_") :]: v for k, v in st.items() if k.startswith("online_ball")}
+    # Why strokes were late (ready after their splice cycle), and the causes of those over 2 ms.
+    summary["late_strokes"] = {
+        k[len("online_") :]: v for k, v in st.items() if k.startswith(("online_late_", "online_over_2ms_"))
+    }
     summary["offline_statuses"] = [str(x) for x in offline["status"]]
     summary["balls"] = [{k: v for k, v in b.items() if k != "timeline"} for b in balls]
     (out / "summary.json").write_text(json.dumps(summary, indent=2))

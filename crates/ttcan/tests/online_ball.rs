@@ -2,7 +2,7 @@
 //! observations, the clock relation, the latency budget, ready after the hit and on a lost ball.
 
 use ttcan::online::ball::{BallBrain, BallBrainConfig, ClockRelation};
-use ttcan::online::brain::{Brain, Command, SpliceAt};
+use ttcan::online::brain::{Brain, Command, DecisionPath, SpliceAt};
 use ttcan::online::wire::{HitMsg, ObservationMsg, PlanStatus, StatusMsg};
 use ttkin::ball::decide::DecideConfig;
 use ttkin::ball::flight::Flight;
@@ -187,6 +187,41 @@ fn a_speculating_brain_decides_from_the_hits_it_found_ahead() {
     feed(&pl, &cfg, &mut plain, 0, 1);
     let p = plain.stats();
     assert_eq!((p.speculated, p.speculation_used, p.speculation_unused), (0, 0, 0));
+}
+
+#[test]
+fn the_searches_ahead_on_a_worker_thread_give_the_hits_of_those_made_in_line() {
+    let pl = planner();
+    let cfg = RallyConfig::default();
+    let mut inline = speculating_brain(&pl, &cfg, 3);
+    let mut worker = speculating_brain(&pl, &cfg, 3);
+    assert!(!worker.has_worker());
+    worker.spawn_worker(0).unwrap();
+    assert!(worker.has_worker());
+    let mut same = 0;
+    let mut paths = Vec::new();
+    for i in 0..10u64 {
+        let a = feed(&pl, &cfg, &mut inline, i, 300 + i as u32);
+        let b = feed(&pl, &cfg, &mut worker, i, 300 + i as u32);
+        let close = a.len() == b.len() && a.iter().zip(&b).all(|(x, y)| (x.t_hit - y.t_hit).abs() < 1e-9);
+        same += close as u32;
+        paths.extend(worker.decision_path());
+        for br in [&mut inline, &mut worker] {
+            br.tick(1e3, &JointState::rest(&pl.ready));
+        }
+    }
+    let (s, w) = (inline.stats(), worker.stats());
+    // The observations are fed at once: the deciding ones come while the worker still searches,
+    // and, without a splice deadline, wait for it to the end.
+    assert!(w.speculation_waited >= 1, "{w:?}");
+    assert_eq!(w.speculation_pending, 0, "{w:?}");
+    assert_eq!((s.speculation_waited, s.speculation_pending), (0, 0), "{s:?}");
+    assert_eq!(w.speculated, s.speculated, "{w:?} vs {s:?}");
+    assert!(w.speculation_used * 10 >= (w.planned + w.corrected) * 7, "{w:?}");
+    // The same searches from the same observations (no budget without a splice deadline): the
+    // same hits.
+    assert_eq!(same, 10, "{same} of 10 balls with the same hits");
+    assert!(paths.contains(&DecisionPath::Held), "{paths:?}");
 }
 
 #[test]

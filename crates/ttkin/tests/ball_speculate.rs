@@ -87,10 +87,11 @@ fn a_held_hit_that_cannot_be_planned_again_falls_back_to_the_search() {
         for (&t, &p) in o.times.iter().zip(&o.positions) {
             let now = t + cfg.camera.latency;
             if spec.speculation_due(1) {
-                // a hit found ahead, held with a hit time already past at the decision
+                // a hit found ahead, held with a hit time already past at the decision, alone
                 if spec.speculate(&pl, now, &ready) {
                     let mut h: Speculation = spec.held().unwrap().clone();
                     h.t_hit = now - 0.1;
+                    h.others.clear();
                     spec.hold(h);
                 }
             }
@@ -109,6 +110,55 @@ fn a_held_hit_that_cannot_be_planned_again_falls_back_to_the_search() {
         }
     }
     assert!(checked >= 8, "{checked} fallbacks");
+}
+
+#[test]
+fn the_next_best_hit_held_is_tried_when_the_best_cannot_be_planned_again() {
+    let (pl, cfg, truth) = setup();
+    let dc = DecideConfig::of(&cfg);
+    let ready = JointState::rest(&pl.ready);
+    let (mut second, mut with_others) = (0, 0);
+    for i in 0..12 {
+        let o = observe_ball(&truth, &cfg, i, None);
+        let mut d = BallDecider::new(&pl, dc);
+        let mut held: Option<Speculation> = None;
+        for (&t, &p) in o.times.iter().zip(&o.positions) {
+            let now = t + cfg.camera.latency;
+            if d.speculation_due(1) && d.speculate(&pl, now, &ready) {
+                // the best hit found ahead made infeasible (its time already past at the
+                // decision), the search's own best put second
+                let found = d.held().unwrap().clone();
+                let h = Speculation {
+                    t_hit: now - 0.1,
+                    others: vec![(found.hit.clone(), found.t_hit)],
+                    ..found
+                };
+                d.hold(h.clone());
+                held = Some(h);
+            }
+            if let Some(Decision::Planned { plan, .. }) = d.observe(&pl, t, p, now, &|_| ready.clone()) {
+                let Some(h) = held.take() else { break };
+                with_others += 1;
+                if d.speculation_rank() == Some(1) {
+                    // planned again from the second: its hit time, not the past one
+                    assert_eq!(d.speculation_used(), Some(true));
+                    let hit = plan.hit.expect("a hit");
+                    assert!((now + hit.hit.t - h.others[0].1).abs() < 1e-9, "ball {i}");
+                    second += 1;
+                } else {
+                    // never the first (its time is past): the second, or the full search
+                    assert_eq!(d.speculation_rank(), None, "ball {i}");
+                    assert_eq!(d.speculation_used(), Some(false), "ball {i}");
+                }
+                break;
+            }
+        }
+    }
+    assert!(with_others >= 8, "{with_others} decisions with a hit held");
+    assert!(
+        second * 10 >= with_others * 7,
+        "{second} of {with_others} from the second hit"
+    );
 }
 
 #[test]

@@ -21,11 +21,13 @@
 //! **Latency budget.** An observation whose exposure is more than `latency_budget` old on arrival
 //! (controller clock) is dropped and counted (`stale`): a plan from it would start too late.
 
-use super::brain::{Awaiting, Brain, Command, Observed, PlannedStroke, SpliceAt};
+use super::brain::{Awaiting, Brain, Command, DecisionPath, Observed, PlannedStroke, SpliceAt};
 use super::counters::Counters;
+use super::speculator::{SpecJob, Speculator};
 use super::wire::{HitMsg, ObservationMsg, PlanStatus, StatusMsg};
 use std::collections::VecDeque;
 use std::sync::atomic::Ordering;
+use std::time::{Duration, Instant};
 use ttkin::ball::decide::{BallDecider, DecideConfig, Decision};
 use ttkin::ball::flight::Flight;
 use ttkin::ball::hitplan::{PlanBudget, ReturnHit, ReturnPlanner, ReturnStatus};
@@ -126,6 +128,15 @@ pub struct BallStats {
     /// Decisions with a hit found ahead that could not use it (not feasible from the decision's
     /// estimate and state, or no correction made) and searched as without one.
     pub speculation_unused: u64,
+    /// Decisions due while their search ahead still ran on the worker thread
+    /// ([`BallBrain::spawn_worker`]) that waited for it.
+    pub speculation_waited: u64,
+    /// Of those, the decisions whose search ahead had not ended by the end of their wait (they
+    /// searched themselves).
+    pub speculation_pending: u64,
+    /// Decisions (within `speculation_used`) that planned again a next best hit of the search
+    /// ahead, the best not being feasible any more.
+    pub speculation_alternative: u64,
 }
 
 /// The ball in play.
@@ -137,10 +148,16 @@ struct Ball {
     /// The absolute time (s, controller clock) and the ball planner's hit in force.
     hit: Option<(f64, ReturnHit)>,
     ended: bool,
+    /// Decisions made for this ball so far (which one a search ahead is for).
+    decisions: u32,
 }
 
+/// Time (s) a decision keeps of its splice deadline for planning the hit found ahead again when
+/// it waits for a search ahead still running ([`BallBrain::spawn_worker`]).
+const REPLAN_RESERVE: f64 = 4e-4;
+
 /// The ball mode's brain (see the module doc).
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub struct BallBrain {
     planner: ReturnPlanner,
     cfg: BallBrainConfig,
@@ -158,6 +175,14 @@ pub struct BallBrain {
     /// it comes too late for its splice, its hit is planned again from a newer observation
     /// ([`Brain::refine`]).
     refinable: bool,
+    /// The thread the searches ahead run on ([`BallBrain::spawn_worker`]); `None`: on the
+    /// caller's thread, within [`Brain::observe`].
+    worker: Option<Speculator>,
+    /// How the last decision found its hit.
+    path: Option<DecisionPath>,
+    /// The search ahead of the decision of the observation being handled still ran at the end of
+    /// its wait ([`BallBrain::collect`]).
+    spec_pending: bool,
 }
 
 /// The brain's state before an observation, and the observation (see [`BallBrain`]'s `before`).
@@ -235,7 +260,54 @@ impl BallBrain {
             stats: BallStats::default(),
             before: None,
             refinable: false,
+            worker: None,
+            path: None,
+            spec_pending: false,
         })
+    }
+
+    /// Moves the searches ahead ([`BallBrainConfig::speculate_frames`]) to a worker thread of
+    /// their own (at SCHED_FIFO `priority` when > 0 and allowed): the thread that observes is
+    /// then free when a decision's observation comes; a decision whose search ahead still runs
+    /// waits for it until [`REPLAN_RESERVE`] before its splice deadline (without a deadline,
+    /// until it ends). Nothing with `speculate_frames` 0.
+    pub fn spawn_worker(&mut self, priority: u8) -> std::io::Result<()> {
+        if self.cfg.speculate_frames > 0 && self.worker.is_none() {
+            self.worker = Some(Speculator::spawn(self.planner.clone(), priority)?);
+        }
+        Ok(())
+    }
+
+    /// Whether the searches ahead run on a worker thread ([`BallBrain::spawn_worker`]).
+    pub fn has_worker(&self) -> bool {
+        self.worker.is_some()
+    }
+
+    /// Takes the worker's result for the current ball's next decision, if there, and holds its
+    /// hit; when the observation at `t` (s) is that decision's and its search still runs, waits
+    /// for it until [`REPLAN_RESERVE`] before `deadline`. Sets `spec_pending` when the
+    /// decision's search ahead was still running at the end (it searches itself).
+    fn collect(&mut self, id: u32, t: f64, deadline: Option<Instant>) {
+        self.spec_pending = false;
+        let (Some(w), Some(ball)) = (self.worker.as_mut(), self.ball.as_mut().filter(|b| b.id == id)) else {
+            return;
+        };
+        let key = (ball.id, ball.decisions);
+        let mut got = w.poll();
+        let mut pending = false;
+        if got.is_none() && w.in_flight() == Some(key) && ball.decider.decides(t) {
+            self.stats.speculation_waited += 1;
+            let until = deadline.map(|d| d.checked_sub(Duration::from_secs_f64(REPLAN_RESERVE)).unwrap_or(d));
+            got = w.wait(until);
+            pending = got.is_none();
+            if pending {
+                self.stats.speculation_pending += 1;
+            }
+        }
+        if let Some(spec) = got.filter(|d| d.key == key).and_then(|d| d.spec) {
+            ball.decider.hold(spec);
+        }
+        self.spec_pending = pending;
     }
 
     /// The counters.
@@ -341,6 +413,7 @@ impl BallBrain {
                 last_seen: now,
                 hit: None,
                 ended: false,
+                decisions: 0,
             });
         }
         let ball = self.ball.as_mut().expect("set above");
@@ -353,6 +426,7 @@ impl BallBrain {
             return out;
         }
         ball.last_seen = now;
+        let pending = self.spec_pending;
         // Decided by the splice's deadline (an anytime search: the best hit found by then).
         self.planner.budget = at.deadline.map(PlanBudget::Until);
         // The decision's `now` is the splice instant: the stroke it plans starts there, from the
@@ -362,23 +436,50 @@ impl BallBrain {
             .observe(&self.planner, t, obs.position, at.t, &|_| at.state.clone());
         let done = ball.decider.done();
         if decision.is_some() {
-            match ball.decider.speculation_used() {
-                Some(true) => self.stats.speculation_used += 1,
-                Some(false) => self.stats.speculation_unused += 1,
-                None => {}
-            }
+            ball.decisions += 1;
+            self.path = Some(match ball.decider.speculation_used() {
+                Some(true) => {
+                    self.stats.speculation_used += 1;
+                    if ball.decider.speculation_rank().is_some_and(|r| r > 0) {
+                        self.stats.speculation_alternative += 1;
+                    }
+                    DecisionPath::Held
+                }
+                Some(false) => {
+                    self.stats.speculation_unused += 1;
+                    DecisionPath::HeldInfeasible
+                }
+                None if pending => DecisionPath::SearchPending,
+                None => DecisionPath::Searched,
+            });
         } else if ball.decider.speculation_due(self.cfg.speculate_frames) {
-            // The next decision's search, made now (on this thread, before its observation
-            // comes), given up 2 ms before that observation is due (the decision then searches
-            // itself): it must not hold that observation up.
+            // The next decision's search, made now, before its observation comes: on the worker
+            // thread given up 1 ms before that observation is due (the decision waits for it,
+            // within its lead); on this thread 2 ms before (it must not hold that observation
+            // up). Either way the decision searches itself when no hit was found. Without a
+            // splice deadline (a brain driven off-line) it is not given up.
             let frames = self.cfg.speculate_frames as f64;
-            let left = (frames * self.cfg.decide.frame_period - 2e-3).max(0.0);
-            self.planner.budget = Some(PlanBudget::Abandon(
-                std::time::Instant::now() + std::time::Duration::from_secs_f64(left),
-            ));
+            let margin = if self.worker.is_some() { 1e-3 } else { 2e-3 };
+            let left = (frames * self.cfg.decide.frame_period - margin).max(0.0);
+            let abandon = at.deadline.map(|_| Instant::now() + Duration::from_secs_f64(left));
             self.stats.speculated += 1;
-            ball.decider.speculate(&self.planner, at.t, &at.state);
-            self.planner.budget = None;
+            match self.worker.as_mut() {
+                Some(w) => {
+                    ball.decider.mark_speculated();
+                    w.submit(SpecJob {
+                        key: (ball.id, ball.decisions),
+                        decider: ball.decider.clone(),
+                        now: at.t,
+                        start: at.state.clone(),
+                        abandon,
+                    });
+                }
+                None => {
+                    self.planner.budget = abandon.map(PlanBudget::Abandon);
+                    ball.decider.speculate(&self.planner, at.t, &at.state);
+                    self.planner.budget = None;
+                }
+            }
         }
         match decision {
             None => {}
@@ -430,6 +531,9 @@ impl Brain for BallBrain {
         // decider's window or correction time near (a frame period either side, the offset may
         // move); otherwise nothing is kept and there is nothing to decide again.
         let t_guess = obs.camera_time + self.offset().unwrap_or(f64::NAN);
+        // The hit found ahead on the worker, held before the state is kept (a decision made
+        // again from it uses it too).
+        self.collect(obs.id, t_guess, splice.deadline);
         let may_decide = match &self.ball {
             Some(b) if b.id == obs.id => !b.ended && b.decider.may_decide(t_guess),
             _ => true,
@@ -532,6 +636,9 @@ impl Brain for BallBrain {
             (&c.ball_speculated, s.speculated),
             (&c.ball_speculation_used, s.speculation_used),
             (&c.ball_speculation_unused, s.speculation_unused),
+            (&c.ball_speculation_waited, s.speculation_waited),
+            (&c.ball_speculation_pending, s.speculation_pending),
+            (&c.ball_speculation_alternative, s.speculation_alternative),
         ] {
             a.store(v, Ordering::Relaxed);
         }
@@ -554,6 +661,10 @@ impl Brain for BallBrain {
             }
             _ => None,
         }
+    }
+
+    fn decision_path(&self) -> Option<DecisionPath> {
+        self.path
     }
 
     fn outcome(&mut self, status: &StatusMsg) {

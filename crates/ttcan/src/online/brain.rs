@@ -89,6 +89,20 @@ pub struct Awaiting {
     pub wait: f64,
 }
 
+/// How a brain's last decision found its hit (why its stroke may come after its splice cycle).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DecisionPath {
+    /// Planned again from the hit found ahead (no search): late only when that re-plan ran past
+    /// the lead.
+    Held,
+    /// A hit found ahead was not feasible from the decision's estimate and state: searched.
+    HeldInfeasible,
+    /// The search ahead was still running when the decision was due (past its wait): searched.
+    SearchPending,
+    /// No hit found ahead (none found, or no search ahead): searched.
+    Searched,
+}
+
 /// A ball-mode decision maker: camera observations in, commands out.
 pub trait Brain: Send {
     /// One camera observation received at controller time `now` (s), with the header's send time
@@ -125,6 +139,10 @@ pub trait Brain: Send {
     fn tick(&mut self, now: f64, commanded: &JointState) -> Option<Command>;
     /// How a hit this brain asked for came out (its status as sent to the upper computer).
     fn outcome(&mut self, status: &StatusMsg);
+    /// How the last decision that made a stroke found its hit (`None`: not known, the default).
+    fn decision_path(&self) -> Option<DecisionPath> {
+        None
+    }
     /// Copies the brain's own counters into the statistics (nothing by default).
     fn publish(&self, counters: &Counters) {
         let _ = counters;

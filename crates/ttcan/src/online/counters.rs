@@ -189,6 +189,45 @@ counters! {
     ball_speculation_used,
     /// Ball mode: decisions with a hit found ahead that could not use it and searched.
     ball_speculation_unused,
+    /// Ball mode: decisions due while their search ahead still ran on the worker thread (they
+    /// waited for it, within their lead).
+    ball_speculation_waited,
+    /// Ball mode: of those, the decisions whose search ahead had not ended in time (searched).
+    ball_speculation_pending,
+    /// Ball mode: decisions that planned again a next best hit of the search ahead (the best
+    /// not feasible any more; counted within `ball_speculation_used`).
+    ball_speculation_alternative,
+    /// Brain strokes ready after their splice cycle because their observation waited for the
+    /// planning thread (busy with something else) longer than half the lead.
+    late_queued,
+    /// Brain strokes ready after their splice cycle though planned again from the hit found
+    /// ahead (no search): that re-plan ran past the lead.
+    late_replan_slow,
+    /// Brain strokes ready after their splice cycle whose hit found ahead was infeasible at the
+    /// decision (searched).
+    late_held_infeasible,
+    /// Brain strokes ready after their splice cycle whose search ahead was still running at the
+    /// decision (searched).
+    late_search_pending,
+    /// Brain strokes ready after their splice cycle without a hit found ahead (searched).
+    late_searched,
+    /// Brain strokes ready after their splice cycle, the brain's path not known.
+    late_other,
+    /// Brain strokes handed over at their first splice cycle whose latency exceeded 2 ms (their
+    /// observation waited for the planning thread).
+    over_2ms_in_time,
+    /// Late brain strokes over 2 ms, by why they were late (the `late_*` causes).
+    over_2ms_queued,
+    /// See `over_2ms_queued`.
+    over_2ms_replan_slow,
+    /// See `over_2ms_queued`.
+    over_2ms_held_infeasible,
+    /// See `over_2ms_queued`.
+    over_2ms_search_pending,
+    /// See `over_2ms_queued`.
+    over_2ms_searched,
+    /// See `over_2ms_queued`.
+    over_2ms_other,
 }
 
 /// Bins of the latency histogram, each [`LatencyHistogram::BIN_US`] wide (the last: beyond).

@@ -30,7 +30,7 @@ use std::time::{Duration, Instant};
 
 use ttkin::traj::JointState;
 
-use super::brain::{Awaiting, Brain, Command, Observed, PlannedStroke};
+use super::brain::{Awaiting, Brain, Command, DecisionPath, Observed, PlannedStroke};
 use super::counters::Counters;
 use super::receiver::{controller_time, send_status, Inbound};
 use super::splicer::status;
@@ -133,7 +133,8 @@ pub fn run_planner(
                             inbound,
                             pending: &mut pending,
                         };
-                        splice_stroke(&mut splicer, brain.as_deref_mut(), st, arrival, queue, counters)
+                        let queued = now - arrival;
+                        splice_stroke(&mut splicer, brain.as_deref_mut(), st, arrival, queued, queue, counters)
                     }
                     Command::Hit(h) => Some(splicer.hit(&h, arrival, counters)),
                     Command::Ready => None,
@@ -211,22 +212,31 @@ impl Queue<'_> {
 /// twice the lead ahead, then twice its last retry time ahead (at most 3 times), then the hit
 /// is planned again from a later cycle; a stroke that does not start from the scheduled state
 /// is planned again at once. `None` when the decision made again has no hit (nothing to answer).
+#[allow(clippy::too_many_arguments)]
 fn splice_stroke<'c>(
     splicer: &mut Splicer,
     mut brain: Option<&mut (dyn Brain + 'c)>,
     mut st: Box<PlannedStroke>,
     mut arrival: f64,
+    queued: f64,
     mut queue: Queue<'_>,
     counters: &Counters,
 ) -> Option<HitOutcome> {
     // the first retry (the same hit from a later splice) takes little time, whatever the decision took
     let mut decided_in = 0.0;
     let mut refined = false;
+    let mut late = None;
     for tries in 0..4 {
         match splicer.stroke(&st, arrival, counters) {
             Ok(out) => {
-                if tries > 0 && out.status.status == PlanStatus::Accepted {
-                    counters.latency_late.record(st.start - arrival);
+                if out.status.status == PlanStatus::Accepted {
+                    let latency = st.start - arrival;
+                    if tries > 0 {
+                        counters.latency_late.record(latency);
+                    }
+                    if latency > 2e-3 {
+                        Counters::bump(late.map_or(&counters.over_2ms_in_time, |c: LateCause| c.over_2ms(counters)));
+                    }
                 }
                 return Some(out);
             }
@@ -234,6 +244,11 @@ fn splice_stroke<'c>(
             Err(StrokeMiss::Late) => {}
         }
         let Some(b) = brain.as_deref_mut() else { break };
+        if late.is_none() {
+            let cause = LateCause::of(queued, splicer.cfg.splice_lead, b.decision_path());
+            Counters::bump(cause.late(counters));
+            late = Some(cause);
+        }
         Counters::bump(&counters.splices_redecided);
         if let (false, Some(aw)) = (refined, b.awaits()) {
             refined = true;
@@ -272,6 +287,98 @@ fn splice_stroke<'c>(
     Some(splicer.replan(&st.hit, arrival, counters))
 }
 
+/// Why a brain's stroke was ready after its splice cycle (the `late_*` counters).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum LateCause {
+    /// Its observation waited for the planning thread longer than half the lead.
+    Queued,
+    /// The brain's decision path.
+    Path(DecisionPath),
+    /// Not known (a brain without [`Brain::decision_path`]).
+    Other,
+}
+
+impl LateCause {
+    /// The cause of a late stroke whose observation waited `queued` s for the planning thread
+    /// with a splice lead `lead` s, decided by `path`.
+    fn of(queued: f64, lead: f64, path: Option<DecisionPath>) -> Self {
+        if queued > 0.5 * lead {
+            return LateCause::Queued;
+        }
+        path.map_or(LateCause::Other, LateCause::Path)
+    }
+
+    /// Its `late_*` counter.
+    fn late(self, c: &Counters) -> &std::sync::atomic::AtomicU64 {
+        match self {
+            LateCause::Queued => &c.late_queued,
+            LateCause::Path(DecisionPath::Held) => &c.late_replan_slow,
+            LateCause::Path(DecisionPath::HeldInfeasible) => &c.late_held_infeasible,
+            LateCause::Path(DecisionPath::SearchPending) => &c.late_search_pending,
+            LateCause::Path(DecisionPath::Searched) => &c.late_searched,
+            LateCause::Other => &c.late_other,
+        }
+    }
+
+    /// Its `over_2ms_*` counter.
+    fn over_2ms(self, c: &Counters) -> &std::sync::atomic::AtomicU64 {
+        match self {
+            LateCause::Queued => &c.over_2ms_queued,
+            LateCause::Path(DecisionPath::Held) => &c.over_2ms_replan_slow,
+            LateCause::Path(DecisionPath::HeldInfeasible) => &c.over_2ms_held_infeasible,
+            LateCause::Path(DecisionPath::SearchPending) => &c.over_2ms_search_pending,
+            LateCause::Path(DecisionPath::Searched) => &c.over_2ms_searched,
+            LateCause::Other => &c.over_2ms_other,
+        }
+    }
+}
+
 fn tl_planning(splicer: &Splicer, on: bool) {
     splicer.timeline.planning.store(on, Ordering::Relaxed);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_late_stroke_is_counted_under_its_cause() {
+        let c = Counters::default();
+        let lead = 8e-4;
+        // an observation that waited for the planning thread more than half the lead: queued,
+        // whatever the decision's path
+        let q = LateCause::of(5e-4, lead, Some(DecisionPath::Held));
+        assert_eq!(q, LateCause::Queued);
+        Counters::bump(q.late(&c));
+        Counters::bump(q.over_2ms(&c));
+        for (path, n) in [
+            (DecisionPath::Held, 1),
+            (DecisionPath::HeldInfeasible, 2),
+            (DecisionPath::SearchPending, 3),
+            (DecisionPath::Searched, 4),
+        ] {
+            let cause = LateCause::of(1e-4, lead, Some(path));
+            assert_eq!(cause, LateCause::Path(path));
+            for _ in 0..n {
+                Counters::bump(cause.late(&c));
+            }
+        }
+        Counters::bump(LateCause::of(0.0, lead, None).late(&c));
+        let s = c.snapshot();
+        assert_eq!(
+            (
+                s.late_queued,
+                s.late_replan_slow,
+                s.late_held_infeasible,
+                s.late_search_pending,
+                s.late_searched,
+                s.late_other
+            ),
+            (1, 1, 2, 3, 4, 1)
+        );
+        assert_eq!(
+            (s.over_2ms_queued, s.over_2ms_replan_slow, s.over_2ms_in_time),
+            (1, 0, 0)
+        );
+    }
 }

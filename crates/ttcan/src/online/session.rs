@@ -49,6 +49,12 @@ pub struct OnlineConfig {
     /// (`realtime_refused`).
     #[serde(default = "thread_priority")]
     pub priority: u8,
+    /// Ball mode: observations ahead of each decision at which its search is made, on a worker
+    /// thread of its own (at `priority` − 1), so that the deciding observation only plans the hit
+    /// found again (`ttcan::online::ball::BallBrainConfig::speculate_frames`); 0: every decision
+    /// searches when its observation comes (0..=20).
+    #[serde(default = "speculate_frames")]
+    pub speculate_frames: usize,
 }
 
 fn silence() -> f64 {
@@ -69,6 +75,9 @@ fn queue() -> usize {
 fn thread_priority() -> u8 {
     40
 }
+fn speculate_frames() -> usize {
+    3
+}
 
 impl Default for OnlineConfig {
     fn default() -> Self {
@@ -79,6 +88,7 @@ impl Default for OnlineConfig {
             telemetry_decimation: decimation(),
             queue: queue(),
             priority: thread_priority(),
+            speculate_frames: speculate_frames(),
         }
     }
 }
@@ -101,6 +111,12 @@ impl OnlineConfig {
         }
         if !(1..=100_000).contains(&self.queue) {
             return Err(format!("online.queue = {}: must be in 1..=100000", self.queue));
+        }
+        if self.speculate_frames > 20 {
+            return Err(format!(
+                "online.speculate_frames = {}: must be in 0..=20 (0: no search ahead)",
+                self.speculate_frames
+            ));
         }
         if self.priority > 98 {
             return Err(format!(
@@ -165,18 +181,22 @@ pub fn start(
     let Endpoints { mode, listen, reply } = ends;
     // Ball mode: the ball brain of this robot (its base placed at the table by the core's rally
     // placement), the receiver's latency budget for the observations.
+    // Its searches ahead on a worker thread just below the planning thread's priority.
     let brain = match mode {
         Mode::Hit => None,
-        Mode::Ball => Some(
-            BallBrain::new(
+        Mode::Ball => {
+            let mut b = BallBrain::new(
                 planner.chain().clone(),
                 BallBrainConfig {
                     latency_budget: cfg.latency_budget_s,
+                    speculate_frames: cfg.speculate_frames,
                     ..BallBrainConfig::default()
                 },
             )
-            .map_err(|e| io::Error::new(io::ErrorKind::InvalidInput, format!("ball mode: {e}")))?,
-        ),
+            .map_err(|e| io::Error::new(io::ErrorKind::InvalidInput, format!("ball mode: {e}")))?;
+            b.spawn_worker(cfg.priority.saturating_sub(1))?;
+            Some(b)
+        }
     };
     let dof = planner.chain().dof();
     if joints.is_empty() || joints.len() > MAX_CHANNELS || dof > MAX_JOINTS {

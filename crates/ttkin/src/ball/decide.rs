@@ -31,7 +31,8 @@
 //!   its latency may make a decision's search a few observations ahead of it
 //!   ([`BallDecider::speculate`]); the decision then plans the hit so found again from its own
 //!   estimate and state ([`ReturnPlanner::plan_same_hit`], the same absolute hit time and
-//!   landing point, no search) and searches as above only when that fails.
+//!   landing point, no search), then, when that is not feasible, the next best hits of the same
+//!   search in turn ([`Speculation::others`]), and searches as above only when none is.
 //!
 //! Times are on one clock, the caller's: observation times, `now` and the hits' times (a hit's
 //! `hit.t` counts from the `now` of its decision).
@@ -131,6 +132,8 @@ pub struct BallDecider {
     /// How the last decision used a held hit: `Some(true)` planned again from it, `Some(false)`
     /// it could not be and the decision searched in full, `None` no hit held.
     spec_used: Option<bool>,
+    /// Which of the held hits the last decision planned again (0: the best, 1…: the others).
+    spec_rank: Option<usize>,
 }
 
 /// The bit of [`BallDecider`]'s `speculated` for a correction: the first's or the second's.
@@ -154,6 +157,17 @@ pub struct Speculation {
     pub t_hit: f64,
     /// For the correction after the bounce (else for the first plan).
     pub correction: bool,
+    /// The next best hits of the same search (other hit times, by decreasing margin,
+    /// [`ReturnPlan::alternatives`]) with their absolute hit times (s): tried in turn when `hit`
+    /// cannot be planned again, before the decision searches.
+    pub others: Vec<(ReturnHit, f64)>,
+}
+
+impl Speculation {
+    /// The held hits in the order a decision tries them: `hit`, then `others`.
+    fn tries(&self) -> impl Iterator<Item = (&ReturnHit, f64)> {
+        std::iter::once((&self.hit, self.t_hit)).chain(self.others.iter().map(|(h, t)| (h, *t)))
+    }
 }
 
 impl BallDecider {
@@ -174,6 +188,7 @@ impl BallDecider {
             held: None,
             speculated: 0,
             spec_used: None,
+            spec_rank: None,
         }
     }
 
@@ -190,6 +205,31 @@ impl BallDecider {
             Phase::Done => false,
             Phase::Observing => self.times.len() + 1 >= self.cfg.window_frames,
             Phase::Correcting(at, _) => t + 2.0 * self.cfg.frame_period > at,
+        }
+    }
+
+    /// Whether an observation at time `t` (s), the next one fed, makes a decision
+    /// ([`BallDecider::observe`] returns one): the window's last observation, or one whose time
+    /// plus a frame period passes the correction time.
+    pub fn decides(&self, t: f64) -> bool {
+        if self.times.last().is_some_and(|&l| t <= l) || !t.is_finite() {
+            return false;
+        }
+        match self.phase {
+            Phase::Done => false,
+            Phase::Observing => self.times.len() + 1 >= self.cfg.window_frames,
+            Phase::Correcting(at, _) => t + self.cfg.frame_period > at,
+        }
+    }
+
+    /// Records that the next decision's search was made ahead elsewhere (on another thread, from
+    /// a clone of this decider, [`BallDecider::speculate`]): [`BallDecider::speculation_due`]
+    /// turns false for that decision; its hit comes with [`BallDecider::hold`].
+    pub fn mark_speculated(&mut self) {
+        match self.phase {
+            Phase::Done => {}
+            Phase::Observing => self.speculated |= 1,
+            Phase::Correcting(_, second) => self.speculated |= correction_bit(second),
         }
     }
 
@@ -267,6 +307,13 @@ impl BallDecider {
         self.spec_used
     }
 
+    /// Which held hit the last decision planned again: `Some(0)` the one found best ahead,
+    /// `Some(k)` the next best number `k` ([`Speculation::others`], the ones before it not
+    /// feasible), `None` none (no hit held, or none feasible).
+    pub fn speculation_rank(&self) -> Option<usize> {
+        self.spec_rank
+    }
+
     fn speculate_first(&self, planner: &ReturnPlanner, now: f64) -> Option<Speculation> {
         let est = estimate(&self.times, &self.obs, &self.opts).ok()?;
         let plan = planner.plan(&est.state, now, self.cfg.target).ok()?;
@@ -275,6 +322,11 @@ impl BallDecider {
             t_hit: now + hit.hit.t,
             hit,
             correction: false,
+            others: plan
+                .alternatives
+                .into_iter()
+                .map(|h| (h.clone(), now + h.hit.t))
+                .collect(),
         })
     }
 
@@ -286,11 +338,12 @@ impl BallDecider {
         start: &JointState,
     ) -> Option<Speculation> {
         let mut used = None;
-        let hit = self.correction(planner, at, now, &|_| start.clone(), None, &mut used)?;
+        let (hit, others) = self.correction(planner, at, now, &|_| start.clone(), None, &mut used)?;
         Some(Speculation {
             t_hit: now + hit.hit.t,
             hit,
             correction: true,
+            others: others.into_iter().map(|h| (h.clone(), now + h.hit.t)).collect(),
         })
     }
 
@@ -343,16 +396,18 @@ impl BallDecider {
         self.estimate = Some(est.clone());
         let held = self.held.take().filter(|h| !h.correction);
         self.spec_used = held.as_ref().map(|_| false);
-        let again = held.and_then(|h| {
-            let start = JointState::rest(&planner.ready);
-            let p = planner
-                .plan_same_hit(&est.state, now, &start, false, &h.hit, h.t_hit)
-                .ok()?;
-            (p.status == ReturnStatus::Ok && p.hit.is_some()).then_some(p)
+        self.spec_rank = None;
+        let start = JointState::rest(&planner.ready);
+        let again = held.as_ref().and_then(|h| {
+            h.tries().enumerate().find_map(|(rank, (hit, t_hit))| {
+                let p = planner.plan_same_hit(&est.state, now, &start, false, hit, t_hit).ok()?;
+                (p.status == ReturnStatus::Ok && p.hit.is_some()).then_some((rank, p))
+            })
         });
         let plan = match again {
-            Some(p) => {
+            Some((rank, p)) => {
                 self.spec_used = Some(true);
+                self.spec_rank = Some(rank);
                 p
             }
             None => match planner.plan(&est.state, now, self.cfg.target) {
@@ -396,8 +451,11 @@ impl BallDecider {
         };
         let held = self.held.take().filter(|h| h.correction);
         let mut used = None;
-        let hit = self.correction(planner, at, now, commanded, held, &mut used);
-        self.spec_used = used;
+        let hit = self
+            .correction(planner, at, now, commanded, held, &mut used)
+            .map(|(h, _)| h);
+        self.spec_rank = used.flatten();
+        self.spec_used = used.map(|r| r.is_some());
         if let Some(h) = &hit {
             self.last = Some((h.clone(), now + h.hit.t, false));
         }
@@ -462,9 +520,9 @@ impl BallDecider {
         now: f64,
         commanded: &dyn Fn(f64) -> JointState,
         held: Option<Speculation>,
-        used: &mut Option<bool>,
-    ) -> Option<ReturnHit> {
-        *used = held.as_ref().map(|_| false);
+        used: &mut Option<Option<usize>>,
+    ) -> Option<(ReturnHit, Vec<ReturnHit>)> {
+        *used = held.as_ref().map(|_| None);
         let est = self.estimate.as_ref()?;
         // The hit under way: the first plan's, or the first correction's at the second.
         let current = self.last.as_ref().map(|(h, t, _)| (h, *t));
@@ -490,15 +548,21 @@ impl BallDecider {
             None => JointState::rest(&planner.ready),
         };
         if let Some(h) = held {
-            let again = replanner.plan_same_hit(&up.state, now, &start, up.bounced, &h.hit, h.t_hit);
-            if let Some(hit) = again.ok().and_then(|p| p.hit.filter(|_| p.status == ReturnStatus::Ok)) {
-                *used = Some(true);
-                return Some(hit);
+            for (rank, (hit, t_hit)) in h.tries().enumerate() {
+                let again = replanner.plan_same_hit(&up.state, now, &start, up.bounced, hit, t_hit);
+                if let Some(hit) = again.ok().and_then(|p| p.hit.filter(|_| p.status == ReturnStatus::Ok)) {
+                    *used = Some(Some(rank));
+                    return Some((hit, Vec::new()));
+                }
             }
         }
         let full = || replanner.plan_from(&up.state, now, self.cfg.target, &start, up.bounced);
-        let ok =
-            |plan: Result<ReturnPlan, Error>| plan.ok().and_then(|p| p.hit.filter(|_| p.status == ReturnStatus::Ok));
+        // the hit with the search's next best (for a speculation: `Speculation::others`)
+        let ok = |plan: Result<ReturnPlan, Error>| {
+            let p = plan.ok()?;
+            let found = p.status == ReturnStatus::Ok;
+            p.hit.filter(|_| found).map(|h| (h, p.alternatives))
+        };
         match current {
             Some((hit, t_prev)) => ok(replanner.plan_near(&up.state, now, &start, up.bounced, hit, t_prev))
                 .or_else(|| self.cfg.widen_correction.then(|| ok(full())).flatten()),

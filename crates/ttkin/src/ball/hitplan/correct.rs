@@ -88,6 +88,7 @@ impl ReturnPlanner {
                 status,
                 hit: None,
                 candidates: 0,
+                alternatives: Vec::new(),
             })
         };
         // The last sample after the bounce at or before `t_prev`, then on to `t_prev` exactly.

@@ -156,7 +156,14 @@ pub struct ReturnPlan {
     pub hit: Option<ReturnHit>,
     /// Candidates examined.
     pub candidates: usize,
+    /// The next best feasible hits the search found at other candidates (other hit times), by
+    /// decreasing margin, at most [`ALTERNATIVES`]: fallbacks for a caller that plans the hit
+    /// again later (a controller's speculation); empty for a plan without a search.
+    pub alternatives: Vec<ReturnHit>,
 }
+
+/// Most [`ReturnPlan::alternatives`] a search keeps.
+pub const ALTERNATIVES: usize = 2;
 
 /// The ball planner of one robot: where and when to hit (placement, hitting volume, ready
 /// configuration, racket rubber, the search's settings), over the one robot-side planner.

@@ -82,6 +82,9 @@ impl Deadline {
 pub(super) struct Search {
     /// The best hit so far (largest margin).
     pub(super) best: Option<ReturnHit>,
+    /// The next best, each of another candidate, by decreasing margin (at most
+    /// [`super::ALTERNATIVES`]).
+    others: Vec<ReturnHit>,
     /// When the search settles for its best hit so far.
     pub(super) deadline: Deadline,
     any_return: bool,
@@ -129,6 +132,7 @@ impl ReturnPlanner {
             status,
             hit: None,
             candidates: 0,
+            alternatives: Vec::new(),
         }))
     }
 }
@@ -138,6 +142,7 @@ impl Search {
     pub(super) fn new(planner: &ReturnPlanner) -> Self {
         Search {
             best: None,
+            others: Vec::new(),
             any_return: false,
             tried: 0,
             good_margin: planner.good_margin,
@@ -177,11 +182,25 @@ impl Search {
             };
             self.any_return = true;
             if let Some(hit) = robot(s, shot) {
-                if self.best.as_ref().is_none_or(|b| hit.margin() > b.margin()) {
-                    self.best = Some(hit);
+                let runner = if self.best.as_ref().is_none_or(|b| hit.margin() > b.margin()) {
+                    self.best.replace(hit)
+                } else {
+                    Some(hit)
+                };
+                if let Some(r) = runner {
+                    self.keep_other(r);
                 }
                 break;
             }
+        }
+    }
+
+    /// Keeps `hit` among the next best when its margin is among the top [`super::ALTERNATIVES`].
+    fn keep_other(&mut self, hit: ReturnHit) {
+        let at = self.others.partition_point(|o| o.margin() >= hit.margin());
+        if at < super::ALTERNATIVES {
+            self.others.insert(at, hit);
+            self.others.truncate(super::ALTERNATIVES);
         }
     }
 
@@ -197,6 +216,7 @@ impl Search {
             status,
             hit: self.best,
             candidates: self.tried,
+            alternatives: self.others,
         }
     }
 }
