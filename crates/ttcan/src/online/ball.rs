@@ -269,7 +269,7 @@ impl BallBrain {
     /// Moves the searches ahead ([`BallBrainConfig::speculate_frames`]) to a worker thread of
     /// their own (at SCHED_FIFO `priority` when > 0 and allowed): the thread that observes is
     /// then free when a decision's observation comes; a decision whose search ahead still runs
-    /// waits for it until [`REPLAN_RESERVE`] before its splice deadline (without a deadline,
+    /// waits for it until 0.4 ms (`REPLAN_RESERVE`) before its splice deadline (without a deadline,
     /// until it ends). Nothing with `speculate_frames` 0.
     pub fn spawn_worker(&mut self, priority: u8) -> std::io::Result<()> {
         if self.cfg.speculate_frames > 0 && self.worker.is_none() {
