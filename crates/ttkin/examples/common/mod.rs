@@ -28,6 +28,7 @@ pub fn row(name: &str, v: &mut [f64]) {
 }
 
 /// The joint state commanded at `tc` (s): the stroke under way (start time, trajectory), else ready.
+#[allow(dead_code)] // not every example runs strokes
 pub fn state_of(stroke: &Option<(f64, JointTrajectory)>, ready: &JointState, tc: f64) -> JointState {
     match stroke {
         Some((t0, tr)) => {
