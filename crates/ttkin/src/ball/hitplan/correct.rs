@@ -16,10 +16,15 @@ use super::{RacketPoses, ReturnHit, ReturnPlan, ReturnPlanner, ReturnStatus};
 use crate::error::{check_finite, Result};
 use crate::hit::Hit;
 use crate::traj::JointState;
-use nalgebra::IsometryMatrix3;
+use nalgebra::{IsometryMatrix3, Vector3};
 
 /// Most candidates a correction tries when none of the nearest `candidates` is feasible.
 const MOST_CANDIDATES: usize = 12;
+
+/// Largest difference (m/s) of a re-planned shot's outgoing velocity from the held hit's for the
+/// same return time: a newer estimate moves the shot by a few cm/s, the return times' shots are
+/// more than 1 m/s apart (their flight times differ by 0.25 s over ≈ 3 m).
+const SAME_SHOT: f64 = 0.5;
 
 impl ReturnPlanner {
     /// Plans the hit of the ball `ball` again for a stroke in the joint state `start` at `now`
@@ -113,8 +118,43 @@ impl ReturnPlanner {
         let mut search = Search::new(self);
         let poses = RacketPoses::new(self);
         let robot = |s: &BallState, shot: Shot| self.robot_hit_near(&poses, s, now, start, shot, &previous.branch.q);
-        search.attempt(self, &at, goal, &robot);
+        search.attempt_shots(&at, self.held_shot_first(&at, goal, &previous.v_out), &robot);
         Ok(search.finish())
+    }
+
+    /// The shots of the ball `s` to `goal` over the return times, the first whose outgoing
+    /// velocity is within `SAME_SHOT` of `v_held` (m/s, world: the held hit's shot, the same
+    /// return time) first, then the others in order; in order when none is. Each shot is solved
+    /// when asked for, so a held hit of the first return time costs no more than the order.
+    fn held_shot_first<'a>(
+        &'a self,
+        s: &'a BallState,
+        goal: [f64; 2],
+        v_held: &'a Vector3<f64>,
+    ) -> impl Iterator<Item = Shot> + 'a {
+        let mut times = self.return_times.iter();
+        // Shots solved before the held one was found, in order.
+        let mut before: Vec<Shot> = Vec::new();
+        let mut found = false;
+        std::iter::from_fn(move || {
+            while !found {
+                let Some(&tf) = times.next() else {
+                    found = true;
+                    break;
+                };
+                if let Some(shot) = self.outgoing(s, goal, tf) {
+                    if (shot.0 - v_held).norm() < SAME_SHOT {
+                        found = true;
+                        return Some(shot);
+                    }
+                    before.push(shot);
+                }
+            }
+            if !before.is_empty() {
+                return Some(before.remove(0));
+            }
+            times.by_ref().find_map(|&tf| self.outgoing(s, goal, tf))
+        })
     }
 
     /// The robot hit of the shot `shot` (outgoing velocity, racket, landing point) at the ball `s`
@@ -175,5 +215,53 @@ impl ReturnPlanner {
             branch,
             landing,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ball::flight::Flight;
+    use crate::ball::rally;
+
+    #[test]
+    fn the_held_shot_comes_first_then_the_others_in_order() {
+        let pl = ReturnPlanner::new(crate::robots::gantry6(), Flight::default()).unwrap();
+        let mut rng = fastrand::Rng::with_seed(33);
+        let mut reordered = 0;
+        for _ in 0..20 {
+            let s = rally::serve(&pl.flight, &mut rng, 30.0, 0.2);
+            let (s, _) = pl.flight.run(&s, 0.22, None);
+            let Some(hit) = pl.plan(&s, 0.23, [0.9, 0.0]).unwrap().hit else {
+                continue;
+            };
+            let (b, goal) = (hit.ball, [hit.landing.x, hit.landing.y]);
+            let shots: Vec<Shot> = pl
+                .return_times
+                .iter()
+                .filter_map(|&tf| pl.outgoing(&b, goal, tf))
+                .collect();
+            // The return times' shots are far apart: a held shot matches one of them only.
+            for (i, a) in shots.iter().enumerate() {
+                for c in &shots[i + 1..] {
+                    assert!((a.0 - c.0).norm() > 2.0 * SAME_SHOT, "{} {}", a.0, c.0);
+                }
+            }
+            let v_out = |order: Vec<Shot>| order.iter().map(|s| s.0).collect::<Vec<_>>();
+            let in_order = v_out(shots.clone());
+            // No held shot among them: the return times in order.
+            let far = hit.v_out + Vector3::new(0.0, 0.0, 10.0);
+            assert_eq!(v_out(pl.held_shot_first(&b, goal, &far).collect()), in_order);
+            for (k, held) in shots.iter().enumerate() {
+                // a held shot a newer estimate moved a little
+                let near = held.0 + Vector3::new(0.1, -0.1, 0.1);
+                let mut want = in_order.clone();
+                let first = want.remove(k);
+                want.insert(0, first);
+                assert_eq!(v_out(pl.held_shot_first(&b, goal, &near).collect()), want, "held {k}");
+                reordered += usize::from(k > 0);
+            }
+        }
+        assert!(reordered >= 5, "{reordered} held shots after the first return time");
     }
 }

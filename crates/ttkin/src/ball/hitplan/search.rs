@@ -175,11 +175,20 @@ impl Search {
         goal: [f64; 2],
         robot: &dyn Fn(&BallState, Shot) -> Option<ReturnHit>,
     ) {
+        let times = self.return_times;
+        self.attempt_shots(s, times.iter().filter_map(|&tf| planner.outgoing(s, goal, tf)), robot);
+    }
+
+    /// One candidate `s` with its shots `shots` (computed as they are asked for, in the order
+    /// tried): the first whose robot hit (`robot`) is feasible, kept as in [`Self::attempt`].
+    pub(super) fn attempt_shots(
+        &mut self,
+        s: &BallState,
+        shots: impl Iterator<Item = Shot>,
+        robot: &dyn Fn(&BallState, Shot) -> Option<ReturnHit>,
+    ) {
         self.tried += 1;
-        for &tf in &self.return_times {
-            let Some(shot) = planner.outgoing(s, goal, tf) else {
-                continue;
-            };
+        for shot in shots {
             self.any_return = true;
             if let Some(hit) = robot(s, shot) {
                 let runner = if self.best.as_ref().is_none_or(|b| hit.margin() > b.margin()) {
