@@ -531,11 +531,6 @@ impl BallDecider {
         }
         let mut replanner = planner.clone();
         replanner.min_stroke_time = CORRECTION_MIN_STROKE;
-        if current.is_some() {
-            // A stroke under way already has its hit: no last resort for a wider correction (a
-            // plan with no feasible hit would search again at a multiple of a search's cost).
-            replanner.last_resort_offsets.clear();
-        }
         let from = self.times.partition_point(|&t| t <= est.state.t);
         let last = self.times.partition_point(|&t| t <= at);
         let up = update_kick(
