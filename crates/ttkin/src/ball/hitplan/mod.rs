@@ -10,7 +10,9 @@
 //!    target or, when no racket with the approximate normal toward it has IK (see
 //!    `roughly_placeable`), at the nearest fallback target on the opponent's half that has one; a
 //!    candidate with none is tried in full only when no other gives a hit, and then the other
-//!    placeable targets of every candidate (at most `FALLBACK_ATTEMPTS` shooting solves).
+//!    placeable targets of every candidate (at most `FALLBACK_ATTEMPTS` shooting solves). With
+//!    still no feasible hit, the last resort ([`ReturnPlanner::last_resort_offsets`]) searches
+//!    again with the ball 40–70 mm off the racket's centre.
 //! 2. **Outgoing velocity** (`shoot.rs`). Shooting: the velocity v₀ with which the ball, spinning with its
 //!    post-impact spin, is at (x_t, y_t, r) after the return flight time T: Broyden's method on the
 //!    3×3 map v₀ ↦ p(T), started from the drag-free solution with the linearised flight's
