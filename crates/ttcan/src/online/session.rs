@@ -300,7 +300,8 @@ fn realtime(prio: u8, counters: &Counters) {
     }
 }
 
-/// Sends the measured joint state to `reply` every `every_ns` until `stop` (once the channels run).
+/// Sends the measured joint state and the fault bits to `reply` every `every_ns` until `stop`,
+/// from the first cycle at which [`Timeline::telemetry_due`] (the channels run, or one stopped).
 fn run_telemetry(
     socket: &UdpSocket,
     reply: SocketAddr,
@@ -312,6 +313,7 @@ fn run_telemetry(
     let mut next = crate::runtime::rt::now_ns();
     let mut seq = 0u64;
     let mut buf = [0u8; wire::MAX_LEN];
+    let mut live = false;
     while !stop.load(Ordering::Relaxed) {
         next += every_ns;
         crate::runtime::rt::sleep_until(next);
@@ -319,8 +321,13 @@ fn run_telemetry(
         if now > next + 100 * every_ns {
             next = now; // far behind (a stall): no burst
         }
-        if !tl.all_enabled() {
-            continue;
+        // Once due, always sent (a faulted channel's fault bits included), so that the upper
+        // computer hears a fault instead of silence.
+        if !live {
+            live = tl.telemetry_due();
+            if !live {
+                continue;
+            }
         }
         let m = tl.measured();
         seq += 1;
