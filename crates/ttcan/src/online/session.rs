@@ -55,6 +55,10 @@ pub struct OnlineConfig {
     /// searches when its observation comes (0..=20).
     #[serde(default = "speculate_frames")]
     pub speculate_frames: usize,
+    /// Ball mode, with `speculate_frames` ≥ 2: each search ahead made again on the worker one
+    /// frame before its decision (`ttcan::online::ball::BallBrainConfig::refresh_ahead`).
+    #[serde(default = "refresh_ahead")]
+    pub refresh_ahead: bool,
 }
 
 fn silence() -> f64 {
@@ -78,6 +82,9 @@ fn thread_priority() -> u8 {
 fn speculate_frames() -> usize {
     3
 }
+fn refresh_ahead() -> bool {
+    true
+}
 
 impl Default for OnlineConfig {
     fn default() -> Self {
@@ -89,6 +96,7 @@ impl Default for OnlineConfig {
             queue: queue(),
             priority: thread_priority(),
             speculate_frames: speculate_frames(),
+            refresh_ahead: refresh_ahead(),
         }
     }
 }
@@ -190,6 +198,7 @@ pub fn start(
                 BallBrainConfig {
                     latency_budget: cfg.latency_budget_s,
                     speculate_frames: cfg.speculate_frames,
+                    refresh_ahead: cfg.refresh_ahead,
                     ..BallBrainConfig::default()
                 },
             )
