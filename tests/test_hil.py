@@ -56,6 +56,7 @@ def ttctl() -> Path:
     return exe
 
 
+@pytest.mark.serial  # real time: ttctl plays the rally against the clock
 def test_a_short_hil_rally_plays_every_ball_against_ttctl(ttctl, tmp_path):
     from ttmanip.hil import run
 
@@ -131,3 +132,59 @@ def test_ttctl_of_this_checkout_is_found_from_it(monkeypatch):
     monkeypatch.setenv("PATH", "/nonexistent")
     monkeypatch.chdir(ROOT / "tests")
     assert Path(find_ttctl()).resolve() == exe.resolve()
+
+
+class _FakeLink:
+    """A link that hands the listener the datagrams of ``script`` (an exception is raised), then
+    ``live()`` every ms (nothing when ``live`` is None); observations go nowhere."""
+
+    def __init__(self, script, live=None):
+        self.script = list(script)
+        self.live = live
+
+    def receive(self, timeout=None):
+        import time
+
+        if not self.script:
+            time.sleep(0.001 if self.live else timeout or 0.0)
+            return self.live() if self.live else None
+        d = self.script.pop(0)
+        if isinstance(d, BaseException):
+            raise d
+        return d
+
+    def observation(self, *a):
+        pass
+
+
+def _telemetry(t, faults):
+    return {"kind": "telemetry", "time": t, "faults": faults, "q": [0.0] * 6, "qd": [0.0] * 6}
+
+
+def test_the_listener_reports_what_stopped_it_and_keeps_the_fault_bits():
+    import time
+
+    from ttmanip.hil import HilError, _Listener
+
+    lis = _Listener(_FakeLink([_telemetry(1.0, 0), _telemetry(2.0, 0b11), RuntimeError("boom")]))
+    until = time.monotonic() + 5.0
+    while lis.error is None and time.monotonic() < until:
+        time.sleep(0.01)
+    # Not silently gone: the exception is kept and raised as a HilError naming it.
+    with pytest.raises(HilError, match="boom"):
+        lis.check()
+    assert len(lis.telemetry) == 2
+    assert lis.fault_since(1.5) == 0b11 and lis.fault_since(2.5) == 0
+    lis.stop()
+
+
+def test_a_ball_lost_to_a_drive_fault_is_scored_as_a_fault_not_as_no_telemetry():
+    import time
+
+    from ttmanip.hil import _Listener, play
+
+    # The controller's clock is this host's; its telemetry keeps coming, joints 0 and 1 faulted.
+    lis = _Listener(_FakeLink([], live=lambda: _telemetry(time.monotonic(), 0b11)))
+    rec = play(_FakeLink([]), lis, 0, seed=0, settle=0.0)
+    lis.stop()
+    assert rec["status"] == "fault" and rec["faults"] == 0b11 and not rec["returned"], rec

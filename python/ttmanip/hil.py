@@ -51,24 +51,50 @@ class _Listener:
         self.telemetry: list[tuple[float, float, np.ndarray, np.ndarray]] = []
         self.status: list[tuple[float, dict]] = []
         self.refused = 0
+        # (controller time, fault bits) of every telemetry row with a fault bit set
+        self.faults: list[tuple[float, int]] = []
+        # what stopped the thread, if anything did (reported by :meth:`check`, never swallowed)
+        self.error: BaseException | None = None
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, daemon=True)
         self._thread.start()
 
     def _run(self) -> None:
-        while not self._stop.is_set():
-            try:
-                d = self.link.receive(timeout=0.05)
-            except TtmanipError:
-                self.refused += 1
-                continue
-            if d is None:
-                continue
-            now = time.monotonic()
-            if d["kind"] == "telemetry":
-                self.telemetry.append((now, d["time"], np.asarray(d["q"]), np.asarray(d["qd"])))
-            elif d["kind"] == "status":
-                self.status.append((now, d))
+        try:
+            while not self._stop.is_set():
+                try:
+                    d = self.link.receive(timeout=0.05)
+                except TtmanipError:
+                    self.refused += 1
+                    continue
+                if d is not None:
+                    self._take(d)
+        except BaseException as e:  # noqa: BLE001 - reported by check(), the run stops on it
+            self.error = e
+
+    def _take(self, d: dict) -> None:
+        now = time.monotonic()
+        if d["kind"] == "telemetry":
+            if d["faults"]:
+                self.faults.append((d["time"], int(d["faults"])))
+            self.telemetry.append((now, d["time"], np.asarray(d["q"]), np.asarray(d["qd"])))
+        elif d["kind"] == "status":
+            self.status.append((now, d))
+
+    def check(self) -> None:
+        """Raises :class:`HilError` when the listener thread stopped on an exception."""
+        if self.error is not None:
+            raise HilError(f"the telemetry listener stopped: {self.error!r}") from self.error
+
+    def fault_since(self, t: float) -> int:
+        """The fault bits (bit j: joint j's channel stopped) of the telemetry from controller time
+        ``t`` (s) on; 0: none."""
+        bits = 0
+        for tc, f in reversed(self.faults):
+            if tc < t:
+                break
+            bits |= f
+        return bits
 
     def offset(self) -> float:
         """This host's monotonic clock minus the controller's (s), smallest delay seen."""
@@ -108,6 +134,7 @@ def play(
         sends.append(time.monotonic())
         link.observation(ball_id, t0 + stamp, p)
     _sleep_until(sends[-1] + settle)
+    listener.check()
     offset = listener.offset()
     start, end = t0, sends[-1] + settle
     rows = [r for r in listener.telemetry if start <= r[1] + offset <= end]
@@ -121,6 +148,12 @@ def play(
         "planning_time_s": [s["planning_time"] for _, s in hits],
         "telemetry": len(rows),
     }
+    # A controller that stopped (a drive fault) keeps sending telemetry with its fault bits: the
+    # ball is lost to the fault, whatever the joints did.
+    faults = listener.fault_since(start - offset)
+    if faults:
+        rec.update(status="fault", faults=faults, returned=False, contact=False)
+        return rec
     if not rows:
         rec.update(status="no_telemetry", returned=False, contact=False)
         return rec
@@ -310,7 +343,7 @@ def run(
             time.sleep(0.05)
         for i in range(n):
             balls.append(play(link, listener, i, seed, world))
-            if balls[-1]["status"] == "no_telemetry":
+            if balls[-1]["status"] in ("no_telemetry", "fault"):
                 break  # the controller stopped (see ttctl.log and its statistics' fault)
     finally:
         listener.stop()

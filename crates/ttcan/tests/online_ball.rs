@@ -194,7 +194,19 @@ fn the_searches_ahead_on_a_worker_thread_give_the_hits_of_those_made_in_line() {
     let pl = planner();
     let cfg = RallyConfig::default();
     let mut inline = speculating_brain(&pl, &cfg, 3);
-    let mut worker = speculating_brain(&pl, &cfg, 3);
+    // without the search made again a frame before the decision (the worker's own, below)
+    let mut worker = BallBrain::with_planner(
+        pl.clone(),
+        BallBrainConfig {
+            decide: DecideConfig::of(&cfg),
+            clock: ClockRelation::Offset(0.0),
+            latency_budget: 1.0,
+            speculate_frames: 3,
+            refresh_ahead: false,
+            ..BallBrainConfig::default()
+        },
+    )
+    .unwrap();
     assert!(!worker.has_worker());
     worker.spawn_worker(0).unwrap();
     assert!(worker.has_worker());
@@ -611,4 +623,32 @@ fn a_late_decision_waits_for_the_next_frame_and_keeps_its_hit() {
         tried >= 6 && refined * 10 >= tried * 7,
         "{refined} of {tried} planned again"
     );
+}
+
+/// The search ahead made again one frame before each decision (`BallDecider::refresh`) on the
+/// worker thread only, once per decision that had a search ahead, and counted.
+#[test]
+fn the_worker_makes_each_search_ahead_again_a_frame_before_its_decision() {
+    let pl = planner();
+    let cfg = RallyConfig::default();
+    let mut inline = speculating_brain(&pl, &cfg, 3);
+    let mut worker = speculating_brain(&pl, &cfg, 3);
+    worker.spawn_worker(0).unwrap();
+    let mut one = speculating_brain(&pl, &cfg, 1);
+    one.spawn_worker(0).unwrap();
+    for i in 0..6u64 {
+        for br in [&mut inline, &mut worker, &mut one] {
+            feed(&pl, &cfg, br, i, 500 + i as u32);
+            br.tick(1e3, &JointState::rest(&pl.ready));
+        }
+    }
+    let (s, w, o) = (inline.stats(), worker.stats(), one.stats());
+    assert_eq!(s.refreshed, 0, "in line: never {s:?}");
+    assert_eq!(
+        o.refreshed, 0,
+        "a search ahead one frame before: nothing to make again {o:?}"
+    );
+    // one per decision with a search ahead (first plans and corrections)
+    assert!(w.refreshed >= w.planned && w.refreshed <= w.speculated, "{w:?}");
+    assert!(w.speculation_used * 10 >= (w.planned + w.corrected) * 7, "{w:?}");
 }

@@ -221,3 +221,69 @@ fn the_correction_uses_the_hit_speculated_before_it() {
         "{used} of {corrections} from the speculated hit"
     );
 }
+
+/// The search ahead made again one frame before the first plan (`refresh_due`, `refresh`): a
+/// held hit still feasible from the newer estimate is kept (same absolute hit time), one that is
+/// not is searched again (the same hit as a fresh search ahead), and the first plan then plans
+/// the refreshed hit again.
+#[test]
+fn the_search_ahead_made_again_a_frame_before_the_decision_keeps_or_replaces_the_held_hit() {
+    let (pl, cfg, truth) = setup();
+    let dc = DecideConfig::of(&cfg);
+    let ready = JointState::rest(&pl.ready);
+    let (mut kept, mut searched, mut used, mut balls) = (0, 0, 0, 0);
+    for i in 0..16 {
+        let o = observe_ball(&truth, &cfg, i, None);
+        let mut d = BallDecider::new(&pl, dc);
+        let mut spoil = i % 2 == 1;
+        for (k, (&t, &p)) in o.times.iter().zip(&o.positions).enumerate() {
+            let now = t + cfg.camera.latency;
+            let decision = d.observe(&pl, t, p, now, &|_| ready.clone());
+            if d.speculation_due(3) {
+                d.speculate(&pl, now, &ready);
+                assert!(!d.refresh_due(), "not at the search ahead's own observation");
+                continue;
+            }
+            if d.refresh_due() {
+                assert!(decision.is_none() && k + 1 + 1 == dc.window_frames, "observation {k}");
+                let Some(mut h) = d.held().cloned() else { break };
+                if spoil {
+                    // not feasible any more: a hit time already past, alone
+                    h.t_hit = now - 0.1;
+                    h.others.clear();
+                    d.hold(h.clone());
+                }
+                let found = d.refresh(&pl, now, &ready);
+                assert!(!d.refresh_due(), "once per decision");
+                if spoil {
+                    // searched again: what a search ahead from here finds
+                    let mut again = BallDecider::new(&pl, dc);
+                    for (&t2, &p2) in o.times[..=k].iter().zip(&o.positions[..=k]) {
+                        again.observe(&pl, t2, p2, t2 + cfg.camera.latency, &|_| ready.clone());
+                    }
+                    again.speculate(&pl, now, &ready);
+                    assert_eq!(d.held(), again.held());
+                    searched += 1;
+                } else if found {
+                    let r = d.held().unwrap();
+                    assert!(!r.correction);
+                    // kept: a held try planned again, its absolute hit time unchanged
+                    assert!(h.others.iter().map(|o| o.1).chain([h.t_hit]).any(|t| t == r.t_hit));
+                    kept += 1;
+                }
+                spoil = false;
+                continue;
+            }
+            if let Some(Decision::Planned { .. }) = decision {
+                balls += 1;
+                used += usize::from(d.speculation_used() == Some(true));
+                break;
+            }
+        }
+    }
+    assert!(kept >= 4 && searched >= 4, "kept {kept}, searched {searched}");
+    assert!(
+        used * 10 >= balls * 7,
+        "{used} of {balls} planned again from the refreshed hit"
+    );
+}

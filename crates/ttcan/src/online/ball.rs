@@ -71,13 +71,18 @@ pub struct BallBrainConfig {
     /// (a fraction of the search, within the splice lead); 0: every decision searches when its
     /// observation comes, as the offline rally does.
     pub speculate_frames: usize,
+    /// With the searches ahead on a worker thread ([`BallBrain::spawn_worker`]) and
+    /// `speculate_frames` ≥ 2: each search ahead made again one frame before its decision from
+    /// the newest estimate (`BallDecider::refresh`: the held hits planned again first).
+    pub refresh_ahead: bool,
 }
 
 impl Default for BallBrainConfig {
     /// The rally's rules; the offset estimated from the send times over 2 s at 200 Hz; a 30 ms
     /// budget (the rally's camera delivers 10 ms after the exposure); lost after 50 ms of
     /// silence; ready 60 ms after the hit (the rally looks for the contact up to then); each
-    /// decision's search made 3 observations (15 ms at 200 Hz) ahead of it.
+    /// decision's search made 3 observations (15 ms at 200 Hz) ahead of it, and again one frame
+    /// before it on the worker.
     fn default() -> Self {
         BallBrainConfig {
             decide: DecideConfig::default(),
@@ -87,6 +92,7 @@ impl Default for BallBrainConfig {
             lost_after: 0.050,
             ready_after: 0.060,
             speculate_frames: 3,
+            refresh_ahead: true,
         }
     }
 }
@@ -137,6 +143,9 @@ pub struct BallStats {
     /// Decisions (within `speculation_used`) that planned again a next best hit of the search
     /// ahead, the best not being feasible any more.
     pub speculation_alternative: u64,
+    /// Searches ahead made again one frame before their decision on the worker thread
+    /// (`BallDecider::refresh`).
+    pub refreshed: u64,
 }
 
 /// The ball in play.
@@ -293,19 +302,30 @@ impl BallBrain {
             return;
         };
         let key = (ball.id, ball.decisions);
-        let mut got = w.poll();
+        // Every result there, in order (the search ahead, then its refresh): the last hit found
+        // is held.
+        let take = |d: super::speculator::SpecDone, decider: &mut BallDecider| {
+            if let Some(spec) = d.spec.filter(|_| d.key == key) {
+                decider.hold(spec);
+            }
+        };
+        while let Some(d) = w.poll() {
+            take(d, &mut ball.decider);
+        }
         let mut pending = false;
-        if got.is_none() && w.in_flight() == Some(key) && ball.decider.decides(t) {
+        if w.in_flight() == Some(key) && ball.decider.decides(t) {
             self.stats.speculation_waited += 1;
             let until = deadline.map(|d| d.checked_sub(Duration::from_secs_f64(REPLAN_RESERVE)).unwrap_or(d));
-            got = w.wait(until);
-            pending = got.is_none();
+            while w.in_flight() == Some(key) {
+                match w.wait(until) {
+                    Some(d) => take(d, &mut ball.decider),
+                    None => break,
+                }
+            }
+            pending = w.in_flight() == Some(key);
             if pending {
                 self.stats.speculation_pending += 1;
             }
-        }
-        if let Some(spec) = got.filter(|d| d.key == key).and_then(|d| d.spec) {
-            ball.decider.hold(spec);
         }
         self.spec_pending = pending;
     }
@@ -472,6 +492,7 @@ impl BallBrain {
                         now: at.t,
                         start: at.state.clone(),
                         abandon,
+                        refresh: false,
                     });
                 }
                 None => {
@@ -479,6 +500,24 @@ impl BallBrain {
                     ball.decider.speculate(&self.planner, at.t, &at.state);
                     self.planner.budget = None;
                 }
+            }
+        } else if self.cfg.refresh_ahead && self.cfg.speculate_frames >= 2 && ball.decider.refresh_due() {
+            // One frame before the decision, on the worker only: its search ahead made again from
+            // the newest estimate (the held hits planned again first, searched when none is
+            // feasible any more), so that the deciding observation rarely searches in full.
+            if let Some(w) = self.worker.as_mut() {
+                let left = (self.cfg.decide.frame_period - 1e-3).max(0.0);
+                let abandon = at.deadline.map(|_| Instant::now() + Duration::from_secs_f64(left));
+                ball.decider.mark_refreshed();
+                self.stats.refreshed += 1;
+                w.submit(SpecJob {
+                    key: (ball.id, ball.decisions),
+                    decider: ball.decider.clone(),
+                    now: at.t,
+                    start: at.state.clone(),
+                    abandon,
+                    refresh: true,
+                });
             }
         }
         match decision {
@@ -639,6 +678,7 @@ impl Brain for BallBrain {
             (&c.ball_speculation_waited, s.speculation_waited),
             (&c.ball_speculation_pending, s.speculation_pending),
             (&c.ball_speculation_alternative, s.speculation_alternative),
+            (&c.ball_speculation_refreshed, s.refreshed),
         ] {
             a.store(v, Ordering::Relaxed);
         }

@@ -197,6 +197,9 @@ counters! {
     /// Ball mode: decisions that planned again a next best hit of the search ahead (the best
     /// not feasible any more; counted within `ball_speculation_used`).
     ball_speculation_alternative,
+    /// Ball mode: searches ahead made again one frame before their decision (the held hits
+    /// planned again from the newest estimate first) on the worker thread.
+    ball_speculation_refreshed,
     /// Brain strokes ready after their splice cycle because their observation waited for the
     /// planning thread (busy with something else) longer than half the lead.
     late_queued,

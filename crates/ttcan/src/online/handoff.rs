@@ -238,6 +238,13 @@ impl Timeline {
         self.enabled.load(Ordering::Acquire) >= self.channels
     }
 
+    /// True once telemetry is to be sent: every channel runs, or a channel has stopped or set a
+    /// fault bit (a drive that never enabled, or left Operation Enabled): from then on the
+    /// telemetry carries the fault bits and is never silent.
+    pub fn telemetry_due(&self) -> bool {
+        self.all_enabled() || self.faults.load(Ordering::Relaxed) != 0 || self.stopped.load(Ordering::Relaxed)
+    }
+
     /// The positions held at enable (valid once [`Timeline::all_enabled`]).
     pub fn hold(&self) -> Vec<f64> {
         self.hold[..self.dof].iter().map(val).collect()

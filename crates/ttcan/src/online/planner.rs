@@ -9,7 +9,10 @@
 //! Splice rules: the stroke starts at the first cycle at least `splice_lead` after the decision
 //! (and after the present cycle; planning must finish before that cycle is commanded; if it did
 //! not, the plan is made again with a lead of twice the one before or twice the planning time,
-//! whichever is longer, three tries in all). A stroke a [`Brain`] built
+//! whichever is longer, three tries in all). A brain deciding on an observation gets the first
+//! cycle at least `splice_lead` after the observation's arrival (at least half the lead from
+//! now, [`Splicer::splice_after`]), so that its in-time strokes start within the lead plus one
+//! cycle of their observation. A stroke a [`Brain`] built
 //! ([`Command::Stroke`]) is handed over as it is at the cycle it was planned for, when that cycle
 //! is still ahead and the stroke starts from the state scheduled there; otherwise its hit is
 //! planned again like an upper computer's (counted `splices_replanned`). A newer
@@ -87,7 +90,7 @@ pub fn run_planner(
                 last_heard = Some(arrival);
                 silent = false;
                 if let Some(b) = brain.as_deref_mut() {
-                    let at = splicer.splice_at(1.0);
+                    let at = splicer.splice_after(arrival);
                     tl_planning(&splicer, true);
                     command = b.observe(&obs, sent, now, &at).map(|c| (c, arrival));
                     tl_planning(&splicer, false);

@@ -55,6 +55,10 @@ pub struct OnlineConfig {
     /// searches when its observation comes (0..=20).
     #[serde(default = "speculate_frames")]
     pub speculate_frames: usize,
+    /// Ball mode, with `speculate_frames` ≥ 2: each search ahead made again on the worker one
+    /// frame before its decision (`ttcan::online::ball::BallBrainConfig::refresh_ahead`).
+    #[serde(default = "refresh_ahead")]
+    pub refresh_ahead: bool,
 }
 
 fn silence() -> f64 {
@@ -78,6 +82,9 @@ fn thread_priority() -> u8 {
 fn speculate_frames() -> usize {
     3
 }
+fn refresh_ahead() -> bool {
+    true
+}
 
 impl Default for OnlineConfig {
     fn default() -> Self {
@@ -89,6 +96,7 @@ impl Default for OnlineConfig {
             queue: queue(),
             priority: thread_priority(),
             speculate_frames: speculate_frames(),
+            refresh_ahead: refresh_ahead(),
         }
     }
 }
@@ -190,6 +198,7 @@ pub fn start(
                 BallBrainConfig {
                     latency_budget: cfg.latency_budget_s,
                     speculate_frames: cfg.speculate_frames,
+                    refresh_ahead: cfg.refresh_ahead,
                     ..BallBrainConfig::default()
                 },
             )
@@ -300,7 +309,8 @@ fn realtime(prio: u8, counters: &Counters) {
     }
 }
 
-/// Sends the measured joint state to `reply` every `every_ns` until `stop` (once the channels run).
+/// Sends the measured joint state and the fault bits to `reply` every `every_ns` until `stop`,
+/// from the first cycle at which [`Timeline::telemetry_due`] (the channels run, or one stopped).
 fn run_telemetry(
     socket: &UdpSocket,
     reply: SocketAddr,
@@ -312,6 +322,7 @@ fn run_telemetry(
     let mut next = crate::runtime::rt::now_ns();
     let mut seq = 0u64;
     let mut buf = [0u8; wire::MAX_LEN];
+    let mut live = false;
     while !stop.load(Ordering::Relaxed) {
         next += every_ns;
         crate::runtime::rt::sleep_until(next);
@@ -319,8 +330,13 @@ fn run_telemetry(
         if now > next + 100 * every_ns {
             next = now; // far behind (a stall): no burst
         }
-        if !tl.all_enabled() {
-            continue;
+        // Once due, always sent (a faulted channel's fault bits included), so that the upper
+        // computer hears a fault instead of silence.
+        if !live {
+            live = tl.telemetry_due();
+            if !live {
+                continue;
+            }
         }
         let m = tl.measured();
         seq += 1;

@@ -1,6 +1,8 @@
 //! The ball brain's search-ahead worker: a thread of its own (neither a cycle thread nor the
 //! planning thread) that makes each decision's search a few observations before the decision
-//! ([`BallDecider::speculate`] on a clone of the ball's decider) and hands the hit found back
+//! ([`BallDecider::speculate`] on a clone of the ball's decider), and again one frame before it
+//! ([`BallDecider::refresh`]: the hit found planned again from the newest estimate, searched
+//! again only when not feasible any more), and hands the hit found back
 //! over a channel, so that the planning thread is free when the deciding observation comes. The
 //! planning thread may block on the channel (it waits for a search still running when its
 //! decision is due, up to its splice deadline); the cycle threads never see it.
@@ -30,6 +32,10 @@ pub struct SpecJob {
     pub start: JointState,
     /// When the search is given up ([`PlanBudget::Abandon`]); `None`: no budget.
     pub abandon: Option<Instant>,
+    /// The search made again one frame before the decision ([`BallDecider::refresh`]: the
+    /// held hits planned again from the newest estimate first) instead of the search ahead
+    /// ([`BallDecider::speculate`]).
+    pub refresh: bool,
 }
 
 /// What a search ahead found: the hit to hold for the decision `key`, if any.
@@ -48,6 +54,8 @@ pub struct Speculator {
     done: Receiver<SpecDone>,
     handle: Option<JoinHandle<()>>,
     in_flight: Option<SpecKey>,
+    /// Jobs submitted for `in_flight` whose results were not taken yet.
+    outstanding: usize,
 }
 
 impl Speculator {
@@ -66,7 +74,11 @@ impl Speculator {
                 let mut planner = planner;
                 for mut job in rx {
                     planner.budget = job.abandon.map(PlanBudget::Abandon);
-                    job.decider.speculate(&planner, job.now, &job.start);
+                    if job.refresh {
+                        job.decider.refresh(&planner, job.now, &job.start);
+                    } else {
+                        job.decider.speculate(&planner, job.now, &job.start);
+                    }
                     let spec = job.decider.held().cloned();
                     if tx.send(SpecDone { key: job.key, spec }).is_err() {
                         return;
@@ -78,19 +90,38 @@ impl Speculator {
             done,
             handle: Some(handle),
             in_flight: None,
+            outstanding: 0,
         })
     }
 
     /// Hands `job` to the worker (a job still running for another decision is superseded: its
-    /// result will be dropped). False when the worker has ended.
+    /// result will be dropped; the results of jobs for the same decision all come, in order).
+    /// False when the worker has ended.
     pub fn submit(&mut self, job: SpecJob) -> bool {
         let key = job.key;
         let sent = self.jobs.as_ref().is_some_and(|j| j.send(job).is_ok());
-        self.in_flight = sent.then_some(key);
+        if !sent {
+            self.in_flight = None;
+            self.outstanding = 0;
+        } else if self.in_flight == Some(key) {
+            self.outstanding += 1;
+        } else {
+            self.in_flight = Some(key);
+            self.outstanding = 1;
+        }
         sent
     }
 
-    /// The decision whose search is running (submitted, its result not taken yet).
+    /// A result for the decision in flight taken: the decision is no longer in flight once
+    /// every job submitted for it has answered.
+    fn took(&mut self) {
+        self.outstanding = self.outstanding.saturating_sub(1);
+        if self.outstanding == 0 {
+            self.in_flight = None;
+        }
+    }
+
+    /// The decision whose search is running (submitted, a result not taken yet).
     pub fn in_flight(&self) -> Option<SpecKey> {
         self.in_flight
     }
@@ -100,7 +131,7 @@ impl Speculator {
     pub fn poll(&mut self) -> Option<SpecDone> {
         while let Ok(d) = self.done.try_recv() {
             if self.in_flight == Some(d.key) {
-                self.in_flight = None;
+                self.took();
                 return Some(d);
             }
         }
@@ -127,7 +158,7 @@ impl Speculator {
             };
             match got {
                 Ok(d) if self.in_flight == Some(d.key) => {
-                    self.in_flight = None;
+                    self.took();
                     return Some(d);
                 }
                 Ok(_) => {}

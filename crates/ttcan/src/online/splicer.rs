@@ -222,6 +222,12 @@ impl Splicer {
     /// the present one, with the channels' skips. A stroke handed over before a channel commands
     /// its start cycle starts there.
     pub(super) fn splice_in(&self, lead: f64) -> Splice {
+        self.splice_from(controller_time() + lead)
+    }
+
+    /// The splice at the first deadline at or after controller time `t` (s), after the present
+    /// one, with the channels' skips.
+    fn splice_from(&self, t: f64) -> Splice {
         let tl = &self.timeline;
         let skips = tl.skips();
         let present = (0..skips.len())
@@ -231,7 +237,7 @@ impl Splicer {
             })
             .max()
             .unwrap_or(0);
-        let at = tl.deadline_at(controller_time() + lead);
+        let at = tl.deadline_at(t);
         Splice {
             deadline: at.max(present + 1),
             skips,
@@ -246,7 +252,25 @@ impl Splicer {
     /// The earliest splice a brain deciding now can plan from (cycle, time, commanded state):
     /// `factor × splice_lead` ahead; its deadline is [`HANDOVER_MARGIN`] before the cycle.
     pub fn splice_at(&self, factor: f64) -> SpliceAt {
-        let sp = self.splice(factor);
+        self.splice_at_deadline(self.splice(factor))
+    }
+
+    /// The earliest splice a brain deciding now on a datagram that arrived at `arrival` (s,
+    /// controller clock) can plan from: the first deadline at least `splice_lead` after the
+    /// arrival, so that a stroke handed over in time starts at most `splice_lead` + one cycle
+    /// after it (its decision latency) whatever the datagram waited for the planning thread; but
+    /// at least half the lead from now (a datagram that waited longer gets that much time).
+    pub fn splice_after(&self, arrival: f64) -> SpliceAt {
+        let lead = self.cfg.splice_lead;
+        let t = if arrival.is_finite() {
+            (arrival + lead).max(controller_time() + 0.5 * lead)
+        } else {
+            controller_time() + lead
+        };
+        self.splice_at_deadline(self.splice_from(t))
+    }
+
+    fn splice_at_deadline(&self, sp: Splice) -> SpliceAt {
         let state = self.state_of(&sp).unwrap_or_else(|| JointState::rest(&self.ready));
         let t = self.timeline.time_of(sp.deadline);
         let left = (t - controller_time() - HANDOVER_MARGIN).max(0.0);
@@ -340,5 +364,51 @@ impl Splicer {
             return false;
         }
         false
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::online::handoff;
+
+    fn splicer(lead: f64) -> Splicer {
+        let chain = ttkin::robots::gantry6();
+        let planner = HitPlanner::new(&chain, ttkin::hit::HitOptions::default()).unwrap();
+        let period_ns = 1_000_000;
+        let tl = Arc::new(Timeline::new(1, 6, period_ns, crate::runtime::rt::now_ns()));
+        let joints = [Some(0), Some(1), Some(2), Some(3)];
+        let (s, _f) = handoff::channel(0, joints, tl.clone());
+        let cfg = PlannerConfig {
+            splice_lead: lead,
+            silence: 1.0,
+        };
+        Splicer::new(planner, tl, vec![s], cfg)
+    }
+
+    #[test]
+    fn a_decision_splices_a_lead_after_its_datagrams_arrival_or_half_a_lead_from_now() {
+        let lead = 0.02;
+        let sp = splicer(lead);
+        let period = sp.timeline.period();
+        // arrived just now: the first deadline at least a lead after the arrival
+        let arrival = controller_time() - 1e-4;
+        let at = sp.splice_after(arrival);
+        assert!(
+            at.t >= arrival + lead && at.t < arrival + lead + period + 1e-9,
+            "{} {arrival}",
+            at.t
+        );
+        assert_eq!(at.cycle, sp.timeline.deadline_at(arrival + lead));
+        // waited in the queue longer than half the lead: half a lead from now
+        let arrival = controller_time() - 0.05;
+        let before = controller_time();
+        let at = sp.splice_after(arrival);
+        assert!(at.t >= before + 0.5 * lead, "{} {before}", at.t);
+        assert!(at.t - arrival > lead + period);
+        // no arrival known: a lead from now, as `splice_at(1.0)`
+        let before = controller_time();
+        let at = sp.splice_after(f64::NAN);
+        assert!(at.t >= before + lead);
     }
 }

@@ -129,6 +129,9 @@ pub struct BallDecider {
     /// The decisions a speculation was made for (see [`BallDecider::speculation_due`]): bit 0
     /// the first plan, bit 1 the correction, bit 2 the second correction.
     speculated: u8,
+    /// The decisions whose search ahead was made again one frame before them, bits as in
+    /// `speculated` ([`BallDecider::refresh`]).
+    refreshed: u8,
     /// How the last decision used a held hit: `Some(true)` planned again from it, `Some(false)`
     /// it could not be and the decision searched in full, `None` no hit held.
     spec_used: Option<bool>,
@@ -187,6 +190,7 @@ impl BallDecider {
             last: None,
             held: None,
             speculated: 0,
+            refreshed: 0,
             spec_used: None,
             spec_rank: None,
         }
@@ -286,6 +290,87 @@ impl BallDecider {
         };
         self.held = spec;
         self.held.is_some()
+    }
+
+    /// Whether the next observation makes the next decision (every frame delivered), that
+    /// decision's search ahead was made ([`BallDecider::speculation_due`] false for it) and it was
+    /// not made again yet: the moment to [`BallDecider::refresh`] it, one frame before the
+    /// decision.
+    pub fn refresh_due(&self) -> bool {
+        match self.phase {
+            Phase::Done => false,
+            Phase::Observing => {
+                self.speculated & 1 != 0 && self.refreshed & 1 == 0 && self.times.len() + 1 == self.cfg.window_frames
+            }
+            Phase::Correcting(at, second) => {
+                let bit = correction_bit(second);
+                self.speculated & bit != 0
+                    && self.refreshed & bit == 0
+                    && self
+                        .times
+                        .last()
+                        .is_some_and(|&t| t + self.cfg.frame_period <= at && t + 2.0 * self.cfg.frame_period > at)
+            }
+        }
+    }
+
+    /// The next decision's search ahead made again at `now` (s) from the observations so far,
+    /// one frame before that decision ([`BallDecider::refresh_due`]), for a stroke from `start`
+    /// (a correction's): the held hits ([`BallDecider::held`]) are planned again first from the
+    /// newest estimate, in order ([`ReturnPlanner::plan_same_hit`], no search), and the first
+    /// feasible one is held, with the next ones after it; when none is (or none is held), the
+    /// search is made again as [`BallDecider::speculate`] makes it. The deciding observation then
+    /// plans a hit found from an estimate one frame old again, rarely in vain. True when a hit
+    /// is held.
+    pub fn refresh(&mut self, planner: &ReturnPlanner, now: f64, start: &JointState) -> bool {
+        let held = self.held.take();
+        let spec = match self.phase {
+            Phase::Done => return false,
+            Phase::Observing => {
+                self.refreshed |= 1;
+                let held = held.filter(|h| !h.correction);
+                let est = estimate(&self.times, &self.obs, &self.opts).ok();
+                let again = est.as_ref().zip(held.as_ref()).and_then(|(est, h)| {
+                    let rest = JointState::rest(&planner.ready);
+                    h.tries().enumerate().find_map(|(rank, (hit, t_hit))| {
+                        let p = planner.plan_same_hit(&est.state, now, &rest, false, hit, t_hit).ok()?;
+                        let new = p.hit.filter(|_| p.status == ReturnStatus::Ok)?;
+                        Some(Speculation {
+                            hit: new,
+                            t_hit,
+                            correction: false,
+                            others: h.others.iter().skip(rank).cloned().collect(),
+                        })
+                    })
+                });
+                again.or_else(|| self.speculate_first(planner, now))
+            }
+            Phase::Correcting(at, second) => {
+                self.refreshed |= correction_bit(second);
+                let held = held.filter(|h| h.correction);
+                let mut used = None;
+                self.correction(planner, at, now, &|_| start.clone(), held, &mut used)
+                    .map(|(hit, others)| Speculation {
+                        t_hit: now + hit.hit.t,
+                        hit,
+                        correction: true,
+                        others: others.into_iter().map(|h| (h.clone(), now + h.hit.t)).collect(),
+                    })
+            }
+        };
+        self.held = spec;
+        self.held.is_some()
+    }
+
+    /// Records that the next decision's search ahead was made again elsewhere (on another
+    /// thread, from a clone of this decider, [`BallDecider::refresh`]): [`BallDecider::refresh_due`]
+    /// turns false for that decision; its hit comes with [`BallDecider::hold`].
+    pub fn mark_refreshed(&mut self) {
+        match self.phase {
+            Phase::Done => {}
+            Phase::Observing => self.refreshed |= 1,
+            Phase::Correcting(_, second) => self.refreshed |= correction_bit(second),
+        }
     }
 
     /// Holds `spec` for the next decision of its kind (a first plan's, or a correction's), as
