@@ -222,7 +222,8 @@ pub struct ReturnPlanner {
     /// ball's centre in time within the drives' torque): the search again, over the early and
     /// the late candidates, with the ball this far (m) off the racket's centre, each in order until
     /// one gives a hit, across the table and up the face alike, with `last_resort_attempts`
-    /// fallback-target solves (empty: no last resort). A ball that plans without it plans the same.
+    /// fallback-target solves (empty: no last resort; skipped once a [`PlanBudget`] is spent, so
+    /// an online controller's decision keeps its time). A ball that plans without it plans the same.
     pub last_resort_offsets: Vec<f64>,
     /// Most fallback-target shooting solves of each last-resort search (`LAST_RESORT_ATTEMPTS`).
     pub last_resort_attempts: usize,
@@ -376,10 +377,12 @@ impl ReturnPlanner {
 
     /// The last resort of a plan with no feasible hit ([`Self::last_resort_offsets`]): the
     /// candidate lists `lists` searched again with the ball further off the racket's centre, the
-    /// smallest offset first, until a hit is found or the budget abandons the search.
+    /// smallest offset first, until a hit is found; not at all, or no further, once a budget
+    /// ([`PlanBudget`]) is spent.
     fn last_resort(&self, lists: &[&[BallState]], now: f64, target: [f64; 2], start: &JointState, search: &mut Search) {
         for &offset in &self.last_resort_offsets {
-            if search.best.is_some() || search.deadline.abandoned() {
+            // Only within the budget: a controller past its deadline keeps its decision's time.
+            if search.best.is_some() || search.deadline.passed() {
                 return;
             }
             let wide = ReturnPlanner {
@@ -390,7 +393,7 @@ impl ReturnPlanner {
                 ..self.clone()
             };
             for list in lists.iter().filter(|l| !l.is_empty()) {
-                if search.best.is_some() || search.deadline.abandoned() {
+                if search.best.is_some() || search.deadline.passed() {
                     return;
                 }
                 wide.search_list(list, now, target, start, search);
