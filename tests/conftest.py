@@ -31,10 +31,15 @@ def robot(request) -> ttmanip.Robot:
 
 
 def built_binary(name: str) -> str | None:
-    """The newest build of the ttcan binary ``name`` (target/release or target/debug), or None.
-    The newest, not the first found: a stale release build must not stand in for a fresh debug one."""
+    """The ttcan binary ``name`` in $TTCAN_BIN_DIR when set (scripts/test.sh picks the build per
+    run), else the newest build (target/release or target/debug), or None. The newest, not the
+    first found: a stale release build must not stand in for a fresh debug one."""
     import os
 
+    chosen = os.environ.get("TTCAN_BIN_DIR")
+    if chosen:
+        path = os.path.join(chosen, name)
+        return path if os.path.exists(path) else None
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     found = [os.path.join(root, "target", p, name) for p in ("release", "debug")]
     found = [p for p in found if os.path.exists(p)]

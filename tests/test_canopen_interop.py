@@ -31,6 +31,9 @@ import pytest
 
 ROOT = sc.ROOT
 
+# real time: SYNC-driven motions through a bridge thread (scripts/test.sh runs these alone)
+pytestmark = pytest.mark.serial
+
 
 @pytest.fixture(scope="module")
 def bins() -> Path:

@@ -56,6 +56,7 @@ def ttctl() -> Path:
     return exe
 
 
+@pytest.mark.serial  # real time: ttctl plays the rally against the clock
 def test_a_short_hil_rally_plays_every_ball_against_ttctl(ttctl, tmp_path):
     from ttmanip.hil import run
 

@@ -22,6 +22,9 @@ from ttmanip.ctl import Link
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 CONFIG = os.path.join(ROOT, "tests", "online", "gantry6.toml")
 
+# real time: ttctl's cycles and planning latency against the clock (scripts/test.sh runs it alone)
+pytestmark = pytest.mark.serial
+
 
 def _free_port() -> int:
     s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
@@ -45,7 +48,8 @@ def _telemetry(link: Link, timeout: float) -> list[dict]:
 
 
 def test_bad_input_hits_and_planning_load_through_link(tmp_path):
-    ttctl = built_binary("ttctl")
+    # timed like the HIL rally: $TTCTL when set (scripts/test.sh: the release build), else the newest
+    ttctl = os.environ.get("TTCTL") or built_binary("ttctl")
     if ttctl is None:
         pytest.skip("ttctl is not built (cargo build -p ttcan)")
     port = _free_port()

@@ -7,7 +7,7 @@
 //! error peaked, the reference and the currents (`TRACE_FAULTS=1`: their whole record); the failed
 //! balls' indices; `IDEAL=1`: exact
 //! execution instead; `START=k`: balls k..k+N; `ROLLS`, `CANDIDATES`, `MAX_CANDIDATES`,
-//! `FALLBACK_ATTEMPTS`, `CONTACT_OFFSET`, `RETURN_TIMES`: the ball planner's settings, `WIDEN=0`: no wider
+//! `FALLBACK_ATTEMPTS`, `CONTACT_OFFSET`, `RETURN_TIMES`, `LAST_RESORT`, `LAST_RESORT_ATTEMPTS`: the ball planner's settings, `WIDEN=0`: no wider
 //! correction search, for experiments; `DUMP=file`: every ball's outcome, one row per ball and world).
 use std::collections::BTreeMap;
 use std::sync::Mutex;
@@ -129,7 +129,8 @@ fn counts(out: &[BallOutcome]) -> (usize, usize, BTreeMap<String, usize>) {
 
 /// Experiment settings of the ball planner from the environment (both worlds alike): `ROLLS`
 /// (degrees, comma-separated), `CANDIDATES`, `MAX_CANDIDATES`, `FALLBACK_ATTEMPTS`,
-/// `CONTACT_OFFSET` (m), `RETURN_TIMES` (three, s).
+/// `CONTACT_OFFSET` (m), `RETURN_TIMES` (three, s), `LAST_RESORT` (the last resort's contact
+/// offsets, m; 0: none), `LAST_RESORT_ATTEMPTS`.
 fn tweak(p: &mut ttkin::ball::hitplan::ReturnPlanner) {
     let list = |name: &str| -> Option<Vec<f64>> {
         std::env::var(name)
@@ -153,6 +154,13 @@ fn tweak(p: &mut ttkin::ball::hitplan::ReturnPlanner) {
     }
     if let Some(t) = list("RETURN_TIMES") {
         p.return_times = [t[0], t[1], t[2]];
+    }
+    // LAST_RESORT=0: no last resort; else its contact offsets (m, comma-separated).
+    if let Some(o) = list("LAST_RESORT") {
+        p.last_resort_offsets = o.into_iter().filter(|&x| x > 0.0).collect();
+    }
+    if let Some(c) = list("LAST_RESORT_ATTEMPTS") {
+        p.last_resort_attempts = c[0] as usize;
     }
 }
 

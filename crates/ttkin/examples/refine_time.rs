@@ -4,7 +4,8 @@
 //! each decision planned again from the next frame without a search (`BallDecider::refine`, what
 //! `ttctl --online ball` does when a decision came after its splice cycle): percentiles, and how
 //! many refinements found the hit again. The stroke under way at the correction is the first
-//! hit's (`rally::execution`), as in the rally.
+//! hit's (`rally::execution`), as in the rally. `LAST_RESORT=0`: the planner without its last
+//! resort (`ReturnPlanner::last_resort_offsets`), for a before/after on the same load.
 mod common;
 
 use common::{cpu_us, row, state_of};
@@ -18,7 +19,10 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     let n: u64 = args.get(1).map_or(2000, |a| a.parse().expect("N"));
     let seed: u64 = args.get(2).map_or(0, |a| a.parse().expect("SEED"));
-    let pl = ReturnPlanner::new(ttkin::robots::gantry6(), Flight::default()).expect("gantry6");
+    let mut pl = ReturnPlanner::new(ttkin::robots::gantry6(), Flight::default()).expect("gantry6");
+    if std::env::var("LAST_RESORT").is_ok_and(|v| v == "0") {
+        pl.last_resort_offsets.clear();
+    }
     let cfg = RallyConfig {
         seed,
         ..RallyConfig::default()

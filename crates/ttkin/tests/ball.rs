@@ -577,6 +577,45 @@ fn a_correction_the_near_search_cannot_make_is_searched_in_full() {
     );
 }
 
+/// The last resort of a plan with no feasible hit (`ReturnPlanner::last_resort_offsets`, issue
+/// 28's ninth stop): balls of seed 0 no stroke reaches with the ball within 30 mm of the racket's
+/// centre in time within the drives' torque (found in `rally_drives 1000 0`, `infeasible`
+/// without it) are returned with the ball further off the centre, inside the face.
+#[test]
+fn balls_with_no_feasible_hit_are_returned_off_the_racket_centre() {
+    let balls = [57, 106, 188, 247];
+    let play = |last_resort: bool| -> Vec<BallOutcome> {
+        let mut r = gantry_rally(RallyConfig {
+            paths: 0,
+            ..RallyConfig::default()
+        });
+        if !last_resort {
+            r.planner.last_resort_offsets.clear();
+        }
+        balls
+            .iter()
+            .map(|&k| r.play_range(k, 1, None, None, &|| false).unwrap().remove(0))
+            .collect()
+    };
+    let (without, with) = (play(false), play(true));
+    for ((k, a), b) in balls.iter().zip(&without).zip(&with) {
+        assert!(a.in_reach && b.in_reach, "ball {k}");
+        assert_eq!(a.status, "infeasible", "ball {k} without the last resort");
+        assert!(!a.returned, "ball {k}");
+        assert_ne!(b.status, "infeasible", "ball {k} with the last resort");
+        // The racket met the ball inside its face (the rally's contact test).
+        if b.returned {
+            assert!(b.racket_error < 0.075, "ball {k}: {}", b.racket_error);
+        }
+    }
+    let returned = with.iter().filter(|o| o.returned).count();
+    assert!(
+        returned >= 3,
+        "{returned} of {} returned with the last resort",
+        balls.len()
+    );
+}
+
 #[test]
 fn ball_beyond_the_quintic_is_planned_and_executed_jerk_limited() {
     let pl = planner();

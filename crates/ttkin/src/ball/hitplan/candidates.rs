@@ -92,7 +92,8 @@ impl ReturnPlanner {
         let g = Vector3::new(0.0, 0.0, -self.flight.model.gravity);
         let v_out = (goal - s.p - 0.5 * g * tf * tf) / tf;
         let n = (v_out - s.v).normalize();
-        self.racket_centres(&s.p, &n)
+        let (centres, count) = self.racket_centres(&s.p, &n);
+        centres[..count]
             .iter()
             .any(|c| (0..poses.rolls()).any(|k| !self.robot.branches(&poses.pose(c, &n, k), None).is_empty()))
     }

@@ -186,7 +186,8 @@ impl ReturnPlanner {
                 .sum()
         };
         let mut nearest: Option<(f64, Vec<f64>, IsometryMatrix3<f64>)> = None;
-        for c in &self.racket_centres(&s.p, &racket.normal) {
+        let (centres, count) = self.racket_centres(&s.p, &racket.normal);
+        for c in &centres[..count] {
             for roll in 0..poses.rolls() {
                 let pose = poses.pose(c, &racket.normal, roll);
                 for q in self.robot.branches(&pose, Some(&start.q)).iter() {

@@ -10,7 +10,9 @@
 //!    target or, when no racket with the approximate normal toward it has IK (see
 //!    `roughly_placeable`), at the nearest fallback target on the opponent's half that has one; a
 //!    candidate with none is tried in full only when no other gives a hit, and then the other
-//!    placeable targets of every candidate (at most `FALLBACK_ATTEMPTS` shooting solves).
+//!    placeable targets of every candidate (at most `FALLBACK_ATTEMPTS` shooting solves). With
+//!    still no feasible hit, the last resort ([`ReturnPlanner::last_resort_offsets`]) searches
+//!    again with the ball 40–70 mm off the racket's centre.
 //! 2. **Outgoing velocity** (`shoot.rs`). Shooting: the velocity v₀ with which the ball, spinning with its
 //!    post-impact spin, is at (x_t, y_t, r) after the return flight time T: Broyden's method on the
 //!    3×3 map v₀ ↦ p(T), started from the drag-free solution with the linearised flight's
@@ -85,6 +87,13 @@ const FALLBACK_ATTEMPTS: usize = 60;
 /// Most candidates tried when none of the first `candidates` is feasible (12 before issue 28's
 /// seventh stop, docs/ball.md).
 const MAX_CANDIDATES: usize = 40;
+
+/// Off-centre contacts (m) of the last resort, [`ReturnPlanner::last_resort_offsets`] (issue 28's
+/// ninth stop, docs/ball.md; the racket's face radius is 75 mm).
+const LAST_RESORT_OFFSETS: [f64; 4] = [0.04, 0.05, 0.06, 0.07];
+
+/// Most fallback-target solves of each last-resort search ([`ReturnPlanner::last_resort_attempts`]).
+const LAST_RESORT_ATTEMPTS: usize = 200;
 
 /// Why a ball got no return, or that it got one: the ball side's outcome. The robot side's
 /// statuses are [`crate::hit::HitStatus`]; a ball with hit points but no feasible robot hit is `Infeasible`.
@@ -205,6 +214,19 @@ pub struct ReturnPlanner {
     /// when the ball on the centre has no IK within the limits); the rally counts a contact within
     /// the racket radius.
     pub contact_offset: f64,
+    /// Off-centre contacts (m) along the face plane's direction closest to world up, tried after
+    /// the centre and the `contact_offset` ones across the table (0: none; the last resort sets
+    /// it, [`Self::last_resort_offsets`]).
+    pub contact_offset_up: f64,
+    /// The last resort of a plan that finds no feasible hit at all (often: no stroke reaches the
+    /// ball's centre in time within the drives' torque): the search again, over the early and
+    /// the late candidates, with the ball this far (m) off the racket's centre, each in order until
+    /// one gives a hit, across the table and up the face alike, with `last_resort_attempts`
+    /// fallback-target solves (empty: no last resort; skipped once a [`PlanBudget`] is spent, so
+    /// an online controller's decision keeps its time). A ball that plans without it plans the same.
+    pub last_resort_offsets: Vec<f64>,
+    /// Most fallback-target shooting solves of each last-resort search (`LAST_RESORT_ATTEMPTS`).
+    pub last_resort_attempts: usize,
     /// Rolls (rad) of the racket about its face normal tried in order (0: handle up); the ball
     /// does not see the roll, the joints do.
     pub rolls: Vec<f64>,
@@ -241,6 +263,9 @@ impl ReturnPlanner {
             return_times: [0.8, 0.55, 1.05],
             good_margin: 0.25,
             contact_offset: 0.03,
+            contact_offset_up: 0.0,
+            last_resort_offsets: LAST_RESORT_OFFSETS.to_vec(),
+            last_resort_attempts: LAST_RESORT_ATTEMPTS,
             rolls: [0.0, 30.0, -30.0].iter().map(|d: &f64| d.to_radians()).collect(),
             budget: None,
         };
@@ -335,15 +360,45 @@ impl ReturnPlanner {
             Begin::Search(list, search) => (list, search),
         };
         self.search_list(&list, now, target, start, &mut search);
+        let mut late = Vec::new();
         if search.best.is_none() && !after_bounce {
             // No early hit is feasible (often: no stroke that fast within the drives' torque):
             // the later candidates the early ones had cut (issue 28).
-            let late = self.late_candidate_states(&self.flight, ball, now, self.search_margin);
+            late = self.late_candidate_states(&self.flight, ball, now, self.search_margin);
             if !late.is_empty() {
                 self.search_list(&late, now, target, start, &mut search);
             }
         }
+        if search.best.is_none() {
+            self.last_resort(&[&list, &late], now, target, start, &mut search);
+        }
         Ok(search.finish())
+    }
+
+    /// The last resort of a plan with no feasible hit ([`Self::last_resort_offsets`]): the
+    /// candidate lists `lists` searched again with the ball further off the racket's centre, the
+    /// smallest offset first, until a hit is found; not at all, or no further, once a budget
+    /// ([`PlanBudget`]) is spent.
+    fn last_resort(&self, lists: &[&[BallState]], now: f64, target: [f64; 2], start: &JointState, search: &mut Search) {
+        for &offset in &self.last_resort_offsets {
+            // Only within the budget: a controller past its deadline keeps its decision's time.
+            if search.best.is_some() || search.deadline.passed() {
+                return;
+            }
+            let wide = ReturnPlanner {
+                contact_offset: offset.max(self.contact_offset),
+                contact_offset_up: offset,
+                fallback_attempts: self.last_resort_attempts,
+                last_resort_offsets: Vec::new(),
+                ..self.clone()
+            };
+            for list in lists.iter().filter(|l| !l.is_empty()) {
+                if search.best.is_some() || search.deadline.passed() {
+                    return;
+                }
+                wide.search_list(list, now, target, start, search);
+            }
+        }
     }
 
     /// The search of [`Self::plan_from`] over the candidate states `list` into `search`.

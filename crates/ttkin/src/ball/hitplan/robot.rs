@@ -27,8 +27,8 @@ impl ReturnPlanner {
         let twist = self.base_twist(&racket.velocity);
         let t = s.t - now;
         let mut best: Option<ReturnHit> = None;
-        let centres = self.racket_centres(&s.p, &racket.normal);
-        for (k, roll) in (0..centres.len()).flat_map(|k| (0..poses.rolls()).map(move |r| (k, r))) {
+        let (centres, count) = self.racket_centres(&s.p, &racket.normal);
+        for (k, roll) in (0..count).flat_map(|k| (0..poses.rolls()).map(move |r| (k, r))) {
             if best
                 .as_ref()
                 .is_some_and(|b| b.margin() >= self.good_margin || k > 0 || deadline.passed())
@@ -64,17 +64,28 @@ impl ReturnPlanner {
     }
 
     /// Racket centres (m, world) for a ball centre `p` touching a face with normal `n`, in the
-    /// order tried: the ball on the face centre, then moved by ±`contact_offset` in the face plane
-    /// along its direction closest to world y (across the table, the carriage's d2 axis), for a
-    /// ball just beyond the carriage's stroke.
-    pub(super) fn racket_centres(&self, p: &Vector3<f64>, n: &Vector3<f64>) -> [Vector3<f64>; 3] {
+    /// order tried, and how many of the array's entries are used: the ball on the face centre,
+    /// then moved by ±`contact_offset` in the face plane along its direction closest to world y
+    /// (across the table, the carriage's d2 axis), for a ball just beyond the carriage's stroke;
+    /// with `contact_offset_up` > 0 (the last resort, [`ReturnPlanner::last_resort_offsets`])
+    /// also by ±`contact_offset_up` along the face plane's other direction (closest to world up).
+    pub(super) fn racket_centres(&self, p: &Vector3<f64>, n: &Vector3<f64>) -> ([Vector3<f64>; 5], usize) {
         let c = p - self.flight.model.radius * n;
         let across = Vector3::y() - n * n.y;
-        let e = if across.norm() > 1e-6 {
-            across.normalize() * self.contact_offset
+        let (e, u) = if across.norm() > 1e-6 {
+            let a = across.normalize();
+            (
+                a * self.contact_offset,
+                n.cross(&a).normalize() * self.contact_offset_up,
+            )
         } else {
-            Vector3::zeros()
+            (Vector3::zeros(), Vector3::zeros())
         };
-        [c, c + e, c - e]
+        let count = if self.contact_offset_up > 0.0 && u.norm() > 0.0 {
+            5
+        } else {
+            3
+        };
+        ([c, c + e, c - e, c + u, c - u], count)
     }
 }
