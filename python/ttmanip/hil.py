@@ -176,6 +176,8 @@ def play(
             "obs": cam["positions"].tolist(),
             "t": t.tolist(),
             "q": q.tolist(),
+            # the ball leaving the racket [t, x, y, z] (s, m, world), when the racket met it
+            "impact": None if sc["after"] is None else np.asarray(sc["after"])[:4].tolist(),
         },
     )
     return rec
@@ -410,8 +412,10 @@ def run(
 
 
 def _figure(out: Path, balls: list[dict]) -> None:
-    """The timeline of the first ball that was hit: observations, the hit time, the measured
-    racket (FK of the measured joints is in the score; here the joint motion)."""
+    """The timeline of the first ball that was hit: observations (those after the planned hit
+    greyed: the simulator streams the recorded incoming flight to its end, the return is not
+    observed), the hit time, where the ball left the racket, and the measured joint motion (FK
+    of the measured joints is in the score)."""
     ball = next((b for b in balls if "timeline" in b), None)
     if ball is None:
         return
@@ -423,8 +427,18 @@ def _figure(out: Path, balls: list[dict]) -> None:
     tl = ball["timeline"]
     fig, ax = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
     obs = np.array(tl["obs"])
+    t_obs = np.array(tl["t_obs"])
+    before = t_obs <= ball["t_hit"]
+    impact = tl.get("impact")
     for k, name in enumerate("xyz"):
-        ax[0].plot(tl["t_obs"], obs[:, k], ".", ms=2, label=f"observed {name}")
+        (line,) = ax[0].plot(t_obs[before], obs[before, k], ".", ms=2, label=f"observed {name}")
+        ax[0].plot(t_obs[~before], obs[~before, k], ".", ms=1, color="0.75")
+        if impact is not None:
+            ax[0].plot(impact[0], impact[1 + k], "x", ms=8, mew=2, color=line.get_color())
+    if np.any(~before):
+        ax[0].plot([], [], ".", color="0.75", label="incoming flight after the hit (not seen)")
+    if impact is not None:
+        ax[0].plot([], [], "kx", label="ball leaving the racket")
     ax[0].axvline(ball["t_hit"], color="k", ls="--", label="planned hit")
     ax[0].set_ylabel("ball (m, world)")
     ax[0].legend(fontsize=7)
